@@ -1,0 +1,320 @@
+"""Tests of towtank.fins: lifting line, fin table, curves, warnings, control derivatives."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from towtank import fins, sandia
+
+A0_SANDIA = 0.11 * 180.0 / math.pi  # Sandia NACA 0015 at Re >= 3.6e5: 0.11 per deg up to 6 deg
+
+
+def linear_section(a0: float = 2 * math.pi, cd0: float = 0.01):
+    """A synthetic 2-D section: C_l = a0 alpha [rad], C_d = cd0."""
+
+    def section(alpha_deg, reynolds):
+        alpha = np.asarray(alpha_deg, dtype=float)
+        shape = np.broadcast_shapes(alpha.shape, np.shape(reynolds))
+        return np.broadcast_to(a0 * np.deg2rad(alpha), shape), np.full(shape, cd0)
+
+    return section
+
+
+# --------------------------------------------------------------------------------------------
+# Lifting line
+# --------------------------------------------------------------------------------------------
+
+
+def test_finite_span_slope_closed_form():
+    slope = fins.finite_span_slope(2 * math.pi, 6.0)
+    assert float(slope) == pytest.approx(2 * math.pi / (1 + 2 / 6), rel=1e-15)
+    assert float(slope) == pytest.approx(4.71238898038469, rel=1e-12)
+    # e < 1 lowers it further
+    assert fins.finite_span_slope(2 * math.pi, 6.0, e=0.8) < slope
+
+
+def test_induced_drag_closed_form():
+    assert float(fins.induced_drag(0.5, 6.0)) == pytest.approx(0.25 / (6 * math.pi), rel=1e-15)
+    assert float(fins.induced_drag(0.5, 6.0)) == pytest.approx(0.013262911924, rel=1e-10)
+    assert float(fins.induced_drag(-0.5, 6.0, e=0.5)) == pytest.approx(0.25 / (3 * math.pi))
+
+
+def test_wall_mounting_doubles_aspect_ratio():
+    free = fins.effective_aspect_ratio(0.30, 0.10)
+    wall = fins.effective_aspect_ratio(0.30, 0.10, mounting="wall")
+    assert float(free) == pytest.approx(3.0)
+    assert float(wall) == pytest.approx(2 * float(free))
+    with pytest.raises(ValueError, match="mounting"):
+        fins.effective_aspect_ratio(0.3, 0.1, mounting="endplate")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="positive"):
+        fins.effective_aspect_ratio(-0.3, 0.1)
+
+
+@pytest.mark.parametrize("a0", [2 * math.pi, 5.5, 6.8])
+@pytest.mark.parametrize("aspect_ratio", [0.5, 1.0, 6.0, 30.0])
+@pytest.mark.parametrize("e", [1.0, 0.7])
+def test_linear_section_reproduces_closed_form(a0, aspect_ratio, e):
+    alpha = np.array([-10.0, -3.0, 0.0, 1.0, 4.0, 12.0])
+    cl, cd = fins.finite_span_coefficients(
+        alpha, 1e6, aspect_ratio, e, section=linear_section(a0, cd0=0.01)
+    )
+    expected_slope = fins.finite_span_slope(a0, aspect_ratio, e)
+    np.testing.assert_allclose(cl, expected_slope * np.deg2rad(alpha), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        cd, 0.01 + cl**2 / (math.pi * e * aspect_ratio), rtol=1e-12, atol=1e-15
+    )
+
+
+def test_exact_case_ar6_e1_a0_2pi():
+    cl, _ = fins.finite_span_coefficients(5.0, 1e6, 6.0, section=linear_section())
+    assert float(cl) / math.radians(5.0) == pytest.approx(4.71238898038469, rel=1e-12)
+
+
+def test_sandia_solution_is_self_consistent_everywhere():
+    alpha = np.linspace(-180, 180, 721)
+    for aspect_ratio in (0.5, 2.0, 8.0):
+        for re in (2e4, 1.6e5, 1e6, 1e7):
+            cl, cd = fins.finite_span_coefficients(alpha, re, aspect_ratio)
+            assert np.isfinite(cl).all() and np.isfinite(cd).all()
+            alpha_i = np.rad2deg(cl / (math.pi * aspect_ratio))
+            eff = alpha - alpha_i
+            eff = np.where(np.abs(eff) > 180, (eff + 180) % 360 - 180, eff)
+            cl2d, cd2d = sandia.section_coefficients(eff, re)
+            np.testing.assert_allclose(cl, cl2d, atol=1e-8)
+            np.testing.assert_allclose(cd, cd2d + cl**2 / (math.pi * aspect_ratio), atol=1e-8)
+
+
+def test_sandia_linear_range_matches_closed_form():
+    alpha = np.array([1.0, 2.0, 3.0])
+    cl, _ = fins.finite_span_coefficients(alpha, 1e6, 4.0)
+    expected = fins.finite_span_slope(A0_SANDIA, 4.0) * np.deg2rad(alpha)
+    np.testing.assert_allclose(cl, expected, rtol=1e-9)
+
+
+def test_finite_span_broadcasts_and_propagates_nan():
+    cl, cd = fins.finite_span_coefficients([[2.0], [np.nan]], [1e6, np.nan, 2e6], 5.0)
+    assert cl.shape == cd.shape == (2, 3)
+    assert np.isnan(cl[1]).all() and np.isnan(cl[0, 1])
+    assert np.isfinite(cl[0, [0, 2]]).all()
+
+
+def test_finite_span_clamp_warning_once():
+    with pytest.warns(sandia.SandiaRangeWarning) as record:
+        fins.finite_span_coefficients([2.0, 4.0], 5e3, 5.0)
+    assert len([w for w in record if issubclass(w.category, sandia.SandiaRangeWarning)]) == 1
+
+
+@settings(deadline=None, max_examples=200)
+@given(
+    alpha=st.floats(-8.0, 8.0, allow_nan=False),
+    log_re=st.floats(math.log10(1.6e5), 7.0, allow_nan=False),
+    aspect_ratio=st.floats(0.3, 50.0, allow_nan=False),
+    e=st.floats(0.5, 1.0, allow_nan=False),
+)
+def test_finite_span_lift_never_exceeds_2d_in_linear_range(alpha, log_re, aspect_ratio, e):
+    re = 10.0**log_re
+    cl3d, cd3d = fins.finite_span_coefficients(alpha, re, aspect_ratio, e)
+    cl2d, cd2d = sandia.section_coefficients(alpha, re)
+    assert abs(float(cl3d)) <= abs(float(cl2d)) + 1e-12
+    assert float(cl3d) * alpha >= 0  # same sign as the angle
+    # and the drag is the 2-D drag at the effective angle plus a non-negative induced part
+    alpha_eff = alpha - math.degrees(float(cl3d) / (math.pi * e * aspect_ratio))
+    _, cd_eff = sandia.section_coefficients(alpha_eff, re)
+    assert float(cd3d) - float(cd_eff) >= -1e-15
+
+
+@settings(deadline=None, max_examples=300)
+@given(
+    cl=st.floats(-5.0, 5.0, allow_nan=False),
+    aspect_ratio=st.floats(0.1, 100.0, allow_nan=False),
+    e=st.floats(0.1, 1.0, allow_nan=False),
+)
+def test_induced_drag_is_never_negative(cl, aspect_ratio, e):
+    assert float(fins.induced_drag(cl, aspect_ratio, e)) >= 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# Fin table
+# --------------------------------------------------------------------------------------------
+
+
+def sandia_runs() -> pd.DataFrame:
+    """Synthetic fin runs whose measured coefficients are Sandia's own 2-D values."""
+    rows = []
+    run = 1
+    for speed, re in ((0.99, 1e6), (1.0, 1e6), (1.01, 1e6), (2.0, 2e6), (2.02, 2e6)):
+        for angle in (-4.0, 0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0):
+            cl, cd = sandia.section_coefficients(angle, re)
+            rows.append(
+                {
+                    "run": run,
+                    "angle_deg": angle,
+                    "speed_mean": speed,
+                    "re": re,
+                    "cl": float(cl),
+                    "cd": float(cd),
+                    "drag_mean": 10.0 * float(cd) * speed**2,
+                    "lift_mean": 10.0 * float(cl) * speed**2,
+                    "config": "fin",
+                }
+            )
+            run += 1
+    return pd.DataFrame(rows)
+
+
+def test_fin_table_columns_and_values():
+    runs = sandia_runs()
+    table = fins.fin_table(runs, aspect_ratio=4.0)
+    assert tuple(table.columns) == fins.FIN_TABLE_COLUMNS
+    assert tuple(table.columns[:8]) == (
+        "run", "angle_deg", "speed_mean", "re", "cl", "cd", "cl_sandia", "cd_sandia",
+    )
+    assert len(table) == len(runs)
+    np.testing.assert_array_equal(table["cl"], table["cl_sandia"])
+    np.testing.assert_array_equal(table["cd"], table["cd_sandia"])
+    np.testing.assert_array_equal(table["run"], runs["run"])
+    np.testing.assert_array_equal(table["drag_mean"], runs["drag_mean"])
+    # 3-D expectation: lower lift, more drag (away from zero lift)
+    lifting = (table["angle_deg"] != 0) & (table["angle_deg"].abs() <= 10)
+    assert (table.loc[lifting, "cl_3d"].abs() < table.loc[lifting, "cl_sandia"].abs()).all()
+    assert (table["cd_3d"] >= table["cd_sandia"] - 1e-12)[table["angle_deg"].abs() <= 10].all()
+    assert sorted(table["speed_group"].unique()) == [1.0, 2.01]
+
+
+def test_fin_table_requires_columns():
+    with pytest.raises(ValueError, match="lift_mean"):
+        fins.fin_table(sandia_runs().drop(columns="lift_mean"), aspect_ratio=4.0)
+
+
+def test_speed_groups():
+    speeds = [0.50, 0.51, 1.00, 1.02, 0.98, np.nan, 1.5]
+    labels = fins.speed_groups(speeds)
+    np.testing.assert_array_equal(labels[:5], [0.51, 0.51, 1.0, 1.0, 1.0])
+    assert np.isnan(labels[5])
+    assert labels[6] == 1.5
+
+
+# --------------------------------------------------------------------------------------------
+# Curves
+# --------------------------------------------------------------------------------------------
+
+
+def test_fin_curves_recovers_linear_slope_with_interval():
+    rng = np.random.default_rng(20240611)
+    true_slope, c0 = 4.3, 0.02
+    angles = np.repeat(np.arange(-8.0, 8.1, 2.0), 3)
+    cl = true_slope * np.deg2rad(angles) + c0 + rng.normal(0, 0.01, angles.size)
+    runs = pd.DataFrame(
+        {
+            "run": np.arange(angles.size) + 1,
+            "angle_deg": angles,
+            "speed_mean": 1.5 + rng.normal(0, 0.005, angles.size),
+            "re": 1.5e5,
+            "cl": cl,
+            "cd": 0.02 + 0.5 * np.deg2rad(angles) ** 2,
+            "drag_mean": 1.0,
+            "lift_mean": 1.0,
+        }
+    )
+    table = fins.fin_table(runs, aspect_ratio=3.0)
+    curves = fins.fin_curves(table, linear_max_deg=10.0)
+    assert tuple(curves.columns) == fins.CURVE_COLUMNS
+    assert len(curves) == 1
+    row = curves.iloc[0]
+    assert row["n_runs"] == angles.size
+    assert row["lift_slope_ci_low"] < true_slope < row["lift_slope_ci_high"]
+    assert row["lift_slope"] == pytest.approx(true_slope, abs=0.2)
+    assert row["cd_min_angle_deg"] == 0.0
+    assert row["cd_min"] == pytest.approx(0.02)
+
+
+def test_fin_curves_sandia_and_3d_slopes():
+    table = fins.fin_table(sandia_runs(), aspect_ratio=4.0)
+    curves = fins.fin_curves(table, linear_max_deg=6.0, aspect_ratio=4.0)
+    slow = curves.set_index("speed_group").loc[1.0]
+    # measured == Sandia here, all in the exactly linear part of the table
+    assert slow["lift_slope"] == pytest.approx(A0_SANDIA, rel=1e-9)
+    assert slow["lift_slope_sandia_2d"] == pytest.approx(A0_SANDIA, rel=1e-9)
+    assert slow["lift_slope_3d"] == pytest.approx(fins.finite_span_slope(A0_SANDIA, 4.0), rel=1e-8)
+    # without the aspect ratio the cl_3d column gives the same answer (all runs at the mean Re)
+    from_column = fins.fin_curves(table, linear_max_deg=6.0).set_index("speed_group").loc[1.0]
+    assert from_column["lift_slope_3d"] == pytest.approx(slow["lift_slope_3d"], rel=1e-8)
+    assert slow["re_mean"] == pytest.approx(1e6)
+    assert slow["n_runs"] == 30
+
+
+def test_stall_detection():
+    curves = fins.fin_curves(fins.fin_table(sandia_runs(), aspect_ratio=4.0))
+    slow = curves.set_index("speed_group").loc[1.0]
+    # Sandia at Re = 1e6: C_L peaks at 12 deg (1.0971), tested up to 16 deg
+    assert slow["stall_angle_deg"] == 12.0
+    assert slow["cl_max"] == pytest.approx(1.0971)
+    assert bool(slow["stall_reached"]) is True
+    assert slow["cd_min_angle_deg"] == 0.0
+
+    runs = sandia_runs()
+    short = runs[runs["angle_deg"] <= 8.0]
+    curves = fins.fin_curves(fins.fin_table(short, aspect_ratio=4.0))
+    assert curves["stall_angle_deg"].tolist() == [8.0, 8.0]
+    assert not curves["stall_reached"].any()
+
+
+def test_force_vs_speed_is_sorted_long_table():
+    table = fins.fin_table(sandia_runs(), aspect_ratio=4.0)
+    long = fins.force_vs_speed(table)
+    assert list(long.columns) == ["angle_deg", "speed_mean", "drag_mean", "lift_mean"]
+    assert len(long) == len(table)
+    keys = list(zip(long["angle_deg"], long["speed_mean"], strict=True))
+    assert keys == sorted(keys)
+
+
+# --------------------------------------------------------------------------------------------
+# Low-Re warnings and control derivatives
+# --------------------------------------------------------------------------------------------
+
+
+def test_low_reynolds_warnings():
+    fin_df = pd.DataFrame({"run": [11, 12, 13, 14], "re": [2.0e5, 8.1e4, np.nan, 9.96e4]})
+    messages = fins.low_reynolds_warnings(fin_df)
+    assert messages == [
+        "run 12: Re = 8.1e4 on the chord is below 1e5, where the section data change fast with "
+        "Re; the comparison with Sandia is weak.",
+        "run 14: Re = 1.0e5 on the chord is below 1e5, where the section data change fast with "
+        "Re; the comparison with Sandia is weak.",
+    ]
+    assert fins.low_reynolds_warnings(fin_df, re_threshold=5e4) == []
+    assert fins.low_reynolds_warnings(fin_df, re_threshold=2.5e5)[0].startswith(
+        "run 11: Re = 2.0e5 on the chord is below 2.5e5"
+    )
+
+
+def test_control_derivative_signs_and_values():
+    rho, c_la, s_fin, x_fin = 1030.0, 3.12, 0.00665, -0.6827
+    table = fins.control_derivatives(c_la, s_fin, x_fin, rho).set_index("symbol")
+    assert list(table.index) == ["Y_uudr", "Z_uuds", "M_uuds", "N_uudr"]
+    base = rho * c_la * s_fin
+    assert table.loc["Y_uudr", "value"] == pytest.approx(base)
+    assert table.loc["Z_uuds", "value"] == pytest.approx(-base)
+    assert table.loc["M_uuds", "value"] == pytest.approx(base * x_fin)
+    assert table.loc["N_uudr", "value"] == pytest.approx(base * x_fin)
+    # fins aft (x_fin < 0): Y > 0, Z < 0, M < 0, N < 0 (Prestero's REMUS sign pattern)
+    assert table.loc["Y_uudr", "value"] > 0
+    assert table.loc["Z_uuds", "value"] < 0
+    assert table.loc["M_uuds", "value"] < 0
+    assert table.loc["N_uudr", "value"] < 0
+    assert table.loc["Y_uudr", "unit"] == "kg/(m*rad)"
+    assert table.loc["M_uuds", "unit"] == "kg/rad"
+    assert table["convention"].str.contains("Prestero").all()
+
+
+def test_no_warnings_for_in_range_table():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fins.fin_curves(fins.fin_table(sandia_runs(), aspect_ratio=4.0), aspect_ratio=4.0)

@@ -1,0 +1,236 @@
+"""The ``towtank`` command line (FORMATS.md §4).
+
+Imports of the heavy libraries are deferred to the sub-command that needs them, so that
+``towtank --help`` answers at once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from towtank import __version__
+
+EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
+
+DESCRIPTION = """\
+towtank turns a towing tank's raw run files into hydrodynamic coefficients.
+
+Feed it the day's protocol (a TOML file naming the run sheet, the data folder, the model and
+the water) and it reduces every run: zero and drift removed, filtered, split into its phases,
+sting tare subtracted. It then fits the hull's added mass and damping with 95 % intervals,
+compares fins with the Sandia NACA 0015 data, scales to the full-size vehicle and writes CSV
+tables, an Excel workbook and a PDF report.
+"""
+
+EPILOG = """\
+examples:
+  towtank process protocols/sut2_hull.toml           reduce the sample hull day
+  towtank process day3.toml --out reports/day3 -j 2  choose the output folder and cores
+  towtank inspect sample_runs/sut2_hull/data/run_020.csv.gz --protocol protocols/sut2_hull.toml
+  towtank scale protocols/sut2_hull.toml --speeds 1 2 3
+  towtank synth /tmp/day --day hull                   generate a synthetic test day
+
+exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
+in runs.csv); 2 the protocol or run sheet is unusable (nothing written); 3 internal error.
+"""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="towtank",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--version", action="version", version=f"towtank {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    pr = sub.add_parser(
+        "process",
+        help="reduce a test day and write its tables and reports",
+        description="Reduce every run of the protocol's run sheet and write coefficients.csv, "
+        "runs.csv, fins.csv, scaling.csv, report.xlsx, report.pdf and provenance.json.",
+    )
+    pr.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
+    pr.add_argument("--out", type=Path, metavar="DIR",
+                    help="output folder (default: output_dir of the protocol)")
+    pr.add_argument("--no-report", action="store_true",
+                    help="write the CSV tables only (no workbook, PDF or figures)")
+    pr.add_argument("--jobs", "-j", type=int, metavar="N",
+                    help="runs reduced in parallel (default: all cores)")
+    pr.add_argument("--date", metavar="YYYY-MM-DD",
+                    help="test date printed in the report (default: from the inputs)")
+    pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
+    pr.add_argument("--no-cache", action="store_true",
+                    help="ignore and rebuild the per-run cache in the output folder")
+    pr.add_argument("--debug", action="store_true",
+                    help="show a traceback for internal errors instead of one sentence")
+
+    ins = sub.add_parser(
+        "inspect",
+        help="quick look at one run file: phases, means and a plot",
+        description="Read one run file, find its phases and print them with the steady means "
+        "(zero and drift removed, no tare); write a PNG of speed and forces with the phases "
+        "shaded.",
+    )
+    ins.add_argument("runfile", type=Path, help="a run file (.csv, .csv.gz or .tdms)")
+    ins.add_argument("--protocol", type=Path,
+                     help="protocol whose [channels] and [processing] apply")
+    ins.add_argument("--png", type=Path,
+                     help="where to write the plot (default: <run file name>.png in the "
+                     "current folder)")
+    ins.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
+    sc = sub.add_parser(
+        "scale",
+        help="print the model-to-prototype scaling table",
+        description="Print the Froude and Reynolds scaling of the campaign's zero-angle "
+        "resistance to the prototype (uses the cached reduction in the output folder).",
+    )
+    sc.add_argument("protocol", type=Path)
+    sc.add_argument("--speeds", type=float, nargs="+", metavar="U",
+                    help="prototype speeds [m/s] (default: [prototype] speeds_m_s)")
+    sc.add_argument("--out", type=Path, metavar="DIR", help="output folder holding the cache")
+    sc.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
+    sy = sub.add_parser(
+        "synth",
+        help="generate a synthetic test day (for training, testing and benchmarks)",
+        description="Write a synthetic day: run files, run sheet, protocol and truth.json.",
+    )
+    sy.add_argument("outdir", type=Path)
+    sy.add_argument("--day", choices=("hull", "fin", "samples"), default="hull",
+                    help="hull day, fin day, or regenerate both shipped sample days")
+    sy.add_argument("--seed", type=int, default=1)
+    sy.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    return p
+
+
+def _err(msg: str) -> None:
+    print(f"towtank: {msg}", file=sys.stderr)
+
+
+def cmd_process(args: argparse.Namespace) -> int:
+    from towtank.errors import ProtocolError
+    from towtank.pipeline import process_day
+    from towtank.protocol import load_protocol
+    from towtank.report import write_outputs
+
+    try:
+        protocol = load_protocol(args.protocol)
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
+    out = args.out if args.out is not None else protocol.campaign.output_dir
+    show = not args.quiet and sys.stderr.isatty()
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=0, unit="run", desc="reducing", file=sys.stderr, leave=False)
+
+    def progress(done: int, total: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+    try:
+        day = process_day(
+            args.protocol,
+            protocol=protocol,
+            jobs=args.jobs,
+            progress=progress,
+            debug=args.debug,
+            cache_dir=None if args.no_cache else Path(out) / ".cache",
+        )
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
+    finally:
+        if bar is not None:
+            bar.close()
+    if args.date:
+        day.report_date = args.date
+    write_outputs(day, out, report=not args.no_report)
+    if not args.quiet:
+        _summary(day, Path(out))
+    return EXIT_REJECTED if day.rejected else EXIT_OK
+
+
+def _summary(day, out: Path) -> None:  # noqa: ANN001 - DayResult, imported lazily
+    runs = day.runs
+    counts = runs["status"].value_counts()
+    print(
+        f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
+        f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
+    )
+    for reason in day.rejected.values():
+        print(f"  rejected: {reason}")
+    for w in day.warnings:
+        print(f"  warning: {w}")
+    print(f"outputs in {out}")
+
+
+def cmd_inspect(args: argparse.Namespace) -> int:
+    from towtank.inspect import inspect_run
+
+    return inspect_run(args.runfile, protocol_path=args.protocol, png=args.png)
+
+
+def cmd_scale(args: argparse.Namespace) -> int:
+    from towtank.scale_cli import scale_command
+
+    return scale_command(args.protocol, speeds=args.speeds, out=args.out)
+
+
+def cmd_synth(args: argparse.Namespace) -> int:
+    from towtank import synthetic
+
+    if args.day == "samples":
+        synthetic.write_sample_days(args.outdir)
+    elif args.day == "hull":
+        synthetic.make_hull_day(args.outdir, seed=args.seed)
+    else:
+        synthetic.make_fin_day(args.outdir, seed=args.seed)
+    print(f"synthetic {args.day} day written to {args.outdir}")
+    return EXIT_OK
+
+
+COMMANDS = {
+    "process": cmd_process,
+    "inspect": cmd_inspect,
+    "scale": cmd_scale,
+    "synth": cmd_synth,
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return EXIT_UNUSABLE
+    from towtank.errors import TowtankError
+
+    try:
+        return COMMANDS[args.command](args)
+    except TowtankError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
+    except KeyboardInterrupt:
+        _err("interrupted; nothing was written.")
+        return 130
+    except Exception as exc:  # noqa: BLE001 - one sentence, not a traceback, for users
+        if getattr(args, "debug", False):
+            raise
+        _err(
+            f"internal error ({type(exc).__name__}: {exc}); nothing was written. "
+            "Rerun with --debug for the traceback and please report it."
+        )
+        return EXIT_BUG
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,130 @@
+"""Signal conditioning: zero, drift, zero-phase low-pass filter, acceleration from speed.
+
+METHOD.md "A run": the force channels' zero is their mean over the still window before the
+carriage moves; where the file also ends at rest the zero is interpolated linearly in time
+between the pre- and post-run windows (balance drift). One zero-phase low-pass filter is applied
+identically to speed and forces, and acceleration is taken from the filtered speed: filtering
+force and speed differently biases the added mass, because the two smear the jerk transitions
+differently.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+
+@lru_cache(maxsize=64)
+def butter_sos(cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
+    """Second-order sections of a Butterworth low-pass.
+
+    Parameters
+    ----------
+    cutoff_hz : float
+        -3 dB frequency of the single pass [Hz]; the forward-backward pass is -6 dB there.
+    fs : float
+        Sample rate [Hz].
+    order : int
+        Filter order of one pass (the zero-phase filter has twice this order).
+    """
+    from scipy.signal import butter
+
+    nyq = 0.5 * fs
+    wn = min(cutoff_hz / nyq, 0.99)
+    return butter(order, wn, btype="low", output="sos")
+
+
+def lowpass(x: np.ndarray, fs: float, cutoff_hz: float, order: int = 4) -> np.ndarray:
+    """Zero-phase Butterworth low-pass (forward-backward, ``scipy.signal.sosfiltfilt``).
+
+    Parameters
+    ----------
+    x : ndarray
+        Signal(s), time along axis 0 [any unit]. Several channels as columns are filtered
+        identically in one call.
+    fs : float
+        Sample rate [Hz].
+    cutoff_hz : float
+        Cut-off frequency [Hz].
+    order : int
+        Order of one pass.
+
+    Returns
+    -------
+    ndarray
+        Filtered signal(s), same shape, no phase lag (Gustafsson 1996, IEEE Trans. Signal
+        Process. 44(4), "Determining the initial states in forward-backward filtering").
+    """
+    from scipy.signal import sosfiltfilt
+
+    sos = butter_sos(float(cutoff_hz), float(fs), int(order))
+    padlen = min(x.shape[0] - 1, 3 * (2 * sos.shape[0] + 1))
+    return sosfiltfilt(sos, x, axis=0, padlen=padlen)
+
+
+def derivative(x: np.ndarray, fs: float) -> np.ndarray:
+    """Time derivative by central differences (one-sided at the ends).
+
+    Parameters
+    ----------
+    x : ndarray
+        Signal sampled at a constant rate, time along axis 0 (e.g. speed [m/s]).
+    fs : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray
+        dx/dt in [unit of x per s] (e.g. acceleration [m/s²]).
+    """
+    return np.gradient(x, 1.0 / fs, axis=0)
+
+
+def zero_line(
+    t: np.ndarray,
+    force: np.ndarray,
+    pre: tuple[int, int],
+    post: tuple[int, int] | None,
+) -> tuple[np.ndarray, float, float]:
+    """The balance zero along the run: constant, or linear between still windows.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time [s].
+    force : ndarray
+        Raw force channel [N].
+    pre : tuple of int
+        Index range [i0, i1) of the still window before the carriage moves.
+    post : tuple of int or None
+        Index range of the still window after the carriage stops, if the file ends at rest.
+
+    Returns
+    -------
+    zero : ndarray
+        Zero at every sample [N]: the pre-window mean, or the straight line through the pre-
+        and post-window means at their mid-times (METHOD.md: zero and drift).
+    zero_pre : float
+        Pre-run zero [N].
+    drift : float
+        Post-run minus pre-run zero [N] (0 without a post window).
+    """
+    z0 = float(np.mean(force[pre[0] : pre[1]]))
+    if post is None or post[1] - post[0] < 2:
+        return np.full(t.shape, z0), z0, 0.0
+    z1 = float(np.mean(force[post[0] : post[1]]))
+    t0 = float(np.mean(t[pre[0] : pre[1]]))
+    t1 = float(np.mean(t[post[0] : post[1]]))
+    slope = (z1 - z0) / (t1 - t0) if t1 > t0 else 0.0
+    return z0 + slope * (t - t0), z0, z1 - z0
+
+
+def decimate_indices(i0: int, i1: int, fs: float, rate_hz: float) -> np.ndarray:
+    """Indices in [i0, i1) spaced 1/rate_hz apart, centred in the window."""
+    step = max(1, int(round(fs / rate_hz)))
+    n = (i1 - i0 - 1) // step + 1 if i1 > i0 else 0
+    if n <= 0:
+        return np.array([], dtype=int)
+    start = i0 + ((i1 - i0 - 1) - (n - 1) * step) // 2
+    return start + step * np.arange(n)

@@ -1,0 +1,676 @@
+"""Fin (control surface) analysis: finite-span expectation, per-run table, curves, derivatives.
+
+The measured fin coefficients (C_L = L/(q S), C_D = D/(q S), q = rho U^2 / 2, S = chord x span,
+Re = U c / nu on the chord) are set beside the two-dimensional NACA 0015 section data of Sheldahl &
+Klimas (1981) (:mod:`towtank.sandia`) at each run's Reynolds number, and beside the finite-span
+expectation from Prandtl's lifting-line theory, which lowers the lift slope and adds induced drag
+(METHOD.md, "Fins"; report section 5-4, Figs. 14-16).
+
+Conventions: angles of attack ``alpha_deg`` in degrees, lift slopes per radian, induced angle in
+radians. The fin's reference area is its planform chord x span, as in runs.csv.
+
+References
+----------
+.. [1] Anderson, J. D., Fundamentals of Aerodynamics, McGraw-Hill, section 5.3 (Prandtl's
+   classical lifting-line theory): eqs. for the induced angle alpha_i = C_L / (pi e AR), induced
+   drag C_D,i = C_L^2 / (pi e AR) and lift slope a = a0 / (1 + a0 / (pi e AR)).
+.. [2] Prestero, T. (2001), Verification of a six-degree of freedom simulation model for the
+   REMUS autonomous underwater vehicle, MSc thesis, MIT / WHOI, section "Control fin forces and
+   moments".
+.. [3] Sheldahl, R. E. and Klimas, P. C. (1981), SAND80-2114, Sandia National Laboratories.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+import pandas as pd
+import statsmodels.api as sm
+
+from towtank import sandia
+
+__all__ = [
+    "FIN_COLUMNS",
+    "FIN_TABLE_COLUMNS",
+    "CURVE_COLUMNS",
+    "control_derivatives",
+    "effective_aspect_ratio",
+    "fin_curves",
+    "fin_table",
+    "finite_span_coefficients",
+    "finite_span_slope",
+    "force_vs_speed",
+    "induced_drag",
+    "low_reynolds_warnings",
+    "speed_groups",
+]
+
+#: The fins.csv columns of FORMATS.md section 5, in order.
+FIN_COLUMNS: tuple[str, ...] = (
+    "run", "angle_deg", "speed_mean", "re", "cl", "cd", "cl_sandia", "cd_sandia",
+)
+#: Columns of :func:`fin_table`: the fins.csv columns first, then the extensions.
+FIN_TABLE_COLUMNS: tuple[str, ...] = FIN_COLUMNS + (
+    "cl_3d", "cd_3d", "speed_group", "drag_mean", "lift_mean",
+)
+#: Columns of :func:`fin_curves`.
+CURVE_COLUMNS: tuple[str, ...] = (
+    "speed_group", "re_mean", "n_runs", "lift_slope", "lift_slope_ci_low", "lift_slope_ci_high",
+    "lift_slope_sandia_2d", "lift_slope_3d", "stall_angle_deg", "cl_max", "stall_reached",
+    "cd_min", "cd_min_angle_deg",
+)
+_RUN_COLUMNS = ("run", "angle_deg", "speed_mean", "re", "cl", "cd", "drag_mean", "lift_mean")
+
+#: A 2-D section: (alpha_deg [deg], reynolds [-]) -> (cl [-], cd [-]), vectorised.
+Section = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def _require(frame: pd.DataFrame, columns: tuple[str, ...], what: str) -> None:
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        raise ValueError(f"{what} lacks the column(s) {', '.join(missing)}.")
+
+
+# --------------------------------------------------------------------------------------------
+# Lifting line
+# --------------------------------------------------------------------------------------------
+
+
+def effective_aspect_ratio(
+    span_m: npt.ArrayLike,
+    chord_m: npt.ArrayLike,
+    mounting: Literal["free", "wall"] = "free",
+) -> np.ndarray:
+    """Effective aspect ratio of a rectangular fin for the lifting-line correction.
+
+    ``"free"``: the fin is tested alone with both tips free and its whole span counted as the
+    wing, so AR = b / c (geometric aspect ratio of a rectangular planform). ``"wall"``: the fin's
+    root sits on a wall, hull or end plate that acts as a plane of symmetry; its mirror image
+    doubles the wing, so AR_eff = 2 b / c (method of images; Anderson [1]_ section 5.3 for the
+    lifting line on the doubled wing).
+
+    Parameters
+    ----------
+    span_m : array_like
+        Fin span, root to tip [m].
+    chord_m : array_like
+        Fin chord [m].
+    mounting : {"free", "wall"}, default "free"
+        How the fin was mounted in the test.
+
+    Returns
+    -------
+    numpy.ndarray
+        Effective aspect ratio [-].
+    """
+    if mounting not in ("free", "wall"):
+        raise ValueError(f"mounting must be 'free' or 'wall', not {mounting!r}.")
+    span = np.asarray(span_m, dtype=float)
+    chord = np.asarray(chord_m, dtype=float)
+    if np.any(span <= 0) or np.any(chord <= 0):
+        raise ValueError("Fin span and chord must be positive.")
+    ar = span / chord
+    return 2.0 * ar if mounting == "wall" else ar
+
+
+def finite_span_slope(
+    a0_per_rad: npt.ArrayLike, aspect_ratio: npt.ArrayLike, e: npt.ArrayLike = 1.0
+) -> np.ndarray:
+    """Lift-curve slope of a finite wing from its section slope (Prandtl lifting line).
+
+    a = a0 / (1 + a0 / (pi e AR)), Anderson [1]_ section 5.3 (elliptic loading for e = 1).
+
+    Parameters
+    ----------
+    a0_per_rad : array_like
+        Two-dimensional section lift slope dC_l/dalpha [1/rad].
+    aspect_ratio : array_like
+        Effective aspect ratio [-], see :func:`effective_aspect_ratio`.
+    e : array_like, default 1.0
+        Span efficiency factor [-] (1 for elliptic loading).
+
+    Returns
+    -------
+    numpy.ndarray
+        Finite-span lift slope dC_L/dalpha [1/rad].
+    """
+    a0 = np.asarray(a0_per_rad, dtype=float)
+    return a0 / (1.0 + a0 / (np.pi * np.asarray(e, dtype=float) * np.asarray(aspect_ratio, float)))
+
+
+def induced_drag(
+    cl: npt.ArrayLike, aspect_ratio: npt.ArrayLike, e: npt.ArrayLike = 1.0
+) -> np.ndarray:
+    """Induced drag coefficient C_D,i = C_L^2 / (pi e AR), Anderson [1]_ section 5.3.
+
+    Parameters
+    ----------
+    cl : array_like
+        Lift coefficient of the wing [-].
+    aspect_ratio : array_like
+        Effective aspect ratio [-].
+    e : array_like, default 1.0
+        Span efficiency factor [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Induced drag coefficient [-], never negative for AR > 0, e > 0.
+    """
+    cl = np.asarray(cl, dtype=float)
+    return cl * cl / (np.pi * np.asarray(e, dtype=float) * np.asarray(aspect_ratio, dtype=float))
+
+
+def _wrap_deg(alpha_deg: np.ndarray) -> np.ndarray:
+    """Angles beyond +-180 deg folded back into [-180, 180) (the 2-D data are 360-deg periodic)."""
+    return np.where(np.abs(alpha_deg) > 180.0, (alpha_deg + 180.0) % 360.0 - 180.0, alpha_deg)
+
+
+def _induced_angle(
+    alpha_deg: np.ndarray,
+    reynolds: np.ndarray,
+    k: np.ndarray,
+    section: Section,
+    tol: float,
+    max_iter: int,
+) -> np.ndarray:
+    """Solve h(x) = x - k C_L,2D(alpha - x) = 0 for the induced angle x [rad], element-wise.
+
+    Started from x = 0 with the damped fixed-point step x <- x - lam h(x), lam = 1 / (1 + 2 pi k)
+    (a Newton step with the thin-aerofoil slope 2 pi); later steps use the secant slope of h
+    through the last two iterates when it is positive (the stable, attached-flow side), the
+    damped step otherwise. Safeguards: whenever a step fails to halve |h|, the next step bisects
+    the sign-change bracket or, while no bracket is known yet, steps twice as far downhill until
+    h changes sign (h(x) ~ x for large |x| because C_L,2D is bounded, so a bracket always
+    exists). Converged when |h| <= tol * min(1, max(|h(0)|, 1e-6)) or the bracket is that
+    narrow; the relative part keeps the precision for very small lift.
+    """
+    n = alpha_deg.size
+    x = np.zeros(n)
+    out = np.full(n, np.nan)
+
+    def h(xs: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        cl, _ = section(_wrap_deg(alpha_deg[idx] - np.rad2deg(xs)), reynolds[idx])
+        return xs - k[idx] * np.asarray(cl, dtype=float)
+
+    hx = h(x, np.arange(n))
+    active = np.isfinite(hx) & np.isfinite(k)
+    lam = 1.0 / (1.0 + 2.0 * np.pi * k)
+    target = tol * np.clip(np.abs(hx), 1e-6, 1.0)
+    lo = np.where(hx < 0, 0.0, np.nan)  # h(lo) < 0
+    hi = np.where(hx > 0, 0.0, np.nan)  # h(hi) > 0
+    x_prev = np.full(n, np.nan)
+    h_prev = np.full(n, np.nan)
+    expand = np.abs(lam * hx)
+    slow = np.zeros(n, dtype=bool)
+    done = active & (np.abs(hx) <= target)
+    out[done] = 0.0
+    live = active & ~done
+
+    for _ in range(max_iter):
+        idx = np.flatnonzero(live)
+        if idx.size == 0:
+            break
+        xi, h_i, lo_i, hi_i = x[idx], hx[idx], lo[idx], hi[idx]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            secant = (h_i - h_prev[idx]) / (xi - x_prev[idx])
+        use_secant = np.isfinite(secant) & (secant > 0)
+        cand = np.where(
+            use_secant, xi - h_i / np.where(use_secant, secant, 1.0), xi - lam[idx] * h_i
+        )
+        bracketed = np.isfinite(lo_i) & np.isfinite(hi_i)
+        inside = (cand > np.fmin(lo_i, hi_i)) & (cand < np.fmax(lo_i, hi_i))
+        bisect = bracketed & (slow[idx] | ~inside)
+        cand = np.where(bisect, 0.5 * (lo_i + hi_i), cand)
+        widen = ~bracketed & slow[idx]
+        expand[idx] = np.where(widen, 2.0 * np.maximum(expand[idx], 1e-12), expand[idx])
+        cand = np.where(widen, xi - np.sign(h_i) * expand[idx], cand)
+
+        hc = h(cand, idx)
+        slow[idx] = ~(np.abs(hc) <= 0.5 * np.abs(h_i))
+        lo[idx] = np.where(hc < 0, cand, lo_i)
+        hi[idx] = np.where(hc > 0, cand, hi_i)
+        x_prev[idx], h_prev[idx] = xi, h_i
+        x[idx], hx[idx] = cand, hc
+        width = np.abs(hi[idx] - lo[idx])
+        finished = (
+            (np.abs(hc) <= target[idx])
+            | (width <= target[idx])
+            | (cand == xi)
+            | ~np.isfinite(hc)
+        )
+        out[idx[finished]] = np.where(np.isfinite(hc[finished]), cand[finished], np.nan)
+        live[idx[finished]] = False
+
+    if live.any():
+        warnings.warn(
+            f"The lifting-line induced angle did not converge to {tol:g} rad in {max_iter} "
+            f"iterations at {int(live.sum())} point(s); the last iterate is used.",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        out[live] = x[live]
+    return out
+
+
+def finite_span_coefficients(
+    alpha_deg: npt.ArrayLike,
+    reynolds: npt.ArrayLike,
+    aspect_ratio: npt.ArrayLike,
+    e: npt.ArrayLike = 1.0,
+    *,
+    section: Section = sandia.section_coefficients,
+    tol: float = 1e-10,
+    max_iter: int = 200,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Finite-span lift and drag expected from 2-D section data (Prandtl lifting line).
+
+    With the induced angle alpha_i = C_L / (pi e AR) [rad] (Anderson [1]_ section 5.3),
+
+        C_L = C_l,2D(alpha - alpha_i, Re),
+        C_D = C_d,2D(alpha - alpha_i, Re) + C_L^2 / (pi e AR),
+
+    where alpha_i is found self-consistently, element-wise, to ``tol`` [rad]. In the linear range
+    (C_l,2D = a0 alpha) this is C_L = a0 / (1 + a0 / (pi e AR)) alpha, the closed form of
+    :func:`finite_span_slope`.
+
+    Solver: a damped fixed-point iteration alpha_i <- alpha_i - lam h(alpha_i) on
+    h(alpha_i) = alpha_i - C_l,2D(alpha - alpha_i) / (pi e AR), with lam = 1 / (1 + 2 pi /
+    (pi e AR)) (one exact step for a linear section of slope 2 pi), started from alpha_i = 0,
+    accelerated by the secant slope of h where that is positive (exact in two steps on any
+    linear stretch of the 2-D curve) and safeguarded by bisection of a sign-change bracket
+    whenever a step fails to halve |h|; vectorised over the inputs. Past stall the 2-D curve
+    falls and h can have several roots (the lifting-line hysteresis): the damped step, which
+    is a contraction only where dh/dalpha_i > 0, settles on a stable root reached from
+    alpha_i = 0, i.e. the branch continuous with attached flow, and the bisection guarantees
+    a root where it cannot. Lifting-line theory is not meant for separated flow: post-stall
+    values are indicative only.
+
+    Parameters
+    ----------
+    alpha_deg : array_like
+        Geometric angle of attack [deg], -180 ... 180.
+    reynolds : array_like
+        Reynolds number on the chord [-].
+    aspect_ratio : array_like
+        Effective aspect ratio [-], see :func:`effective_aspect_ratio`.
+    e : array_like, default 1.0
+        Span efficiency factor [-].
+    section : callable, default :func:`towtank.sandia.section_coefficients`
+        2-D section data, ``section(alpha_deg, reynolds) -> (cl, cd)``, vectorised. Effective
+        angles beyond +-180 deg are wrapped into [-180, 180) before the call.
+    tol : float, default 1e-10
+        Convergence tolerance on the induced angle [rad]; scaled down by the first residual
+        |k C_l,2D(alpha)| when that is below 1 rad (not below 1e-6 x tol).
+    max_iter : int, default 200
+        Iteration limit; a RuntimeWarning is issued where it is reached.
+
+    Returns
+    -------
+    cl3d : numpy.ndarray
+        Finite-span lift coefficient [-], shape of the broadcast inputs.
+    cd3d : numpy.ndarray
+        Finite-span drag coefficient, profile plus induced [-].
+    """
+    alpha, re, ar, ee = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (alpha_deg, reynolds, aspect_ratio, e))
+    )
+    shape = alpha.shape
+    if np.any(ar <= 0) or np.any(ee <= 0):
+        raise ValueError("Aspect ratio and span efficiency must be positive.")
+    alpha, re, ar, ee = (np.ravel(v).copy() for v in (alpha, re, ar, ee))
+    k = 1.0 / (np.pi * ee * ar)
+
+    # The first call may warn (e.g. Re clamped to the Sandia range); the iterations repeat it.
+    section(alpha, re)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sandia.SandiaRangeWarning)
+        alpha_i = _induced_angle(alpha, re, k, section, tol, max_iter)
+        alpha_eff = np.where(np.isfinite(alpha_i), _wrap_deg(alpha - np.rad2deg(alpha_i)), np.nan)
+        cl, cd = section(alpha_eff, re)
+    cl = np.asarray(cl, dtype=float)
+    cd3d = np.asarray(cd, dtype=float) + induced_drag(cl, ar, ee)
+    return cl.reshape(shape), cd3d.reshape(shape)
+
+
+# --------------------------------------------------------------------------------------------
+# Per-run table and curves
+# --------------------------------------------------------------------------------------------
+
+
+def speed_groups(speed_mean: npt.ArrayLike, rel_tol: float = 0.05) -> np.ndarray:
+    """Group runs by nominal carriage speed.
+
+    Sorted speeds are chained into one group while each is within ``rel_tol`` of the previous
+    one (single linkage: a gap larger than ``rel_tol`` times the smaller speed starts a new
+    group). A group's label is its mean speed rounded to 0.01 m/s.
+
+    Parameters
+    ----------
+    speed_mean : array_like
+        Steady-phase mean carriage speed of each run [m/s].
+    rel_tol : float, default 0.05
+        Relative gap that separates two groups [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        The group label of each run [m/s], NaN where the speed is NaN.
+    """
+    speed = np.asarray(speed_mean, dtype=float).ravel()
+    labels = np.full(speed.shape, np.nan)
+    idx = np.flatnonzero(np.isfinite(speed))
+    if idx.size == 0:
+        return labels
+    order = idx[np.argsort(speed[idx], kind="stable")]
+    sorted_speed = speed[order]
+    gaps = np.diff(sorted_speed) > rel_tol * np.abs(sorted_speed[:-1])
+    group_id = np.concatenate([[0], np.cumsum(gaps)])
+    for g in np.unique(group_id):
+        members = order[group_id == g]
+        labels[members] = round(float(np.mean(speed[members])), 2)
+    return labels
+
+
+def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.DataFrame:
+    """One row per fin run: measured coefficients beside the Sandia 2-D and 3-D expectations.
+
+    cl_sandia, cd_sandia are :func:`towtank.sandia.section_coefficients` at the run's angle and
+    chord Reynolds number (Sheldahl & Klimas [3]_); cl_3d, cd_3d the lifting-line expectation of
+    :func:`finite_span_coefficients` for the fin's effective aspect ratio.
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        Fin runs with at least ``run``, ``angle_deg`` [deg], ``speed_mean`` [m/s], ``re`` [-]
+        (on the chord), ``cl`` [-], ``cd`` [-] (on chord x span), ``drag_mean`` [N],
+        ``lift_mean`` [N].
+    aspect_ratio : float
+        Effective aspect ratio of the fin [-], see :func:`effective_aspect_ratio`.
+    e : float, default 1.0
+        Span efficiency factor [-].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`FIN_TABLE_COLUMNS`: the fins.csv columns of FORMATS.md section 5 (run,
+        angle_deg, speed_mean, re, cl, cd, cl_sandia, cd_sandia), then cl_3d, cd_3d,
+        speed_group [m/s] (see :func:`speed_groups`), drag_mean [N], lift_mean [N]. Rows in the
+        order of ``runs``.
+    """
+    _require(runs, _RUN_COLUMNS, "The fin run table")
+    out = runs.loc[:, list(_RUN_COLUMNS)].reset_index(drop=True).copy()
+    alpha = out["angle_deg"].to_numpy(dtype=float)
+    re = out["re"].to_numpy(dtype=float)
+    cl2d, cd2d = sandia.section_coefficients(alpha, re)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sandia.SandiaRangeWarning)  # already said once
+        cl3d, cd3d = finite_span_coefficients(alpha, re, aspect_ratio, e)
+    out["cl_sandia"] = cl2d
+    out["cd_sandia"] = cd2d
+    out["cl_3d"] = cl3d
+    out["cd_3d"] = cd3d
+    out["speed_group"] = speed_groups(out["speed_mean"].to_numpy(dtype=float))
+    return out.loc[:, list(FIN_TABLE_COLUMNS)]
+
+
+def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tuple[float, ...]:
+    """OLS fit y = a alpha + c0: (a, ci_low, ci_high); NaN where the data cannot tell."""
+    ok = np.isfinite(alpha_rad) & np.isfinite(y)
+    x, y = alpha_rad[ok], y[ok]
+    if x.size < 2 or np.unique(x).size < 2:
+        return np.nan, np.nan, np.nan
+    fit = sm.OLS(y, sm.add_constant(x, has_constant="add")).fit()
+    a = float(fit.params[1])
+    if fit.df_resid < 1:
+        return a, np.nan, np.nan
+    low, high = fit.conf_int(alpha=1.0 - level)[1]
+    return a, float(low), float(high)
+
+
+def _ls_slope(alpha_rad: np.ndarray, y: np.ndarray) -> float:
+    """Least-squares slope of y on alpha (same model as :func:`_ols_slope`, no interval)."""
+    ok = np.isfinite(alpha_rad) & np.isfinite(y)
+    if ok.sum() < 2 or np.unique(alpha_rad[ok]).size < 2:
+        return np.nan
+    return float(np.polyfit(alpha_rad[ok], y[ok], 1)[0])
+
+
+def fin_curves(
+    fin_df: pd.DataFrame,
+    linear_max_deg: float = 10.0,
+    *,
+    aspect_ratio: float | None = None,
+    e: float = 1.0,
+    level: float = 0.95,
+) -> pd.DataFrame:
+    """Lift slope, stall and minimum drag of the fin, one row per speed group.
+
+    Lift slope: OLS fit C_L = a alpha + c0 (alpha in rad) through the group's runs with
+    |alpha| <= ``linear_max_deg``, with the ``level`` (95 %) t-interval of a from statsmodels;
+    NaN where fewer than two distinct angles (interval NaN with fewer than three runs). The same
+    straight line is fitted through the Sandia 2-D section (Sheldahl & Klimas [3]_) evaluated at
+    the group's mean Re and the same angles (``lift_slope_sandia_2d``) and through the lifting-line
+    expectation (``lift_slope_3d``; Anderson [1]_ section 5.3): with ``aspect_ratio`` given it is
+    :func:`finite_span_coefficients` at the group's mean Re, otherwise the ``cl_3d`` column of
+    ``fin_df`` (each run's own Re, within the 5 % speed grouping of the mean).
+
+    Stall: C_L is averaged over repeats at each angle; the angle with the largest mean C_L is the
+    stall angle and that mean is C_L,max. ``stall_reached`` is False when that angle is the
+    largest tested angle, i.e. C_L was still rising where the test stopped. Minimum C_D and its
+    angle likewise from the per-angle means.
+
+    Parameters
+    ----------
+    fin_df : pandas.DataFrame
+        Output of :func:`fin_table` (needs angle_deg [deg], re [-], cl, cd, cl_sandia,
+        speed_group [m/s]; cl_3d unless ``aspect_ratio`` is given).
+    linear_max_deg : float, default 10.0
+        Largest |angle of attack| used for the slope fits [deg].
+    aspect_ratio : float, optional
+        Effective aspect ratio [-] for the 3-D expectation at the group's mean Re.
+    e : float, default 1.0
+        Span efficiency factor [-] (with ``aspect_ratio``).
+    level : float, default 0.95
+        Confidence level of the slope interval [-].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`CURVE_COLUMNS`; slopes in [1/rad], angles in [deg], re_mean [-],
+        speed_group [m/s]; sorted by speed group.
+    """
+    _require(fin_df, ("angle_deg", "re", "cl", "cd", "speed_group"), "The fin table")
+    if aspect_ratio is None:
+        _require(fin_df, ("cl_3d",), "The fin table (without aspect_ratio)")
+    rows = []
+    for label, group in fin_df.groupby("speed_group", sort=True):
+        angle = group["angle_deg"].to_numpy(dtype=float)
+        re_mean = float(np.nanmean(group["re"].to_numpy(dtype=float)))
+        linear = np.abs(angle) <= linear_max_deg
+        a_lin = angle[linear]
+        a, low, high = _ols_slope(np.deg2rad(a_lin), group["cl"].to_numpy(dtype=float)[linear],
+                                  level)
+        slope_2d = slope_3d = np.nan
+        fit_angles = a_lin[np.isfinite(a_lin)]
+        if np.isfinite(re_mean) and fit_angles.size:
+            re_fit = np.full(fit_angles.shape, re_mean)
+            cl2d, _ = sandia.section_coefficients(fit_angles, re_fit)
+            slope_2d = _ls_slope(np.deg2rad(fit_angles), cl2d)
+            if aspect_ratio is not None:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", sandia.SandiaRangeWarning)
+                    cl3d, _ = finite_span_coefficients(fit_angles, re_fit, aspect_ratio, e)
+                slope_3d = _ls_slope(np.deg2rad(fit_angles), cl3d)
+        if aspect_ratio is None:
+            slope_3d = _ls_slope(np.deg2rad(a_lin), group["cl_3d"].to_numpy(dtype=float)[linear])
+
+        per_angle = group.groupby("angle_deg")[["cl", "cd"]].mean()
+        cl_by = per_angle["cl"].dropna()
+        cd_by = per_angle["cd"].dropna()
+        if cl_by.empty:
+            stall_angle = cl_max = np.nan
+            reached: object = pd.NA
+        else:
+            stall_angle = float(cl_by.idxmax())
+            cl_max = float(cl_by.max())
+            reached = bool(stall_angle < float(cl_by.index.max()))
+        cd_min = float(cd_by.min()) if not cd_by.empty else np.nan
+        cd_min_angle = float(cd_by.idxmin()) if not cd_by.empty else np.nan
+        rows.append(
+            {
+                "speed_group": float(label),
+                "re_mean": re_mean,
+                "n_runs": int(len(group)),
+                "lift_slope": a,
+                "lift_slope_ci_low": low,
+                "lift_slope_ci_high": high,
+                "lift_slope_sandia_2d": slope_2d,
+                "lift_slope_3d": slope_3d,
+                "stall_angle_deg": stall_angle,
+                "cl_max": cl_max,
+                "stall_reached": reached,
+                "cd_min": cd_min,
+                "cd_min_angle_deg": cd_min_angle,
+            }
+        )
+    out = pd.DataFrame(rows, columns=list(CURVE_COLUMNS))
+    out["n_runs"] = out["n_runs"].astype(int)
+    out["stall_reached"] = out["stall_reached"].astype("boolean")
+    return out
+
+
+def force_vs_speed(fin_df: pd.DataFrame) -> pd.DataFrame:
+    """Long table for the "lift and drag against speed at each angle" plots.
+
+    Parameters
+    ----------
+    fin_df : pandas.DataFrame
+        With angle_deg [deg], speed_mean [m/s], drag_mean [N], lift_mean [N].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns angle_deg [deg], speed_mean [m/s], drag_mean [N], lift_mean [N], sorted by
+        angle then speed.
+    """
+    cols = ("angle_deg", "speed_mean", "drag_mean", "lift_mean")
+    _require(fin_df, cols, "The fin table")
+    return (
+        fin_df.loc[:, list(cols)]
+        .sort_values(["angle_deg", "speed_mean"], kind="stable")
+        .reset_index(drop=True)
+    )
+
+
+def _sci(x: float, keep_zero: bool = True) -> str:
+    """8.1e4 style: one decimal, no '+' or leading zeros; 1e5 when ``keep_zero`` is False."""
+    mantissa, _, exponent = f"{x:.1e}".partition("e")
+    if not keep_zero and mantissa.endswith(".0"):
+        mantissa = mantissa[:-2]
+    return f"{mantissa}e{int(exponent)}"
+
+
+def _run_label(run: object) -> str:
+    if isinstance(run, float | np.floating) and float(run).is_integer():
+        return str(int(run))
+    return str(run)
+
+
+def low_reynolds_warnings(fin_df: pd.DataFrame, re_threshold: float = 1e5) -> list[str]:
+    """One sentence per run whose chord Reynolds number is below ``re_threshold``.
+
+    Below about 1e5 the NACA 0015 section data of Sheldahl & Klimas [3]_ change fast (and not
+    monotonically) with Re, so the run's comparison with the table is weak.
+
+    Parameters
+    ----------
+    fin_df : pandas.DataFrame
+        With ``run`` and ``re`` [-] (on the chord).
+    re_threshold : float, default 1e5
+        Reynolds number below which a run is flagged [-].
+
+    Returns
+    -------
+    list of str
+        E.g. "run 12: Re = 8.1e4 on the chord is below 1e5, where the section data change fast
+        with Re; the comparison with Sandia is weak." In the order of ``fin_df``.
+    """
+    _require(fin_df, ("run", "re"), "The fin table")
+    limit = _sci(re_threshold, keep_zero=False)
+    out = []
+    for run, re in zip(fin_df["run"], fin_df["re"].to_numpy(dtype=float), strict=True):
+        if np.isfinite(re) and re < re_threshold:
+            out.append(
+                f"run {_run_label(run)}: Re = {_sci(re)} on the chord is below {limit}, where "
+                "the section data change fast with Re; the comparison with Sandia is weak."
+            )
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Control derivatives
+# --------------------------------------------------------------------------------------------
+
+
+def control_derivatives(
+    lift_slope_per_rad: float, fin_area_m2: float, x_fin_m: float, rho: float
+) -> pd.DataFrame:
+    """Fin control derivatives in the AUV-model convention of Prestero (2001) [2]_.
+
+    Each fin of a pair gives lift L = 1/2 rho c_La S_fin delta_e u^2; a pair of rudders (or of
+    stern planes) therefore gives rho c_La S_fin delta u^2, acting at x_fin. With SNAME body axes
+    (x forward, y starboard, z down), the force and moment terms Y = Y_uudr u^2 delta_r,
+    Z = Z_uuds u^2 delta_s, M = M_uuds u^2 delta_s, N = N_uudr u^2 delta_r, and moments
+    M = -x_fin Z, N = x_fin Y of the fin force:
+
+        Y_uudr =  rho c_La S_fin            [kg/(m rad)]
+        Z_uuds = -rho c_La S_fin            [kg/(m rad)]
+        M_uuds =  rho c_La S_fin x_fin      [kg/rad]
+        N_uudr =  rho c_La S_fin x_fin      [kg/rad]
+
+    (Prestero [2]_, "Control fin forces and moments"; the same expressions are used in the
+    REMUS simulation codes derived from it.) x_fin is negative for fins aft of the origin, which
+    makes M_uuds and N_uudr negative, the sign pattern of the REMUS values in Prestero's
+    coefficient table (Y_uudr = 9.64, Z_uuds = -9.64, M_uuds = N_uudr = -6.15).
+
+    Parameters
+    ----------
+    lift_slope_per_rad : float
+        Fin lift slope dC_L/d(delta) on S_fin [1/rad] (finite-span, e.g. from :func:`fin_curves`).
+    fin_area_m2 : float
+        Planform area of one fin, S_fin [m^2].
+    x_fin_m : float
+        Axial position of the fins' centre of pressure from the body origin [m], negative aft.
+    rho : float
+        Water density [kg/m^3].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Rows Y_uudr, Z_uuds, M_uuds, N_uudr; columns symbol, value, unit, convention.
+    """
+    base = float(rho) * float(lift_slope_per_rad) * float(fin_area_m2)
+    x_fin = float(x_fin_m)
+    pair = "pair of fins, each L = 1/2 rho c_La S_fin delta u^2; Prestero (2001)"
+    rows = [
+        ("Y_uudr", base, "kg/(m*rad)", f"Y = Y_uudr u^2 delta_r; rho c_La S_fin; {pair}"),
+        ("Z_uuds", -base, "kg/(m*rad)", f"Z = Z_uuds u^2 delta_s; -rho c_La S_fin; {pair}"),
+        (
+            "M_uuds",
+            base * x_fin,
+            "kg/rad",
+            f"M = M_uuds u^2 delta_s; rho c_La S_fin x_fin (x_fin < 0 aft); {pair}",
+        ),
+        (
+            "N_uudr",
+            base * x_fin,
+            "kg/rad",
+            f"N = N_uudr u^2 delta_r; rho c_La S_fin x_fin (x_fin < 0 aft); {pair}",
+        ),
+    ]
+    return pd.DataFrame(rows, columns=["symbol", "value", "unit", "convention"])

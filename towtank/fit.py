@@ -1,0 +1,589 @@
+"""Hull coefficients: added mass and quadratic damping with 95 % intervals (SUT-2 report §2).
+
+Added mass (report eqs. 7–8; METHOD.md "Added mass"). At constant acceleration a and speed U
+the balance drag is D = (m − X_udot)·a + R(U). The primary estimate is the joint regression
+D = k2·U|U| + k1·U + M·a over all steady and constant-acceleration samples of the α = 0 runs
+(α = 90° for Y_vdot), X_udot = m − M. Its interval is the regression's (standard errors robust
+to the correlation of samples within a run: clustered by run) combined with the stated
+uncertainty of the weighed mass. The report's own method, a quadratic D_a(U) per acceleration
+level minus the steady quadratic D_s(U) averaged over their common speed range, is the second
+estimate, reported beside it with a check of their agreement.
+
+Damping (report eqs. 13–15; METHOD.md "Damping from C_D(α)"). C_D = R/(½ρAU²) per steady hull
+run with |α| ≤ 30°; C_D(α) = a·α² + b·α + c (α in rad) by OLS (statsmodels); then
+X_u|u| = −½ρA·c, X_uv = X_uw = −½ρA·b, X_v|v| = X_w|w| = −½ρA·(a − c/2), Y_uv = Z_uw = −½ρA·c,
+and Y_v|v| = Z_w|w| = −½ρ·A_lat·C_D,90 from the transverse steady runs' R = K·U|U|. The frontal
+and lateral areas cancel in these dimensional values (the fits are of R/U²), so the dimensions'
+uncertainty enters the prime values only.
+
+A coefficient the day's runs cannot support is omitted with a sentence saying which runs are
+missing; nothing is ever extrapolated into a value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from towtank.reduce import PHASE_ACCEL, PHASE_STEADY, RunReduction
+
+SYMBOLS = (
+    "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
+    "Y_uv", "Z_uw", "Y_v|v|", "Z_w|w|",
+)
+KIND = {s: ("added_mass" if s.endswith("dot") else "damping") for s in SYMBOLS}
+UNIT = {s: ("kg" if KIND[s] == "added_mass" else "kg/m") for s in SYMBOLS}
+MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv",
+          "Z_w|w|": "Y_v|v|"}
+Z95 = 1.959963984540054
+ANGLE_TOL_DEG = 0.5
+
+
+@dataclass
+class Estimate:
+    """One coefficient: model-scale SI value, standard uncertainty, 95 % interval."""
+
+    symbol: str
+    value: float
+    std_error: float
+    ci_low: float
+    ci_high: float
+    method: str
+    n_runs: int
+    alt_value: float = math.nan
+    alt_method: str = ""
+    agreement: str = ""
+
+
+@dataclass
+class AddedMassFit:
+    """Joint regression D = k2·U|U| + k1·U + M·a and its by-products."""
+
+    symbol: str
+    mass: float  # [kg]
+    M: float  # m − X_udot [kg]
+    M_se: float  # [kg]
+    k2: float  # [N s²/m²]
+    k1: float  # [N s/m]
+    dof: int
+    runs: list[int]
+    accel_levels: list[float]
+    residual_by_run: dict[int, float]
+    estimate: Estimate
+    curve_difference: dict[str, object] = field(default_factory=dict)
+
+
+@dataclass
+class DampingFit:
+    """C_D(α) quadratic fit and the transverse C_D,90."""
+
+    params: np.ndarray  # a, b, c  (C_D = a α² + b α + c, α in rad)
+    cov: np.ndarray
+    dof: int
+    rho: float
+    area: float
+    runs: pd.DataFrame  # run, angle_deg, alpha_rad, speed, cd, fitted, resid, student, cooks
+    outliers: list[int]
+    cd90: float = math.nan
+    cd90_se: float = math.nan
+    transverse_runs: pd.DataFrame | None = None
+
+
+@dataclass
+class HullFit:
+    """All hull coefficients of the day, with their diagnostics and messages."""
+
+    estimates: dict[str, Estimate]
+    rho: float
+    length: float
+    mass: float
+    added_mass: dict[str, AddedMassFit]
+    damping: DampingFit | None
+    repeats: pd.DataFrame
+    messages: list[str]
+    lift_slope: tuple[float, float, float] | None = None  # dCL/dα [1/rad], ci low, ci high
+
+    def table(self) -> pd.DataFrame:
+        """The estimates in FORMATS order (without prime/reference columns)."""
+        rows = [vars(self.estimates[s]) for s in SYMBOLS if s in self.estimates]
+        return pd.DataFrame(rows)
+
+
+# ------------------------------------------------------------------------------ selection
+def select_runs(runs: pd.DataFrame, angle_deg: float, *, config: str = "hull") -> pd.DataFrame:
+    """The usable runs of ``config`` at ``angle_deg`` (± 0.5°)."""
+    ok = (runs["status"] == "ok") & (runs["config"] == config)
+    return runs[ok & (np.abs(runs["angle_deg"] - angle_deg) <= ANGLE_TOL_DEG)]
+
+
+def pooled_samples(
+    reductions: dict[int, RunReduction], run_ids: list[int]
+) -> dict[str, np.ndarray]:
+    """Fit samples (tare removed) of several runs, with a 'run' column."""
+    parts = [reductions[r].samples for r in run_ids]
+    out = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
+    out["run"] = np.concatenate(
+        [np.full(p["U"].size, r, dtype=int) for r, p in zip(run_ids, parts, strict=True)]
+    )
+    return out
+
+
+def accel_levels(reductions: dict[int, RunReduction], run_ids: list[int], *,
+                 rel_tol: float = 0.1) -> list[float]:
+    """Distinct constant-acceleration levels [m/s²] among the runs (clustered within 10 %)."""
+    vals = sorted(reductions[r].accel_mean for r in run_ids
+                  if math.isfinite(reductions[r].accel_mean))
+    levels: list[list[float]] = []
+    for v in vals:
+        if levels and abs(v - np.mean(levels[-1])) <= rel_tol * abs(np.mean(levels[-1])):
+            levels[-1].append(v)
+        else:
+            levels.append([v])
+    return [float(np.mean(g)) for g in levels]
+
+
+# ----------------------------------------------------------------------------- added mass
+def joint_regression(
+    speed: np.ndarray, accel: np.ndarray, drag: np.ndarray, groups: np.ndarray
+):
+    """OLS of D = k2·U|U| + k1·U + M·a with run-clustered standard errors.
+
+    Parameters
+    ----------
+    speed : ndarray
+        Sample speeds U [m/s].
+    accel : ndarray
+        Sample accelerations a [m/s²].
+    drag : ndarray
+        Tare-corrected balance drag D [N].
+    groups : ndarray
+        Run number of each sample (the clusters).
+
+    Returns
+    -------
+    statsmodels RegressionResults with params (k2 [N s²/m²], k1 [N s/m], M [kg]).
+    """
+    import statsmodels.api as sm
+
+    x = np.column_stack([speed * np.abs(speed), speed, accel])
+    model = sm.OLS(drag, x)
+    if len(np.unique(groups)) >= 4:
+        return model.fit(cov_type="cluster", cov_kwds={"groups": groups}, use_t=True)
+    return model.fit()
+
+
+def fit_added_mass(
+    symbol: str,
+    reductions: dict[int, RunReduction],
+    run_ids: list[int],
+    mass: float,
+    mass_sd: float,
+) -> AddedMassFit:
+    """Added mass from the runs at one angle (α = 0 for X_udot, 90° for Y_vdot).
+
+    Parameters
+    ----------
+    symbol : str
+        "X_udot" or "Y_vdot".
+    reductions : dict
+        Tare-corrected run reductions.
+    run_ids : list of int
+        The usable runs at that angle.
+    mass : float
+        Weighed mass of the model (everything downstream of the balance but the sting) [kg].
+    mass_sd : float
+        Standard uncertainty of the weighed mass [kg].
+    """
+    s = pooled_samples(reductions, run_ids)
+    res = joint_regression(s["U"], s["a"], s["drag"], s["run"])
+    k2, k1, M = (float(v) for v in res.params)
+    M_se = float(res.bse[2])
+    value = mass - M
+    u_c = math.hypot(M_se, mass_sd)
+    clustered = getattr(res, "cov_type", "nonrobust") == "cluster"
+    dof = len(set(s["run"].tolist())) - 1 if clustered else int(res.df_resid)
+    tq = _t95(dof)
+    resid = s["drag"] - res.fittedvalues
+    by_run = {int(r): float(np.mean(resid[s["run"] == r])) for r in run_ids}
+    est = Estimate(
+        symbol=symbol,
+        value=value,
+        std_error=u_c,
+        ci_low=value - tq * u_c,
+        ci_high=value + tq * u_c,
+        method="joint regression D = k2·U|U| + k1·U + (m − " + symbol + ")·a over steady and "
+        "constant-acceleration samples (report eqs. 7–8)",
+        n_runs=len(run_ids),
+    )
+    fit = AddedMassFit(
+        symbol=symbol, mass=mass, M=M, M_se=M_se, k2=k2, k1=k1, dof=dof, runs=list(run_ids),
+        accel_levels=accel_levels(reductions, run_ids), residual_by_run=by_run, estimate=est,
+    )
+    fit.curve_difference = curve_difference(reductions, run_ids, mass)
+    cd = fit.curve_difference
+    if cd.get("value") is not None and math.isfinite(float(cd["value"])):  # type: ignore[arg-type]
+        alt = float(cd["value"])  # type: ignore[arg-type]
+        est.alt_value = alt
+        est.alt_method = "curve difference (report eqs. 7–8: per-acceleration quadratic minus "
+        "steady quadratic)"
+        spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]
+        tol = 2.0 * math.hypot(M_se, spread)
+        diff = alt - value
+        est.agreement = (
+            f"agree: difference {diff:+.4g} kg within {tol:.2g} kg"
+            if abs(diff) <= max(tol, 1e-12)
+            else f"DISAGREE: difference {diff:+.4g} kg exceeds {tol:.2g} kg"
+        )
+    return fit
+
+
+def curve_difference(
+    reductions: dict[int, RunReduction], run_ids: list[int], mass: float
+) -> dict[str, object]:
+    """The report's method: ΔD = D_a(U) − D_s(U) averaged over the common speed range.
+
+    Per acceleration level a quadratic D_a(U) = p2·U² + p1·U + p0 through that level's
+    constant-acceleration samples, and D_s(U) = q2·U|U| + q1·U through the steady samples;
+    M_a = mean ΔD / a over the common speed range; X = m − M_a, averaged over the levels.
+    """
+    s = pooled_samples(reductions, run_ids)
+    st = s["phase"] == PHASE_STEADY
+    acc = s["phase"] == PHASE_ACCEL
+    if st.sum() < 3 or acc.sum() < 3:
+        return {"value": None, "levels": []}
+    us, ds = s["U"][st], s["drag"][st]
+    q, *_ = np.linalg.lstsq(np.column_stack([us * np.abs(us), us]), ds, rcond=None)
+    levels = accel_levels(reductions, run_ids)
+    out_levels = []
+    for level in levels:
+        sel = acc & (np.abs(s["a"] - level) <= 0.15 * abs(level))
+        if sel.sum() < 4:
+            continue
+        ua, da = s["U"][sel], s["drag"][sel]
+        lo, hi = max(ua.min(), us.min()), min(ua.max(), us.max())
+        if not hi > lo:
+            lo, hi = ua.min(), ua.max()  # steady curve through the origin covers [0, max]
+            lo = max(lo, 0.0)
+        p = np.polyfit(ua, da, 2)
+        grid = np.linspace(lo, hi, 50)
+        dd = np.polyval(p, grid) - (q[0] * grid * np.abs(grid) + q[1] * grid)
+        a_mean = float(np.mean(s["a"][sel]))
+        M_a = float(np.mean(dd)) / a_mean
+        out_levels.append({"accel": a_mean, "delta_drag": float(np.mean(dd)), "M": M_a,
+                           "value": mass - M_a, "speed_range": (float(lo), float(hi)),
+                           "n": int(sel.sum()), "quadratic": p.tolist()})
+    if not out_levels:
+        return {"value": None, "levels": []}
+    vals = np.array([lv["value"] for lv in out_levels])
+    return {
+        "value": float(np.mean(vals)),
+        "spread": float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0,
+        "levels": out_levels,
+        "steady_quadratic": q.tolist(),
+    }
+
+
+# -------------------------------------------------------------------------------- damping
+def fit_cd_alpha(alpha_rad: np.ndarray, cd: np.ndarray):
+    """OLS of C_D(α) = a·α² + b·α + c (report eq. 13); statsmodels results."""
+    import statsmodels.api as sm
+
+    x = np.column_stack([alpha_rad**2, alpha_rad, np.ones_like(alpha_rad)])
+    return sm.OLS(cd, x).fit()
+
+
+def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: int,
+         method: str, n: int) -> Estimate:
+    value = float(g @ params)
+    se = float(math.sqrt(max(g @ cov @ g, 0.0)))
+    tq = _t95(dof)
+    return Estimate(symbol, value, se, value - tq * se, value + tq * se, method, n)
+
+
+def _t95(dof: int) -> float:
+    from scipy.stats import t
+
+    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
+
+
+def fit_damping(
+    runs: pd.DataFrame, rho: float, area: float, alpha_max_deg: float
+) -> tuple[DampingFit | None, dict[str, Estimate], list[str]]:
+    """C_D(α) damping terms from the steady hull runs with |α| ≤ ``alpha_max_deg``.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv rows (status ok) with angle_deg, speed_mean, drag_mean, rho.
+    rho : float
+        Water density for the dimensional values [kg/m³].
+    area : float
+        Frontal area A [m²] (C_D reference).
+    alpha_max_deg : float
+        Largest |α| used [deg].
+    """
+    msgs: list[str] = []
+    est: dict[str, Estimate] = {}
+    hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")]
+    sel = hull[np.abs(hull["angle_deg"]) <= alpha_max_deg + 1e-9]
+    sel = sel[sel["speed_mean"] > 0]
+    if sel.empty:
+        msgs.append("X_u|u|, X_uv, X_v|v| and Y_uv need steady hull runs at |α| ≤ "
+                    f"{alpha_max_deg:g}°; the day has none.")
+        return None, est, msgs
+    alpha = np.radians(sel["angle_deg"].to_numpy(float))
+    cd = sel["cd"].to_numpy(float)
+    q = 0.5 * rho * area
+    angles = sorted(set(np.round(sel["angle_deg"].to_numpy(float), 1)))
+    n = len(sel)
+    method = f"C_D(α) quadratic OLS over {n} steady runs at α = " + ", ".join(
+        f"{a:g}" for a in angles) + "° (report eqs. 13–15)"
+    if len(angles) >= 3 and n >= 4:
+        res = fit_cd_alpha(alpha, cd)
+        params, cov, dof = np.asarray(res.params), np.asarray(res.cov_params()), int(res.df_resid)
+        infl = res.get_influence()
+        student = infl.resid_studentized_external
+        cooks = infl.cooks_distance[0]
+        table = pd.DataFrame({
+            "run": sel["run"].to_numpy(int), "angle_deg": sel["angle_deg"].to_numpy(float),
+            "alpha_rad": alpha, "speed": sel["speed_mean"].to_numpy(float), "cd": cd,
+            "fitted": res.fittedvalues, "resid": res.resid, "student": student,
+            "cooks": cooks,
+        })
+        outl = table.loc[(np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5)), "run"]
+        fit = DampingFit(params=params, cov=cov, dof=dof, rho=rho, area=area, runs=table,
+                         outliers=[int(r) for r in outl])
+        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, dof, method, n)
+        est["X_uv"] = _lin("X_uv", np.array([0, -q, 0]), params, cov, dof, method, n)
+        est["X_v|v|"] = _lin("X_v|v|", np.array([-q, 0, q / 2]), params, cov, dof, method, n)
+        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, dof, method, n)
+        return fit, est, msgs
+    zero = sel[np.abs(sel["angle_deg"]) <= ANGLE_TOL_DEG]
+    msgs.append(
+        "X_uv and X_v|v| need steady hull runs at three or more angles up to "
+        f"{alpha_max_deg:g}°; the day has {len(angles)} ("
+        + ", ".join(f"{a:g}°" for a in angles) + ")."
+    )
+    if len(zero) >= 2:
+        c = zero["cd"].to_numpy(float)
+        mean, se = float(np.mean(c)), float(np.std(c, ddof=1) / math.sqrt(len(c)))
+        params = np.array([0.0, 0.0, mean])
+        cov = np.diag([0.0, 0.0, se**2])
+        m2 = f"mean C_D of {len(zero)} steady runs at α = 0 (report eq. 13, c only)"
+        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, len(c) - 1, m2,
+                             len(c))
+        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, len(c) - 1, m2, len(c))
+    else:
+        msgs.append("X_u|u| and Y_uv need two or more steady hull runs at α = 0.")
+    return None, est, msgs
+
+
+def fit_transverse(
+    runs: pd.DataFrame, rho: float, lateral_area: float
+) -> tuple[Estimate | None, float, float, pd.DataFrame | None, list[str]]:
+    """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|."""
+    import statsmodels.api as sm
+
+    tr = select_runs(runs, 90.0)
+    tr = tr[tr["speed_mean"] > 0]
+    if len(tr) < 2:
+        return None, math.nan, math.nan, None, [
+            "Y_v|v| and Z_w|w| need two or more steady transverse (α = 90°) hull runs; "
+            f"the day has {len(tr)}."
+        ]
+    u = tr["speed_mean"].to_numpy(float)
+    r = tr["drag_mean"].to_numpy(float)
+    res = sm.OLS(r, (u * np.abs(u))[:, None]).fit()
+    K, K_se, dof = float(res.params[0]), float(res.bse[0]), int(res.df_resid)
+    tq = _t95(dof)
+    value = -K
+    est = Estimate(
+        "Y_v|v|", value, K_se, value - tq * K_se, value + tq * K_se,
+        f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
+        "(report eq. 15)", len(tr),
+    )
+    q90 = 0.5 * rho * lateral_area
+    table = pd.DataFrame({"run": tr["run"].to_numpy(int), "speed": u, "drag": r,
+                          "cd90": r / (q90 * u * u), "resid": res.resid})
+    return est, K / q90, K_se / q90, table, []
+
+
+def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:
+    """Spread of C_D between repeats: runs at the same angle and speed (within 3 %)."""
+    hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")].copy()
+    rows = []
+    for angle, grp in hull.groupby(np.round(hull["angle_deg"], 1)):
+        speeds = grp.sort_values("speed_mean")
+        cluster: list[pd.Series] = []
+        for _, r in speeds.iterrows():
+            if cluster and abs(r["speed_mean"] - cluster[0]["speed_mean"]) > 0.03 * max(
+                cluster[0]["speed_mean"], 1e-9
+            ):
+                rows.append(_spread_row(angle, cluster))
+                cluster = []
+            cluster.append(r)
+        if cluster:
+            rows.append(_spread_row(angle, cluster))
+    df = pd.DataFrame(rows)
+    return df[df["n"] > 1].reset_index(drop=True) if not df.empty else df
+
+
+def _spread_row(angle: float, cluster: list[pd.Series]) -> dict[str, object]:
+    cds = np.array([c["cd"] for c in cluster], dtype=float)
+    drags = np.array([c["drag_mean"] for c in cluster], dtype=float)
+    return {
+        "angle_deg": float(angle),
+        "speed": float(np.mean([c["speed_mean"] for c in cluster])),
+        "n": len(cluster),
+        "runs": " ".join(str(int(c["run"])) for c in cluster),
+        "cd_mean": float(np.mean(cds)),
+        "cd_std": float(np.std(cds, ddof=1)) if len(cds) > 1 else math.nan,
+        "drag_std": float(np.std(drags, ddof=1)) if len(drags) > 1 else math.nan,
+    }
+
+
+# ------------------------------------------------------------------------------- the table
+def fit_hull(
+    runs: pd.DataFrame,
+    reductions: dict[int, RunReduction],
+    *,
+    mass: float,
+    mass_sd: float,
+    length: float,
+    frontal_area: float,
+    lateral_area: float,
+    alpha_max_deg: float = 30.0,
+) -> HullFit:
+    """Every hull coefficient the day supports (model scale, SI, SNAME signs).
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv rows.
+    reductions : dict
+        Tare-corrected run reductions (for the sample-level added-mass regressions).
+    mass : float
+        Weighed model mass [kg].
+    mass_sd : float
+        Its standard uncertainty [kg].
+    length : float
+        Model length L [m] (for the prime values).
+    frontal_area : float
+        Frontal area A [m²].
+    lateral_area : float
+        Projected side area A_lat [m²].
+    alpha_max_deg : float
+        Largest |α| of the C_D(α) fit [deg].
+    """
+    messages: list[str] = []
+    hull_ok = runs[(runs["status"] == "ok") & (runs["config"] == "hull")]
+    rho = float(hull_ok["rho"].mean()) if len(hull_ok) else math.nan
+    estimates: dict[str, Estimate] = {}
+    added: dict[str, AddedMassFit] = {}
+    for symbol, angle in (("X_udot", 0.0), ("Y_vdot", 90.0)):
+        sel = select_runs(runs, angle)
+        ids = [int(r) for r in sel["run"] if int(r) in reductions]
+        levels = accel_levels(reductions, ids)
+        if len(levels) < 2:
+            found = ", ".join(f"{lv:.2f}" for lv in levels) or "none"
+            messages.append(
+                f"{symbol} needs accelerated hull runs at α = {angle:g}° at two or more "
+                f"accelerations; the day has {len(levels)} (m/s²: {found}), so it is omitted."
+            )
+            continue
+        fit = fit_added_mass(symbol, reductions, ids, mass, mass_sd)
+        added[symbol] = fit
+        estimates[symbol] = fit.estimate
+    damping, est_d, msgs = fit_damping(runs, rho, frontal_area, alpha_max_deg)
+    estimates.update(est_d)
+    messages += msgs
+    yvv, cd90, cd90_se, ttable, msgs = fit_transverse(runs, rho, lateral_area)
+    messages += msgs
+    if yvv is not None:
+        estimates["Y_v|v|"] = yvv
+        if damping is not None:
+            damping.cd90, damping.cd90_se, damping.transverse_runs = cd90, cd90_se, ttable
+    for target, source in MIRROR.items():
+        if source in estimates:
+            e = estimates[source]
+            estimates[target] = Estimate(
+                target, e.value, e.std_error, e.ci_low, e.ci_high,
+                f"= {source} (axisymmetric hull)", e.n_runs, e.alt_value, e.alt_method,
+                e.agreement,
+            )
+    lift_slope = None
+    small = hull_ok[np.abs(hull_ok["angle_deg"]) <= alpha_max_deg]
+    if small["cl"].notna().sum() >= 3 and small["angle_deg"].nunique() >= 2:
+        import statsmodels.api as sm
+
+        a = np.radians(small["angle_deg"].to_numpy(float))
+        res = sm.OLS(small["cl"].to_numpy(float), a[:, None]).fit()
+        lo, hi = res.conf_int()[0]
+        lift_slope = (float(res.params[0]), float(lo), float(hi))
+    return HullFit(
+        estimates=estimates, rho=rho, length=length, mass=mass, added_mass=added,
+        damping=damping, repeats=repeat_spread(runs), messages=messages, lift_slope=lift_slope,
+    )
+
+
+def load_reference(reference: str) -> dict[str, float]:
+    """Reference prime values by symbol: the built-in 'remus' set or a CSV (symbol, prime)."""
+    from importlib import resources
+
+    if reference == "remus":
+        with resources.files("towtank").joinpath("data", "sut2_table4.csv").open() as fh:
+            df = pd.read_csv(fh, comment="#")
+        return dict(zip(df["symbol"], df["remus_prime"].astype(float), strict=True))
+    df = pd.read_csv(reference, comment="#")
+    cols = {c.lower().strip(): c for c in df.columns}
+    if "symbol" not in cols or "prime" not in cols:
+        from towtank.errors import ProtocolError
+
+        raise ProtocolError(
+            f"{reference}: a reference CSV needs the columns symbol and prime "
+            f"(found {', '.join(df.columns)})."
+        )
+    return dict(zip(df[cols["symbol"]].astype(str).str.strip(),
+                    df[cols["prime"]].astype(float), strict=True))
+
+
+COEFFICIENT_COLUMNS = [
+    "symbol", "value", "unit", "prime", "ci_low", "ci_high", "method", "reference_prime",
+    "diff_pct", "prototype_value",
+]
+
+
+def coefficients_table(
+    hull: HullFit, reference: dict[str, float], length_sd: float = 0.0
+) -> pd.DataFrame:
+    """coefficients.csv (FORMATS §5) without prototype values, plus extension columns.
+
+    prime = value/(½ρL³) for added mass and value/(½ρL²) for damping; diff_pct =
+    (prime − reference)/|reference|·100, empty where the reference is zero.
+    """
+    rows = []
+    for s in SYMBOLS:
+        if s not in hull.estimates:
+            continue
+        e = hull.estimates[s]
+        k = 3 if KIND[s] == "added_mass" else 2
+        scale = 0.5 * hull.rho * hull.length**k
+        prime = e.value / scale
+        ref = reference.get(s, math.nan)
+        diff = (prime - ref) / abs(ref) * 100.0 if math.isfinite(ref) and ref != 0 else math.nan
+        rel_len = k * length_sd / hull.length
+        prime_se = math.hypot(e.std_error / scale, abs(prime) * rel_len)
+        half = (e.ci_high - e.ci_low) / 2.0
+        factor = half / e.std_error if e.std_error > 0 else Z95
+        rows.append({
+            "symbol": s, "value": e.value, "unit": UNIT[s], "prime": prime,
+            "ci_low": e.ci_low, "ci_high": e.ci_high, "method": e.method,
+            "reference_prime": ref, "diff_pct": diff, "prototype_value": math.nan,
+            "std_error": e.std_error, "prime_ci_low": prime - factor * prime_se,
+            "prime_ci_high": prime + factor * prime_se, "n_runs": e.n_runs,
+            "alt_value": e.alt_value, "alt_method": e.alt_method, "agreement": e.agreement,
+        })
+    return pd.DataFrame(rows)

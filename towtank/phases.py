@@ -1,0 +1,232 @@
+"""Automatic phase detection from the carriage speed (report Fig. 2; METHOD.md "A run").
+
+A run is: still water (zero window) → acceleration → speed settling → steady measurement zone →
+deceleration → stop. The phases are found from the filtered speed and its derivative alone, so
+they do not depend on the set values in the sheet (those only cross-check). Thresholds scale
+with the run's own peak speed and acceleration, which keeps the detection robust from 0.1 m/s
+transverse tows to 3 m/s; every window is trimmed away from its transitions.
+
+All functions are vectorised over the samples (no per-sample Python loop).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from towtank.errors import RunError
+
+PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
+
+
+@dataclass(frozen=True)
+class Phases:
+    """Index windows [i0, i1) of a run's phases; ``None`` where a phase is absent."""
+
+    still_pre: tuple[int, int]
+    accel: tuple[int, int] | None
+    steady: tuple[int, int]
+    decel: tuple[int, int] | None
+    still_post: tuple[int, int] | None
+    motion: tuple[int, int]
+    speed_level: float
+    accel_level: float | None
+
+    def windows_s(self, t: np.ndarray) -> dict[str, tuple[float, float] | None]:
+        """The phase windows in seconds."""
+        out: dict[str, tuple[float, float] | None] = {}
+        for name in PHASE_NAMES:
+            w = getattr(self, name)
+            out[name] = None if w is None else (float(t[w[0]]), float(t[w[1] - 1]))
+        return out
+
+
+def runs_of_true(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start indices and lengths of the stretches of True in a boolean array."""
+    if mask.size == 0:
+        return np.array([], dtype=int), np.array([], dtype=int)
+    m = np.concatenate(([False], mask, [False])).astype(np.int8)
+    d = np.diff(m)
+    starts = np.flatnonzero(d == 1)
+    return starts, np.flatnonzero(d == -1) - starts
+
+
+def close_gaps(mask: np.ndarray, max_gap: int) -> np.ndarray:
+    """Fill stretches of False no longer than ``max_gap`` that lie between two True samples."""
+    if max_gap <= 0 or not mask.any():
+        return mask
+    out = mask.copy()
+    starts, lengths = runs_of_true(~mask)
+    for s, n in zip(starts, lengths, strict=True):
+        if n <= max_gap and s > 0 and s + n < mask.size:
+            out[s : s + n] = True
+    return out
+
+
+def longest_run(mask: np.ndarray) -> tuple[int, int] | None:
+    """[i0, i1) of the longest stretch of True (the first of equals)."""
+    starts, lengths = runs_of_true(mask)
+    if starts.size == 0:
+        return None
+    k = int(np.argmax(lengths))
+    return int(starts[k]), int(starts[k] + lengths[k])
+
+
+def _trim(window: tuple[int, int] | None, n_trim: int, min_len: int) -> tuple[int, int] | None:
+    if window is None:
+        return None
+    i0, i1 = window[0] + n_trim, window[1] - n_trim
+    return (i0, i1) if i1 - i0 >= max(min_len, 2) else None
+
+
+def detect_phases(
+    t: np.ndarray,
+    speed: np.ndarray,
+    accel: np.ndarray,
+    fs: float,
+    *,
+    trim_s: float = 0.375,
+    min_steady_s: float = 0.5,
+    min_accel_s: float = 0.3,
+    min_still_s: float = 0.3,
+    zero_window_s: float = 2.0,
+    steady_tolerance: float = 0.01,
+) -> Phases:
+    """Split a run into its phases from the filtered speed.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time [s].
+    speed : ndarray
+        Low-pass filtered carriage speed [m/s].
+    accel : ndarray
+        Acceleration from the filtered speed [m/s²].
+    fs : float
+        Sample rate [Hz].
+    trim_s : float
+        Cut from each end of the acceleration and steady windows [s] (filter settling).
+    min_steady_s, min_accel_s : float
+        Shortest usable steady and constant-acceleration windows after trimming [s]. A run
+        without a steady window is rejected; a too short acceleration window is dropped.
+    min_still_s : float
+        Shortest still window before the carriage moves [s]; without it there is no zero.
+    zero_window_s : float
+        Longest still window used for the zero (the part nearest the motion) [s].
+    steady_tolerance : float
+        Half-width of the plateau band as a fraction of the plateau speed [-].
+
+    Returns
+    -------
+    Phases
+
+    Raises
+    ------
+    RunError
+        The carriage never moves, there is no still window before it moves, or the speed never
+        settles on a plateau.
+    """
+    n = speed.size
+    v_peak = float(np.percentile(speed, 99.0))
+    if not v_peak > 0.02:
+        raise RunError(f"the carriage never moves (peak speed {v_peak:.3f} m/s)")
+    a_abs_peak = float(np.percentile(np.abs(accel), 99.5))
+    # --- motion: where speed or acceleration rises above small fractions of their peaks
+    moving = (speed > 0.03 * v_peak) | (np.abs(accel) > 0.1 * a_abs_peak)
+    moving = close_gaps(moving, int(0.5 * fs))
+    motion = longest_run(moving)
+    assert motion is not None
+    margin = int(round((trim_s + 0.1) * fs))
+    pre_end = motion[0] - margin
+    if pre_end < int(min_still_s * fs):
+        raise RunError(
+            f"there is no still window before the carriage moves (motion starts at "
+            f"t = {t[motion[0]]:.2f} s): the zero cannot be found"
+        )
+    pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
+    post_start = motion[1] + margin
+    post = (post_start, min(n, post_start + int(zero_window_s * fs)))
+    still_post = post if post[1] - post[0] >= int(min_still_s * fs) else None
+
+    # --- steady plateau: speed within a narrow band of the level where acceleration is ~0
+    seg = slice(motion[0], motion[1])
+    v_seg, a_seg = speed[seg], accel[seg]
+    fast = v_seg > 0.5 * v_peak
+    calm = np.abs(a_seg) < max(0.05 * a_abs_peak, 0.002)
+    cand = fast & calm
+    if cand.sum() < 3:
+        raise RunError(
+            f"the carriage speed never settles on a plateau (peak {v_peak:.3f} m/s, "
+            "no stretch of constant speed)"
+        )
+    level = float(np.median(v_seg[cand]))
+    tol = max(steady_tolerance * level, 0.002)
+    band = close_gaps(np.abs(v_seg - level) <= tol, int(0.05 * fs))
+    plateau = longest_run(band)
+    assert plateau is not None
+    plateau = (plateau[0] + motion[0], plateau[1] + motion[0])
+    level = float(np.median(speed[plateau[0] : plateau[1]]))
+    n_trim = int(round(trim_s * fs))
+    steady = _trim(plateau, n_trim, int(min_steady_s * fs))
+    if steady is None:
+        dur = (plateau[1] - plateau[0]) / fs
+        raise RunError(
+            f"the carriage speed never settles on a plateau long enough to measure "
+            f"(longest steady stretch {dur:.2f} s at {level:.3f} m/s, "
+            f"{min_steady_s:g} s needed after trimming {trim_s:g} s at each end)"
+        )
+
+    # --- constant acceleration between motion start and plateau; deceleration after it
+    accel_w, accel_level = _constant_stretch(accel, motion[0], plateau[0], +1, fs)
+    accel_w = _trim(accel_w, n_trim, int(min_accel_s * fs))
+    decel_w, _ = _constant_stretch(accel, plateau[1], motion[1], -1, fs)
+    decel_w = _trim(decel_w, n_trim, int(min_accel_s * fs))
+    if accel_w is not None:
+        accel_level = float(np.mean(accel[accel_w[0] : accel_w[1]]))
+    else:
+        accel_level = None
+    return Phases(
+        still_pre=pre,
+        accel=accel_w,
+        steady=steady,
+        decel=decel_w,
+        still_post=still_post,
+        motion=motion,
+        speed_level=level,
+        accel_level=accel_level,
+    )
+
+
+def _constant_stretch(
+    accel: np.ndarray, i0: int, i1: int, sign: int, fs: float
+) -> tuple[tuple[int, int] | None, float | None]:
+    """The constant-acceleration stretch of sign ``sign`` in [i0, i1)."""
+    if i1 - i0 < 3:
+        return None, None
+    a = sign * accel[i0:i1]
+    peak = float(np.percentile(a, 98.0))
+    if not peak > 0.005:
+        return None, None
+    strong = close_gaps(a > 0.5 * peak, int(0.05 * fs))
+    core = longest_run(strong)
+    if core is None:
+        return None, None
+    level = float(np.median(a[core[0] : core[1]]))
+    band = close_gaps(np.abs(a - level) <= max(0.05 * level, 0.004), int(0.05 * fs))
+    w = longest_run(band)
+    if w is None:
+        return None, None
+    return (w[0] + i0, w[1] + i0), sign * level
+
+
+def manual_window(t: np.ndarray, start_s: float, end_s: float) -> tuple[int, int]:
+    """Index window for a steady window given by hand in the run sheet [s]."""
+    i0 = int(np.searchsorted(t, start_s, side="left"))
+    i1 = int(np.searchsorted(t, end_s, side="right"))
+    if i1 - i0 < 2:
+        raise RunError(
+            f"the manual window {start_s:g}–{end_s:g} s holds no samples "
+            f"(the file spans {t[0]:.2f}–{t[-1]:.2f} s)"
+        )
+    return i0, i1

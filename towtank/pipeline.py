@@ -1,0 +1,323 @@
+"""The day's pipeline: protocol → run sheet → runs → reductions → tare → fits → outputs.
+
+Each stage is a module of its own and data flows one way; this module only wires them. Any
+failure confined to one run rejects that run with one sentence and the rest of the day goes on;
+a protocol or run-sheet fault stops before anything is written.
+"""
+
+from __future__ import annotations
+
+import math
+import traceback
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from towtank.cache import RunCache, settings_key
+from towtank.errors import RunError
+from towtank.ingest import file_bytes, load_run
+from towtank.protocol import Protocol, load_protocol
+from towtank.reduce import RunReduction, apply_tare, force_coefficient, reduce_run
+from towtank.runsheet import read_run_sheet, unlisted_files
+from towtank.tare import TareModel, fit_tare_group
+
+G = 9.80665
+
+
+@dataclass
+class DayResult:
+    """Everything computed for a day; the report stage only formats it."""
+
+    protocol: Protocol
+    sheet: pd.DataFrame
+    reductions: dict[int, RunReduction]
+    rejected: dict[int, str]
+    tares: dict[str, TareModel]
+    runs: pd.DataFrame
+    warnings: list[str] = field(default_factory=list)
+    hull: Any = None  # towtank.fit.HullFit
+    fins: Any = None  # towtank.fins results
+    scaling: Any = None  # towtank.similarity results
+    inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
+    report_date: str | None = None
+
+    @property
+    def n_rejected(self) -> int:
+        return len(self.rejected)
+
+
+def _internal_error_sentence(exc: BaseException) -> str:
+    last = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
+    where = f" in {Path(last.filename).name}:{last.lineno}" if last else ""
+    return (
+        f"an unexpected internal error ({type(exc).__name__}: {exc}{where}); "
+        "please report it, and rerun with --debug for the traceback"
+    )
+
+
+def reduce_one(
+    protocol: Protocol, row: dict[str, Any], *, debug: bool = False
+) -> tuple[int, RunReduction | None, str | None]:
+    """Read and reduce one run of the sheet; never raises for a data problem."""
+    run = int(row["run"])
+    file = str(row["file"])
+    path = protocol.campaign.data_dir / file
+    try:
+        p = protocol.processing
+        data = file_bytes(path)
+        raw = load_run(
+            path,
+            protocol.channels,
+            max_nan_gap_s=p.max_nan_gap_s,
+            max_bad_row_fraction=p.max_bad_row_fraction,
+            do_despike=p.despike,
+            data=data,
+        )
+        ws = row.get("window_start_s", math.nan)
+        we = row.get("window_end_s", math.nan)
+        window = (float(ws), float(we)) if math.isfinite(ws) and math.isfinite(we) else None
+        red = reduce_run(
+            raw,
+            p,
+            run=run,
+            file=file,
+            window_s=window,
+            speed_nominal=float(row.get("speed_nominal", math.nan)),
+            accel_nominal=float(row.get("accel_nominal", math.nan)),
+        )
+        return run, red, None
+    except RunError as exc:
+        return run, None, f"run {run}: {exc.reason}"
+    except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
+        if debug:
+            raise
+        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}"
+
+
+def fit_tares(
+    sheet: pd.DataFrame, reductions: dict[int, RunReduction]
+) -> dict[str, TareModel]:
+    """One tare model per group from that group's usable sting runs."""
+    out: dict[str, TareModel] = {}
+    stings = sheet[(sheet["config"] == "sting") & sheet["run"].isin(list(reductions))]
+    for group, rows in stings.groupby("tare_group", sort=True):
+        reds = [reductions[int(r)] for r in rows["run"]]
+        s = {k: np.concatenate([r.samples[k] for r in reds]) for k in ("U", "a", "drag", "lift")}
+        has_lift = all(r.has_lift for r in reds)
+        out[str(group)] = fit_tare_group(
+            str(group),
+            [r.run for r in reds],
+            s["U"],
+            s["a"],
+            s["drag"],
+            s["lift"] if has_lift else None,
+            [r.speed_mean for r in reds],
+        )
+    return out
+
+
+def water_at(temperature_C: float, water_type: str, salinity: float | None) -> tuple[float, float]:
+    """(rho [kg/m³], nu [m²/s]) of the tank water."""
+    from towtank.water import water_properties
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        w = water_properties(temperature_C, water_type, salinity)
+    return float(w.rho), float(w.nu)
+
+
+RUN_COLUMNS = [
+    "run", "file", "config", "angle_deg", "status", "reason", "speed_mean", "accel_mean",
+    "drag_mean", "lift_mean", "tare_drag", "cd", "cl", "re", "fn",
+]
+EXTRA_COLUMNS = [
+    "test", "tare_group", "speed_nominal", "accel_nominal", "water_temp_C", "rho", "nu",
+    "speed_std", "drag_std", "lift_tare", "cd_lateral", "zero_drag", "drift_drag", "zero_lift",
+    "drift_lift", "still_pre_start_s", "still_pre_end_s", "accel_start_s", "accel_end_s",
+    "steady_start_s", "steady_end_s", "decel_start_s", "decel_end_s", "window_source",
+    "fs_hz", "n_samples", "sha256", "notes", "remarks",
+]
+
+
+def run_table(
+    protocol: Protocol,
+    sheet: pd.DataFrame,
+    reductions: dict[int, RunReduction],
+    rejected: dict[int, str],
+) -> pd.DataFrame:
+    """runs.csv: one row per run of the sheet (FORMATS §5), then extension columns."""
+    rows = []
+    model, fin = protocol.model, protocol.fin
+    for rec in sheet.to_dict("records"):
+        run = int(rec["run"])
+        status = "void" if rec["status"] == "void" else "ok"
+        reason = rec["remarks"] if status == "void" else ""
+        if run in rejected:
+            status, reason = "rejected", rejected[run]
+        row: dict[str, Any] = {c: math.nan for c in RUN_COLUMNS + EXTRA_COLUMNS}
+        row.update(
+            run=run, file=rec["file"], config=rec["config"], angle_deg=rec["angle_deg"],
+            status=status, reason=reason, test=rec["test"], tare_group=rec["tare_group"],
+            speed_nominal=rec["speed_nominal"], accel_nominal=rec["accel_nominal"],
+            water_temp_C=rec["water_temp_C"], remarks=rec["remarks"], notes="",
+            window_source="", sha256="",
+        )
+        red = reductions.get(run)
+        if red is not None and status == "ok":
+            rho, nu = water_at(rec["water_temp_C"], protocol.water.type,
+                               protocol.water.salinity_g_kg)
+            u = red.speed_mean
+            row.update(
+                speed_mean=u, accel_mean=red.accel_mean, drag_mean=red.drag_mean,
+                lift_mean=red.lift_mean, tare_drag=red.tare_drag, lift_tare=red.tare_lift,
+                rho=rho, nu=nu, speed_std=red.speed_std, drag_std=red.drag_std,
+                zero_drag=red.zero_drag, drift_drag=red.drift_drag, zero_lift=red.zero_lift,
+                drift_lift=red.drift_lift, window_source=red.window_source, fs_hz=red.fs,
+                n_samples=red.n_samples, sha256=red.sha256, notes="; ".join(red.notes),
+            )
+            for name in ("still_pre", "accel", "steady", "decel"):
+                w = red.windows.get(name)
+                if w is not None:
+                    row[f"{name}_start_s"], row[f"{name}_end_s"] = w
+            ref_len = None
+            if rec["config"] == "hull" and model is not None:
+                area, ref_len = model.frontal_area, model.length_m
+                row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
+                row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
+                row["cd_lateral"] = force_coefficient(red.drag_mean, rho, model.lateral_area, u)
+            elif rec["config"] == "fin" and fin is not None:
+                area, ref_len = fin.area, fin.chord_m
+                row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
+                row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
+            elif model is not None:
+                ref_len = model.length_m
+            elif fin is not None:
+                ref_len = fin.chord_m
+            if ref_len:
+                row["re"] = u * ref_len / nu
+                row["fn"] = u / math.sqrt(G * ref_len)
+        rows.append(row)
+    df = pd.DataFrame(rows, columns=RUN_COLUMNS + EXTRA_COLUMNS)
+    extra = [c for c in sheet.columns if c not in df.columns and c not in ("sheet_row",
+                                                                           "sheet_error",
+                                                                           "window_start_s",
+                                                                           "window_end_s")]
+    for c in extra:
+        df[c] = sheet[c].to_numpy()
+    for c in ("window_start_s", "window_end_s"):
+        if sheet[c].notna().any():
+            df[c] = sheet[c].to_numpy()
+    return df
+
+
+def process_day(
+    protocol_path: str | Path,
+    *,
+    jobs: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    debug: bool = False,
+    protocol: Protocol | None = None,
+    cache_dir: str | Path | None = None,
+) -> DayResult:
+    """Run the whole day: everything but writing the outputs.
+
+    Raises ProtocolError for an unusable protocol or run sheet; per-run problems only reject
+    those runs.
+    """
+    if protocol is None:
+        protocol = load_protocol(protocol_path)
+    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
+    day_warnings = list(protocol.warnings)
+    for f in unlisted_files(sheet, protocol.campaign.data_dir):
+        day_warnings.append(f"{f} is in the data folder but not in the run sheet; it is ignored.")
+
+    rejected: dict[int, str] = {}
+    todo = []
+    for rec in sheet.to_dict("records"):
+        if rec["sheet_error"]:
+            rejected[int(rec["run"])] = f"run {rec['run']}: {rec['sheet_error']}"
+        elif rec["status"] != "void":
+            todo.append(rec)
+
+    reductions: dict[int, RunReduction] = {}
+    from towtank.parallel import map_runs
+
+    cache = RunCache(cache_dir) if cache_dir is not None else None
+    keys: dict[int, str] = {}
+    to_reduce = []
+    for rec in todo:
+        run = int(rec["run"])
+        if cache is not None:
+            keys[run] = settings_key(protocol, rec)
+            sha = cache.known_sha(protocol.campaign.data_dir / str(rec["file"]))
+            hit = cache.get(sha, keys[run]) if sha else None
+            if hit is not None:
+                reductions[run] = replace(hit, run=run)
+                continue
+        to_reduce.append(rec)
+    done = len(todo) - len(to_reduce)
+    if progress is not None and done:
+        progress(done, len(todo))
+    for i, (run, red, reason) in enumerate(
+        map_runs(reduce_one, protocol, to_reduce, jobs=jobs, debug=debug)
+    ):
+        if red is not None:
+            reductions[run] = red
+            if cache is not None:
+                cache.put(red.sha256, keys[run], red)
+                cache.remember_sha(protocol.campaign.data_dir / red.file, red.sha256)
+        else:
+            assert reason is not None
+            rejected[run] = reason
+        if progress is not None:
+            progress(done + i + 1, len(todo))
+    if cache is not None:
+        cache.flush()
+    # keep the sheet's order whatever the order of cache hits and fresh reductions
+    order = {int(r): k for k, r in enumerate(sheet["run"])}
+    reductions = dict(sorted(reductions.items(), key=lambda kv: order[kv[0]]))
+
+    tares = fit_tares(sheet, reductions)
+    config_of = dict(zip(sheet["run"].astype(int), sheet["config"], strict=True))
+    group_of = dict(zip(sheet["run"].astype(int), sheet["tare_group"], strict=True))
+    for run in list(reductions):
+        if config_of[run] == "sting":
+            reductions[run] = apply_tare(reductions[run], None)
+            continue
+        tare = tares.get(group_of[run])
+        if tare is None:
+            rejected[run] = (
+                f"run {run}: {reductions[run].file}: its tare group '{group_of[run]}' has no "
+                "usable sting (tare) run, so the mounting's force cannot be removed"
+            )
+            del reductions[run]
+            continue
+        reductions[run] = apply_tare(reductions[run], tare)
+
+    runs = run_table(protocol, sheet, reductions, rejected)
+    inputs = {str(protocol.path): _sha(protocol.path),
+              str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
+    for red in sorted(reductions.values(), key=lambda r: r.run):
+        inputs[str(protocol.campaign.data_dir / red.file)] = red.sha256
+    day = DayResult(
+        protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
+        runs=runs, warnings=day_warnings, inputs=inputs,
+    )
+    _analyse(day)
+    return day
+
+
+def _sha(path: Path) -> str:
+    from towtank.ingest import sha256_bytes
+
+    return sha256_bytes(path.read_bytes())
+
+
+def _analyse(day: DayResult) -> None:
+    """The fitting stages: hull coefficients, fins, similarity (each on the reduced runs)."""
+    return None

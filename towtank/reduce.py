@@ -1,0 +1,297 @@
+"""Per-run reduction: from a run's calibrated channels to its phases, means and fit samples.
+
+:func:`reduce_run` takes a :class:`~towtank.ingest.RawRun` and does, in this order (METHOD.md,
+"A run"): filter the speed and find the phases from it; zero the forces on the still window
+before the run and remove the drift to the still window after it; filter the forces with the
+same zero-phase low-pass as the speed; take acceleration from the filtered speed (or from an
+accel channel filtered the same way); average over the trimmed steady window; keep decimated
+samples of the steady and constant-acceleration windows for the fitters and a thumbnail of the
+whole run for the report. Everything it returns is plain data that can be cached.
+
+:func:`apply_tare` then subtracts a group's sting tare sample by sample, and
+:func:`run_coefficients` makes C_D, C_L, Re and Fn at the run's water temperature.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from towtank import conditioning, phases
+from towtank.errors import RunError
+from towtank.ingest import RawRun
+from towtank.protocol import Processing
+from towtank.tare import TareModel
+
+PHASE_STEADY = 0
+PHASE_ACCEL = 1
+THUMB_HZ = 10.0
+
+
+@dataclass
+class RunReduction:
+    """Everything the later stages need from one run (before tare)."""
+
+    run: int
+    file: str
+    sha256: str
+    fs: float
+    n_samples: int
+    duration_s: float
+    windows: dict[str, tuple[float, float] | None]
+    window_source: str
+    speed_level: float  # plateau speed from detection [m/s]
+    speed_mean: float  # steady-window mean of the filtered speed [m/s]
+    speed_std: float  # [m/s]
+    accel_mean: float  # constant-acceleration window mean [m/s²], NaN if none
+    zero_drag: float  # [N]
+    drift_drag: float  # [N]
+    zero_lift: float  # [N], NaN without lift
+    drift_lift: float  # [N]
+    drag_mean_raw: float  # steady mean, zero and drift removed, tare still in [N]
+    drag_std: float  # [N]
+    lift_mean_raw: float  # [N], NaN without lift
+    steady_regressors: tuple[float, float, float]  # means of U|U|, U, a over the steady window
+    samples: dict[str, np.ndarray]  # phase, t, U, a, drag, lift (decimated fit samples)
+    thumb: dict[str, np.ndarray]  # t, U, drag, lift of the whole run (zeroed, filtered)
+    has_lift: bool
+    notes: list[str] = field(default_factory=list)
+    # set by apply_tare
+    tare_drag: float = 0.0
+    tare_lift: float = 0.0
+    tare_group: str = ""
+    drag_mean: float = math.nan
+    lift_mean: float = math.nan
+
+
+def reduce_run(
+    raw: RawRun,
+    processing: Processing,
+    *,
+    run: int,
+    file: str,
+    window_s: tuple[float, float] | None = None,
+    speed_nominal: float = math.nan,
+    accel_nominal: float = math.nan,
+) -> RunReduction:
+    """Reduce one run (before tare).
+
+    Parameters
+    ----------
+    raw : RawRun
+        Calibrated channels from :func:`towtank.ingest.load_run`.
+    processing : Processing
+        Filter and phase-detection settings.
+    run : int
+        Run number (for messages).
+    file : str
+        File name as in the sheet.
+    window_s : tuple of float, optional
+        Steady window set by hand in the run sheet [s]; replaces the detected one.
+    speed_nominal : float
+        Set carriage speed [m/s] (cross-check only).
+    accel_nominal : float
+        Set carriage acceleration [m/s²] (cross-check only).
+    """
+    fs = raw.fs
+    t = raw.time
+    p = processing
+    notes = list(raw.notes)
+    # one zero-phase filter, identical for every channel
+    forces = [raw.drag] + ([raw.lift] if raw.lift is not None else [])
+    stack = np.column_stack([raw.speed] + forces + ([raw.accel] if raw.accel is not None else []))
+    filt = conditioning.lowpass(stack, fs, p.cutoff_hz, p.filter_order)
+    speed_f = filt[:, 0]
+    if raw.accel is not None:
+        accel_f = filt[:, -1]
+    else:
+        accel_f = conditioning.derivative(speed_f, fs)
+
+    ph = phases.detect_phases(
+        t,
+        speed_f,
+        accel_f,
+        fs,
+        trim_s=p.trim,
+        min_steady_s=p.min_steady_s,
+        min_accel_s=p.min_accel_s,
+        zero_window_s=p.zero_window_s,
+        steady_tolerance=p.steady_tolerance,
+    )
+    windows = ph.windows_s(t)
+    steady = ph.steady
+    window_source = "detected"
+    if window_s is not None:
+        steady = phases.manual_window(t, *window_s)
+        det = windows["steady"]
+        assert det is not None
+        window_source = (
+            f"manual {window_s[0]:g}–{window_s[1]:g} s (detected {det[0]:.2f}–{det[1]:.2f} s)"
+        )
+        notes.append(f"steady window set by hand in the sheet: {window_source}")
+        windows["steady"] = (float(t[steady[0]]), float(t[steady[1] - 1]))
+
+    # zero and drift: on the raw forces' still windows, then the same filter (linear, so the
+    # order does not matter) -- subtract the zero line from the filtered force
+    zero_d, z_d, drift_d = conditioning.zero_line(t, raw.drag, ph.still_pre, ph.still_post)
+    drag_f = filt[:, 1] - zero_d
+    if raw.lift is not None:
+        zero_l, z_l, drift_l = conditioning.zero_line(t, raw.lift, ph.still_pre, ph.still_post)
+        lift_f = filt[:, 2] - zero_l
+    else:
+        z_l = drift_l = math.nan
+        lift_f = np.full(t.shape, np.nan)
+    if ph.still_post is None:
+        notes.append("the file does not end at rest: zero held constant (no drift correction)")
+
+    s0, s1 = steady
+    u_s = speed_f[s0:s1]
+    speed_mean = float(np.mean(u_s))
+    accel_mean = math.nan
+    if ph.accel is not None:
+        accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
+
+    # cross-checks against the sheet's set values
+    tol = p.nominal_tolerance
+    if math.isfinite(speed_nominal) and speed_nominal > 0:
+        if abs(speed_mean - speed_nominal) > tol * speed_nominal:
+            notes.append(
+                f"measured plateau speed {speed_mean:.3f} m/s differs from the set "
+                f"{speed_nominal:g} m/s by more than {100 * tol:g} %"
+            )
+    if math.isfinite(accel_nominal) and accel_nominal > 0:
+        if ph.accel is None:
+            notes.append(
+                f"no constant-acceleration stretch found although the sheet sets "
+                f"{accel_nominal:g} m/s²"
+            )
+        elif abs(accel_mean - accel_nominal) > 2 * tol * accel_nominal:
+            notes.append(
+                f"measured acceleration {accel_mean:.3f} m/s² differs from the set "
+                f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
+            )
+
+    # decimated fit samples: steady and constant-acceleration windows
+    rate = p.fit_sample_hz or 4.0 * p.cutoff_hz
+    idx_s = conditioning.decimate_indices(s0, s1, fs, rate)
+    idx_a = (
+        conditioning.decimate_indices(ph.accel[0], ph.accel[1], fs, rate)
+        if ph.accel is not None
+        else np.array([], dtype=int)
+    )
+    idx = np.concatenate([idx_s, idx_a])
+    samples = {
+        "phase": np.concatenate(
+            [np.full(idx_s.size, PHASE_STEADY), np.full(idx_a.size, PHASE_ACCEL)]
+        ).astype(np.int8),
+        "t": t[idx],
+        "U": speed_f[idx],
+        "a": accel_f[idx],
+        "drag": drag_f[idx],
+        "lift": lift_f[idx],
+    }
+    step = max(1, int(round(fs / THUMB_HZ)))
+    thumb = {
+        "t": t[::step].copy(),
+        "U": speed_f[::step].copy(),
+        "a": accel_f[::step].copy(),
+        "drag": drag_f[::step].copy(),
+        "lift": lift_f[::step].copy(),
+    }
+    a_s = accel_f[s0:s1]
+    return RunReduction(
+        run=run,
+        file=file,
+        sha256=raw.sha256,
+        fs=fs,
+        n_samples=raw.n,
+        duration_s=float(t[-1] - t[0]),
+        windows=windows,
+        window_source=window_source,
+        speed_level=ph.speed_level,
+        speed_mean=speed_mean,
+        speed_std=float(np.std(u_s)),
+        accel_mean=accel_mean,
+        zero_drag=z_d,
+        drift_drag=drift_d,
+        zero_lift=z_l,
+        drift_lift=drift_l,
+        drag_mean_raw=float(np.mean(drag_f[s0:s1])),
+        drag_std=float(np.std(drag_f[s0:s1])),
+        lift_mean_raw=float(np.mean(lift_f[s0:s1])) if raw.lift is not None else math.nan,
+        steady_regressors=(
+            float(np.mean(u_s * np.abs(u_s))),
+            speed_mean,
+            float(np.mean(a_s)),
+        ),
+        samples=samples,
+        thumb=thumb,
+        has_lift=raw.lift is not None,
+        notes=notes,
+    )
+
+
+def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
+    """Subtract a tare group's F_tare(U, a) sample by sample (METHOD.md "Sting tare").
+
+    The steady means use the window means of U|U|, U and a, which equals averaging the
+    sample-by-sample difference. Returns a new reduction; ``red`` is not changed.
+    """
+    if tare is None:
+        return replace(
+            red, drag_mean=red.drag_mean_raw, lift_mean=red.lift_mean_raw, tare_group=""
+        )
+    x = np.asarray(red.steady_regressors)
+    tare_d = float(x @ tare.drag.coef)
+    tare_l = float(x @ tare.lift.coef) if tare.lift is not None else 0.0
+    s = dict(red.samples)
+    s["drag"] = s["drag"] - tare.drag(s["U"], s["a"])
+    th = dict(red.thumb)
+    th["drag"] = th["drag"] - tare.drag(th["U"], th["a"])
+    if tare.lift is not None and red.has_lift:
+        s["lift"] = s["lift"] - tare.lift(s["U"], s["a"])
+        th["lift"] = th["lift"] - tare.lift(th["U"], th["a"])
+    notes = list(red.notes)
+    if not tare.covers(red.speed_mean):
+        lo, hi = tare.speed_range
+        notes.append(
+            f"plateau speed {red.speed_mean:.3f} m/s is outside the tare runs' range "
+            f"{lo:.3f}–{hi:.3f} m/s of group '{tare.group}': the tare is extrapolated"
+        )
+    return replace(
+        red,
+        samples=s,
+        thumb=th,
+        tare_drag=tare_d,
+        tare_lift=tare_l,
+        tare_group=tare.group,
+        drag_mean=red.drag_mean_raw - tare_d,
+        lift_mean=(red.lift_mean_raw - tare_l) if red.has_lift else math.nan,
+        notes=notes,
+    )
+
+
+def force_coefficient(force: float, rho: float, area: float, speed: float) -> float:
+    """C = F / (½ ρ A U²) [-].
+
+    Parameters
+    ----------
+    force : float
+        Force [N].
+    rho : float
+        Water density [kg/m³].
+    area : float
+        Reference area [m²].
+    speed : float
+        Speed [m/s].
+    """
+    q = 0.5 * rho * area * speed * speed
+    return force / q if q > 0 else math.nan
+
+
+def check_reduction(red: RunReduction) -> None:
+    """Sanity checks on a reduced run that reject it with one sentence."""
+    if not math.isfinite(red.drag_mean_raw):
+        raise RunError("the steady drag mean is not finite")

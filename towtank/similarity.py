@@ -1,0 +1,686 @@
+"""Similarity laws, model-to-prototype scaling and resistance extrapolation.
+
+Conventions follow METHOD.md, "Similarity and scaling" (the SUT-2 report, section 3): the scale
+ratio is ``lambda = L_p / L_m`` (prototype over model), ``Fn = U / sqrt(g L)``, ``Re = U L / nu``.
+Resistance is extrapolated with the ITTC 1957 model-ship correlation line and a form factor
+(ITTC Recommended Procedure 7.5-02-02-02, *1978 ITTC Performance Prediction Method*, with the
+wave-making term dropped for a deeply submerged body).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+
+#: Standard acceleration of gravity [m/s^2].
+STANDARD_GRAVITY = 9.80665
+
+#: Depth-to-diameter ratio beyond which a submerged body of revolution makes no significant waves.
+DEEP_SUBMERGENCE_DEPTH_RATIO = 3.0
+
+#: Reynolds number below which a model's boundary layer may still be laminar (SUT-2 report).
+TURBULENT_RE_MODEL = 1.0e5
+
+PRIME_KINDS = {"added_mass": 3, "damping": 2}
+
+SCALING_COLUMNS = (
+    "speed_prototype",
+    "re_prototype",
+    "fn_prototype",
+    "speed_model_froude",
+    "speed_model_reynolds",
+    "drag_froude",
+    "drag_ittc57",
+    "froude_in_tested_range",
+    "reynolds_in_tested_range",
+    "re_model_froude",
+)
+
+
+def froude_number(
+    speed: ArrayLike, length: ArrayLike, g: float = STANDARD_GRAVITY
+) -> float | np.ndarray:
+    """Length Froude number, ``Fn = U / sqrt(g L)``.
+
+    Parameters
+    ----------
+    speed : float or array_like
+        Speed through the water [m/s]
+    length : float or array_like
+        Reference length [m]
+    g : float, default 9.80665
+        Acceleration of gravity [m/s^2]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Froude number [-]
+    """
+    return np.asarray(speed, dtype=float) / np.sqrt(g * np.asarray(length, dtype=float))
+
+
+def reynolds_number(speed: ArrayLike, length: ArrayLike, nu: ArrayLike) -> float | np.ndarray:
+    """Length Reynolds number, ``Re = U L / nu``.
+
+    Parameters
+    ----------
+    speed : float or array_like
+        Speed through the water [m/s]
+    length : float or array_like
+        Reference length [m]
+    nu : float or array_like
+        Kinematic viscosity of the water [m^2/s]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Reynolds number [-]
+    """
+    return np.asarray(speed, dtype=float) * np.asarray(length, dtype=float) / np.asarray(nu)
+
+
+def ittc57_cf(reynolds: ArrayLike) -> float | np.ndarray:
+    """Frictional resistance coefficient of the ITTC 1957 model-ship correlation line.
+
+    ``C_F = 0.075 / (log10 Re - 2)^2`` (ITTC 1957; ITTC 7.5-02-02-02).
+
+    Parameters
+    ----------
+    reynolds : float or array_like
+        Reynolds number based on length [-], > 100
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Frictional resistance coefficient on the wetted area [-]
+
+    Raises
+    ------
+    ValueError
+        A Reynolds number is not above 100, where the line has its pole.
+    """
+    re = np.asarray(reynolds, dtype=float)
+    if np.any(~(re > 100.0)):
+        raise ValueError("The ITTC-57 line is defined only for Reynolds numbers above 100.")
+    return 0.075 / (np.log10(re) - 2.0) ** 2
+
+
+def froude_speed_model(speed_prototype: ArrayLike, scale: float) -> float | np.ndarray:
+    """Model speed under Froude similarity, ``U_m = U_p / sqrt(lambda)``.
+
+    Parameters
+    ----------
+    speed_prototype : float or array_like
+        Prototype speed [m/s]
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Model speed [m/s]
+    """
+    return np.asarray(speed_prototype, dtype=float) / math.sqrt(_positive(scale, "scale"))
+
+
+def froude_speed_prototype(speed_model: ArrayLike, scale: float) -> float | np.ndarray:
+    """Prototype speed under Froude similarity, ``U_p = U_m sqrt(lambda)``.
+
+    Parameters
+    ----------
+    speed_model : float or array_like
+        Model speed [m/s]
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Prototype speed [m/s]
+    """
+    return np.asarray(speed_model, dtype=float) * math.sqrt(_positive(scale, "scale"))
+
+
+def reynolds_speed_model(
+    speed_prototype: ArrayLike, scale: float, nu_model: float, nu_prototype: float
+) -> float | np.ndarray:
+    """Model speed under Reynolds similarity, ``U_m = U_p lambda nu_m / nu_p``.
+
+    Parameters
+    ----------
+    speed_prototype : float or array_like
+        Prototype speed [m/s]
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+    nu_model : float
+        Kinematic viscosity of the tank water [m^2/s]
+    nu_prototype : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Model speed [m/s]
+    """
+    return (
+        np.asarray(speed_prototype, dtype=float)
+        * _positive(scale, "scale")
+        * _positive(nu_model, "nu_model")
+        / _positive(nu_prototype, "nu_prototype")
+    )
+
+
+def reynolds_speed_prototype(
+    speed_model: ArrayLike, scale: float, nu_model: float, nu_prototype: float
+) -> float | np.ndarray:
+    """Prototype speed under Reynolds similarity, ``U_p = U_m (nu_p / nu_m) / lambda``.
+
+    Parameters
+    ----------
+    speed_model : float or array_like
+        Model speed [m/s]
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+    nu_model : float
+        Kinematic viscosity of the tank water [m^2/s]
+    nu_prototype : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Prototype speed [m/s]
+    """
+    return (
+        np.asarray(speed_model, dtype=float)
+        * _positive(nu_prototype, "nu_prototype")
+        / _positive(nu_model, "nu_model")
+        / _positive(scale, "scale")
+    )
+
+
+def froude_force_ratio(scale: float, rho_model: float, rho_prototype: float) -> float:
+    """Prototype-to-model force ratio under Froude similarity, ``lambda^3 rho_p / rho_m``.
+
+    Parameters
+    ----------
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+    rho_model : float
+        Density of the tank water [kg/m^3]
+    rho_prototype : float
+        Density of the prototype's water [kg/m^3]
+
+    Returns
+    -------
+    float
+        ``F_p / F_m`` [-]
+    """
+    return (
+        _positive(scale, "scale") ** 3
+        * _positive(rho_prototype, "rho_prototype")
+        / _positive(rho_model, "rho_model")
+    )
+
+
+def reynolds_force_ratio(
+    rho_model: float, rho_prototype: float, nu_model: float, nu_prototype: float
+) -> float:
+    """Prototype-to-model force ratio under Reynolds similarity, ``(rho_p/rho_m)(nu_p/nu_m)^2``.
+
+    Equal Reynolds numbers give ``U_p L_p = U_m L_m nu_p / nu_m``, and so
+    ``F = C (1/2) rho U^2 L^2`` scales with ``rho nu^2``, independently of the scale ratio.
+
+    Parameters
+    ----------
+    rho_model : float
+        Density of the tank water [kg/m^3]
+    rho_prototype : float
+        Density of the prototype's water [kg/m^3]
+    nu_model : float
+        Kinematic viscosity of the tank water [m^2/s]
+    nu_prototype : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+
+    Returns
+    -------
+    float
+        ``F_p / F_m`` [-]
+    """
+    return (
+        _positive(rho_prototype, "rho_prototype")
+        / _positive(rho_model, "rho_model")
+        * (_positive(nu_prototype, "nu_prototype") / _positive(nu_model, "nu_model")) ** 2
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class FormFactor:
+    """Form factor ``1 + k`` from model resistance (ITTC 7.5-02-02-02 with the ITTC-57 line).
+
+    Attributes
+    ----------
+    one_plus_k : float
+        Mean of ``C_T / C_F`` over the points used [-]
+    std : float
+        Sample standard deviation (ddof = 1) of those values [-]; NaN when one point is used
+    n : int
+        Number of points used
+    values : numpy.ndarray
+        ``(1 + k)_i = C_T,i / C_F,i`` for every input point [-] (NaN where ``Re`` <= 100)
+    reynolds : numpy.ndarray
+        Reynolds number of every input point [-]
+    used : numpy.ndarray
+        Boolean mask of the points with ``Re >= re_min`` that enter the mean
+    re_range : tuple of float
+        Smallest and largest Reynolds number of the points used [-]
+    """
+
+    one_plus_k: float
+    std: float
+    n: int
+    values: np.ndarray
+    reynolds: np.ndarray
+    used: np.ndarray
+    re_range: tuple[float, float]
+
+
+def form_factor(
+    drag: ArrayLike,
+    speed: ArrayLike,
+    wetted_area: float,
+    rho: float,
+    nu: float,
+    length: float,
+    re_min: float = 2e5,
+) -> FormFactor:
+    """Form factor ``1 + k = C_T / C_F`` from steady zero-angle model resistance.
+
+    For each point ``C_T = R / (1/2 rho S U^2)`` and ``C_F`` is the ITTC-57 line at
+    ``Re = U L / nu``; ``(1 + k)_i = C_T / C_F`` (ITTC 7.5-02-02-02, with no wave resistance for a
+    deeply submerged body). The mean and sample standard deviation are taken over the points with
+    ``Re >= re_min``, so that the laminar and transitional range is left out.
+
+    Parameters
+    ----------
+    drag : array_like
+        Steady resistance of the model at zero incidence, tare removed [N]
+    speed : array_like
+        Model speed of each point [m/s]
+    wetted_area : float
+        Wetted surface area of the model [m^2]
+    rho : float
+        Density of the tank water [kg/m^3]
+    nu : float
+        Kinematic viscosity of the tank water [m^2/s]
+    length : float
+        Model length [m]
+    re_min : float, default 2e5
+        Smallest Reynolds number used [-]
+
+    Returns
+    -------
+    FormFactor
+
+    Raises
+    ------
+    ValueError
+        ``drag`` and ``speed`` differ in length, or no point reaches ``re_min``.
+    """
+    r = np.atleast_1d(np.asarray(drag, dtype=float))
+    u = np.abs(np.atleast_1d(np.asarray(speed, dtype=float)))
+    if r.shape != u.shape:
+        raise ValueError(
+            f"drag and speed must have the same length ({r.size} and {u.size} points given)."
+        )
+    area = _positive(wetted_area, "wetted_area")
+    re = reynolds_number(u, _positive(length, "length"), _positive(nu, "nu"))
+    values = np.full(r.shape, np.nan)
+    valid = np.isfinite(re) & (re > 100.0) & np.isfinite(r)
+    ct = r[valid] / (0.5 * _positive(rho, "rho") * area * u[valid] ** 2)
+    values[valid] = ct / ittc57_cf(re[valid])
+    used = valid & (re >= re_min)
+    n = int(np.count_nonzero(used))
+    if n == 0:
+        top = f"{np.nanmax(re):.3g}" if np.any(np.isfinite(re)) else "undefined"
+        raise ValueError(
+            f"No steady point reaches Re = {re_min:.3g} (highest Re = {top}), so the form factor "
+            "cannot be taken outside the laminar range."
+        )
+    chosen = values[used]
+    std = float(np.std(chosen, ddof=1)) if n > 1 else float("nan")
+    return FormFactor(
+        one_plus_k=float(np.mean(chosen)),
+        std=std,
+        n=n,
+        values=values,
+        reynolds=re,
+        used=used,
+        re_range=(float(np.min(re[used])), float(np.max(re[used]))),
+    )
+
+
+def ittc57_drag(
+    speed_prototype: ArrayLike,
+    length_prototype: float,
+    wetted_area_prototype: float,
+    rho_p: float,
+    nu_p: float,
+    one_plus_k: float,
+    delta_cf: float = 0.0,
+) -> float | np.ndarray:
+    """Prototype resistance from the ITTC-57 line and a form factor.
+
+    ``R_p = 1/2 rho_p S_p U_p^2 [(1 + k) C_F(Re_p) + Delta C_F]`` (ITTC 7.5-02-02-02, 1978 ITTC
+    method without wave resistance; ``C_F`` from the ITTC 1957 line).
+
+    Parameters
+    ----------
+    speed_prototype : float or array_like
+        Prototype speed [m/s], > 0
+    length_prototype : float
+        Prototype length [m]
+    wetted_area_prototype : float
+        Prototype wetted surface area [m^2]
+    rho_p : float
+        Density of the prototype's water [kg/m^3]
+    nu_p : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+    one_plus_k : float
+        Form factor ``1 + k`` [-]
+    delta_cf : float, default 0
+        Roughness allowance ``Delta C_F`` [-]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Prototype resistance [N]
+    """
+    u = np.asarray(speed_prototype, dtype=float)
+    re = reynolds_number(np.abs(u), _positive(length_prototype, "length_prototype"), nu_p)
+    ct = one_plus_k * ittc57_cf(re) + delta_cf
+    return 0.5 * rho_p * _positive(wetted_area_prototype, "wetted_area_prototype") * u**2 * ct
+
+
+def _prime_factor(rho: float, length: float, kind: str) -> float:
+    """``1/2 rho L^3`` for added mass, ``1/2 rho L^2`` for quadratic damping."""
+    if kind not in PRIME_KINDS:
+        raise ValueError(
+            f"Unknown coefficient kind {kind!r}: use one of {', '.join(map(repr, PRIME_KINDS))}."
+        )
+    return 0.5 * _positive(rho, "rho") * _positive(length, "length") ** PRIME_KINDS[kind]
+
+
+def prototype_value(
+    prime: ArrayLike, rho_prototype: float, length_prototype: float, kind: str
+) -> float | np.ndarray:
+    """Dimensional prototype coefficient from its prime (non-dimensional) value.
+
+    Added mass: ``prime * 1/2 rho L^3`` [kg]; quadratic damping: ``prime * 1/2 rho L^2`` [kg/m]
+    (SNAME 1950 prime system, as in METHOD.md "Conventions").
+
+    Parameters
+    ----------
+    prime : float or array_like
+        Prime coefficient [-]
+    rho_prototype : float
+        Density of the prototype's water [kg/m^3]
+    length_prototype : float
+        Prototype length [m]
+    kind : str
+        ``"added_mass"`` or ``"damping"``
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Dimensional coefficient [kg] or [kg/m]
+    """
+    return np.asarray(prime, dtype=float) * _prime_factor(rho_prototype, length_prototype, kind)
+
+
+def prime_value(value: ArrayLike, rho: float, length: float, kind: str) -> float | np.ndarray:
+    """Prime (non-dimensional) coefficient from a dimensional one; inverse of `prototype_value`.
+
+    Added mass: ``value / (1/2 rho L^3)``; quadratic damping: ``value / (1/2 rho L^2)``.
+
+    Parameters
+    ----------
+    value : float or array_like
+        Dimensional coefficient [kg] (added mass) or [kg/m] (quadratic damping)
+    rho : float
+        Water density [kg/m^3]
+    length : float
+        Body length [m]
+    kind : str
+        ``"added_mass"`` or ``"damping"``
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Prime coefficient [-]
+    """
+    return np.asarray(value, dtype=float) / _prime_factor(rho, length, kind)
+
+
+def scaling_table(
+    speeds_prototype: ArrayLike,
+    *,
+    scale: float,
+    length_model: float,
+    length_prototype: float,
+    rho_m: float,
+    nu_m: float,
+    rho_p: float,
+    nu_p: float,
+    resistance_model: Callable[[float], float],
+    tested_speed_range: tuple[float, float],
+    wetted_area_model: float,
+    one_plus_k: float,
+    delta_cf: float = 0.0,
+) -> pd.DataFrame:
+    """Prototype resistance at given speeds, by Froude scaling and by the ITTC-57 method.
+
+    For each prototype speed ``U_p``:
+
+    - ``re_prototype = U_p L_p / nu_p``, ``fn_prototype = U_p / sqrt(g L_p)``;
+    - ``speed_model_froude = U_p / sqrt(lambda)``,
+      ``speed_model_reynolds = U_p lambda nu_m / nu_p``;
+    - ``drag_froude = R_m(speed_model_froude) lambda^3 rho_p / rho_m``: the model's resistance
+      curve Froude-scaled, which is what it is labelled (a deeply submerged hull's resistance does
+      not follow Froude scaling);
+    - ``drag_ittc57 = 1/2 rho_p S_p U_p^2 [(1 + k) C_F(Re_p) + Delta C_F]`` with
+      ``S_p = S_m lambda^2`` (:func:`ittc57_drag`);
+    - ``froude_in_tested_range`` / ``reynolds_in_tested_range``: whether the corresponding model
+      speed lies inside ``tested_speed_range`` (``drag_froude`` is extrapolated where it does not);
+    - ``re_model_froude = speed_model_froude L_m / nu_m``.
+
+    ``scale`` is the ``lambda`` used for speeds, forces and areas; ``length_prototype`` and
+    ``length_model`` give the Reynolds and Froude numbers. They must agree,
+    ``length_prototype / length_model`` within 1 % of ``scale``.
+
+    Parameters
+    ----------
+    speeds_prototype : float or array_like
+        Prototype speeds [m/s], > 0
+    scale : float
+        Scale ratio ``lambda = L_p / L_m`` [-]
+    length_model : float
+        Model length [m]
+    length_prototype : float
+        Prototype length [m]
+    rho_m : float
+        Density of the tank water [kg/m^3]
+    nu_m : float
+        Kinematic viscosity of the tank water [m^2/s]
+    rho_p : float
+        Density of the prototype's water [kg/m^3]
+    nu_p : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+    resistance_model : callable
+        Steady model resistance [N] as a function of model speed [m/s]
+    tested_speed_range : tuple of float
+        Lowest and highest model speed tested [m/s]
+    wetted_area_model : float
+        Wetted surface area of the model [m^2]
+    one_plus_k : float
+        Form factor ``1 + k`` [-], e.g. from :func:`form_factor`
+    delta_cf : float, default 0
+        Roughness allowance ``Delta C_F`` [-]
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per prototype speed, columns as listed in ``SCALING_COLUMNS``.
+
+    Raises
+    ------
+    ValueError
+        Lengths inconsistent with ``scale``, or an invalid tested speed range.
+    """
+    lam = _positive(scale, "scale")
+    l_m = _positive(length_model, "length_model")
+    l_p = _positive(length_prototype, "length_prototype")
+    if abs(l_p / l_m - lam) > 0.01 * lam:
+        raise ValueError(
+            f"length_prototype / length_model = {l_p / l_m:.4g} does not match scale = {lam:.4g}."
+        )
+    lo, hi = (float(v) for v in tested_speed_range)
+    if not lo <= hi:
+        raise ValueError(f"tested_speed_range must be (lowest, highest), not ({lo}, {hi}).")
+    u_p = np.atleast_1d(np.asarray(speeds_prototype, dtype=float)).ravel()
+    u_m_froude = froude_speed_model(u_p, lam)
+    u_m_reynolds = reynolds_speed_model(u_p, lam, nu_m, nu_p)
+    r_m = np.array([float(resistance_model(float(u))) for u in u_m_froude], dtype=float)
+    wetted_area_prototype = _positive(wetted_area_model, "wetted_area_model") * lam**2
+    table = pd.DataFrame(
+        {
+            "speed_prototype": u_p,
+            "re_prototype": reynolds_number(u_p, l_p, nu_p),
+            "fn_prototype": froude_number(u_p, l_p),
+            "speed_model_froude": u_m_froude,
+            "speed_model_reynolds": u_m_reynolds,
+            "drag_froude": r_m * froude_force_ratio(lam, rho_m, rho_p),
+            "drag_ittc57": ittc57_drag(
+                u_p, l_p, wetted_area_prototype, rho_p, nu_p, one_plus_k, delta_cf
+            ),
+            "froude_in_tested_range": (u_m_froude >= lo) & (u_m_froude <= hi),
+            "reynolds_in_tested_range": (u_m_reynolds >= lo) & (u_m_reynolds <= hi),
+            "re_model_froude": reynolds_number(u_m_froude, l_m, nu_m),
+        },
+        columns=list(SCALING_COLUMNS),
+    )
+    return table
+
+
+def similarity_statement(
+    re_model_range: tuple[float, float],
+    re_prototype_range: tuple[float, float],
+    depth_m: float | None = None,
+    diameter_m: float | None = None,
+) -> str:
+    """Plain-English account of which similarity the model tests met.
+
+    States the model and prototype Reynolds ranges and their ratio, whether they overlap
+    (Reynolds similarity), whether the model range reaches the turbulent range (Re > 1e5, as the
+    SUT-2 report required) and, when the depth and diameter are given, whether the depth exceeds
+    3 D so that the body makes no waves and Froude similarity is not needed (the SUT-2 tests ran at
+    5 D).
+
+    Parameters
+    ----------
+    re_model_range : tuple of float
+        Lowest and highest Reynolds number of the model tests [-]
+    re_prototype_range : tuple of float
+        Lowest and highest Reynolds number of the prototype's operation [-]
+    depth_m : float, optional
+        Submergence of the model's axis during the tests [m]
+    diameter_m : float, optional
+        Maximum diameter of the model [m]
+
+    Returns
+    -------
+    str
+        Sentences separated by single spaces.
+
+    Raises
+    ------
+    ValueError
+        Non-positive Reynolds numbers, or only one of ``depth_m`` and ``diameter_m`` given.
+    """
+    m_lo, m_hi = _re_range(re_model_range, "re_model_range")
+    p_lo, p_hi = _re_range(re_prototype_range, "re_prototype_range")
+    sentences = [
+        f"The model tests covered Re = {m_lo:.3g} to {m_hi:.3g}; the prototype operates at "
+        f"Re = {p_lo:.3g} to {p_hi:.3g}."
+    ]
+    overlap_lo, overlap_hi = max(m_lo, p_lo), min(m_hi, p_hi)
+    if overlap_lo <= overlap_hi:
+        sentences.append(
+            f"Reynolds similarity was met for Re = {overlap_lo:.3g} to {overlap_hi:.3g}, "
+            "where the two ranges overlap."
+        )
+    else:
+        ratio_lo, ratio_hi = sorted((p_lo / m_lo, p_hi / m_hi))
+        side = "above" if p_lo > m_hi else "below"
+        sentences.append(
+            f"Reynolds similarity was not met: the prototype's Reynolds numbers lie {side} the "
+            f"model's, by a factor of {_ratio_text(ratio_lo, ratio_hi)}, so the resistance is "
+            "extrapolated with the ITTC-57 line and a form factor."
+        )
+    if m_lo >= TURBULENT_RE_MODEL:
+        sentences.append(
+            f"All model tests were above Re = {TURBULENT_RE_MODEL:.0e}, in turbulent flow."
+        )
+    elif m_hi >= TURBULENT_RE_MODEL:
+        sentences.append(
+            f"Part of the model range lies below Re = {TURBULENT_RE_MODEL:.0e}, where the boundary "
+            "layer may be laminar; those tests do not scale to the prototype."
+        )
+    else:
+        sentences.append(
+            f"All model tests were below Re = {TURBULENT_RE_MODEL:.0e}, where the boundary layer "
+            "may be laminar; they do not scale to a turbulent prototype."
+        )
+    if (depth_m is None) != (diameter_m is None):
+        raise ValueError("Give both depth_m and diameter_m, or neither.")
+    if depth_m is not None and diameter_m is not None:
+        ratio = _positive(depth_m, "depth_m") / _positive(diameter_m, "diameter_m")
+        if ratio > DEEP_SUBMERGENCE_DEPTH_RATIO:
+            sentences.append(
+                f"The model ran at a depth of {depth_m:g} m = {ratio:.3g} D, more than "
+                f"{DEEP_SUBMERGENCE_DEPTH_RATIO:g} D, so it made no significant waves and Froude "
+                "similarity was not needed; its resistance scales with Reynolds number."
+            )
+        else:
+            sentences.append(
+                f"The model ran at a depth of {depth_m:g} m = {ratio:.3g} D, not more than "
+                f"{DEEP_SUBMERGENCE_DEPTH_RATIO:g} D, so free-surface waves may have added to its "
+                "resistance and Froude similarity would also be needed."
+            )
+    return " ".join(sentences)
+
+
+def _ratio_text(lo: float, hi: float) -> str:
+    if math.isclose(lo, hi, rel_tol=0.005):
+        return f"{lo:.3g}"
+    return f"{lo:.3g} to {hi:.3g}"
+
+
+def _re_range(values: tuple[float, float], name: str) -> tuple[float, float]:
+    lo, hi = sorted(float(v) for v in values)
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo > 0.0):
+        raise ValueError(f"{name} must hold two finite Reynolds numbers > 0, not {values}.")
+    return lo, hi
+
+
+def _positive(value: float, name: str) -> float:
+    """``value`` as a float; raise ValueError unless it is finite and > 0."""
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ValueError(f"{name} must be a finite value > 0, not {value}.")
+    return v

@@ -1,0 +1,150 @@
+"""Sting tare (report §4: "test the rod without the model and subtract"; METHOD.md "Sting tare").
+
+Runs with config = sting measure the mounting alone. Per tare group and per force channel,
+F_tare(U, a) = t2·U|U| + t1·U + m_t·a is fitted by least squares over the sting runs' steady and
+constant-acceleration samples, and subtracted sample by sample from the model runs of that
+group. A model run whose speeds lie outside the tare runs' speed range is flagged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+TARE_TERMS = ("t2", "t1", "m_t")
+
+
+def tare_design(speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
+    """Regressors of the tare model, columns [U|U|, U, a].
+
+    Parameters
+    ----------
+    speed : ndarray
+        Carriage speed U [m/s].
+    accel : ndarray
+        Carriage acceleration a [m/s²].
+    """
+    speed = np.asarray(speed, dtype=float)
+    return np.column_stack([speed * np.abs(speed), speed, np.asarray(accel, dtype=float)])
+
+
+def tare_force(coef: np.ndarray, speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
+    """F_tare = t2·U|U| + t1·U + m_t·a [N].
+
+    Parameters
+    ----------
+    coef : ndarray
+        (t2 [N s²/m²], t1 [N s/m], m_t [kg]).
+    speed : ndarray
+        U [m/s].
+    accel : ndarray
+        a [m/s²].
+    """
+    return tare_design(speed, accel) @ np.asarray(coef, dtype=float)
+
+
+@dataclass(frozen=True)
+class TareFit:
+    """Tare of one force channel of one tare group."""
+
+    coef: np.ndarray  # t2 [N s²/m²], t1 [N s/m], m_t [kg]
+    cov: np.ndarray  # covariance of coef
+    residual_std: float  # [N]
+    n_samples: int
+
+    def __call__(self, speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        return tare_force(self.coef, speed, accel)
+
+    def std_error(self, speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Standard error of the fitted tare at (U, a) [N]."""
+        x = tare_design(speed, accel)
+        return np.sqrt(np.einsum("ij,jk,ik->i", x, self.cov, x))
+
+
+@dataclass(frozen=True)
+class TareModel:
+    """The tare of one group: a fit per force channel and the range it was fitted over."""
+
+    group: str
+    runs: tuple[int, ...]
+    drag: TareFit
+    lift: TareFit | None
+    speed_range: tuple[float, float]  # steady speeds of the tare runs [m/s]
+    accel_range: tuple[float, float]  # accelerations covered [m/s²]
+
+    def covers(self, speed: float, *, rel: float = 0.05, abs_tol: float = 0.02) -> bool:
+        """Is a model-run speed inside the tare runs' range (with a small margin)?"""
+        lo, hi = self.speed_range
+        return lo - max(rel * lo, abs_tol) <= speed <= hi + max(rel * hi, abs_tol)
+
+
+def fit_channel(speed: np.ndarray, accel: np.ndarray, force: np.ndarray) -> TareFit:
+    """Least-squares fit of F = t2·U|U| + t1·U + m_t·a.
+
+    Parameters
+    ----------
+    speed : ndarray
+        U [m/s] of the samples.
+    accel : ndarray
+        a [m/s²] of the samples.
+    force : ndarray
+        Zeroed, filtered force of the sting runs [N].
+    """
+    x = tare_design(speed, accel)
+    y = np.asarray(force, dtype=float)
+    ok = np.isfinite(y) & np.isfinite(x).all(axis=1)
+    x, y = x[ok], y[ok]
+    # a tare group without accelerated samples cannot resolve m_t: fit t2, t1 only
+    active = np.array([True, True, np.ptp(x[:, 2]) > 1e-3 if len(x) else False])
+    coef = np.zeros(3)
+    cov = np.zeros((3, 3))
+    xa = x[:, active]
+    beta, *_ = np.linalg.lstsq(xa, y, rcond=None)
+    resid = y - xa @ beta
+    dof = max(len(y) - int(active.sum()), 1)
+    s2 = float(resid @ resid) / dof
+    cov_a = s2 * np.linalg.pinv(xa.T @ xa)
+    coef[active] = beta
+    cov[np.ix_(active, active)] = cov_a
+    return TareFit(coef=coef, cov=cov, residual_std=float(np.sqrt(s2)), n_samples=int(len(y)))
+
+
+def fit_tare_group(
+    group: str,
+    runs: Sequence[int],
+    speed: np.ndarray,
+    accel: np.ndarray,
+    drag: np.ndarray,
+    lift: np.ndarray | None,
+    steady_speeds: Sequence[float],
+) -> TareModel:
+    """Fit the tare of one group from its sting runs' pooled samples.
+
+    Parameters
+    ----------
+    group : str
+        Tare group name.
+    runs : sequence of int
+        The sting runs pooled.
+    speed, accel : ndarray
+        Pooled sample speed [m/s] and acceleration [m/s²].
+    drag, lift : ndarray
+        Pooled zeroed, filtered forces [N]; lift may be None.
+    steady_speeds : sequence of float
+        Plateau speed of each sting run [m/s], for the covered range.
+    """
+    drag_fit = fit_channel(speed, accel, drag)
+    lift_fit = None
+    if lift is not None and np.isfinite(lift).sum() > 3:
+        lift_fit = fit_channel(speed, accel, lift)
+    acc = np.asarray(accel, dtype=float)
+    return TareModel(
+        group=group,
+        runs=tuple(int(r) for r in runs),
+        drag=drag_fit,
+        lift=lift_fit,
+        speed_range=(float(min(steady_speeds)), float(max(steady_speeds))),
+        accel_range=(float(np.min(acc)), float(np.max(acc))) if acc.size else (0.0, 0.0),
+    )
