@@ -320,4 +320,180 @@ def _sha(path: Path) -> str:
 
 def _analyse(day: DayResult) -> None:
     """The fitting stages: hull coefficients, fins, similarity (each on the reduced runs)."""
-    return None
+    from towtank.errors import TowtankError
+
+    for stage in (_hull_stage, _fin_stage, _scaling_stage):
+        try:
+            stage(day)
+        except TowtankError as exc:
+            day.warnings.append(str(exc))
+
+
+@dataclass
+class HullResult:
+    fit: Any  # towtank.fit.HullFit
+    coefficients: pd.DataFrame
+
+
+@dataclass
+class FinResult:
+    table: pd.DataFrame  # fins.csv
+    curves: pd.DataFrame
+    force_vs_speed: pd.DataFrame
+    aspect_ratio: float
+    oswald_e: float
+    control: pd.DataFrame | None
+    warnings: list[str]
+
+
+@dataclass
+class ScalingResult:
+    table: pd.DataFrame  # scaling.csv
+    resistance: tuple[float, float]  # k2 [N s²/m²], k1 [N s/m] of R = k2·U|U| + k1·U
+    tested_speed_range: tuple[float, float]
+    form_factor: Any  # towtank.similarity.FormFactor or None
+    statement: str
+    rho_p: float
+    nu_p: float
+    rho_m: float
+    nu_m: float
+    scale: float
+
+
+def _hull_stage(day: DayResult) -> None:
+    from towtank import fit
+
+    model = day.protocol.model
+    runs = day.runs
+    if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
+        return
+    hf = fit.fit_hull(
+        runs,
+        day.reductions,
+        mass=model.mass_kg,
+        mass_sd=model.mass_uncertainty_kg,
+        length=model.length_m,
+        frontal_area=model.frontal_area,
+        lateral_area=model.lateral_area,
+        alpha_max_deg=day.protocol.processing.damping_alpha_max_deg,
+    )
+    ref = fit.load_reference(day.protocol.campaign.reference)
+    table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
+    day.hull = HullResult(fit=hf, coefficients=table)
+    day.warnings.extend(hf.messages)
+    for sym, am in hf.added_mass.items():
+        if am.estimate.agreement.startswith("DISAGREE"):
+            day.warnings.append(
+                f"{sym}: the curve-difference estimate {am.estimate.alt_value:.4g} kg and the "
+                f"joint regression {am.estimate.value:.4g} kg disagree "
+                f"({am.estimate.agreement[10:]})."
+            )
+    if hf.damping is not None and hf.damping.outliers:
+        day.warnings.append(
+            "C_D(α) fit: runs " + ", ".join(map(str, hf.damping.outliers))
+            + " are flagged as outliers (|studentized residual| > 3 or large Cook's distance)."
+        )
+
+
+def _fin_stage(day: DayResult) -> None:
+    from towtank import fins
+
+    fin = day.protocol.fin
+    runs = day.runs
+    sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
+    if fin is None or sel.empty:
+        return
+    ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, fin.mounting))
+    table = fins.fin_table(sel, ar, fin.oswald_e)
+    curves = fins.fin_curves(table, aspect_ratio=ar, e=fin.oswald_e)
+    warn = fins.low_reynolds_warnings(table)
+    control = None
+    if fin.x_m is not None and len(curves):
+        slope = float(np.nanmean(curves["lift_slope"]))
+        rho = float(sel["rho"].mean())
+        control = fins.control_derivatives(slope, fin.area, fin.x_m, rho)
+    day.fins = FinResult(
+        table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
+        aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=warn,
+    )
+    day.warnings.extend(warn)
+
+
+def _scaling_stage(day: DayResult) -> None:
+    import statsmodels.api as sm
+
+    from towtank import similarity
+
+    p = day.protocol
+    model, proto = p.model, p.prototype
+    if model is None or proto is None:
+        return
+    scale = model.scale if model.scale is not None else proto.length_m / model.length_m
+    rho_p, nu_p = water_at(proto.water.temperature_C, proto.water.type,
+                           proto.water.salinity_g_kg)
+    rho_m, nu_m = water_at(p.water.temperature_C, p.water.type, p.water.salinity_g_kg)
+    if day.hull is not None:
+        coef = day.hull.coefficients
+        kinds = coef["symbol"].map(lambda s: "added_mass" if s.endswith("dot") else "damping")
+        coef["prototype_value"] = [
+            float(similarity.prototype_value(pr, rho_p, proto.length_m, k))
+            for pr, k in zip(coef["prime"], kinds, strict=True)
+        ]
+    runs = day.runs
+    zero = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
+                & (np.abs(runs["angle_deg"]) <= 0.5)]
+    if len(zero) < 2:
+        day.warnings.append(
+            "scaling.csv needs two or more steady hull runs at α = 0 for the resistance curve."
+        )
+        return
+    u = zero["speed_mean"].to_numpy(float)
+    r = zero["drag_mean"].to_numpy(float)
+    res = sm.OLS(r, np.column_stack([u * np.abs(u), u])).fit()
+    k2, k1 = (float(v) for v in res.params)
+    ff = None
+    one_plus_k = math.nan
+    if model.wetted_area_m2 is not None:
+        try:
+            ff = similarity.form_factor(
+                r, u, model.wetted_area_m2, float(zero["rho"].mean()),
+                float(zero["nu"].mean()), model.length_m, re_min=p.processing.laminar_re,
+            )
+            one_plus_k = float(ff.one_plus_k)
+        except ValueError as exc:
+            day.warnings.append(f"form factor: {exc}")
+    else:
+        day.warnings.append(
+            "drag_ittc57 needs the model's wetted area ([model] wetted_area_m2 or a Myring "
+            "description); it is left empty."
+        )
+    table = similarity.scaling_table(
+        np.asarray(proto.speeds_m_s),
+        scale=scale,
+        length_model=model.length_m,
+        length_prototype=proto.length_m,
+        rho_m=rho_m, nu_m=nu_m, rho_p=rho_p, nu_p=nu_p,
+        resistance_model=lambda um: k2 * um * abs(um) + k1 * um,
+        tested_speed_range=(float(u.min()), float(u.max())),
+        wetted_area_model=model.wetted_area_m2 or math.nan,
+        one_plus_k=one_plus_k,
+        delta_cf=proto.delta_cf,
+    )
+    hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")]
+    re_model = (float(hull_runs["re"].min()), float(hull_runs["re"].max()))
+    re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
+    depth = model.depth_m if model.diameter_m is not None else None
+    statement = similarity.similarity_statement(
+        re_model, re_proto, depth, model.diameter_m if depth is not None else None
+    )
+    day.scaling = ScalingResult(
+        table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
+        form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
+        scale=scale,
+    )
+    outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
+    if outside:
+        day.warnings.append(
+            "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "
+            "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s."
+        )

@@ -14,3 +14,9 @@ if TYPE_CHECKING:
 def write_tables(day: DayResult, out: Path) -> None:
     """Write the CSV tables the day has data for."""
     write_csv(day.runs, out / "runs.csv")
+    if day.hull is not None:
+        write_csv(day.hull.coefficients, out / "coefficients.csv")
+    if day.fins is not None:
+        write_csv(day.fins.table, out / "fins.csv")
+    if day.scaling is not None:
+        write_csv(day.scaling.table, out / "scaling.csv")
