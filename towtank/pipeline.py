@@ -479,7 +479,8 @@ def _scaling_stage(day: DayResult) -> None:
         one_plus_k=one_plus_k,
         delta_cf=proto.delta_cf,
     )
-    hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")]
+    hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
+                     & (np.abs(runs["angle_deg"]) <= p.processing.damping_alpha_max_deg)]
     re_model = (float(hull_runs["re"].min()), float(hull_runs["re"].max()))
     re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
     depth = model.depth_m if model.diameter_m is not None else None

@@ -1149,7 +1149,7 @@ def write_run_file(
     name = path.name.lower()
     path.parent.mkdir(parents=True, exist_ok=True)
     if name.endswith(".csv.gz"):
-        path.write_bytes(gzip.compress(_csv_bytes(out), compresslevel=9, mtime=0))
+        path.write_bytes(gzip.compress(_csv_bytes(out), compresslevel=6, mtime=0))
     elif name.endswith(".csv"):
         path.write_bytes(_csv_bytes(out))
     elif name.endswith(".tdms"):

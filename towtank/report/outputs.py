@@ -109,11 +109,18 @@ def write_outputs(
             json.dumps(provenance(day), indent=2, sort_keys=False, default=str) + "\n",
             encoding="utf-8",
         )
-        for name in keep:
+        moved = []
+        for name in keep:  # carried over by a rename, not a copy: the cache can be large
             src = out_dir / name
             if src.exists() and not (tmp / name).exists():
-                shutil.copytree(src, tmp / name) if src.is_dir() else shutil.copy2(src, tmp / name)
-        _swap_into_place(tmp, out_dir)
+                os.rename(src, tmp / name)
+                moved.append(name)
+        try:
+            _swap_into_place(tmp, out_dir)
+        except BaseException:
+            for name in moved:
+                os.rename(tmp / name, out_dir / name)
+            raise
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
