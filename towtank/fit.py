@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.reduce import PHASE_ACCEL, PHASE_STEADY, RunReduction
+from towtank.tare import TareModel, tare_design
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -145,6 +146,46 @@ def accel_levels(reductions: dict[int, RunReduction], run_ids: list[int], *,
     return [float(np.mean(g)) for g in levels]
 
 
+# ---------------------------------------------------------------------- tare uncertainty
+def tare_covariance(
+    A: np.ndarray,
+    tare_rows: np.ndarray,
+    groups: np.ndarray,
+    tares: dict[str, TareModel] | None,
+) -> np.ndarray:
+    """Covariance that the subtracted tare adds to an estimate β = A·y.
+
+    Each y_i had F_tare = T_i·t_g removed, with t_g the tare coefficients of its group (common
+    to all runs of the group, so their error never shows in the residual scatter). Then
+    cov(β) gains Σ_g (A T_g) Σ_g (A T_g)ᵀ, Σ_g the tare fit's covariance (GUM, JCGM 100:2008,
+    §5.2: correlated input quantities).
+
+    Parameters
+    ----------
+    A : ndarray (p, n)
+        Linear map from the n observations to the p estimates.
+    tare_rows : ndarray (n, 3)
+        Tare regressors [U|U|, U, a] of each observation, divided by whatever the
+        observation was divided by (e.g. ½ρAU² for C_D).
+    groups : ndarray (n,)
+        Tare group of each observation.
+    tares : dict
+        Tare models by group; None adds nothing.
+    """
+    p = A.shape[0]
+    out = np.zeros((p, p))
+    if not tares:
+        return out
+    groups = np.asarray(groups).astype(str)
+    for g in np.unique(groups):
+        if g not in tares:
+            continue
+        tg = np.where((groups == g)[:, None], tare_rows, 0.0)
+        b = A @ tg
+        out += b @ tares[g].drag.cov @ b.T
+    return out
+
+
 # ----------------------------------------------------------------------------- added mass
 def joint_regression(
     speed: np.ndarray, accel: np.ndarray, drag: np.ndarray, groups: np.ndarray
@@ -181,6 +222,7 @@ def fit_added_mass(
     run_ids: list[int],
     mass: float,
     mass_sd: float,
+    tares: dict[str, TareModel] | None = None,
 ) -> AddedMassFit:
     """Added mass from the runs at one angle (α = 0 for X_udot, 90° for Y_vdot).
 
@@ -196,11 +238,17 @@ def fit_added_mass(
         Weighed mass of the model (everything downstream of the balance but the sting) [kg].
     mass_sd : float
         Standard uncertainty of the weighed mass [kg].
+    tares : dict, optional
+        The tare models subtracted, whose uncertainty (m_t above all) is propagated.
     """
     s = pooled_samples(reductions, run_ids)
     res = joint_regression(s["U"], s["a"], s["drag"], s["run"])
     k2, k1, M = (float(v) for v in res.params)
-    M_se = float(res.bse[2])
+    x = tare_design(s["U"], s["a"])
+    group_of = {r: reductions[r].tare_group for r in run_ids}
+    groups = np.array([group_of[int(r)] for r in s["run"]])
+    tare_var = float(tare_covariance(np.linalg.pinv(x), x, groups, tares)[2, 2])
+    M_se = float(math.sqrt(float(res.bse[2]) ** 2 + tare_var))
     value = mass - M
     u_c = math.hypot(M_se, mass_sd)
     clustered = getattr(res, "cov_type", "nonrobust") == "cluster"
@@ -310,7 +358,12 @@ def _t95(dof: int) -> float:
 
 
 def fit_damping(
-    runs: pd.DataFrame, rho: float, area: float, alpha_max_deg: float
+    runs: pd.DataFrame,
+    rho: float,
+    area: float,
+    alpha_max_deg: float,
+    reductions: dict[int, RunReduction] | None = None,
+    tares: dict[str, TareModel] | None = None,
 ) -> tuple[DampingFit | None, dict[str, Estimate], list[str]]:
     """C_D(α) damping terms from the steady hull runs with |α| ≤ ``alpha_max_deg``.
 
@@ -324,6 +377,8 @@ def fit_damping(
         Frontal area A [m²] (C_D reference).
     alpha_max_deg : float
         Largest |α| used [deg].
+    reductions, tares : dict, optional
+        Run reductions and tare models, to propagate the tare's uncertainty.
     """
     msgs: list[str] = []
     est: dict[str, Estimate] = {}
@@ -344,6 +399,8 @@ def fit_damping(
     if len(angles) >= 3 and n >= 4:
         res = fit_cd_alpha(alpha, cd)
         params, cov, dof = np.asarray(res.params), np.asarray(res.cov_params()), int(res.df_resid)
+        x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
+        cov = cov + _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
         infl = res.get_influence()
         student = infl.resid_studentized_external
         cooks = infl.cooks_distance[0]
@@ -370,6 +427,8 @@ def fit_damping(
     if len(zero) >= 2:
         c = zero["cd"].to_numpy(float)
         mean, se = float(np.mean(c)), float(np.std(c, ddof=1) / math.sqrt(len(c)))
+        avg = np.full((1, len(c)), 1.0 / len(c))
+        se = math.sqrt(se**2 + float(_run_tare_cov(avg, zero, reductions, tares, q)[0, 0]))
         params = np.array([0.0, 0.0, mean])
         cov = np.diag([0.0, 0.0, se**2])
         m2 = f"mean C_D of {len(zero)} steady runs at α = 0 (report eq. 13, c only)"
@@ -381,8 +440,30 @@ def fit_damping(
     return None, est, msgs
 
 
+def _run_tare_cov(
+    A: np.ndarray,
+    sel: pd.DataFrame,
+    reductions: dict[int, RunReduction] | None,
+    tares: dict[str, TareModel] | None,
+    q_area: float,
+) -> np.ndarray:
+    """Tare covariance of a fit over per-run steady means (divided by q_area·U² when C_D)."""
+    if not reductions or not tares:
+        return np.zeros((A.shape[0], A.shape[0]))
+    ids = [int(r) for r in sel["run"]]
+    rows = np.array([reductions[r].steady_regressors for r in ids], dtype=float)
+    u = sel["speed_mean"].to_numpy(float)
+    denom = q_area * u * u if q_area else np.ones_like(u)
+    groups = np.array([reductions[r].tare_group for r in ids])
+    return tare_covariance(A, rows / denom[:, None], groups, tares)
+
+
 def fit_transverse(
-    runs: pd.DataFrame, rho: float, lateral_area: float
+    runs: pd.DataFrame,
+    rho: float,
+    lateral_area: float,
+    reductions: dict[int, RunReduction] | None = None,
+    tares: dict[str, TareModel] | None = None,
 ) -> tuple[Estimate | None, float, float, pd.DataFrame | None, list[str]]:
     """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|."""
     import statsmodels.api as sm
@@ -398,6 +479,9 @@ def fit_transverse(
     r = tr["drag_mean"].to_numpy(float)
     res = sm.OLS(r, (u * np.abs(u))[:, None]).fit()
     K, K_se, dof = float(res.params[0]), float(res.bse[0]), int(res.df_resid)
+    uu = (u * np.abs(u))[:, None]
+    K_se = math.sqrt(K_se**2 + float(_run_tare_cov(np.linalg.pinv(uu), tr, reductions, tares,
+                                                    0.0)[0, 0]))
     tq = _t95(dof)
     value = -K
     est = Estimate(
@@ -456,6 +540,7 @@ def fit_hull(
     frontal_area: float,
     lateral_area: float,
     alpha_max_deg: float = 30.0,
+    tares: dict[str, TareModel] | None = None,
 ) -> HullFit:
     """Every hull coefficient the day supports (model scale, SI, SNAME signs).
 
@@ -477,6 +562,8 @@ def fit_hull(
         Projected side area A_lat [m²].
     alpha_max_deg : float
         Largest |α| of the C_D(α) fit [deg].
+    tares : dict, optional
+        Tare models by group: their uncertainty is propagated into every interval.
     """
     messages: list[str] = []
     hull_ok = runs[(runs["status"] == "ok") & (runs["config"] == "hull")]
@@ -494,13 +581,15 @@ def fit_hull(
                 f"accelerations; the day has {len(levels)} (m/s²: {found}), so it is omitted."
             )
             continue
-        fit = fit_added_mass(symbol, reductions, ids, mass, mass_sd)
+        fit = fit_added_mass(symbol, reductions, ids, mass, mass_sd, tares)
         added[symbol] = fit
         estimates[symbol] = fit.estimate
-    damping, est_d, msgs = fit_damping(runs, rho, frontal_area, alpha_max_deg)
+    damping, est_d, msgs = fit_damping(runs, rho, frontal_area, alpha_max_deg, reductions,
+                                       tares)
     estimates.update(est_d)
     messages += msgs
-    yvv, cd90, cd90_se, ttable, msgs = fit_transverse(runs, rho, lateral_area)
+    yvv, cd90, cd90_se, ttable, msgs = fit_transverse(runs, rho, lateral_area, reductions,
+                                                      tares)
     messages += msgs
     if yvv is not None:
         estimates["Y_v|v|"] = yvv

@@ -376,6 +376,7 @@ def _hull_stage(day: DayResult) -> None:
         frontal_area=model.frontal_area,
         lateral_area=model.lateral_area,
         alpha_max_deg=day.protocol.processing.damping_alpha_max_deg,
+        tares=day.tares,
     )
     ref = fit.load_reference(day.protocol.campaign.reference)
     table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
