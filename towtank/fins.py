@@ -418,26 +418,60 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
     return out.loc[:, list(FIN_TABLE_COLUMNS)]
 
 
+def _with_intercept(alpha_rad: np.ndarray) -> bool:
+    """Fit an intercept only with three or more distinct angles (else through the origin)."""
+    return bool(np.unique(alpha_rad).size >= 3)
+
+
 def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tuple[float, ...]:
-    """OLS fit y = a alpha + c0: (a, ci_low, ci_high); NaN where the data cannot tell."""
+    """OLS slope of C_L on α: (a, ci_low, ci_high); NaN where the data cannot tell.
+
+    With three or more distinct angles the line C_L = a·α + c0 is fitted (c0 absorbs a small
+    misalignment of the fin); with fewer, C_L = a·α through the origin, which the symmetric
+    section justifies, so that two angles (e.g. 5° and 10°) still give a slope and an interval
+    from their repeats and speeds.
+    """
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
     x, y = alpha_rad[ok], y[ok]
-    if x.size < 2 or np.unique(x).size < 2:
+    if x.size < 1 or not np.any(x != 0):
         return np.nan, np.nan, np.nan
-    fit = sm.OLS(y, sm.add_constant(x, has_constant="add")).fit()
-    a = float(fit.params[1])
+    if _with_intercept(x):
+        fit = sm.OLS(y, sm.add_constant(x, has_constant="add")).fit()
+        k = 1
+    else:
+        fit = sm.OLS(y, x[:, None]).fit()
+        k = 0
+    a = float(fit.params[k])
     if fit.df_resid < 1:
         return a, np.nan, np.nan
-    low, high = fit.conf_int(alpha=1.0 - level)[1]
+    low, high = fit.conf_int(alpha=1.0 - level)[k]
     return a, float(low), float(high)
 
 
 def _ls_slope(alpha_rad: np.ndarray, y: np.ndarray) -> float:
     """Least-squares slope of y on alpha (same model as :func:`_ols_slope`, no interval)."""
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
-    if ok.sum() < 2 or np.unique(alpha_rad[ok]).size < 2:
+    x, y = alpha_rad[ok], y[ok]
+    if x.size < 1 or not np.any(x != 0):
         return np.nan
-    return float(np.polyfit(alpha_rad[ok], y[ok], 1)[0])
+    if _with_intercept(x):
+        return float(np.polyfit(x, y, 1)[0])
+    return float(x @ y / (x @ x))
+
+
+def _stall(cl_by_angle: pd.Series) -> tuple[float, float, bool]:
+    """(stall angle [deg], C_L,max, stall reached) from mean C_L per angle: first local max."""
+    positive = cl_by_angle[cl_by_angle.index >= 0].sort_index()
+    if positive.empty:
+        positive = cl_by_angle.sort_index()
+    angles = positive.index.to_numpy(dtype=float)
+    cl = positive.to_numpy(dtype=float)
+    drops = np.flatnonzero(np.diff(cl) < 0)
+    if drops.size:
+        k = int(drops[0])
+        return float(angles[k]), float(cl[k]), True
+    k = int(np.argmax(cl))
+    return float(angles[k]), float(cl[k]), False
 
 
 def fin_curves(
@@ -459,10 +493,12 @@ def fin_curves(
     :func:`finite_span_coefficients` at the group's mean Re, otherwise the ``cl_3d`` column of
     ``fin_df`` (each run's own Re, within the 5 % speed grouping of the mean).
 
-    Stall: C_L is averaged over repeats at each angle; the angle with the largest mean C_L is the
-    stall angle and that mean is C_L,max. ``stall_reached`` is False when that angle is the
-    largest tested angle, i.e. C_L was still rising where the test stopped. Minimum C_D and its
-    angle likewise from the per-angle means.
+    Stall: C_L is averaged over repeats at each angle (|α| taken, lift sign folded); the stall
+    angle is the first angle after which C_L falls (the first local maximum of C_L(α)), and its
+    C_L is C_L,max. Past stall a section's lift can rise again towards the flat-plate regime
+    (the Sandia tables peak again near 45°), so the global maximum is not the stall.
+    ``stall_reached`` is False when C_L never falls within the tested angles. Minimum C_D and
+    its angle from the per-angle means.
 
     Parameters
     ----------
@@ -516,9 +552,7 @@ def fin_curves(
             stall_angle = cl_max = np.nan
             reached: object = pd.NA
         else:
-            stall_angle = float(cl_by.idxmax())
-            cl_max = float(cl_by.max())
-            reached = bool(stall_angle < float(cl_by.index.max()))
+            stall_angle, cl_max, reached = _stall(cl_by)
         cd_min = float(cd_by.min()) if not cd_by.empty else np.nan
         cd_min_angle = float(cd_by.idxmin()) if not cd_by.empty else np.nan
         rows.append(

@@ -581,6 +581,20 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
             f"{src}: [model.myring] gives a length of {g.length:.4f} m but length_m is "
             f"{model.length_m:.4f} m."
         )
+    computed = [
+        name for name, given in (
+            ("frontal area", model.frontal_area_m2), ("lateral area", model.lateral_area_m2),
+            ("wetted area", model.wetted_area_m2), ("volume", model.volume_m3),
+        ) if given is None
+    ]
+    given = [n for n in ("frontal area", "lateral area", "wetted area", "volume")
+             if n not in computed]
+    source = (
+        (", ".join(computed) + " computed from the protocol's Myring description"
+         if computed else "")
+        + ("; " if computed and given else "")
+        + (", ".join(given) + " as given in the protocol" if given else "")
+    )
     return replace(
         model,
         diameter_m=model.diameter_m if model.diameter_m is not None else my.d,
@@ -588,7 +602,7 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
         lateral_area_m2=model.lateral_area_m2 or g.lateral_area,
         wetted_area_m2=model.wetted_area_m2 or g.wetted_area,
         volume_m3=model.volume_m3 or g.volume,
-        geometry_source="Myring description in the protocol (areas not given are computed)",
+        geometry_source=source,
     )
 
 

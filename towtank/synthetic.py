@@ -1863,6 +1863,15 @@ def hull_protocol_sections(
             "lateral_area_m2": 0.0152,
             "wetted_area_m2": 0.0472,
             "scale": 4.0,
+            "depth_m": 0.25,
+            "myring": {
+                "a": 0.05875,
+                "b": 0.1765,
+                "c": 0.11775,
+                "n": 2.0,
+                "theta_deg": 25.0,
+                "d": 0.05,
+            },
         },
         "prototype": {
             "length_m": 1.412,
@@ -1904,7 +1913,12 @@ def fin_protocol_sections(
             "output_dir": output_dir,
         },
         "water": {"type": "fresh", "temperature_C": float(temperature_C)},
-        "fin": {"chord_m": fin.chord, "span_m": fin.span, "section": fin.section},
+        "fin": {
+            "chord_m": fin.chord,
+            "span_m": fin.span,
+            "section": fin.section,
+            "x_m": -0.61,
+        },
         "processing": {},
     }
 

@@ -18,5 +18,8 @@ def write_tables(day: DayResult, out: Path) -> None:
         write_csv(day.hull.coefficients, out / "coefficients.csv")
     if day.fins is not None:
         write_csv(day.fins.table, out / "fins.csv")
+        write_csv(day.fins.curves, out / "fin_curves.csv")
+        if day.fins.control is not None:
+            write_csv(day.fins.control, out / "fin_control.csv")
     if day.scaling is not None:
         write_csv(day.scaling.table, out / "scaling.csv")
