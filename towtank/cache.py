@@ -5,6 +5,20 @@ that run (processing settings, channel mapping, manual window, set values, file 
 unchanged run is not read again and a changed setting invalidates exactly the runs it affects.
 The file's sha256 is remembered with its size and modification time: while those are unchanged
 the file is not even opened. Fits and outputs are always recomputed from the reductions.
+
+Layout, built for campaigns of thousands of runs:
+
+* ``files.json`` -- the index: ``files`` maps a run file's real path to [size, mtime_ns,
+  sha256]; ``entries`` maps an entry name (sha256 prefix and settings key) to [pack, offset,
+  length, crc32] of its pickled reduction.
+* ``runs/pack-*.bin`` -- pickled reductions back to back. New entries are gathered in memory and
+  written as one pack (with the index) every :data:`PACK_ENTRIES` entries and at :meth:`flush`,
+  instead of one file each; at most :data:`MAX_PACKS` packs are kept, beyond that they are
+  merged into one.
+* ``runs/<entry>.pkl`` -- one entry per file, the layout of earlier versions; still read.
+
+Every file is written to a temporary name and renamed into place. A missing, truncated or
+damaged entry (or index) is simply a miss.
 """
 
 from __future__ import annotations
@@ -14,32 +28,67 @@ import json
 import math
 import os
 import pickle
+import stat
+import sys
 import tempfile
+import time
+import zlib
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from towtank import __version__
 
-CACHE_FORMAT = 1
+CACHE_FORMAT = 1  # of the entries and settings keys
+INDEX_FORMAT = 2  # of files.json
+PACK_ENTRIES = 64  # entries per pack written while runs are being reduced
+MAX_PACKS = 16  # more packs than this are merged into one at flush
+ORPHAN_AGE_S = 3600.0  # unindexed packs older than this are removed when packs are merged
+
+_PREFIX_MEMO: list[Any] = [None, ""]  # [protocol, its part of the settings payload]
+
+
+def _num(x: Any) -> Any:
+    return None if isinstance(x, float) and math.isnan(x) else x
+
+
+def _protocol_part(protocol: Any) -> str:
+    """The JSON of the protocol's settings, as json.dumps writes them inside the payload."""
+    if _PREFIX_MEMO[0] is protocol:
+        return str(_PREFIX_MEMO[1])
+    channels = {k: asdict(v) for k, v in sorted(protocol.channels.items())}
+    processing = asdict(protocol.processing)
+    part = (
+        json.dumps(channels, sort_keys=True, default=str),
+        json.dumps(processing, sort_keys=True, default=str),
+    )
+    text = "\x00".join(part)
+    _PREFIX_MEMO[0], _PREFIX_MEMO[1] = protocol, text
+    return text
 
 
 def settings_key(protocol: Any, row: dict[str, Any]) -> str:
-    """Hash of everything besides the file's bytes that changes a run's reduction."""
+    """Hash of everything besides the file's bytes that changes a run's reduction.
 
-    def num(x: Any) -> Any:
-        return None if isinstance(x, float) and math.isnan(x) else x
-
-    payload = {
-        "format": CACHE_FORMAT,
-        "version": __version__,
-        "processing": asdict(protocol.processing),
-        "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
-        "file": str(row["file"]),
-        "window": [num(row.get("window_start_s")), num(row.get("window_end_s"))],
-        "nominal": [num(row.get("speed_nominal")), num(row.get("accel_nominal"))],
-    }
-    text = json.dumps(payload, sort_keys=True, default=str)
+    The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
+    version, processing settings, channel mapping, file name, manual window and set values. The
+    protocol's part is serialised once per protocol object (thousands of runs share it); the
+    text hashed is the same as serialising the whole payload each time.
+    """
+    channels, processing = _protocol_part(protocol).split("\x00")
+    dumps = json.dumps
+    text = (
+        '{"channels": ' + channels
+        + ', "file": ' + dumps(str(row["file"]))
+        + ', "format": ' + dumps(CACHE_FORMAT)
+        + ', "nominal": '
+        + dumps([_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))], default=str)
+        + ', "processing": ' + processing
+        + ', "version": ' + dumps(__version__)
+        + ', "window": '
+        + dumps([_num(row.get("window_start_s")), _num(row.get("window_end_s"))], default=str)
+        + "}"
+    )
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
@@ -60,46 +109,275 @@ class RunCache:
 
     def __init__(self, directory: str | Path):
         self.dir = Path(directory)
+        self._runs = self.dir / "runs"
         self._index_path = self.dir / "files.json"
+        self._files: dict[str, list[Any]] = {}
+        self._entries: dict[str, list[Any]] = {}
         try:
-            self._index: dict[str, list[Any]] = json.loads(self._index_path.read_text())
-        except (OSError, ValueError):
-            self._index = {}
+            data = json.loads(self._index_path.read_bytes())
+            if isinstance(data, dict) and data.get("format") == INDEX_FORMAT:
+                self._files = dict(data.get("files", {}))
+                self._entries = dict(data.get("entries", {}))
+            elif isinstance(data, dict):  # earlier layout: the files map alone
+                self._files = {k: v for k, v in data.items() if isinstance(v, list)}
+        except (OSError, ValueError, TypeError):
+            pass
+        self._pending: list[tuple[str, bytes]] = []
+        self._packs: dict[str, bytes | None] = {}  # pack name -> its bytes, read on first use
+        self._real_dirs: dict[str, str] = {}
         self._dirty = False
+
+    # ----------------------------------------------------------------------------- files
+    def _stat(self, path: Path) -> tuple[str, os.stat_result] | None:
+        """The file's index key (its real path, as ``Path.resolve``) and its stat."""
+        name = os.fspath(path)
+        try:
+            st = os.lstat(name)
+        except OSError:
+            return None
+        if stat.S_ISLNK(st.st_mode):
+            try:
+                return str(Path(name).resolve()), os.stat(name)
+            except OSError:
+                return None
+        head, tail = os.path.split(name)
+        real = self._real_dirs.get(head)
+        if real is None:
+            real = self._real_dirs[head] = os.path.realpath(head or ".")
+        return os.path.join(real, tail), st
 
     def known_sha(self, path: Path) -> str | None:
         """The file's sha256 if its size and mtime are those recorded with it."""
-        try:
-            st = path.stat()
-        except OSError:
+        found = self._stat(path)
+        if found is None:
             return None
-        rec = self._index.get(str(path.resolve()))
+        key, st = found
+        rec = self._files.get(key)
         if rec and rec[0] == st.st_size and rec[1] == st.st_mtime_ns:
             return str(rec[2])
         return None
 
     def remember_sha(self, path: Path, sha: str) -> None:
-        try:
-            st = path.stat()
-        except OSError:
+        found = self._stat(path)
+        if found is None:
             return
-        self._index[str(path.resolve())] = [st.st_size, st.st_mtime_ns, sha]
+        key, st = found
+        self._files[key] = [st.st_size, st.st_mtime_ns, sha]
         self._dirty = True
 
+    # --------------------------------------------------------------------------- entries
+    @staticmethod
+    def _name(sha: str, key: str) -> str:
+        return f"{sha[:32]}-{key}"
+
     def _entry(self, sha: str, key: str) -> Path:
-        return self.dir / "runs" / f"{sha[:32]}-{key}.pkl"
+        """Where an entry of the earlier one-file-per-entry layout lives."""
+        return self._runs / f"{self._name(sha, key)}.pkl"
+
+    def _pack_bytes(self, pack: str) -> bytes | None:
+        if pack not in self._packs:
+            try:
+                self._packs[pack] = (self._runs / pack).read_bytes()
+            except OSError:
+                self._packs[pack] = None
+        return self._packs[pack]
+
+    def _blob(self, name: str) -> bytes | None:
+        loc = self._entries.get(name)
+        if loc is None:
+            return None
+        try:
+            pack, offset, length, crc = loc
+            data = self._pack_bytes(str(pack))
+            if data is None or offset + length > len(data):
+                return None
+            blob = data[offset : offset + length]
+            return blob if zlib.crc32(blob) == crc else None
+        except (TypeError, ValueError):
+            return None
 
     def get(self, sha: str, key: str) -> Any | None:
+        name = self._name(sha, key)
         try:
+            for pending, blob in self._pending:
+                if pending == name:
+                    return pickle.loads(blob)
+            blob = self._blob(name)
+            if blob is not None:
+                return pickle.loads(blob)
             with open(self._entry(sha, key), "rb") as fh:
                 return pickle.load(fh)
         except Exception:  # noqa: BLE001 - any damage is a miss
             return None
 
     def put(self, sha: str, key: str, value: Any) -> None:
-        _atomic_write(self._entry(sha, key), pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
+        """Store a reduction (pickled now; written with the next pack)."""
+        blob = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+        self._pending.append((self._name(sha, key), blob))
+        self._dirty = True
+        if len(self._pending) >= PACK_ENTRIES:
+            self._write_pack()
+            self._write_index()
+
+    # ----------------------------------------------------------------------------- disk
+    def _write_pack(self) -> None:
+        if not self._pending:
+            return
+        pack = f"pack-{time.time_ns():x}-{os.getpid()}.bin"
+        parts, offset = [], 0
+        locs: dict[str, list[Any]] = {}
+        for name, blob in self._pending:
+            parts.append(blob)
+            locs[name] = [pack, offset, len(blob), zlib.crc32(blob)]
+            offset += len(blob)
+        data = b"".join(parts)
+        _atomic_write(self._runs / pack, data)
+        self._entries.update(locs)
+        self._pending.clear()
+
+    def _write_index(self) -> None:
+        payload = {"format": INDEX_FORMAT, "files": self._files, "entries": self._entries}
+        _atomic_write(self._index_path, json.dumps(payload, separators=(",", ":")).encode())
+
+    def _merge_packs(self) -> None:
+        """Rewrite every indexed entry into one pack; remove the packs merged (and old orphans)."""
+        packs = {str(loc[0]) for loc in self._entries.values()}
+        if len(packs) <= MAX_PACKS:
+            return
+        for name in list(self._entries):
+            blob = self._blob(name)
+            del self._entries[name]
+            if blob is not None:
+                self._pending.append((name, blob))
+        self._write_pack()
+        self._write_index()
+        keep = {str(loc[0]) for loc in self._entries.values()}
+        now = time.time()
+        for path in self._runs.glob("pack-*.bin"):
+            try:
+                old = now - path.stat().st_mtime > ORPHAN_AGE_S
+                if path.name not in keep and (path.name in packs or old):
+                    path.unlink()
+                    self._packs.pop(path.name, None)
+            except OSError:
+                pass
 
     def flush(self) -> None:
+        """Write the pending entries and the index."""
         if self._dirty:
-            _atomic_write(self._index_path, json.dumps(self._index, sort_keys=True).encode())
+            self._write_pack()
+            self._write_index()
             self._dirty = False
+            self._merge_packs()
+
+
+# ================================================================================ the day
+DAY_FORMAT = 1
+
+
+def _sha_file(path: Path) -> str | None:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int]]:
+    """(relative path, size, mtime_ns) of every file under ``root``, sorted."""
+    out = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = sorted(d for d in dirnames if d not in skip and d != "__pycache__")
+        for name in filenames:
+            p = os.path.join(dirpath, name)
+            try:
+                st = os.stat(p)
+            except OSError:
+                continue
+            out.append((os.path.relpath(p, root), st.st_size, st.st_mtime_ns))
+    return sorted(out)
+
+
+def _installed() -> list[str]:
+    """Names (with versions) of the distributions installed on sys.path: a library upgraded
+    changes the outputs' provenance, so it changes the fingerprint. One listing per folder."""
+    out = []
+    for entry in sys.path:
+        try:
+            names = os.listdir(entry or ".")
+        except OSError:
+            continue
+        out.extend(n for n in names if n.endswith((".dist-info", ".egg-info")))
+    return sorted(out)
+
+
+class DayStamp:
+    """Fingerprint of everything a day's outputs depend on, kept with them (``.cache/day.json``).
+
+    The fingerprint covers towtank's own code (its files' sizes and modification times) and
+    version, the libraries' versions, the protocol and the run sheet (their bytes), a reference
+    file named by the protocol, the data folder (every file's name, size and modification time,
+    as the run cache's index does: nothing is read), the output folder and the options that
+    change the outputs. :meth:`replay` returns the exit code and the summary recorded by the
+    last complete run when its fingerprint is this one and every output it wrote is still there
+    with the same sha256; the caller can then stop. Anything else, including any error while
+    checking, is "not unchanged".
+    """
+
+    def __init__(self, cache_dir: str | Path, protocol: Any, out_dir: str | Path,
+                 options: dict[str, Any] | None = None):
+        self.path = Path(cache_dir) / "day.json"
+        self.out_dir = Path(out_dir).resolve()
+        self._protocol = protocol
+        self._options = dict(options or {})
+        self._key: str | None = None
+
+    @property
+    def key(self) -> str:
+        if self._key is None:
+            import platform
+
+            import towtank
+
+            c = self._protocol.campaign
+            ref = Path(str(c.reference))
+            payload = {
+                "format": DAY_FORMAT,
+                "version": __version__,
+                "code": _tree(Path(towtank.__file__).parent),
+                "python": platform.python_version(),
+                "libraries": _installed(),
+                "protocol": [str(self._protocol.path), _sha_file(Path(self._protocol.path))],
+                "run_sheet": [str(c.run_sheet), _sha_file(Path(c.run_sheet))],
+                "reference": [str(ref), _sha_file(ref) if ref.is_file() else None],
+                "data": [str(c.data_dir), _tree(Path(c.data_dir))],
+                "out": str(self.out_dir),
+                "options": self._options,
+            }
+            text = json.dumps(payload, sort_keys=True, default=str)
+            self._key = hashlib.sha256(text.encode()).hexdigest()
+        return self._key
+
+    def _outputs(self) -> dict[str, str | None]:
+        skip = (self.path.parent.name,)
+        return {rel: _sha_file(self.out_dir / rel) for rel, _, _ in _tree(self.out_dir, skip)}
+
+    def replay(self) -> tuple[int, str] | None:
+        """(exit code, summary) of the last run if nothing changed since, else None."""
+        try:
+            rec = json.loads(self.path.read_bytes())
+            if rec.get("key") != self.key:
+                return None
+            if rec.get("outputs") != self._outputs():
+                return None
+            return int(rec["exit_code"]), str(rec["summary"])
+        except Exception:  # noqa: BLE001 - any doubt: process the day
+            return None
+
+    def record(self, exit_code: int, summary: str) -> None:
+        """Remember a completed run (call once its outputs are in place)."""
+        rec = {"key": self.key, "exit_code": int(exit_code), "summary": summary,
+               "outputs": self._outputs()}
+        _atomic_write(self.path, json.dumps(rec, indent=1).encode())
+
+    def forget(self) -> None:
+        self.path.unlink(missing_ok=True)

@@ -275,8 +275,10 @@ def fit_added_mass(
     if cd.get("value") is not None and math.isfinite(float(cd["value"])):  # type: ignore[arg-type]
         alt = float(cd["value"])  # type: ignore[arg-type]
         est.alt_value = alt
-        est.alt_method = "curve difference (report eqs. 7–8: per-acceleration quadratic minus "
-        "steady quadratic)"
+        est.alt_method = (
+            "curve difference (report eqs. 7–8: per-acceleration quadratic minus "
+            "steady quadratic)"
+        )
         spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]
         tol = 2.0 * math.hypot(M_se, spread)
         diff = alt - value
@@ -477,22 +479,26 @@ def fit_transverse(
         ]
     u = tr["speed_mean"].to_numpy(float)
     r = tr["drag_mean"].to_numpy(float)
-    res = sm.OLS(r, (u * np.abs(u))[:, None]).fit()
-    K, K_se, dof = float(res.params[0]), float(res.bse[0]), int(res.df_resid)
+    # each run at its own water density: R/(½ρ_run·A_lat) = C_D,90·U|U|
+    y = r / (0.5 * tr["rho"].to_numpy(float) * lateral_area)
     uu = (u * np.abs(u))[:, None]
-    K_se = math.sqrt(K_se**2 + float(_run_tare_cov(np.linalg.pinv(uu), tr, reductions, tares,
-                                                    0.0)[0, 0]))
+    res = sm.OLS(y, uu).fit()
+    cd90, cd90_se, dof = float(res.params[0]), float(res.bse[0]), int(res.df_resid)
+    q_run = 0.5 * tr["rho"].to_numpy(float) * lateral_area
+    tare_var = float(_run_tare_cov(np.linalg.pinv(uu) / q_run[None, :], tr, reductions, tares,
+                                   0.0)[0, 0])
+    cd90_se = math.sqrt(cd90_se**2 + tare_var)
+    q90 = 0.5 * rho * lateral_area
+    value, se = -q90 * cd90, q90 * cd90_se
     tq = _t95(dof)
-    value = -K
     est = Estimate(
-        "Y_v|v|", value, K_se, value - tq * K_se, value + tq * K_se,
+        "Y_v|v|", value, se, value - tq * se, value + tq * se,
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
         "(report eq. 15)", len(tr),
     )
-    q90 = 0.5 * rho * lateral_area
     table = pd.DataFrame({"run": tr["run"].to_numpy(int), "speed": u, "drag": r,
-                          "cd90": r / (q90 * u * u), "resid": res.resid})
-    return est, K / q90, K_se / q90, table, []
+                          "cd90": y / (u * u), "resid": res.resid})
+    return est, cd90, cd90_se, table, []
 
 
 def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:

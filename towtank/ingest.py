@@ -3,10 +3,15 @@
 Run files (FORMATS.md §3) are CSV, CSV.gz or LabVIEW TDMS. The file is read once as bytes (the
 same bytes give its sha256 for the cache and the provenance), parsed with pyarrow (CSV) or npTDMS
 (TDMS) into float64 arrays, mapped to the canonical channels with value = gain·(raw − offset),
-and checked: truncated last line, non-numeric rows, NaN gaps, time running backwards or at an
-irregular rate, channels clipped flat at a rail, spikes. Repairs that are safe (a few bad rows
-dropped, short gaps interpolated, spikes replaced) are made and counted in ``notes``; anything
-else raises :class:`~towtank.errors.RunError` with one sentence. Raw files are only ever read.
+and checked: truncated last line, non-numeric or malformed rows, missing and infinite values,
+time not increasing (duplicated blocks, clock resets), an implausible or irregular sample rate,
+lost samples, channels clipped flat at a rail, spikes. Repairs that are safe (a few bad rows
+dropped, a few lost samples and short gaps interpolated, isolated spikes replaced) are made and
+counted in ``notes``; anything else raises :class:`~towtank.errors.RunError` with one sentence
+that names the file and says what is wrong and where. Rows are counted as a spreadsheet or a
+text editor counts them (the header is row 1); TDMS data are counted in samples from 1.
+
+Raw files are only ever opened for reading. Every check is vectorised (no per-sample loop).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import io
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +31,20 @@ from towtank.protocol import ChannelMap, channel_map
 REQUIRED_CHANNELS = ("time", "speed", "drag")
 OPTIONAL_CHANNELS = ("accel", "lift")
 FORCE_CHANNELS = ("drag", "lift")
+UNITS = {"time": "s", "speed": "m/s", "accel": "m/s²", "drag": "N", "lift": "N"}
+
+MIN_SAMPLES = 10
+MIN_FS_HZ = 10.0  # below this the time channel is not in seconds (ms? sample numbers?)
+MAX_FS_HZ = 1.0e6
+JITTER_TOLERANCE = 0.2  # largest departure of one time step from the sample interval [-]
+SPIKE_THRESHOLD = 8.0  # robust standard deviations (see despike)
+MAX_SPEED = 50.0  # [m/s] no towing carriage is faster: a larger value is a unit or gain error
+MAX_VALUE = 1.0e9  # [SI] larger values are corrupted numbers (and would overflow the filters)
+MAX_TIME = 1.0e11  # [s] over 3000 years: not a time in seconds
+
+_ROWS_KEY = "__rows__"
+_INVALID_KEY = "__invalid_rows__"
+_LABEL_KEY = "__label__"
 
 
 @dataclass
@@ -47,14 +67,16 @@ class RawRun:
 
 
 def file_bytes(path: Path) -> bytes:
-    """The file's bytes, read-only; a missing or unreadable file is a RunError."""
+    """The file's bytes, opened read-only; a missing or unreadable file is a RunError."""
     try:
         with open(path, "rb") as fh:
             return fh.read()
     except FileNotFoundError:
         raise RunError(f"the data file {path.name} is not found in {path.parent}") from None
+    except IsADirectoryError:
+        raise RunError(f"{path.name} is a folder, not a data file") from None
     except OSError as exc:
-        raise RunError(f"{path.name} cannot be read ({exc.strerror})") from None
+        raise RunError(f"{path.name} cannot be read ({exc.strerror or exc})") from None
 
 
 def sha256_bytes(data: bytes) -> str:
@@ -73,75 +95,227 @@ def file_kind(path: Path) -> str:
     raise RunError(f"{path.name} is neither .csv, .csv.gz nor .tdms")
 
 
+# --------------------------------------------------------------------------- row bookkeeping
+class _Where:
+    """Where a sample sits in the file: its row (CSV, header = row 1) or sample number (TDMS)."""
+
+    def __init__(self, rows: np.ndarray, label: str = "row"):
+        self.rows = rows
+        self.label = label
+
+    def __call__(self, i: int) -> str:
+        i = min(max(int(i), 0), self.rows.size - 1)
+        return f"{self.label} {int(self.rows[i])}"
+
+    def span(self, i0: int, i1: int) -> str:
+        """Rows i0..i1 (inclusive sample indices)."""
+        if i1 <= i0:
+            return self(i0)
+        r0 = int(self.rows[min(max(i0, 0), self.rows.size - 1)])
+        r1 = int(self.rows[min(max(i1, 0), self.rows.size - 1)])
+        return f"{self.label}s {r0}–{r1}"
+
+    def many(self, idx: np.ndarray, limit: int = 5) -> str:
+        """'rows 12, 40, 77' (at most ``limit``, then an ellipsis)."""
+        idx = np.asarray(idx, dtype=int)
+        shown = ", ".join(str(int(self.rows[i])) for i in idx[:limit])
+        more = ", …" if idx.size > limit else ""
+        return f"{self.label}{'s' if idx.size > 1 else ''} {shown}{more}"
+
+    def subset(self, keep: np.ndarray) -> _Where:
+        return _Where(self.rows[keep], self.label)
+
+
+def _list_rows(rows: np.ndarray, limit: int = 5) -> str:
+    shown = ", ".join(str(int(r)) for r in rows[:limit])
+    more = ", …" if rows.size > limit else ""
+    return f"row{'s' if rows.size > 1 else ''} {shown}{more}"
+
+
 # ------------------------------------------------------------------------------------ readers
 def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Float64 array and a mask of entries that were text but not numbers."""
+    """Float64 array and a mask of entries that hold text that is not a number."""
     import pandas as pd
 
-    if values.dtype.kind in "fiu":
+    if values.dtype.kind in "fiub":
         return values.astype(np.float64, copy=False), np.zeros(values.size, dtype=bool)
     s = pd.Series(values, dtype=object)
     as_text = s.astype("string").str.strip()
     empty = as_text.isna() | (as_text == "") | as_text.str.lower().isin(["nan", "na", "null"])
     num = pd.to_numeric(as_text.where(~empty), errors="coerce")
-    bad = num.isna().to_numpy() & ~empty.to_numpy()
+    bad = num.isna().to_numpy(dtype=bool, na_value=True) & ~empty.to_numpy(
+        dtype=bool, na_value=True
+    )
     return num.to_numpy(dtype=np.float64, na_value=np.nan), bad
 
 
-def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Parse CSV text (already decompressed) into float64 columns.
+def _sniff_delimiter(header: bytes) -> str:
+    if b"," in header:
+        return ","
+    if b";" in header:
+        return ";"
+    if b"\t" in header:
+        return "\t"
+    return ","
 
-    Returns the columns and notes. Rows with the wrong number of fields are skipped by pyarrow's
-    invalid-row handler and reported; a last line cut short is reported as a truncated file.
+
+def _line_table(data: bytes, delim: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Per line of the file: 1-based number, field count, emptiness; and the header's index.
+
+    A plain count of delimiters (numeric run files do not quote fields); it is used only to
+    give messages the rows a text editor shows, never to parse values.
     """
+    buf = np.frombuffer(data, dtype=np.uint8)
+    nl = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], nl + 1))
+    ends = np.concatenate((nl, [buf.size]))
+    if starts[-1] >= buf.size:  # nothing after the final line break
+        starts, ends = starts[:-1], ends[:-1]
+    if starts.size == 0:
+        return np.array([], int), np.array([], int), np.array([], bool), 0
+    last = np.maximum(ends - 1, 0)
+    cr = (ends > starts) & (buf[last] == 13)
+    eff_end = ends - cr
+    empty = eff_end <= starts
+    cum = np.concatenate(([0], np.cumsum(buf == ord(delim))))
+    nfields = cum[eff_end] - cum[starts] + 1
+    numbers = np.arange(1, starts.size + 1)
+    nonempty = np.flatnonzero(~empty)
+    header = int(nonempty[0]) if nonempty.size else 0
+    return numbers, nfields, empty, header
+
+
+def _truncated_tail(data: bytes, delim: str, n_header: int) -> bool:
+    """True when the file does not end with a line break and its last line is cut short.
+
+    A last line with fewer fields than the header is cut, and so is one whose last value is
+    empty or not a number (``1.2e``, ``-``). A complete last line without a final line break is
+    fine (many programs write no final line break); a number cut to a shorter number cannot be
+    told from a complete one, and is at worst one odd sample at the end of the still window.
+    """
+    if data.endswith((b"\n", b"\r")):
+        return False
+    last = data[data.rfind(b"\n") + 1 :].rstrip(b"\r")
+    if not last.strip():
+        return False
+    fields = last.split(delim.encode())
+    if len(fields) != n_header:
+        return len(fields) < n_header  # more fields: a malformed row, skipped and counted
+    tail = fields[-1].strip()
+    try:
+        float(tail)
+    except ValueError:
+        return True
+    return False
+
+
+def _arrow_table(data: bytes, delim: str, handler, whole: bool = False):  # noqa: ANN001
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
-    if not data.strip():
-        raise RunError(f"{name} is empty")
-    notes: list[str] = []
-    truncated_tail = not data.endswith((b"\n", b"\r"))
-    invalid: list[int] = []
+    block = max(1 << 22, len(data) + 1) if whole else 1 << 22
+    return pacsv.read_csv(
+        pa.BufferReader(data),
+        read_options=pacsv.ReadOptions(block_size=block),
+        parse_options=pacsv.ParseOptions(delimiter=delim, invalid_row_handler=handler),
+        convert_options=pacsv.ConvertOptions(
+            strings_can_be_null=True,
+            null_values=["", "NaN", "nan", "NA", "N/A", "null", "NULL"],
+        ),
+    )
 
-    def handler(row: pacsv.InvalidRow) -> str:
-        invalid.append(row.number if row.number is not None else -1)
+
+def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Parse CSV text (already decompressed) into columns.
+
+    Returns the columns (float64 where numeric, object arrays where some values are text) and
+    notes. Two private entries come with them: ``__rows__``, the file row of every data row
+    (header = row 1), and ``__invalid_rows__``, the rows skipped for a wrong number of fields.
+    A UTF-8 byte-order mark, Windows line ends and blank lines are accepted. A last line cut
+    short is a RunError naming its row (truncated file).
+    """
+    import pyarrow as pa
+
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    if not data or data.isspace():
+        raise RunError(f"{name} is empty (0 data rows)")
+    if not data.isascii():
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError:  # not UTF-8: read it as Latin-1 (every byte is a character)
+            data = data.decode("latin-1").encode("utf-8")
+    first = len(data) - len(data.lstrip(b"\r\n")) if data[:1] in (b"\r", b"\n") else 0
+    end = data.find(b"\n", first)
+    header_line = data[first : end if end >= 0 else len(data)]
+    delim = _sniff_delimiter(header_line)
+    n_header = header_line.rstrip(b"\r").count(delim.encode()) + 1
+    if _truncated_tail(data, delim, n_header):
+        last_row = data.count(b"\n") + 1
+        raise RunError(f"{name} ends mid-line at row {last_row} (truncated file)")
+
+    notes: list[str] = []
+    n_invalid = [0]
+
+    def handler(row) -> str:  # noqa: ANN001 - pyarrow.csv.InvalidRow
+        n_invalid[0] += 1
         return "skip"
 
-    try:
-        table = pacsv.read_csv(
-            pa.BufferReader(data),
-            read_options=pacsv.ReadOptions(block_size=1 << 22),
-            parse_options=pacsv.ParseOptions(invalid_row_handler=handler),
-            convert_options=pacsv.ConvertOptions(
-                strings_can_be_null=True, null_values=["", "NaN", "nan", "NA", "null"]
-            ),
-        )
-    except pa.ArrowInvalid as exc:
-        raise RunError(f"{name} is not a readable CSV table ({str(exc).splitlines()[0]})") from None
-    n_lines = table.num_rows + len(invalid) + 1  # + header
-    if truncated_tail:
-        last_row = n_lines
-        raise RunError(f"{name} ends mid-line at row {last_row} (truncated file)")
-    if invalid:
-        last = max(invalid)
-        if last >= n_lines and len(invalid) == 1:
-            raise RunError(f"{name} ends mid-line at row {last} (truncated file)")
-        notes.append(
-            f"{len(invalid)} row(s) with the wrong number of fields skipped "
-            f"(first at row {min(invalid)})"
-        )
+    table = None
+    errors: list[str] = []
+    for whole in (False, True):  # the second time, column types are inferred from all rows
+        n_invalid[0] = 0
+        try:
+            table = _arrow_table(data, delim, handler, whole)
+            break
+        except (pa.ArrowException, UnicodeDecodeError, ValueError) as exc:
+            errors.append(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    if table is None:
+        raise RunError(f"{name} is not a readable CSV table ({errors[-1]})")
     if table.num_columns == 0 or table.num_rows == 0:
         raise RunError(f"{name} has a header but no data rows")
-    cols: dict[str, np.ndarray] = {}
-    for col_name, column in zip(table.column_names, table.columns, strict=True):
-        if pa.types.is_floating(column.type) or pa.types.is_integer(column.type):
-            cols[col_name] = column.to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
-        elif pa.types.is_null(column.type):
-            cols[col_name] = np.full(table.num_rows, np.nan)
+
+    # file rows of the data rows (and of the skipped ones) for the messages
+    rows = np.arange(table.num_rows) + 2
+    invalid_rows = np.array([], dtype=int)
+    if n_invalid[0] or b"\n\n" in data or b"\n\r\n" in data or data.startswith((b"\n", b"\r")):
+        numbers, nfields, empty, header = _line_table(data, delim)
+        body = np.arange(numbers.size) > header
+        good = body & ~empty & (nfields == n_header)
+        bad = body & ~empty & (nfields != n_header)
+        if int(good.sum()) == table.num_rows:
+            rows = numbers[good]
+            invalid_rows = numbers[bad]
         else:
-            cols[col_name] = column.to_numpy(zero_copy_only=False)
-    if invalid:
-        cols["__invalid_rows__"] = np.asarray(invalid)
+            invalid_rows = np.full(n_invalid[0], -1)
+    if n_invalid[0]:
+        if invalid_rows.size != n_invalid[0]:
+            invalid_rows = np.full(n_invalid[0], -1)
+        known = invalid_rows.size and int(invalid_rows.min()) > 0
+        where = _list_rows(invalid_rows) if known else "rows"
+        notes.append(
+            f"{n_invalid[0]} row(s) with the wrong number of fields skipped ({where})"
+        )
+
+    cols: dict[str, np.ndarray] = {}
+    seen: set[str] = set()
+    for col_name, column in zip(table.column_names, table.columns, strict=True):
+        key = col_name.strip()
+        if key in seen:
+            key = f"{key} (duplicate)"
+        seen.add(key)
+        if pa.types.is_floating(column.type) or pa.types.is_integer(column.type):
+            cols[key] = column.to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
+        elif pa.types.is_null(column.type):
+            cols[key] = np.full(table.num_rows, np.nan)
+        elif pa.types.is_timestamp(column.type):
+            ns = column.cast(pa.int64()).to_numpy(zero_copy_only=False).astype(np.float64)
+            first = ns[np.isfinite(ns)][0] if np.isfinite(ns).any() else 0.0
+            cols[key] = (ns - first) * 1e-9
+        else:
+            cols[key] = column.to_numpy(zero_copy_only=False)
+    cols[_ROWS_KEY] = rows
+    cols[_INVALID_KEY] = invalid_rows
     return cols, notes
 
 
@@ -150,22 +324,25 @@ def read_tdms_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], li
     from nptdms import TdmsFile
 
     if not data:
-        raise RunError(f"{name} is empty")
+        raise RunError(f"{name} is empty (0 bytes)")
     try:
         tdms = TdmsFile.read(io.BytesIO(data))
+        cols: dict[str, np.ndarray] = {}
+        for group in tdms.groups():
+            for channel in group.channels():
+                arr = np.asarray(channel[:])
+                if arr.dtype.kind not in "fiu":
+                    continue
+                with np.errstate(invalid="ignore", over="ignore"):
+                    arr = arr.astype(np.float64, copy=False)
+                cols.setdefault(channel.name, arr)
+                cols[f"{group.name}/{channel.name}"] = arr
     except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
-        raise RunError(f"{name} is not a readable TDMS file ({exc})") from None
-    cols: dict[str, np.ndarray] = {}
-    for group in tdms.groups():
-        for channel in group.channels():
-            arr = np.asarray(channel[:])
-            if arr.dtype.kind not in "fiu":
-                continue
-            arr = arr.astype(np.float64, copy=False)
-            cols.setdefault(channel.name, arr)
-            cols[f"{group.name}/{channel.name}"] = arr
+        reason = f"{type(exc).__name__}: {exc}"
+        raise RunError(f"{name} is not a readable TDMS file ({reason})") from None
     if not cols:
         raise RunError(f"{name} holds no numeric channels")
+    cols[_LABEL_KEY] = np.array([], dtype=float)
     return cols, []
 
 
@@ -177,11 +354,16 @@ def read_columns(path: Path, data: bytes | None = None) -> tuple[dict[str, np.nd
     if kind == "tdms":
         return read_tdms_columns(data, path.name)
     if kind == "csv.gz":
+        if not data:
+            raise RunError(f"{path.name} is empty (0 bytes)")
         try:
             data = gzip.decompress(data)
-        except (OSError, EOFError) as exc:
-            msg = "truncated gzip file" if isinstance(exc, EOFError) else str(exc)
-            raise RunError(f"{path.name} cannot be decompressed ({msg})") from None
+        except EOFError:
+            raise RunError(
+                f"{path.name} cannot be decompressed: the gzip stream ends early (truncated file)"
+            ) from None
+        except (OSError, zlib.error) as exc:
+            raise RunError(f"{path.name} cannot be decompressed ({exc})") from None
     return read_csv_columns(data, path.name)
 
 
@@ -198,20 +380,31 @@ def _runs_of_true(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fill_gaps(
-    x: np.ndarray, t: np.ndarray, max_gap_samples: int, name: str
+    x: np.ndarray,
+    t: np.ndarray,
+    max_gap_samples: int,
+    name: str,
+    *,
+    file: str = "",
+    where: _Where | None = None,
 ) -> tuple[np.ndarray, int]:
     """Interpolate NaN gaps up to ``max_gap_samples`` long; a longer gap is a RunError."""
     nan = np.isnan(x)
     if not nan.any():
         return x, 0
+    head = f"{file}: " if file else ""
+    if nan.all():
+        raise RunError(f"{head}the {name} channel holds no numbers")
     starts, lengths = _runs_of_true(nan)
     worst = int(np.argmax(lengths))
-    if lengths[worst] > max_gap_samples or nan.all():
-        i0 = starts[worst]
-        span = lengths[worst] * (np.median(np.diff(t)) if t.size > 1 else 0.0)
+    if lengths[worst] > max_gap_samples:
+        i0, n = int(starts[worst]), int(lengths[worst])
+        dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+        rows = f", {where.span(i0, i0 + n - 1)}" if where is not None else ""
         raise RunError(
-            f"the {name} channel has a gap of {lengths[worst]} missing values ({span:.2f} s) "
-            f"from t = {t[i0]:.2f} s, too long to interpolate"
+            f"{head}the {name} channel has a gap of {n} missing values ({n * dt:.2f} s) from "
+            f"t = {t[i0]:.2f} s{rows}, longer than the {max_gap_samples * dt:.2f} s that may "
+            "be interpolated"
         )
     good = ~nan
     out = x.copy()
@@ -219,96 +412,340 @@ def fill_gaps(
     return out, int(nan.sum())
 
 
-def check_time(t: np.ndarray, name: str) -> float:
-    """Check the time channel increases at a regular rate; return the sample rate [Hz]."""
-    if t.size < 10:
-        raise RunError(f"{name} has only {t.size} samples")
+@dataclass
+class TimeBase:
+    """The result of the time checks: sample rate and the lost samples to put back."""
+
+    fs: float
+    steps: np.ndarray  # samples per time step (1 everywhere unless samples were lost)
+
+    @property
+    def n_lost(self) -> int:
+        return int(self.steps.sum() - self.steps.size)
+
+
+def _not_increasing(
+    t: np.ndarray,
+    dt: np.ndarray,
+    i: int,
+    file: str,
+    where: _Where,
+    values: np.ndarray | None,
+) -> RunError:
+    """The sentence for the first step i where time does not increase.
+
+    A duplicated block repeats earlier rows, time and data alike; a clock reset starts time
+    again from (or before) the start of the file with new data; anything else goes backwards.
+    """
+    t_prev, t_next = float(t[i]), float(t[i + 1])
+    pos = dt[dt > 0]
+    med = float(np.median(pos)) if pos.size else 0.0
+    j = int(np.searchsorted(t[: i + 1], t_next, side="left"))
+    if j <= i and t[j] == t_next:
+        m = min(t.size - (i + 1), i + 1 - j)
+        eq = t[i + 1 : i + 1 + m] == t[j : j + m]
+        k = int(np.argmin(eq)) if not eq.all() else m
+        same = values is None or np.array_equal(
+            values[i + 1 : i + 1 + k], values[j : j + k], equal_nan=True
+        )
+        if same and k > 1:
+            return RunError(
+                f"{file}: time repeats itself from {where(i + 1)}: {where.span(i + 1, i + k)} "
+                f"duplicate {where.span(j, j + k - 1)} (t = {t[j]:.4f}–{t[j + k - 1]:.4f} s), "
+                f"a duplicated block of {k} rows"
+            )
+        if same:
+            return RunError(
+                f"{file}: time repeats at {where(i + 1)} (t = {t_next:.4f} s twice): a "
+                "duplicated row"
+            )
+    if t_next <= float(t[0]) + 2.0 * med:
+        return RunError(
+            f"{file}: time restarts at {where(i + 1)} (t = {t_next:.4f} s after {t_prev:.4f} s):"
+            " a clock reset in the middle of the run"
+        )
+    return RunError(
+        f"{file}: time goes backwards at {where(i + 1)} (t = {t_next:.4f} s after "
+        f"{t_prev:.4f} s)"
+    )
+
+
+def time_base(
+    t: np.ndarray,
+    file: str,
+    *,
+    where: _Where | None = None,
+    max_gap_samples: int = 0,
+    max_lost: int = 0,
+    values: np.ndarray | None = None,
+) -> TimeBase:
+    """Check the time channel and find the sample rate.
+
+    Time must increase; its median step must give a plausible rate (MIN_FS_HZ..MAX_FS_HZ);
+    every step must be the sample interval to within JITTER_TOLERANCE (or to the resolution the
+    times are written with), or a whole multiple of it where samples were lost. Lost samples
+    are accepted (and reported in ``steps``) up to ``max_gap_samples`` in one place and
+    ``max_lost`` in all; anything else is a RunError. ``values`` (a data channel on the same
+    rows) tells a duplicated block from a clock reset.
+    """
+    where = where or _Where(np.arange(t.size) + 2)
+    if t.size < MIN_SAMPLES:
+        raise RunError(f"{file} has only {t.size} samples")
     dt = np.diff(t)
     bad = np.flatnonzero(~(dt > 0))
     if bad.size:
-        i = int(bad[0])
-        what = "repeats" if dt[i] == 0 else "goes backwards"
-        raise RunError(
-            f"time {what} at row {i + 3} (t = {t[i + 1]:.4f} s after {t[i]:.4f} s): "
-            "a duplicated block or a clock reset"
-        )
+        raise _not_increasing(t, dt, int(bad[0]), file, where, values)
     med = float(np.median(dt))
-    worst = int(np.argmax(np.abs(dt - med)))
-    if abs(dt[worst] - med) > 0.5 * med:
-        raise RunError(
-            f"the sample rate is irregular: a step of {dt[worst] * 1e3:.2f} ms at row {worst + 3} "
-            f"(t = {t[worst]:.3f} s) where the rate is {1.0 / med:.1f} Hz (samples lost?)"
+    fs_med = 1.0 / med
+    if not MIN_FS_HZ <= fs_med <= MAX_FS_HZ:
+        hint = (
+            "is time recorded in ms or as sample numbers rather than in s?"
+            if fs_med < MIN_FS_HZ
+            else "is time recorded in µs rather than in s?"
         )
-    return 1.0 / med
+        raise RunError(
+            f"{file}: the time channel steps by {med:.6g} per sample, a sample rate of "
+            f"{fs_med:.3g} Hz: {hint}"
+        )
+    k = np.rint(dt / med)
+    tol = JITTER_TOLERANCE * med
+    off = (k < 1) | (np.abs(dt - k * med) > tol)
+    if off.any():
+        # times written with a coarse resolution (ms at 300 Hz: steps of 3 and 4 ms) jitter by
+        # one resolution step: that is rounding, not an irregular clock
+        distinct = np.unique(dt)
+        gaps = np.diff(distinct)
+        gaps = gaps[gaps > 1e-6 * med]
+        resolution = float(gaps.min()) if gaps.size else 0.0
+        if resolution < 0.5 * med:
+            tol = max(tol, 1.01 * resolution)
+            off = (k < 1) | (np.abs(dt - k * med) > tol)
+    if off.any():
+        worst = int(np.argmax(np.where(off, np.abs(dt - np.maximum(k, 1) * med), -1.0)))
+        n_off = int(off.sum())
+        raise RunError(
+            f"{file}: the sample rate is irregular: a step of {dt[worst] * 1e3:.3g} ms at "
+            f"{where(worst + 1)} (t = {t[worst + 1]:.3f} s) where the rate is {fs_med:.1f} Hz "
+            f"({n_off} of {dt.size} steps off by more than {100 * tol / med:.0f} %)"
+        )
+    lost = k - 1
+    if lost.any():
+        i = int(np.argmax(lost))
+        total = int(lost.sum())
+        if lost[i] > max_gap_samples or total > max_lost:
+            n_gaps = int(np.count_nonzero(lost))
+            raise RunError(
+                f"{file}: {int(lost[i])} samples are missing after {where(i)} (t = "
+                f"{t[i]:.3f}–{t[i + 1]:.3f} s, a step of {dt[i] * 1e3:.3g} ms where the rate is "
+                f"{fs_med:.1f} Hz; {total} lost in {n_gaps} place(s), more than can be "
+                "interpolated)"
+            )
+    regular = k == 1
+    exact = np.all(np.abs(dt[regular] - med) <= 1e-9 * med) if regular.any() else True
+    fs = fs_med if exact else float(np.count_nonzero(regular) / np.sum(dt[regular]))
+    return TimeBase(fs=fs, steps=k.astype(np.int64))
 
 
-def check_clipping(x: np.ndarray, t: np.ndarray, fs: float, name: str) -> None:
-    """A channel stuck at its extreme value for ≥ 20 samples (and ≥ 20 ms) is saturated."""
+def check_time(t: np.ndarray, name: str) -> float:
+    """Check the time channel increases at a regular rate; return the sample rate [Hz]."""
+    return time_base(t, name).fs
+
+
+def _blocks(x: np.ndarray, size: int = 4096, n_blocks: int = 8) -> np.ndarray:
+    """At most ``size`` values of ``x`` for a statistic: contiguous blocks spread over it.
+
+    Blocks rather than every k-th value, so that a periodic disturbance (mains hum) is seen at
+    all its phases.
+    """
+    if x.size <= size:
+        return x
+    block = size // n_blocks
+    starts = np.linspace(0, x.size - block, n_blocks).astype(np.int64)
+    return x[(starts[:, None] + np.arange(block)[None, :]).ravel()]
+
+
+def _quantiles(x: np.ndarray, qs: tuple[float, ...]) -> np.ndarray:
+    """Order statistics of ``x`` at fractions ``qs`` (one partition, no interpolation)."""
+    k = [min(x.size - 1, int(q * x.size)) for q in qs]
+    return np.partition(x, k)[k]
+
+
+def _robust_scale(r: np.ndarray, floor: float) -> float:
+    """A standard deviation of ``r`` that ignores outliers and survives quantised values.
+
+    1.4826·MAD collapses when most values are tied (a quantised channel: half the residuals are
+    exactly 0), so the 90th percentile of |r − median|/1.645 is taken too, and the larger wins.
+    """
+    if r.size == 0:
+        return floor
+    c = np.abs(r - _quantiles(r, (0.5,))[0])
+    q50, q90 = _quantiles(c, (0.5, 0.9))
+    return float(max(1.4826 * q50, q90 / 1.6449, floor))
+
+
+def despike(
+    x: np.ndarray, window: int = 7, threshold: float = SPIKE_THRESHOLD
+) -> tuple[np.ndarray, int]:
+    """Replace isolated spikes (one or two samples wide) by interpolation from their neighbours.
+
+    A sample is a spike when it departs by more than ``threshold`` robust standard deviations
+    both from the running median of ``window`` samples (Hampel filter; Pearson, R. K. 2002,
+    IEEE Trans. Control Syst. Technol. 10(1)) and from the straight-line extrapolations of the
+    two samples on either side. The second test keeps real signal: at a kink (the end of a
+    constant-acceleration stretch, say) the running median cuts the corner, but one side's
+    extrapolation always runs through it. Robust scales come from :func:`_robust_scale`, never
+    below 1e-4 of the channel's range (noise-free synthetic data).
+    """
+    n = x.size
+    if n < 3 * window:
+        return x, 0
+    lo, hi = _quantiles(_blocks(x), (0.005, 0.995))
+    floor = 1e-4 * float(hi - lo) + 1e-12 * float(np.max(np.abs(x)))
+    if not floor > 0:
+        return x, 0
+    rl = np.full(n, np.inf)
+    rr = np.full(n, np.inf)
+    with np.errstate(over="ignore", invalid="ignore"):
+        rl[2:] = x[2:] - 2.0 * x[1:-1] + x[:-2]
+    rr[:-2] = rl[2:]  # the same second difference, seen from the other side
+    e = np.minimum(np.abs(rl), np.abs(rr))
+    s_e = _robust_scale(_blocks(rl[2:]), floor)
+    cand = e > threshold * s_e
+    if not cand.any():
+        return x, 0
+    from scipy.ndimage import median_filter
+
+    med = median_filter(x, size=window, mode="nearest")
+    dev = x - med
+    s_d = _robust_scale(_blocks(dev), floor)
+    spikes = cand & (np.abs(dev) > threshold * s_d)
+    n_spikes = int(spikes.sum())
+    if n_spikes == 0:
+        return x, 0
+    idx = np.arange(n)
+    good = ~spikes
+    out = x.copy()
+    out[spikes] = np.interp(idx[spikes], idx[good], x[good])
+    return out, n_spikes
+
+
+def check_clipping(
+    x: np.ndarray,
+    t: np.ndarray,
+    fs: float,
+    name: str,
+    *,
+    file: str = "",
+    where: _Where | None = None,
+    calibration: tuple[float, float] = (1.0, 0.0),
+) -> None:
+    """Reject a channel that sits flat on a rail (its extreme value): a saturated sensor.
+
+    Clipped means: at least max(20 samples, 20 ms) inside the record (stretches that touch its
+    start or end are a reading at rest) exactly at the channel's maximum or minimum, at least
+    4 times as many as at any other single value, while off the rail the channel is noisy (the
+    robust spread of its second differences is over 4 quantisation steps), so that noise would
+    have moved a genuine reading off any one value. A healthy quantised channel repeats values
+    but never piles up at its extreme; a noise-free or coarsely quantised channel, whose still
+    windows and plateaus are flat anyway, cannot be told from a clipped one and is let through;
+    an exact 0 is a reading at rest or zeroed, never a rail. ``calibration`` (gain, offset)
+    lets the message give the rail as written in the file too.
+    """
     min_len = max(20, int(0.02 * fs))
     if x.size < min_len:
         return
-    for rail, label in ((np.max(x), "upper"), (np.min(x), "lower")):
-        at = x == rail
-        if at.sum() < min_len:
+    x_max, x_min = float(np.max(x)), float(np.min(x))
+    if x_max == x_min:
+        return  # a constant channel: dead or absent, not clipped (the phases will tell)
+    head = f"{file}: " if file else ""
+    for rail, label in ((x_max, "upper"), (x_min, "lower")):
+        if rail == 0.0:
             continue
-        starts, lengths = _runs_of_true(at)
-        k = int(np.argmax(lengths))
-        if lengths[k] >= min_len:
-            raise RunError(
-                f"the {name} channel is clipped flat at {rail:g} ({label} rail) for "
-                f"{lengths[k] / fs:.2f} s from t = {t[starts[k]]:.2f} s (saturated)"
-            )
+        at = x == rail
+        if np.count_nonzero(at) < min_len:
+            continue
+        inner = at.copy()
+        if at[0]:
+            inner[: int(np.argmin(at))] = False
+        if at[-1]:
+            inner[x.size - int(np.argmin(at[::-1])) :] = False
+        n_at = int(np.count_nonzero(inner))
+        if n_at < min_len:
+            continue
+        off = ~at
+        pairs = off[1:] & off[:-1]
+        steps = np.abs(np.diff(x))[pairs]
+        steps = steps[steps > 0]
+        quantum = float(steps.min()) if steps.size else 0.0
+        triples = off[2:] & off[1:-1] & off[:-2]
+        with np.errstate(over="ignore", invalid="ignore"):
+            d2 = (x[2:] - 2.0 * x[1:-1] + x[:-2])[triples]
+        noise = _robust_scale(d2, 0.0) if d2.size >= min_len else 0.0
+        if not noise > 4.0 * quantum:
+            continue
+        _, counts = np.unique(x[off], return_counts=True)
+        if n_at < 4 * int(counts.max(initial=1)):
+            continue
+        idx = np.flatnonzero(inner)
+        i0, i1 = int(idx[0]), int(idx[-1])
+        rows = f", {where.span(i0, i1)}" if where is not None else ""
+        gain, offset = calibration
+        raw = f", {rail / gain + offset:.6g} in the file" if (gain, offset) != (1.0, 0.0) else ""
+        raise RunError(
+            f"{head}the {name} channel is clipped flat at {rail:.6g} {UNITS.get(name, '')} "
+            f"({label} rail{raw}) for {n_at} samples ({n_at / fs:.2f} s) between t = {t[i0]:.2f} s "
+            f"and {t[i1]:.2f} s{rows}: the sensor or its amplifier saturated"
+        )
 
 
-def despike(x: np.ndarray, window: int = 7, threshold: float = 10.0) -> tuple[np.ndarray, int]:
-    """Replace isolated spikes by the running median (Hampel filter).
-
-    A sample is a spike when it departs from the running median of ``window`` samples by more
-    than ``threshold`` robust standard deviations (1.4826·MAD of the departures). Pearson, R. K.
-    (2002), Outliers in process modeling and identification, IEEE Trans. Control Syst. Technol.
-    """
-    from scipy.ndimage import median_filter
-
-    if x.size < 3 * window:
-        return x, 0
-    med = median_filter(x, size=window, mode="nearest")
-    dev = x - med
-    mad = 1.4826 * np.median(np.abs(dev - np.median(dev)))
-    if not mad > 0:
-        return x, 0
-    spikes = np.abs(dev) > threshold * mad
-    n = int(spikes.sum())
-    if n == 0:
-        return x, 0
-    out = x.copy()
-    out[spikes] = med[spikes]
-    return out, n
+def _check_range(x: np.ndarray, t: np.ndarray, name: str, file: str, where: _Where) -> None:
+    """Reject values no towing tank records: a wrong unit or gain, or corrupted numbers."""
+    limit = {"speed": MAX_SPEED, "time": MAX_TIME}.get(name, MAX_VALUE)
+    big = np.abs(x) > limit
+    if not big.any():
+        return
+    i = int(np.argmax(np.abs(x)))
+    hint = {
+        "speed": "a wrong unit or gain in [channels]?",
+        "time": "is time recorded in ms or µs rather than in s?",
+    }.get(name, "corrupted numbers?")
+    raise RunError(
+        f"{file}: the {name} channel reaches {x[i]:.4g} {UNITS.get(name, '')} at {where(i)} "
+        f"(t = {t[i]:.2f} s; {int(big.sum())} value(s) beyond ±{limit:g}): {hint}"
+    )
 
 
 # ------------------------------------------------------------------------------------ mapping
 def map_channels(
     cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], name: str
 ) -> dict[str, np.ndarray]:
-    """Canonical channels from raw columns: value = gain·(raw − offset).
+    """Canonical channels from raw columns (not yet calibrated).
 
     The required channels (time, speed, drag) must be present; accel and lift are optional
-    unless the protocol maps them explicitly.
+    unless the protocol maps them explicitly. Column names are matched exactly, then with
+    surrounding blanks ignored.
     """
     full = channel_map(mapping)
     out: dict[str, np.ndarray] = {}
     found = [c for c in cols if not c.startswith("__")]
+    stripped = {c.strip(): c for c in found}
     for canon, cm in full.items():
-        if cm.column in cols:
-            out[canon] = cols[cm.column]  # calibrated after numeric conversion
+        key = cm.column if cm.column in cols else stripped.get(cm.column.strip())
+        if key is not None:
+            if f"{key} (duplicate)" in cols:
+                raise RunError(
+                    f"{name}: the column '{key}' for the {canon} channel appears more than once"
+                )
+            out[canon] = cols[key]
         elif canon in REQUIRED_CHANNELS or canon in mapping:
             how = (
-                f"mapped from column '{cm.column}' in [channels]"
+                f"mapped from the column '{cm.column}' in [channels]"
                 if canon in mapping
-                else f"expected as column '{canon}' (no [channels] mapping)"
+                else f"expected as the column '{canon}' (no [channels] mapping)"
             )
+            listed = ", ".join(f"'{c}'" for c in found) or "none"
             raise RunError(
-                f"the {canon} channel is missing from {name}: {how}; "
-                f"columns found: {', '.join(found) or 'none'}"
+                f"{name}: the {canon} channel is missing ({how}); columns found: {listed}"
             )
     return out
 
@@ -331,68 +768,174 @@ def load_run(
     mapping : dict
         Protocol [channels] mapping (canonical name → column, gain, offset).
     max_nan_gap_s : float
-        Longest gap of missing values that is interpolated [s]; longer gaps reject the run.
+        Longest gap of missing values (or of lost samples) that is interpolated [s]; longer
+        gaps reject the run.
     max_bad_row_fraction : float
-        Largest fraction of non-numeric or malformed rows that is dropped with a warning;
-        more rejects the run.
+        Largest fraction of non-numeric or malformed rows (and of lost samples) that is
+        dropped (re-interpolated) with a note; more rejects the run.
     do_despike : bool
-        Replace isolated spikes in speed and forces by the running median.
+        Replace isolated spikes in speed, forces and accel by interpolation.
     data : bytes, optional
         The file's bytes when already read (for hashing).
+
+    Raises
+    ------
+    RunError
+        One sentence naming the file, what is wrong and where (row, time).
     """
     if data is None:
         data = file_bytes(path)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike)
+
+
+def _load_run(
+    path: Path,
+    mapping: dict[str, ChannelMap],
+    data: bytes,
+    max_nan_gap_s: float,
+    max_bad_row_fraction: float,
+    do_despike: bool,
+) -> RawRun:
+    name = path.name
     digest = sha256_bytes(data)
     cols, notes = read_columns(path, data)
-    invalid = cols.pop("__invalid_rows__", np.array([], dtype=int))
-    chans = map_channels(cols, mapping, path.name)
+    invalid = cols.pop(_INVALID_KEY, np.array([], dtype=int))
+    rows = cols.pop(_ROWS_KEY, None)
+    label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
+    chans = map_channels(cols, mapping, name)
     full = channel_map(mapping)
-    n_rows = next(iter(chans.values())).size
+
+    sizes = {k: int(np.asarray(v).size) for k, v in chans.items()}
+    if len(set(sizes.values())) > 1:
+        listed = ", ".join(f"{k} {v}" for k, v in sizes.items())
+        raise RunError(
+            f"{name}: the channels have different lengths ({listed} samples): the file is "
+            "incomplete"
+        )
+    n_rows = sizes["time"]
+    if rows is None or rows.size != n_rows:
+        rows = np.arange(n_rows) + (2 if label == "row" else 1)
+    where = _Where(rows, label)
+
+    # --- non-numeric and malformed rows: drop a few, reject many
     bad_rows = np.zeros(n_rows, dtype=bool)
     numeric: dict[str, np.ndarray] = {}
     for canon, raw in chans.items():
         arr, bad = _to_float_array(np.asarray(raw))
         bad_rows |= bad
         numeric[canon] = arr
-    n_bad = int(bad_rows.sum()) + int(len(invalid))
-    total = n_rows + int(len(invalid))
+    n_text = int(bad_rows.sum())
+    n_bad = n_text + int(invalid.size)
+    total = n_rows + int(invalid.size)
     if n_bad:
         frac = n_bad / max(total, 1)
         if frac > max_bad_row_fraction:
+            all_bad = np.sort(np.concatenate([rows[bad_rows], invalid[invalid > 0]]))
+            first = f"first at row {int(all_bad[0])}; " if all_bad.size else ""
             raise RunError(
-                f"{n_bad} of {total} rows of {path.name} are not numeric or malformed "
-                f"({100 * frac:.1f} %, more than the {100 * max_bad_row_fraction:g} % that "
-                "may be dropped)"
+                f"{name}: {n_bad} of {total} rows are not numeric or malformed ({first}"
+                f"{100 * frac:.1f} %, more than the {100 * max_bad_row_fraction:g} % that may "
+                "be dropped)"
             )
-        if bad_rows.any():
-            numeric = {k: v[~bad_rows] for k, v in numeric.items()}
-            notes.append(f"{int(bad_rows.sum())} non-numeric row(s) dropped")
+        if n_text:
+            notes.append(
+                f"{n_text} non-numeric row(s) dropped ({where.many(np.flatnonzero(bad_rows))})"
+            )
+            keep = ~bad_rows
+            numeric = {k: v[keep] for k, v in numeric.items()}
+            where = where.subset(keep)
+
+    # --- calibration, then infinities are missing values
     for canon, arr in numeric.items():
         cm = full[canon]
         if cm.gain != 1.0 or cm.offset != 0.0:
-            numeric[canon] = cm.gain * (arr - cm.offset)
+            with np.errstate(all="ignore"):
+                arr = cm.gain * (arr - cm.offset)
+        inf = np.isinf(arr)
+        if inf.any():
+            arr = np.where(inf, np.nan, arr)
+            notes.append(f"{int(inf.sum())} infinite {canon} value(s) treated as missing")
+        numeric[canon] = arr
 
+    # --- time: a short stretch of missing times is interpolated by row (the clock is regular;
+    # the time checks below still see any irregularity around it); a long one rejects the run
     t = numeric["time"]
-    if np.isnan(t).any():
-        good = ~np.isnan(t)
-        if good.sum() < 10:
-            raise RunError(f"the time channel of {path.name} holds no numbers")
+    no_t = np.isnan(t)
+    if no_t.any():
+        if np.count_nonzero(~no_t) < MIN_SAMPLES:
+            raise RunError(f"{name}: the time channel holds no numbers")
+        starts, lengths = _runs_of_true(no_t)
+        tt = t[~no_t]
+        dt_est = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
+        gap_max = max(1, int(round(max_nan_gap_s / dt_est))) if dt_est > 0 else 1
+        k = int(np.argmax(lengths))
+        if lengths[k] > gap_max:
+            i0, n = int(starts[k]), int(lengths[k])
+            raise RunError(
+                f"{name}: the time channel is empty for {n} rows ({where.span(i0, i0 + n - 1)}), "
+                f"longer than the {max_nan_gap_s:g} s that may be interpolated"
+            )
         idx = np.arange(t.size)
-        t = np.interp(idx, idx[good], t[good])
-        notes.append(f"{int((~good).sum())} missing time value(s) interpolated")
-    fs = check_time(t, path.name)
+        t = np.interp(idx, idx[~no_t], t[~no_t])
+        numeric["time"] = t
+        notes.append(f"{int(no_t.sum())} missing time value(s) interpolated")
+
+    n = t.size
+    if n < MIN_SAMPLES:
+        raise RunError(f"{name} has only {n} usable samples")
+    _check_range(t, t, "time", name, where)
+    dt_med = float(np.median(np.diff(t)))
+    fs_guess = 1.0 / dt_med if dt_med > 0 else 0.0
+    max_gap = max(1, int(round(max_nan_gap_s * fs_guess)))
+    tb = time_base(
+        t,
+        name,
+        where=where,
+        max_gap_samples=max_gap,
+        max_lost=int(max_bad_row_fraction * (n + 1)),
+        values=numeric["drag"],
+    )
+    fs = tb.fs
     max_gap = max(1, int(round(max_nan_gap_s * fs)))
+    if tb.n_lost:
+        # put lost samples back as missing values on a regular time base
+        pos = np.concatenate(([0], np.cumsum(tb.steps)))
+        m = int(pos[-1]) + 1
+        grid = np.interp(np.arange(m), pos, t)
+        for canon in list(numeric):
+            full_arr = np.full(m, np.nan)
+            full_arr[pos] = numeric[canon]
+            numeric[canon] = full_arr
+        numeric["time"] = grid
+        t = grid
+        rows_full = np.zeros(m, dtype=np.int64)
+        rows_full[pos] = where.rows
+        where = _Where(np.maximum.accumulate(rows_full), where.label)  # a lost one: row before
+        notes.append(f"{tb.n_lost} lost sample(s) put back by interpolation")
+
     for canon in ("speed",) + FORCE_CHANNELS + ("accel",):
         if canon not in numeric:
             continue
-        arr, n_filled = fill_gaps(numeric[canon], t, max_gap, canon)
-        if n_filled:
+        arr = numeric[canon]
+        if np.isnan(arr).all() and canon not in REQUIRED_CHANNELS:
+            del numeric[canon]
+            notes.append(f"the {canon} column holds no numbers; the channel is ignored")
+            continue
+        arr, n_filled = fill_gaps(arr, t, max_gap, canon, file=name, where=where)
+        if n_filled and not tb.n_lost:
             notes.append(f"{n_filled} missing {canon} value(s) interpolated")
-        check_clipping(arr, t, fs, canon)
+        elif n_filled > tb.n_lost:
+            notes.append(f"{n_filled - tb.n_lost} missing {canon} value(s) interpolated")
+        cm = full[canon]
+        check_clipping(
+            arr, t, fs, canon, file=name, where=where, calibration=(cm.gain, cm.offset)
+        )
         if do_despike:
             arr, n_spikes = despike(arr)
             if n_spikes:
                 notes.append(f"{n_spikes} spike(s) removed from {canon}")
+        _check_range(arr, t, canon, name, where)
         numeric[canon] = arr
     return RawRun(
         time=t,

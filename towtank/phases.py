@@ -164,7 +164,11 @@ def detect_phases(
     tol = max(steady_tolerance * level, 0.002)
     band = close_gaps(np.abs(v_seg - level) <= tol, int(0.05 * fs))
     plateau = longest_run(band)
-    assert plateau is not None
+    if plateau is None:  # the calm samples are spread over speeds far apart: no single level
+        raise RunError(
+            f"the carriage speed never settles on a plateau (peak {v_peak:.3f} m/s, no "
+            f"stretch within {100 * steady_tolerance:g} % of one speed)"
+        )
     plateau = (plateau[0] + motion[0], plateau[1] + motion[0])
     level = float(np.median(speed[plateau[0] : plateau[1]]))
     n_trim = int(round(trim_s * fs))

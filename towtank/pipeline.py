@@ -92,7 +92,10 @@ def reduce_one(
         )
         return run, red, None
     except RunError as exc:
-        return run, None, f"run {run}: {exc.reason}"
+        reason = exc.reason
+        if file not in reason and Path(file).name not in reason:
+            reason = f"{file}: {reason}"
+        return run, None, f"run {run}: {reason}"
     except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
         if debug:
             raise
@@ -302,8 +305,13 @@ def process_day(
     runs = run_table(protocol, sheet, reductions, rejected)
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
-    for red in sorted(reductions.values(), key=lambda r: r.run):
-        inputs[str(protocol.campaign.data_dir / red.file)] = red.sha256
+    shas = {red.file: red.sha256 for red in reductions.values()}
+    for file in sheet["file"]:  # every input the sheet names, rejected runs' files too
+        path = protocol.campaign.data_dir / str(file)
+        if str(file) in shas:
+            inputs[str(path)] = shas[str(file)]
+        elif str(file) and path.is_file():
+            inputs[str(path)] = _sha(path)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
         runs=runs, warnings=day_warnings, inputs=inputs,
@@ -313,9 +321,13 @@ def process_day(
 
 
 def _sha(path: Path) -> str:
+    """sha256 of a file, or "" when it cannot be read (its run is rejected anyway)."""
     from towtank.ingest import sha256_bytes
 
-    return sha256_bytes(path.read_bytes())
+    try:
+        return sha256_bytes(path.read_bytes())
+    except OSError:
+        return ""
 
 
 def _analyse(day: DayResult) -> None:

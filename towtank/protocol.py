@@ -280,6 +280,9 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind in ("str", "path"):
         if not isinstance(value, str) or not value.strip():
             raise bad
+        if kind == "path" and ("\x00" in value or any(len(part) > 255
+                                                      for part in value.split("/"))):
+            raise ProtocolError(f"{src}: {where} is not a usable path ({value[:60]!r}...).")
         return value
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -421,6 +424,14 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
         if required not in data:
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
 
+    try:
+        return _build(path, src, data, check_paths)
+    except (OSError, ValueError) as exc:  # an unusable path on this file system
+        raise ProtocolError(f"{src}: a path in the protocol cannot be used ({exc}).") from None
+
+
+def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Protocol:
+    """The validated protocol from parsed TOML (see :func:`load_protocol`)."""
     base = path.resolve().parent
     camp = _section(data["campaign"], "campaign", "campaign", src)
     water = _water(_section(data["water"], "water", "water", src), "water", src)

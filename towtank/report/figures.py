@@ -50,6 +50,8 @@ if TYPE_CHECKING:
 PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
 CAPTION_CHARS = 118  # wrap width of captions on a page-wide figure
+CAPTION_LINE_IN = 7.8 * 1.35 / 72  # height of one caption line [in]
+Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 
 
 # ------------------------------------------------------------------------------------ helpers
@@ -91,49 +93,33 @@ def _new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Fi
     return Figure(figsize=style.PAGE_SIZE if page else size)
 
 
-def _grid(fig: Figure, nrows: int, ncols: int, *, page: bool, top_in: float = 0.55,
-          bottom_in: float = 1.3, left: float = 0.1, right: float = 0.95, **kw: Any):
-    """A GridSpec with margins in inches (so a page figure keeps room for header/footer)."""
-    w, h = fig.get_size_inches()
-    top_in += PAGE_HEADER_IN if page else 0.0
-    bottom_in += PAGE_FOOTER_IN if page else 0.0
-    return fig.add_gridspec(nrows, ncols, left=left, right=right, top=1 - top_in / h,
-                            bottom=bottom_in / h, **kw)
+def _layout(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text: str,
+            top_in: float = 0.8, xlabel_in: float = 0.5, left: float = 0.1,
+            right: float = 0.95, **kw: Any) -> Any:
+    """Title, caption and a GridSpec between them, with margins in inches.
 
-
-def _title(fig: Figure, text: str, *, page: bool) -> None:
-    h = fig.get_size_inches()[1]
-    y = 1 - ((PAGE_HEADER_IN if page else 0.0) + 0.22) / h
-    fig.text(0.5, y, text, ha="center", va="top", fontsize=10.5, fontweight="bold")
-
-
-def caption(fig: Figure, text: str, *, page: bool, width: int = CAPTION_CHARS) -> None:
-    """A wrapped caption in the bottom margin of ``fig``.
-
-    Parameters
-    ----------
-    fig : Figure
-        The figure.
-    text : str
-        Caption; paragraphs separated by blank lines are kept apart.
-    page : bool
-        The figure is a PDF page (the caption sits above the footer).
-    width : int
-        Wrap width [characters].
+    A page figure keeps room for the PDF page's header and footer; the caption's height is
+    known from its wrapped line count, so the axes end just above it.
     """
     h = fig.get_size_inches()[1]
-    y = ((PAGE_FOOTER_IN if page else 0.0) + 0.95) / h
-    paras = [textwrap.fill(p.strip(), width) for p in text.split("\n\n") if p.strip()]
-    fig.text(0.08, y, "\n".join(paras), ha="left", va="top", fontsize=7.8, linespacing=1.35,
+    header = PAGE_HEADER_IN if page else 0.0
+    footer = PAGE_FOOTER_IN if page else 0.0
+    fig.text(0.5, 1 - (header + 0.22) / h, title, ha="center", va="top", fontsize=10.5,
+             fontweight="bold")
+    wrapped = wrap_caption(text)
+    n_lines = wrapped.count("\n") + 1
+    cap_top = footer + 0.25 + n_lines * CAPTION_LINE_IN
+    fig.text(0.08, cap_top / h, wrapped, ha="left", va="top", fontsize=7.8, linespacing=1.35,
              color="#333333")
+    bottom = cap_top + 0.2 + xlabel_in
+    return fig.add_gridspec(nrows, ncols, left=left, right=right, top=1 - (header + top_in) / h,
+                            bottom=bottom / h, **kw)
 
 
-def _note_axes(ax: Axes, text: str) -> None:
-    """Turn ``ax`` into a framed note (used instead of empty axes)."""
-    ax.set_axis_off()
-    ax.text(0.5, 0.5, textwrap.fill(text, 48), ha="center", va="center", fontsize=8,
-            color="#555555", transform=ax.transAxes,
-            bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc"})
+def wrap_caption(text: str, width: int = CAPTION_CHARS) -> str:
+    """``text`` wrapped to ``width`` characters; paragraphs (blank-line separated) kept apart."""
+    paras = [textwrap.fill(" ".join(p.split()), width) for p in text.split("\n\n") if p.strip()]
+    return "\n".join(paras)
 
 
 def _fmt(x: float, digits: int = 4) -> str:
@@ -149,6 +135,16 @@ def _hull_fit(day: DayResult) -> Any:
 
 # ----------------------------------------------------------------------- (a) added mass
 ANGLE_OF = {"X_udot": 0.0, "Y_vdot": 90.0}
+
+ADDED_MASS_CAPTION = (
+    "Top: tare-corrected balance drag D of the constant-acceleration samples (coloured by "
+    "acceleration level) and of the steady samples (grey), with the steady quadratic "
+    "D_s(U) = q2·U|U| + q1·U and each level's quadratic D_a(U), drawn over the speed range the "
+    "level shares with the steady runs (report eqs. 7–8). Bottom: their difference "
+    "ΔD = D_a − D_s; its mean over that range divided by a gives m − X, the report's "
+    "curve-difference estimate. Dotted: (m − X)·a of the joint regression "
+    "D = k2·U|U| + k1·U + (m − X)·a over all samples, the primary estimate."
+)
 
 
 @styled
@@ -173,20 +169,12 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
     if not fits:
         return None
     fig = _new_figure(page)
-    gs = _grid(fig, 2, len(fits), page=page, hspace=0.38, wspace=0.28, top_in=0.75,
-               bottom_in=1.35, height_ratios=[1.35, 1.0])
-    _title(fig, "Added mass: balance drag against speed at each acceleration", page=page)
+    gs = _layout(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
+                 height_ratios=[1.35, 1.0],
+                 title="Added mass: balance drag against speed at each acceleration",
+                 text=ADDED_MASS_CAPTION)
     for col, am in enumerate(fits):
         _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]), day, am)
-    caption(fig, (
-        "Top: tare-corrected balance drag D of the constant-acceleration samples (coloured by "
-        "acceleration level) and of the steady samples (grey), with the steady quadratic "
-        "D_s(U) = q2·U|U| + q1·U and each level's quadratic D_a(U) drawn over the speed range "
-        "the level shares with the steady runs (report eqs. 7–8). Bottom: their difference "
-        "ΔD = D_a − D_s, whose mean over that range divided by a gives m − X (the report's "
-        "curve-difference estimate); dotted: (m − X)·a of the joint regression "
-        "D = k2·U|U| + k1·U + (m − X)·a, the primary estimate."
-    ), page=page)
     return fig
 
 
@@ -200,29 +188,32 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     s = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
     st = s["phase"] == PHASE_STEADY
     acc = s["phase"] == PHASE_ACCEL
-    ax.plot(s["U"][st], s["drag"][st], ".", ms=2.2, color=style.STEADY_SAMPLE_COLOR,
-            alpha=0.6, rasterized=False, zorder=1)
-    handles = [Line2D([], [], ls="", marker=".", color=style.STEADY_SAMPLE_COLOR,
+    ax.plot(s["U"][st], s["drag"][st], "o", ms=3.2, color=style.STEADY_SAMPLE_COLOR,
+            alpha=0.7, mew=0, zorder=6)
+    handles = [Line2D([], [], ls="", marker="o", ms=4, color=style.STEADY_SAMPLE_COLOR,
                       label="steady samples")]
     shown = np.zeros(s["U"].size, dtype=bool)
+    dmax = 0.0
     for i, lv in enumerate(levels):
         color = style.PALETTE[(i + 1) % len(style.PALETTE)]
         sel = acc & (np.abs(s["a"] - lv["accel"]) <= 0.15 * abs(lv["accel"]))
         shown |= sel
-        ax.plot(s["U"][sel], s["drag"][sel], ".", ms=2.2, color=color, alpha=0.55, zorder=2)
-        lo, hi = lv["speed_range"]
-        u = np.linspace(lo, hi, 60)
+        ax.plot(s["U"][sel], s["drag"][sel], "o", ms=2.0, mew=0, color=color, alpha=0.5,
+                zorder=2)
+        u = np.linspace(*lv["speed_range"], 60)
         d_a = np.polyval(lv["quadratic"], u)
-        ax.plot(u, d_a, color=color, lw=1.6, zorder=4)
-        handles.append(Line2D([], [], color=color, marker=".",
+        ax.plot(u, d_a, color=color, lw=1.7, zorder=4)
+        handles.append(Line2D([], [], color=color, marker="o", ms=3,
                               label=f"$a$ = {lv['accel']:.2f} m/s²: samples, $D_a(U)$"))
         if q is not None:
-            d_s = q[0] * u * np.abs(u) + q[1] * u
-            ax_d.plot(u, d_a - d_s, color=color, lw=1.5)
-            ax_d.axhline(am.M * lv["accel"], color=color, ls=":", lw=1.2)
+            diff = d_a - (q[0] * u * np.abs(u) + q[1] * u)
+            ax_d.plot(u, diff, color=color, lw=1.6)
+            dmax = max(dmax, float(np.max(diff)))
+        ax_d.axhline(am.M * lv["accel"], color=color, ls=":", lw=1.2)
+        dmax = max(dmax, am.M * lv["accel"])
     other = acc & ~shown
     if other.any():
-        ax.plot(s["U"][other], s["drag"][other], ".", ms=2, color="#cfcfcf", zorder=1)
+        ax.plot(s["U"][other], s["drag"][other], "o", ms=2, mew=0, color="#cfcfcf", zorder=1)
     if q is not None:
         umax = float(np.nanmax(s["U"])) if s["U"].size else 1.0
         u = np.linspace(0.0, umax, 80)
@@ -234,27 +225,24 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"Drag $D$ [N]")
     ax.set_xlim(left=0)
-    ax.legend(handles=handles, loc="upper left", fontsize=6.8, markerscale=2.5)
+    ax.legend(handles=handles, loc="upper left", fontsize=6.8)
 
     ax_d.set_title(r"Difference $\Delta D = D_a(U) - D_s(U)$", fontsize=8.8)
     ax_d.set_xlabel(r"Speed $U$ [m/s]")
     ax_d.set_ylabel(r"$\Delta D$ [N]")
-    ax_d.set_ylim(bottom=0)
     ax_d.set_xlim(ax.get_xlim())
+    ax_d.set_ylim(0, dmax * 1.55 if dmax > 0 else 1.0)
     alt = est.alt_value if math.isfinite(est.alt_value) else math.nan
-    lines = [
-        f"joint regression: {_fmt(est.value)} kg  [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
-        f"curve difference: {_fmt(alt)} kg",
-        f"mass m = {_fmt(am.mass)} kg, m − X = {_fmt(am.M)} kg",
-    ]
-    if est.agreement:
-        lines.append(est.agreement.split(":")[0])
-    ax_d.text(0.02, 0.04, "\n".join(lines), transform=ax_d.transAxes, fontsize=6.8,
-              va="bottom", ha="left",
-              bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#cccccc", "alpha": 0.9})
+    title = "\n".join([
+        f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
+        f"curve difference: {_fmt(alt)} kg" + (
+            f" ({est.agreement.split(':')[0]})" if est.agreement else ""),
+        f"m = {_fmt(am.mass)} kg, m − X = {_fmt(am.M)} kg",
+    ])
     ax_d.legend(handles=[Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
-                         Line2D([], [], color="#555555", ls=":", label=r"$(m - X)\,a$ (joint)")],
-                loc="upper right", fontsize=6.8)
+                         Line2D([], [], color="#555555", ls=":", label=r"$(m - X)\,a$, joint")],
+                loc="upper left", fontsize=6.8, title=title, title_fontsize=6.8,
+                alignment="left", ncol=2)
 
 
 # -------------------------------------------------------------------------- (b) damping
@@ -272,12 +260,31 @@ def cd_alpha_curve(params: np.ndarray, cov: np.ndarray, dof: int,
         Residual degrees of freedom of the fit.
     alpha_deg : ndarray
         Grid of angles [deg].
+
+    Returns
+    -------
+    mean, half_width : ndarray
+        C_D on the grid and the half-width of the 95 % confidence band of the mean [-].
     """
     a = np.radians(np.asarray(alpha_deg, dtype=float))
     x = np.column_stack([a**2, a, np.ones_like(a)])
     mean = x @ np.asarray(params, dtype=float)
-    se = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", x, np.asarray(cov, dtype=float), x), 0.0))
-    return mean, t95(dof) * se
+    var = np.einsum("ij,jk,ik->i", x, np.asarray(cov, dtype=float), x)
+    return mean, t95(dof) * np.sqrt(np.maximum(var, 0.0))
+
+
+def damping_caption(day: DayResult) -> str:
+    """Caption of :func:`fig_damping`."""
+    return (
+        "C_D = R/(½ρAU²) of each steady hull run with |α| ≤ "
+        f"{day.protocol.processing.damping_alpha_max_deg:g}° (A the frontal area), coloured by "
+        "speed; the line is the stored quadratic fit C_D(α) = aα² + bα + c (α in rad) and the "
+        "band its 95 % confidence interval from the fit's covariance. X_u|u| = −½ρA·c, "
+        "X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2), Y_uv = −½ρA·c. Runs circled in red are "
+        "flagged as outliers (|studentized residual| > 3 or large Cook's distance). Bottom "
+        "right: C_D,90 on the lateral area from the transverse tows (band: ±1.96 standard "
+        "errors), which gives Y_v|v| = −½ρA_lat·C_D,90."
+    )
 
 
 @styled
@@ -300,19 +307,25 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
     runs = dm.runs
     has_90 = dm.transverse_runs is not None and len(dm.transverse_runs) > 0
     fig = _new_figure(page)
-    gs = _grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, top_in=0.75, bottom_in=1.25,
-               height_ratios=[1.5, 1.0], right=0.93)
-    _title(fig, r"Damping: drag coefficient against angle of attack", page=page)
+    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
+                 right=0.93, title="Damping: drag coefficient against angle of attack",
+                 text=damping_caption(day))
     ax = fig.add_subplot(gs[0, :])
     angles = runs["angle_deg"].to_numpy(float)
     lo, hi = float(np.min(angles)), float(np.max(angles))
     pad = max(1.0, 0.05 * (hi - lo))
     grid = np.linspace(lo - pad, hi + pad, 200)
     mean, half = cd_alpha_curve(dm.params, dm.cov, dm.dof, grid)
+    se = np.sqrt(np.maximum(np.diag(dm.cov), 0.0))
+    fit_label = "\n".join(
+        [r"fit $C_D = a\,\alpha^2 + b\,\alpha + c$ ($\alpha$ in rad):"]
+        + [f"{n} = {_fmt(v, 5)} ± {_fmt(e, 2)} (s.e.)"
+           for n, v, e in zip("abc", dm.params, se, strict=True)]
+        + [f"{len(runs)} runs, {dm.dof} residual d.o.f."]
+    )
     ax.fill_between(grid, mean - half, mean + half, color=style.BAND_COLOR, alpha=0.6, lw=0,
                     label="95 % confidence band of the fit", zorder=1)
-    ax.plot(grid, mean, color=style.FIT_COLOR, lw=1.6, zorder=2,
-            label=r"fit $C_D = a\,\alpha^2 + b\,\alpha + c$")
+    ax.plot(grid, mean, color=style.FIT_COLOR, lw=1.6, zorder=2, label=fit_label)
     sc = ax.scatter(angles, runs["cd"], c=runs["speed"], cmap="viridis", s=22, zorder=3,
                     edgecolors="black", linewidths=0.4, label="steady hull runs")
     out = runs[runs["run"].isin(dm.outliers)]
@@ -320,72 +333,57 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
         ax.scatter(out["angle_deg"], out["cd"], s=90, facecolors="none",
                    edgecolors=style.OUTLIER_COLOR, linewidths=1.2, zorder=4, label="outlier")
         for r in out.itertuples():
-            ax.annotate(f"run {int(r.run)}", (r.angle_deg, r.cd), xytext=(6, -10),
-                        textcoords="offset points", fontsize=7, color=style.OUTLIER_COLOR)
+            ax.annotate(f"run {int(r.run)}", (r.angle_deg, r.cd), xytext=(7, -3),
+                        textcoords="offset points", fontsize=7, color=style.OUTLIER_COLOR,
+                        va="top")
     cb = fig.colorbar(sc, ax=ax, pad=0.01, fraction=0.04)
     cb.set_label(r"Speed $U$ [m/s]")
     ax.set_xlabel(r"Angle of attack $\alpha$ [deg]")
     ax.set_ylabel(r"Drag coefficient $C_D$ [-] (frontal area)")
-    se = np.sqrt(np.maximum(np.diag(dm.cov), 0.0))
-    txt = "\n".join(
-        [r"$\alpha$ in rad; value ± standard error"]
-        + [f"{n} = {_fmt(v, 5)} ± {_fmt(e, 2)}" for n, v, e in zip("abc", dm.params, se,
-                                                                    strict=True)]
-        + [f"{len(runs)} runs, {dm.dof} residual d.o.f."]
-    )
-    ax.text(0.02, 0.97, txt, transform=ax.transAxes, va="top", ha="left", fontsize=7.2,
-            bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#cccccc", "alpha": 0.9})
-    ax.legend(loc="lower right")
+    ax.legend(loc="best", fontsize=7)
     ax.set_title(r"$C_D(\alpha)$ of the steady hull runs (report eqs. 13–15)")
 
     ax_r = fig.add_subplot(gs[1, 0] if has_90 else gs[1, :])
     ax_r.axhspan(-3, 3, color="#eeeeee", lw=0, zorder=0)
     ax_r.axhline(0, color="#777777", lw=0.8)
-    colors = np.where(runs["run"].isin(dm.outliers), style.OUTLIER_COLOR, style.FIT_COLOR)
-    ax_r.scatter(angles, runs["student"], c=list(colors), s=16, zorder=3)
-    for r in runs[runs["run"].isin(dm.outliers)].itertuples():
-        ax_r.annotate(str(int(r.run)), (r.angle_deg, r.student), xytext=(4, 2),
-                      textcoords="offset points", fontsize=7, color=style.OUTLIER_COLOR)
+    flagged = runs["run"].isin(dm.outliers).to_numpy()
+    ax_r.scatter(angles[~flagged], runs["student"][~flagged], color=style.FIT_COLOR, s=16,
+                 zorder=3)
+    ax_r.scatter(angles[flagged], runs["student"][flagged], color=style.OUTLIER_COLOR, s=16,
+                 zorder=3)
+    for r in runs[flagged].itertuples():
+        ax_r.annotate(f"run {int(r.run)}", (r.angle_deg, r.student), xytext=(-5, 0),
+                      textcoords="offset points", fontsize=7, color=style.OUTLIER_COLOR,
+                      ha="right", va="center")
     lim = max(3.5, float(np.nanmax(np.abs(runs["student"]))) * 1.15)
     ax_r.set_ylim(-lim, lim)
+    ax_r.set_xlim(grid[0], grid[-1])
     ax_r.set_xlabel(r"Angle of attack $\alpha$ [deg]")
-    ax_r.set_ylabel(r"Studentized residual [-]")
+    ax_r.set_ylabel("Studentized residual [-]")
     ax_r.set_title("Fit residuals (shaded: within ±3)", fontsize=8.8)
 
     if has_90:
-        tr = dm.transverse_runs
-        ax_t = fig.add_subplot(gs[1, 1])
-        cd90, cd90_se = float(dm.cd90), float(dm.cd90_se)
-        umax = float(tr["speed"].max()) * 1.1
-        if math.isfinite(cd90_se):
-            ax_t.axhspan(cd90 - style_z * cd90_se, cd90 + style_z * cd90_se,
-                         color=style.BAND_COLOR, alpha=0.6, lw=0)
-        ax_t.axhline(cd90, color=style.FIT_COLOR, lw=1.4,
-                     label=rf"$C_{{D,90}}$ = {_fmt(cd90)} ± {_fmt(style_z * cd90_se, 2)}")
-        ax_t.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5,
-                  label="transverse runs")
-        ax_t.set_xlim(0, umax)
-        spread = max(float(np.ptp(tr["cd90"])), 4 * cd90_se if math.isfinite(cd90_se) else 0)
-        spread = max(spread, 0.02 * abs(cd90))
-        ax_t.set_ylim(cd90 - 2.5 * spread, cd90 + 2.5 * spread)
-        ax_t.set_xlabel(r"Speed $U$ [m/s]")
-        ax_t.set_ylabel(r"$C_{D,90}$ [-] (lateral area)")
-        ax_t.set_title(r"Transverse tow, $\alpha$ = 90°", fontsize=8.8)
-        ax_t.legend(loc="upper right", fontsize=6.8)
-    caption(fig, (
-        "C_D = R/(½ρAU²) of each steady hull run with |α| ≤ "
-        f"{day.protocol.processing.damping_alpha_max_deg:g}° (A the frontal area), coloured by "
-        "speed; the line is the stored quadratic fit C_D(α) = aα² + bα + c (α in rad) and the "
-        "band its 95 % confidence interval from the fit's covariance. X_u|u| = −½ρA·c, "
-        "X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2), Y_uv = −½ρA·c. Runs circled in red are flagged "
-        "as outliers (|studentized residual| > 3 or large Cook's distance). Bottom right: "
-        "C_D,90 on the lateral area from the transverse tows (band: ±1.96 standard errors), "
-        "which gives Y_v|v| = −½ρA_lat·C_D,90."
-    ), page=page)
+        _transverse_panel(fig.add_subplot(gs[1, 1]), dm)
     return fig
 
 
-style_z = 1.959963984540054  # two-sided 95 % normal quantile
+def _transverse_panel(ax: Axes, dm: Any) -> None:
+    tr = dm.transverse_runs
+    cd90, cd90_se = float(dm.cd90), float(dm.cd90_se)
+    half = Z95 * cd90_se if math.isfinite(cd90_se) else 0.0
+    if half > 0:
+        ax.axhspan(cd90 - half, cd90 + half, color=style.BAND_COLOR, alpha=0.6, lw=0)
+    ax.axhline(cd90, color=style.FIT_COLOR, lw=1.4,
+               label=rf"$C_{{D,90}}$ = {_fmt(cd90)} ± {_fmt(half, 2)}")
+    ax.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5,
+            label="transverse runs")
+    ax.set_xlim(0, float(tr["speed"].max()) * 1.1)
+    spread = max(float(np.ptp(tr["cd90"])), 2 * half, 0.005 * abs(cd90))
+    ax.set_ylim(cd90 - 1.6 * spread, cd90 + 2.2 * spread)
+    ax.set_xlabel(r"Speed $U$ [m/s]")
+    ax.set_ylabel(r"$C_{D,90}$ [-] (lateral area)")
+    ax.set_title(r"Transverse tow, $\alpha$ = 90°", fontsize=8.8)
+    ax.legend(loc="upper right", fontsize=6.8)
 
 
 # ----------------------------------------------------------------------------- (c,d) fins
@@ -407,8 +405,10 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
     cmap = mpl.colormaps["viridis"]
     colors = {a: cmap(i / max(len(angles) - 1, 1) * 0.9) for i, a in enumerate(angles)}
     fig = _new_figure(page)
-    gs = _grid(fig, 2, 1, page=page, hspace=0.3, top_in=0.75, bottom_in=0.95, right=0.83)
-    _title(fig, "Fin forces against carriage speed at each angle of attack", page=page)
+    gs = _layout(fig, 2, 1, page=page, hspace=0.32, right=0.84,
+                 title="Fin forces against carriage speed at each angle of attack",
+                 text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
+                 "Each line joins the runs at one angle of attack α.")
     axes = [fig.add_subplot(gs[i, 0]) for i in range(2)]
     for col, ax, name in (("drag_mean", axes[0], "Drag"), ("lift_mean", axes[1], "Lift")):
         for a in angles:
@@ -417,22 +417,17 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
         sym = "D" if col == "drag_mean" else "L"
         ax.set_ylabel(rf"{name} ${sym}$ [N]")
         ax.set_xlabel(r"Speed $U$ [m/s]")
-        ax.set_xlim(left=0)
         ax.set_title(f"{name} against speed (report Fig. {14 if sym == 'D' else 15})")
     handles = [Line2D([], [], color=colors[a], marker="o", ms=4, label=f"{a:g}")
                for a in angles]
     fig.legend(handles=handles, title=r"$\alpha$ [deg]", loc="center left",
-               bbox_to_anchor=(0.845, 0.5), fontsize=7.5, title_fontsize=8)
-    caption(fig, (
-        "Steady-phase means of the fin runs, zero, drift and sting tare removed. Each line joins "
-        "the runs at one angle of attack."
-    ), page=page)
+               bbox_to_anchor=(0.855, 0.5), fontsize=7.5, title_fontsize=8)
     return fig
 
 
 def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
                     e: float) -> tuple[np.ndarray, ...]:
-    """Sandia 2-D and lifting-line curves of a given Re on an angle grid (evaluation only)."""
+    """Sandia 2-D and lifting-line curves of one Re on an angle grid (evaluation only)."""
     from towtank import fins, sandia
 
     res = np.full(alpha.shape, re)
@@ -461,27 +456,39 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
     if fr is None or len(fr.table) == 0:
         return None
     tab = fr.table
-    groups = (fr.curves[["speed_group", "re_mean"]].to_numpy(float) if len(fr.curves)
-              else np.array([[g, tab.loc[tab["speed_group"] == g, "re"].mean()]
-                             for g in sorted(tab["speed_group"].unique())]))
+    if len(fr.curves):
+        groups = fr.curves[["speed_group", "re_mean"]].to_numpy(float)
+    else:
+        groups = np.array([[g, tab.loc[tab["speed_group"] == g, "re"].mean()]
+                           for g in sorted(tab["speed_group"].dropna().unique())])
     amin = min(0.0, float(tab["angle_deg"].min()) - 2.0)
     amax = min(180.0, float(tab["angle_deg"].max()) + 5.0)
     grid = np.linspace(amin, amax, int(round((amax - amin) / 0.25)) + 1)
     fig = _new_figure(page)
-    gs = _grid(fig, 2, 1, page=page, hspace=0.3, top_in=0.75, bottom_in=1.1, right=0.95)
-    _title(fig, "Fin lift and drag coefficients against angle of attack", page=page)
+    text = (
+        "C_L = L/(½ρSU²), C_D = D/(½ρSU²) on the planform S = chord × span, Re on the chord. "
+        "Solid: two-dimensional NACA 0015 data of Sheldahl & Klimas (1981, SAND80-2114) "
+        "interpolated at each speed group's mean Re; dashed: the finite-span expectation from "
+        "Prandtl's lifting line for the fin's effective aspect ratio "
+        f"(AR = {fr.aspect_ratio:.3g}, e = {fr.oswald_e:.3g}), which lowers the lift slope and "
+        "adds induced drag. Lifting-line values past stall are indicative only."
+    )
+    n_rows = math.ceil(len(groups) / 4)
+    gs = _layout(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
+                 title="Fin lift and drag coefficients against angle of attack", text=text)
     ax_l, ax_d = fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[1, 0])
     group_handles = []
     for i, (g, re) in enumerate(groups):
         color = style.PALETTE[i % len(style.PALETTE)]
         sel = tab[tab["speed_group"] == g]
-        cl2, cd2, cl3, cd3 = _section_curves(grid, float(re), fr.aspect_ratio, fr.oswald_e)
-        for ax, meas, two, three in ((ax_l, "cl", cl2, cl3), (ax_d, "cd", cd2, cd3)):
+        curves = _section_curves(grid, float(re), fr.aspect_ratio, fr.oswald_e)
+        for ax, meas, two, three in ((ax_l, "cl", curves[0], curves[2]),
+                                     (ax_d, "cd", curves[1], curves[3])):
             ax.plot(grid, two, color=color, lw=1.0, alpha=0.9)
             ax.plot(grid, three, color=color, lw=1.0, ls="--", alpha=0.9)
             ax.plot(sel["angle_deg"], sel[meas], "o", color=color, ms=5, mec="black", mew=0.4,
                     zorder=4)
-        group_handles.append(Patch(color=color, label=f"$U$ ≈ {g:.2f} m/s, Re = {re:.2g}"))
+        group_handles.append(Patch(color=color, label=f"$U$ ≈ {g:.2f} m/s, Re = {sci(re)}"))
     style_handles = [
         Line2D([], [], ls="", marker="o", color="#777777", mec="black", mew=0.4,
                label="measured"),
@@ -489,6 +496,13 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
         Line2D([], [], color="#777777", ls="--",
                label=f"finite span (lifting line, AR = {fr.aspect_ratio:.3g})"),
     ]
+    h = fig.get_size_inches()[1]
+    y0 = 1 - ((PAGE_HEADER_IN if page else 0.0) + 0.45) / h
+    ncol = min(len(group_handles), 4)
+    fig.legend(handles=group_handles, loc="upper center", bbox_to_anchor=(0.52, y0),
+               ncol=ncol, fontsize=7.2, frameon=False)
+    fig.legend(handles=style_handles, loc="upper center", ncol=3, fontsize=7.2, frameon=False,
+               bbox_to_anchor=(0.52, y0 - (0.05 + 0.17 * n_rows) / h))
     ax_l.set_ylabel(r"Lift coefficient $C_L$ [-]")
     ax_d.set_ylabel(r"Drag coefficient $C_D$ [-]")
     for ax in (ax_l, ax_d):
@@ -496,20 +510,51 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
         ax.set_xlim(amin, amax)
     ax_l.set_title(r"$C_L(\alpha)$ (report Fig. 16)")
     ax_d.set_title(r"$C_D(\alpha)$")
-    ax_l.legend(handles=group_handles, loc="upper left", fontsize=7)
-    ax_d.legend(handles=style_handles, loc="upper left", fontsize=7)
-    caption(fig, (
-        "C_L = L/(½ρSU²), C_D = D/(½ρSU²) on the planform S = chord × span, Re on the chord. "
-        "Solid: two-dimensional NACA 0015 data of Sheldahl & Klimas (1981, SAND80-2114) "
-        "interpolated at each speed group's mean Re; dashed: the finite-span expectation from "
-        "Prandtl's lifting line for the fin's effective aspect ratio "
-        f"(AR = {fr.aspect_ratio:.3g}, e = {fr.oswald_e:.3g}), which lowers the lift slope and "
-        "adds induced drag. Lifting-line values past stall are indicative only."
-    ), page=page)
     return fig
 
 
 # ------------------------------------------------------------------------------ (f) scaling
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+
+
+def sci(x: float, digits: int = 2) -> str:
+    """A positive number in scientific notation with Unicode superscripts: 2.7e5 → 2.7×10⁵.
+
+    Plain text, not mathtext: cheap to lay out and found by a PDF text search.
+
+    Parameters
+    ----------
+    x : float
+        The number.
+    digits : int
+        Significant digits.
+    """
+    x = float(x)
+    if not math.isfinite(x) or x <= 0:
+        return _fmt(x)
+    m, _, e = f"{x:.{digits}g}".partition("e")
+    if not e:
+        return m
+    return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
+
+
+def scaling_caption(day: DayResult) -> str:
+    """Caption of :func:`fig_scaling`."""
+    sr = day.scaling
+    k2, k1 = sr.resistance
+    ff = sr.form_factor
+    ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (s.d. over {ff.n} runs)."
+               if ff is not None else "No form factor (no wetted area or too few runs).")
+    return (
+        "Left: steady zero-angle model resistance with the resistance curve "
+        f"R = k2·U|U| + k1·U (k2 = {k2:.4g} N s²/m², k1 = {k1:.4g} N s/m) and the model speeds "
+        "that correspond to the prototype speeds by Froude scaling (hollow: outside the tested "
+        "range, so extrapolated). Right: prototype resistance by Froude scaling of that curve "
+        "(λ³ρ_p/ρ_m) and by the ITTC-57 friction line with the form factor. " + ff_text
+        + "\n\n" + sr.statement
+    )
+
+
 @styled
 def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     """Model resistance, prototype resistance (Froude and ITTC-57) and the Re ranges.
@@ -531,9 +576,9 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     k2, k1 = sr.resistance
     lo, hi = sr.tested_speed_range
     fig = _new_figure(page)
-    gs = _grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, top_in=0.75, bottom_in=1.55,
-               height_ratios=[1.4, 0.8])
-    _title(fig, f"Scaling to the prototype (λ = {sr.scale:g})", page=page)
+    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
+                 title=f"Scaling to the prototype (λ = {sr.scale:g})",
+                 text=scaling_caption(day))
 
     ax_m = fig.add_subplot(gs[0, 0])
     umax = max(hi, float(tab["speed_model_froude"].max())) * 1.08
@@ -574,49 +619,41 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_ylim(bottom=0)
     ax_p.set_xlabel(r"Prototype speed $U_p$ [m/s]")
     ax_p.set_ylabel(r"Prototype resistance $R_p$ [N]")
-    ax_p.set_title("Prototype (sea water)" if day.protocol.prototype is not None
-                   and day.protocol.prototype.water.type == "sea" else "Prototype")
+    proto = day.protocol.prototype
+    ax_p.set_title(f"Prototype ({proto.water.type} water)" if proto is not None else "Prototype")
     ax_p.legend(loc="upper left", fontsize=6.8)
 
-    ax_r = fig.add_subplot(gs[1, :])
+    _reynolds_panel(fig.add_subplot(gs[1, :]), day, ok_hull)
+    return fig
+
+
+def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
+    sr = day.scaling
+    tab = sr.table
     bars = []
     sel = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
     if sel["re"].notna().any():
         bars.append(("model tests", float(sel["re"].min()), float(sel["re"].max()),
                      style.PALETTE[0]))
-    ff = sr.form_factor
-    if ff is not None:
-        bars.append(("form-factor runs", *ff.re_range, style.PALETTE[2]))
-    bars.append(("model at Froude speeds", float(tab["re_model_froude"].min()),
+    if sr.form_factor is not None:
+        bars.append(("form-factor runs", *sr.form_factor.re_range, style.PALETTE[2]))
+    bars.append(("model at the Froude speeds", float(tab["re_model_froude"].min()),
                  float(tab["re_model_froude"].max()), style.PALETTE[1]))
     bars.append(("prototype", float(tab["re_prototype"].min()),
                  float(tab["re_prototype"].max()), style.PALETTE[3]))
     for i, (name, b0, b1, color) in enumerate(reversed(bars)):
-        width = b1 / b0 if b0 > 0 else 1.0
-        if width < 1.03:  # a single Re: widen the bar a little so it shows
+        if b1 / b0 < 1.03:  # a single Re: widen the bar a little so it shows
             b0, b1 = b0 / 1.015, b1 * 1.015
-        ax_r.barh(i, b1 - b0, left=b0, height=0.55, color=color, alpha=0.85)
-        ax_r.text(b1 * 1.04, i, f"{b0:.2g} – {b1:.2g}", va="center", fontsize=7)
-    ax_r.set_yticks(range(len(bars)), [b[0] for b in reversed(bars)])
-    ax_r.set_xscale("log")
+        ax.barh(i, b1 - b0, left=b0, height=0.6, color=color, alpha=0.85)
+        ax.text(b1 * 1.06, i, f"{name}: {sci(b0)} – {sci(b1)}", va="center", fontsize=7.5)
+    ax.set_yticks([])
+    ax.set_xscale("log")
     xs = [b[1] for b in bars] + [b[2] for b in bars]
-    ax_r.set_xlim(min(xs) / 2, max(xs) * 4)
-    ax_r.set_ylim(-0.6, len(bars) - 0.4)
-    ax_r.set_xlabel(r"Reynolds number Re = $UL/\nu$ [-] (on the hull length)")
-    ax_r.set_title("Reynolds number ranges")
-    ax_r.grid(axis="y", visible=False)
-
-    ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (s.d., {ff.n} runs). "
-               if ff is not None else "No form factor (no wetted area or too few runs). ")
-    caption(fig, (
-        "Left: steady zero-angle model resistance with the resistance curve "
-        f"R = k2·U|U| + k1·U (k2 = {k2:.4g} N s²/m², k1 = {k1:.4g} N s/m) and the model speeds "
-        "that correspond to the prototype speeds by Froude scaling (hollow: outside the tested "
-        "range, so extrapolated). Right: prototype resistance by Froude scaling of that curve "
-        "(λ³ρ_p/ρ_m) and by the ITTC-57 friction line with the form factor. " + ff_text
-        + "\n\n" + sr.statement
-    ), page=page)
-    return fig
+    ax.set_xlim(min(xs) / 2, max(xs) * 12)
+    ax.set_ylim(-0.6, len(bars) - 0.4)
+    ax.set_xlabel(r"Reynolds number Re = $UL/\nu$ [-] (on the hull length)")
+    ax.set_title("Reynolds number ranges")
+    ax.grid(axis="y", visible=False)
 
 
 # ------------------------------------------------------------------------------ (g) a run
@@ -656,19 +693,20 @@ def run_thumbnail(
     """
     th = reduction.thumb
     t = np.asarray(th["t"], dtype=float)
+    ax2 = ax.twinx()
+    # the force axes lie below: shading, then forces; the speed axes on top are transparent
+    ax.set_zorder(ax2.get_zorder() + 1)
+    ax.patch.set_visible(False)
     for name, (color, _label) in style.PHASE_SHADES.items():
         w = reduction.windows.get(name)
         if w is not None:
-            ax.axvspan(w[0], w[1], color=color, lw=0, zorder=0)
+            ax2.axvspan(w[0], w[1], color=color, lw=0, zorder=0)
     ax.plot(t, th["U"], color=style.SPEED_COLOR, lw=linewidth, zorder=3)
-    ax2 = ax.twinx()
     ax2.plot(t, th["drag"], color=style.DRAG_COLOR, lw=linewidth * 0.9, zorder=2)
     lift = reduction.has_lift if show_lift is None else show_lift
     if lift and np.isfinite(th["lift"]).any():
         ax2.plot(t, th["lift"], color=style.LIFT_COLOR, lw=linewidth * 0.9, zorder=2)
     ax2.grid(False)
-    ax.set_zorder(ax2.get_zorder() + 1)  # speed line above the forces ...
-    ax.patch.set_visible(False)  # ... without hiding them
     ax2.spines["right"].set_visible(True)
     ax.set_xlim(float(t[0]), float(t[-1]))
     if labels:
@@ -682,10 +720,12 @@ def run_thumbnail(
 
 def thumbnail_legend_handles(show_lift: bool = True) -> list[Any]:
     """Legend entries for :func:`run_thumbnail`: lines and phase shades."""
-    handles: list[Any] = [Line2D([], [], color=style.SPEED_COLOR, label="speed $U$"),
-                          Line2D([], [], color=style.DRAG_COLOR, label="drag $D$")]
+    handles: list[Any] = [
+        Line2D([], [], color=style.SPEED_COLOR, label="speed $U$ [m/s] (left)"),
+        Line2D([], [], color=style.DRAG_COLOR, label="drag $D$ [N] (right)"),
+    ]
     if show_lift:
-        handles.append(Line2D([], [], color=style.LIFT_COLOR, label="lift $L$"))
+        handles.append(Line2D([], [], color=style.LIFT_COLOR, label="lift $L$ [N] (right)"))
     seen = set()
     for color, label in style.PHASE_SHADES.values():
         if color + label.split()[0] in seen or label == "still after":
@@ -709,14 +749,14 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
         Text under the plot (e.g. the steady means).
     """
     fig = Figure(figsize=(9.0, 4.8))
-    bottom = 0.26 if note else 0.14
+    bottom = 0.21 if note else 0.14
     ax = fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
     run_thumbnail(ax, reduction, linewidth=1.3)
     ax.set_title(title, loc="left", fontsize=9.5)
     fig.legend(handles=thumbnail_legend_handles(reduction.has_lift), loc="upper right",
-               ncol=7, fontsize=7, bbox_to_anchor=(0.99, 0.995), frameon=False)
+               ncol=7, fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
     if note:
-        fig.text(0.08, 0.02, note, fontsize=7.5, family="DejaVu Sans Mono", va="bottom",
+        fig.text(0.08, 0.035, note, fontsize=7.5, family="DejaVu Sans Mono", va="bottom",
                  color="#333333")
     return fig
 

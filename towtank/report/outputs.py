@@ -128,4 +128,24 @@ def write_outputs(
 
 
 def _report_writers() -> list[Writer]:
-    return []
+    """The report's writers: report.xlsx, report.pdf and figures/*.png.
+
+    The protocol's [report] table may turn the PDF (``pdf = false``) or the PNG figures
+    (``figures = false``) off; the workbook is always written.
+    """
+    from towtank.report.figures import write_figures
+    from towtank.report.pdf import write_pdf
+    from towtank.report.workbook import write_workbook
+
+    def wanted(day: DayResult, option: str) -> bool:
+        return bool(getattr(getattr(day.protocol, "report", None), option, True))
+
+    def pdf(day: DayResult, folder: Path) -> None:
+        if wanted(day, "pdf"):
+            write_pdf(day, folder)
+
+    def figures(day: DayResult, folder: Path) -> None:
+        if wanted(day, "figures"):
+            write_figures(day, folder)
+
+    return [write_workbook, pdf, figures]

@@ -19,10 +19,13 @@ RC: dict[str, object] = {
     "font.size": 8.5,
     "axes.titlesize": 9.5,
     "axes.titleweight": "bold",
+    "axes.titley": 1.0,  # fixed title position: skips a costly automatic placement
+    "axes.titlepad": 5.0,
     "axes.labelsize": 8.5,
     "axes.grid": True,
     "axes.axisbelow": True,
     "axes.spines.top": False,
+    "axes.spines.right": False,
     "axes.prop_cycle": None,  # set below from PALETTE
     "grid.color": "#b0b0b0",
     "grid.alpha": 0.35,
@@ -36,7 +39,7 @@ RC: dict[str, object] = {
     "lines.linewidth": 1.3,
     "lines.markersize": 4.5,
     "mathtext.fontset": "dejavusans",
-    "pdf.fonttype": 42,  # TrueType: text stays selectable and searchable
+    "pdf.fonttype": 3,  # subset Type 3 fonts: searchable text, fast to embed
     "svg.fonttype": "none",
     "savefig.dpi": PNG_DPI,
     "figure.dpi": 100,

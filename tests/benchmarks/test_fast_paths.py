@@ -1,0 +1,242 @@
+"""The speed-ups behind the campaign benchmark change nothing but the time.
+
+The filter gives scipy's result bit for bit, the settings key is the same hash as before, the
+packed cache returns what was stored (and a damaged entry is a miss), the parallel map returns
+the serial results in sheet order, and the day's fingerprint notices every kind of change.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import pickle
+from dataclasses import asdict, replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.signal import sosfiltfilt
+
+from towtank import __version__, cache, conditioning, parallel
+from towtank.protocol import ChannelMap, Processing
+
+
+# ------------------------------------------------------------------------------------ filter
+@pytest.mark.parametrize("n", [2, 3, 27, 28, 29, 500, 12_001])
+@pytest.mark.parametrize("channels", [1, 3])
+@pytest.mark.parametrize("design", [(1000.0, 4.0, 4), (200.0, 5.0, 2), (50.0, 20.0, 5)])
+def test_lowpass_is_sosfiltfilt_bit_for_bit(n, channels, design):
+    fs, cutoff, order = design
+    x = np.cumsum(np.random.default_rng(n).standard_normal((n, channels)), axis=0) + 2.5
+    sos = conditioning.butter_sos(cutoff, fs, order)
+    padlen = min(n - 1, 3 * (2 * sos.shape[0] + 1))
+    expected = sosfiltfilt(sos, x, axis=0, padlen=padlen)
+    got = conditioning.lowpass(x, fs, cutoff, order)
+    assert got.shape == expected.shape
+    assert np.array_equal(got, expected)
+    one = conditioning.lowpass(x[:, 0], fs, cutoff, order)
+    assert np.array_equal(one, sosfiltfilt(sos, x[:, 0], axis=0, padlen=padlen))
+    assert np.array_equal(x, np.cumsum(np.random.default_rng(n).standard_normal((n, channels)),
+                                       axis=0) + 2.5)  # input untouched
+
+
+def test_lowpass_other_dtypes_take_scipy_path():
+    x = (np.arange(200, dtype=np.float32) % 7)[:, None]
+    sos = conditioning.butter_sos(5.0, 100.0, 4)
+    expected = sosfiltfilt(sos, x, axis=0, padlen=15)
+    assert np.array_equal(conditioning.lowpass(x, 100.0, 5.0, 4), expected)
+
+
+# ------------------------------------------------------------------------------ settings key
+def _protocol(**processing):
+    return SimpleNamespace(
+        processing=replace(Processing(), **processing),
+        channels={"drag": ChannelMap("Fx (V)", 20.0, 0.01), "time": ChannelMap("t")},
+    )
+
+
+def _reference_key(protocol, row):
+    """The settings key as first written: one json.dumps of the whole payload."""
+
+    def num(x):
+        return None if isinstance(x, float) and math.isnan(x) else x
+
+    payload = {
+        "format": cache.CACHE_FORMAT,
+        "version": __version__,
+        "processing": asdict(protocol.processing),
+        "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
+        "file": str(row["file"]),
+        "window": [num(row.get("window_start_s")), num(row.get("window_end_s"))],
+        "nominal": [num(row.get("speed_nominal")), num(row.get("accel_nominal"))],
+    }
+    text = json.dumps(payload, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+@pytest.mark.parametrize("row", [
+    {"file": "run_001.csv", "speed_nominal": 1.2, "accel_nominal": 0.5},
+    {"file": "day 2/run_002.csv.gz", "speed_nominal": math.nan, "accel_nominal": 0.5,
+     "window_start_s": 5.0, "window_end_s": 7.25},
+    {"file": 'odd "name" \\ é\x00.tdms', "speed_nominal": np.float64(0.8)},
+    {"file": "run_004.csv"},
+])
+def test_settings_key_is_unchanged(row):
+    p = _protocol()
+    assert cache.settings_key(p, row) == _reference_key(p, row)
+    other = _protocol(cutoff_hz=7.0)  # a new protocol object: its own settings
+    assert cache.settings_key(other, row) == _reference_key(other, row)
+    assert cache.settings_key(other, row) != cache.settings_key(p, row)
+
+
+# ------------------------------------------------------------------------------------ cache
+def _sha(i):
+    return hashlib.sha256(str(i).encode()).hexdigest()
+
+
+def _red(i):
+    return {"run": i, "samples": {"U": np.linspace(0, 1, 30) * i}, "notes": [f"run {i}"]}
+
+
+def test_cache_round_trip_and_index(tmp_path, monkeypatch):
+    monkeypatch.setattr(cache, "PACK_ENTRIES", 4)
+    data = tmp_path / "data"
+    data.mkdir()
+    files = []
+    for i in range(10):
+        f = data / f"run_{i:03d}.csv"
+        f.write_text(f"t,u\n{i},1\n")
+        files.append(f)
+    c = cache.RunCache(tmp_path / ".cache")
+    for i, f in enumerate(files):
+        assert c.known_sha(f) is None
+        c.put(_sha(i), "k", _red(i))
+        c.remember_sha(f, _sha(i))
+        assert c.get(_sha(i), "k")["run"] == i  # readable before the flush
+    c.flush()
+    c2 = cache.RunCache(tmp_path / ".cache")
+    for i, f in enumerate(files):
+        assert c2.known_sha(f) == _sha(i)
+        got = c2.get(c2.known_sha(f), "k")
+        assert got["run"] == i and np.array_equal(got["samples"]["U"], _red(i)["samples"]["U"])
+    assert c2.get(_sha(3), "other-settings") is None
+    # a file that changed (size or mtime) is unknown; the index holds real paths
+    files[2].write_text("t,u\n2,1\n9,9\n")
+    assert c2.known_sha(files[2]) is None
+    link = tmp_path / "link.csv"
+    os.symlink(files[1], link)
+    assert c2.known_sha(link) == _sha(1)
+    assert c2.known_sha(tmp_path / "data" / ".." / "data" / "run_005.csv") == _sha(5)
+
+
+def test_damaged_cache_is_a_miss(tmp_path):
+    c = cache.RunCache(tmp_path)
+    c.put("a" * 64, "k", _red(1))
+    c.put("b" * 64, "k", _red(2))
+    c.flush()
+    (pack,) = (tmp_path / "runs").glob("pack-*.bin")
+    raw = bytearray(pack.read_bytes())
+    raw[5] ^= 0xFF
+    pack.write_bytes(bytes(raw))
+    c2 = cache.RunCache(tmp_path)
+    assert c2.get("a" * 64, "k") is None
+    assert c2.get("b" * 64, "k")["run"] == 2
+    (tmp_path / "files.json").write_text("{ not json")
+    assert cache.RunCache(tmp_path).get("b" * 64, "k") is None
+
+
+def test_cache_reads_the_one_file_per_entry_layout(tmp_path):
+    old = tmp_path / "runs" / f"{'c' * 32}-key.pkl"
+    old.parent.mkdir(parents=True)
+    old.write_bytes(pickle.dumps(_red(7)))
+    f = tmp_path / "run.csv"
+    f.write_text("x\n1\n")
+    st = f.stat()
+    (tmp_path / "files.json").write_text(json.dumps({str(f.resolve()): [st.st_size,
+                                                                         st.st_mtime_ns,
+                                                                         "c" * 64]}))
+    c = cache.RunCache(tmp_path)
+    assert c.known_sha(f) == "c" * 64
+    assert c.get("c" * 64, "key")["run"] == 7
+
+
+def test_packs_are_merged(tmp_path, monkeypatch):
+    monkeypatch.setattr(cache, "MAX_PACKS", 3)
+    for i in range(6):  # six processes, one pack each
+        c = cache.RunCache(tmp_path)
+        c.put(_sha(i), "k", _red(i))
+        c.flush()
+    assert len(list((tmp_path / "runs").glob("pack-*.bin"))) <= 3
+    c = cache.RunCache(tmp_path)
+    assert [c.get(_sha(i), "k")["run"] for i in range(6)] == list(range(6))
+
+
+# ---------------------------------------------------------------------------------- parallel
+def _square(protocol, rec, *, debug=False):
+    if rec["x"] < 0 and debug:
+        raise ValueError("negative")
+    return rec["x"] ** 2 + protocol["offset"], os.getpid()
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 37])
+def test_map_runs_keeps_sheet_order(n):
+    records = [{"x": i} for i in range(n)]
+    serial = [r for r, _ in parallel.map_runs(_square, {"offset": 1}, records, jobs=1)]
+    par = list(parallel.map_runs(_square, {"offset": 1}, records, jobs=2))
+    assert [r for r, _ in par] == serial == [i * i + 1 for i in range(n)]
+    if n >= 3:
+        assert par[0][1] == os.getpid()  # the first in this process, the rest in workers
+        assert {pid for _, pid in par[1:]} - {os.getpid()}
+    assert not parallel._TASKS
+
+
+def test_map_runs_raises_worker_errors_in_debug():
+    records = [{"x": 1}, {"x": 2}, {"x": -1}, {"x": 3}]
+    with pytest.raises(ValueError, match="negative"):
+        list(parallel.map_runs(_square, {"offset": 0}, records, jobs=2, debug=True))
+    assert not parallel._TASKS
+
+
+# ---------------------------------------------------------------------------------- the day
+def _day(tmp_path: Path) -> SimpleNamespace:
+    (tmp_path / "data").mkdir()
+    for i in range(3):
+        (tmp_path / "data" / f"run_{i}.csv").write_text(f"t\n{i}\n")
+    (tmp_path / "sheet.csv").write_text("run,file\n")
+    (tmp_path / "protocol.toml").write_text("[campaign]\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "runs.csv").write_text("run\n1\n")
+    campaign = SimpleNamespace(run_sheet=tmp_path / "sheet.csv", data_dir=tmp_path / "data",
+                               reference="remus")
+    return SimpleNamespace(path=tmp_path / "protocol.toml", campaign=campaign)
+
+
+def test_day_stamp_replays_only_an_unchanged_day(tmp_path):
+    p = _day(tmp_path)
+    out = tmp_path / "out"
+
+    def stamp(**options):
+        return cache.DayStamp(out / ".cache", p, out, options or {"report": False})
+
+    assert stamp().replay() is None
+    stamp().record(1, "summary\n")
+    assert stamp().replay() == (1, "summary\n")
+    assert stamp(report=True).replay() is None  # other options
+    (out / "runs.csv").write_text("run\n2\n")  # an output edited
+    assert stamp().replay() is None
+    stamp().record(0, "again\n")
+    assert stamp().replay() == (0, "again\n")
+    f = tmp_path / "data" / "run_1.csv"
+    st = f.stat()
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 1))  # a data file touched
+    assert stamp().replay() is None
+    stamp().record(0, "x\n")
+    (tmp_path / "sheet.csv").write_text("run,file\n1,run_1.csv\n")  # the sheet edited
+    assert stamp().replay() is None
+    stamp().record(0, "x\n")
+    (tmp_path / "data" / "new.csv").write_text("t\n")  # a file added
+    assert stamp().replay() is None

@@ -1,0 +1,204 @@
+"""Shared fixtures: synthetic days generated once per session and processed by the pipeline.
+
+Every day is written by :mod:`towtank.synthetic` (whose truth is exact) into a session temporary
+folder, with its protocol beside it (paths relative to the protocol), and processed once. Tests
+then compare the pipeline's numbers with the per-run truth of ``truth.json``.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pytest
+
+from towtank import synthetic as syn
+
+JOBS = 2  # the CI machine has two cores
+
+
+@dataclass
+class Day:
+    """A generated day: its folder, protocol, truth.json and the processed result."""
+
+    dir: Path
+    protocol: Path
+    truth: dict[str, Any]
+    result: Any  # towtank.pipeline.DayResult
+
+    def run_truth(self, run: int) -> dict[str, Any]:
+        return self.truth["runs"][str(int(run))]
+
+
+def write_hull_protocol(
+    day_dir: Path,
+    *,
+    name: str = "p.toml",
+    sheet_format: str = "xlsx",
+    channel_style: str = "lab",
+    channels: syn.LabChannels | None = None,
+    processing: dict[str, Any] | None = None,
+    temperature_C: float = 18.0,
+) -> Path:
+    """The hull protocol of a generated day, written inside the day's folder."""
+    sections = syn.hull_protocol_sections(
+        ".",
+        "out",
+        sheet_format=sheet_format,
+        channel_style=channel_style,
+        channels=channels,
+        temperature_C=temperature_C,
+    )
+    if processing:
+        sections["processing"] = dict(processing)
+    return syn.write_protocol(day_dir / name, **sections)
+
+
+def process(protocol: Path, **kw: Any):
+    from towtank.pipeline import process_day
+
+    kw.setdefault("jobs", JOBS)
+    return process_day(protocol, **kw)
+
+
+def make_processed_hull_day(
+    day_dir: Path,
+    *,
+    sheet_edit: Callable[[Path], None] | None = None,
+    protocol_kw: dict[str, Any] | None = None,
+    **make_kw: Any,
+) -> Day:
+    """Generate a hull day with ``make_hull_day(**make_kw)``, optionally edit its sheet, process."""
+    make_kw.setdefault("seed", 3)
+    syn.make_hull_day(day_dir, **make_kw)
+    if sheet_edit is not None:
+        sheet_edit(day_dir)
+    pkw = {
+        "sheet_format": make_kw.get("sheet_format", "xlsx"),
+        "channel_style": make_kw.get("channel_style", "lab"),
+        "channels": make_kw.get("channels"),
+    }
+    pkw.update(protocol_kw or {})
+    protocol = write_hull_protocol(day_dir, **pkw)
+    return Day(day_dir, protocol, syn.load_truth(day_dir), process(protocol))
+
+
+# ------------------------------------------------------------------------------ hull days
+@pytest.fixture(scope="session")
+def hull_day(tmp_path_factory) -> Day:
+    """The default synthetic SUT-2 day (seed 3): lab channels in volts with a negative lift gain,
+    gzipped CSV run files, an .xlsx run sheet, 200 Hz, realistic default noise."""
+    return make_processed_hull_day(tmp_path_factory.mktemp("hull_default"), seed=3)
+
+
+CUSTOM_CHANNELS = syn.LabChannels(
+    time="t [s]",
+    speed="V carriage [m/s]",
+    accel="A carriage [m/s^2]",
+    drag="Load cell X [V]",
+    lift="Load cell Y [V]",
+    drag_gain=-18.5,  # the drag cell is mounted reversed too
+    drag_offset=0.12,
+    lift_gain=-31.0,
+    lift_offset=-0.05,
+)
+
+
+@pytest.fixture(scope="session")
+def hull_day_tdms(tmp_path_factory) -> Day:
+    """TDMS run files with a custom [channels] mapping: other column names, both load cells in
+    volts with NEGATIVE gains and non-zero offsets; an .xlsx sheet."""
+    return make_processed_hull_day(
+        tmp_path_factory.mktemp("hull_tdms"),
+        seed=11,
+        file_format="tdms",
+        sheet_format="xlsx",
+        channel_style="lab",
+        channels=CUSTOM_CHANNELS,
+    )
+
+
+MANUAL_RUN = 15  # hull, 0 deg, 1.6 m/s steady run: its steady window is set by hand
+MANUAL_OFFSETS = (1.0, 4.5)  # [s] after the truth plateau start
+
+
+def _add_manual_window(day_dir: Path) -> None:
+    truth = syn.load_truth(day_dir)["runs"][str(MANUAL_RUN)]
+    sheet_path = day_dir / "run_sheet.csv"
+    sheet = pd.read_csv(sheet_path, dtype=str, keep_default_na=False)
+    sheet["window_start_s"] = ""
+    sheet["window_end_s"] = ""
+    row = sheet["run"].astype(int) == MANUAL_RUN
+    sheet.loc[row, "window_start_s"] = f"{truth['t_plateau_start'] + MANUAL_OFFSETS[0]:.3f}"
+    sheet.loc[row, "window_end_s"] = f"{truth['t_plateau_start'] + MANUAL_OFFSETS[1]:.3f}"
+    sheet.to_csv(sheet_path, index=False, lineterminator="\n")
+
+
+@pytest.fixture(scope="session")
+def hull_day_csv(tmp_path_factory) -> Day:
+    """Plain .csv run files (not gzipped) with canonical channel names, a .csv sheet, and a
+    manual steady window written into one row of the sheet."""
+    return make_processed_hull_day(
+        tmp_path_factory.mktemp("hull_csv"),
+        seed=12,
+        file_format="csv",
+        sheet_format="csv",
+        channel_style="canonical",
+        sheet_edit=_add_manual_window,
+    )
+
+
+@pytest.fixture(scope="session", params=["default", "tdms", "csv"])
+def any_hull_day(request) -> Day:
+    """Each of the three hull days in turn."""
+    name = {"default": "hull_day", "tdms": "hull_day_tdms", "csv": "hull_day_csv"}[request.param]
+    return request.getfixturevalue(name)
+
+
+@pytest.fixture(scope="session")
+def fin_day(tmp_path_factory) -> Day:
+    """The NACA 0015 fin day: TDMS (float32) run files, canonical channels, .csv sheet."""
+    d = tmp_path_factory.mktemp("fin")
+    syn.make_fin_day(d, seed=5)
+    protocol = syn.write_protocol(d / "p.toml", **syn.fin_protocol_sections(".", "out"))
+    return Day(d, protocol, syn.load_truth(d), process(protocol))
+
+
+# ------------------------------------------------------------------------- many-seed results
+@dataclass
+class SeedResult:
+    seed: int
+    fs: float
+    coefficients: pd.DataFrame  # coefficients.csv, indexed by symbol
+    truth: dict[str, float]  # truth coefficients (model-scale SI)
+    rejected: dict[int, str]
+
+
+@pytest.fixture(scope="session")
+def seed_result(tmp_path_factory) -> Callable[..., SeedResult]:
+    """``seed_result(seed, fs=200.0)``: a realistic-noise SUT-2 day with that seed, processed;
+    computed once per (seed, fs) for the whole session, its files deleted afterwards."""
+    cache: dict[tuple[int, float], SeedResult] = {}
+
+    def get(seed: int, fs: float = 200.0) -> SeedResult:
+        key = (int(seed), float(fs))
+        if key not in cache:
+            d = tmp_path_factory.mktemp(f"seed{seed}_{int(fs)}hz")
+            truth = syn.make_hull_day(d, seed=seed, fs=fs)
+            day = process(write_hull_protocol(d))
+            assert day.hull is not None, day.warnings
+            cache[key] = SeedResult(
+                seed=int(seed),
+                fs=float(fs),
+                coefficients=day.hull.coefficients.set_index("symbol"),
+                truth=dict(truth.coefficients or {}),
+                rejected=dict(day.rejected),
+            )
+            shutil.rmtree(d, ignore_errors=True)
+        return cache[key]
+
+    return get

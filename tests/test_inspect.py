@@ -1,0 +1,107 @@
+"""Tests of ``towtank inspect``: one run file's phases, means and plot."""
+
+from __future__ import annotations
+
+import gzip
+import io
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from towtank import synthetic
+from towtank.cli import main
+from towtank.inspect import inspect_run, plot_name
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def day(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("inspect") / "hull"
+    synthetic.make_hull_day(root, seed=5)
+    synthetic.write_protocol(root / "p.toml", **synthetic.hull_protocol_sections(".", "out"))
+    return root
+
+
+def test_cli_inspect_prints_phases_and_writes_png(day, tmp_path, capsys):
+    png = tmp_path / "plots" / "run13.png"
+    rc = main(["inspect", str(day / "data" / "run_013.csv.gz"), "--protocol",
+               str(day / "p.toml"), "--png", str(png)])
+    out = capsys.readouterr().out
+    assert rc == 0
+    for word in ("phases", "zero (still)", "acceleration", "steady", "deceleration",
+                 "steady means", "speed", "drag", "lift", "zero", "drift", "200 Hz", "notes"):
+        assert word in out, word
+    assert f"plot: {png}" in out
+    assert png.read_bytes()[:8] == PNG
+
+
+def test_inspect_without_protocol_uses_canonical_channels(day, tmp_path, capsys):
+    lab = pd.read_csv(day / "data" / "run_014.csv.gz")
+    canonical = pd.DataFrame({
+        "time": lab["Time (s)"],
+        "speed": lab["Carriage speed (m/s)"],
+        "drag": 20.0 * lab["Fx load cell (V)"],
+    })
+    path = tmp_path / "raw" / "run_014.csv"
+    path.parent.mkdir()
+    canonical.to_csv(path, index=False)
+    png = tmp_path / "out.png"
+    assert inspect_run(path, png=png) == 0
+    out = capsys.readouterr().out
+    assert "steady" in out and "lift" not in out.split("steady means")[1].split("acceleration")[0]
+    assert png.exists()
+
+
+def test_default_png_goes_to_the_current_folder(day, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    rc = main(["inspect", str(day / "data" / "run_015.csv.gz"), "--protocol",
+               str(day / "p.toml")])
+    assert rc == 0
+    assert (tmp_path / "run_015.png").read_bytes()[:8] == PNG
+    assert not list((day / "data").glob("*.png"))
+
+
+def test_never_writes_beside_the_raw_data(day, monkeypatch, capsys):
+    monkeypatch.chdir(day / "data")
+    rc = main(["inspect", "run_016.csv.gz", "--protocol", str(day / "p.toml")])
+    assert rc == 0
+    assert "not written" in capsys.readouterr().out
+    assert not list((day / "data").glob("*.png"))
+    rc = main(["inspect", "run_016.csv.gz", "--protocol", str(day / "p.toml"), "--png",
+               str(day / "data" / "x.png")])
+    assert rc == 1
+    assert not list((day / "data").glob("*.png"))
+
+
+@pytest.mark.parametrize("content", [
+    b"not a gzip file at all",
+    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n")[:25],
+    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n0,0,0\n"),
+])
+def test_damaged_file_gives_one_sentence_and_exit_1(day, tmp_path, capsys, content):
+    path = tmp_path / "run_099.csv.gz"
+    path.write_bytes(content)
+    rc = main(["inspect", str(path), "--protocol", str(day / "p.toml"), "--png",
+               str(tmp_path / "x.png")])
+    captured = capsys.readouterr()
+    assert rc == 1
+    lines = [ln for ln in captured.err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("towtank: ") and lines[0].endswith(".")
+    assert "Traceback" not in captured.err and "run_099" in lines[0]
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_wrong_channels_name_the_missing_column(day, tmp_path):
+    err = io.StringIO()
+    rc = inspect_run(day / "data" / "run_013.csv.gz", png=tmp_path / "x.png",
+                     out=io.StringIO(), err=err)
+    assert rc == 1
+    assert "missing" in err.getvalue() and "Time (s)" in err.getvalue()
+
+
+def test_plot_name():
+    assert plot_name("data/run_020.csv.gz") == "run_020.png"
+    assert plot_name("run_7.tdms") == "run_7.png"
+    assert plot_name("day3.run.12.csv") == "day3.run.12.png"

@@ -1,0 +1,300 @@
+"""Tests of the report stage: report.xlsx, report.pdf and figures/*.png.
+
+A synthetic hull day (with one run damaged, so one is rejected beside the voided one) and a
+synthetic fin day are generated once per module, processed by the pipeline and written by
+:func:`towtank.report.write_outputs`; the tests read the files back.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import math
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import openpyxl
+import pandas as pd
+import pytest
+from pypdf import PdfReader
+
+from towtank import synthetic
+from towtank.pipeline import process_day
+from towtank.report import figures, pdf, style, workbook, write_outputs
+
+REPORT_DATE = "2024-05-21"
+NUMERIC = re.compile(r"^[+-]?\d+(\.\d*)?([eE][+-]?\d+)?$")
+DAMAGED_RUN = 33  # a repeat run at 0 deg, 1.2 m/s: the day stays complete without it
+
+
+@pytest.fixture(scope="module")
+def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
+    root = tmp_path_factory.mktemp("report")
+    out = {}
+    hull = root / "hull"
+    synthetic.make_hull_day(hull, seed=3)
+    synthetic.write_protocol(hull / "p.toml", **synthetic.hull_protocol_sections(".", "out"))
+    damaged = hull / "data" / f"run_{DAMAGED_RUN:03d}.csv.gz"
+    damaged.write_bytes(damaged.read_bytes()[:300])  # truncated gzip: rejected with a reason
+    fin = root / "fin"
+    synthetic.make_fin_day(fin, seed=4)
+    synthetic.write_protocol(fin / "p.toml", **synthetic.fin_protocol_sections(".", "out"))
+    for name, folder, date in (("hull", hull, REPORT_DATE), ("fin", fin, None)):
+        day = process_day(folder / "p.toml", jobs=1)
+        day.report_date = date
+        out[name] = (day, write_outputs(day, folder / "out"))
+    return out
+
+
+def _header_map(ws) -> dict[str, int]:
+    """Column index (1-based) of each header of row 1, by its name without the unit."""
+    return {str(c.value).split(" [")[0]: c.column for c in ws[1] if c.value is not None}
+
+
+def _same(a, b) -> bool:
+    missing = (a is None or (isinstance(a, float) and math.isnan(a)))
+    other_missing = (b is None or (isinstance(b, float) and math.isnan(b)))
+    if missing or other_missing:
+        return missing and other_missing
+    return a == b
+
+
+# ----------------------------------------------------------------------------- the workbook
+@pytest.mark.parametrize("name", ["hull", "fin"])
+def test_workbook_has_every_sheet_frozen_and_filtered(days, name):
+    _, out = days[name]
+    wb = openpyxl.load_workbook(out / "report.xlsx")
+    assert wb.sheetnames == list(workbook.SHEETS)
+    for ws in wb.worksheets:
+        assert ws.freeze_panes == "A2", ws.title
+        assert ws.auto_filter.ref and ws.auto_filter.ref.startswith("A1:"), ws.title
+        assert ws["A1"].font.bold, ws.title
+
+
+def test_workbook_coefficients_equal_the_csv_exactly(days):
+    day, out = days["hull"]
+    csv = pd.read_csv(out / "coefficients.csv")
+    assert csv["value"].tolist() == day.hull.coefficients["value"].tolist()
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Coefficients"]
+    cols = _header_map(ws)
+    assert ws.cell(1, cols["value"]).value == "value [SI]"
+    numeric = [c for c in csv.columns if pd.api.types.is_numeric_dtype(csv[c])]
+    assert {"value", "ci_low", "ci_high", "prime", "diff_pct", "prototype_value"} <= set(numeric)
+    for i, rec in enumerate(csv.to_dict("records"), start=2):
+        assert ws.cell(i, cols["symbol"]).value == rec["symbol"]
+        for c in numeric:
+            cell = ws.cell(i, cols[c]).value
+            assert _same(cell, rec[c]), (rec["symbol"], c, cell, rec[c])
+            if cell is not None:
+                assert isinstance(cell, int | float) and not isinstance(cell, bool)
+    # the key results of the Summary sheet are the same floats too
+    summary = openpyxl.load_workbook(out / "report.xlsx")["Summary"]
+    rows = list(summary.iter_rows(values_only=True))
+    head = next(i for i, r in enumerate(rows) if r[0] == "symbol")
+    idx = {str(v).split(" [")[0]: j for j, v in enumerate(rows[head]) if v}
+    for rec, row in zip(csv.to_dict("records"), rows[head + 1:], strict=False):
+        assert row[0] == rec["symbol"]
+        assert _same(row[idx["value"]], rec["value"])
+
+
+@pytest.mark.parametrize("name", ["hull", "fin"])
+def test_workbook_numbers_are_numbers(days, name):
+    day, out = days[name]
+    wb = openpyxl.load_workbook(out / "report.xlsx")
+    for ws in wb.worksheets:
+        for row in ws.iter_rows():
+            for cell in row:
+                if isinstance(cell.value, str):
+                    assert not NUMERIC.match(cell.value.strip()), (ws.title, cell.coordinate)
+    runs = wb["Runs"]
+    cols = _header_map(runs)
+    assert runs.cell(1, cols["speed_mean"]).value == "speed_mean [m/s]"
+    ok = [r for r in runs.iter_rows(min_row=2, values_only=True) if r[cols["status"] - 1] == "ok"]
+    assert len(ok) == int((day.runs["status"] == "ok").sum())
+    for r in ok:
+        assert isinstance(r[cols["speed_mean"] - 1], float)
+        assert isinstance(r[cols["run"] - 1], int)
+
+
+def test_workbook_highlights_rejected_and_void_runs(days):
+    day, out = days["hull"]
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Runs"]
+    cols = _header_map(ws)
+    fills = {}
+    for row in ws.iter_rows(min_row=2, max_row=1 + len(day.runs)):
+        status = row[cols["status"] - 1].value
+        fills.setdefault(status, set()).add(row[0].fill.fgColor.rgb[-6:])
+    assert fills["rejected"] == {style.XL_REJECTED_FILL}
+    assert fills["void"] == {style.XL_VOID_FILL}
+    assert style.XL_REJECTED_FILL not in fills["ok"]
+    quality = openpyxl.load_workbook(out / "report.xlsx")["Quality"]
+    text = " ".join(str(c.value) for row in quality.iter_rows() for c in row if c.value)
+    assert f"run {DAMAGED_RUN}" in text and "carriage stopped early" in text
+
+
+def test_workbook_highlights_large_differences(days, tmp_path):
+    day, _ = days["hull"]
+    hull = copy.copy(day.hull)
+    coef = day.hull.coefficients.copy()
+    coef.loc[0, "diff_pct"] = 12.5
+    coef.loc[1, "diff_pct"] = -9.0
+    changed = replace(day, hull=replace(hull, coefficients=coef))
+    ws = openpyxl.load_workbook(workbook.write_workbook(changed, tmp_path))["Coefficients"]
+    assert ws["A2"].fill.fgColor.rgb[-6:] == style.XL_DIFF_FILL
+    assert ws["A3"].fill.fgColor.rgb[-6:] != style.XL_DIFF_FILL
+
+
+def test_fin_day_workbook_notes_why_sheets_are_empty(days):
+    _, out = days["fin"]
+    wb = openpyxl.load_workbook(out / "report.xlsx")
+    assert wb["Coefficients"]["A1"].value == "note"
+    assert "No hull coefficients" in wb["Coefficients"]["A2"].value
+    assert "No scaling" in wb["Scaling"]["A2"].value
+    fins = wb["Fins"]
+    assert _header_map(fins)["cl_sandia"] > 0
+    assert fins.max_row > 30  # the runs, then the per-speed curves below
+
+
+def test_workbook_provenance_lists_inputs_with_sha256(days):
+    day, out = days["hull"]
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Provenance"]
+    values = [c.value for row in ws.iter_rows() for c in row if c.value is not None]
+    for path, sha in day.inputs.items():
+        assert path in values and sha in values
+
+
+# ------------------------------------------------------------------------------------ PDF
+def _expected_pages(day) -> int:
+    n_figs = len(figures.available_figures(day))
+    n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
+    return 2 + n_figs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
+
+
+def test_hull_pdf_pages_and_sections(days):
+    day, out = days["hull"]
+    reader = PdfReader(out / "report.pdf")
+    assert len(reader.pages) == _expected_pages(day)
+    # title, summary, added mass, damping, scaling, quality, 42 runs on 4 appendix pages
+    assert len(reader.pages) == 10
+    text = [p.extract_text() for p in reader.pages]
+    for section in ("Summary", "Added mass", "Damping", "Scaling", "Quality", "Appendix"):
+        assert any(section in t for t in text[1:]), section
+    assert "Fins" not in " ".join(text)
+    assert REPORT_DATE in text[0]
+    assert "X_udot" in text[1] or "−0.01" in text[1]
+    all_text = " ".join(text)
+    assert f"run {DAMAGED_RUN}" in all_text and "rejected" in all_text
+
+
+def test_fin_pdf_has_no_hull_pages(days):
+    day, out = days["fin"]
+    reader = PdfReader(out / "report.pdf")
+    assert len(reader.pages) == _expected_pages(day)
+    assert len(reader.pages) == 2 + 2 + 1 + math.ceil(len(day.runs) / 12)
+    text = " ".join(p.extract_text() for p in reader.pages)
+    assert "Fins" in text and "Quality" in text
+    assert "Added mass" not in text and "Damping" not in text
+    assert "not given" in reader.pages[0].extract_text()
+
+
+def test_pdf_metadata_and_reproducible(days, tmp_path):
+    day, out = days["hull"]
+    meta = PdfReader(out / "report.pdf").metadata
+    assert meta["/Author"] == "towtank"
+    assert day.protocol.name in meta["/Title"]
+    assert meta["/CreationDate"].startswith("D:20240521")
+    again = pdf.write_pdf(day, tmp_path)
+    digest = [hashlib.sha256(p.read_bytes()).hexdigest() for p in (out / "report.pdf", again)]
+    assert digest[0] == digest[1]
+    fin_meta = PdfReader(days["fin"][1] / "report.pdf").metadata
+    assert "/CreationDate" not in fin_meta  # no date known: none invented
+
+
+def test_report_date_order(days):
+    day, _ = days["fin"]
+    assert pdf.report_date(day) == (None, "not given")
+    dated = replace(day, report_date="2023-01-02")
+    assert pdf.report_date(dated)[0] == "2023-01-02"
+    sheet = day.sheet.copy()
+    sheet["date"] = ["2022-03-04"] * (len(sheet) - 1) + ["2022-03-05"]
+    assert pdf.report_date(replace(day, sheet=sheet))[0] == "2022-03-05"
+
+
+# -------------------------------------------------------------------------------- figures
+def test_figures_written(days):
+    for name, expected in (("hull", {"added_mass", "damping", "scaling"}),
+                           ("fin", {"fin_forces", "fin_coefficients"})):
+        _, out = days[name]
+        pngs = {p.stem: p for p in (out / "figures").glob("*.png")}
+        assert set(pngs) == expected
+        for p in pngs.values():
+            assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_damping_figure_draws_the_stored_fit(days):
+    day, _ = days["hull"]
+    dm = day.hull.fit.damping
+    fig = figures.fig_damping(day)
+    ax = fig.axes[0]
+    line = next(ln for ln in ax.get_lines() if ln.get_label().startswith("fit"))
+    a = np.radians(line.get_xdata())
+    np.testing.assert_allclose(line.get_ydata(), dm.params @ np.vstack([a * a, a, 1 + 0 * a]))
+    # change the stored parameters: the figure follows them (nothing is refitted)
+    moved = copy.deepcopy(day)
+    moved.hull.fit.damping.params = dm.params + np.array([0.0, 0.0, 0.01])
+    line2 = next(ln for ln in figures.fig_damping(moved).axes[0].get_lines()
+                 if ln.get_label().startswith("fit"))
+    np.testing.assert_allclose(line2.get_ydata(), line.get_ydata() + 0.01)
+
+
+def test_report_stage_does_not_refit(days, tmp_path, monkeypatch):
+    import statsmodels.api as sm
+
+    from towtank import fins, fit, similarity
+
+    def boom(*args, **kwargs):
+        raise AssertionError("the report stage must not fit anything")
+
+    for mod, name in ((fit, "fit_cd_alpha"), (fit, "joint_regression"), (fit, "fit_hull"),
+                      (fit, "curve_difference"), (fit, "fit_added_mass"), (sm, "OLS"),
+                      (sm, "WLS"), (np, "polyfit"), (np.linalg, "lstsq"),
+                      (fins, "fin_curves"), (fins, "fin_table"), (similarity, "form_factor"),
+                      (similarity, "scaling_table")):
+        monkeypatch.setattr(mod, name, boom)
+    for name in ("hull", "fin"):
+        day, _ = days[name]
+        out = write_outputs(day, tmp_path / name)
+        assert (out / "report.pdf").stat().st_size > 10_000
+        assert (out / "report.xlsx").exists()
+
+
+def test_run_thumbnail_shades_the_phases(days):
+    from matplotlib.figure import Figure
+
+    day, _ = days["hull"]
+    red = day.reductions[13]
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax2 = figures.run_thumbnail(ax, red)
+    spans = [p for p in ax2.patches]
+    assert len(spans) == sum(w is not None for w in red.windows.values())
+    assert len(ax.get_lines()) == 1 and len(ax2.get_lines()) == 2  # speed; drag and lift
+    assert ax.get_xlabel() == "$t$ [s]"
+
+
+def test_write_outputs_timing_is_reasonable(days, tmp_path):
+    import time
+
+    day, _ = days["hull"]
+    t0 = time.perf_counter()
+    write_outputs(day, tmp_path / "timed")
+    assert time.perf_counter() - t0 < 60  # generous: a loaded CI machine; ~5 s on a quiet one
+
+
+def test_math_symbol():
+    assert figures.math_symbol("X_udot") == r"$X_{\dot u}$"
+    assert figures.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
+    assert figures.sci(2.7e5) == "2.7×10⁵"
+    assert Path(pdf.__file__).name == "pdf.py"

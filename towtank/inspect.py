@@ -1,0 +1,180 @@
+"""``towtank inspect``: a quick look at one run file.
+
+Reads the file (with the protocol's [channels] and [processing] when given, else canonical
+channel names and default processing), reduces it exactly as the day's pipeline would but
+without a sting tare, prints the phases, the steady means, the acceleration, zero and drift,
+the sample rate and any notes, and writes a PNG of speed and forces with the phases shaded.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TextIO
+
+from towtank.errors import RunError
+from towtank.reduce import RunReduction
+
+EXIT_OK, EXIT_RUN_ERROR = 0, 1
+
+PHASE_NAMES = {
+    "still_pre": "zero (still)",
+    "accel": "acceleration",
+    "steady": "steady",
+    "decel": "deceleration",
+    "still_post": "still after",
+}
+RUN_EXTENSIONS = (".gz", ".csv", ".tdms", ".txt")
+
+
+def plot_name(runfile: str | Path) -> str:
+    """``run_020.csv.gz`` → ``run_020.png`` (the run file's name without its extensions)."""
+    name = Path(runfile).name
+    changed = True
+    while changed:
+        changed = False
+        for ext in RUN_EXTENSIONS:
+            if name.lower().endswith(ext) and len(name) > len(ext):
+                name = name[: -len(ext)]
+                changed = True
+    return f"{name}.png"
+
+
+def _fmt(x: float, unit: str, digits: int = 4) -> str:
+    return "–" if x != x else f"{x:+.{digits}f} {unit}".replace("+", " ", 1)
+
+
+def summary_lines(red: RunReduction, columns: tuple[str, ...] = ()) -> list[str]:
+    """The printed account of one reduced run (phases, means, acceleration, zero, drift)."""
+    lines = [
+        f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
+        + (f"; columns: {', '.join(columns)}" if columns else ""),
+        "phases [s]:",
+    ]
+    for key, label in PHASE_NAMES.items():
+        w = red.windows.get(key)
+        text = f"{w[0]:7.2f} – {w[1]:7.2f}" if w is not None else "    not found"
+        extra = f"   ({red.window_source})" if key == "steady" else ""
+        lines.append(f"  {label:<14s}{text}{extra}")
+    lines += [
+        "steady means (zero and drift removed, no tare):",
+        f"  speed  {_fmt(red.speed_mean, 'm/s')}   (s.d. {red.speed_std:.4f} m/s)",
+        f"  drag   {_fmt(red.drag_mean_raw, 'N')}   (s.d. {red.drag_std:.4f} N)",
+    ]
+    if red.has_lift:
+        lines.append(f"  lift   {_fmt(red.lift_mean_raw, 'N')}")
+    lines.append(f"acceleration  {_fmt(red.accel_mean, 'm/s²', 3)}   "
+                 "(mean over the constant-acceleration window)")
+    zero = f"drag {_fmt(red.zero_drag, 'N')}"
+    drift = f"drag {_fmt(red.drift_drag, 'N')}"
+    if red.has_lift:
+        zero += f", lift {_fmt(red.zero_lift, 'N')}"
+        drift += f", lift {_fmt(red.drift_lift, 'N')}"
+    lines += [f"zero          {zero}", f"drift         {drift}   (end minus start)"]
+    if red.notes:
+        lines.append("notes:")
+        lines += [f"  - {n}" for n in red.notes]
+    else:
+        lines.append("notes: none")
+    return lines
+
+
+def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - (channels, Processing)
+    from towtank.protocol import Processing, load_protocol
+
+    if protocol_path is None:
+        return {}, Processing()
+    protocol = load_protocol(protocol_path, check_paths=False)
+    return protocol.channels, protocol.processing
+
+
+def _same_folder(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
+
+
+def inspect_run(
+    runfile: str | Path,
+    protocol_path: str | Path | None = None,
+    png: str | Path | None = None,
+    *,
+    out: TextIO | None = None,
+    err: TextIO | None = None,
+) -> int:
+    """Print one run's phases and means and write its plot; the ``towtank inspect`` command.
+
+    Parameters
+    ----------
+    runfile : path
+        The run file (.csv, .csv.gz or .tdms).
+    protocol_path : path, optional
+        A protocol whose [channels] and [processing] apply; default canonical channel names
+        and default processing.
+    png : path, optional
+        Where to write the plot; default ``<run file name without extensions>.png`` in the
+        current folder. The plot is never written into the run file's own folder.
+    out, err : text streams, optional
+        Where to print (default stdout and stderr).
+
+    Returns
+    -------
+    int
+        0, or 1 when the run cannot be read or reduced (one sentence on ``err`` says why) or
+        the plot would land beside the raw data.
+    """
+    out = out or sys.stdout
+    err = err or sys.stderr
+    from towtank.ingest import load_run
+    from towtank.reduce import reduce_run
+
+    runfile = Path(runfile)
+    channels, p = _settings(protocol_path)
+    try:
+        raw = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
+                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike)
+        red = reduce_run(raw, p, run=0, file=runfile.name)
+    except RunError as exc:
+        reason = exc.reason.rstrip(".")
+        head = "" if runfile.name in reason else f"{runfile.name}: "
+        print(f"towtank: {head}{reason}.", file=err)
+        return EXIT_RUN_ERROR
+    for line in summary_lines(red, raw.columns):
+        print(line, file=out)
+
+    target = Path(png) if png is not None else Path.cwd() / plot_name(runfile)
+    if _same_folder(target.parent, runfile.parent):
+        msg = (f"the plot is not written: {target} would lie beside the raw data; "
+               "give --png with a path in another folder.")
+        if png is not None:
+            print(f"towtank: {msg}", file=err)
+            return EXIT_RUN_ERROR
+        print(f"plot: {msg}", file=out)
+        return EXIT_OK
+    write_plot(red, target, protocol_path)
+    print(f"plot: {target}", file=out)
+    return EXIT_OK
+
+
+def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None) -> Path:
+    """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
+    from towtank.report.figures import fig_run
+
+    title = f"{red.file}: speed and forces (zero and drift removed, no tare)"
+    note = (f"steady: U = {red.speed_mean:.4f} m/s, D = {red.drag_mean_raw:.4f} N"
+            + (f", L = {red.lift_mean_raw:.4f} N" if red.has_lift else "")
+            + (f";  acceleration {red.accel_mean:.3f} m/s²" if red.accel_mean == red.accel_mean
+               else "")
+            + f";  {red.fs:g} Hz"
+            + (f";  settings of {Path(protocol_path).name}" if protocol_path else
+               ";  canonical channels, default processing"))
+    fig = fig_run(red, title, note)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import matplotlib as mpl
+
+    from towtank.report import style
+
+    with mpl.rc_context(style.rc()):
+        fig.savefig(path, dpi=style.PNG_DPI, facecolor="white", metadata={"Software": None})
+    return path

@@ -1,0 +1,809 @@
+"""report.pdf: the day's printed report, laid out like a towing-tank test report.
+
+Pages (A4 portrait), in order:
+
+1. title page: campaign, model, fin, test date, program version, contents;
+2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
+   tables where the day has them;
+3. figure pages, one section each where the day has data: "Added mass", "Damping", "Fins",
+   "Scaling" (:mod:`towtank.report.figures`);
+4. quality: rejected and void runs, warnings, fit diagnostics (continued over more pages when
+   long);
+5. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
+
+Only matplotlib's :class:`~matplotlib.backends.backend_pdf.PdfPages` is used. The metadata's
+CreationDate is fixed from the report date so the same day gives the same file.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import re
+import struct
+import textwrap
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import matplotlib as mpl
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+
+from towtank import __version__
+from towtank.report import figures, style
+
+if TYPE_CHECKING:
+    from towtank.pipeline import DayResult
+
+PAGE_W, PAGE_H = style.PAGE_SIZE
+MARGIN_IN = 0.6  # left and right page margin [in]
+THUMB_COLS, THUMB_ROWS = 3, 4
+THUMBS_PER_PAGE = THUMB_COLS * THUMB_ROWS
+DIFF_HIGHLIGHT_PCT = 10.0  # |diff %| above which a coefficient is highlighted
+
+
+
+# ------------------------------------------------------------------------------ test date
+def _iso(value: Any) -> str | None:
+    """A date-like value as YYYY-MM-DD, or None."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return None
+    ts = pd.to_datetime(str(value).strip(), errors="coerce")
+    return None if ts is pd.NaT or pd.isna(ts) else ts.strftime("%Y-%m-%d")
+
+
+def _gzip_mtime(path: Path) -> str | None:
+    """The modification time stored in a gzip header (0 = not stored), as a date."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(10)
+    except OSError:
+        return None
+    if len(head) < 10 or head[:2] != b"\x1f\x8b":
+        return None
+    (mtime,) = struct.unpack("<I", head[4:8])
+    if mtime == 0:
+        return None
+    return dt.datetime.fromtimestamp(mtime, dt.UTC).strftime("%Y-%m-%d")
+
+
+def _tdms_date(path: Path) -> str | None:
+    """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
+    try:
+        from nptdms import TdmsFile
+
+        meta = TdmsFile.read_metadata(str(path))
+        objs = [meta] + list(meta.groups())
+        objs += [c for g in meta.groups() for c in g.channels()]
+    except Exception:  # noqa: BLE001 - a date is optional; a damaged file just has none
+        return None
+    dates = []
+    for obj in objs:
+        for value in getattr(obj, "properties", {}).values():
+            if isinstance(value, np.datetime64 | dt.datetime):
+                iso = _iso(value)
+                if iso and iso > "1904-01-01":
+                    dates.append(iso)
+    return max(dates) if dates else None
+
+
+def date_from_inputs(day: DayResult) -> str | None:
+    """The newest date recorded in the inputs themselves, or None.
+
+    Looked for, in this order: a ``date`` or ``test_date`` column of the run sheet; the
+    timestamps stored inside the run files (the gzip header of .csv.gz files, datetime
+    properties of TDMS files). File-system times are never used: they change with a copy.
+    """
+    sheet = day.sheet
+    for col in ("test_date", "date"):
+        if col in sheet.columns:
+            dates = [d for d in (_iso(v) for v in sheet[col]) if d]
+            if dates:
+                return max(dates)
+    data_dir = day.protocol.campaign.data_dir
+    dates = []
+    for red in day.reductions.values():
+        path = data_dir / red.file
+        name = path.name.lower()
+        if name.endswith(".gz"):
+            d = _gzip_mtime(path)
+        elif name.endswith(".tdms"):
+            d = _tdms_date(path)
+        else:
+            d = None
+        if d:
+            dates.append(d)
+    return max(dates) if dates else None
+
+
+def report_date(day: DayResult) -> tuple[str | None, str]:
+    """The test date printed in the report and where it comes from.
+
+    ``day.report_date`` (the command line's --date), then the protocol's [report] date or
+    [campaign] test_date, then :func:`date_from_inputs`; (None, "not given") otherwise.
+    """
+    if day.report_date:
+        return str(day.report_date), "given on the command line"
+    p = day.protocol
+    report = getattr(p, "report", None)
+    if report is not None and getattr(report, "date", None):
+        return str(report.date), "protocol [report] date"
+    if getattr(p.campaign, "test_date", None):
+        return str(p.campaign.test_date), "protocol [campaign] test_date"
+    found = date_from_inputs(day)
+    if found:
+        return found, "newest date recorded in the run sheet or run files"
+    return None, "not given"
+
+
+def creation_date(date: str | None) -> dt.datetime | None:
+    """The PDF's CreationDate: midnight UTC of the report date (None if there is none)."""
+    iso = _iso(date) if date else None
+    if iso is None:
+        return None
+    return dt.datetime.strptime(iso, "%Y-%m-%d").replace(tzinfo=dt.UTC)
+
+
+# ------------------------------------------------------------------------------ page plan
+@dataclass
+class Page:
+    """One page of the report: its kind, section title and what it draws."""
+
+    kind: str  # title | summary | figure | quality | thumbs
+    section: str
+    payload: Any = None
+    subtitle: str = ""
+    number: str = ""  # section number: 1, 2, ... in order of appearance; "A" the appendix
+
+
+@dataclass
+class Flow:
+    """Text laid out top-down over as many pages as it needs (for the quality section)."""
+
+    items: list[tuple[str, str]] = field(default_factory=list)
+
+    def h(self, text: str) -> None:
+        self.items.append(("h", text))
+
+    def p(self, text: str) -> None:
+        self.items.append(("p", text))
+
+    def li(self, text: str) -> None:
+        self.items.append(("li", text))
+
+    def mono(self, text: str) -> None:
+        self.items.append(("mono", text))
+
+    def gap(self) -> None:
+        self.items.append(("gap", ""))
+
+
+LINE_IN = {"h": 0.30, "p": 0.165, "li": 0.165, "mono": 0.15, "gap": 0.1}
+WRAP = {"p": 112, "li": 108, "mono": 118}
+
+
+def _flow_groups(flow: Flow) -> list[list[tuple[str, str]]]:
+    """The flow's items as groups of single lines (wrapped; list items with a hanging indent).
+
+    A group (one paragraph, list item or table line; a heading with the group after it) is
+    kept on one page when it fits on one.
+    """
+    groups: list[list[tuple[str, str]]] = []
+    for kind, text in flow.items:
+        if kind == "p":
+            lines = [("p", line) for line in textwrap.wrap(text, WRAP["p"]) or [""]]
+        elif kind == "li":
+            wrapped = textwrap.wrap(text, WRAP["li"], initial_indent="•  ",
+                                    subsequent_indent="   ") or ["•"]
+            lines = [("li", line) for line in wrapped]
+        elif kind == "mono":
+            lines = [("mono", line[: WRAP["mono"]]) for line in text.split("\n")]
+        else:
+            lines = [(kind, text)]
+        if groups and groups[-1][-1][0] == "h":
+            groups[-1].extend(lines)  # a heading stays with what follows it
+        else:
+            groups.append(lines)
+    return groups
+
+
+def _height(lines: list[tuple[str, str]]) -> float:
+    return sum(LINE_IN[kind] for kind, _ in lines)
+
+
+def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
+    """Split the flow into pages of ``height_in``, keeping each group together if it fits."""
+    pages: list[list[tuple[str, str]]] = [[]]
+    used = 0.0
+    for group in _flow_groups(flow):
+        need = _height(group)
+        if used + need > height_in and pages[-1] and need <= height_in:
+            pages.append([])
+            used = 0.0
+        for line in group:  # a group taller than a page flows on line by line
+            if used + LINE_IN[line[0]] > height_in and pages[-1]:
+                pages.append([])
+                used = 0.0
+            if not pages[-1] and line[0] == "gap":
+                continue
+            pages[-1].append(line)
+            used += LINE_IN[line[0]]
+    return pages
+
+
+QUALITY_HEIGHT_IN = PAGE_H - figures.PAGE_HEADER_IN - figures.PAGE_FOOTER_IN - 0.6
+
+
+def quality_flow(day: DayResult) -> Flow:
+    """The quality section's content: run status, warnings, fit diagnostics, run notes."""
+    f = Flow()
+    runs = day.runs
+    counts = runs["status"].value_counts()
+    f.h("Run status")
+    f.p(f"{len(runs)} runs in the sheet: {int(counts.get('ok', 0))} ok, "
+        f"{int(counts.get('rejected', 0))} rejected by the program, "
+        f"{int(counts.get('void', 0))} voided by the operator.")
+    bad = runs[runs["status"] != "ok"]
+    if len(bad):
+        for r in bad.itertuples():
+            reason = short_reason(int(r.run), r.file, r.reason)
+            f.li(f"run {int(r.run)} ({r.config}, α = {_num(r.angle_deg)}°, {r.file}): "
+                 f"{r.status} — {reason}")
+    else:
+        f.p("Every run of the sheet was used.")
+    f.gap()
+    f.h("Warnings")
+    if day.warnings:
+        for w in day.warnings:
+            f.li(w)
+    else:
+        f.p("None.")
+    _diagnostics_flow(f, day)
+    notes = runs[runs["notes"].fillna("").astype(str).str.len() > 0]
+    f.gap()
+    f.h("Notes on individual runs")
+    if len(notes):
+        for r in notes.itertuples():
+            f.li(f"run {int(r.run)}: {r.notes}")
+    else:
+        f.p("No run needed a repair (gaps, spikes, dropped rows) or a cross-check note.")
+    return f
+
+
+def _diagnostics_flow(f: Flow, day: DayResult) -> None:
+    hf = day.hull.fit if day.hull is not None else None
+    if hf is None:
+        return
+    f.gap()
+    f.h("Fit diagnostics")
+    for sym, am in hf.added_mass.items():
+        est = am.estimate
+        f.li(f"{sym}: joint regression {est.value:.5g} kg [{est.ci_low:.5g}, {est.ci_high:.5g}] "
+             f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
+             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}.")
+        levels = (am.curve_difference or {}).get("levels") or []
+        if levels:
+            f.mono("     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
+                   "   X [kg]")
+            for lv in levels:
+                lo, hi = lv["speed_range"]
+                f.mono(f"     {lv['accel']:8.3f}   {lo:6.3f} – {hi:6.3f}     {lv['n']:7d}   "
+                       f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
+        resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
+        f.p(f"Mean residual of the joint regression by run [mN]: {resid}.")
+    dm = hf.damping
+    if dm is not None:
+        t = dm.runs
+        worst = t.iloc[int(np.argmax(np.abs(t["student"].to_numpy())))]
+        f.li(f"C_D(α) fit over {len(t)} runs ({dm.dof} residual d.o.f.): largest |studentized "
+             f"residual| {abs(worst['student']):.2f} (run {int(worst['run'])}), largest Cook's "
+             f"distance {t['cooks'].max():.2f} (run {int(t.loc[t['cooks'].idxmax(), 'run'])}); "
+             + (f"outliers: runs {', '.join(map(str, dm.outliers))}." if dm.outliers
+                else "no outliers."))
+    rep = hf.repeats
+    if rep is not None and len(rep):
+        f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats.")
+        f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
+               "drag s.d. [mN]")
+        for r in rep.itertuples():
+            f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
+                   f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
+    if getattr(hf, "lift_slope", None):
+        s, lo, hi = hf.lift_slope
+        f.li(f"Hull lift slope dC_L/dα = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
+
+
+def short_reason(run: Any, file: Any, reason: Any) -> str:
+    """A run's reason without the "run N: file:" prefix the pipeline puts in front of it."""
+    text = str(reason) if isinstance(reason, str) and reason else "no reason given"
+    for prefix in (f"run {run}:", f"{file}:"):
+        if text.startswith(prefix):
+            text = text[len(prefix):].strip()
+    return text
+
+
+def _num(x: Any, digits: int = 4) -> str:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    return "–" if not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+def page_plan(day: DayResult) -> list[Page]:
+    """Every page of the report, in order (known before anything is drawn)."""
+    pages = [Page("title", "Title"), Page("summary", "Summary")]
+    for name, section, func in figures.available_figures(day):
+        pages.append(Page("figure", section, (name, func)))
+    q = _paginate(quality_flow(day), QUALITY_HEIGHT_IN)
+    for i, chunk in enumerate(q):
+        pages.append(Page("quality", "Quality", chunk,
+                          subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
+    runs = list(day.runs["run"].astype(int))
+    for k in range(0, len(runs), THUMBS_PER_PAGE):
+        chunk = runs[k:k + THUMBS_PER_PAGE]
+        pages.append(Page("thumbs", "Appendix", chunk,
+                          subtitle=f"run thumbnails, runs {chunk[0]}–{chunk[-1]}"))
+    numbers: dict[str, str] = {}
+    for page in pages[1:]:
+        if page.section not in numbers:
+            numbers[page.section] = ("A" if page.kind == "thumbs"
+                                     else str(len([n for n in numbers.values() if n != "A"]) + 1))
+        page.number = numbers[page.section]
+    return pages
+
+
+# --------------------------------------------------------------------------------- drawing
+def _page() -> Figure:
+    return Figure(figsize=style.PAGE_SIZE)
+
+
+def _y(inches_from_top: float) -> float:
+    return 1 - inches_from_top / PAGE_H
+
+
+def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) -> None:
+    """Section header, rule and footer of a page."""
+    x0, x1 = MARGIN_IN / PAGE_W, 1 - MARGIN_IN / PAGE_W
+    if page.kind != "title":
+        head = f"{page.number}  {page.section}" if page.number else page.section
+        fig.text(x0, _y(0.5), head, fontsize=14, fontweight="bold", va="baseline")
+        if page.subtitle:
+            fig.text(x1, _y(0.5), page.subtitle, fontsize=8.5, ha="right", va="baseline",
+                     color="#555555")
+        fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
+    fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
+    fig.text(x0, 0.25 / PAGE_H, f"{day.protocol.name}", fontsize=7, color="#555555")
+    fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
+             fontsize=7, color="#555555", ha="right")
+
+
+def _water_text(day: DayResult) -> str:
+    w = day.protocol.water
+    ok = day.runs[day.runs["status"] == "ok"]
+    rho = ok["rho"].dropna()
+    nu = ok["nu"].dropna()
+    temps = day.runs["water_temp_C"].dropna()
+    t = (f"{temps.min():.1f}–{temps.max():.1f} °C" if len(temps) and temps.min() != temps.max()
+         else f"{w.temperature_C:g} °C")
+    out = f"{w.type} water, {t}"
+    if len(rho):
+        out += (f"; ρ = {rho.mean():.2f} kg/m³, ν = {figures.sci(nu.mean(), 4)} m²/s "
+                "(mean of the runs)")
+    return out
+
+
+def _model_text(day: DayResult) -> str:
+    m = day.protocol.model
+    if m is None:
+        return "none (no hull runs)"
+    parts = [m.name or "model", f"L = {m.length_m:g} m"]
+    if m.diameter_m is not None:
+        parts.append(f"D = {m.diameter_m:g} m")
+    parts.append(f"m = {m.mass_kg:g} kg")
+    if m.scale is not None:
+        parts.append(f"scale λ = {m.scale:g}")
+    return ", ".join(parts)
+
+
+def _fin_text(day: DayResult) -> str | None:
+    fin = day.protocol.fin
+    if fin is None:
+        return None
+    return (f"{fin.section}, chord {fin.chord_m:g} m, span {fin.span_m:g} m"
+            + (f", effective aspect ratio {day.fins.aspect_ratio:.3g}" if day.fins else ""))
+
+
+def _counts(day: DayResult) -> str:
+    c = day.runs["status"].value_counts()
+    return (f"{len(day.runs)} in the sheet: {int(c.get('ok', 0))} ok, "
+            f"{int(c.get('rejected', 0))} rejected, {int(c.get('void', 0))} void")
+
+
+def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
+    date, source = report_date(day)
+    x0 = MARGIN_IN / PAGE_W + 0.03
+    fig.text(x0, _y(1.6), "Towing-tank test report", fontsize=24, fontweight="bold")
+    fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
+    fig.text(x0, _y(2.4), textwrap.fill(day.protocol.name, 48), fontsize=16, va="top")
+    rows = [
+        ("Model", _model_text(day) if day.protocol.model is not None else None),
+        ("Fin", _fin_text(day)),
+        ("Water", _water_text(day)),
+        ("Test date", date or "not given"),
+        ("Runs", _counts(day)),
+        ("Protocol", str(day.protocol.path.name)),
+        ("Program", f"towtank {__version__}"),
+    ]
+    y = 3.7
+    for label, value in rows:
+        if value is None:
+            continue
+        wrapped = textwrap.fill(value, 70)
+        fig.text(x0, _y(y), label, fontsize=10, fontweight="bold", va="top")
+        fig.text(x0 + 1.5 / PAGE_W, _y(y), wrapped, fontsize=10, va="top")
+        y += 0.3 + 0.19 * wrapped.count("\n")
+    if date and source != "given on the command line":
+        fig.text(x0 + 1.5 / PAGE_W, _y(y - 0.05), f"(test date: {source})", fontsize=7.5,
+                 color="#666666", va="top")
+        y += 0.2
+    y += 0.5
+    fig.text(x0, _y(y), "Contents", fontsize=12, fontweight="bold", va="top")
+    y += 0.4
+    seen: dict[str, tuple[int, str]] = {}
+    for i, p in enumerate(plan, start=1):
+        if p.kind != "title" and p.section not in seen:
+            seen[p.section] = (i, p.number)
+    for section, (number, num) in seen.items():
+        name = {"Appendix": "Appendix: run thumbnails"}.get(section, section)
+        fig.text(x0, _y(y), num, fontsize=10, va="top")
+        fig.text(x0 + 0.35 / PAGE_W, _y(y), name, fontsize=10, va="top")
+        fig.text(1 - x0 - 0.05, _y(y), str(number), fontsize=10, va="top", ha="right")
+        y += 0.27
+    if day.hull is None:
+        return
+    fig.text(x0, _y(PAGE_H - 1.0), textwrap.fill(
+        "Model-scale values are SI with SNAME signs (added mass and damping negative); prime "
+        "values divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %. Method: "
+        "the SUT-2 model test report; see METHOD.md of the program.", 100),
+        fontsize=7.5, color="#555555", va="bottom")
+
+
+def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
+           col_widths: list[float], *, fontsize: float = 7.5, row_in: float = 0.22,
+           highlight: dict[tuple[int, int], str] | None = None,
+           align: list[str] | None = None) -> float:
+    """A matplotlib table across the page; returns the inches used."""
+    n = len(rows) + 1
+    height = n * row_in
+    x0 = MARGIN_IN / PAGE_W
+    ax = fig.add_axes((x0, _y(top_in + height), 1 - 2 * x0, height / PAGE_H))
+    ax.set_axis_off()
+    total = sum(col_widths)
+    tab = ax.table(cellText=rows, colLabels=header, colWidths=[w / total for w in col_widths],
+                   bbox=(0, 0, 1, 1), cellLoc="right")
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(fontsize)
+    for (r, c), cell in tab.get_celld().items():
+        cell.set_linewidth(0.4)
+        cell.set_edgecolor("#bbbbbb")
+        cell.PAD = 0.04
+        if align is not None:
+            cell.get_text().set_horizontalalignment(align[c])
+            cell._loc = align[c]  # noqa: SLF001 - keeps the alignment when the table redraws
+        if r == 0:
+            cell.set_facecolor("#" + style.XL_HEADER_FILL)
+            cell.get_text().set_fontweight("bold")
+        elif highlight and (r - 1, c) in highlight:
+            cell.set_facecolor(highlight[(r - 1, c)])
+        elif r % 2 == 0:
+            cell.set_facecolor("#f7f7f7")
+    return height
+
+
+def _v(x: Any, fmt: str = ".4g", scale: float = 1.0) -> str:
+    """A table number: format, true minus sign, '–' for missing."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return "–"
+    if not math.isfinite(v):
+        return "–"
+    return format(v * scale, fmt).replace("-", "\u2212")
+
+
+def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[str],
+                                              dict[tuple[int, int], str]]:
+    """Header, rows, method footnotes and highlighted cells of the summary's table.
+
+    A coefficient equal to another by the hull's symmetry shows that symbol as its method
+    ("= Y_vdot") instead of a footnote.
+    """
+    coef = day.hull.coefficients
+    header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
+              "diff %", "prototype", "method"]
+    methods: list[str] = []
+    rows, hl = [], {}
+    for i, r in enumerate(coef.to_dict("records")):
+        m = str(r.get("method", ""))
+        mirror = re.match(r"=\s*(\S+)", m)
+        if mirror:
+            ref = "= " + figures.math_symbol(mirror.group(1))
+        else:
+            if m not in methods:
+                methods.append(m)
+            ref = f"[{methods.index(m) + 1}]"
+        diff = r.get("diff_pct", math.nan)
+        rows.append([
+            figures.math_symbol(r["symbol"]), _v(r["value"]), r["unit"],
+            f"{_v(r['ci_low'])} … {_v(r['ci_high'])}", _v(r["prime"], ".4g", 1e3),
+            _v(r.get("reference_prime"), ".4g", 1e3), _v(diff, "+.1f"),
+            _v(r.get("prototype_value")), ref,
+        ])
+        try:
+            if abs(float(diff)) > DIFF_HIGHLIGHT_PCT:
+                hl[(i, 6)] = "#ffe699"
+        except (TypeError, ValueError):
+            pass
+    return header, rows, methods, hl
+
+
+def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
+                fontsize: float = 7.5, color: str = "#333333", indent_in: float = 0.0) -> float:
+    wrapped = textwrap.fill(text, width)
+    x = (MARGIN_IN + indent_in) / PAGE_W
+    fig.text(x, _y(top_in), wrapped, fontsize=fontsize, va="top", color=color,
+             linespacing=1.3)
+    return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
+
+
+def _heading(fig: Figure, top_in: float, text: str) -> float:
+    fig.text(MARGIN_IN / PAGE_W, _y(top_in), text, fontsize=10.5, fontweight="bold", va="top")
+    return 0.3
+
+
+def _draw_summary(fig: Figure, day: DayResult) -> None:
+    date, _ = report_date(day)
+    y = 0.95
+    has_model = day.protocol.model is not None
+    facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
+             ("Fin", _fin_text(day)), ("Water", _water_text(day)),
+             ("Test date", date or "not given"), ("Runs", _counts(day)),
+             ("Reference", f"prime values of '{day.protocol.campaign.reference}'"
+              if day.hull is not None else None)]
+    for label, value in facts:
+        if value is None:
+            continue
+        fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), label, fontsize=8.5, fontweight="bold",
+                 va="baseline")
+        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), value, fontsize=8.5, va="baseline")
+        y += 0.21
+    y += 0.15
+    if day.hull is not None and len(day.hull.coefficients):
+        y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
+        header, rows, methods, hl = coefficient_rows(day)
+        y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.75, 0.55, 0.75, 0.65],
+                    highlight=hl, align=["center"] + ["right"] * 7 + ["center"],
+                    fontsize=7.8) + 0.1
+        notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
+        notes.append(f"Shaded: |diff %| > {DIFF_HIGHLIGHT_PCT:g} against the reference. "
+                     "Prototype: prime × ½ρ_p·L_p³ (added mass, kg) or × ½ρ_p·L_p² (kg/m).")
+        for n in notes:
+            y += _text_block(fig, y, n, width=125, fontsize=7)
+        for r in day.hull.coefficients.to_dict("records"):
+            if r.get("agreement") and not str(r.get("method", "")).startswith("="):
+                y += _text_block(fig, y, (
+                    f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
+                    f"{str(r['alt_method']).split(' (')[0]}; {r['agreement']}."), width=125,
+                    fontsize=7)
+        y += 0.2
+    elif day.protocol.model is not None:
+        y += _heading(fig, y, "Hull coefficients")
+        y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
+                         "(see the quality section).", fontsize=8.5) + 0.2
+    if day.fins is not None and len(day.fins.curves):
+        y += _heading(fig, y, "Fin: lift slope, stall and minimum drag per speed")
+        y += _fin_table(fig, y, day) + 0.2
+    if day.fins is not None and len(day.fins.table):
+        y += _fin_runs_table(fig, y, day) + 0.2
+    if day.scaling is not None:
+        y += _heading(fig, y, "Prototype resistance")
+        y += _scaling_table(fig, y, day)
+    if day.hull is None and day.fins is None and day.protocol.model is None:
+        _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
+                    fontsize=9)
+
+
+def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
+    c = day.fins.curves
+    header = [r"$U$ group [m/s]", "Re", "runs", r"$dC_L/d\alpha$ [1/rad]", "95 % interval",
+              "Sandia 2-D", "lifting line", "stall [deg]", r"$C_{L,max}$", r"$C_{D,min}$"]
+    rows = []
+    for r in c.to_dict("records"):
+        stall = _v(r["stall_angle_deg"], ".3g")
+        if r.get("stall_reached") is False:
+            stall = f"> {stall}"
+        lo, hi = _v(r["lift_slope_ci_low"], ".3f"), _v(r["lift_slope_ci_high"], ".3f")
+        rows.append([_v(r["speed_group"], ".2f"), figures.sci(r["re_mean"]), str(r["n_runs"]),
+                     _v(r["lift_slope"], ".3f"), "–" if lo == hi == "–" else f"{lo} … {hi}",
+                     _v(r["lift_slope_sandia_2d"], ".3f"), _v(r["lift_slope_3d"], ".3f"),
+                     stall, _v(r["cl_max"], ".3f"), _v(r["cd_min"], ".4f")])
+    used = _table(fig, y, header, rows, [1.0, 0.75, 0.45, 1.15, 1.1, 0.8, 0.8, 0.8, 0.65, 0.65])
+    used += 0.08 + _text_block(fig, y + used + 0.08, (
+        f"Effective aspect ratio {day.fins.aspect_ratio:.3g}, span efficiency "
+        f"{day.fins.oswald_e:.3g}. Stall '> x': C_L still rising at the largest angle tested. "
+        "Sandia 2-D and lifting line: the same straight-line fit through the 2-D section data "
+        "and the finite-span expectation at the group's mean Re."), width=125, fontsize=7)
+    ctrl = day.fins.control
+    if ctrl is not None and len(ctrl):
+        text = "Control derivatives: " + "; ".join(
+            f"{r.get('symbol', '')} = {_v(r.get('value'))} {r.get('unit', '')}".strip()
+            for r in ctrl.to_dict("records"))
+        used += _text_block(fig, y + used, text, width=125, fontsize=7)
+    return used
+
+
+def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
+    """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer."""
+    t = day.fins.table
+    used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
+    row_in = 0.19
+    room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - (y + used)
+    if (len(t) + 1) * row_in > room:
+        return used + _text_block(fig, y + used, f"{len(t)} fin runs: see fins.csv or the "
+                                  "Fins sheet of report.xlsx.", fontsize=8)
+    header = ["run", "α [deg]", "U [m/s]", "Re", r"$C_L$", r"$C_D$", r"$C_L$ 2-D",
+              r"$C_D$ 2-D", r"$C_L$ finite span", r"$C_D$ finite span"]
+    rows = [[str(int(r["run"])), _v(r["angle_deg"], "g"), _v(r["speed_mean"], ".3f"),
+             figures.sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
+             _v(r["cl_sandia"], ".4f"), _v(r["cd_sandia"], ".4f"), _v(r.get("cl_3d"), ".4f"),
+             _v(r.get("cd_3d"), ".4f")] for r in t.to_dict("records")]
+    return used + _table(fig, y + used, header, rows,
+                         [0.45, 0.55, 0.6, 0.75, 0.65, 0.65, 0.7, 0.7, 1.0, 1.0],
+                         row_in=row_in, fontsize=7.2)
+
+
+def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
+    sr = day.scaling
+    header = [r"$U_p$ [m/s]", r"$Re_p$", r"$Fn_p$", r"$U_m$ Froude [m/s]",
+              r"$U_m$ Reynolds [m/s]", r"$R_p$ Froude [N]", r"$R_p$ ITTC-57 [N]"]
+    rows = []
+    for r in sr.table.to_dict("records"):
+        froude = _v(r["drag_froude"], ".4g")
+        if not r.get("froude_in_tested_range", True):
+            froude += " *"
+        rows.append([_v(r["speed_prototype"], ".3g"), figures.sci(r["re_prototype"], 3),
+                     _v(r["fn_prototype"], ".3f"), _v(r["speed_model_froude"], ".3f"),
+                     _v(r["speed_model_reynolds"], ".3f"), froude,
+                     _v(r["drag_ittc57"], ".4g")])
+    used = _table(fig, y, header, rows, [0.8, 0.8, 0.6, 1.0, 1.1, 1.0, 1.0])
+    ff = sr.form_factor
+    note = ("* extrapolated beyond the tested model speeds. "
+            + (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} from {ff.n} runs. "
+               if ff is not None else "") + sr.statement)
+    return used + 0.08 + _text_block(fig, y + used + 0.08, note, width=125, fontsize=7)
+
+
+def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
+    y = 0.95
+    x0 = MARGIN_IN / PAGE_W
+    for kind, text in lines:
+        if kind == "h":
+            fig.text(x0, _y(y + 0.06), text, fontsize=10.5, fontweight="bold", va="top")
+        elif kind == "mono":
+            fig.text(x0, _y(y), text, fontsize=6.8, family="DejaVu Sans Mono", va="top",
+                     color="#222222")
+        elif kind in ("p", "li"):
+            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), text, fontsize=7.8,
+                     va="top", color="#222222")
+        y += LINE_IN[kind]
+
+
+def _thumb_title(row: dict[str, Any]) -> str:
+    head = f"run {int(row['run'])} · {row['config']} α = {_num(row['angle_deg'], 3)}°"
+    u = row.get("speed_mean")
+    if u is not None and isinstance(u, float) and math.isfinite(u):
+        head += f" · {u:.2f} m/s"
+    return head
+
+
+def _draw_thumbs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
+    by_run = {int(r["run"]): r for r in day.runs.to_dict("records")}
+    top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
+    bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
+    gs = fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.93, top=1 - top,
+                          bottom=bottom, hspace=0.5, wspace=0.55)
+    any_lift = False
+    for k, run in enumerate(run_ids):
+        ax = fig.add_subplot(gs[k // THUMB_COLS, k % THUMB_COLS])
+        row = by_run[run]
+        red = day.reductions.get(run)
+        title = _thumb_title(row)
+        if red is None or row["status"] != "ok":
+            reason = short_reason(run, row.get("file"), row.get("reason"))
+            ax.set_axis_off()
+            ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
+            ax.text(0.5, 0.5, textwrap.fill(f"{row['status']}: {reason}", 38), ha="center",
+                    va="center", fontsize=7, color="#7a0000" if row["status"] == "rejected"
+                    else "#555555", transform=ax.transAxes,
+                    bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc"})
+            continue
+        any_lift |= bool(red.has_lift)
+        ax2 = figures.run_thumbnail(ax, red, labels=False, linewidth=0.8)
+        ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
+        for a in (ax, ax2):
+            a.tick_params(labelsize=6, length=2, pad=1.5)
+            a.yaxis.set_major_locator(MaxNLocator(4))
+        ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
+        ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
+    legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
+    fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center", ncol=7,
+               fontsize=6.8, frameon=False, columnspacing=1.2, handlelength=1.6,
+               bbox_to_anchor=(0.5, legend_y))
+
+
+# ---------------------------------------------------------------------------------- writer
+def write_pdf(day: DayResult, folder: str | Path) -> Path:
+    """Write ``folder/report.pdf``.
+
+    Parameters
+    ----------
+    day : DayResult
+        The processed day.
+    folder : path
+        The output folder (the report writers' temporary folder).
+
+    Returns
+    -------
+    Path
+        The PDF written.
+    """
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    path = Path(folder) / "report.pdf"
+    plan = page_plan(day)
+    date, _ = report_date(day)
+    meta = {
+        "Title": f"{day.protocol.name}: towing-tank test report",
+        "Author": "towtank",
+        "Subject": "Hydrodynamic coefficients from towing-tank runs",
+        "Creator": f"towtank {__version__}",
+        "CreationDate": creation_date(date),
+        "ModDate": None,
+    }
+    with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:
+        for number, page in enumerate(plan, start=1):
+            fig = _render(day, page, plan)
+            _decorate(fig, day, page, number, len(plan))
+            pdf.savefig(fig)
+    return path
+
+
+def _render(day: DayResult, page: Page, plan: list[Page]) -> Figure:
+    if page.kind == "figure":
+        _name, func = page.payload
+        fig = func(day, page=True)
+        if fig is None:  # available_figures said yes: a stage changed under us
+            fig = _page()
+            _text_block(fig, 1.2, "No data for this figure.", fontsize=10)
+        return fig
+    fig = _page()
+    if page.kind == "title":
+        _draw_title(fig, day, plan)
+    elif page.kind == "summary":
+        _draw_summary(fig, day)
+    elif page.kind == "quality":
+        _draw_quality(fig, page.payload)
+    elif page.kind == "thumbs":
+        _draw_thumbs(fig, day, page.payload)
+    return fig
+
+
+__all__ = [
+    "creation_date", "date_from_inputs", "page_plan", "quality_flow", "report_date", "write_pdf",
+]
+
