@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.masks import runs_of_true
 from towtank.protocol import ChannelMap, channel_map
 
 REQUIRED_CHANNELS = ("time", "speed", "drag")
@@ -368,17 +369,6 @@ def read_columns(path: Path, data: bytes | None = None) -> tuple[dict[str, np.nd
 
 
 # ------------------------------------------------------------------------------ checks/repairs
-def _runs_of_true(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start indices and lengths of the runs of True in a boolean array."""
-    if mask.size == 0:
-        return np.array([], dtype=int), np.array([], dtype=int)
-    m = np.concatenate(([False], mask, [False])).astype(np.int8)
-    d = np.diff(m)
-    starts = np.flatnonzero(d == 1)
-    ends = np.flatnonzero(d == -1)
-    return starts, ends - starts
-
-
 def fill_gaps(
     x: np.ndarray,
     t: np.ndarray,
@@ -395,7 +385,7 @@ def fill_gaps(
     head = f"{file}: " if file else ""
     if nan.all():
         raise RunError(f"{head}the {name} channel holds no numbers")
-    starts, lengths = _runs_of_true(nan)
+    starts, lengths = runs_of_true(nan)
     worst = int(np.argmax(lengths))
     if lengths[worst] > max_gap_samples:
         i0, n = int(starts[worst]), int(lengths[worst])
@@ -865,7 +855,7 @@ def _load_run(
     if no_t.any():
         if np.count_nonzero(~no_t) < MIN_SAMPLES:
             raise RunError(f"{name}: the time channel holds no numbers")
-        starts, lengths = _runs_of_true(no_t)
+        starts, lengths = runs_of_true(no_t)
         tt = t[~no_t]
         dt_est = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
         gap_max = max(1, int(round(max_nan_gap_s / dt_est))) if dt_est > 0 else 1

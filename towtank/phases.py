@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.masks import close_gaps, longest_run
 
 PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
 
@@ -40,37 +41,6 @@ class Phases:
             w = getattr(self, name)
             out[name] = None if w is None else (float(t[w[0]]), float(t[w[1] - 1]))
         return out
-
-
-def runs_of_true(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start indices and lengths of the stretches of True in a boolean array."""
-    if mask.size == 0:
-        return np.array([], dtype=int), np.array([], dtype=int)
-    m = np.concatenate(([False], mask, [False])).astype(np.int8)
-    d = np.diff(m)
-    starts = np.flatnonzero(d == 1)
-    return starts, np.flatnonzero(d == -1) - starts
-
-
-def close_gaps(mask: np.ndarray, max_gap: int) -> np.ndarray:
-    """Fill stretches of False no longer than ``max_gap`` that lie between two True samples."""
-    if max_gap <= 0 or not mask.any():
-        return mask
-    out = mask.copy()
-    starts, lengths = runs_of_true(~mask)
-    for s, n in zip(starts, lengths, strict=True):
-        if n <= max_gap and s > 0 and s + n < mask.size:
-            out[s : s + n] = True
-    return out
-
-
-def longest_run(mask: np.ndarray) -> tuple[int, int] | None:
-    """[i0, i1) of the longest stretch of True (the first of equals)."""
-    starts, lengths = runs_of_true(mask)
-    if starts.size == 0:
-        return None
-    k = int(np.argmax(lengths))
-    return int(starts[k]), int(starts[k] + lengths[k])
 
 
 def _trim(window: tuple[int, int] | None, n_trim: int, min_len: int) -> tuple[int, int] | None:
