@@ -370,8 +370,9 @@ def run_bench(
     outs = workdir / "out"
     shutil.rmtree(outs, ignore_errors=True)
     # untimed run on a small campaign: interpreter, libraries and bytecode into the caches
+    # (its peak memory is the baseline: interpreter and libraries, hardly any data)
     tiny = build_campaign(workdir, pool, min(runs, 4), "warmup")
-    process(tiny["protocol"], outs / "warmup", jobs, tmp)
+    baseline = process(tiny["protocol"], outs / "warmup", jobs, tmp)
 
     log(f"campaign: {runs} runs, {csv_bytes / 1e6:.0f} MB of CSV at {fs:g} Hz; "
         f"jobs = {jobs}; measuring{f' (best of {repeat})' if repeat > 1 else ''} ...")
@@ -430,6 +431,15 @@ def run_bench(
     res["peak_rss_workers_mb"] = max(r["rss_workers_mb"] for r in everything)
     res["peak_rss_over_largest_file"] = _ratio(
         max(res["peak_rss_main_mb"], res["peak_rss_workers_mb"]), res["largest_file_mb"]
+    )
+    # above the baseline of a 4-run day (libraries), per MB of the largest run file
+    res["baseline_rss_main_mb"] = baseline["rss_main_mb"]
+    res["baseline_rss_workers_mb"] = baseline["rss_workers_mb"]
+    res["worker_rss_above_baseline_per_largest_file"] = _ratio(
+        res["peak_rss_workers_mb"] - baseline["rss_workers_mb"], res["largest_file_mb"]
+    )
+    res["main_rss_above_baseline_per_run_kb"] = _ratio(
+        1024.0 * (res["peak_rss_main_mb"] - baseline["rss_main_mb"]), runs + 1
     )
 
     scale_rows = {1: {"runs": runs, "csv_mb": res["csv_mb"], "cold_s": cold["seconds"],
@@ -511,6 +521,11 @@ def format_table(res: dict[str, Any]) -> str:
         f"  {'peak RSS: towtank process':<38}{res['peak_rss_main_mb']:8.0f} MB",
         f"  {'peak RSS: largest worker':<38}{res['peak_rss_workers_mb']:8.0f} MB   "
         f"largest run file {res['largest_file_mb']:.2f} MB",
+        f"  {'  above a 4-run day (libraries)':<38}"
+        f"main +{res['peak_rss_main_mb'] - res['baseline_rss_main_mb']:.0f} MB "
+        f"({res['main_rss_above_baseline_per_run_kb']:.0f} kB/run), worker "
+        f"+{res['peak_rss_workers_mb'] - res['baseline_rss_workers_mb']:.0f} MB "
+        f"({res['worker_rss_above_baseline_per_largest_file']:.1f}x the largest file)",
         "  scaling of the cold time:",
     ]
     for s, v in res["scales"].items():

@@ -12,9 +12,9 @@ Layout, built for campaigns of thousands of runs:
   sha256]; ``entries`` maps an entry name (sha256 prefix and settings key) to [pack, offset,
   length, crc32] of its pickled reduction.
 * ``runs/pack-*.bin`` -- pickled reductions back to back. New entries are gathered in memory and
-  written as one pack (with the index) every :data:`PACK_ENTRIES` entries and at :meth:`flush`,
-  instead of one file each; at most :data:`MAX_PACKS` packs are kept, beyond that they are
-  merged into one.
+  written as one pack (with the index) at :meth:`flush` and, while runs are being reduced, every
+  :data:`PACK_SECONDS` seconds (at least :data:`PACK_ENTRIES` entries), instead of one file
+  each; at most :data:`MAX_PACKS` packs are kept, beyond that they are merged into one.
 * ``runs/<entry>.pkl`` -- one entry per file, the layout of earlier versions; still read.
 
 Every file is written to a temporary name and renamed into place. A missing, truncated or
@@ -41,7 +41,8 @@ from towtank import __version__
 
 CACHE_FORMAT = 1  # of the entries and settings keys
 INDEX_FORMAT = 2  # of files.json
-PACK_ENTRIES = 64  # entries per pack written while runs are being reduced
+PACK_ENTRIES = 64  # a pack is written while runs are being reduced once this many wait
+PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interrupt loses little)
 MAX_PACKS = 16  # more packs than this are merged into one at flush
 ORPHAN_AGE_S = 3600.0  # unindexed packs older than this are removed when packs are merged
 
@@ -126,6 +127,7 @@ class RunCache:
         self._packs: dict[str, bytes | None] = {}  # pack name -> its bytes, read on first use
         self._real_dirs: dict[str, str] = {}
         self._dirty = False
+        self._last_write = time.monotonic()
 
     # ----------------------------------------------------------------------------- files
     def _stat(self, path: Path) -> tuple[str, os.stat_result] | None:
@@ -215,7 +217,8 @@ class RunCache:
         blob = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
         self._pending.append((self._name(sha, key), blob))
         self._dirty = True
-        if len(self._pending) >= PACK_ENTRIES:
+        if (len(self._pending) >= PACK_ENTRIES
+                and time.monotonic() - self._last_write >= PACK_SECONDS):
             self._write_pack()
             self._write_index()
 
@@ -234,6 +237,7 @@ class RunCache:
         _atomic_write(self._runs / pack, data)
         self._entries.update(locs)
         self._pending.clear()
+        self._last_write = time.monotonic()
 
     def _write_index(self) -> None:
         payload = {"format": INDEX_FORMAT, "files": self._files, "entries": self._entries}

@@ -17,6 +17,9 @@ TOP_LEVEL = {
     "startup_help_s", "parse_single_s", "parse_parallel_s", "cold_s", "cold_over_parse_single",
     "cold_over_parse_parallel", "rerun_s", "rerun_over_cold", "added_s", "added_over_cold",
     "peak_rss_main_mb", "peak_rss_workers_mb", "peak_rss_over_largest_file", "scales", "growth",
+    "baseline_rss_main_mb", "baseline_rss_workers_mb", "worker_rss_above_baseline_per_largest_file",
+    "main_rss_above_baseline_per_run_kb", "parse_single_cpu_s", "cold_cpu_s", "rerun_cpu_s",
+    "added_cpu_s", "repeat",
     "peak_rss_by_scale_mb", "status_cold", "status_added", "bench_rss_mb", "targets",
 }
 SCALE_FIELDS = {"runs", "csv_mb", "cold_s", "ratio", "rss_main_mb", "rss_workers_mb", "cpu_s"}

@@ -103,6 +103,7 @@ def _red(i):
 
 def test_cache_round_trip_and_index(tmp_path, monkeypatch):
     monkeypatch.setattr(cache, "PACK_ENTRIES", 4)
+    monkeypatch.setattr(cache, "PACK_SECONDS", 0.0)
     data = tmp_path / "data"
     data.mkdir()
     files = []
