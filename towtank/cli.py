@@ -114,9 +114,7 @@ def _err(msg: str) -> None:
 
 def cmd_process(args: argparse.Namespace) -> int:
     from towtank.errors import ProtocolError
-    from towtank.pipeline import process_day
     from towtank.protocol import load_protocol
-    from towtank.report import write_outputs
 
     try:
         protocol = load_protocol(args.protocol)
@@ -124,6 +122,21 @@ def cmd_process(args: argparse.Namespace) -> int:
         _err(str(exc))
         return EXIT_UNUSABLE
     out = args.out if args.out is not None else protocol.campaign.output_dir
+    stamp = None
+    if not args.no_cache:
+        from towtank.cache import DayStamp
+
+        stamp = DayStamp(Path(out) / ".cache", protocol, Path(out),
+                         {"report": not args.no_report, "date": args.date})
+        replay = stamp.replay()
+        if replay is not None:  # nothing changed since the last run: its outputs stand
+            code, text = replay
+            if not args.quiet:
+                print(text, end="")
+            return code
+    from towtank.pipeline import process_day
+    from towtank.report import write_outputs
+
     show = not args.quiet and sys.stderr.isatty()
     bar = None
     if show:
@@ -154,23 +167,26 @@ def cmd_process(args: argparse.Namespace) -> int:
     if args.date:
         day.report_date = args.date
     write_outputs(day, out, report=not args.no_report)
+    text = _summary(day, Path(out))
     if not args.quiet:
-        _summary(day, Path(out))
-    return EXIT_REJECTED if day.rejected else EXIT_OK
+        print(text, end="")
+    code = EXIT_REJECTED if day.rejected else EXIT_OK
+    if stamp is not None:
+        stamp.record(code, text)
+    return code
 
 
-def _summary(day, out: Path) -> None:  # noqa: ANN001 - DayResult, imported lazily
+def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazily
     runs = day.runs
     counts = runs["status"].value_counts()
-    print(
+    lines = [
         f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
         f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
-    )
-    for reason in day.rejected.values():
-        print(f"  rejected: {reason}")
-    for w in day.warnings:
-        print(f"  warning: {w}")
-    print(f"outputs in {out}")
+    ]
+    lines += [f"  rejected: {reason}" for reason in day.rejected.values()]
+    lines += [f"  warning: {w}" for w in day.warnings]
+    lines.append(f"outputs in {out}")
+    return "\n".join(lines) + "\n"
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:

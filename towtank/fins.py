@@ -29,7 +29,6 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 import pandas as pd
-import statsmodels.api as sm
 
 from towtank import sandia
 
@@ -431,15 +430,17 @@ def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tup
     section justifies, so that two angles (e.g. 5° and 10°) still give a slope and an interval
     from their repeats and speeds.
     """
+    from statsmodels.regression.linear_model import OLS
+
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
     x, y = alpha_rad[ok], y[ok]
     if x.size < 1 or not np.any(x != 0):
         return np.nan, np.nan, np.nan
     if _with_intercept(x):
-        fit = sm.OLS(y, sm.add_constant(x, has_constant="add")).fit()
+        fit = OLS(y, np.column_stack([np.ones_like(x), x])).fit()
         k = 1
     else:
-        fit = sm.OLS(y, x[:, None]).fit()
+        fit = OLS(y, x[:, None]).fit()
         k = 0
     a = float(fit.params[k])
     if fit.df_resid < 1:

@@ -409,13 +409,13 @@ def _hull_stage(day: DayResult) -> None:
 
 
 def _fin_stage(day: DayResult) -> None:
-    from towtank import fins
-
     fin = day.protocol.fin
     runs = day.runs
     sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
     if fin is None or sel.empty:
         return
+    from towtank import fins
+
     ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, fin.mounting))
     table = fins.fin_table(sel, ar, fin.oswald_e)
     curves = fins.fin_curves(table, aspect_ratio=ar, e=fin.oswald_e)
@@ -433,7 +433,7 @@ def _fin_stage(day: DayResult) -> None:
 
 
 def _scaling_stage(day: DayResult) -> None:
-    import statsmodels.api as sm
+    from statsmodels.regression.linear_model import OLS
 
     from towtank import similarity
 
@@ -462,7 +462,7 @@ def _scaling_stage(day: DayResult) -> None:
         return
     u = zero["speed_mean"].to_numpy(float)
     r = zero["drag_mean"].to_numpy(float)
-    res = sm.OLS(r, np.column_stack([u * np.abs(u), u])).fit()
+    res = OLS(r, np.column_stack([u * np.abs(u), u])).fit()
     k2, k1 = (float(v) for v in res.params)
     ff = None
     one_plus_k = math.nan
