@@ -132,7 +132,7 @@ def cmd_process(args: argparse.Namespace) -> int:
         if replay is not None:  # nothing changed since the last run: its outputs stand
             code, text = replay
             if not args.quiet:
-                print(text, end="")
+                print(text.rstrip("\n"))
             return code
     from towtank.pipeline import process_day
     from towtank.report import write_outputs
@@ -206,11 +206,21 @@ def cmd_synth(args: argparse.Namespace) -> int:
 
     if args.day == "samples":
         synthetic.write_sample_days(args.outdir)
-    elif args.day == "hull":
+        print(f"sample days written to {args.outdir}")
+        return EXIT_OK
+    if args.day == "hull":
         synthetic.make_hull_day(args.outdir, seed=args.seed)
+        sections = synthetic.hull_protocol_sections(".", "out")
     else:
         synthetic.make_fin_day(args.outdir, seed=args.seed)
-    print(f"synthetic {args.day} day written to {args.outdir}")
+        sections = synthetic.fin_protocol_sections(".", "out")
+    protocol = synthetic.write_protocol(
+        Path(args.outdir) / "protocol.toml",
+        header=f"Synthetic {args.day} day, seed {args.seed} (towtank synth); truth in truth.json",
+        **sections,
+    )
+    print(f"synthetic {args.day} day written to {args.outdir}; process it with:\n"
+          f"  towtank process {protocol}")
     return EXIT_OK
 
 

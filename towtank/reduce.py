@@ -164,8 +164,9 @@ def reduce_run(
     if math.isfinite(accel_nominal) and accel_nominal > 0:
         if ph.accel is None:
             notes.append(
-                f"no constant-acceleration stretch found although the sheet sets "
-                f"{accel_nominal:g} m/s²"
+                f"no usable constant-acceleration stretch although the sheet sets "
+                f"{accel_nominal:g} m/s² (absent, or shorter than {p.min_accel_s:g} s after "
+                f"trimming {p.trim:.2f} s at each end); the run is used for its steady phase"
             )
         elif abs(accel_mean - accel_nominal) > 2 * tol * accel_nominal:
             notes.append(

@@ -1,0 +1,38 @@
+"""The command line as a newcomer meets it: help, synth → process, exit statuses."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from towtank.cli import main
+
+
+def test_help_names_every_command(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    for cmd in ("process", "inspect", "scale", "synth"):
+        assert cmd in text
+    assert "exit status" in text
+
+
+def test_synth_writes_a_day_that_processes(tmp_path, capsys):
+    day = tmp_path / "day"
+    assert main(["synth", str(day), "--day", "hull", "--seed", "7"]) == 0
+    assert "towtank process" in capsys.readouterr().out
+    assert (day / "protocol.toml").is_file() and (day / "truth.json").is_file()
+    assert main(["process", str(day / "protocol.toml"), "--no-report", "-q"]) == 0
+    coef = pd.read_csv(day / "out" / "coefficients.csv").set_index("symbol")
+    truth = json.loads((day / "truth.json").read_text())["coefficients"]
+    assert coef.loc["X_u|u|", "value"] == pytest.approx(truth["X_u|u|"], rel=0.01)
+
+
+def test_process_without_a_command_or_protocol(tmp_path, capsys):
+    assert main([]) == 2
+    assert main(["process", str(tmp_path / "missing.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "does not exist" in err and "Traceback" not in err
