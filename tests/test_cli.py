@@ -36,3 +36,21 @@ def test_process_without_a_command_or_protocol(tmp_path, capsys):
     assert main(["process", str(tmp_path / "missing.toml")]) == 2
     err = capsys.readouterr().err
     assert "does not exist" in err and "Traceback" not in err
+
+
+def test_sheet_disagreements_are_warned_on_the_terminal(tmp_path, capsys):
+    """A set speed the carriage did not run at, and a temperature in °F, reach the user."""
+    from towtank.synthetic import hull_protocol_sections, make_hull_day, write_protocol
+
+    make_hull_day(tmp_path, seed=11, sheet_format="csv")
+    write_protocol(tmp_path / "p.toml", **hull_protocol_sections(".", "out", sheet_format="csv"))
+    sheet = pd.read_csv(tmp_path / "run_sheet.csv")
+    hull = sheet.index[(sheet.config == "hull") & (sheet.status != "void")]
+    wrong_speed, fahrenheit = int(sheet.loc[hull[0], "run"]), int(sheet.loc[hull[1], "run"])
+    sheet.loc[hull[0], "speed_nominal"] = sheet.loc[hull[0], "speed_nominal"] * 1.5
+    sheet.loc[hull[1], "water_temp_C"] = 64.4
+    sheet.to_csv(tmp_path / "run_sheet.csv", index=False)
+    assert main(["process", str(tmp_path / "p.toml"), "--no-report"]) == 0
+    out = capsys.readouterr().out
+    assert f"warning: run {wrong_speed}: measured plateau speed" in out
+    assert f"warning: run {fahrenheit}: water temperature 64.4 °C is outside 0–40 °C" in out

@@ -39,7 +39,7 @@ from typing import Any
 
 from towtank import __version__
 
-CACHE_FORMAT = 2  # of entries and settings keys (2: fit samples carry window-mean accel)
+CACHE_FORMAT = 3  # of entries and settings keys (3: reductions carry their warnings)
 INDEX_FORMAT = 2  # of files.json
 PACK_ENTRIES = 64  # a pack is written while runs are being reduced once this many wait
 PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interrupt loses little)

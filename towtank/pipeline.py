@@ -302,6 +302,15 @@ def process_day(
             continue
         reductions[run] = apply_tare(reductions[run], tare)
 
+    for red in reductions.values():
+        day_warnings.extend(f"run {red.run}: {w}." for w in red.warnings)
+    for rec in sheet.to_dict("records"):
+        temp = rec["water_temp_C"]
+        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
+            day_warnings.append(
+                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
+                "ITTC water properties are extrapolated (a unit mistake?)."
+            )
     runs = run_table(protocol, sheet, reductions, rejected)
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}

@@ -58,6 +58,7 @@ class RunReduction:
     thumb: dict[str, np.ndarray]  # t, U, drag, lift of the whole run (zeroed, filtered)
     has_lift: bool
     notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)  # the notes the engineer must see
     # set by apply_tare
     tare_drag: float = 0.0
     tare_lift: float = 0.0
@@ -153,7 +154,8 @@ def reduce_run(
     if ph.accel is not None:
         accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
 
-    # cross-checks against the sheet's set values
+    # cross-checks against the sheet's set values (warnings: the sheet or the carriage is off)
+    n_notes = len(notes)
     tol = p.nominal_tolerance
     if math.isfinite(speed_nominal) and speed_nominal > 0:
         if abs(speed_mean - speed_nominal) > tol * speed_nominal:
@@ -173,6 +175,8 @@ def reduce_run(
                 f"measured acceleration {accel_mean:.3f} m/s² differs from the set "
                 f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
             )
+
+    warn = [n for n in notes[n_notes:] if "differs from the set" in n]
 
     # decimated fit samples: steady and constant-acceleration windows
     rate = p.fit_sample_hz or 4.0 * p.cutoff_hz
@@ -238,6 +242,7 @@ def reduce_run(
         thumb=thumb,
         has_lift=raw.lift is not None,
         notes=notes,
+        warnings=warn,
     )
 
 
@@ -262,12 +267,15 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
         s["lift"] = s["lift"] - tare.lift(s["U"], s["a"])
         th["lift"] = th["lift"] - tare.lift(th["U"], th["a"])
     notes = list(red.notes)
+    warn = list(red.warnings)
     if not tare.covers(red.speed_mean):
         lo, hi = tare.speed_range
-        notes.append(
+        msg = (
             f"plateau speed {red.speed_mean:.3f} m/s is outside the tare runs' range "
             f"{lo:.3f}–{hi:.3f} m/s of group '{tare.group}': the tare is extrapolated"
         )
+        notes.append(msg)
+        warn.append(msg)
     return replace(
         red,
         samples=s,
@@ -278,6 +286,7 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
         drag_mean=red.drag_mean_raw - tare_d,
         lift_mean=(red.lift_mean_raw - tare_l) if red.has_lift else math.nan,
         notes=notes,
+        warnings=warn,
     )
 
 
