@@ -435,6 +435,16 @@ def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
         warnings.simplefilter("ignore", sandia.SandiaRangeWarning)
         cl2, cd2 = sandia.section_coefficients(alpha, res)
         cl3, cd3 = fins.finite_span_coefficients(alpha, res, aspect_ratio, e)
+    # lifting-line theory holds for attached flow only: draw the finite-span expectation up to
+    # the angle whose effective angle α − α_i reaches the 2-D section's stall (its first local
+    # maximum of C_L); beyond it the self-consistent solution jumps between branches
+    pos = alpha >= 0
+    drops = np.flatnonzero(np.diff(cl2[pos]) < 0)
+    if drops.size:
+        stall_2d = float(alpha[pos][drops[0]])
+        effective = alpha - np.degrees(cl3 / (np.pi * e * aspect_ratio))
+        beyond = np.abs(effective) > stall_2d
+        cl3, cd3 = np.where(beyond, np.nan, cl3), np.where(beyond, np.nan, cd3)
     return cl2, cd2, cl3, cd3
 
 
@@ -471,7 +481,8 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
         "interpolated at each speed group's mean Re; dashed: the finite-span expectation from "
         "Prandtl's lifting line for the fin's effective aspect ratio "
         f"(AR = {fr.aspect_ratio:.3g}, e = {fr.oswald_e:.3g}), which lowers the lift slope and "
-        "adds induced drag. Lifting-line values past stall are indicative only."
+        "adds induced drag; it is drawn for attached flow only, up to the angle whose "
+        "effective angle reaches the section's stall."
     )
     n_rows = math.ceil(len(groups) / 4)
     gs = _layout(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
