@@ -46,50 +46,26 @@ PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interru
 MAX_PACKS = 16  # more packs than this are merged into one at flush
 ORPHAN_AGE_S = 3600.0  # unindexed packs older than this are removed when packs are merged
 
-_PREFIX_MEMO: list[Any] = [None, ""]  # [protocol, its part of the settings payload]
-
-
 def _num(x: Any) -> Any:
     return None if isinstance(x, float) and math.isnan(x) else x
-
-
-def _protocol_part(protocol: Any) -> str:
-    """The JSON of the protocol's settings, as json.dumps writes them inside the payload."""
-    if _PREFIX_MEMO[0] is protocol:
-        return str(_PREFIX_MEMO[1])
-    channels = {k: asdict(v) for k, v in sorted(protocol.channels.items())}
-    processing = asdict(protocol.processing)
-    part = (
-        json.dumps(channels, sort_keys=True, default=str),
-        json.dumps(processing, sort_keys=True, default=str),
-    )
-    text = "\x00".join(part)
-    _PREFIX_MEMO[0], _PREFIX_MEMO[1] = protocol, text
-    return text
 
 
 def settings_key(protocol: Any, row: dict[str, Any]) -> str:
     """Hash of everything besides the file's bytes that changes a run's reduction.
 
     The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
-    version, processing settings, channel mapping, file name, manual window and set values. The
-    protocol's part is serialised once per protocol object (thousands of runs share it); the
-    text hashed is the same as serialising the whole payload each time.
+    version, processing settings, channel mapping, file name, manual window and set values.
     """
-    channels, processing = _protocol_part(protocol).split("\x00")
-    dumps = json.dumps
-    text = (
-        '{"channels": ' + channels
-        + ', "file": ' + dumps(str(row["file"]))
-        + ', "format": ' + dumps(CACHE_FORMAT)
-        + ', "nominal": '
-        + dumps([_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))], default=str)
-        + ', "processing": ' + processing
-        + ', "version": ' + dumps(__version__)
-        + ', "window": '
-        + dumps([_num(row.get("window_start_s")), _num(row.get("window_end_s"))], default=str)
-        + "}"
-    )
+    payload = {
+        "format": CACHE_FORMAT,
+        "version": __version__,
+        "processing": asdict(protocol.processing),
+        "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
+        "file": str(row["file"]),
+        "window": [_num(row.get("window_start_s")), _num(row.get("window_end_s"))],
+        "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
+    }
+    text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
