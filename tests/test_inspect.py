@@ -77,9 +77,9 @@ def test_never_writes_beside_the_raw_data(day, monkeypatch, capsys):
 
 @pytest.mark.parametrize("content", [
     b"not a gzip file at all",
-    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n")[:25],
-    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n0,0,0\n"),
-])
+    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n", mtime=0)[:25],
+    gzip.compress(b"Time (s),Carriage speed (m/s),Fx load cell (V)\n0,0,0\n", mtime=0),
+], ids=["not-gzip", "truncated-gzip", "one-row"])
 def test_damaged_file_gives_one_sentence_and_exit_1(day, tmp_path, capsys, content):
     path = tmp_path / "run_099.csv.gz"
     path.write_bytes(content)
