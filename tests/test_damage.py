@@ -255,16 +255,16 @@ def test_a_failing_report_writer_leaves_the_old_outputs(day, processed, monkeypa
 
 
 def test_an_internal_bug_rejects_one_run_and_debug_shows_it(day, monkeypatch, tmp_path):
-    from towtank import pipeline
+    from towtank import reduce as reduce_stage
 
-    real = pipeline.reduce_run
+    real = reduce_stage.reduce_run
 
     def buggy(raw, processing, *, run, **kw):
         if run == 14:
             raise ZeroDivisionError("float division by zero")
         return real(raw, processing, run=run, **kw)
 
-    monkeypatch.setattr(pipeline, "reduce_run", buggy)
+    monkeypatch.setattr(reduce_stage, "reduce_run", buggy)
     out = tmp_path / "out"
     args = (str(day.protocol), "--no-report", "--out", str(out), "-j", "1", "--no-cache")
     rc, stdout, stderr = run_cli(*args)

@@ -303,7 +303,7 @@ def test_deterministic_and_independent_of_jobs(cli_outputs):
 
 
 def test_cache_hit_and_invalidation(cli_outputs, hull_day: Day, monkeypatch):
-    import towtank.pipeline as pipeline
+    import towtank.reduce as reduce_stage
 
     out = cli_outputs["a"]
     assert (out / ".cache").is_dir()
@@ -311,7 +311,7 @@ def test_cache_hit_and_invalidation(cli_outputs, hull_day: Day, monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("load_run called although the run is cached")
 
-    monkeypatch.setattr(pipeline, "load_run", refuse)
+    monkeypatch.setattr(reduce_stage, "load_run", refuse)
     assert _cli(hull_day.protocol, out, "--jobs", "1") == 0
     assert _csvs(out) == cli_outputs["csv_a"]
 
@@ -323,7 +323,7 @@ def test_cache_hit_and_invalidation(cli_outputs, hull_day: Day, monkeypatch):
         calls.append(args[0])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(pipeline, "load_run", counting)
+    monkeypatch.setattr(reduce_stage, "load_run", counting)
     changed = write_hull_protocol(hull_day.dir, name="p_cutoff5.toml",
                                   processing={"cutoff_hz": 5.0})
     assert _cli(changed, out, "--jobs", "1") == 0

@@ -90,12 +90,12 @@ def test_ittc57_line_value():
 
 
 def test_scale_command_prints_table_from_cache(outputs, capsys, monkeypatch):
-    import towtank.pipeline as pipeline
+    import towtank.reduce as reduce_stage
 
     def no_read(*args, **kwargs):
         raise AssertionError("the scale command re-read a run file despite the cache")
 
-    monkeypatch.setattr(pipeline, "load_run", no_read)
+    monkeypatch.setattr(reduce_stage, "load_run", no_read)
     code = main(["scale", str(PROTOCOL), "--speeds", "2", "3", "--out", str(outputs)])
     text = capsys.readouterr().out
     assert code == 0

@@ -1,8 +1,6 @@
 """``python -m towtank``: the same command line as the ``towtank`` script."""
 
-import sys
-
-from towtank.cli import main
+from towtank.cli import entry
 
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

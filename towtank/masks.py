@@ -25,8 +25,8 @@ def close_gaps(mask: np.ndarray, max_gap: int) -> np.ndarray:
     if not fill.any():
         return mask
     delta = np.zeros(mask.size + 1, dtype=np.int64)
-    np.add.at(delta, starts[fill], 1)
-    np.add.at(delta, ends[fill], -1)
+    delta[starts[fill]] += 1  # gap starts are distinct, and so are gap ends
+    delta[ends[fill]] -= 1
     return mask | (np.cumsum(delta[:-1]) > 0)
 
 

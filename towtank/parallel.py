@@ -2,25 +2,28 @@
 
 How the work is spread (campaign scale, hundreds of runs):
 
-* The first record is reduced in this process before any worker exists. Every lazy import it
-  needs (pyarrow, scipy's filters) and every per-process cache it fills (filter design, water
-  properties) is then inherited by the forked workers, copy-on-write, instead of being paid
-  again in each worker.
-* The workers are forked (POSIX) and find the function, the protocol and the records in this
-  module's memory; only record numbers are sent to them, in small chunks (a few runs each), so
-  the protocol is never pickled and the last chunks keep every core busy.
-* A reduction comes back as it is (a few kB: means, windows and decimated samples; the raw
-  channels never cross the process boundary), chunk by chunk and in order, so the caller can
-  store each in the cache while the workers go on.
+* The workers come from a *fork server* (``multiprocessing``'s "forkserver" start method) that
+  imports the reduction's libraries once (:data:`PRELOAD`: pyarrow, scipy's filters, the
+  reduction modules) and forks every worker from that warm state. The main process never
+  imports them itself: it reads the run sheet, consults the cache and loads the fitting
+  libraries while the fork server loads the reduction's, one core each.
+* :func:`prestart` starts the pool early (the ``process`` command calls it before it even loads
+  pandas); the first :func:`map_runs` call then uses it. Without it, :func:`map_runs` starts a
+  pool of its own, or reduces a handful of records in this process.
+* Records are sent to the workers in small chunks (a few runs each), so the last chunks keep
+  every core busy; a reduction comes back as it is (a few kB: means, windows and decimated
+  samples; the raw channels never cross the process boundary), chunk by chunk and in order, so
+  the caller can store each in the cache while the workers go on.
+* Where there is no fork server (Windows) the records are reduced in this process.
 """
 
 from __future__ import annotations
 
-import itertools
 import multiprocessing as mp
 import os
+import threading
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Executor, ProcessPoolExecutor
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -28,9 +31,15 @@ T = TypeVar("T")
 #: Records per task sent to a worker (at most); small enough to balance the tail.
 MAX_CHUNK = 8
 
-# Work of the running map_runs calls, by token; read by the forked workers (never pickled).
-_TASKS: dict[int, tuple[Callable[..., Any], Any, Sequence[dict[str, Any]], bool]] = {}
-_TOKENS = itertools.count(1)
+#: Fewest records worth starting a pool for when none was started beforehand: below it the
+#: records are reduced in this process (starting the fork server costs about one library load).
+MIN_RECORDS_FOR_POOL = 16
+
+#: Modules the fork server imports once, before it forks any worker.
+PRELOAD = ("numpy", "pyarrow", "pyarrow.csv", "scipy.signal", "scipy.ndimage", "towtank.reduce")
+
+_lock = threading.Lock()
+_prestarted: dict[str, Any] = {}  # "pool": _Pool started by prestart(), until map_runs takes it
 
 
 def default_jobs() -> int:
@@ -46,6 +55,102 @@ def chunk_size(n_records: int, jobs: int) -> int:
     return max(1, min(MAX_CHUNK, n_records // (8 * jobs)))
 
 
+def _context() -> Any | None:
+    """The fork-server context with :data:`PRELOAD`, or None where there is none."""
+    if "forkserver" not in mp.get_all_start_methods():
+        return None  # pragma: no cover - Windows
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(list(PRELOAD))
+    return ctx
+
+
+def _worker_init() -> None:
+    """In each worker: pyarrow parses on this worker's core only (the others have workers)."""
+    try:
+        import pyarrow
+
+        pyarrow.set_cpu_count(1)
+    except Exception:  # noqa: BLE001 - a tuning knob only  # pragma: no cover
+        pass
+
+
+def _ready() -> int:
+    return os.getpid()
+
+
+class _Pool:
+    """A process pool whose workers are started in a background thread.
+
+    Starting a fork-server worker waits until the server has loaded :data:`PRELOAD`; the thread
+    lets this process go on meanwhile.
+    """
+
+    def __init__(self, jobs: int, ctx: Any) -> None:
+        self.jobs = jobs
+        self.executor: Executor = ProcessPoolExecutor(
+            max_workers=jobs, mp_context=ctx, initializer=_worker_init
+        )
+        self._starter = threading.Thread(target=self._start, name="towtank-pool", daemon=True)
+        self._starter.start()
+
+    def _start(self) -> None:
+        try:
+            for _ in range(self.jobs):
+                self.executor.submit(_ready)
+        except Exception:  # noqa: BLE001 - a pool that cannot start fails again in map()
+            pass
+
+    def close(self) -> None:
+        self._starter.join()
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+def prestart(jobs: int | None = None) -> bool:
+    """Start the worker pool now, for the next :func:`map_runs` call of this process.
+
+    The workers load the reduction's libraries while this process reads the sheet; returns
+    False (and starts nothing) for one job or where there is no fork server.
+    """
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    ctx = _context() if jobs > 1 else None
+    if ctx is None:
+        return False
+    with _lock:
+        if "pool" not in _prestarted:
+            _prestarted["pool"] = _Pool(jobs, ctx)
+    return True
+
+
+def discard_prestarted() -> None:
+    """Stop a pool that :func:`prestart` started and no :func:`map_runs` call took."""
+    with _lock:
+        pool = _prestarted.pop("pool", None)
+    if pool is not None:
+        pool.close()
+
+
+def load_in_background(modules: Sequence[str]) -> threading.Thread:
+    """Import ``modules`` in a background thread; join it before using them.
+
+    While this process only waits for the workers' results, the thread loads what the later
+    stages need (the fitting libraries), on the core the waiting leaves free. Import errors are
+    left for the later stages' own imports to raise.
+    """
+
+    def load() -> None:
+        import importlib
+
+        for name in modules:
+            try:
+                importlib.import_module(name)
+            except Exception:  # noqa: BLE001 - raised again, in place, by the stage needing it
+                pass
+
+    thread = threading.Thread(target=load, name="towtank-imports", daemon=True)
+    thread.start()
+    return thread
+
+
 def map_runs(
     func: Callable[..., T],
     protocol: Any,
@@ -56,35 +161,39 @@ def map_runs(
 ) -> Iterator[T]:
     """``func(protocol, record, debug=debug)`` for every record, in order.
 
-    With ``jobs`` > 1 the records are spread over worker processes (fork, so the protocol and
-    the imported modules are shared copy-on-write); results still come back in sheet order, so
-    the outputs do not depend on the number of jobs. Without fork (not POSIX) the records are
-    reduced in this process.
+    With ``jobs`` > 1 the records are spread over worker processes (``func`` must be a
+    module-level function, ``protocol`` and the records picklable); results still come back in
+    sheet order, so the outputs do not depend on the number of jobs. A pool started by
+    :func:`prestart` is used (and closed) by this call.
     """
     records = list(records)
-    jobs = default_jobs() if jobs is None else max(1, int(jobs))
-    jobs = min(jobs, len(records) - 1) if len(records) > 1 else 1
-    if jobs <= 1 or "fork" not in mp.get_all_start_methods():
+    with _lock:
+        pool = _prestarted.pop("pool", None)
+    if pool is None:
+        n_jobs = default_jobs() if jobs is None else max(1, int(jobs))
+        n_jobs = min(n_jobs, len(records))
+        ctx = _context() if n_jobs > 1 and len(records) >= MIN_RECORDS_FOR_POOL else None
+        if ctx is not None:
+            pool = _Pool(n_jobs, ctx)
+    if pool is None:
         for rec in records:
             yield func(protocol, rec, debug=debug)
         return
-    # the first record here: imports and caches are then shared by the forked workers
-    yield func(protocol, records[0], debug=debug)
-    rest = records[1:]
-    token = next(_TOKENS)
-    _TASKS[token] = (func, protocol, rest, debug)
     try:
-        chunk = chunk_size(len(rest), jobs)
-        tasks = [(token, i, min(i + chunk, len(rest))) for i in range(0, len(rest), chunk)]
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("fork")) as pool:
-            for results in pool.map(_run_slice, tasks):
-                yield from results
+        if not records:
+            return
+        chunk = chunk_size(len(records), pool.jobs)
+        tasks = [
+            (func, protocol, records[i : i + chunk], debug)
+            for i in range(0, len(records), chunk)
+        ]
+        for results in pool.executor.map(_run_chunk, tasks):
+            yield from results
     finally:
-        del _TASKS[token]
+        pool.close()
 
 
-def _run_slice(task: tuple[int, int, int]) -> list[Any]:
-    """In a worker: the records [i0, i1) of the map_runs call ``token``."""
-    token, i0, i1 = task
-    func, protocol, records, debug = _TASKS[token]
-    return [func(protocol, records[i], debug=debug) for i in range(i0, i1)]
+def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool]) -> list[Any]:
+    """In a worker: one chunk of records."""
+    func, protocol, records, debug = task
+    return [func(protocol, rec, debug=debug) for rec in records]

@@ -6,7 +6,8 @@ they do not depend on the set values in the sheet (those only cross-check). Thre
 with the run's own peak speed and acceleration, which keeps the detection robust from 0.1 m/s
 transverse tows to 3 m/s; every window is trimmed away from its transitions.
 
-All functions are vectorised over the samples (no per-sample Python loop).
+All functions are vectorised over the samples (no per-sample Python loop); levels and peaks
+are order statistics (:mod:`towtank.robust`): the median, the 99th percentile sample.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 
 from towtank.errors import RunError
 from towtank.masks import close_gaps, longest_run
+from towtank.robust import quantile, spread_sample
 
 PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
 
@@ -98,10 +100,10 @@ def detect_phases(
         settles on a plateau.
     """
     n = speed.size
-    v_peak = float(np.percentile(speed, 99.0))
+    v_peak = quantile(spread_sample(speed), 0.99)
     if not v_peak > 0.02:
         raise RunError(f"the carriage never moves (peak speed {v_peak:.3f} m/s)")
-    a_abs_peak = float(np.percentile(np.abs(accel), 99.5))
+    a_abs_peak = quantile(np.abs(spread_sample(accel)), 0.995)
     # --- motion: where speed or acceleration rises above small fractions of their peaks
     moving = (speed > 0.03 * v_peak) | (np.abs(accel) > 0.1 * a_abs_peak)
     moving = close_gaps(moving, int(0.5 * fs))
@@ -130,7 +132,7 @@ def detect_phases(
             f"the carriage speed never settles on a plateau (peak {v_peak:.3f} m/s, "
             "no stretch of constant speed)"
         )
-    level = float(np.median(v_seg[cand]))
+    level = quantile(v_seg[cand], 0.5)
     tol = max(steady_tolerance * level, 0.002)
     band = close_gaps(np.abs(v_seg - level) <= tol, int(0.05 * fs))
     plateau = longest_run(band)
@@ -140,7 +142,7 @@ def detect_phases(
             f"stretch within {100 * steady_tolerance:g} % of one speed)"
         )
     plateau = (plateau[0] + motion[0], plateau[1] + motion[0])
-    level = float(np.median(speed[plateau[0] : plateau[1]]))
+    level = quantile(speed[plateau[0] : plateau[1]], 0.5)
     n_trim = int(round(trim_s * fs))
     steady = _trim(plateau, n_trim, int(min_steady_s * fs))
     if steady is None:
@@ -179,14 +181,14 @@ def _constant_stretch(
     if i1 - i0 < 3:
         return None, None
     a = sign * accel[i0:i1]
-    peak = float(np.percentile(a, 98.0))
+    peak = quantile(spread_sample(a), 0.98)
     if not peak > 0.005:
         return None, None
     strong = close_gaps(a > 0.5 * peak, int(0.05 * fs))
     core = longest_run(strong)
     if core is None:
         return None, None
-    level = float(np.median(a[core[0] : core[1]]))
+    level = quantile(a[core[0] : core[1]], 0.5)
     band = close_gaps(np.abs(a - level) <= max(0.05 * level, 0.004), int(0.05 * fs))
     w = longest_run(band)
     if w is None:

@@ -8,7 +8,6 @@ a protocol or run-sheet fault stops before anything is written.
 from __future__ import annotations
 
 import math
-import traceback
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -19,14 +18,24 @@ import numpy as np
 import pandas as pd
 
 from towtank.cache import RunCache, settings_key
-from towtank.errors import RunError
-from towtank.ingest import file_bytes, load_run
 from towtank.protocol import Protocol, load_protocol
-from towtank.reduce import RunReduction, apply_tare, force_coefficient, reduce_run
+from towtank.reduce import RunReduction, apply_tare, force_coefficient, reduce_record
 from towtank.runsheet import read_run_sheet, unlisted_files
 from towtank.tare import TareModel, fit_tare_group
 
 G = 9.80665
+
+#: What the fitting stages import: loaded while the workers reduce the runs.
+ANALYSIS_MODULES = (
+    "scipy.stats",
+    "statsmodels.regression.linear_model",
+    "iapws",
+    "scipy.interpolate",
+    "towtank.fit",
+    "towtank.fins",
+    "towtank.similarity",
+    "towtank.water",
+)
 
 
 @dataclass
@@ -49,57 +58,6 @@ class DayResult:
     @property
     def n_rejected(self) -> int:
         return len(self.rejected)
-
-
-def _internal_error_sentence(exc: BaseException) -> str:
-    last = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
-    where = f" in {Path(last.filename).name}:{last.lineno}" if last else ""
-    return (
-        f"an unexpected internal error ({type(exc).__name__}: {exc}{where}); "
-        "please report it, and rerun with --debug for the traceback"
-    )
-
-
-def reduce_one(
-    protocol: Protocol, row: dict[str, Any], *, debug: bool = False
-) -> tuple[int, RunReduction | None, str | None]:
-    """Read and reduce one run of the sheet; never raises for a data problem."""
-    run = int(row["run"])
-    file = str(row["file"])
-    path = protocol.campaign.data_dir / file
-    try:
-        p = protocol.processing
-        data = file_bytes(path)
-        raw = load_run(
-            path,
-            protocol.channels,
-            max_nan_gap_s=p.max_nan_gap_s,
-            max_bad_row_fraction=p.max_bad_row_fraction,
-            do_despike=p.despike,
-            data=data,
-        )
-        ws = row.get("window_start_s", math.nan)
-        we = row.get("window_end_s", math.nan)
-        window = (float(ws), float(we)) if math.isfinite(ws) and math.isfinite(we) else None
-        red = reduce_run(
-            raw,
-            p,
-            run=run,
-            file=file,
-            window_s=window,
-            speed_nominal=float(row.get("speed_nominal", math.nan)),
-            accel_nominal=float(row.get("accel_nominal", math.nan)),
-        )
-        return run, red, None
-    except RunError as exc:
-        reason = exc.reason
-        if file not in reason and Path(file).name not in reason:
-            reason = f"{file}: {reason}"
-        return run, None, f"run {run}: {reason}"
-    except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
-        if debug:
-            raise
-        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}"
 
 
 def fit_tares(
@@ -248,7 +206,7 @@ def process_day(
             todo.append(rec)
 
     reductions: dict[int, RunReduction] = {}
-    from towtank.parallel import map_runs
+    from towtank.parallel import load_in_background, map_runs
 
     cache = RunCache(cache_dir) if cache_dir is not None else None
     keys: dict[int, str] = {}
@@ -263,11 +221,12 @@ def process_day(
                 reductions[run] = replace(hit, run=run)
                 continue
         to_reduce.append(rec)
+    loading = load_in_background(ANALYSIS_MODULES) if to_reduce else None
     done = len(todo) - len(to_reduce)
     if progress is not None and done:
         progress(done, len(todo))
     for i, (run, red, reason) in enumerate(
-        map_runs(reduce_one, protocol, to_reduce, jobs=jobs, debug=debug)
+        map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug)
     ):
         if red is not None:
             reductions[run] = red
@@ -281,6 +240,8 @@ def process_day(
             progress(done + i + 1, len(todo))
     if cache is not None:
         cache.flush()
+    if loading is not None:
+        loading.join()  # the later stages import nothing while another thread does
     # keep the sheet's order whatever the order of cache hits and fresh reductions
     order = {int(r): k for k, r in enumerate(sheet["run"])}
     reductions = dict(sorted(reductions.items(), key=lambda kv: order[kv[0]]))

@@ -15,14 +15,17 @@ whole run for the report. Everything it returns is plain data that can be cached
 from __future__ import annotations
 
 import math
+import traceback
 from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from towtank import conditioning, phases
 from towtank.errors import RunError
-from towtank.ingest import RawRun
-from towtank.protocol import Processing
+from towtank.ingest import RawRun, file_bytes, load_run
+from towtank.protocol import Processing, Protocol
 from towtank.tare import TareModel
 
 PHASE_STEADY = 0
@@ -312,3 +315,59 @@ def check_reduction(red: RunReduction) -> None:
     """Sanity checks on a reduced run that reject it with one sentence."""
     if not math.isfinite(red.drag_mean_raw):
         raise RunError("the steady drag mean is not finite")
+
+
+def _internal_error_sentence(exc: BaseException) -> str:
+    last = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
+    where = f" in {Path(last.filename).name}:{last.lineno}" if last else ""
+    return (
+        f"an unexpected internal error ({type(exc).__name__}: {exc}{where}); "
+        "please report it, and rerun with --debug for the traceback"
+    )
+
+
+def reduce_record(
+    protocol: Protocol, row: dict[str, Any], *, debug: bool = False
+) -> tuple[int, RunReduction | None, str | None]:
+    """Read and reduce the run of one run-sheet row; never raises for a data problem.
+
+    Returns (run, reduction, None), or (run, None, reason) where ``reason`` is one sentence
+    naming the run, its file and what is wrong. An unexpected error (a bug) is reported the same
+    way, or raised with ``debug``.
+    """
+    run = int(row["run"])
+    file = str(row["file"])
+    path = protocol.campaign.data_dir / file
+    try:
+        p = protocol.processing
+        data = file_bytes(path)
+        raw = load_run(
+            path,
+            protocol.channels,
+            max_nan_gap_s=p.max_nan_gap_s,
+            max_bad_row_fraction=p.max_bad_row_fraction,
+            do_despike=p.despike,
+            data=data,
+        )
+        ws = row.get("window_start_s", math.nan)
+        we = row.get("window_end_s", math.nan)
+        window = (float(ws), float(we)) if math.isfinite(ws) and math.isfinite(we) else None
+        red = reduce_run(
+            raw,
+            p,
+            run=run,
+            file=file,
+            window_s=window,
+            speed_nominal=float(row.get("speed_nominal", math.nan)),
+            accel_nominal=float(row.get("accel_nominal", math.nan)),
+        )
+        return run, red, None
+    except RunError as exc:
+        reason = exc.reason
+        if file not in reason and Path(file).name not in reason:
+            reason = f"{file}: {reason}"
+        return run, None, f"run {run}: {reason}"
+    except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
+        if debug:
+            raise
+        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}"

@@ -188,17 +188,41 @@ def test_map_runs_keeps_sheet_order(n):
     serial = [r for r, _ in parallel.map_runs(_square, {"offset": 1}, records, jobs=1)]
     par = list(parallel.map_runs(_square, {"offset": 1}, records, jobs=2))
     assert [r for r, _ in par] == serial == [i * i + 1 for i in range(n)]
-    if n >= 3:
-        assert par[0][1] == os.getpid()  # the first in this process, the rest in workers
-        assert {pid for _, pid in par[1:]} - {os.getpid()}
-    assert not parallel._TASKS
+    pids = {pid for _, pid in par}
+    if n >= parallel.MIN_RECORDS_FOR_POOL:
+        assert os.getpid() not in pids and len(pids) >= 1  # all in worker processes
+    else:
+        assert pids <= {os.getpid()}  # a handful: not worth starting workers
+    assert "pool" not in parallel._prestarted
+
+
+def test_prestarted_pool_is_used_once_and_closed():
+    assert parallel.prestart(2)
+    records = [{"x": i} for i in range(3)]
+    par = list(parallel.map_runs(_square, {"offset": 0}, records, jobs=2))
+    assert [r for r, _ in par] == [0, 1, 4]
+    assert os.getpid() not in {pid for _, pid in par}  # the prestarted workers did them
+    assert "pool" not in parallel._prestarted
+    assert parallel.prestart(2)
+    parallel.discard_prestarted()
+    assert "pool" not in parallel._prestarted
+    assert not parallel.prestart(1)  # one job: nothing to start
 
 
 def test_map_runs_raises_worker_errors_in_debug():
-    records = [{"x": 1}, {"x": 2}, {"x": -1}, {"x": 3}]
+    records = [{"x": 1}, {"x": 2}, {"x": -1}, {"x": 3}] * 5
     with pytest.raises(ValueError, match="negative"):
         list(parallel.map_runs(_square, {"offset": 0}, records, jobs=2, debug=True))
-    assert not parallel._TASKS
+    assert "pool" not in parallel._prestarted
+
+
+def test_background_loading_imports_and_survives_a_missing_module():
+    thread = parallel.load_in_background(["colorsys", "towtank_no_such_module"])
+    thread.join(timeout=30)
+    assert not thread.is_alive()
+    import sys
+
+    assert "colorsys" in sys.modules
 
 
 # ---------------------------------------------------------------------------------- the day
