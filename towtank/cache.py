@@ -50,21 +50,32 @@ def _num(x: Any) -> Any:
     return None if isinstance(x, float) and math.isnan(x) else x
 
 
-def settings_key(protocol: Any, row: dict[str, Any]) -> str:
-    """Hash of everything besides the file's bytes that changes a run's reduction.
-
-    The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
-    version, processing settings, channel mapping, file name, manual window and set values.
-    """
-    payload = {
+def protocol_settings(protocol: Any) -> dict[str, Any]:
+    """The part of :func:`settings_key`'s payload that is the same for every run of a day."""
+    return {
         "format": CACHE_FORMAT,
         "version": __version__,
         "processing": asdict(protocol.processing),
         "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
+    }
+
+
+def settings_key(
+    protocol: Any, row: dict[str, Any], common: dict[str, Any] | None = None
+) -> str:
+    """Hash of everything besides the file's bytes that changes a run's reduction.
+
+    The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
+    version, processing settings, channel mapping (:func:`protocol_settings`, which may be
+    given as ``common`` when the keys of many runs are made), file name, manual window and
+    set values.
+    """
+    payload = dict(protocol_settings(protocol) if common is None else common)
+    payload.update({
         "file": str(row["file"]),
         "window": [_num(row.get("window_start_s")), _num(row.get("window_end_s"))],
         "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
-    }
+    })
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -523,10 +524,11 @@ def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:
     """Spread of C_D between repeats: runs at the same angle and speed (within 3 %)."""
     hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")].copy()
     rows = []
+    cols = ["run", "speed_mean", "cd", "drag_mean"]
     for angle, grp in hull.groupby(np.round(hull["angle_deg"], 1)):
-        speeds = grp.sort_values("speed_mean")
-        cluster: list[pd.Series] = []
-        for _, r in speeds.iterrows():
+        speeds = grp.sort_values("speed_mean")[cols].to_dict("records")
+        cluster: list[dict[str, Any]] = []
+        for r in speeds:
             if cluster and abs(r["speed_mean"] - cluster[0]["speed_mean"]) > 0.03 * max(
                 cluster[0]["speed_mean"], 1e-9
             ):
@@ -539,7 +541,7 @@ def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:
     return df[df["n"] > 1].reset_index(drop=True) if not df.empty else df
 
 
-def _spread_row(angle: float, cluster: list[pd.Series]) -> dict[str, object]:
+def _spread_row(angle: float, cluster: list[dict[str, Any]]) -> dict[str, object]:
     cds = np.array([c["cd"] for c in cluster], dtype=float)
     drags = np.array([c["drag_mean"] for c in cluster], dtype=float)
     return {

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from towtank.cache import RunCache, settings_key
+from towtank.cache import RunCache, protocol_settings, settings_key
 from towtank.protocol import Protocol, load_protocol
 from towtank.reduce import RunReduction, apply_tare, force_coefficient, reduce_record
 from towtank.runsheet import read_run_sheet, unlisted_files
@@ -209,12 +209,13 @@ def process_day(
     from towtank.parallel import load_in_background, map_runs
 
     cache = RunCache(cache_dir) if cache_dir is not None else None
+    common = protocol_settings(protocol) if cache is not None else None
     keys: dict[int, str] = {}
     to_reduce = []
     for rec in todo:
         run = int(rec["run"])
         if cache is not None:
-            keys[run] = settings_key(protocol, rec)
+            keys[run] = settings_key(protocol, rec, common)
             sha = cache.known_sha(protocol.campaign.data_dir / str(rec["file"]))
             hit = cache.get(sha, keys[run]) if sha else None
             if hit is not None:
