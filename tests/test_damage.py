@@ -275,3 +275,12 @@ def test_an_internal_bug_rejects_one_run_and_debug_shows_it(day, monkeypatch, tm
     assert "ZeroDivisionError" in reason and "--debug" in reason
     with pytest.raises(ZeroDivisionError):
         run_cli(*args, "--debug")
+
+
+def test_a_run_whose_worker_dies_is_rejected_in_one_sentence():
+    from towtank.reduce import crashed_record
+
+    run, red, reason = crashed_record({"run": 30, "file": "run_030.csv"})
+    assert (run, red) == (30, None)
+    assert reason.startswith("run 30: run_030.csv: the process reducing it stopped abruptly")
+    assert reason.count(". ") == 0 and "\n" not in reason

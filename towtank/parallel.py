@@ -24,6 +24,7 @@ import os
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -87,6 +88,7 @@ class _Pool:
 
     def __init__(self, jobs: int, ctx: Any) -> None:
         self.jobs = jobs
+        self.ctx = ctx
         self.executor: Executor = ProcessPoolExecutor(
             max_workers=jobs, mp_context=ctx, initializer=_worker_init
         )
@@ -158,6 +160,7 @@ def map_runs(
     *,
     jobs: int | None = None,
     debug: bool = False,
+    on_crash: Callable[[dict[str, Any]], T] | None = None,
 ) -> Iterator[T]:
     """``func(protocol, record, debug=debug)`` for every record, in order.
 
@@ -165,6 +168,11 @@ def map_runs(
     module-level function, ``protocol`` and the records picklable); results still come back in
     sheet order, so the outputs do not depend on the number of jobs. A pool started by
     :func:`prestart` is used (and closed) by this call.
+
+    When a worker dies (killed, out of memory, a crash inside a library), the records not yet
+    returned are done again one at a time, each in a worker of its own, so that only the record
+    that kills its worker is lost: its result is ``on_crash(record)`` (without ``on_crash`` the
+    error is raised). Where workers cannot be started at all, the records are done here.
     """
     records = list(records)
     with _lock:
@@ -179,18 +187,52 @@ def map_runs(
         for rec in records:
             yield func(protocol, rec, debug=debug)
         return
+    done = 0
+    broken: BaseException | None = None
     try:
-        if not records:
-            return
         chunk = chunk_size(len(records), pool.jobs)
         tasks = [
             (func, protocol, records[i : i + chunk], debug)
             for i in range(0, len(records), chunk)
         ]
-        for results in pool.executor.map(_run_chunk, tasks):
-            yield from results
+        try:
+            for results in pool.executor.map(_run_chunk, tasks):
+                yield from results
+                done += len(results)
+        except BrokenProcessPool as exc:
+            broken = exc
+        except OSError as exc:  # no worker could be started (no fork server here)
+            if done:
+                raise
+            broken = exc
     finally:
         pool.close()
+    if broken is None:
+        return
+    if isinstance(broken, OSError):
+        for rec in records:
+            yield func(protocol, rec, debug=debug)
+        return
+    for rec in records[done:]:
+        yield _alone(func, protocol, rec, debug, pool.ctx, on_crash)
+
+
+def _alone(
+    func: Callable[..., T],
+    protocol: Any,
+    rec: dict[str, Any],
+    debug: bool,
+    ctx: Any,
+    on_crash: Callable[[dict[str, Any]], T] | None,
+) -> T:
+    """One record in a worker of its own; ``on_crash(rec)`` if that worker dies."""
+    with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as one:
+        try:
+            return one.submit(func, protocol, rec, debug=debug).result()
+        except BrokenProcessPool:
+            if on_crash is None:
+                raise
+            return on_crash(rec)
 
 
 def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool]) -> list[Any]:

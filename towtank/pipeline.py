@@ -19,7 +19,13 @@ import pandas as pd
 
 from towtank.cache import RunCache, protocol_settings, settings_key
 from towtank.protocol import Protocol, load_protocol
-from towtank.reduce import RunReduction, apply_tare, force_coefficient, reduce_record
+from towtank.reduce import (
+    RunReduction,
+    apply_tare,
+    crashed_record,
+    force_coefficient,
+    reduce_record,
+)
 from towtank.runsheet import read_run_sheet, unlisted_files
 from towtank.tare import TareModel, fit_tare_group
 
@@ -227,7 +233,8 @@ def process_day(
     if progress is not None and done:
         progress(done, len(todo))
     for i, (run, red, reason) in enumerate(
-        map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug)
+        map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug,
+                 on_crash=crashed_record)
     ):
         if red is not None:
             reductions[run] = red

@@ -371,3 +371,12 @@ def reduce_record(
         if debug:
             raise
         return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}"
+
+
+def crashed_record(row: dict[str, Any]) -> tuple[int, None, str]:
+    """The rejection of a run whose worker process died while reducing it."""
+    run, file = int(row["run"]), str(row["file"])
+    return run, None, (
+        f"run {run}: {file}: the process reducing it stopped abruptly (killed, out of memory, "
+        "or a crash inside a reading library); the file is left as it is"
+    )

@@ -12,6 +12,8 @@ import json
 import math
 import os
 import pickle
+import signal
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -214,6 +216,22 @@ def test_map_runs_raises_worker_errors_in_debug():
     with pytest.raises(ValueError, match="negative"):
         list(parallel.map_runs(_square, {"offset": 0}, records, jobs=2, debug=True))
     assert "pool" not in parallel._prestarted
+
+
+def _die_on_seven(protocol, rec, *, debug=False):
+    if rec["x"] == 7:
+        os.kill(os.getpid(), signal.SIGKILL)  # a worker killed (out of memory, a crash)
+    return rec["x"] ** 2, os.getpid()
+
+
+def test_a_dying_worker_loses_only_its_record():
+    records = [{"x": i} for i in range(20)]
+    out = list(parallel.map_runs(_die_on_seven, None, records, jobs=2,
+                                 on_crash=lambda rec: ("lost", rec["x"])))
+    assert [r for r, _ in out] == [i * i if i != 7 else "lost" for i in range(20)]
+    assert out[7] == ("lost", 7)
+    with pytest.raises(BrokenProcessPool):
+        list(parallel.map_runs(_die_on_seven, None, records, jobs=2))
 
 
 def test_background_loading_imports_and_survives_a_missing_module():
