@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import math
+import os
 import re
 from dataclasses import replace
 from pathlib import Path
@@ -284,13 +285,42 @@ def test_run_thumbnail_shades_the_phases(days):
     assert ax.get_xlabel() == "$t$ [s]"
 
 
-def test_write_outputs_timing_is_reasonable(days, tmp_path):
-    import time
+def _write_a(day, folder):
+    (Path(folder) / "a.txt").write_text("a")
 
+
+def _write_b(day, folder):
+    (Path(folder) / "b.txt").write_text(str(os.getpid()))
+
+
+def _fail(day, folder):
+    raise ValueError("no ink")
+
+
+def _die(day, folder):
+    os._exit(3)
+
+
+def test_report_writers_run_beside_each_other(days, tmp_path):
     day, _ = days["hull"]
-    t0 = time.perf_counter()
-    write_outputs(day, tmp_path / "timed")
-    assert time.perf_counter() - t0 < 60  # generous: a loaded CI machine; ~5 s on a quiet one
+    out = write_outputs(day, tmp_path / "out", writers=[_write_a, _write_b])
+    assert (out / "a.txt").read_text() == "a"
+    assert (out / "b.txt").read_text() != str(os.getpid())  # written in a process of its own
+    assert (out / "runs.csv").exists()
+
+
+@pytest.mark.parametrize("bad, message", [(_fail, "_fail: ValueError: no ink"),
+                                          (_die, "_die: the process writing it stopped")])
+def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
+    day, _ = days["hull"]
+    out = tmp_path / "out"
+    write_outputs(day, out, report=False)
+    before = sorted(p.name for p in out.iterdir())
+    with pytest.raises(RuntimeError, match=message):
+        write_outputs(day, out, writers=[_write_a, bad])
+    assert sorted(p.name for p in out.iterdir()) == before  # the previous outputs stand
+    assert not (out / "a.txt").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.tmp-")]
 
 
 def test_math_symbol():

@@ -103,8 +103,7 @@ def write_outputs(
 
         tables.write_tables(day, tmp)
         if report:
-            for writer in writers or _report_writers():
-                writer(day, tmp)
+            run_writers(writers or _report_writers(), day, tmp)
         (tmp / "provenance.json").write_text(
             json.dumps(provenance(day), indent=2, sort_keys=False, default=str) + "\n",
             encoding="utf-8",
@@ -125,6 +124,70 @@ def write_outputs(
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return out_dir
+
+
+def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
+    """Run the report writers, the first in this process and the others beside it.
+
+    Each writer writes its own files into ``folder`` and shares nothing with the others, so the
+    later ones run in forked processes while this one draws the first (the PDF, the longest):
+    the report takes about the time of its longest part. Where forking is not available or not
+    safe (another thread is running) they run one after another. A writer that fails, here or
+    in its process, fails the whole report (the caller then writes nothing).
+    """
+    import multiprocessing as mp
+    import threading
+
+    if len(writers) < 2 or "fork" not in mp.get_all_start_methods() or (
+        threading.active_count() > 1
+    ):
+        for writer in writers:
+            writer(day, folder)
+        return
+    ctx = mp.get_context("fork")
+    children = []
+    for writer in writers[1:]:
+        recv, send = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_write_in_child, args=(writer, day, folder, send), daemon=True)
+        proc.start()
+        send.close()
+        children.append((writer, proc, recv))
+    failures: list[tuple[str, str]] = []
+    try:
+        writers[0](day, folder)
+    finally:
+        for writer, proc, recv in children:
+            try:
+                outcome = recv.recv()
+            except EOFError:
+                outcome = ("the process writing it stopped abruptly", "")
+            proc.join()
+            recv.close()
+            if outcome is not None:
+                failures.append((f"{_writer_name(writer)}: {outcome[0]}", outcome[1]))
+    if failures:
+        exc = RuntimeError("; ".join(f for f, _ in failures))
+        for _, trace in failures:
+            if trace:
+                exc.add_note(trace)
+        raise exc
+
+
+def _writer_name(writer: Writer) -> str:
+    return getattr(writer, "__name__", type(writer).__name__)
+
+
+def _write_in_child(writer: Writer, day: DayResult, folder: Path, send: Any) -> None:
+    """In a forked process: one writer; sends None, or (error, traceback)."""
+    import traceback
+
+    try:
+        writer(day, folder)
+        outcome = None
+    except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
+        outcome = (f"{type(exc).__name__}: {exc}", traceback.format_exc())
+    send.send(outcome)
+    send.close()
 
 
 def _report_writers() -> list[Writer]:
@@ -148,4 +211,4 @@ def _report_writers() -> list[Writer]:
         if wanted(day, "figures"):
             write_figures(day, folder)
 
-    return [write_workbook, pdf, figures]
+    return [pdf, figures, write_workbook]  # the longest first: see run_writers
