@@ -31,6 +31,23 @@ def test_synth_writes_a_day_that_processes(tmp_path, capsys):
     assert coef.loc["X_u|u|", "value"] == pytest.approx(truth["X_u|u|"], rel=0.01)
 
 
+def test_jobs_from_the_protocol_unless_given(tmp_path, capsys, monkeypatch):
+    from towtank import parallel
+
+    day = tmp_path / "day"
+    assert main(["synth", str(day), "--day", "hull", "--seed", "3"]) == 0
+    proto = day / "protocol.toml"
+    text = proto.read_text()
+    assert text.count("[processing]\n") == 1
+    proto.write_text(text.replace("[processing]\n", "[processing]\njobs = 1\n"))
+    asked: list = []
+    real = parallel.prestart
+    monkeypatch.setattr(parallel, "prestart", lambda jobs=None: asked.append(jobs) or real(jobs))
+    assert main(["process", str(proto), "--no-report", "-q", "--no-cache"]) == 0
+    assert main(["process", str(proto), "--no-report", "-q", "--no-cache", "-j", "2"]) == 0
+    assert asked == [1, 2]
+
+
 def test_process_without_a_command_or_protocol(tmp_path, capsys):
     assert main([]) == 2
     assert main(["process", str(tmp_path / "missing.toml")]) == 2

@@ -60,7 +60,8 @@ def _parser() -> argparse.ArgumentParser:
     pr.add_argument("--no-report", action="store_true",
                     help="write the CSV tables only (no workbook, PDF or figures)")
     pr.add_argument("--jobs", "-j", type=int, metavar="N",
-                    help="runs reduced in parallel (default: all cores)")
+                    help="runs reduced in parallel (default: the protocol's [processing] "
+                         "jobs, else all cores)")
     pr.add_argument("--date", metavar="YYYY-MM-DD",
                     help="test date printed in the report (default: from the inputs)")
     pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
@@ -137,6 +138,9 @@ def cmd_process(args: argparse.Namespace) -> int:
             return code
     from towtank import parallel
 
+    # --jobs, else the protocol's [processing] jobs, else every core
+    if args.jobs is None:
+        args.jobs = protocol.processing.jobs
     # the workers load the reduction's libraries while this process loads pandas and the sheet
     parallel.prestart(args.jobs)
     try:

@@ -600,7 +600,7 @@ def despike(
         return x, 0
     with np.errstate(over="ignore", invalid="ignore"):
         d2 = x[2:] - 2.0 * x[1:-1] + x[:-2]  # d2[i - 2]: sample i from its two left neighbours
-    s_e = robust_scale(blocks(d2), floor)
+    s_e = robust_scale(blocks(d2), floor, centred=True)
     big = np.abs(d2) > threshold * s_e
     # sample i departs from both extrapolations: d2[i - 2] (left) and d2[i] (right) are big;
     # the first two and last two samples have one side only

@@ -14,6 +14,9 @@ How the work is spread (campaign scale, hundreds of runs):
   every core busy; a reduction comes back as it is (a few kB: means, windows and decimated
   samples; the raw channels never cross the process boundary), chunk by chunk and in order, so
   the caller can store each in the cache while the workers go on.
+* A worker that dies (killed, out of memory, a crash inside a library) costs only the record
+  it was on: the records not yet returned are done again one per worker, and the one whose
+  worker dies again gets the caller's ``on_crash`` result (a rejected run).
 * Where there is no fork server (Windows) the records are reduced in this process.
 """
 

@@ -198,6 +198,8 @@ def process_day(
     """
     if protocol is None:
         protocol = load_protocol(protocol_path)
+    if jobs is None:
+        jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
     day_warnings = list(protocol.warnings)
     for f in unlisted_files(sheet, protocol.campaign.data_dir):

@@ -59,15 +59,17 @@ def spread_sample(x: np.ndarray, size: int = 2 * STAT_SAMPLES) -> np.ndarray:
     return x[::step]
 
 
-def robust_scale(r: np.ndarray, floor: float) -> float:
+def robust_scale(r: np.ndarray, floor: float, *, centred: bool = False) -> float:
     """A standard deviation of ``r`` that ignores outliers and survives quantised values.
 
     1.4826·MAD collapses when most values are tied (a quantised channel: half the residuals are
     exactly 0), so the 90th percentile of |r − median|/1.645 is taken too, and the larger wins;
-    never below ``floor`` [unit of r].
+    never below ``floor`` [unit of r]. ``centred`` says that ``r`` scatters about 0 by
+    construction (second differences, residuals), so that |r| replaces |r − median| and one
+    order statistic is saved.
     """
     if r.size == 0:
         return floor
-    c = np.abs(r - quantile(r, 0.5))
+    c = np.abs(r) if centred else np.abs(r - quantile(r, 0.5))
     q50, q90 = quantiles(c, (0.5, 0.9))
     return float(max(MAD_TO_SD * q50, q90 / Q90_ABS_TO_SD, floor))
