@@ -19,6 +19,8 @@ import numpy as np
 import openpyxl
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from pypdf import PdfReader
 
 from towtank import synthetic
@@ -213,6 +215,28 @@ def test_pdf_metadata_and_reproducible(days, tmp_path):
     assert "/CreationDate" not in fin_meta  # no date known: none invented
 
 
+@settings(max_examples=60, deadline=None)
+@given(kinds=st.lists(st.sampled_from(["title", "summary", "figure", "quality", "thumbs"]),
+                      min_size=1, max_size=60),
+       parts=st.integers(1, 8))
+def test_pages_split_into_contiguous_groups(kinds, parts):
+    plan = [pdf.Page(k, "s", list(range(12)) if k == "thumbs" else None) for k in kinds]
+    groups = pdf.split_pages(plan, parts)
+    assert len(groups) == min(parts, len(plan))
+    assert [i for g in groups for i in g] == list(range(len(plan)))
+    assert all(groups)
+
+
+def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
+    day, out = days["hull"]
+    one = pdf.write_pdf(day, tmp_path, parts=1)
+    a, b = PdfReader(one), PdfReader(out / "report.pdf")
+    assert len(a.pages) == len(b.pages)
+    assert [p.extract_text() for p in a.pages] == [p.extract_text() for p in b.pages]
+    assert a.metadata["/CreationDate"] == b.metadata["/CreationDate"]
+    assert not list(tmp_path.glob(".report-part-*"))
+
+
 def test_report_date_order(days):
     day, _ = days["fin"]
     assert pdf.report_date(day) == (None, "not given")
@@ -310,7 +334,7 @@ def test_report_writers_run_beside_each_other(days, tmp_path):
 
 
 @pytest.mark.parametrize("bad, message", [(_fail, "_fail: ValueError: no ink"),
-                                          (_die, "_die: the process writing it stopped")])
+                                          (_die, "_die: the process running it stopped")])
 def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
     day, _ = days["hull"]
     out = tmp_path / "out"

@@ -242,3 +242,59 @@ def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool])
     """In a worker: one chunk of records."""
     func, protocol, records, debug = task
     return [func(protocol, rec, debug=debug) for rec in records]
+
+
+def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
+    """Run independent ``(name, task)`` pairs at once: the first here, the others forked.
+
+    For tasks that share nothing and write their own files (the parts of the report). Where
+    forking is not available or not safe (another thread is running) they run one after
+    another. A task that fails here raises as it is; one that fails (or dies) in its process
+    makes a RuntimeError naming it, with its traceback as a note, once every task has ended.
+    """
+    if len(tasks) < 2 or "fork" not in mp.get_all_start_methods() or (
+        threading.active_count() > 1
+    ):
+        for _, task in tasks:
+            task()
+        return
+    ctx = mp.get_context("fork")
+    children = []
+    for name, task in tasks[1:]:
+        recv, send = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_run_in_child, args=(task, send), daemon=True)
+        proc.start()
+        send.close()
+        children.append((name, proc, recv))
+    failures: list[tuple[str, str]] = []
+    try:
+        tasks[0][1]()
+    finally:
+        for name, proc, recv in children:
+            try:
+                outcome = recv.recv()
+            except EOFError:
+                outcome = ("the process running it stopped abruptly", "")
+            proc.join()
+            recv.close()
+            if outcome is not None:
+                failures.append((f"{name}: {outcome[0]}", outcome[1]))
+    if failures:
+        exc = RuntimeError("; ".join(f for f, _ in failures))
+        for _, trace in failures:
+            if trace:
+                exc.add_note(trace)
+        raise exc
+
+
+def _run_in_child(task: Callable[[], None], send: Any) -> None:
+    """In a forked process: one task; sends None, or (error, traceback)."""
+    import traceback
+
+    try:
+        task()
+        outcome = None
+    except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
+        outcome = (f"{type(exc).__name__}: {exc}", traceback.format_exc())
+    send.send(outcome)
+    send.close()

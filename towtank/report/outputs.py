@@ -131,63 +131,19 @@ def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
 
     Each writer writes its own files into ``folder`` and shares nothing with the others, so the
     later ones run in forked processes while this one draws the first (the PDF, the longest):
-    the report takes about the time of its longest part. Where forking is not available or not
-    safe (another thread is running) they run one after another. A writer that fails, here or
-    in its process, fails the whole report (the caller then writes nothing).
+    the report takes about the time of its longest part (:func:`towtank.parallel.run_beside`).
+    A writer that fails, here or in its process, fails the whole report (the caller then
+    writes nothing).
     """
-    import multiprocessing as mp
-    import threading
+    from functools import partial
 
-    if len(writers) < 2 or "fork" not in mp.get_all_start_methods() or (
-        threading.active_count() > 1
-    ):
-        for writer in writers:
-            writer(day, folder)
-        return
-    ctx = mp.get_context("fork")
-    children = []
-    for writer in writers[1:]:
-        recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_write_in_child, args=(writer, day, folder, send), daemon=True)
-        proc.start()
-        send.close()
-        children.append((writer, proc, recv))
-    failures: list[tuple[str, str]] = []
-    try:
-        writers[0](day, folder)
-    finally:
-        for writer, proc, recv in children:
-            try:
-                outcome = recv.recv()
-            except EOFError:
-                outcome = ("the process writing it stopped abruptly", "")
-            proc.join()
-            recv.close()
-            if outcome is not None:
-                failures.append((f"{_writer_name(writer)}: {outcome[0]}", outcome[1]))
-    if failures:
-        exc = RuntimeError("; ".join(f for f, _ in failures))
-        for _, trace in failures:
-            if trace:
-                exc.add_note(trace)
-        raise exc
+    from towtank.parallel import run_beside
+
+    run_beside([(_writer_name(w), partial(w, day, folder)) for w in writers])
 
 
 def _writer_name(writer: Writer) -> str:
     return getattr(writer, "__name__", type(writer).__name__)
-
-
-def _write_in_child(writer: Writer, day: DayResult, folder: Path, send: Any) -> None:
-    """In a forked process: one writer; sends None, or (error, traceback)."""
-    import traceback
-
-    try:
-        writer(day, folder)
-        outcome = None
-    except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
-        outcome = (f"{type(exc).__name__}: {exc}", traceback.format_exc())
-    send.send(outcome)
-    send.close()
 
 
 def _report_writers() -> list[Writer]:

@@ -11,7 +11,8 @@ Pages (A4 portrait), in order:
    long);
 5. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
 
-Only matplotlib's :class:`~matplotlib.backends.backend_pdf.PdfPages` is used. The metadata's
+The pages are drawn by matplotlib's :class:`~matplotlib.backends.backend_pdf.PdfPages`, in
+groups on all the cores at once, and joined with pypdf (:func:`write_pdf`). The metadata's
 CreationDate is fixed from the report date so the same day gives the same file.
 """
 
@@ -747,8 +748,43 @@ def _draw_thumbs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
 
 
 # ---------------------------------------------------------------------------------- writer
-def write_pdf(day: DayResult, folder: str | Path) -> Path:
+#: Page groups of report.pdf drawn at once (fixed, so that the file is the same on any machine).
+PDF_PARTS = 4
+
+#: Rough drawing time of a page by kind, relative (to split the pages evenly between cores);
+#: a thumbnail page costs in proportion to its runs.
+PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "quality": 0.3, "thumbs": 1.0}
+
+
+def _page_cost(page: Page) -> float:
+    cost = PAGE_COST.get(page.kind, 0.5)
+    if page.kind == "thumbs":
+        cost *= 0.1 + 0.9 * len(page.payload) / THUMBS_PER_PAGE
+    return cost
+
+
+def split_pages(plan: list[Page], parts: int) -> list[list[int]]:
+    """Page indices in ``parts`` contiguous groups of about equal drawing time (none empty)."""
+    parts = max(1, min(parts, len(plan)))
+    ends = np.cumsum([_page_cost(p) for p in plan])
+    cuts = [0]
+    for k in range(1, parts):
+        target = ends[-1] * k / parts
+        c = int(np.searchsorted(ends, target))  # pages [0, b) before the cut: b = c or c + 1
+        b = min((c, c + 1), key=lambda b: abs(ends[max(b - 1, 0)] - target) if b else math.inf)
+        cuts.append(min(max(b, cuts[-1] + 1), len(plan) - (parts - k)))  # none empty
+    cuts.append(len(plan))
+    return [list(range(a, b)) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> Path:
     """Write ``folder/report.pdf``.
+
+    The pages are drawn in ``parts`` groups at once (:func:`split_pages`, each group by
+    matplotlib's ``PdfPages`` into a part file, in a forked process of its own) and the parts
+    joined in order with pypdf; the metadata (title, author, creation date from the report
+    date) are set once on the whole. The number of parts does not depend on the machine, so
+    the same day gives the same bytes anywhere.
 
     Parameters
     ----------
@@ -756,31 +792,63 @@ def write_pdf(day: DayResult, folder: str | Path) -> Path:
         The processed day.
     folder : path
         The output folder (the report writers' temporary folder).
+    parts : int
+        Page groups drawn at once.
 
     Returns
     -------
     Path
         The PDF written.
     """
+    from functools import partial
+
+    from pypdf import PdfWriter
+
+    from towtank.parallel import run_beside
+
+    folder = Path(folder)
+    path = folder / "report.pdf"
+    plan = page_plan(day)
+    groups = split_pages(plan, parts)
+    parts = [folder / f".report-part-{k}.pdf" for k in range(len(groups))]
+    try:
+        run_beside([
+            (f"report.pdf pages {g[0] + 1}–{g[-1] + 1}", partial(_write_part, day, plan, g, part))
+            for g, part in zip(groups, parts, strict=True)
+        ])
+        writer = PdfWriter()
+        for part in parts:
+            writer.append(part)
+        date, _ = report_date(day)
+        created = creation_date(date)
+        meta = {
+            "/Title": f"{day.protocol.name}: towing-tank test report",
+            "/Author": "towtank",
+            "/Subject": "Hydrodynamic coefficients from towing-tank runs",
+            "/Creator": f"towtank {__version__}",
+            "/Producer": f"matplotlib {mpl.__version__}, pypdf",
+        }
+        if created is not None:
+            meta["/CreationDate"] = created.strftime("D:%Y%m%d%H%M%SZ")
+        writer.add_metadata(meta)
+        with open(path, "wb") as fh:
+            writer.write(fh)
+    finally:
+        for part in parts:
+            part.unlink(missing_ok=True)
+    return path
+
+
+def _write_part(day: DayResult, plan: list[Page], pages: list[int], path: Path) -> None:
+    """Draw the pages ``pages`` (indices into ``plan``) into the PDF ``path``."""
     from matplotlib.backends.backend_pdf import PdfPages
 
-    path = Path(folder) / "report.pdf"
-    plan = page_plan(day)
-    date, _ = report_date(day)
-    meta = {
-        "Title": f"{day.protocol.name}: towing-tank test report",
-        "Author": "towtank",
-        "Subject": "Hydrodynamic coefficients from towing-tank runs",
-        "Creator": f"towtank {__version__}",
-        "CreationDate": creation_date(date),
-        "ModDate": None,
-    }
+    meta = {"CreationDate": None, "ModDate": None}  # set on the joined file
     with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:
-        for number, page in enumerate(plan, start=1):
-            fig = _render(day, page, plan)
-            _decorate(fig, day, page, number, len(plan))
+        for i in pages:
+            fig = _render(day, plan[i], plan)
+            _decorate(fig, day, plan[i], i + 1, len(plan))
             pdf.savefig(fig)
-    return path
 
 
 def _render(day: DayResult, page: Page, plan: list[Page]) -> Figure:
