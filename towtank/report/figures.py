@@ -20,6 +20,7 @@ fig_fin_forces           fin drag and lift against speed per angle (Figs. 14–1
 fig_fin_coefficients     fin C_L, C_D against α with Sandia 2-D and finite span (Fig. 16)
 fig_scaling              model and prototype resistance, Reynolds ranges
 run_thumbnail            one run: speed, drag and lift with the phases shaded
+thumbnail_twin           the forces' axes of a thumbnail (made once, reused page after page)
 =======================  ============================================================
 """
 
@@ -668,6 +669,17 @@ def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
 
 
 # ------------------------------------------------------------------------------ (g) a run
+def thumbnail_twin(ax: Axes) -> Axes:
+    """The twin axes of a thumbnail for the forces, under the transparent speed axes."""
+    twin = ax.twinx()
+    # the force axes lie below: shading, then forces; the speed axes on top are transparent
+    ax.set_zorder(twin.get_zorder() + 1)
+    ax.patch.set_visible(False)
+    twin.grid(False)
+    twin.spines["right"].set_visible(True)
+    return twin
+
+
 def run_thumbnail(
     ax: Axes,
     reduction: RunReduction,
@@ -676,6 +688,7 @@ def run_thumbnail(
     show_lift: bool | None = None,
     labels: bool = True,
     linewidth: float = 1.0,
+    twin: Axes | None = None,
 ) -> Axes:
     """Speed (left axis) and drag/lift (right axis) of one run with its phases shaded.
 
@@ -696,6 +709,8 @@ def run_thumbnail(
         Axis labels with units.
     linewidth : float
         Line width [pt].
+    twin : Axes, optional
+        The forces' axes from :func:`thumbnail_twin` (made here when not given).
 
     Returns
     -------
@@ -704,10 +719,7 @@ def run_thumbnail(
     """
     th = reduction.thumb
     t = np.asarray(th["t"], dtype=float)
-    ax2 = ax.twinx()
-    # the force axes lie below: shading, then forces; the speed axes on top are transparent
-    ax.set_zorder(ax2.get_zorder() + 1)
-    ax.patch.set_visible(False)
+    ax2 = thumbnail_twin(ax) if twin is None else twin
     for name, (color, _label) in style.PHASE_SHADES.items():
         w = reduction.windows.get(name)
         if w is not None:
@@ -717,8 +729,6 @@ def run_thumbnail(
     lift = reduction.has_lift if show_lift is None else show_lift
     if lift and np.isfinite(th["lift"]).any():
         ax2.plot(t, th["lift"], color=style.LIFT_COLOR, lw=linewidth * 0.9, zorder=2)
-    ax2.grid(False)
-    ax2.spines["right"].set_visible(True)
     ax.set_xlim(float(t[0]), float(t[-1]))
     if labels:
         ax.set_xlabel(r"$t$ [s]")

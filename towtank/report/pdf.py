@@ -712,39 +712,82 @@ def _thumb_title(row: dict[str, Any]) -> str:
     return head
 
 
-def _draw_thumbs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
-    by_run = {int(r["run"]): r for r in day.runs.to_dict("records")}
-    top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
-    bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
-    gs = fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.93, top=1 - top,
-                          bottom=bottom, hspace=0.5, wspace=0.55)
-    any_lift = False
-    for k, run in enumerate(run_ids):
-        ax = fig.add_subplot(gs[k // THUMB_COLS, k % THUMB_COLS])
-        row = by_run[run]
-        red = day.reductions.get(run)
-        title = _thumb_title(row)
-        if red is None or row["status"] != "ok":
-            reason = short_reason(run, row.get("file"), row.get("reason"))
-            ax.set_axis_off()
+class ThumbGrid:
+    """One A4 figure with the 3 × 4 thumbnail axes, drawn again for every appendix page.
+
+    Making a matplotlib Axes (and its twin, and their ticks) is most of the time a thumbnail
+    page takes; the appendix of a large campaign has dozens of such pages, so the axes are made
+    once and each page only replaces what is drawn in them (lines, phase shades, titles, the
+    page's header and footer).
+    """
+
+    def __init__(self) -> None:
+        self.fig = _page()
+        top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
+        bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
+        gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.93, top=1 - top,
+                                   bottom=bottom, hspace=0.5, wspace=0.55)
+        self.cells = []
+        for k in range(THUMBS_PER_PAGE):
+            ax = self.fig.add_subplot(gs[k // THUMB_COLS, k % THUMB_COLS])
+            twin = figures.thumbnail_twin(ax)
+            for a in (ax, twin):
+                a.tick_params(labelsize=6, length=2, pad=1.5)
+                a.yaxis.set_major_locator(MaxNLocator(4))
+            ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
+            self.cells.append((ax, twin))
+
+    def _clear(self) -> None:
+        fig = self.fig
+        for art in [*fig.texts, *fig.artists, *fig.legends]:
+            art.remove()
+        for ax, twin in self.cells:
+            for a in (ax, twin):
+                for art in [*a.lines, *a.patches, *a.texts]:
+                    art.remove()
+                a.set_title("")
+            ax.set_xlabel("")
+            ax.set_visible(True)
+            ax.set_axis_on()
+            twin.set_visible(True)
+
+    def draw(self, day: DayResult, run_ids: list[int]) -> Figure:
+        """The figure with the runs ``run_ids`` drawn (at most :data:`THUMBS_PER_PAGE`)."""
+        self._clear()
+        by_run = {int(r["run"]): r for r in day.runs.to_dict("records")}
+        any_lift = False
+        for k, (ax, twin) in enumerate(self.cells):
+            if k >= len(run_ids):
+                ax.set_visible(False)
+                twin.set_visible(False)
+                continue
+            run = run_ids[k]
+            row = by_run[run]
+            red = day.reductions.get(run)
+            title = _thumb_title(row)
+            if red is None or row["status"] != "ok":
+                reason = short_reason(run, row.get("file"), row.get("reason"))
+                ax.set_axis_off()
+                twin.set_visible(False)
+                ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
+                ax.text(0.5, 0.5, textwrap.fill(f"{row['status']}: {reason}", 38),
+                        ha="center", va="center", fontsize=7,
+                        color="#7a0000" if row["status"] == "rejected" else "#555555",
+                        transform=ax.transAxes,
+                        bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc"})
+                continue
+            any_lift |= bool(red.has_lift)
+            figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
+            for a in (ax, twin):
+                a.relim()
+                a.autoscale_view()
             ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
-            ax.text(0.5, 0.5, textwrap.fill(f"{row['status']}: {reason}", 38), ha="center",
-                    va="center", fontsize=7, color="#7a0000" if row["status"] == "rejected"
-                    else "#555555", transform=ax.transAxes,
-                    bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc"})
-            continue
-        any_lift |= bool(red.has_lift)
-        ax2 = figures.run_thumbnail(ax, red, labels=False, linewidth=0.8)
-        ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
-        for a in (ax, ax2):
-            a.tick_params(labelsize=6, length=2, pad=1.5)
-            a.yaxis.set_major_locator(MaxNLocator(4))
-        ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
-        ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
-    legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
-    fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center", ncol=7,
-               fontsize=6.8, frameon=False, columnspacing=1.2, handlelength=1.6,
-               bbox_to_anchor=(0.5, legend_y))
+            ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
+        legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
+        self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
+                        ncol=7, fontsize=6.8, frameon=False, columnspacing=1.2,
+                        handlelength=1.6, bbox_to_anchor=(0.5, legend_y))
+        return self.fig
 
 
 # ---------------------------------------------------------------------------------- writer
@@ -844,14 +887,23 @@ def _write_part(day: DayResult, plan: list[Page], pages: list[int], path: Path) 
     from matplotlib.backends.backend_pdf import PdfPages
 
     meta = {"CreationDate": None, "ModDate": None}  # set on the joined file
+    grids: dict[str, ThumbGrid] = {}
     with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:
         for i in pages:
-            fig = _render(day, plan[i], plan)
+            fig = _render(day, plan[i], plan, grids)
             _decorate(fig, day, plan[i], i + 1, len(plan))
             pdf.savefig(fig)
 
 
-def _render(day: DayResult, page: Page, plan: list[Page]) -> Figure:
+def _render(
+    day: DayResult, page: Page, plan: list[Page], grids: dict[str, ThumbGrid] | None = None
+) -> Figure:
+    """The figure of one page; thumbnail pages reuse the ThumbGrid kept in ``grids``."""
+    if page.kind == "thumbs":
+        grids = {} if grids is None else grids
+        if "thumbs" not in grids:
+            grids["thumbs"] = ThumbGrid()
+        return grids["thumbs"].draw(day, page.payload)
     if page.kind == "figure":
         _name, func = page.payload
         fig = func(day, page=True)
@@ -866,8 +918,6 @@ def _render(day: DayResult, page: Page, plan: list[Page]) -> Figure:
         _draw_summary(fig, day)
     elif page.kind == "quality":
         _draw_quality(fig, page.payload)
-    elif page.kind == "thumbs":
-        _draw_thumbs(fig, day, page.payload)
     return fig
 
 
