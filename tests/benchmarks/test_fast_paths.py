@@ -234,6 +234,25 @@ def test_a_dying_worker_loses_only_its_record():
         list(parallel.map_runs(_die_on_seven, None, records, jobs=2))
 
 
+def test_workers_that_cannot_start_leave_the_records_to_this_process(monkeypatch):
+    import multiprocessing as mp
+
+    real = mp.get_context("forkserver")
+
+    class NoProcesses:  # a start method whose processes never start (no /tmp for the socket)
+        def __getattr__(self, name):
+            return getattr(real, name)
+
+        def Process(self, *args, **kwargs):  # noqa: N802 - the multiprocessing name
+            raise OSError("cannot start a process here")
+
+    monkeypatch.setattr(parallel, "_context", lambda: NoProcesses())
+    records = [{"x": i} for i in range(20)]
+    out = list(parallel.map_runs(_square, {"offset": 0}, records, jobs=2))
+    assert [r for r, _ in out] == [i * i for i in range(20)]
+    assert {pid for _, pid in out} == {os.getpid()}
+
+
 def test_background_loading_imports_and_survives_a_missing_module():
     thread = parallel.load_in_background(["colorsys", "towtank_no_such_module"])
     thread.join(timeout=30)
