@@ -302,3 +302,48 @@ def test_day_stamp_replays_only_an_unchanged_day(tmp_path):
     stamp().record(0, "x\n")
     (tmp_path / "data" / "new.csv").write_text("t\n")  # a file added
     assert stamp().replay() is None
+
+
+# ------------------------------------------------------------------ what each process loads
+REPO = Path(__file__).resolve().parents[2]
+_LOADED = """
+import sys
+from pathlib import Path
+from towtank.protocol import load_protocol
+{body}
+print("LOADED:", *(m for m in ("pandas", "statsmodels", "matplotlib") if m in sys.modules))
+"""
+
+
+def _loaded(body: str) -> set[str]:
+    import subprocess
+    import sys
+
+    code = _LOADED.format(body=body)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=REPO, check=True)
+    last = out.stdout.strip().splitlines()[-1]
+    assert last.startswith("LOADED:")
+    return set(last.split()[1:])
+
+
+def test_a_reduction_worker_never_loads_pandas():
+    """pyarrow's to_numpy loads pandas; in every worker that cost 0.3 s (see ingest)."""
+    loaded = _loaded(
+        "from towtank.reduce import reduce_record\n"
+        "p = load_protocol('protocols/sut2_hull.toml')\n"
+        "run, red, reason = reduce_record(p, {'run': 5, 'file': 'run_005.csv.gz'})\n"
+        "assert red is not None, reason\n"
+    )
+    assert loaded == set()
+
+
+def test_inspect_loads_neither_pandas_nor_statsmodels():
+    loaded = _loaded(
+        "from towtank.cli import main\n"
+        "import tempfile\n"
+        "png = Path(tempfile.mkdtemp()) / 'x.png'\n"
+        "assert main(['inspect', 'sample_runs/sut2_hull/data/run_005.csv.gz', '--protocol',\n"
+        "             'protocols/sut2_hull.toml', '--png', str(png)]) == 0\n"
+    )
+    assert loaded == {"matplotlib"}
