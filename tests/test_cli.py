@@ -48,6 +48,29 @@ def test_jobs_from_the_protocol_unless_given(tmp_path, capsys, monkeypatch):
     assert asked == [1, 2]
 
 
+def test_the_progress_bar_leaves_no_thread_behind(tmp_path, capsys, monkeypatch):
+    """The report's writers fork, which is safe (and done) only when no other thread runs:
+    the terminal's progress bar must not leave its monitor thread behind."""
+    import sys
+    import threading
+
+    from towtank.report import outputs
+
+    day = tmp_path / "day"
+    assert main(["synth", str(day), "--day", "fin", "--seed", "2"]) == 0
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)  # a terminal: the bar is shown
+    seen = []
+    real = outputs.write_outputs
+
+    def spy(*args, **kwargs):
+        seen.append([t.name for t in threading.enumerate()])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(outputs, "write_outputs", spy)
+    assert main(["process", str(day / "protocol.toml"), "--no-report"]) == 0
+    assert seen == [["MainThread"]]
+
+
 def test_process_without_a_command_or_protocol(tmp_path, capsys):
     assert main([]) == 2
     assert main(["process", str(tmp_path / "missing.toml")]) == 2

@@ -159,6 +159,8 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     if show:
         from tqdm import tqdm
 
+        # no monitor thread: the report's writers fork, which is only safe with one thread
+        tqdm.monitor_interval = 0
         bar = tqdm(total=0, unit="run", desc="reducing", file=sys.stderr, leave=False)
 
     def progress(done: int, total: int) -> None:
