@@ -9,7 +9,12 @@ samples of the steady and constant-acceleration windows for the fitters and a th
 whole run for the report. Everything it returns is plain data that can be cached.
 
 :func:`apply_tare` then subtracts a group's sting tare sample by sample, and
-:func:`run_coefficients` makes C_D, C_L, Re and Fn at the run's water temperature.
+:func:`force_coefficient` makes a force coefficient C = F / (½ρU²A).
+
+:func:`reduce_record` is the unit of work of the worker processes: one run-sheet row read
+(:func:`towtank.ingest.load_run`) and reduced, any problem turned into the run's one-sentence
+rejection; :func:`crashed_record` is that sentence for a run whose worker died. This module
+and what it imports never load pandas, so the workers start light.
 """
 
 from __future__ import annotations
