@@ -29,7 +29,7 @@ class Phases:
 
     still_pre: tuple[int, int]
     accel: tuple[int, int] | None
-    steady: tuple[int, int]
+    steady: tuple[int, int] | None  # None only when detected with steady_required=False
     decel: tuple[int, int] | None
     still_post: tuple[int, int] | None
     motion: tuple[int, int]
@@ -64,6 +64,7 @@ def detect_phases(
     min_still_s: float = 0.3,
     zero_window_s: float = 2.0,
     steady_tolerance: float = 0.01,
+    steady_required: bool = True,
 ) -> Phases:
     """Split a run into its phases from the filtered speed.
 
@@ -88,6 +89,10 @@ def detect_phases(
         Longest still window used for the zero (the part nearest the motion) [s].
     steady_tolerance : float
         Half-width of the plateau band as a fraction of the plateau speed [-].
+    steady_required : bool, default True
+        False when the steady window is set by hand in the run sheet: a run whose plateau is
+        not found (too short, too unsteady) then still gets its still, acceleration and
+        deceleration windows, with ``steady`` None, split at the peak speed.
 
     Returns
     -------
@@ -96,8 +101,8 @@ def detect_phases(
     Raises
     ------
     RunError
-        The carriage never moves, there is no still window before it moves, or the speed never
-        settles on a plateau.
+        The carriage never moves, there is no still window before it moves, or (with
+        ``steady_required``) the speed never settles on a plateau.
     """
     n = speed.size
     v_peak = quantile(spread_sample(speed), 0.99)
@@ -122,6 +127,56 @@ def detect_phases(
     still_post = post if post[1] - post[0] >= int(min_still_s * fs) else None
 
     # --- steady plateau: speed within a narrow band of the level where acceleration is ~0
+    try:
+        plateau, level, steady = _plateau(
+            speed, accel, motion, fs, v_peak, a_abs_peak, trim_s=trim_s,
+            min_steady_s=min_steady_s, steady_tolerance=steady_tolerance,
+        )
+    except RunError:
+        if steady_required:
+            raise
+        peak = motion[0] + int(np.argmax(speed[motion[0] : motion[1]]))
+        plateau, level, steady = (peak, peak), float(speed[peak]), None
+    n_trim = int(round(trim_s * fs))
+
+    # --- constant acceleration between motion start and plateau; deceleration after it
+    accel_w, accel_level = _constant_stretch(accel, motion[0], plateau[0], +1, fs)
+    accel_w = _trim(accel_w, n_trim, int(min_accel_s * fs))
+    decel_w, _ = _constant_stretch(accel, plateau[1], motion[1], -1, fs)
+    decel_w = _trim(decel_w, n_trim, int(min_accel_s * fs))
+    if accel_w is not None:
+        accel_level = float(np.mean(accel[accel_w[0] : accel_w[1]]))
+    else:
+        accel_level = None
+    return Phases(
+        still_pre=pre,
+        accel=accel_w,
+        steady=steady,
+        decel=decel_w,
+        still_post=still_post,
+        motion=motion,
+        speed_level=level,
+        accel_level=accel_level,
+    )
+
+
+def _plateau(
+    speed: np.ndarray,
+    accel: np.ndarray,
+    motion: tuple[int, int],
+    fs: float,
+    v_peak: float,
+    a_abs_peak: float,
+    *,
+    trim_s: float,
+    min_steady_s: float,
+    steady_tolerance: float,
+) -> tuple[tuple[int, int], float, tuple[int, int]]:
+    """(plateau, its median speed [m/s], the trimmed steady window) inside ``motion``.
+
+    The plateau is the longest stretch within ``steady_tolerance`` of the level of the fast,
+    calm samples (speed above half the peak, acceleration near zero).
+    """
     seg = slice(motion[0], motion[1])
     v_seg, a_seg = speed[seg], accel[seg]
     fast = v_seg > 0.5 * v_peak
@@ -152,26 +207,7 @@ def detect_phases(
             f"(longest steady stretch {dur:.2f} s at {level:.3f} m/s, "
             f"{min_steady_s:g} s needed after trimming {trim_s:g} s at each end)"
         )
-
-    # --- constant acceleration between motion start and plateau; deceleration after it
-    accel_w, accel_level = _constant_stretch(accel, motion[0], plateau[0], +1, fs)
-    accel_w = _trim(accel_w, n_trim, int(min_accel_s * fs))
-    decel_w, _ = _constant_stretch(accel, plateau[1], motion[1], -1, fs)
-    decel_w = _trim(decel_w, n_trim, int(min_accel_s * fs))
-    if accel_w is not None:
-        accel_level = float(np.mean(accel[accel_w[0] : accel_w[1]]))
-    else:
-        accel_level = None
-    return Phases(
-        still_pre=pre,
-        accel=accel_w,
-        steady=steady,
-        decel=decel_w,
-        still_post=still_post,
-        motion=motion,
-        speed_level=level,
-        accel_level=accel_level,
-    )
+    return plateau, level, steady
 
 
 def _constant_stretch(

@@ -75,6 +75,55 @@ class RunReduction:
     lift_mean: float = math.nan
 
 
+def manual_window_checks(
+    t: np.ndarray,
+    speed: np.ndarray,
+    window: tuple[int, int],
+    ph: phases.Phases,
+    *,
+    steady_tolerance: float,
+) -> list[str]:
+    """What is wrong with a steady window set by hand, as sentences (empty when nothing is).
+
+    A hand window is trusted over the detection, but not blindly: it is checked for overlap
+    with the detected constant-acceleration and deceleration windows (the force there holds
+    the inertia (m − X_udot)·a, which would bias a steady mean), and for a speed spread inside
+    it wider than the plateau band (max − min > 2·``steady_tolerance``·mean, or 4 mm/s).
+
+    Parameters
+    ----------
+    t : ndarray
+        Time [s].
+    speed : ndarray
+        Filtered carriage speed [m/s].
+    window : tuple of int
+        Index window [i0, i1) of the hand-set steady window.
+    ph : Phases
+        The detected phases.
+    steady_tolerance : float
+        Half-width of the plateau band as a fraction of the speed [-].
+    """
+    i0, i1 = window
+    out = []
+    for name, label in (("accel", "acceleration"), ("decel", "deceleration")):
+        w = getattr(ph, name)
+        if w is not None and w[0] < i1 and i0 < w[1]:
+            out.append(
+                f"the hand-set steady window overlaps the detected constant {label} "
+                f"({t[w[0]]:.2f}–{t[w[1] - 1]:.2f} s): its mean holds inertia force"
+            )
+    u = speed[i0:i1]
+    mean = float(np.mean(u))
+    spread = float(np.max(u) - np.min(u))
+    allowed = max(2.0 * steady_tolerance * abs(mean), 0.004)
+    if spread > allowed:
+        out.append(
+            f"the speed varies by {spread:.3f} m/s inside the hand-set steady window "
+            f"(mean {mean:.3f} m/s; a plateau varies by at most {allowed:.3f} m/s)"
+        )
+    return out
+
+
 def reduce_run(
     raw: RawRun,
     processing: Processing,
@@ -108,6 +157,11 @@ def reduce_run(
     t = raw.time
     p = processing
     notes = list(raw.notes)
+    if p.cutoff_hz >= 0.5 * fs:
+        raise RunError(
+            f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
+            f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered"
+        )
     # one zero-phase filter, identical for every channel
     forces = [raw.drag] + ([raw.lift] if raw.lift is not None else [])
     stack = np.column_stack([raw.speed] + forces + ([raw.accel] if raw.accel is not None else []))
@@ -128,19 +182,25 @@ def reduce_run(
         min_accel_s=p.min_accel_s,
         zero_window_s=p.zero_window_s,
         steady_tolerance=p.steady_tolerance,
+        steady_required=window_s is None,
     )
     windows = ph.windows_s(t)
-    steady = ph.steady
-    window_source = "detected"
-    if window_s is not None:
+    manual_warnings: list[str] = []
+    if window_s is None:
+        assert ph.steady is not None
+        steady = ph.steady
+        window_source = "detected"
+    else:
         steady = phases.manual_window(t, *window_s)
         det = windows["steady"]
-        assert det is not None
-        window_source = (
-            f"manual {window_s[0]:g}–{window_s[1]:g} s (detected {det[0]:.2f}–{det[1]:.2f} s)"
-        )
+        found = f"detected {det[0]:.2f}–{det[1]:.2f} s" if det else "no plateau detected"
+        window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s ({found})"
         notes.append(f"steady window set by hand in the sheet: {window_source}")
         windows["steady"] = (float(t[steady[0]]), float(t[steady[1] - 1]))
+        manual_warnings = manual_window_checks(
+            t, speed_f, steady, ph, steady_tolerance=p.steady_tolerance
+        )
+        notes.extend(manual_warnings)
 
     # zero and drift: on the raw forces' still windows, then the same filter (linear, so the
     # order does not matter) -- subtract the zero line from the filtered force
@@ -184,7 +244,7 @@ def reduce_run(
                 f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
             )
 
-    warn = [n for n in notes[n_notes:] if "differs from the set" in n]
+    warn = manual_warnings + [n for n in notes[n_notes:] if "differs from the set" in n]
 
     # decimated fit samples: steady and constant-acceleration windows
     rate = p.fit_sample_hz or 4.0 * p.cutoff_hz

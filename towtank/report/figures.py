@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 import textwrap
 import warnings
 from collections.abc import Callable
@@ -83,6 +84,43 @@ def math_symbol(symbol: str) -> str:
     return f"${head}_{{{sub}}}$"
 
 
+#: Plain-text symbols of the program's messages and their mathtext (no spaces inside, so that
+#: wrapping never splits one), longest first.
+_MATH_TOKENS: tuple[tuple[str, str], ...] = tuple(
+    sorted(
+        {
+            **{s: f"${s[0]}_{{\\dot{{{s[2]}}}}}$" for s in ("X_udot", "Y_vdot", "Z_wdot")},
+            **{s: f"${s[0]}_{{{s[2:]}}}$" for s in (
+                "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|", "Y_uv", "Z_uw", "Y_v|v|",
+                "Z_w|w|")},
+            **{s: f"${s[0]}_{{uu\\delta_{s[-1]}}}$" for s in (
+                "Y_uudr", "Z_uuds", "M_uuds", "N_uudr")},
+            "C_D(α)": r"$C_D(\alpha)$", "C_D,90": r"$C_{D,90}$", "C_D,min": r"$C_{D,min}$",
+            "C_L,max": r"$C_{L,max}$", "C_D": r"$C_D$", "C_L": r"$C_L$", "C_F": r"$C_F$",
+            "A_lat": r"$A_{lat}$", "ρ_p": r"$\rho_p$", "ρ_m": r"$\rho_m$", "L_p": r"$L_p$",
+            "U_p": r"$U_p$", "U_m": r"$U_m$", "R_p": r"$R_p$", "S_p": r"$S_p$", "D_a": r"$D_a$",
+            "D_s": r"$D_s$", "k2": r"$k_2$", "k1": r"$k_1$", "q2": r"$q_2$", "q1": r"$q_1$",
+        }.items(),
+        key=lambda kv: -len(kv[0]),
+    )
+)
+_MATH_RE = re.compile(
+    r"(?<![A-Za-z0-9_$\\])("
+    + "|".join(re.escape(k) for k, _ in _MATH_TOKENS)
+    + r")(?![A-Za-z0-9_])"
+)
+
+
+def math_text(text: str) -> str:
+    """Prose with the program's plain symbols typeset in mathtext: ``X_udot`` → Ẋ-style.
+
+    A ``$`` already in the text (a run's remarks, say) is escaped first, so that no text
+    from the inputs is ever parsed as mathtext.
+    """
+    table = dict(_MATH_TOKENS)
+    return _MATH_RE.sub(lambda m: table[m.group(1)], text.replace("$", r"\$"))
+
+
 def t95(dof: int) -> float:
     """Two-sided 95 % Student-t quantile for ``dof`` degrees of freedom (inf if dof ≤ 0)."""
     from scipy.stats import t
@@ -120,7 +158,7 @@ def _layout(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text
 def wrap_caption(text: str, width: int = CAPTION_CHARS) -> str:
     """``text`` wrapped to ``width`` characters; paragraphs (blank-line separated) kept apart."""
     paras = [textwrap.fill(" ".join(p.split()), width) for p in text.split("\n\n") if p.strip()]
-    return "\n".join(paras)
+    return math_text("\n".join(paras))
 
 
 def _fmt(x: float, digits: int = 4) -> str:
@@ -490,17 +528,17 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
                  title="Fin lift and drag coefficients against angle of attack", text=text)
     ax_l, ax_d = fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[1, 0])
     group_handles = []
-    for i, (g, re) in enumerate(groups):
+    for i, (g, re_g) in enumerate(groups):
         color = style.PALETTE[i % len(style.PALETTE)]
         sel = tab[tab["speed_group"] == g]
-        curves = _section_curves(grid, float(re), fr.aspect_ratio, fr.oswald_e)
+        curves = _section_curves(grid, float(re_g), fr.aspect_ratio, fr.oswald_e)
         for ax, meas, two, three in ((ax_l, "cl", curves[0], curves[2]),
                                      (ax_d, "cd", curves[1], curves[3])):
             ax.plot(grid, two, color=color, lw=1.0, alpha=0.9)
             ax.plot(grid, three, color=color, lw=1.0, ls="--", alpha=0.9)
             ax.plot(sel["angle_deg"], sel[meas], "o", color=color, ms=5, mec="black", mew=0.4,
                     zorder=4)
-        group_handles.append(Patch(color=color, label=f"$U$ ≈ {g:.2f} m/s, Re = {sci(re)}"))
+        group_handles.append(Patch(color=color, label=f"$U$ ≈ {g:.2f} m/s, Re = {sci(re_g)}"))
     style_handles = [
         Line2D([], [], ls="", marker="o", color="#777777", mec="black", mew=0.4,
                label="measured"),
@@ -555,7 +593,8 @@ def scaling_caption(day: DayResult) -> str:
     sr = day.scaling
     k2, k1 = sr.resistance
     ff = sr.form_factor
-    ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (s.d. over {ff.n} runs)."
+    ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (mean and s.d. over "
+               f"{ff.n} tested speeds, {ff.n_runs} runs)."
                if ff is not None else "No form factor (no wetted area or too few runs).")
     return (
         "Left: steady zero-angle model resistance with the resistance curve "
@@ -727,9 +766,15 @@ def run_thumbnail(
     ax.plot(t, th["U"], color=style.SPEED_COLOR, lw=linewidth, zorder=3)
     ax2.plot(t, th["drag"], color=style.DRAG_COLOR, lw=linewidth * 0.9, zorder=2)
     lift = reduction.has_lift if show_lift is None else show_lift
+    drawn = [np.asarray(th["drag"], dtype=float)]
     if lift and np.isfinite(th["lift"]).any():
         ax2.plot(t, th["lift"], color=style.LIFT_COLOR, lw=linewidth * 0.9, zorder=2)
+        drawn.append(np.asarray(th["lift"], dtype=float))
     ax.set_xlim(float(t[0]), float(t[-1]))
+    ax.set_ylim(*thumbnail_ylim(np.asarray(th["U"], dtype=float), above=0.08, below=0.05))
+    # the forces keep to the lower two thirds, so that a force that grows like U² is not
+    # drawn on top of the speed it follows
+    ax2.set_ylim(*thumbnail_ylim(np.concatenate(drawn), above=0.55, below=0.08))
     if labels:
         ax.set_xlabel(r"$t$ [s]")
         ax.set_ylabel(r"$U$ [m/s]")
@@ -737,6 +782,18 @@ def run_thumbnail(
     if title:
         ax.set_title(title)
     return ax2
+
+
+def thumbnail_ylim(values: np.ndarray, *, above: float, below: float) -> tuple[float, float]:
+    """Axis limits around the finite ``values``, with margins as fractions of their range.
+
+    Zero is always inside the range (speeds and forces are read against it).
+    """
+    v = values[np.isfinite(values)]
+    lo = min(float(v.min()), 0.0) if v.size else 0.0
+    hi = max(float(v.max()), 0.0) if v.size else 1.0
+    span = hi - lo if hi > lo else max(abs(hi), 1e-3)
+    return lo - below * span, hi + above * span
 
 
 def thumbnail_legend_handles(show_lift: bool = True) -> list[Any]:

@@ -56,6 +56,13 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     }
 
 
+#: Every entry towtank writes into an output folder (the cache aside).
+OUTPUT_NAMES = frozenset({
+    "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
+    "scaling.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
+})
+
+
 def _swap_into_place(tmp: Path, out_dir: Path) -> None:
     """Replace ``out_dir`` by ``tmp`` with renames (atomic on one file system)."""
     if out_dir.exists():
@@ -72,6 +79,48 @@ def _swap_into_place(tmp: Path, out_dir: Path) -> None:
         os.rename(tmp, out_dir)
 
 
+def _replace_entries(tmp: Path, out_dir: Path) -> None:
+    """Put the entries of ``tmp`` into ``out_dir`` one by one, each by a rename.
+
+    Used when ``out_dir`` holds files towtank did not write: those are left alone. Earlier
+    towtank outputs the new set lacks (e.g. fins.csv of a fin day) are removed, and
+    provenance.json goes last, so that it marks a complete set.
+    """
+    names = sorted(p.name for p in tmp.iterdir())
+    names.sort(key=lambda n: n == "provenance.json")
+    for name in names:
+        src, dst = tmp / name, out_dir / name
+        if src.is_dir():
+            old = None
+            if dst.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{name}.old-", dir=out_dir))
+                old.rmdir()
+                os.rename(dst, old)
+            os.rename(src, dst)
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(src, dst)
+    for name in OUTPUT_NAMES.difference(names):
+        stale = out_dir / name
+        if stale.is_dir():
+            shutil.rmtree(stale, ignore_errors=True)
+        elif stale.exists():
+            stale.unlink()
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
+def foreign_entries(out_dir: Path, keep: tuple[str, ...] = (".cache",)) -> list[str]:
+    """Names in ``out_dir`` that towtank did not write (nor keeps, nor left as temporaries)."""
+    if not out_dir.is_dir():
+        return []
+    return sorted(
+        p.name for p in out_dir.iterdir()
+        if p.name not in OUTPUT_NAMES and p.name not in keep
+        and not p.name.startswith((f".{out_dir.name}.", ".figures.old-"))
+    )
+
+
 Writer = Callable[["DayResult", Path], None]
 
 
@@ -83,15 +132,18 @@ def write_outputs(
     writers: list[Writer] | None = None,
     keep: tuple[str, ...] = (".cache",),
 ) -> Path:
-    """Write every output of the day into ``out_dir``, replacing it as a whole.
+    """Write every output of the day into ``out_dir``, replacing the previous outputs.
 
     Parameters
     ----------
     day : DayResult
         The processed day.
     out_dir : path
-        Output folder; created if needed. Its previous content is replaced only once the new
-        set is complete (entries named in ``keep``, e.g. the cache, are carried over).
+        Output folder; created if needed. Nothing is written there before the new set is
+        complete in a temporary folder beside it. A folder holding only towtank's outputs is
+        then replaced as a whole by one rename (entries named in ``keep``, e.g. the cache, are
+        carried over); in a folder that also holds other files, each output is replaced by its
+        own rename and the other files are left untouched.
     report : bool
         Also write the workbook, the PDF and the figures.
     """
@@ -108,6 +160,11 @@ def write_outputs(
             json.dumps(provenance(day), indent=2, sort_keys=False, default=str) + "\n",
             encoding="utf-8",
         )
+        if foreign_entries(out_dir, keep):
+            # a folder with the user's own files in it: replace our entries one by one and
+            # leave everything else (and the kept cache) where it is
+            _replace_entries(tmp, out_dir)
+            return out_dir
         moved = []
         for name in keep:  # carried over by a rename, not a copy: the cache can be large
             src = out_dir / name

@@ -411,6 +411,25 @@ def _model_text(day: DayResult) -> str:
     return ", ".join(parts)
 
 
+def geometry_text(day: DayResult) -> str | None:
+    """The hull geometry used, each quantity with its source; None without a [model]."""
+    from towtank.pipeline import geometry_used
+
+    short = {"π D²/4 from diameter_m": "π D²/4",
+             "L·D from length_m and diameter_m (default)": "L·D, the default",
+             "computed from the [model.myring] Myring description": "Myring description"}
+    parts = []
+    for g in geometry_used(day):
+        source = short.get(g["source"], g["source"].replace("given in the protocol", "given"))
+        if g["value"] is None:
+            parts.append(f"{g['symbol']} not known")
+        elif g["symbol"] == "S_p":
+            parts.append(f"prototype S_p = {source} = {_num(g['value'])} {g['unit']}")
+        else:
+            parts.append(f"{g['symbol']} = {_num(g['value'])} {g['unit']} ({source})")
+    return "; ".join(parts) + "." if parts else None
+
+
 def _fin_text(day: DayResult) -> str | None:
     fin = day.protocol.fin
     if fin is None:
@@ -557,8 +576,8 @@ def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
                 fontsize: float = 7.5, color: str = "#333333", indent_in: float = 0.0) -> float:
     wrapped = textwrap.fill(text, width)
     x = (MARGIN_IN + indent_in) / PAGE_W
-    fig.text(x, _y(top_in), wrapped, fontsize=fontsize, va="top", color=color,
-             linespacing=1.3)
+    fig.text(x, _y(top_in), figures.math_text(wrapped), fontsize=fontsize, va="top",
+             color=color, linespacing=1.3)
     return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
 
 
@@ -583,6 +602,12 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                  va="baseline")
         fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), value, fontsize=8.5, va="baseline")
         y += 0.21
+    geometry = geometry_text(day) if has_model else None
+    if geometry is not None:
+        fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), "Geometry", fontsize=8.5,
+                 fontweight="bold", va="baseline")
+        y += _text_block(fig, y + 0.01, geometry, width=90, fontsize=8.5, color="black",
+                         indent_in=1.0) + 0.02
     y += 0.15
     if day.hull is not None and len(day.hull.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
@@ -683,8 +708,13 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
                      _v(r["drag_ittc57"], ".4g")])
     used = _table(fig, y, header, rows, [0.8, 0.8, 0.6, 1.0, 1.1, 1.0, 1.0])
     ff = sr.form_factor
+    area = (f"on the prototype's wetted area S_p = λ²·S_m = {_num(sr.wetted_area_prototype)} m²"
+            if sr.wetted_area_prototype is not None else "not computed: no wetted area known")
+    dcf = f" + ΔC_F = {sr.delta_cf:g}" if sr.delta_cf else ""
     note = ("* extrapolated beyond the tested model speeds. "
-            + (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} from {ff.n} runs. "
+            f"ITTC-57: (1 + k)·C_F{dcf}, {area}. "
+            + (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f}: mean and s.d. over "
+               f"{ff.n} tested speeds ({ff.n_runs} runs, repeats averaged per speed). "
                if ff is not None else "") + sr.statement)
     return used + 0.08 + _text_block(fig, y + used + 0.08, note, width=125, fontsize=7)
 
@@ -694,13 +724,14 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
     x0 = MARGIN_IN / PAGE_W
     for kind, text in lines:
         if kind == "h":
-            fig.text(x0, _y(y + 0.06), text, fontsize=10.5, fontweight="bold", va="top")
+            fig.text(x0, _y(y + 0.06), text.replace("$", r"\$"), fontsize=10.5,
+                     fontweight="bold", va="top")
         elif kind == "mono":
-            fig.text(x0, _y(y), text, fontsize=6.8, family="DejaVu Sans Mono", va="top",
-                     color="#222222")
+            fig.text(x0, _y(y), text.replace("$", r"\$"), fontsize=6.8,
+                     family="DejaVu Sans Mono", va="top", color="#222222")
         elif kind in ("p", "li"):
-            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), text, fontsize=7.8,
-                     va="top", color="#222222")
+            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), figures.math_text(text),
+                     fontsize=7.8, va="top", color="#222222")
         y += LINE_IN[kind]
 
 
@@ -778,9 +809,6 @@ class ThumbGrid:
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
-            for a in (ax, twin):
-                a.relim()
-                a.autoscale_view()
             ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
         legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
