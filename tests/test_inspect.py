@@ -54,6 +54,16 @@ def test_inspect_without_protocol_uses_canonical_channels(day, tmp_path, capsys)
     assert png.exists()
 
 
+def test_lab_columns_without_protocol_suggest_the_protocol(day, tmp_path, capsys):
+    err = io.StringIO()
+    rc = inspect_run(day / "data" / "run_014.csv.gz", png=tmp_path / "x.png", err=err)
+    assert rc == 1
+    text = err.getvalue()
+    assert "columns found" in text and "--protocol" in text
+    assert text.count("\n") == 1  # one sentence pair on one line
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_default_png_goes_to_the_current_folder(day, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     rc = main(["inspect", str(day / "data" / "run_015.csv.gz"), "--protocol",

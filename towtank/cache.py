@@ -67,14 +67,15 @@ def settings_key(
 
     The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
     version, processing settings, channel mapping (:func:`protocol_settings`, which may be
-    given as ``common`` when the keys of many runs are made), file name, manual window and
-    set values.
+    given as ``common`` when the keys of many runs are made), file name, manual window, set
+    values and the run's purpose (``test``, which decides which notes are warnings).
     """
     payload = dict(protocol_settings(protocol) if common is None else common)
     payload.update({
         "file": str(row["file"]),
         "window": [_num(row.get("window_start_s")), _num(row.get("window_end_s"))],
         "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
+        "test": str(row.get("test", "")).strip().lower(),
     })
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]

@@ -138,7 +138,11 @@ def inspect_run(
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "
-        print(f"towtank: {head}{reason}.", file=err)
+        hint = ""
+        if protocol_path is None and "missing" in reason and "columns found" in reason:
+            hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
+                    "[channels] mapping names the lab's columns.")
+        print(f"towtank: {head}{reason}.{hint}", file=err)
         return EXIT_RUN_ERROR
     for line in summary_lines(red, raw.columns):
         print(line, file=out)

@@ -426,6 +426,9 @@ def reduce_record(
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
         )
+        if str(row.get("test", "")).strip().lower() == "accel" and red.windows["accel"] is None:
+            # a run made for its acceleration without one: the engineer must hear of it
+            red.warnings.extend(n for n in red.notes if n.startswith("no usable constant-acc"))
         return run, red, None
     except RunError as exc:
         reason = exc.reason
