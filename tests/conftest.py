@@ -176,6 +176,11 @@ class SeedResult:
     coefficients: pd.DataFrame  # coefficients.csv, indexed by symbol
     truth: dict[str, float]  # truth coefficients (model-scale SI)
     rejected: dict[int, str]
+    # what the hull fit was given, to refit the same day with other settings
+    runs: pd.DataFrame
+    reductions: dict[int, Any]  # towtank.reduce.RunReduction by run
+    tares: dict[str, Any]  # towtank.tare.TareModel by group
+    model: Any  # towtank.protocol.Model
 
 
 @pytest.fixture(scope="session")
@@ -197,8 +202,30 @@ def seed_result(tmp_path_factory) -> Callable[..., SeedResult]:
                 coefficients=day.hull.coefficients.set_index("symbol"),
                 truth=dict(truth.coefficients or {}),
                 rejected=dict(day.rejected),
+                runs=day.runs,
+                reductions=day.reductions,
+                tares=day.tares,
+                model=day.protocol.model,
             )
             shutil.rmtree(d, ignore_errors=True)
         return cache[key]
 
     return get
+
+
+# ------------------------------------------------------------------------------ workbook
+def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
+    """The table under the first row of ``sheet`` whose first cell starts with ``title_start``
+    (a block title: give enough of it not to match the text of a warning above it)."""
+    from openpyxl import load_workbook
+
+    ws = load_workbook(path, read_only=True)[sheet]
+    rows = [list(r) for r in ws.iter_rows(values_only=True)]
+    start = next(i for i, r in enumerate(rows) if str(r[0] or "").startswith(title_start))
+    header = [str(h).split(" [")[0] for h in rows[start + 1] if h is not None]
+    body = []
+    for r in rows[start + 2:]:
+        if r[0] is None or (len(header) > 1 and all(c is None for c in r[1:len(header)])):
+            break  # a blank row, or a note under the table
+        body.append(r[: len(header)])
+    return pd.DataFrame(body, columns=header)

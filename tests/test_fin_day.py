@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -17,7 +18,13 @@ import pytest
 from towtank import fins, sandia
 from towtank.cli import main
 from towtank.pipeline import process_day
-from towtank.synthetic import fin_protocol_sections, make_fin_day, write_protocol
+from towtank.synthetic import (
+    RunSpec,
+    fin_day_plan,
+    fin_protocol_sections,
+    make_fin_day,
+    write_protocol,
+)
 
 FINS_COLUMNS = ["run", "angle_deg", "speed_mean", "re", "cl", "cd", "cl_sandia", "cd_sandia"]
 
@@ -73,34 +80,93 @@ def test_generated_truth_is_the_sandia_section(fin_day):
     t = day.fins.table
     small = t[t["angle_deg"] <= 10]
     assert np.all(np.abs(small["cl"] - small["cl_sandia"]) < 0.01)
-    # the finite-span expectation of this low-aspect-ratio fin is far lower
-    assert np.all(small["cl_3d"] < 0.8 * small["cl_sandia"])
+    # the finite-span expectation of this low-aspect-ratio fin is far lower (away from 0 deg)
+    lifting = small[small["angle_deg"] > 0]
+    assert np.all(lifting["cl_3d"] < 0.8 * lifting["cl_sandia"])
 
 
-def test_stall_found_between_10_and_15_deg_at_low_re(fin_day):
+def test_stall_found_at_the_last_angle_before_the_fall(fin_day):
+    """Sandia's C_L peaks near 9 deg at Re ≈ 1.1e5 and at 10 deg from 1.7e5 to 2.9e5.
+
+    The tested angles step 7.5 -> 10 -> 15 deg, so the first local maximum of the measured
+    C_L(α) is 7.5 deg at 1.0 m/s and 10 deg at the three higher speeds; the least drag is at
+    the zero-lift runs.
+    """
     _, _, day = fin_day
     curves = day.fins.curves
+    assert curves["stall_reached"].all()
+    assert curves["stall_angle_deg"].tolist() == [7.5, 10.0, 10.0, 10.0]
+    assert (curves["cd_min_angle_deg"] == 0.0).all()
     slow = curves.iloc[0]
-    assert slow["stall_reached"]
-    assert 10.0 <= slow["stall_angle_deg"] < 15.0
-    assert slow["cd_min_angle_deg"] == 5.0
+    cl_75, _ = sandia.section_coefficients(7.5, slow["re_mean"])
+    assert slow["cl_max"] == pytest.approx(float(cl_75), abs=0.01)
 
 
 def test_lift_slope_interval_contains_sandia_slope(fin_day):
+    """The slope comes from the linear range, below each speed's stall: at 1.0 m/s 0-5 deg, at
+    the others 0-7.5 deg; three or more angles, so an intercept and a finite interval."""
     _, _, day = fin_day
-    for row in day.fins.curves.itertuples():
+    curves = day.fins.curves
+    assert curves["slope_angles_deg"].tolist() == ["0 2.5 5"] + ["0 2.5 5 7.5"] * 3
+    for row in curves.itertuples():
         assert row.lift_slope_ci_low <= row.lift_slope_sandia_2d <= row.lift_slope_ci_high
         assert row.lift_slope == pytest.approx(row.lift_slope_sandia_2d, rel=0.02)
+        assert row.lift_slope_3d < 0.5 * row.lift_slope  # AR = 1.25: lifting line far lower
+    assert not [w for w in day.warnings if w.startswith("fin lift slope")]
+
+
+LOW_RE_PLAN = [
+    RunSpec("sting", 0.0, v, 0.3, tare_group="post") for v in (0.3, 0.5, 0.8)
+] + [
+    RunSpec("fin", a, v, 0.3, tare_group="post")
+    for a in (0.0, 2.5, 5.0, 7.5)
+    for v in (0.3, 0.5, 0.8)
+]
 
 
 def test_low_reynolds_runs_are_warned(tmp_path):
-    make_fin_day(tmp_path, seed=5)
+    """At 0.3-0.8 m/s the 0.12 m chord runs at Re ≈ 3.4e4-9.1e4: every fin run is warned."""
+    make_fin_day(tmp_path, seed=5, runs=LOW_RE_PLAN)
     sections = fin_protocol_sections(".", "out")
     write_protocol(tmp_path / "p.toml", **sections)
     day = process_day(tmp_path / "p.toml", jobs=1)
-    low = day.fins.table[day.fins.table["re"] < 1e5]
+    t = day.fins.table
+    low = t[t["re"] < 1e5]
+    assert len(low) == len(t) == 12
     warned = [w for w in day.warnings if "below 1e5" in w]
-    assert len(warned) == len(low)
+    assert len(warned) == len(low) > 0
+    for run, re in zip(low["run"], low["re"], strict=True):
+        mine = [w for w in warned if w.startswith(f"run {run}: Re = ")]
+        assert len(mine) == 1, (run, warned)
+        assert f"Re = {re:.1e}".replace("e+0", "e") in mine[0]
+    assert warned == day.fins.warnings[: len(warned)]
+
+
+def test_sandia_re_clamp_reaches_the_day_warnings():
+    """A run below the table's Re = 1e4 is clamped; the day (report, provenance) says so."""
+    from types import SimpleNamespace
+
+    from towtank.pipeline import _fin_stage
+    from towtank.protocol import Fin
+
+    angles = [0.0, 2.5, 5.0, 7.5, 10.0]
+    runs = pd.DataFrame({
+        "run": range(1, 11), "config": "fin", "status": "ok", "angle_deg": angles * 2,
+        "speed_mean": [0.06] * 5 + [1.0] * 5, "re": [6.9e3] * 5 + [1.14e5] * 5,
+        "cl": 0.1, "cd": 0.02, "drag_mean": 0.01, "lift_mean": 0.01, "rho": 998.6,
+    })
+    day = SimpleNamespace(protocol=SimpleNamespace(fin=Fin(0.12, 0.15, x_m=-0.61)), runs=runs,
+                          warnings=[], fins=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sandia.SandiaRangeWarning)  # none escapes to stderr
+        _fin_stage(day)
+    clamp = [w for w in day.warnings if w.startswith("fin: Reynolds number")]  # said once
+    assert len(clamp) == 1, day.warnings
+    assert clamp[0] == (
+        "fin: Reynolds number 6.9e3 is below the Sandia NACA 0015 table's lowest Re = 1.0e4; "
+        "the section data at Re = 1.0e4 are used instead."
+    )
+    assert clamp[0] in day.fins.warnings
 
 
 def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
@@ -111,19 +177,27 @@ def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
     wall = process_day(tmp_path / "wall.toml", jobs=1)
     assert wall.fins.aspect_ratio == pytest.approx(2 * day.fins.aspect_ratio)
     # in the attached-flow range a larger effective aspect ratio lifts the finite-span
-    # expectation toward the 2-D data (past stall the effective angle decides, not the slope)
-    attached = day.fins.table["angle_deg"] <= 5.0
+    # expectation toward the 2-D data (past stall the effective angle decides, not the slope);
+    # at 0 deg both are zero
+    angle = day.fins.table["angle_deg"]
+    attached = (angle > 0.0) & (angle <= 5.0)
     w, f = wall.fins.table[attached], day.fins.table[attached]
     assert np.all(w["cl_3d"] > f["cl_3d"])
     assert np.all(w["cl_3d"] < w["cl_sandia"])
 
 
 def test_control_derivatives_follow_the_measured_slope(fin_day):
+    """c_La is the mean of the per-speed linear-range slopes, and the table says so."""
     _, _, day = fin_day
     ctrl = day.fins.control.set_index("symbol")
     fin = day.protocol.fin
     rho = day.runs.loc[day.runs["config"] == "fin", "rho"].mean()
     slope = float(np.nanmean(day.fins.curves["lift_slope"]))
+    np.testing.assert_allclose(ctrl["lift_slope"], slope, rtol=1e-12)
+    assert ctrl["lift_slope_source"].str.startswith(
+        "mean of the measured linear-range lift slopes (|α| ≤ 10°, below stall) of the speed "
+        "groups 1.00 m/s (0 2.5 5°), 1.50 m/s (0 2.5 5 7.5°)"
+    ).all()
     assert ctrl.loc["Y_uudr", "value"] == pytest.approx(rho * slope * fin.area)
     assert ctrl.loc["Z_uuds", "value"] == pytest.approx(-rho * slope * fin.area)
     assert ctrl.loc["N_uudr", "value"] == pytest.approx(rho * slope * fin.area * fin.x_m)
@@ -139,9 +213,19 @@ def test_sample_fin_day_cli(tmp_path):
     assert code == 0
     t = pd.read_csv(tmp_path / "out" / "fins.csv")
     assert list(t.columns[: len(FINS_COLUMNS)]) == FINS_COLUMNS
-    assert len(t) == 28
-    assert (tmp_path / "out" / "fin_curves.csv").is_file()
+    # one row per fin run of the plan: 10 angles (0, 2.5, 5, 7.5, then 10-35 deg) x 4 speeds;
+    # the 5 post (sting) tares are not fin runs
+    n_fin = sum(spec.config == "fin" for spec in fin_day_plan())
+    assert len(t) == n_fin == 40
     assert np.all(np.abs(t["cl"] - t["cl_sandia"]) < 0.01)
+    curves = pd.read_csv(tmp_path / "out" / "fin_curves.csv")
+    assert len(curves) == 4 and (curves["n_runs"] == 10).all()
+    # every speed resolves the slope: >= 3 angles below its stall, a finite interval
+    assert curves[["lift_slope", "lift_slope_ci_low", "lift_slope_ci_high"]].notna().all().all()
+    assert (curves["lift_slope_ci_high"] - curves["lift_slope_ci_low"] < 3.0).all()
+    # past stall no finite-span value is given (lifting line needs attached flow)
+    assert t.loc[t["angle_deg"] >= 25, "cl_3d"].isna().all()
+    assert t.loc[t["angle_deg"] <= 15, "cl_3d"].notna().all()
 
 
 def test_lifting_line_against_closed_form():
@@ -156,3 +240,46 @@ def test_lifting_line_against_closed_form():
     expected = 2 * np.pi / (1 + 2 * np.pi / (np.pi * 6.0))
     np.testing.assert_allclose(cl / np.radians([2.0, 4.0]), expected, rtol=1e-9)
     np.testing.assert_allclose(cd, 0.01 + cl**2 / (math.pi * 6.0), rtol=1e-9)
+
+
+def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
+    """The section data end at ±180 deg (ValueError): such a run must not stop the day."""
+    from types import SimpleNamespace
+
+    from towtank.pipeline import _fin_stage
+    from towtank.protocol import Fin
+
+    runs = pd.DataFrame({
+        "run": [1, 2, 3, 4], "config": "fin", "status": "ok",
+        "angle_deg": [0.0, 2.5, 5.0, 200.0], "speed_mean": 1.0, "re": 1.14e5, "cl": 0.1,
+        "cd": 0.02, "drag_mean": 0.01, "lift_mean": 0.01, "rho": 998.6,
+    })
+    day = SimpleNamespace(protocol=SimpleNamespace(fin=Fin(0.12, 0.15)), runs=runs,
+                          warnings=[], fins=None)
+    _fin_stage(day)
+    assert day.fins.table["run"].tolist() == [1, 2, 3]
+    assert day.warnings[0] == (
+        "run 4: fin angle 200° is outside −180…180°, the range of the Sandia section data; "
+        "the run is left out of the fin analysis."
+    )
+
+
+def test_protocol_linear_max_deg_sets_the_linear_range(fin_day, tmp_path):
+    from towtank.errors import ProtocolError
+    from towtank.protocol import load_protocol
+
+    d, _, day = fin_day
+    sections = fin_protocol_sections(str(d), str(tmp_path / "out"))
+    for bad in (0.0, -5.0, 95.0):
+        sections["fin"]["linear_max_deg"] = bad
+        write_protocol(tmp_path / "bad.toml", **sections)
+        with pytest.raises(ProtocolError, match="linear_max_deg"):
+            load_protocol(tmp_path / "bad.toml")
+    sections["fin"]["linear_max_deg"] = 5.0
+    write_protocol(tmp_path / "five.toml", **sections)
+    five = process_day(tmp_path / "five.toml", jobs=1)
+    assert five.protocol.fin.linear_max_deg == 5.0
+    assert five.fins.curves["slope_angles_deg"].tolist() == ["0 2.5 5"] * 4
+    assert "(|α| ≤ 5°, below stall)" in five.fins.control["lift_slope_source"].iloc[0]
+    # 0-5 deg is the straight part of the section at every speed: close to its 0.11/deg
+    assert five.fins.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)

@@ -266,6 +266,146 @@ def test_stall_detection():
     assert not curves["stall_reached"].any()
 
 
+def sandia_group(angles, re: float = 1.14e5, speed: float = 1.0, start: int = 1) -> pd.DataFrame:
+    """One speed group of fin runs whose measured coefficients are Sandia's at ``re``."""
+    alpha = np.asarray(angles, dtype=float)
+    cl, cd = sandia.section_coefficients(alpha, np.full(alpha.shape, re))
+    return pd.DataFrame(
+        {
+            "run": np.arange(alpha.size) + start,
+            "angle_deg": alpha,
+            "speed_mean": speed,
+            "re": re,
+            "cl": cl,
+            "cd": cd,
+            "drag_mean": 1.0,
+            "lift_mean": 1.0,
+        }
+    )
+
+
+def test_stall_is_found_on_folded_negative_angles():
+    """A day at negative angles only: folded to (|α|, sign(α) C_L), it stalls as its mirror."""
+    runs = sandia_runs()
+    positive = runs[runs["angle_deg"] >= 0]
+    mirrored = positive.assign(angle_deg=-positive["angle_deg"], cl=-positive["cl"])
+    mirrored = mirrored[mirrored["angle_deg"] < 0]  # negative angles only (0 dropped)
+    neg = fins.fin_curves(fins.fin_table(mirrored, aspect_ratio=4.0)).set_index("speed_group")
+    pos = fins.fin_curves(fins.fin_table(positive[positive["angle_deg"] > 0], aspect_ratio=4.0))
+    pos = pos.set_index("speed_group")
+    # Sandia at Re = 1e6: C_L peaks at 12 deg (1.0971)
+    assert neg.loc[1.0, "stall_angle_deg"] == 12.0
+    assert neg.loc[1.0, "cl_max"] == pytest.approx(1.0971)
+    assert bool(neg.loc[1.0, "stall_reached"]) is True
+    for col in ("stall_angle_deg", "cl_max", "lift_slope", "lift_slope_sandia_2d"):
+        np.testing.assert_allclose(neg[col], pos[col], rtol=1e-12, err_msg=col)
+    assert (neg["cd_min_angle_deg"] == -pos["cd_min_angle_deg"]).all()
+
+
+def test_stall_folds_mixed_signs_before_averaging():
+    """±α runs fold onto one curve: the fall after 12 deg is seen at -14 deg only."""
+    alpha = [4.0, 8.0, -12.0, 12.0, -14.0, -16.0]
+    runs = sandia_group(alpha, re=1e6)
+    curves = fins.fin_curves(fins.fin_table(runs, aspect_ratio=4.0))
+    assert curves.loc[0, "stall_angle_deg"] == 12.0
+    assert bool(curves.loc[0, "stall_reached"]) is True
+    assert curves.loc[0, "cl_max"] == pytest.approx(1.0971)  # mean of sign(α) C_L at |α| = 12
+
+
+def test_lift_slope_excludes_a_stalled_point_in_the_linear_range():
+    """At Re = 1.14e5 Sandia's C_L peaks near 9 deg: 10 deg lies in |α| <= 10 but past stall.
+
+    The tested C_L falls from 7.5 to 10 deg, so the stall is 7.5 deg and the slope is fitted
+    through 0, 2.5 and 5 deg only; fitting every |α| <= 10 deg (10 deg included) would pull it
+    far below the section's linear slope (~5.2 instead of ~6.1 1/rad).
+    """
+    runs = sandia_group([0.0, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0] * 2)
+    table = fins.fin_table(runs, aspect_ratio=1.25)
+    row = fins.fin_curves(table, linear_max_deg=10.0, aspect_ratio=1.25).iloc[0]
+    assert row["stall_angle_deg"] == 7.5 and bool(row["stall_reached"])
+    linear = np.array([0.0, 2.5, 5.0])
+    cl, _ = sandia.section_coefficients(linear, 1.14e5)
+    expected = np.polyfit(np.deg2rad(linear), cl, 1)[0]
+    assert row["lift_slope"] == pytest.approx(expected, rel=1e-9)
+    assert row["lift_slope"] > 6.0
+    assert row["slope_angles_deg"] == "0 2.5 5"
+    with_stalled = np.array([0.0, 2.5, 5.0, 7.5, 10.0])
+    cl_all, _ = sandia.section_coefficients(with_stalled, 1.14e5)
+    assert np.polyfit(np.deg2rad(with_stalled), cl_all, 1)[0] < 5.5  # what the old fit gave
+    # the Sandia 2-D and lifting-line slopes use the same angles
+    assert row["lift_slope_sandia_2d"] == pytest.approx(expected, rel=1e-9)
+    cl3d, _ = fins.finite_span_coefficients(linear, 1.14e5, 1.25)
+    assert row["lift_slope_3d"] == pytest.approx(np.polyfit(np.deg2rad(linear), cl3d, 1)[0])
+    assert fins.lift_slope_warnings(fins.fin_curves(table)) == []
+
+
+def test_linear_max_deg_bounds_the_fit():
+    runs = sandia_group([0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0], re=1e6)
+    table = fins.fin_table(runs, aspect_ratio=4.0)
+    narrow = fins.fin_curves(table, linear_max_deg=6.0).iloc[0]
+    wide = fins.fin_curves(table, linear_max_deg=30.0).iloc[0]
+    assert narrow["slope_angles_deg"] == "0 2 4 6"
+    assert narrow["lift_slope"] == pytest.approx(A0_SANDIA, rel=1e-9)
+    assert wide["stall_angle_deg"] == 12.0
+    assert wide["slope_angles_deg"] == "0 2 4 6 8 10"  # stops below the stall, not at 30 deg
+
+
+def test_no_slope_below_two_non_zero_angles_and_the_warning_says_why():
+    """5, 10 and 15 deg at Re = 1.14e5: stall at 10 deg leaves 5 deg alone: no slope, no secant."""
+    runs = pd.concat([sandia_group([5.0, 10.0, 15.0] * 2),
+                      sandia_group([0.0, 5.0, 10.0, 15.0], re=2.28e5, speed=2.0, start=10),
+                      sandia_group([20.0, 25.0], re=2.85e5, speed=2.5, start=20)])
+    table = fins.fin_table(runs, aspect_ratio=1.25)
+    curves = fins.fin_curves(table, aspect_ratio=1.25)
+    assert curves["lift_slope"].isna().all()
+    for col in ("lift_slope_ci_low", "lift_slope_ci_high", "lift_slope_sandia_2d",
+                "lift_slope_3d"):
+        assert curves[col].isna().all(), col
+    assert curves["slope_angles_deg"].tolist() == ["5", "0 5", ""]
+    assert fins.lift_slope_warnings(curves) == [
+        "fin lift slope at U ≈ 1.00 m/s: only 5° lies below stall (10°) within the linear "
+        "range (≤ 10°); no slope.",
+        "fin lift slope at U ≈ 2.00 m/s: only 0° and 5° lie below stall (10°) within the "
+        "linear range (≤ 10°), fewer than two distinct non-zero angles; no slope.",
+        "fin lift slope at U ≈ 2.50 m/s: no tested angle lies within the linear range "
+        "(≤ 10°); no slope.",
+    ]
+    slope, source = fins.control_lift_slope(curves)
+    assert math.isnan(slope) and "no speed group" in source
+
+
+def test_two_non_zero_angles_fit_through_the_origin():
+    runs = sandia_group([2.0, 4.0, 2.0, 4.0], re=1e6)
+    row = fins.fin_curves(fins.fin_table(runs, aspect_ratio=4.0)).iloc[0]
+    assert row["slope_angles_deg"] == "2 4"
+    assert row["lift_slope"] == pytest.approx(A0_SANDIA, rel=1e-9)
+
+
+def test_section_stall_angle():
+    stall = fins.section_stall_angle([1e6, 1.6e5, 1.14e5, np.nan, 1e4])
+    # first local maxima of the Sandia table: 12 deg at 1e6, 10 deg at 1.6e5, 3 deg at 1e4;
+    # 9 deg between 8e4 (8 deg) and 1.6e5 (10 deg)
+    np.testing.assert_array_equal(stall[[0, 1, 2, 4]], [12.0, 10.0, 9.0, 3.0])
+    assert np.isnan(stall[3])
+    assert fins.section_stall_angle(2e6).shape == ()
+
+
+def test_finite_span_values_only_for_attached_flow():
+    """cl_3d, cd_3d are NaN where the effective angle is past the section's stall."""
+    runs = pd.concat([sandia_group(np.arange(0.0, 36.0, 5.0), re=re, speed=u, start=10 * k)
+                      for k, (u, re) in enumerate(((1.0, 1.14e5), (1.5, 1.71e5), (2.0, 2.28e5),
+                                                   (2.5, 2.85e5)))])
+    table = fins.fin_table(runs, aspect_ratio=1.25)
+    cl3d, cd3d = fins.finite_span_coefficients(table["angle_deg"], table["re"], 1.25)
+    effective = table["angle_deg"] - np.rad2deg(cl3d / (math.pi * 1.25))
+    attached = np.abs(effective) <= fins.section_stall_angle(table["re"])
+    np.testing.assert_array_equal(table["cl_3d"].notna(), attached)
+    np.testing.assert_array_equal(table["cd_3d"].notna(), attached)
+    np.testing.assert_allclose(table.loc[attached, "cl_3d"], cl3d[attached], rtol=0, atol=0)
+    assert attached[table["angle_deg"] <= 15].all()  # the fin stalls later than its section
+    assert not attached[table["angle_deg"] >= 25].any()
+
+
 def test_force_vs_speed_is_sorted_long_table():
     table = fins.fin_table(sandia_runs(), aspect_ratio=4.0)
     long = fins.force_vs_speed(table)
@@ -293,6 +433,24 @@ def test_low_reynolds_warnings():
     assert fins.low_reynolds_warnings(fin_df, re_threshold=2.5e5)[0].startswith(
         "run 11: Re = 2.0e5 on the chord is below 2.5e5"
     )
+
+
+def test_control_lift_slope_is_the_mean_linear_range_slope():
+    runs = pd.concat([sandia_group([0.0, 2.5, 5.0, 7.5, 10.0, 15.0]),
+                      sandia_group([0.0, 2.5, 5.0, 7.5, 10.0, 15.0], re=2.85e5, speed=2.5,
+                                   start=10),
+                      sandia_group([5.0, 10.0, 15.0], re=1.71e5, speed=1.5, start=20)])
+    curves = fins.fin_curves(fins.fin_table(runs, aspect_ratio=1.25), linear_max_deg=8.0)
+    slope, source = fins.control_lift_slope(curves, linear_max_deg=8.0)
+    by = curves.set_index("speed_group")
+    assert math.isnan(by.loc[1.5, "lift_slope"])  # only 5 deg below its 10 deg stall
+    assert slope == pytest.approx((by.loc[1.0, "lift_slope"] + by.loc[2.5, "lift_slope"]) / 2)
+    assert source == (
+        "mean of the measured linear-range lift slopes (|α| ≤ 8°, below stall) of the speed "
+        "groups 1.00 m/s (0 2.5 5°), 2.50 m/s (0 2.5 5 7.5°)"
+    )
+    table = fins.control_derivatives(slope, 0.018, -0.61, 998.6, source)
+    assert (table["lift_slope"] == slope).all() and (table["lift_slope_source"] == source).all()
 
 
 def test_control_derivative_signs_and_values():

@@ -197,7 +197,7 @@ def test_manual_window_override(hull_day_csv: Day):
 def test_fin_day_tdms_forces(fin_day: Day):
     assert fin_day.result.rejected == {}
     rows = _ok(fin_day, "fin")
-    assert len(rows) == 28
+    assert len(rows) == 40  # 10 angles (0-35°) at 4 speeds
     for _, row in rows.iterrows():
         truth = fin_day.run_truth(row["run"])
         assert abs(row["drag_mean"] - truth["drag_model"]) <= _drag_tol(truth["drag_model"])

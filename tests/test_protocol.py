@@ -407,6 +407,70 @@ def test_cli_exit_2_and_nothing_written_for_an_unusable_protocol(folder, capsys)
     assert "did you mean 'length_m'" in err and "Traceback" not in err
 
 
+# ------------------------------------------------------------------------ [prototype] checks
+def test_prototype_length_must_match_model_length_times_scale(folder):
+    data = _base()
+    data["prototype"]["length_m"] = 2.0  # L_m x scale = 0.353 x 4 = 1.412 m
+    msg = _error(folder, data)
+    assert "length_m = 2 m" in msg and "1.412" in msg and "0.353" in msg and "scale" in msg
+    data["prototype"]["length_m"] = 1.412 * 1.009  # within 1 %: accepted
+    assert load_protocol(_write(folder, data)).prototype.length_m == pytest.approx(1.4247, 1e-4)
+
+
+@pytest.mark.parametrize("delta_cf", [0.0021, -0.0021, 0.4, -5.0])
+def test_absurd_roughness_allowance_is_refused(folder, delta_cf):
+    data = _base()
+    data["prototype"]["delta_cf"] = delta_cf
+    msg = _error(folder, data)
+    assert "delta_cf" in msg and "[prototype]" in msg and "0.002" in msg
+
+
+@pytest.mark.parametrize("delta_cf", [0.0004, -0.0002, 0.002])
+def test_plausible_roughness_allowance_is_kept(folder, delta_cf):
+    data = _base()
+    data["prototype"]["delta_cf"] = delta_cf
+    assert load_protocol(_write(folder, data)).prototype.delta_cf == delta_cf
+
+
+@pytest.mark.parametrize(
+    "key, value, words",
+    [("temperature_C", 45.0, "temperature_C = 45"), ("temperature_C", -5.0, "temperature_C = -5"),
+     ("salinity_g_kg", 350.0, "salinity_g_kg = 350")],
+)
+def test_prototype_water_outside_the_ittc_range_warns(folder, key, value, words):
+    data = _base()
+    data["prototype"]["water"][key] = value
+    p = load_protocol(_write(folder, data))
+    hits = [w for w in p.warnings if "[prototype.water]" in w]
+    assert len(hits) == 1 and words in hits[0] and "extrapolated" in hits[0], p.warnings
+    data["prototype"]["water"][key] = 15.0 if key == "temperature_C" else 35.0
+    assert load_protocol(_write(folder, data)).warnings == ()
+
+
+def test_salinity_given_for_fresh_water_is_refused(folder):
+    data = _base()
+    data["prototype"]["water"] = {"type": "fresh", "temperature_C": 15.0, "salinity_g_kg": 35.0}
+    msg = _error(folder, data)
+    assert "[prototype.water]" in msg and "salinity_g_kg" in msg and "sea" in msg
+
+
+def test_model_geometry_lists_each_quantity_with_its_source(folder):
+    from towtank.protocol import model_geometry
+
+    data = _base()
+    del data["model"]["lateral_area_m2"]
+    p = load_protocol(_write(folder, data))
+    rows = {g["symbol"]: g for g in model_geometry(p.model, 4.0)}
+    assert rows["A"]["value"] == pytest.approx(math.pi * 0.05**2 / 4)
+    assert "π D²/4" in rows["A"]["source"]
+    assert rows["A_lat"]["value"] == pytest.approx(0.353 * 0.05)
+    assert "L·D" in rows["A_lat"]["source"]
+    assert rows["S_m"]["value"] == 0.0472 and "wetted_area_m2" in rows["S_m"]["source"]
+    assert rows["V"]["value"] is None and "not known" in rows["V"]["source"]
+    assert rows["S_p"]["value"] == pytest.approx(0.0472 * 16) and "λ²" in rows["S_p"]["source"]
+    assert "S_p" not in {g["symbol"] for g in model_geometry(p.model)}
+
+
 # ------------------------------------------------------------------------------- fuzzing
 KNOWN_PATHS: list[tuple[str, ...]] = [(s,) for s in TOP_LEVEL]
 for _name, _keys in SCHEMA.items():

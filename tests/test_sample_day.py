@@ -10,6 +10,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -62,3 +63,97 @@ def test_diff_pct_against_remus_as_printed(sample):
         # the report prints |diff|; ours is signed and carries our estimate's own error
         slack = TOLERANCE_PCT[symbol] / 100 * abs(table4.loc[symbol, "sut2_prime"] / remus) * 100
         assert abs(abs(coef.loc[symbol, "diff_pct"]) - printed) <= slack + 0.05, symbol
+
+
+# --------------------------------------------------------------------- diagnostics, README
+@pytest.fixture(scope="module")
+def sample_day():
+    from conftest import process
+
+    return process(ROOT / "protocols" / "sut2_hull.toml")
+
+
+def test_repeat_groups_of_the_sample_day(sample_day):
+    """The runs at the same angle and speed: the repeats of the sheet (33, 34, 35) with their
+    originals, the accelerated runs at 0° and 90° with the steady run at their plateau speed."""
+    rep = sample_day.hull.fit.repeats
+    groups = {(float(a), r) for a, r in zip(rep["angle_deg"], rep["runs"], strict=True)}
+    assert groups == {(0.0, "14 33"), (0.0, "16 17 18 19 34"), (10.0, "27 35"),
+                      (90.0, "40 41 42")}
+    assert (rep["n"] == rep["runs"].str.split().str.len()).all()
+    # repeats agree to better than 0.02 % of C_D on this day
+    assert (rep["cd_std"] / rep["cd_mean"] < 2e-4).all()
+
+
+def test_quality_sheet_holds_the_fit_diagnostics(sample_day, tmp_path):
+    """The workbook's Quality sheet: C_D(α) residuals with studentized residuals, Cook's
+    distances and outlier flags; the transverse runs' residuals; the repeat spread; the
+    added-mass fits with their mean residual per run and the curve-difference levels."""
+    from conftest import workbook_block
+
+    from towtank.report.workbook import write_workbook
+
+    hf = sample_day.hull.fit
+    path = write_workbook(sample_day, tmp_path)
+    cd = workbook_block(path, "Quality", "C_D(α) fit: residuals")
+    assert cd["run"].tolist() == hf.damping.runs["run"].tolist()
+    np.testing.assert_allclose(cd["student"].astype(float), hf.damping.runs["student"])
+    np.testing.assert_allclose(cd["cooks"].astype(float), hf.damping.runs["cooks"])
+    assert not cd["outlier"].astype(bool).any() and hf.damping.outliers == []
+    tr = workbook_block(path, "Quality", "Transverse runs")
+    assert tr["run"].tolist() == [36, 37, 38, 39, 40, 41, 42]
+    np.testing.assert_allclose(tr["resid"].astype(float), hf.damping.transverse_runs["resid"])
+    rep = workbook_block(path, "Quality", "Repeat spread")
+    assert rep["runs"].tolist() == hf.repeats["runs"].tolist()
+    am = workbook_block(path, "Quality", "Added mass: joint regression")
+    assert am["symbol"].tolist() == ["X_udot", "Y_vdot"]
+    assert all(str(a).startswith("agree") for a in am["agreement"])
+    res = workbook_block(path, "Quality", "Added mass: mean residual")
+    expected = [(s, r) for s, fit_ in hf.added_mass.items() for r in fit_.residual_by_run]
+    assert list(zip(res["symbol"], res["run"], strict=True)) == expected
+    levels = workbook_block(path, "Quality", "Added mass: curve difference")
+    assert set(levels["symbol"]) == {"X_udot", "Y_vdot"}
+
+
+def _printed(text: str) -> tuple[float, float]:
+    """A number as printed in the README (Unicode minus) and half its last digit."""
+    text = text.replace("−", "-").strip()
+    decimals = len(text.split(".")[1]) if "." in text else 0
+    return float(text), 0.5 * 10.0**-decimals * (1 + 1e-9)
+
+
+def test_readme_table_is_the_sample_day(sample):
+    """README's coefficient table and its sentence on the intervals are this day's numbers."""
+    import json
+    import re
+
+    _, coef, _, _ = sample
+    truth = json.loads((ROOT / "sample_runs" / "sut2_hull" / "truth.json").read_text())
+    truth = truth["coefficients"]
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| ([A-Z]_[^ ]+) \[kg(?:/m)?\] \| (.+) \|$", readme, re.M)
+    assert len(rows) == 7
+    outside = set()
+    for sym, rest in rows:
+        sym = sym.replace("\\|", "|")
+        found, true, err, interval, prime, diff = (c.strip() for c in rest.split(" | "))
+        row = coef.loc[sym]
+        checks = [(found, row["value"]), (true, truth[sym]),
+                  (err.rstrip(" %"), (row["value"] - truth[sym]) / abs(truth[sym]) * 100),
+                  (prime, row["prime"])]
+        lo, hi = interval.split(" … ")
+        checks += [(lo, row["ci_low"]), (hi, row["ci_high"])]
+        if diff.startswith("(REMUS 0)"):
+            assert row["reference_prime"] == 0
+        else:
+            checks.append((diff.rstrip(" %"), row["diff_pct"]))
+        for text, value in checks:
+            v, half = _printed(text)
+            assert abs(v - value) <= half, (sym, text, value)
+        if not row["ci_low"] <= truth[sym] <= row["ci_high"]:
+            outside.add(sym)
+    assert outside == {"Y_v|v|"}
+    gap = min(abs(truth["Y_v|v|"] - coef.loc["Y_v|v|", c]) for c in ("ci_low", "ci_high"))
+    text = " ".join(readme.split())
+    assert ("every truth lies inside its 95 % interval but that of Y_v|v| (and its twin "
+            f"Z_w|w|), just outside it by {gap:.1e} kg/m".replace("e-0", "e-")) in text

@@ -7,15 +7,21 @@ and ``towtank scale`` prints the same numbers from the cached reduction.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
+import re
+import shutil
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from towtank import similarity
+from towtank import geometry, similarity
 from towtank.cli import main
+from towtank.pipeline import process_day
 from towtank.water import water_properties
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,6 +36,45 @@ def outputs(tmp_path_factory):
     code = main(["process", str(PROTOCOL), "--no-report", "--out", str(out), "-q"])
     assert code == 0
     return out
+
+
+@pytest.fixture(scope="module")
+def cache(outputs, tmp_path_factory):
+    """A copy of the sample day's run cache: the variants below reduce nothing again."""
+    folder = tmp_path_factory.mktemp("cache") / ".cache"
+    shutil.copytree(outputs / ".cache", folder)
+    return folder
+
+
+def _variant(folder: Path, *, drop: tuple[str, ...] = (), myring: bool = True,
+             prototype: dict[str, str] | None = None) -> Path:
+    """protocols/sut2_hull.toml with keys dropped, [model.myring] removed or [prototype]
+    values changed (``key: TOML value``), written to ``folder``."""
+    text = PROTOCOL.read_text(encoding="utf-8").replace('"../', f'"{ROOT}/')
+    text = re.sub(r"(?m)^output_dir = .*\n", "", text)
+    for key in drop:
+        text, n = re.subn(rf"(?m)^{key} = .*\n", "", text)
+        assert n == 1, key
+    if not myring:
+        text, n = re.subn(r"(?ms)^\[model\.myring\]\n.*?(?=^\[)", "", text)
+        assert n == 1
+    for key, value in (prototype or {}).items():
+        text, n = re.subn(r"(?m)^(\[prototype\]\n)", rf"\g<1>{key} = {value}\n", text)
+        assert n == 1
+        text = re.sub(rf"(?m)^({key} = .*\n)((?:.*\n)*?){key} = .*\n", r"\1\2", text)
+    path = folder / "variant.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _process_cached(path: Path, out: Path, cache: Path, *args: str) -> int:
+    """``towtank process`` on a variant, with the sample day's reductions in its cache."""
+    shutil.copytree(cache, out / ".cache")
+    return main(["process", str(path), "--no-report", "--out", str(out), *args])
+
+
+def _zero_runs(runs: pd.DataFrame) -> pd.DataFrame:
+    return runs[(runs.config == "hull") & (runs.status == "ok") & (runs.angle_deg == 0)]
 
 
 def test_prototype_values_are_prime_times_prototype_scale(outputs):
@@ -89,19 +134,196 @@ def test_ittc57_line_value():
     assert similarity.ittc57_cf(1e6) == pytest.approx(0.0046875, rel=1e-12)
 
 
+def _spy_on_reductions(monkeypatch) -> list[int]:
+    """Record every run handed to the reduction stage, wherever it would then run.
+
+    The runs are reduced in worker processes, where a patch of ``load_run`` in this process
+    sees nothing; :func:`towtank.parallel.map_runs` is the one door every reduction passes
+    through, in this process, so the spy sits there.
+    """
+    import towtank.parallel as parallel
+
+    reduced: list[int] = []
+    real = parallel.map_runs
+
+    def spy(func, protocol, records, **kwargs):
+        records = list(records)
+        reduced.extend(int(r["run"]) for r in records)
+        return real(func, protocol, records, **kwargs)
+
+    monkeypatch.setattr(parallel, "map_runs", spy)
+    return reduced
+
+
+def _packs(cache_dir: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted((cache_dir / "runs").iterdir())}
+
+
 def test_scale_command_prints_table_from_cache(outputs, capsys, monkeypatch):
     import towtank.reduce as reduce_stage
 
     def no_read(*args, **kwargs):
         raise AssertionError("the scale command re-read a run file despite the cache")
 
+    reduced = _spy_on_reductions(monkeypatch)
     monkeypatch.setattr(reduce_stage, "load_run", no_read)
+    packs = _packs(outputs / ".cache")
+    assert packs
     code = main(["scale", str(PROTOCOL), "--speeds", "2", "3", "--out", str(outputs)])
     text = capsys.readouterr().out
     assert code == 0
+    assert reduced == []  # every run came from the cache: none was handed to a worker
+    assert _packs(outputs / ".cache") == packs  # and the cache was not rewritten
     assert "U_m Froude" in text and "ITTC-57" in text
     assert "1.000" in text and "1.500" in text  # Froude model speeds of 2 and 3 m/s
     assert "depth" in text.lower() or "froude similarity" in text.lower()
+    assert "4 tested speeds, 9 runs" in text
+
+
+def test_reduction_spy_sees_a_cache_miss(tmp_path, capsys, monkeypatch):
+    """The spy of the test above is not blind: with no cache, scale reduces every run."""
+    reduced = _spy_on_reductions(monkeypatch)
+    code = main(["scale", str(PROTOCOL), "--speeds", "2", "--out", str(tmp_path / "empty")])
+    assert code == 0 and "U_m Froude" in capsys.readouterr().out
+    assert len(reduced) == 41  # the sheet's 42 runs but the void one
+
+
+@pytest.mark.parametrize("speed", ["nan", "inf", "-1", "0", "1e-9"])
+def test_scale_command_refuses_unusable_speeds(outputs, capsys, speed):
+    code = main(["scale", str(PROTOCOL), "--speeds", "2", speed, "--out", str(outputs)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.count("\n") == 0 and "--speeds" in err and "internal error" not in err
+    assert "prototype speed" in err
+
+
+def test_protocol_speed_below_minimum_reynolds_exits_2(tmp_path, cache, capsys):
+    path = _variant(tmp_path, prototype={"speeds_m_s": "[0.00005, 1.0]"})
+    out = tmp_path / "out"
+    assert _process_cached(path, out, cache, "-q") == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "internal error" not in err
+    assert "'speeds_m_s' in [prototype]" in err and "5e-05 m/s" in err and "Re = 59" in err
+    assert not (out / "scaling.csv").exists()  # nothing written
+
+
+def test_missing_wetted_area_leaves_only_ittc57_empty(outputs, tmp_path, cache, capsys):
+    """No wetted_area_m2 and no Myring description (valid per FORMATS): the day completes,
+    drag_ittc57 is empty with a warning and every other column of scaling.csv is as before."""
+    path = _variant(tmp_path, drop=("wetted_area_m2",), myring=False)
+    out = tmp_path / "out"
+    assert _process_cached(path, out, cache) == 0
+    text = capsys.readouterr().out
+    assert "drag_ittc57 needs the model's wetted area" in text
+    sc = pd.read_csv(out / "scaling.csv")
+    assert sc["drag_ittc57"].isna().all()
+    ref = pd.read_csv(outputs / "scaling.csv")
+    rest = [c for c in ref.columns if c != "drag_ittc57"]
+    pd.testing.assert_frame_equal(sc[rest], ref[rest])
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    assert prov["scaling"]["form_factor"] is None
+    assert prov["scaling"]["wetted_area_prototype_m2"] is None
+    wetted = next(g for g in prov["geometry"]["quantities"] if g["symbol"] == "S_m")
+    assert wetted["value"] is None and "not known" in wetted["source"]
+
+
+def test_myring_geometry_is_used_and_documented(tmp_path, cache):
+    """wetted_area_m2 and lateral_area_m2 left out, a Myring description given: its areas are
+    used (the wetted area in 1 + k and, through the ΔC_F term, in drag_ittc57) and the
+    workbook, the PDF text and provenance.json say where each came from."""
+    import openpyxl
+
+    from towtank.report.outputs import provenance
+    from towtank.report.pdf import geometry_text
+    from towtank.report.workbook import write_workbook
+
+    path = _variant(tmp_path, drop=("wetted_area_m2", "lateral_area_m2"),
+                    prototype={"delta_cf": "0.0004"})
+    day = process_day(path, cache_dir=cache)
+    my = tomllib.loads(PROTOCOL.read_text(encoding="utf-8"))["model"]["myring"]
+    g = geometry.myring_geometry(my["a"], my["b"], my["c"], my["n"], my["theta_deg"], my["d"])
+    model = day.protocol.model
+    assert model.wetted_area_m2 == g.wetted_area and model.lateral_area == g.lateral_area
+    assert g.wetted_area == pytest.approx(0.0483, abs=5e-5)  # not the 0.0472 of the protocol
+
+    zero = _zero_runs(day.runs)
+    rho_m, nu_m = float(zero.rho.mean()), float(zero.nu.mean())
+    ff = similarity.form_factor(zero.drag_mean, zero.speed_mean, g.wetted_area, rho_m, nu_m,
+                                0.353)
+    assert day.scaling.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
+    given = similarity.form_factor(zero.drag_mean, zero.speed_mean, 0.0472, rho_m, nu_m, 0.353)
+    assert abs(ff.one_plus_k - given.one_plus_k) > 0.02  # the area matters to 1 + k
+    sea = water_properties(15.0, "sea")
+    up = day.scaling.table["speed_prototype"].to_numpy()
+    cf = 0.075 / (np.log10(up * 1.412 / sea.nu) - 2) ** 2
+    s_p = 16 * g.wetted_area
+    expected = 0.5 * sea.rho * s_p * up**2 * (ff.one_plus_k * cf + 0.0004)
+    np.testing.assert_allclose(day.scaling.table["drag_ittc57"], expected, rtol=1e-9)
+    assert day.scaling.wetted_area_prototype == pytest.approx(s_p, rel=1e-12)
+    assert "Re = 2e+05" in day.scaling.statement  # the form factor's laminar threshold
+
+    write_workbook(day, tmp_path)
+    rows = [r[:5] for r in openpyxl.load_workbook(tmp_path / "report.xlsx")["Summary"]
+            .iter_rows(values_only=True)]
+    head = rows.index(("quantity", "symbol", "value", "unit", "source"))
+    table = {r[1]: r for r in rows[head + 1:head + 6]}
+    assert table["S_m"][2] == g.wetted_area and "Myring" in table["S_m"][4]
+    assert table["A_lat"][2] == g.lateral_area and "Myring" in table["A_lat"][4]
+    assert table["S_p"][2] == pytest.approx(s_p, rel=1e-12)
+    assert any("Myring" in str(r[0]) for r in rows if r and r[0])  # the geometry_source note
+
+    prov = json.loads(json.dumps(provenance(day), default=str))
+    geo = {q["symbol"]: q for q in prov["geometry"]["quantities"]}
+    assert geo["S_m"]["value"] == g.wetted_area and "Myring" in geo["S_m"]["source"]
+    assert "wetted area" in prov["geometry"]["geometry_source"]
+    assert "Myring" in prov["geometry"]["geometry_source"]
+    assert prov["scaling"]["delta_cf"] == 0.0004
+    assert "S_m = 0.04831 m² (Myring description)" in geometry_text(day)
+
+
+def test_roughness_allowance_adds_its_term_exactly(tmp_path, cache):
+    """[prototype] delta_cf through the whole day: drag_ittc57 rises by ½ρ_p U² S_p ΔC_F."""
+    base = process_day(PROTOCOL, cache_dir=cache)
+    rough = process_day(_variant(tmp_path, prototype={"delta_cf": "0.0004"}), cache_dir=cache)
+    assert rough.protocol.prototype.delta_cf == 0.0004
+    sea = water_properties(15.0, "sea")
+    up = base.scaling.table["speed_prototype"].to_numpy()
+    rise = 0.5 * sea.rho * up**2 * (16 * 0.0472) * 0.0004
+    np.testing.assert_allclose(
+        rough.scaling.table["drag_ittc57"] - base.scaling.table["drag_ittc57"], rise, rtol=1e-9
+    )
+    assert rough.scaling.form_factor.one_plus_k == base.scaling.form_factor.one_plus_k
+    pd.testing.assert_series_equal(rough.scaling.table["drag_froude"],
+                                   base.scaling.table["drag_froude"])
+
+
+def test_hot_prototype_water_is_a_day_warning(tmp_path, cache):
+    text = _variant(tmp_path).read_text(encoding="utf-8")
+    text, n = re.subn(r"(\[prototype\.water\]\ntype = \"sea\"\ntemperature_C = )15\.0",
+                      r"\g<1>45.0", text)
+    assert n == 1
+    (tmp_path / "hot.toml").write_text(text, encoding="utf-8")
+    day = process_day(tmp_path / "hot.toml", cache_dir=cache)
+    hits = [w for w in day.warnings if "[prototype.water]" in w]
+    assert len(hits) == 1 and "temperature_C = 45" in hits[0]
+
+
+def test_sample_day_form_factor_is_the_mean_over_tested_speeds(outputs):
+    """Nine zero-angle runs at four speeds (five at 2 m/s): 1 + k weighs each speed once."""
+    runs = pd.read_csv(outputs / "runs.csv")
+    zero = _zero_runs(runs)
+    u = zero.speed_mean.to_numpy()
+    ct = zero.drag_mean.to_numpy() / (0.5 * zero.rho.mean() * 0.0472 * u**2)
+    k = ct / similarity.ittc57_cf(u * 0.353 / zero.nu.mean())
+    per_speed = pd.Series(k).groupby(np.round(u, 1)).mean()
+    assert list(per_speed.index) == [0.8, 1.2, 1.6, 2.0]
+    prov = json.loads((outputs / "provenance.json").read_text(encoding="utf-8"))
+    ff = prov["scaling"]["form_factor"]
+    assert (ff["n_speeds"], ff["n_runs"]) == (4, 9)
+    assert ff["one_plus_k"] == pytest.approx(per_speed.mean(), rel=1e-6)
+    assert ff["std"] == pytest.approx(per_speed.std(ddof=1), rel=1e-6)
+    assert abs(ff["one_plus_k"] - k.mean()) > 0.05  # the run-weighted mean is another number
 
 
 def test_myring_geometry_feeds_the_model():

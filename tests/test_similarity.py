@@ -10,8 +10,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from towtank.similarity import (
+    MIN_PROTOTYPE_REYNOLDS,
     SCALING_COLUMNS,
     FormFactor,
+    check_prototype_speeds,
     form_factor,
     froude_force_ratio,
     froude_number,
@@ -27,6 +29,7 @@ from towtank.similarity import (
     reynolds_speed_prototype,
     scaling_table,
     similarity_statement,
+    speed_groups,
 )
 
 RHO_M, NU_M = 999.10, 1.1386e-6  # fresh water, 15 °C
@@ -151,6 +154,40 @@ def test_form_factor_mean_and_sample_std():
     np.testing.assert_allclose(ff.values, k_values)
 
 
+def test_form_factor_is_the_mean_over_tested_speeds_not_over_runs():
+    # five repeats at 2 m/s (within 2 % of each other) and one run at 1 and 1.5 m/s: each
+    # tested speed weighs the same, so 1 + k = mean(1.10, 1.20, 1.30) = 1.20, not the run
+    # mean (1.10 + 1.20 + 5 x 1.30) / 7 = 1.257
+    area, length, rho, nu = 0.05, 0.35, 1000.0, 1e-6
+    speed = np.array([1.0, 1.5, 2.0, 1.99, 2.01, 2.0, 2.02])
+    k_values = np.array([1.10, 1.20, 1.29, 1.31, 1.30, 1.30, 1.30])
+    drag = _synthetic_drag(speed, k_values, area, rho, nu, length)
+    ff = form_factor(drag, speed, area, rho, nu, length)
+    assert ff.n == 3 and ff.n_runs == 7
+    np.testing.assert_allclose(ff.speeds, [1.0, 1.5, np.mean(speed[2:])])
+    np.testing.assert_allclose(ff.speed_values, [1.10, 1.20, 1.30])
+    np.testing.assert_array_equal(ff.speed_runs, [1, 1, 5])
+    assert ff.one_plus_k == pytest.approx(1.20, rel=1e-12)
+    assert ff.std == pytest.approx(0.10, rel=1e-12)  # s.d. of (1.10, 1.20, 1.30)
+    np.testing.assert_allclose(ff.values, k_values)  # the per-run values are kept
+
+
+def test_form_factor_with_one_tested_speed_has_no_spread():
+    speed = np.array([2.0, 2.01, 1.995])
+    drag = _synthetic_drag(speed, np.array([1.1, 1.2, 1.3]), 0.05, 1000.0, 1e-6, 0.35)
+    ff = form_factor(drag, speed, 0.05, 1000.0, 1e-6, 0.35)
+    assert (ff.n, ff.n_runs) == (1, 3)
+    assert ff.one_plus_k == pytest.approx(1.2) and math.isnan(ff.std)
+
+
+def test_speed_groups_chain_repeats_within_two_percent():
+    groups = speed_groups([2.0, 0.8, 1.99, 1.2, 2.03, 0.81, 1.26])
+    # 0.8/0.81 (1.25 %) and 1.99/2.0/2.03 (< 2 % steps) are repeats; 1.2 -> 1.26 is 5 %
+    np.testing.assert_array_equal(groups, [3, 0, 3, 1, 3, 0, 2])
+    assert speed_groups([]).size == 0
+    np.testing.assert_array_equal(speed_groups([1.0, 1.04], rel_tol=0.05), [0, 0])
+
+
 def test_form_factor_without_turbulent_points_raises():
     with pytest.raises(ValueError, match="No steady point reaches"):
         form_factor([0.01, 0.02], [0.1, 0.2], 0.05, 1000.0, 1e-6, 0.35)
@@ -251,6 +288,45 @@ def test_scaling_table_density_ratio_and_wetted_area_scaling():
     assert table.drag_ittc57.iloc[0] == pytest.approx(expected)
 
 
+def _table(speeds, **kw):
+    args = dict(
+        scale=4.0, length_model=0.353, length_prototype=1.412, rho_m=RHO_M, nu_m=NU_M,
+        rho_p=RHO_P, nu_p=NU_P, resistance_model=lambda u: 0.2 * u**2,
+        tested_speed_range=(0.8, 2.0), wetted_area_model=0.0472, one_plus_k=1.5,
+    )
+    args.update(kw)
+    return scaling_table(speeds, **args)
+
+
+def test_scaling_table_without_wetted_area_leaves_only_ittc57_empty():
+    full = _table([1.0, 2.0])
+    table = _table([1.0, 2.0], wetted_area_model=None)
+    assert table["drag_ittc57"].isna().all()
+    rest = [c for c in SCALING_COLUMNS if c != "drag_ittc57"]
+    assert table[rest].equals(full[rest])
+    assert full["drag_ittc57"].notna().all()
+    # an unknown form factor (too few turbulent runs) likewise
+    assert _table([1.0, 2.0], one_plus_k=math.nan)["drag_ittc57"].isna().all()
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -1.0, 0.0, 1e-9, 5e-5])
+def test_scaling_table_refuses_unusable_prototype_speeds(bad):
+    with pytest.raises(ValueError, match="prototype speed"):
+        _table([1.0, bad])
+    with pytest.raises(ValueError, match="prototype speed"):
+        check_prototype_speeds([bad], 1.412, NU_P)
+
+
+def test_check_prototype_speeds_threshold():
+    u_min = MIN_PROTOTYPE_REYNOLDS * NU_P / 1.412  # Re_p = 1e3 exactly
+    np.testing.assert_array_equal(check_prototype_speeds([u_min * 1.001, 2.0], 1.412, NU_P),
+                                  [u_min * 1.001, 2.0])
+    with pytest.raises(ValueError, match=r"Re = 999.*below 1e\+03.*at least 0.00084 m/s"):
+        check_prototype_speeds([u_min * 0.999], 1.412, NU_P)
+    with pytest.raises(ValueError, match="no prototype speed"):
+        check_prototype_speeds([], 1.412, NU_P)
+
+
 def test_scaling_table_rejects_inconsistent_lengths():
     with pytest.raises(ValueError, match="does not match scale"):
         scaling_table(
@@ -284,6 +360,17 @@ def test_similarity_statement_overlap_shallow_and_laminar():
     assert "Reynolds similarity was met for Re = 2e+05 to 3e+05" in text
     assert "laminar" in text
     assert "Froude similarity would also be needed" in text
+
+
+def test_similarity_statement_uses_the_form_factor_laminar_threshold():
+    # the model's lowest Re, 1.5e5, lies above the SUT-2 report's 1e5 but below the 2e5 the
+    # form factor leaves out ([processing] laminar_re): the statement must say so
+    text = similarity_statement((1.5e5, 6.0e5), (1.2e6, 3.0e6))
+    assert "Part of the model range lies below Re = 2e+05" in text
+    assert "left out of the form factor" in text
+    assert "All model tests were above" not in text
+    low = similarity_statement((1.5e5, 6.0e5), (1.2e6, 3.0e6), turbulent_re=1e5)
+    assert "All model tests were above Re = 1e+05" in low
 
 
 def test_similarity_statement_without_depth_and_bad_arguments():

@@ -502,8 +502,18 @@ def test_day_plans():
                     and r.test == "accel")  # fmt: skip
     assert accel0 == [0.25, 0.5, 1.0]
     fin = syn.fin_day_plan()
-    assert pd.Series([r.config for r in fin]).value_counts().to_dict() == {"fin": 28, "sting": 5}
+    # 10 angles (0, 2.5, 5, 7.5, 10, 15, ..., 35 deg) x 4 speeds, and 5 post tares
+    assert pd.Series([r.config for r in fin]).value_counts().to_dict() == {"fin": 40, "sting": 5}
     assert {r.tare_group for r in fin} == {"post"}
+    fin_runs = [r for r in fin if r.config == "fin"]
+    assert sorted({r.angle_deg for r in fin_runs}) == [0.0, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0,
+                                                       25.0, 30.0, 35.0]
+    from towtank import fins
+
+    for v in sorted({r.speed for r in fin_runs}):  # >= 3 angles below the section's stall
+        stall = float(fins.section_stall_angle(v * 0.12 / 1.06e-6))
+        below = {r.angle_deg for r in fin_runs if r.speed == v and r.angle_deg < stall}
+        assert len(below) >= 3 and 0.0 in below, (v, stall)
     for spec in hull + fin:  # every planned run fits the tank
         syn.plan_profile(spec.speed, spec.accel, plateau_s=spec.plateau_s)
 
@@ -547,7 +557,7 @@ def test_sample_protocols(tmp_path):
     fin = tomllib.loads(paths[1].read_text())
     # only FORMATS keys, plus the extensions towtank documents in docs/formats.md (the hull
     # day shows the submergence depth and a Myring description, the fin day its position)
-    extensions = {"model": {"depth_m", "myring"}, "fin": {"x_m"}}
+    extensions = {"model": {"depth_m", "myring"}, "fin": {"x_m", "linear_max_deg"}}
     for data in (hull, fin):
         for section, values in data.items():
             assert set(values) <= FORMATS_KEYS[section] | extensions.get(section, set()), section
@@ -575,9 +585,55 @@ def test_shipped_sample_days_match_generator():
         r["file"] for r in hull["runs"].values()
     )
     sheet = pd.read_excel(ROOT / "sample_runs" / "sut2_hull" / "run_sheet.xlsx")
-    assert tuple(sheet.columns) == syn.SHEET_COLUMNS
+    assert tuple(sheet.columns) == syn.SHEET_COLUMNS + ("date",)
+    assert (sheet["date"] == syn.HULL_SAMPLE_DATE).all()
     fin = syn.load_truth(ROOT / "sample_runs" / "naca0015_fin")
     assert len(fin["runs"]) == len(syn.fin_day_plan())
+    fin_sheet = pd.read_csv(ROOT / "sample_runs" / "naca0015_fin" / "run_sheet.csv")
+    assert tuple(fin_sheet.columns) == syn.SHEET_COLUMNS + ("date",)
+    assert (fin_sheet["date"] == syn.FIN_SAMPLE_DATE).all()
     with gzip.open(data_dir / "run_001.csv.gz", "rb") as fh:
         first = pd.read_csv(io.BytesIO(fh.read()))
     assert list(first.columns)[:2] == ["Time (s)", "Carriage speed (m/s)"]
+
+
+def test_sheet_date_is_optional(tmp_path):
+    plan = [syn.RunSpec("sting", 0.0, 1.5, 0.5, tare_group="post")]
+    plain = syn.make_fin_day(tmp_path / "plain", seed=9, runs=plan)
+    dated = syn.make_fin_day(tmp_path / "dated", seed=9, runs=plan, date="2024-05-22")
+    sheet = pd.read_csv(tmp_path / "plain" / "run_sheet.csv")
+    assert tuple(sheet.columns) == syn.SHEET_COLUMNS  # other generated days are unchanged
+    sheet = pd.read_csv(tmp_path / "dated" / "run_sheet.csv")
+    assert tuple(sheet.columns) == syn.SHEET_COLUMNS + ("date",)
+    assert sheet["date"].tolist() == ["2024-05-22"]
+    # the date is in the sheet only: the data and the truth are the same
+    assert (tmp_path / "plain" / "truth.json").read_bytes() == (
+        tmp_path / "dated" / "truth.json").read_bytes()
+    assert plain.runs == dated.runs
+    import datetime as dt
+
+    syn.make_hull_day(tmp_path / "hull", seed=9, runs=[syn.RunSpec("sting", 0.0, 1.5, 0.5)],
+                      date=dt.date(2024, 5, 21))
+    assert pd.read_excel(tmp_path / "hull" / "run_sheet.xlsx")["date"].tolist() == [
+        "2024-05-21"]
+    with pytest.raises(ValueError, match="ISO date"):
+        syn.make_fin_day(tmp_path / "bad", seed=9, runs=plan, date="21/05/2024")
+
+
+@pytest.mark.parametrize(("day", "protocol", "date"), [
+    ("sut2_hull", "sut2_hull.toml", "2024-05-21"),
+    ("naca0015_fin", "naca0015_fin.toml", "2024-05-22"),
+])
+def test_sample_days_report_date_comes_from_the_sheet(day, protocol, date):
+    """The shipped days' report says "Test date: <date>", found in the run sheet's date column."""
+    pytest.importorskip("matplotlib")
+    from towtank.protocol import load_protocol
+    from towtank.report import pdf
+    from towtank.runsheet import read_run_sheet
+
+    p = load_protocol(ROOT / "protocols" / protocol)
+    assert p.campaign.run_sheet.parent.name == day
+    sheet = read_run_sheet(p.campaign.run_sheet, p.water.temperature_C)
+    result = SimpleNamespace(protocol=p, sheet=sheet, reductions={}, report_date=None)
+    assert pdf.date_from_inputs(result) == date
+    assert pdf.report_date(result) == (date, "newest date recorded in the run sheet or run files")

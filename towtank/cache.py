@@ -137,13 +137,18 @@ class RunCache:
         return os.path.join(real, tail), st
 
     def known_sha(self, path: Path) -> str | None:
-        """The file's sha256 if its size and mtime are those recorded with it."""
+        """The file's sha256 if its size, mtime, ctime and inode are those recorded with it.
+
+        The ctime (set by the system on every write, not settable by ``touch``) and the inode
+        catch a file rewritten at the same size with its mtime put back.
+        """
         found = self._stat(path)
         if found is None:
             return None
         key, st = found
         rec = self._files.get(key)
-        if rec and rec[0] == st.st_size and rec[1] == st.st_mtime_ns:
+        if rec and len(rec) >= 5 and rec[:2] == [st.st_size, st.st_mtime_ns] \
+                and rec[3:5] == [st.st_ctime_ns, st.st_ino]:
             return str(rec[2])
         return None
 
@@ -152,7 +157,7 @@ class RunCache:
         if found is None:
             return
         key, st = found
-        self._files[key] = [st.st_size, st.st_mtime_ns, sha]
+        self._files[key] = [st.st_size, st.st_mtime_ns, sha, st.st_ctime_ns, st.st_ino]
         self._dirty = True
 
     # --------------------------------------------------------------------------- entries
@@ -274,8 +279,8 @@ def _sha_file(path: Path) -> str | None:
         return None
 
 
-def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int]]:
-    """(relative path, size, mtime_ns) of every file under ``root``, sorted."""
+def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int, int]]:
+    """(relative path, size, mtime_ns, ctime_ns) of every file under ``root``, sorted."""
     out = []
     for dirpath, dirnames, filenames in os.walk(root):
         dirnames[:] = sorted(d for d in dirnames if d not in skip and d != "__pycache__")
@@ -285,7 +290,7 @@ def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int]]:
                 st = os.stat(p)
             except OSError:
                 continue
-            out.append((os.path.relpath(p, root), st.st_size, st.st_mtime_ns))
+            out.append((os.path.relpath(p, root), st.st_size, st.st_mtime_ns, st.st_ctime_ns))
     return sorted(out)
 
 
@@ -351,7 +356,7 @@ class DayStamp:
 
     def _outputs(self) -> dict[str, str | None]:
         skip = (self.path.parent.name,)
-        return {rel: _sha_file(self.out_dir / rel) for rel, _, _ in _tree(self.out_dir, skip)}
+        return {rel: _sha_file(self.out_dir / rel) for rel, *_ in _tree(self.out_dir, skip)}
 
     def replay(self) -> tuple[int, str] | None:
         """(exit code, summary) of the last run if nothing changed since, else None."""

@@ -116,14 +116,20 @@ def _err(msg: str) -> None:
 
 def cmd_process(args: argparse.Namespace) -> int:
     from towtank.errors import ProtocolError
-    from towtank.protocol import load_protocol
+    from towtank.protocol import check_output_dir, load_protocol
 
     try:
         protocol = load_protocol(args.protocol)
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
-    out = args.out if args.out is not None else protocol.campaign.output_dir
+    try:
+        out = check_output_dir(
+            args.out if args.out is not None else protocol.campaign.output_dir, protocol
+        )
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
     stamp = None
     if not args.no_cache:
         from towtank.cache import DayStamp

@@ -37,6 +37,7 @@ __all__ = [
     "FIN_TABLE_COLUMNS",
     "CURVE_COLUMNS",
     "control_derivatives",
+    "control_lift_slope",
     "effective_aspect_ratio",
     "fin_curves",
     "fin_table",
@@ -44,7 +45,9 @@ __all__ = [
     "finite_span_slope",
     "force_vs_speed",
     "induced_drag",
+    "lift_slope_warnings",
     "low_reynolds_warnings",
+    "section_stall_angle",
     "speed_groups",
 ]
 
@@ -60,7 +63,7 @@ FIN_TABLE_COLUMNS: tuple[str, ...] = FIN_COLUMNS + (
 CURVE_COLUMNS: tuple[str, ...] = (
     "speed_group", "re_mean", "n_runs", "lift_slope", "lift_slope_ci_low", "lift_slope_ci_high",
     "lift_slope_sandia_2d", "lift_slope_3d", "stall_angle_deg", "cl_max", "stall_reached",
-    "cd_min", "cd_min_angle_deg",
+    "cd_min", "cd_min_angle_deg", "slope_angles_deg",
 )
 _RUN_COLUMNS = ("run", "angle_deg", "speed_mean", "re", "cl", "cd", "drag_mean", "lift_mean")
 
@@ -336,6 +339,39 @@ def finite_span_coefficients(
     return cl.reshape(shape), cd3d.reshape(shape)
 
 
+def section_stall_angle(reynolds: npt.ArrayLike) -> np.ndarray:
+    """Stall angle of the 2-D NACA 0015 section: the first local maximum of C_L(alpha >= 0).
+
+    The Sandia table (Sheldahl & Klimas [3]_) interpolated linearly in alpha at the given Re
+    (:func:`towtank.sandia.section_coefficients`, its Re clamp included) is piecewise linear
+    between the tabulated angles, so its first local maximum lies on one of them: the last
+    tabulated angle before C_L first falls.
+
+    Parameters
+    ----------
+    reynolds : array_like
+        Reynolds number on the chord [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Section stall angle [deg], shape of ``reynolds``; NaN where Re is NaN or not positive.
+    """
+    re = np.asarray(reynolds, dtype=float)
+    out = np.full(re.shape, np.nan)
+    ok = np.isfinite(re) & (re > 0)
+    if not ok.any():
+        return out
+    knots = np.unique(sandia.table()["alpha_deg"].to_numpy(dtype=float))
+    unique_re, inverse = np.unique(re[ok], return_inverse=True)
+    cl, _ = sandia.section_coefficients(knots[None, :], unique_re[:, None])
+    falls = np.diff(cl, axis=1) < 0
+    first = np.argmax(falls, axis=1)
+    stall = np.where(falls.any(axis=1), knots[first], np.nan)
+    out[ok] = stall[inverse]
+    return out
+
+
 # --------------------------------------------------------------------------------------------
 # Per-run table and curves
 # --------------------------------------------------------------------------------------------
@@ -380,7 +416,11 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
 
     cl_sandia, cd_sandia are :func:`towtank.sandia.section_coefficients` at the run's angle and
     chord Reynolds number (Sheldahl & Klimas [3]_); cl_3d, cd_3d the lifting-line expectation of
-    :func:`finite_span_coefficients` for the fin's effective aspect ratio.
+    :func:`finite_span_coefficients` for the fin's effective aspect ratio where the flow is
+    attached, i.e. where the effective angle |alpha - alpha_i| (alpha_i = C_L,3D / (pi e AR),
+    Anderson [1]_ section 5.3) is at or below the section's stall angle at the run's Re
+    (:func:`section_stall_angle`), and NaN otherwise: past stall lifting-line theory does not
+    hold and its self-consistent solution jumps between branches.
 
     Parameters
     ----------
@@ -397,9 +437,9 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
     -------
     pandas.DataFrame
         Columns :data:`FIN_TABLE_COLUMNS`: the fins.csv columns of FORMATS.md section 5 (run,
-        angle_deg, speed_mean, re, cl, cd, cl_sandia, cd_sandia), then cl_3d, cd_3d,
-        speed_group [m/s] (see :func:`speed_groups`), drag_mean [N], lift_mean [N]. Rows in the
-        order of ``runs``.
+        angle_deg, speed_mean, re, cl, cd, cl_sandia, cd_sandia), then cl_3d, cd_3d (NaN past
+        the section's stall), speed_group [m/s] (see :func:`speed_groups`), drag_mean [N],
+        lift_mean [N]. Rows in the order of ``runs``.
     """
     _require(runs, _RUN_COLUMNS, "The fin run table")
     out = runs.loc[:, list(_RUN_COLUMNS)].reset_index(drop=True).copy()
@@ -409,12 +449,24 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sandia.SandiaRangeWarning)  # already said once
         cl3d, cd3d = finite_span_coefficients(alpha, re, aspect_ratio, e)
+        stall = section_stall_angle(re)
+    # lifting-line theory holds for attached flow only: past the section's stall the
+    # self-consistent solution jumps between branches, so no finite-span value is given there
+    effective = alpha - np.rad2deg(cl3d / (np.pi * e * aspect_ratio))
+    attached = np.abs(effective) <= stall
+    cl3d = np.where(attached, cl3d, np.nan)
+    cd3d = np.where(attached, cd3d, np.nan)
     out["cl_sandia"] = cl2d
     out["cd_sandia"] = cd2d
     out["cl_3d"] = cl3d
     out["cd_3d"] = cd3d
     out["speed_group"] = speed_groups(out["speed_mean"].to_numpy(dtype=float))
     return out.loc[:, list(FIN_TABLE_COLUMNS)]
+
+
+def _enough_angles(alpha: np.ndarray) -> bool:
+    """A slope needs two or more distinct non-zero angles (one angle gives only a secant)."""
+    return bool(np.unique(alpha[alpha != 0]).size >= 2)
 
 
 def _with_intercept(alpha_rad: np.ndarray) -> bool:
@@ -425,16 +477,16 @@ def _with_intercept(alpha_rad: np.ndarray) -> bool:
 def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tuple[float, ...]:
     """OLS slope of C_L on α: (a, ci_low, ci_high); NaN where the data cannot tell.
 
-    With three or more distinct angles the line C_L = a·α + c0 is fitted (c0 absorbs a small
-    misalignment of the fin); with fewer, C_L = a·α through the origin, which the symmetric
-    section justifies, so that two angles (e.g. 5° and 10°) still give a slope and an interval
-    from their repeats and speeds.
+    NaN unless two or more distinct non-zero angles. With three or more distinct angles the line
+    C_L = a·α + c0 is fitted (c0 absorbs a small misalignment of the fin); with two (both
+    non-zero), C_L = a·α through the origin, which the symmetric section justifies, so that two
+    angles (e.g. 2.5° and 5°) still give a slope and an interval from their repeats and speeds.
     """
     from statsmodels.regression.linear_model import OLS
 
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
     x, y = alpha_rad[ok], y[ok]
-    if x.size < 1 or not np.any(x != 0):
+    if not _enough_angles(x):
         return np.nan, np.nan, np.nan
     if _with_intercept(x):
         fit = OLS(y, np.column_stack([np.ones_like(x), x])).fit()
@@ -453,26 +505,39 @@ def _ls_slope(alpha_rad: np.ndarray, y: np.ndarray) -> float:
     """Least-squares slope of y on alpha (same model as :func:`_ols_slope`, no interval)."""
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
     x, y = alpha_rad[ok], y[ok]
-    if x.size < 1 or not np.any(x != 0):
+    if not _enough_angles(x):
         return np.nan
     if _with_intercept(x):
         return float(np.polyfit(x, y, 1)[0])
     return float(x @ y / (x @ x))
 
 
-def _stall(cl_by_angle: pd.Series) -> tuple[float, float, bool]:
-    """(stall angle [deg], C_L,max, stall reached) from mean C_L per angle: first local max."""
-    positive = cl_by_angle[cl_by_angle.index >= 0].sort_index()
-    if positive.empty:
-        positive = cl_by_angle.sort_index()
-    angles = positive.index.to_numpy(dtype=float)
-    cl = positive.to_numpy(dtype=float)
-    drops = np.flatnonzero(np.diff(cl) < 0)
+def _stall(alpha_deg: np.ndarray, cl: np.ndarray) -> tuple[float, float, object]:
+    """(stall angle [deg], C_L,max, stall reached) from runs folded to (|α|, sign(α)·C_L).
+
+    C_L is averaged over the runs at each |α|; the stall is the first local maximum of that
+    curve. (NaN, NaN, pd.NA) without a finite run.
+    """
+    ok = np.isfinite(alpha_deg) & np.isfinite(cl)
+    if not ok.any():
+        return np.nan, np.nan, pd.NA
+    folded_alpha = np.abs(alpha_deg[ok])
+    folded_cl = np.where(alpha_deg[ok] < 0, -cl[ok], cl[ok])
+    per_angle = pd.Series(folded_cl).groupby(folded_alpha).mean().sort_index()
+    angles = per_angle.index.to_numpy(dtype=float)
+    mean_cl = per_angle.to_numpy(dtype=float)
+    drops = np.flatnonzero(np.diff(mean_cl) < 0)
     if drops.size:
         k = int(drops[0])
-        return float(angles[k]), float(cl[k]), True
-    k = int(np.argmax(cl))
-    return float(angles[k]), float(cl[k]), False
+        return float(angles[k]), float(mean_cl[k]), True
+    k = int(np.argmax(mean_cl))
+    return float(angles[k]), float(mean_cl[k]), False
+
+
+def _angle_list(angles: npt.ArrayLike) -> str:
+    """Distinct angles as text, ascending: "0 2.5 5" ("" for none)."""
+    values = np.unique(np.asarray(angles, dtype=float))
+    return " ".join(f"{v:g}" for v in values[np.isfinite(values)])
 
 
 def fin_curves(
@@ -485,29 +550,37 @@ def fin_curves(
 ) -> pd.DataFrame:
     """Lift slope, stall and minimum drag of the fin, one row per speed group.
 
-    Lift slope: OLS fit C_L = a alpha + c0 (alpha in rad) through the group's runs with
-    |alpha| <= ``linear_max_deg``, with the ``level`` (95 %) t-interval of a from statsmodels;
-    NaN where fewer than two distinct angles (interval NaN with fewer than three runs). The same
-    straight line is fitted through the Sandia 2-D section (Sheldahl & Klimas [3]_) evaluated at
-    the group's mean Re and the same angles (``lift_slope_sandia_2d``) and through the lifting-line
-    expectation (``lift_slope_3d``; Anderson [1]_ section 5.3): with ``aspect_ratio`` given it is
-    :func:`finite_span_coefficients` at the group's mean Re, otherwise the ``cl_3d`` column of
-    ``fin_df`` (each run's own Re, within the 5 % speed grouping of the mean).
+    Stall: each run is folded to (|α|, sign(α)·C_L) (the section is symmetric) and C_L is
+    averaged over the runs at each |α|; the stall angle is the first angle after which C_L falls
+    (the first local maximum of C_L(|α|)), and its C_L is C_L,max (positive). Past stall a
+    section's lift can rise again towards the flat-plate regime (the Sandia tables peak again
+    near 45°), so the global maximum is not the stall. ``stall_reached`` is False when C_L never
+    falls within the tested angles.
 
-    Stall: C_L is averaged over repeats at each angle (|α| taken, lift sign folded); the stall
-    angle is the first angle after which C_L falls (the first local maximum of C_L(α)), and its
-    C_L is C_L,max. Past stall a section's lift can rise again towards the flat-plate regime
-    (the Sandia tables peak again near 45°), so the global maximum is not the stall.
-    ``stall_reached`` is False when C_L never falls within the tested angles. Minimum C_D and
-    its angle from the per-angle means.
+    Lift slope from the linear range: the group's runs with |α| <= ``linear_max_deg`` and, when
+    the stall is reached, |α| strictly below the group's stall angle (a stalled point is never
+    fitted). OLS fit of C_L = a α + c0 (α in rad) with three or more distinct angles, of
+    C_L = a α with two (both non-zero), with the ``level`` (95 %) t-interval of a from
+    statsmodels; NaN with fewer than two distinct non-zero angles (no secant is passed off as a
+    slope; :func:`lift_slope_warnings` says why), interval NaN without residual degrees of
+    freedom. The angles used are listed in ``slope_angles_deg``. The same straight line through
+    the same angles (each run's angle, repeats included) is fitted through the Sandia 2-D
+    section (Sheldahl & Klimas [3]_) at the group's mean Re (``lift_slope_sandia_2d``) and
+    through the lifting-line expectation (``lift_slope_3d``; Anderson [1]_ section 5.3): with
+    ``aspect_ratio`` given it is :func:`finite_span_coefficients` at the group's mean Re,
+    otherwise the ``cl_3d`` column of ``fin_df`` (each run's own Re, within the 5 % speed
+    grouping of the mean).
+
+    Minimum C_D and its (signed) angle from the means per angle.
 
     Parameters
     ----------
     fin_df : pandas.DataFrame
-        Output of :func:`fin_table` (needs angle_deg [deg], re [-], cl, cd, cl_sandia,
-        speed_group [m/s]; cl_3d unless ``aspect_ratio`` is given).
+        Output of :func:`fin_table` (needs angle_deg [deg], re [-], cl, cd, speed_group [m/s];
+        cl_3d unless ``aspect_ratio`` is given).
     linear_max_deg : float, default 10.0
-        Largest |angle of attack| used for the slope fits [deg].
+        Largest |angle of attack| of the linear range used for the slope fits [deg]
+        (protocol ``[fin] linear_max_deg``).
     aspect_ratio : float, optional
         Effective aspect ratio [-] for the 3-D expectation at the group's mean Re.
     e : float, default 1.0
@@ -519,7 +592,8 @@ def fin_curves(
     -------
     pandas.DataFrame
         Columns :data:`CURVE_COLUMNS`; slopes in [1/rad], angles in [deg], re_mean [-],
-        speed_group [m/s]; sorted by speed group.
+        speed_group [m/s], slope_angles_deg the distinct angles of the slope fit [deg] as text
+        ("0 2.5 5"); sorted by speed group.
     """
     _require(fin_df, ("angle_deg", "re", "cl", "cd", "speed_group"), "The fin table")
     if aspect_ratio is None:
@@ -527,14 +601,17 @@ def fin_curves(
     rows = []
     for label, group in fin_df.groupby("speed_group", sort=True):
         angle = group["angle_deg"].to_numpy(dtype=float)
+        cl = group["cl"].to_numpy(dtype=float)
         re_mean = float(np.nanmean(group["re"].to_numpy(dtype=float)))
-        linear = np.abs(angle) <= linear_max_deg
-        a_lin = angle[linear]
-        a, low, high = _ols_slope(np.deg2rad(a_lin), group["cl"].to_numpy(dtype=float)[linear],
-                                  level)
+        stall_angle, cl_max, reached = _stall(angle, cl)
+
+        linear = np.isfinite(angle) & np.isfinite(cl) & (np.abs(angle) <= linear_max_deg)
+        if reached is True:
+            linear &= np.abs(angle) < stall_angle
+        fit_angles = angle[linear]
+        a, low, high = _ols_slope(np.deg2rad(fit_angles), cl[linear], level)
         slope_2d = slope_3d = np.nan
-        fit_angles = a_lin[np.isfinite(a_lin)]
-        if np.isfinite(re_mean) and fit_angles.size:
+        if np.isfinite(re_mean) and _enough_angles(fit_angles):
             re_fit = np.full(fit_angles.shape, re_mean)
             cl2d, _ = sandia.section_coefficients(fit_angles, re_fit)
             slope_2d = _ls_slope(np.deg2rad(fit_angles), cl2d)
@@ -544,16 +621,11 @@ def fin_curves(
                     cl3d, _ = finite_span_coefficients(fit_angles, re_fit, aspect_ratio, e)
                 slope_3d = _ls_slope(np.deg2rad(fit_angles), cl3d)
         if aspect_ratio is None:
-            slope_3d = _ls_slope(np.deg2rad(a_lin), group["cl_3d"].to_numpy(dtype=float)[linear])
+            slope_3d = _ls_slope(
+                np.deg2rad(fit_angles), group["cl_3d"].to_numpy(dtype=float)[linear]
+            )
 
-        per_angle = group.groupby("angle_deg")[["cl", "cd"]].mean()
-        cl_by = per_angle["cl"].dropna()
-        cd_by = per_angle["cd"].dropna()
-        if cl_by.empty:
-            stall_angle = cl_max = np.nan
-            reached: object = pd.NA
-        else:
-            stall_angle, cl_max, reached = _stall(cl_by)
+        cd_by = group.groupby("angle_deg")["cd"].mean().dropna()
         cd_min = float(cd_by.min()) if not cd_by.empty else np.nan
         cd_min_angle = float(cd_by.idxmin()) if not cd_by.empty else np.nan
         rows.append(
@@ -571,11 +643,60 @@ def fin_curves(
                 "stall_reached": reached,
                 "cd_min": cd_min,
                 "cd_min_angle_deg": cd_min_angle,
+                "slope_angles_deg": _angle_list(fit_angles),
             }
         )
     out = pd.DataFrame(rows, columns=list(CURVE_COLUMNS))
     out["n_runs"] = out["n_runs"].astype(int)
     out["stall_reached"] = out["stall_reached"].astype("boolean")
+    out["slope_angles_deg"] = out["slope_angles_deg"].astype(object)
+    return out
+
+
+def _deg_list(text: str) -> list[str]:
+    return [f"{float(v):g}°" for v in str(text).split()]
+
+
+def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0) -> list[str]:
+    """One sentence per speed group of :func:`fin_curves` that has no lift slope.
+
+    A group gets no slope when fewer than two distinct non-zero angles lie in its linear range
+    (|α| <= ``linear_max_deg`` and below its stall angle); the sentence names the group, the
+    angles that remain, the stall angle and the linear range.
+
+    Parameters
+    ----------
+    curves : pandas.DataFrame
+        Output of :func:`fin_curves` (speed_group [m/s], lift_slope [1/rad], stall_angle_deg
+        [deg], stall_reached, slope_angles_deg).
+    linear_max_deg : float, default 10.0
+        The linear range the curves were fitted with [deg].
+
+    Returns
+    -------
+    list of str
+        E.g. "fin lift slope at U ≈ 1.00 m/s: only 5° lies below stall (10°) within the linear
+        range (≤ 10°); no slope." In the order of ``curves``.
+    """
+    _require(curves, ("speed_group", "lift_slope", "stall_angle_deg", "stall_reached",
+                      "slope_angles_deg"), "The fin curves")
+    out = []
+    for row in curves.to_dict("records"):
+        if np.isfinite(row["lift_slope"]):
+            continue
+        left = _deg_list(row["slope_angles_deg"])
+        stalled = bool(pd.notna(row["stall_reached"]) and row["stall_reached"])
+        where = (f"below stall ({row['stall_angle_deg']:g}°) " if stalled else "") + (
+            f"within the linear range (≤ {linear_max_deg:g}°)"
+        )
+        if not left:
+            what = f"no tested angle lies {where}"
+        elif len(left) == 1:
+            what = f"only {left[0]} lies {where}"
+        else:
+            what = (f"only {', '.join(left[:-1])} and {left[-1]} lie {where}, fewer than two "
+                    "distinct non-zero angles")
+        out.append(f"fin lift slope at U ≈ {row['speed_group']:.2f} m/s: {what}; no slope.")
     return out
 
 
@@ -652,8 +773,51 @@ def low_reynolds_warnings(fin_df: pd.DataFrame, re_threshold: float = 1e5) -> li
 # --------------------------------------------------------------------------------------------
 
 
+def control_lift_slope(
+    curves: pd.DataFrame, linear_max_deg: float = 10.0
+) -> tuple[float, str]:
+    """The fin lift slope for the control derivatives, and a sentence saying which it is.
+
+    The mean of the measured linear-range lift slopes of :func:`fin_curves` over the speed
+    groups that have one (|alpha| <= ``linear_max_deg`` and below each group's stall; groups
+    without a slope are left out, never replaced by a secant).
+
+    Parameters
+    ----------
+    curves : pandas.DataFrame
+        Output of :func:`fin_curves` (speed_group [m/s], lift_slope [1/rad], slope_angles_deg).
+    linear_max_deg : float, default 10.0
+        The linear range the curves were fitted with [deg].
+
+    Returns
+    -------
+    slope : float
+        dC_L/d(alpha) on the fin's planform area [1/rad]; NaN when no group has a slope.
+    source : str
+        E.g. "mean of the measured linear-range lift slopes (|α| ≤ 10°, below stall) of the
+        speed groups 1.00 m/s (0 2.5 5°), 1.50 m/s (0 2.5 5 7.5°)".
+    """
+    _require(curves, ("speed_group", "lift_slope", "slope_angles_deg"), "The fin curves")
+    ok = curves[np.isfinite(curves["lift_slope"].to_numpy(dtype=float))]
+    if ok.empty:
+        return np.nan, "no speed group has a linear-range lift slope"
+    groups = ", ".join(
+        f"{g:.2f} m/s ({a}°)"
+        for g, a in zip(ok["speed_group"], ok["slope_angles_deg"], strict=True)
+    )
+    word = "slope" if len(ok) == 1 else "slopes"
+    what = "measured linear-range lift " + word + f" (|α| ≤ {linear_max_deg:g}°, below stall)"
+    source = (f"{what} of the speed group {groups}" if len(ok) == 1
+              else f"mean of the {what} of the speed groups {groups}")
+    return float(ok["lift_slope"].mean()), source
+
+
 def control_derivatives(
-    lift_slope_per_rad: float, fin_area_m2: float, x_fin_m: float, rho: float
+    lift_slope_per_rad: float,
+    fin_area_m2: float,
+    x_fin_m: float,
+    rho: float,
+    slope_source: str = "given",
 ) -> pd.DataFrame:
     """Fin control derivatives in the AUV-model convention of Prestero (2001) [2]_.
 
@@ -676,18 +840,22 @@ def control_derivatives(
     Parameters
     ----------
     lift_slope_per_rad : float
-        Fin lift slope dC_L/d(delta) on S_fin [1/rad] (finite-span, e.g. from :func:`fin_curves`).
+        Fin lift slope dC_L/d(delta) on S_fin [1/rad] (finite-span, measured in the linear
+        range, e.g. :func:`control_lift_slope` of :func:`fin_curves`).
     fin_area_m2 : float
         Planform area of one fin, S_fin [m^2].
     x_fin_m : float
         Axial position of the fins' centre of pressure from the body origin [m], negative aft.
     rho : float
         Water density [kg/m^3].
+    slope_source : str, default "given"
+        Which lift slope this is (see :func:`control_lift_slope`), carried to the table.
 
     Returns
     -------
     pandas.DataFrame
-        Rows Y_uudr, Z_uuds, M_uuds, N_uudr; columns symbol, value, unit, convention.
+        Rows Y_uudr, Z_uuds, M_uuds, N_uudr; columns symbol, value, unit, convention,
+        lift_slope (the c_La used [1/rad]) and lift_slope_source.
     """
     base = float(rho) * float(lift_slope_per_rad) * float(fin_area_m2)
     x_fin = float(x_fin_m)
@@ -708,4 +876,7 @@ def control_derivatives(
             f"N = N_uudr u^2 delta_r; rho c_La S_fin x_fin (x_fin < 0 aft); {pair}",
         ),
     ]
-    return pd.DataFrame(rows, columns=["symbol", "value", "unit", "convention"])
+    out = pd.DataFrame(rows, columns=["symbol", "value", "unit", "convention"])
+    out["lift_slope"] = float(lift_slope_per_rad)
+    out["lift_slope_source"] = str(slope_source)
+    return out

@@ -3,18 +3,23 @@
 Added mass (report eqs. 7–8; METHOD.md "Added mass"). At constant acceleration a and speed U
 the balance drag is D = (m − X_udot)·a + R(U). The primary estimate is the joint regression
 D = k2·U|U| + k1·U + M·a over all steady and constant-acceleration samples of the α = 0 runs
-(α = 90° for Y_vdot), X_udot = m − M. Its interval is the regression's (standard errors robust
-to the correlation of samples within a run: clustered by run) combined with the stated
-uncertainty of the weighed mass. The report's own method, a quadratic D_a(U) per acceleration
-level minus the steady quadratic D_s(U) averaged over their common speed range, is the second
-estimate, reported beside it with a check of their agreement.
+(α = 90° for Y_vdot), X_udot = m − M. Its interval combines the regression's standard error
+(clustered by run with the small-sample CR2 correction, :mod:`towtank.sandwich`), the tare's
+(clustered likewise) and the stated uncertainty of the weighed mass, with Student's t at the
+Welch–Satterthwaite degrees of freedom. The report's own method, a quadratic D_a(U) per
+acceleration level minus the steady quadratic D_s(U) averaged over their common speed range,
+is the second estimate, reported beside it (in the method text too) with a check of their
+agreement.
 
 Damping (report eqs. 13–15; METHOD.md "Damping from C_D(α)"). C_D = R/(½ρAU²) per steady hull
 run with |α| ≤ 30°; C_D(α) = a·α² + b·α + c (α in rad) by OLS (statsmodels); then
 X_u|u| = −½ρA·c, X_uv = X_uw = −½ρA·b, X_v|v| = X_w|w| = −½ρA·(a − c/2), Y_uv = Z_uw = −½ρA·c,
 and Y_v|v| = Z_w|w| = −½ρ·A_lat·C_D,90 from the transverse steady runs' R = K·U|U|. The frontal
-and lateral areas cancel in these dimensional values (the fits are of R/U²), so the dimensions'
-uncertainty enters the prime values only.
+and lateral areas cancel in these dimensional values (the fits are of R/U²): the stated
+uncertainty of the length (``length_uncertainty_m``) enters the prime values only, through
+½ρL³ and ½ρL², and that of the diameter (``diameter_uncertainty_m``) enters no coefficient at
+all (A = πD²/4 and A_lat = L·D cancel; the primes use L alone), so it is recorded in
+provenance.json only.
 
 A coefficient the day's runs cannot support is omitted with a sentence saying which runs are
 missing; nothing is ever extrapolated into a value.
@@ -30,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.reduce import PHASE_ACCEL, PHASE_STEADY, RunReduction
+from towtank.sandwich import cr2_covariance, welch_satterthwaite
 from towtank.tare import TareModel, tare_design
 
 SYMBOLS = (
@@ -67,15 +73,35 @@ class AddedMassFit:
     symbol: str
     mass: float  # [kg]
     M: float  # m − X_udot [kg]
-    M_se: float  # [kg]
+    M_se: float  # regression and tare combined [kg]
     k2: float  # [N s²/m²]
     k1: float  # [N s/m]
-    dof: int
+    dof: float  # effective degrees of freedom of the interval (Welch–Satterthwaite)
     runs: list[int]
     accel_levels: list[float]
     residual_by_run: dict[int, float]
     estimate: Estimate
     curve_difference: dict[str, object] = field(default_factory=dict)
+    regression_se: float = math.nan  # the regression's alone (CR2, clustered by run) [kg]
+    regression_dof: float = math.nan  # runs − 1 (clustered), samples − 3 otherwise
+    tare_se: float = math.nan  # the subtracted tare's [kg]
+
+
+@dataclass
+class ClusteredOLS:
+    """OLS estimates with a covariance clustered by run (or iid with too few runs)."""
+
+    params: np.ndarray
+    cov: np.ndarray
+    dof: float  # degrees of freedom of Student's t for intervals from cov
+    resid: np.ndarray
+    fittedvalues: np.ndarray
+    clustered: bool
+
+    @property
+    def bse(self) -> np.ndarray:
+        """Standard errors of the estimates."""
+        return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
 
 
 @dataclass
@@ -190,8 +216,18 @@ def tare_covariance(
 # ----------------------------------------------------------------------------- added mass
 def joint_regression(
     speed: np.ndarray, accel: np.ndarray, drag: np.ndarray, groups: np.ndarray
-):
-    """OLS of D = k2·U|U| + k1·U + M·a with run-clustered standard errors.
+) -> ClusteredOLS:
+    """OLS of D = k2·U|U| + k1·U + M·a with standard errors clustered by run.
+
+    The samples of one run share its zero, drift correction and filtered noise, so their errors
+    are correlated, and a day has few runs per angle (4 to 10). The covariance is therefore the
+    Bell–McCaffrey bias-reduced cluster-robust one (CR2) with Student's t at G − 1 degrees of
+    freedom, G the number of runs (:func:`towtank.sandwich.cr2_covariance`; Bell & McCaffrey
+    2002, Imbens & Kolesár 2016, Cameron & Miller 2015 §VI). The usual CR1 correction
+    (statsmodels' ``cov_type="cluster"``) is biased low with so few clusters, most where a few
+    accelerated runs carry the leverage on M. With fewer than four runs no clustered
+    covariance can be estimated and the samples are taken as independent (n − 3 degrees of
+    freedom), which understates the interval.
 
     Parameters
     ----------
@@ -206,15 +242,21 @@ def joint_regression(
 
     Returns
     -------
-    statsmodels RegressionResults with params (k2 [N s²/m²], k1 [N s/m], M [kg]).
+    ClusteredOLS
+        params (k2 [N s²/m²], k1 [N s/m], M [kg]), their covariance and its degrees of freedom.
     """
     from statsmodels.regression.linear_model import OLS
 
     x = np.column_stack([speed * np.abs(speed), speed, accel])
-    model = OLS(drag, x)
+    res = OLS(drag, x).fit()
+    resid = np.asarray(res.resid)
     if len(np.unique(groups)) >= 4:
-        return model.fit(cov_type="cluster", cov_kwds={"groups": groups}, use_t=True)
-    return model.fit()
+        cov, dof = cr2_covariance(x, resid, groups)
+        clustered = True
+    else:
+        cov, dof, clustered = np.asarray(res.cov_params()), res.df_resid, False
+    return ClusteredOLS(params=np.asarray(res.params), cov=cov, dof=float(dof), resid=resid,
+                        fittedvalues=np.asarray(res.fittedvalues), clustered=clustered)
 
 
 def fit_added_mass(
@@ -226,6 +268,17 @@ def fit_added_mass(
     tares: dict[str, TareModel] | None = None,
 ) -> AddedMassFit:
     """Added mass from the runs at one angle (α = 0 for X_udot, 90° for Y_vdot).
+
+    X = m − M, M from :func:`joint_regression`. Its standard uncertainty combines three
+    independent parts, u_c² = u_reg² + u_tare² + u_m² (GUM, JCGM 100:2008, eq. 10): the
+    regression's (CR2, clustered by run, G − 1 degrees of freedom), the subtracted tare's (its
+    m_t goes one-for-one into X; its covariance is clustered by sting run likewise in
+    :func:`towtank.tare.fit_channel` and propagated by :func:`tare_covariance`, one component
+    per tare group with that fit's degrees of freedom) and the weighed mass's (``mass_sd``, a
+    stated value: infinite degrees of freedom). The 95 % interval is X ± t₀.₉₇₅(ν_eff)·u_c with
+    ν_eff from the Welch–Satterthwaite formula (GUM G.4.1). The second estimate, the report's
+    curve difference (:func:`curve_difference`), is set beside it in ``alt_value`` and at the
+    end of the method text, with the agreement of the two (:func:`agreement`).
 
     Parameters
     ----------
@@ -248,47 +301,87 @@ def fit_added_mass(
     x = tare_design(s["U"], s["a"])
     group_of = {r: reductions[r].tare_group for r in run_ids}
     groups = np.array([group_of[int(r)] for r in s["run"]])
-    tare_var = float(tare_covariance(np.linalg.pinv(x), x, groups, tares)[2, 2])
-    M_se = float(math.sqrt(float(res.bse[2]) ** 2 + tare_var))
+    pinv = np.linalg.pinv(x)
+    # one variance component per tare group, each with its own degrees of freedom
+    tare_parts = [
+        (float(tare_covariance(pinv, x, groups, {g: tares[g]})[2, 2]), tares[g].drag.dof)
+        for g in sorted(set(groups.tolist())) if tares and g in tares
+    ]
+    reg_var = float(res.cov[2, 2])
+    tare_var = sum(v for v, _ in tare_parts)
+    M_se = math.sqrt(reg_var + tare_var)
     value = mass - M
     u_c = math.hypot(M_se, mass_sd)
-    clustered = getattr(res, "cov_type", "nonrobust") == "cluster"
-    dof = len(set(s["run"].tolist())) - 1 if clustered else int(res.df_resid)
-    tq = _t95(dof)
-    resid = s["drag"] - res.fittedvalues
-    by_run = {int(r): float(np.mean(resid[s["run"] == r])) for r in run_ids}
+    dof = welch_satterthwaite(
+        [reg_var, *(v for v, _ in tare_parts), mass_sd**2],
+        [res.dof, *(nu for _, nu in tare_parts), math.inf],
+    )
+    half = _t95(dof) * u_c if u_c > 0 else 0.0
+    by_run = {int(r): float(np.mean(res.resid[s["run"] == r])) for r in run_ids}
+    errors = ("clustered by run" if res.clustered
+              else f"samples as independent: only {len(run_ids)} runs")
     est = Estimate(
         symbol=symbol,
         value=value,
         std_error=u_c,
-        ci_low=value - tq * u_c,
-        ci_high=value + tq * u_c,
+        ci_low=value - half,
+        ci_high=value + half,
         method="joint regression D = k2·U|U| + k1·U + (m − " + symbol + ")·a over steady and "
-        "constant-acceleration samples (report eqs. 7–8)",
+        f"constant-acceleration samples of {len(run_ids)} runs (report eqs. 7–8; "
+        f"errors {errors})",
         n_runs=len(run_ids),
     )
     fit = AddedMassFit(
         symbol=symbol, mass=mass, M=M, M_se=M_se, k2=k2, k1=k1, dof=dof, runs=list(run_ids),
         accel_levels=accel_levels(reductions, run_ids), residual_by_run=by_run, estimate=est,
+        regression_se=math.sqrt(reg_var), regression_dof=res.dof,
+        tare_se=math.sqrt(tare_var),
     )
     fit.curve_difference = curve_difference(reductions, run_ids, mass)
     cd = fit.curve_difference
     if cd.get("value") is not None and math.isfinite(float(cd["value"])):  # type: ignore[arg-type]
         alt = float(cd["value"])  # type: ignore[arg-type]
+        spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]
         est.alt_value = alt
         est.alt_method = (
             "curve difference (report eqs. 7–8: per-acceleration quadratic minus "
             "steady quadratic)"
         )
-        spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]
-        tol = 2.0 * math.hypot(M_se, spread)
-        diff = alt - value
-        est.agreement = (
-            f"agree: difference {diff:+.4g} kg within {tol:.2g} kg"
-            if abs(diff) <= max(tol, 1e-12)
-            else f"DISAGREE: difference {diff:+.4g} kg exceeds {tol:.2g} kg"
+        est.agreement = agreement(value, alt, M_se, spread)
+        verdict, detail = est.agreement.split(": ", 1)
+        est.method += (
+            f"; second estimate (curve difference, report eqs. 7–8) {alt:.5g} kg: "
+            f"{verdict} ({detail})"
         )
     return fit
+
+
+def agreement(primary: float, second: float, se: float, spread: float) -> str:
+    """Do the joint regression and the curve difference agree? A sentence saying so.
+
+    They agree when |second − primary| ≤ 2·√(se² + spread²), se the joint regression's
+    standard error (regression and tare, without the mass, which both share) and spread the
+    standard deviation of the curve-difference values between acceleration levels [kg].
+
+    Parameters
+    ----------
+    primary, second : float
+        The two estimates [kg].
+    se : float
+        Standard error of the primary estimate, mass excluded [kg].
+    spread : float
+        Standard deviation of the per-level curve-difference values [kg].
+
+    Returns
+    -------
+    str
+        "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds … kg".
+    """
+    tol = 2.0 * math.hypot(se, spread)
+    diff = second - primary
+    if abs(diff) <= max(tol, 1e-12):
+        return f"agree: difference {diff:+.2g} kg within {tol:.2g} kg"
+    return f"DISAGREE: difference {diff:+.2g} kg exceeds {tol:.2g} kg"
 
 
 def curve_difference(
@@ -515,8 +608,9 @@ def fit_transverse(
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
         "(report eq. 15)", len(tr),
     )
+    # residual of each run's drag [N]: R − ½ρ_run·A_lat·C_D,90·U|U|
     table = pd.DataFrame({"run": tr["run"].to_numpy(int), "speed": u, "drag": r,
-                          "cd90": y / (u * u), "resid": res.resid})
+                          "cd90": y / (u * u), "resid": np.asarray(res.resid) * q_run})
     return est, cd90, cd90_se, table, []
 
 
@@ -548,7 +642,7 @@ def _spread_row(angle: float, cluster: list[dict[str, Any]]) -> dict[str, object
         "angle_deg": float(angle),
         "speed": float(np.mean([c["speed_mean"] for c in cluster])),
         "n": len(cluster),
-        "runs": " ".join(str(int(c["run"])) for c in cluster),
+        "runs": " ".join(str(r) for r in sorted(int(c["run"]) for c in cluster)),
         "cd_mean": float(np.mean(cds)),
         "cd_std": float(np.std(cds, ddof=1)) if len(cds) > 1 else math.nan,
         "drag_std": float(np.std(drags, ddof=1)) if len(drags) > 1 else math.nan,
@@ -602,9 +696,11 @@ def fit_hull(
         levels = accel_levels(reductions, ids)
         if len(levels) < 2:
             found = ", ".join(f"{lv:.2f}" for lv in levels) or "none"
+            who, it = ((f"{symbol} and Z_wdot need", "they are") if symbol == "Y_vdot"
+                       else (f"{symbol} needs", "it is"))
             messages.append(
-                f"{symbol} needs accelerated hull runs at α = {angle:g}° at two or more "
-                f"accelerations; the day has {len(levels)} (m/s²: {found}), so it is omitted."
+                f"{who} accelerated hull runs at α = {angle:g}° at two or more "
+                f"accelerations; the day has {len(levels)} (m/s²: {found}), so {it} omitted."
             )
             continue
         fit = fit_added_mass(symbol, reductions, ids, mass, mass_sd, tares)
@@ -652,22 +748,19 @@ def load_reference(reference: str) -> dict[str, float]:
         with resources.files("towtank").joinpath("data", "sut2_table4.csv").open() as fh:
             df = pd.read_csv(fh, comment="#")
         return dict(zip(df["symbol"], df["remus_prime"].astype(float), strict=True))
-    df = pd.read_csv(reference, comment="#")
-    cols = {c.lower().strip(): c for c in df.columns}
-    if "symbol" not in cols or "prime" not in cols:
-        from towtank.errors import ProtocolError
+    from towtank.protocol import read_reference_csv
 
-        raise ProtocolError(
-            f"{reference}: a reference CSV needs the columns symbol and prime "
-            f"(found {', '.join(df.columns)})."
-        )
-    return dict(zip(df[cols["symbol"]].astype(str).str.strip(),
-                    df[cols["prime"]].astype(float), strict=True))
+    return read_reference_csv(reference)
 
 
 COEFFICIENT_COLUMNS = [
     "symbol", "value", "unit", "prime", "ci_low", "ci_high", "method", "reference_prime",
     "diff_pct", "prototype_value",
+]
+#: Extension columns of coefficients.csv after the FORMATS §5 ones (docs/formats.md).
+COEFFICIENT_EXTRA_COLUMNS = [
+    "std_error", "prime_ci_low", "prime_ci_high", "n_runs", "alt_value", "alt_method",
+    "agreement",
 ]
 
 
@@ -676,8 +769,25 @@ def coefficients_table(
 ) -> pd.DataFrame:
     """coefficients.csv (FORMATS §5) without prototype values, plus extension columns.
 
-    prime = value/(½ρL³) for added mass and value/(½ρL²) for damping; diff_pct =
-    (prime − reference)/|reference|·100, empty where the reference is zero.
+    prime = value/(½ρL³) for added mass and value/(½ρL²) for damping (k = 3 or 2 below);
+    diff_pct = (prime − reference)/|reference|·100, empty where the reference is zero or
+    missing. A symmetric twin (Z_wdot, X_uw, X_w|w|, Z_uw, Z_w|w|) the reference lacks takes its
+    source's reference (Y_vdot, X_uv, X_v|v|, Y_uv, Y_v|v|), as its value does.
+
+    The prime's standard uncertainty adds the length's in quadrature,
+    u(prime) = √((u(value)/(½ρL^k))² + (prime·k·u(L)/L)²), and its 95 % interval uses the
+    coverage factor of the value's interval, (ci_high − ci_low)/(2·std_error). The value itself
+    is independent of L, and of the diameter, whose areas cancel in every coefficient
+    (module docstring).
+
+    Parameters
+    ----------
+    hull : HullFit
+        The day's hull fit.
+    reference : dict
+        Reference prime values by symbol (:func:`load_reference`).
+    length_sd : float, default 0
+        Standard uncertainty of the model length L [m].
     """
     rows = []
     for s in SYMBOLS:
@@ -687,7 +797,7 @@ def coefficients_table(
         k = 3 if KIND[s] == "added_mass" else 2
         scale = 0.5 * hull.rho * hull.length**k
         prime = e.value / scale
-        ref = reference.get(s, math.nan)
+        ref = float(reference.get(s, reference.get(MIRROR.get(s, s), math.nan)))
         diff = (prime - ref) / abs(ref) * 100.0 if math.isfinite(ref) and ref != 0 else math.nan
         rel_len = k * length_sd / hull.length
         prime_se = math.hypot(e.std_error / scale, abs(prime) * rel_len)
@@ -701,4 +811,4 @@ def coefficients_table(
             "prime_ci_high": prime + factor * prime_se, "n_runs": e.n_runs,
             "alt_value": e.alt_value, "alt_method": e.alt_method, "agreement": e.agreement,
         })
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)

@@ -221,8 +221,9 @@ def myring_geometry(
     Integrals of the profile of :func:`myring_radius` (Myring 1976; Prestero 2001):
     volume ``V = integral of pi r^2 dx``, projected side area ``integral of 2 r dx`` and wetted
     (curved) area ``integral of 2 pi r ds = integral of 2 pi sqrt(r^2 + (r r')^2) dx``, each by
-    adaptive Gauss-Kronrod quadrature per section (the midbody in closed form). The nose slope is
-    infinite at an untruncated tip; the nose is therefore integrated in ``w`` with
+    composite 24-point Gauss-Legendre quadrature per section on 17 panels halving in width
+    towards the section's start (the midbody in closed form). The nose slope is infinite at an
+    untruncated tip; the nose is therefore integrated in ``w`` with
     ``1 + (x + a_offset - a)/a = w^max(n, 1)``, which makes the integrands finite there.
 
     Parameters

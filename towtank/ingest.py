@@ -354,7 +354,12 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
 
 def read_tdms_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], list[str]]:
     """All channels of a TDMS file as float64 arrays, keyed by channel name (and group/channel)."""
+    import logging
+
     from nptdms import TdmsFile
+
+    # nptdms logs what it finds odd in a damaged file; the run's one sentence says it instead
+    logging.getLogger("nptdms").setLevel(logging.ERROR)
 
     if not data:
         raise RunError(f"{name} is empty (0 bytes)")
@@ -397,6 +402,17 @@ def read_columns(path: Path, data: bytes | None = None) -> tuple[dict[str, np.nd
             ) from None
         except (OSError, zlib.error) as exc:
             raise RunError(f"{path.name} cannot be decompressed ({exc})") from None
+    elif data[:2] == b"\x1f\x8b":
+        raise RunError(
+            f"{path.name} is gzip-compressed although its name does not end in .gz "
+            f"(rename it {path.name}.gz)"
+        )
+    nul = data.find(b"\x00", 0, 65536)
+    if nul >= 0:
+        raise RunError(
+            f"{path.name} is not a text file: it holds NUL bytes (the first at byte {nul}), "
+            "as a file the DAQ never finished writing does"
+        )
     return read_csv_columns(data, path.name)
 
 

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.cache import RunCache, protocol_settings, settings_key
-from towtank.protocol import Protocol, load_protocol
+from towtank.protocol import Protocol, load_protocol, model_geometry
 from towtank.reduce import (
     RunReduction,
     apply_tare,
@@ -84,18 +84,69 @@ def fit_tares(
             s["drag"],
             s["lift"] if has_lift else None,
             [r.speed_mean for r in reds],
+            sample_runs=np.concatenate([np.full(r.samples["U"].size, r.run) for r in reds]),
         )
     return out
 
 
 def water_at(temperature_C: float, water_type: str, salinity: float | None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of the tank water."""
+    """(rho [kg/m³], nu [m²/s]) of the tank or the prototype's water.
+
+    Out-of-range warnings (WaterPropertyWarning) are silenced here: the protocol's unit checks
+    already put a temperature or salinity outside the ITTC range of [water] and
+    [prototype.water] into the day's warnings, and each run's temperature is checked in
+    :func:`process_day`.
+    """
     from towtank.water import water_properties
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         w = water_properties(temperature_C, water_type, salinity)
     return float(w.rho), float(w.nu)
+
+
+def model_scale(protocol: Protocol) -> float | None:
+    """λ = L_p / L_m: [model] scale, else [prototype] length_m / [model] length_m, else None."""
+    model, proto = protocol.model, protocol.prototype
+    if model is None:
+        return None
+    if model.scale is not None:
+        return model.scale
+    return proto.length_m / model.length_m if proto is not None else None
+
+
+def geometry_used(day: DayResult) -> list[dict[str, Any]]:
+    """The day's hull geometry with where each quantity came from; empty without a [model].
+
+    See :func:`towtank.protocol.model_geometry`; the prototype's wetted area λ²·S_m is listed
+    when the scale ratio is known.
+    """
+    model = day.protocol.model
+    if model is None:
+        return []
+    scale = day.scaling.scale if day.scaling is not None else model_scale(day.protocol)
+    return model_geometry(model, scale)
+
+
+def check_prototype_speeds(protocol: Protocol) -> None:
+    """Raise ProtocolError unless every [prototype] speed is finite, > 0 and gives Re_p >= 1e3.
+
+    Needs the prototype water's viscosity, so it runs once the analysis libraries are loaded
+    (after the reductions), not in :func:`towtank.protocol.load_protocol`.
+    """
+    from towtank import similarity
+    from towtank.errors import ProtocolError
+
+    proto = protocol.prototype
+    if protocol.model is None or proto is None:
+        return
+    _, nu_p = water_at(proto.water.temperature_C, proto.water.type, proto.water.salinity_g_kg)
+    try:
+        similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
+    except ValueError as exc:
+        raise ProtocolError(
+            f"{protocol.path.name}: 'speeds_m_s' in [prototype] cannot be scaled: {exc}"
+        ) from None
 
 
 RUN_COLUMNS = [
@@ -208,9 +259,11 @@ def process_day(
     rejected: dict[int, str] = {}
     todo = []
     for rec in sheet.to_dict("records"):
+        if rec["status"] == "void":  # listed, never used: a void row's faults do not matter
+            continue
         if rec["sheet_error"]:
             rejected[int(rec["run"])] = f"run {rec['run']}: {rec['sheet_error']}"
-        elif rec["status"] != "void":
+        else:
             todo.append(rec)
 
     reductions: dict[int, RunReduction] = {}
@@ -285,6 +338,8 @@ def process_day(
     runs = run_table(protocol, sheet, reductions, rejected)
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
+    if protocol.campaign.reference != "remus":  # a user reference CSV is an input too
+        inputs[str(protocol.campaign.reference)] = _sha(Path(protocol.campaign.reference))
     shas = {red.file: red.sha256 for red in reductions.values()}
     for file in sheet["file"]:  # every input the sheet names, rejected runs' files too
         path = protocol.campaign.data_dir / str(file)
@@ -296,6 +351,7 @@ def process_day(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
         runs=runs, warnings=day_warnings, inputs=inputs,
     )
+    check_prototype_speeds(protocol)
     _analyse(day)
     return day
 
@@ -350,6 +406,9 @@ class ScalingResult:
     rho_m: float
     nu_m: float
     scale: float
+    length_prototype: float = math.nan  # [m]
+    wetted_area_prototype: float | None = None  # λ²·S_m [m²], None when S_m is not known
+    delta_cf: float = 0.0
 
 
 def _hull_stage(day: DayResult) -> None:
@@ -382,9 +441,18 @@ def _hull_stage(day: DayResult) -> None:
                 f"({am.estimate.agreement[10:]})."
             )
     if hf.damping is not None and hf.damping.outliers:
+        dm = hf.damping
+        t = dm.runs.set_index("run")
+        flagged = ", ".join(
+            f"{r} (studentized residual {t.loc[r, 'student']:+.3g}, Cook's distance "
+            f"{t.loc[r, 'cooks']:.2g})" for r in dm.outliers)
+        one = len(dm.outliers) == 1
         day.warnings.append(
-            "C_D(α) fit: runs " + ", ".join(map(str, hf.damping.outliers))
-            + " are flagged as outliers (|studentized residual| > 3 or large Cook's distance)."
+            f"C_D(α) fit: {'run' if one else 'runs'} {flagged} "
+            f"{'is' if one else 'are'} flagged as {'an outlier' if one else 'outliers'} "
+            f"(|studentized residual| > 3 or Cook's distance > {max(4.0 / len(t), 0.5):.2g}); "
+            f"{'it is' if one else 'they are'} still in the fit: check "
+            f"{'it' if one else 'them'} before trusting X_u|u|, X_uv, X_v|v| and Y_uv."
         )
 
 
@@ -394,17 +462,42 @@ def _fin_stage(day: DayResult) -> None:
     sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
     if fin is None or sel.empty:
         return
-    from towtank import fins
+    from towtank import fins, sandia
 
+    warn: list[str] = []
+    beyond = sel["angle_deg"].abs() > 180.0  # the section data stop there (ValueError)
+    for run, angle in zip(sel.loc[beyond, "run"], sel.loc[beyond, "angle_deg"], strict=True):
+        warn.append(f"run {run}: fin angle {angle:g}° is outside −180…180°, the range of the "
+                    "Sandia section data; the run is left out of the fin analysis.")
+    sel = sel[~beyond]
+    if sel.empty:
+        day.warnings.extend(warn)
+        return
     ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, fin.mounting))
-    table = fins.fin_table(sel, ar, fin.oswald_e)
-    curves = fins.fin_curves(table, aspect_ratio=ar, e=fin.oswald_e)
-    warn = fins.low_reynolds_warnings(table)
+    linear_max = fin.linear_max_deg
+    # Sandia's Re clamp (Re outside 1e4-1e7) goes to the day's warnings, so that the report
+    # and provenance carry it; any other warning goes on as a Python warning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = fins.fin_table(sel, ar, fin.oswald_e)
+        curves = fins.fin_curves(table, linear_max, aspect_ratio=ar, e=fin.oswald_e)
+    for w in caught:
+        if issubclass(w.category, sandia.SandiaRangeWarning):
+            text = f"fin: {w.message}"
+            if text not in warn:
+                warn.append(text)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    warn += fins.low_reynolds_warnings(table)
+    warn += fins.lift_slope_warnings(curves, linear_max)
     control = None
     if fin.x_m is not None and len(curves):
-        slope = float(np.nanmean(curves["lift_slope"]))
-        rho = float(sel["rho"].mean())
-        control = fins.control_derivatives(slope, fin.area, fin.x_m, rho)
+        slope, source = fins.control_lift_slope(curves, linear_max)
+        if np.isfinite(slope):
+            rho = float(sel["rho"].mean())
+            control = fins.control_derivatives(slope, fin.area, fin.x_m, rho, source)
+        else:
+            warn.append(f"fin control derivatives: {source}; fin_control.csv is not written.")
     day.fins = FinResult(
         table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
         aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=warn,
@@ -421,7 +514,8 @@ def _scaling_stage(day: DayResult) -> None:
     model, proto = p.model, p.prototype
     if model is None or proto is None:
         return
-    scale = model.scale if model.scale is not None else proto.length_m / model.length_m
+    scale = model_scale(p)
+    assert scale is not None
     rho_p, nu_p = water_at(proto.water.temperature_C, proto.water.type,
                            proto.water.salinity_g_kg)
     rho_m, nu_m = water_at(p.water.temperature_C, p.water.type, p.water.salinity_g_kg)
@@ -458,7 +552,7 @@ def _scaling_stage(day: DayResult) -> None:
     else:
         day.warnings.append(
             "drag_ittc57 needs the model's wetted area ([model] wetted_area_m2 or a Myring "
-            "description); it is left empty."
+            "description); it is left empty and no form factor is found."
         )
     table = similarity.scaling_table(
         np.asarray(proto.speeds_m_s),
@@ -468,7 +562,7 @@ def _scaling_stage(day: DayResult) -> None:
         rho_m=rho_m, nu_m=nu_m, rho_p=rho_p, nu_p=nu_p,
         resistance_model=lambda um: k2 * um * abs(um) + k1 * um,
         tested_speed_range=(float(u.min()), float(u.max())),
-        wetted_area_model=model.wetted_area_m2 or math.nan,
+        wetted_area_model=model.wetted_area_m2,
         one_plus_k=one_plus_k,
         delta_cf=proto.delta_cf,
     )
@@ -478,12 +572,16 @@ def _scaling_stage(day: DayResult) -> None:
     re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
     depth = model.depth_m if model.diameter_m is not None else None
     statement = similarity.similarity_statement(
-        re_model, re_proto, depth, model.diameter_m if depth is not None else None
+        re_model, re_proto, depth, model.diameter_m if depth is not None else None,
+        turbulent_re=p.processing.laminar_re,
     )
     day.scaling = ScalingResult(
         table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
         form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
-        scale=scale,
+        scale=scale, length_prototype=proto.length_m,
+        wetted_area_prototype=(model.wetted_area_m2 * scale**2
+                               if model.wetted_area_m2 is not None else None),
+        delta_cf=proto.delta_cf,
     )
     outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
     if outside:

@@ -19,6 +19,11 @@ from typing import Any
 from towtank.errors import ProtocolError
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
+#: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
+#: (about 4e-4); anything larger is a unit or typing mistake.
+MAX_DELTA_CF = 0.002
+#: Largest mismatch between [prototype] length_m and [model] length_m × scale [-].
+LENGTH_SCALE_TOLERANCE = 0.01
 WATER_TYPES = ("fresh", "sea")
 FIN_MOUNTINGS = ("free", "wall")
 
@@ -75,11 +80,14 @@ class Model:
     volume_m3: float | None = None
     scale: float | None = None
     depth_m: float | None = None
-    mass_uncertainty_kg: float = 0.0005
-    length_uncertainty_m: float = 0.0005
-    diameter_uncertainty_m: float = 0.0001
+    mass_uncertainty_kg: float = 0.0005  # added-mass intervals
+    length_uncertainty_m: float = 0.0005  # prime-value intervals
+    diameter_uncertainty_m: float = 0.0001  # provenance only: D cancels in every coefficient
     myring: Myring | None = None
-    geometry_source: str = "protocol"
+    geometry_source: str = "as given in the protocol"
+    #: Which of frontal_area_m2, lateral_area_m2, wetted_area_m2, volume_m3 the Myring
+    #: description supplied (the protocol did not give them).
+    myring_computed: tuple[str, ...] = ()
 
     @property
     def frontal_area(self) -> float:
@@ -106,6 +114,7 @@ class Fin:
     mounting: str = "free"
     oswald_e: float = 1.0
     x_m: float | None = None
+    linear_max_deg: float = 10.0  # largest |angle of attack| of the lift-slope fit [deg]
 
     @property
     def area(self) -> float:
@@ -222,6 +231,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "mounting": ("str", False),
         "oswald_e": (_NUM, False),
         "x_m": (_NUM, False),
+        "linear_max_deg": (_NUM, False),
     },
     "prototype": {
         "length_m": (_NUM, False),
@@ -333,6 +343,22 @@ def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any
     return out
 
 
+#: [processing] keys that must be > 0, and the closed ranges of the others.
+_PROCESSING_POSITIVE = (
+    "cutoff_hz", "filter_order", "zero_window_s", "min_steady_s", "min_accel_s",
+    "steady_tolerance", "nominal_tolerance", "fit_sample_hz", "damping_alpha_max_deg",
+    "laminar_re", "jobs",
+)
+_PROCESSING_RANGES = {
+    "trim_s": (0.0, 60.0),
+    "max_nan_gap_s": (0.0, 60.0),
+    "max_bad_row_fraction": (0.0, 0.5),
+    "steady_tolerance": (0.0, 0.5),
+    "nominal_tolerance": (0.0, 1.0),
+    "damping_alpha_max_deg": (0.0, 90.0),
+}
+
+
 def _positive(values: dict[str, Any], keys: tuple[str, ...], label: str, src: str) -> None:
     for key in keys:
         if key in values and values[key] is not None and values[key] <= 0:
@@ -348,11 +374,17 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
             f"{src}: 'type' in [{label}] must be one of {', '.join(WATER_TYPES)}, "
             f"but it is {wtype!r}{_suggest(wtype, WATER_TYPES)}"
         )
-    return Water(
-        type=wtype,
-        temperature_C=values["temperature_C"],
-        salinity_g_kg=values.get("salinity_g_kg"),
-    )
+    salinity = values.get("salinity_g_kg")
+    if salinity is not None and wtype == "fresh" and salinity != 0:
+        raise ProtocolError(
+            f"{src}: [{label}] gives salinity_g_kg = {salinity:g} for fresh water; "
+            "set type = \"sea\" for saline water."
+        )
+    if salinity is not None and salinity < 0:
+        raise ProtocolError(
+            f"{src}: 'salinity_g_kg' in [{label}] must not be negative, but it is {salinity:g}."
+        )
+    return Water(type=wtype, temperature_C=values["temperature_C"], salinity_g_kg=salinity)
 
 
 def slugify(text: str) -> str:
@@ -361,8 +393,15 @@ def slugify(text: str) -> str:
     return slug or "campaign"
 
 
-def _unit_warnings(model: Model | None, fin: Fin | None, water: Water) -> list[str]:
-    """Order-of-magnitude checks: a value that is plausible only in other units."""
+def _unit_warnings(
+    model: Model | None, fin: Fin | None, water: Water, prototype: Prototype | None = None
+) -> list[str]:
+    """Order-of-magnitude checks: a value that is plausible only in other units.
+
+    The water temperatures (tank and prototype) are checked against 0–40 °C and a sea water's
+    salinity against 0–42 g/kg, the ranges of the water properties (ITTC 7.5-02-01-03): outside
+    them the density and viscosity are extrapolated.
+    """
     out: list[str] = []
 
     def check(value: float | None, lo: float, hi: float, what: str, hint: str) -> None:
@@ -382,6 +421,14 @@ def _unit_warnings(model: Model | None, fin: Fin | None, water: Water) -> list[s
         check(fin.chord_m, 0.005, 5.0, "[fin] chord_m", "was it given in mm or cm?")
         check(fin.span_m, 0.005, 10.0, "[fin] span_m", "was it given in mm or cm?")
     check(water.temperature_C, 0.0, 40.0, "[water] temperature_C", "was it given in K or °F?")
+    if prototype is not None:
+        pw = prototype.water
+        check(pw.temperature_C, 0.0, 40.0, "[prototype.water] temperature_C",
+              "there the ITTC water properties, and so the prototype's Re and drag, are "
+              "extrapolated (was it given in K or °F?)")
+        if pw.type == "sea":
+            check(pw.salinity_g_kg, 0.0, 42.0, "[prototype.water] salinity_g_kg",
+                  "there the sea-water properties are extrapolated (was it given in ‰ × 10?)")
     return out
 
 
@@ -407,7 +454,7 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
     path = Path(path)
     src = path.name
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a BOM from a Windows editor is fine
     except FileNotFoundError:
         raise ProtocolError(f"{path}: the protocol file does not exist.") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -450,6 +497,8 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
                 f"set 'remus' nor an existing CSV file ({ref_path})."
             )
         reference = str(ref_path)
+        if check_paths:
+            read_reference_csv(ref_path)  # a bad reference stops here, before any work
     campaign = Campaign(
         name=camp["name"],
         run_sheet=(base / camp["run_sheet"]).resolve(),
@@ -499,7 +548,12 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     fin = None
     if "fin" in data:
         f = _section(data["fin"], "fin", "fin", src)
-        _positive(f, ("chord_m", "span_m", "oswald_e"), "fin", src)
+        _positive(f, ("chord_m", "span_m", "oswald_e", "linear_max_deg"), "fin", src)
+        if f.get("linear_max_deg", 0.0) > 90.0:
+            raise ProtocolError(
+                f"{src}: 'linear_max_deg' in [fin] is the largest angle of attack of the "
+                f"linear range, 0–90°, but it is {f['linear_max_deg']}."
+            )
         mounting = f.get("mounting", "free")
         if mounting not in FIN_MOUNTINGS:
             raise ProtocolError(
@@ -528,8 +582,24 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             raise ProtocolError(
                 f"{src}: [prototype] needs 'length_m', or [model] needs 'scale' to derive it."
             )
+        if model is not None and model.scale is not None and "length_m" in p:
+            expected = model.length_m * model.scale
+            if abs(length_p - expected) > LENGTH_SCALE_TOLERANCE * expected:
+                raise ProtocolError(
+                    f"{src}: [prototype] length_m = {length_p:g} m does not match [model] "
+                    f"length_m × scale = {model.length_m:g} × {model.scale:g} = {expected:.4g} m "
+                    f"(they must agree within {LENGTH_SCALE_TOLERANCE:.0%}); correct one of them "
+                    "or leave [prototype] length_m out."
+                )
         if any(s <= 0 for s in p["speeds_m_s"]):
             raise ProtocolError(f"{src}: 'speeds_m_s' in [prototype] must all be positive.")
+        delta_cf = p.get("delta_cf", 0.0)
+        if abs(delta_cf) > MAX_DELTA_CF:
+            raise ProtocolError(
+                f"{src}: 'delta_cf' in [prototype] is {delta_cf:g}, but a roughness allowance "
+                f"ΔC_F lies within ±{MAX_DELTA_CF:g} (the ITTC value for a full-size hull is "
+                "about 0.0004)."
+            )
         pw = (
             _water(_section(p["water"], "prototype.water", "prototype.water", src),
                    "prototype.water", src)
@@ -540,7 +610,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             length_m=length_p,
             speeds_m_s=p["speeds_m_s"],
             water=pw,
-            delta_cf=p.get("delta_cf", 0.0),
+            delta_cf=delta_cf,
         )
 
     channels: dict[str, ChannelMap] = {}
@@ -553,12 +623,17 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             channels[name] = ChannelMap(**c)
 
     proc_values = _section(data.get("processing", {}), "processing", "processing", src)
+    _positive(proc_values, _PROCESSING_POSITIVE, "processing", src)
+    for key, (low, high) in _PROCESSING_RANGES.items():
+        value = proc_values.get(key)
+        if value is not None and not low <= value <= high:
+            raise ProtocolError(
+                f"{src}: '{key}' in [processing] must lie in {low:g}–{high:g}, but it is {value}."
+            )
     processing = Processing(**proc_values)
-    if processing.cutoff_hz <= 0 or processing.filter_order < 1:
-        raise ProtocolError(f"{src}: [processing] cutoff_hz and filter_order must be positive.")
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
 
-    warnings = _unit_warnings(model, fin, water)
+    warnings = _unit_warnings(model, fin, water, prototype)
     return Protocol(
         path=path.resolve(),
         campaign=campaign,
@@ -614,11 +689,156 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
         wetted_area_m2=model.wetted_area_m2 or g.wetted_area,
         volume_m3=model.volume_m3 or g.volume,
         geometry_source=source,
+        myring_computed=tuple(
+            key for key in ("frontal_area_m2", "lateral_area_m2", "wetted_area_m2", "volume_m3")
+            if getattr(model, key) is None
+        ),
     )
+
+
+def model_geometry(model: Model, scale: float | None = None) -> list[dict[str, Any]]:
+    """The hull geometry the day used, each quantity with where it came from.
+
+    Rows, in order: frontal area ``A`` (given, Myring, or ``pi D^2 / 4``), lateral area ``A_lat``
+    (given, Myring, or ``L D``), wetted area ``S_m`` and volume ``V`` (given, Myring, or not
+    known), and, when ``scale`` is given and ``S_m`` known, the prototype's wetted area
+    ``S_p = lambda^2 S_m`` of the ITTC-57 extrapolation.
+
+    Parameters
+    ----------
+    model : Model
+        The validated [model] section.
+    scale : float, optional
+        Scale ratio ``lambda = L_p / L_m`` [-]
+
+    Returns
+    -------
+    list of dict
+        ``quantity``, ``symbol``, ``value`` (None when not known), ``unit``, ``source``.
+    """
+    myring = "computed from the [model.myring] Myring description"
+
+    def origin(key: str, default: str) -> str:
+        if key in model.myring_computed:
+            return myring
+        if getattr(model, key) is not None:
+            return f"given in the protocol ({key})"
+        return default
+
+    rows = [
+        ("frontal area", "A", model.frontal_area, "m²",
+         origin("frontal_area_m2", "π D²/4 from diameter_m")),
+        ("lateral area", "A_lat", model.lateral_area, "m²",
+         origin("lateral_area_m2", "L·D from length_m and diameter_m (default)")),
+        ("wetted area", "S_m", model.wetted_area_m2, "m²",
+         origin("wetted_area_m2", "not known (no wetted_area_m2, no Myring description)")),
+        ("volume", "V", model.volume_m3, "m³",
+         origin("volume_m3", "not known (no volume_m3, no Myring description)")),
+    ]
+    if scale is not None and model.wetted_area_m2 is not None:
+        rows.append(("prototype wetted area", "S_p", model.wetted_area_m2 * scale**2, "m²",
+                     f"λ²·S_m with λ = {scale:g}"))
+    return [
+        {"quantity": q, "symbol": sym, "value": v, "unit": u, "source": src}
+        for q, sym, v, u, src in rows
+    ]
 
 
 def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMap]:
     """The complete mapping: protocol entries, canonical names for the rest."""
     out = {name: ChannelMap(column=name) for name in CANONICAL_CHANNELS}
     out.update(protocol_channels)
+    return out
+
+
+#: Every entry towtank writes into an output folder (FORMATS §5; the cache aside).
+OUTPUT_NAMES = frozenset({
+    "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
+    "scaling.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
+})
+
+
+def read_reference_csv(path: str | Path) -> dict[str, float]:
+    """Reference prime values of a user CSV with the columns ``symbol`` and ``prime`` [-].
+
+    Lines starting with ``#`` are comments; column names are matched without regard to case
+    or surrounding spaces; other columns are ignored.
+
+    Raises
+    ------
+    ProtocolError
+        The file cannot be read, lacks a column, holds no row, repeats a symbol or has a prime
+        that is not a finite number (one sentence naming the file and the row).
+    """
+    import csv
+    import math
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProtocolError(f"{path}: the reference CSV cannot be read ({exc}).") from None
+    lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise ProtocolError(f"{path}: the reference CSV is empty (it needs the columns symbol "
+                            "and prime and one row per coefficient).")
+    rows = list(csv.reader([line for _, line in lines]))
+    header = [h.strip().lower() for h in rows[0]]
+    if "symbol" not in header or "prime" not in header:
+        raise ProtocolError(
+            f"{path}: a reference CSV needs the columns symbol and prime "
+            f"(found {', '.join(repr(h) for h in rows[0])})."
+        )
+    i_sym, i_prime = header.index("symbol"), header.index("prime")
+    out: dict[str, float] = {}
+    for (lineno, _), row in zip(lines[1:], rows[1:], strict=True):
+        cells = row + [""] * (len(header) - len(row))
+        sym, raw = cells[i_sym].strip(), cells[i_prime].strip()
+        try:
+            value = float(raw)
+        except ValueError:
+            value = math.nan
+        if not sym or not math.isfinite(value):
+            raise ProtocolError(
+                f"{path}: line {lineno} needs a symbol and a finite prime value "
+                f"(found symbol {sym!r}, prime {raw!r})."
+            )
+        if sym in out:
+            raise ProtocolError(f"{path}: line {lineno} repeats the symbol {sym!r}.")
+        out[sym] = value
+    if not out:
+        raise ProtocolError(f"{path}: the reference CSV has a header but no coefficient rows.")
+    return out
+
+
+def check_output_dir(out_dir: str | Path, protocol: Protocol) -> Path:
+    """The output folder, resolved, after checking that writing there cannot touch an input.
+
+    Raises
+    ------
+    ProtocolError
+        ``out_dir`` is a file; it is, holds or lies inside the data folder; or one of the
+        outputs would replace the protocol, the run sheet or the reference CSV.
+    """
+    out = Path(out_dir).resolve()
+    if out.exists() and not out.is_dir():
+        raise ProtocolError(f"the output folder {out} is a file, not a folder.")
+    data = protocol.campaign.data_dir.resolve()
+    if out == data or data.is_relative_to(out) or out.is_relative_to(data):
+        raise ProtocolError(
+            f"the output folder {out} would mix the outputs with the raw run files in {data}; "
+            "choose another folder with --out or [campaign] output_dir."
+        )
+    inputs = [protocol.path, protocol.campaign.run_sheet]
+    if protocol.campaign.reference != "remus":
+        inputs.append(Path(protocol.campaign.reference))
+    for name in sorted(OUTPUT_NAMES):
+        target = out / name
+        for path in inputs:
+            if target == Path(path).resolve() or Path(path).resolve().is_relative_to(target):
+                raise ProtocolError(
+                    f"the output folder {out} would overwrite the input {path} with the "
+                    f"output {name}; choose another folder with --out or [campaign] output_dir."
+                )
     return out

@@ -33,6 +33,10 @@ from towtank.ingest import RawRun, file_bytes, load_run
 from towtank.protocol import Processing, Protocol
 from towtank.tare import TareModel
 
+#: The repair of the ingest that the engineer is told of on the terminal (the others, gaps
+#: interpolated and spikes removed, are listed in runs.csv's notes and the report).
+WARNED_REPAIRS = "non-numeric row(s) dropped"
+
 PHASE_STEADY = 0
 PHASE_ACCEL = 1
 THUMB_HZ = 10.0
@@ -244,7 +248,11 @@ def reduce_run(
                 f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
             )
 
-    warn = manual_warnings + [n for n in notes[n_notes:] if "differs from the set" in n]
+    warn = (
+        [n for n in raw.notes if WARNED_REPAIRS in n]  # dropped rows: said, not only noted
+        + manual_warnings
+        + [n for n in notes[n_notes:] if "differs from the set" in n]
+    )
 
     # decimated fit samples: steady and constant-acceleration windows
     rate = p.fit_sample_hz or 4.0 * p.cutoff_hz

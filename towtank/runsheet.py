@@ -48,10 +48,43 @@ def _read_table(path: Path) -> pd.DataFrame:
         raise
     except Exception as exc:  # noqa: BLE001 - any reader failure is a sheet-level fault
         raise ProtocolError(f"{path.name}: the run sheet cannot be read ({exc}).") from None
-    df.columns = [str(c).strip() for c in df.columns]
+    df.columns = known_columns([str(c).strip() for c in df.columns], path.name)
     # drop rows that are entirely empty (trailing rows in spreadsheets)
     blank = df.apply(lambda col: col.map(_is_blank)).all(axis=1)
     return df.loc[~blank].reset_index(drop=True)
+
+
+def known_columns(columns: list[str], src: str) -> list[str]:
+    """The sheet's column names with the FORMATS §2 ones spelt as the contract spells them.
+
+    A known column written in another case (``Status``, ``Water_Temp_C``) is renamed to its
+    contract name. A column that is not known but is close to a known one (``water_temp``,
+    ``tare grp``) is an error: read as an extra column it would silently lose what it says
+    (a void run processed, every run at the default temperature).
+
+    Raises
+    ------
+    ProtocolError
+        Naming the column and the known column it resembles.
+    """
+    import difflib
+
+    by_lower = {k.lower(): k for k in KNOWN}
+    out = [by_lower.get(c.lower(), c) if c not in KNOWN else c for c in columns]
+    absent = [k for k in KNOWN if k not in out]
+    for c in out:
+        if c in KNOWN:
+            continue
+        close = difflib.get_close_matches(
+            c.lower().replace(" ", "_"), [k.lower() for k in absent], n=1, cutoff=0.75
+        )
+        if close:
+            raise ProtocolError(
+                f"{src}: the run sheet's column {c!r} looks like a misspelling of "
+                f"{by_lower[close[0]]!r}; rename it (other columns are carried to the reports "
+                "as they are, so a misspelt one would be silently ignored)."
+            )
+    return out
 
 
 def _is_blank(v: object) -> bool:

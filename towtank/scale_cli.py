@@ -15,13 +15,21 @@ def scale_command(
 
     The day is reduced through the per-run cache in the output folder (``.cache``), so after a
     ``towtank process`` no run file is read again; only the fits and the scaling are redone.
+    Speeds that are not finite, not > 0 or give a prototype Re below 1e3 are refused
+    (:func:`towtank.similarity.check_prototype_speeds`) with a ProtocolError (exit status 2).
     """
+    import math
+
     import pandas as pd
 
-    from towtank.pipeline import process_day
+    from towtank import similarity
+    from towtank.pipeline import process_day, water_at
     from towtank.protocol import Prototype, Water, load_protocol
 
     protocol = load_protocol(protocol_path)
+    if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
+        bad = next(s for s in speeds if not (math.isfinite(s) and s > 0))
+        raise ProtocolError(f"--speeds: the prototype speed {bad:g} m/s is not a finite speed > 0.")
     if protocol.model is None:
         raise ProtocolError(f"{protocol.path.name}: scaling needs a [model] section.")
     proto = protocol.prototype
@@ -38,8 +46,12 @@ def scale_command(
         )
     elif speeds:
         proto = replace(proto, speeds_m_s=tuple(float(s) for s in speeds))
-    if any(s <= 0 for s in proto.speeds_m_s):
-        raise ProtocolError("prototype speeds must be positive.")
+    _, nu_p = water_at(proto.water.temperature_C, proto.water.type, proto.water.salinity_g_kg)
+    try:
+        similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
+    except ValueError as exc:
+        where = "--speeds" if speeds else f"{protocol.path.name}: 'speeds_m_s' in [prototype]"
+        raise ProtocolError(f"{where} cannot be scaled: {exc}") from None
     protocol = replace(protocol, prototype=proto)
     out_dir = out if out is not None else protocol.campaign.output_dir
     day = process_day(protocol_path, protocol=protocol, cache_dir=Path(out_dir) / ".cache")
@@ -58,7 +70,9 @@ def scale_command(
             f"{v:.2f}" + ("" if ok else " *")
             for v, ok in zip(table["drag_froude"], table["froude_in_tested_range"], strict=True)
         ],
-        "R_p ITTC-57 [N]": table["drag_ittc57"].map(lambda v: f"{v:.2f}"),
+        "R_p ITTC-57 [N]": table["drag_ittc57"].map(
+            lambda v: f"{v:.2f}" if math.isfinite(v) else "–"
+        ),
     })
     print(f"{protocol.name}: model L = {protocol.model.length_m:g} m, prototype "
           f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.type} water "
@@ -69,6 +83,10 @@ def scale_command(
               f"{sc.tested_speed_range[0]:.2f}–{sc.tested_speed_range[1]:.2f} m/s: extrapolated")
     if sc.form_factor is not None:
         ff = sc.form_factor
-        print(f"form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (n = {ff.n}, ITTC-57)")
+        print(f"form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (s.d. over {ff.n} "
+              f"tested speeds, {ff.n_runs} runs; ITTC-57)")
+    else:
+        print("no form factor: R_p ITTC-57 needs the model's wetted area and runs above "
+              "the laminar range")
     print(sc.statement)
     return 0

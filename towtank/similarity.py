@@ -23,8 +23,13 @@ STANDARD_GRAVITY = 9.80665
 #: Depth-to-diameter ratio beyond which a submerged body of revolution makes no significant waves.
 DEEP_SUBMERGENCE_DEPTH_RATIO = 3.0
 
-#: Reynolds number below which a model's boundary layer may still be laminar (SUT-2 report).
-TURBULENT_RE_MODEL = 1.0e5
+#: Reynolds number below which a model's boundary layer may still be laminar: the default of
+#: [processing] laminar_re, used alike by the form factor and the similarity statement.
+TURBULENT_RE_MODEL = 2.0e5
+
+#: Smallest prototype Reynolds number scaled: far below it the ITTC-57 line means nothing (its
+#: pole is at Re = 100) and a speed there is a unit mistake.
+MIN_PROTOTYPE_REYNOLDS = 1.0e3
 
 PRIME_KINDS = {"added_mass": 3, "damping": 2}
 
@@ -266,11 +271,13 @@ class FormFactor:
     Attributes
     ----------
     one_plus_k : float
-        Mean of ``C_T / C_F`` over the points used [-]
+        Mean over the tested speeds of the per-speed ``C_T / C_F`` [-]
     std : float
-        Sample standard deviation (ddof = 1) of those values [-]; NaN when one point is used
+        Sample standard deviation (ddof = 1) of the per-speed values [-]; NaN for one speed
     n : int
-        Number of points used
+        Number of tested speeds used (repeats at one speed count once)
+    n_runs : int
+        Number of points (runs) used
     values : numpy.ndarray
         ``(1 + k)_i = C_T,i / C_F,i`` for every input point [-] (NaN where ``Re`` <= 100)
     reynolds : numpy.ndarray
@@ -279,15 +286,53 @@ class FormFactor:
         Boolean mask of the points with ``Re >= re_min`` that enter the mean
     re_range : tuple of float
         Smallest and largest Reynolds number of the points used [-]
+    speeds : numpy.ndarray
+        Mean speed of each tested speed used, ascending [m/s]
+    speed_values : numpy.ndarray
+        ``1 + k`` of each tested speed, the mean over its repeats [-]
+    speed_runs : numpy.ndarray
+        Number of points (runs) at each tested speed
     """
 
     one_plus_k: float
     std: float
     n: int
+    n_runs: int
     values: np.ndarray
     reynolds: np.ndarray
     used: np.ndarray
     re_range: tuple[float, float]
+    speeds: np.ndarray
+    speed_values: np.ndarray
+    speed_runs: np.ndarray
+
+
+def speed_groups(speed: ArrayLike, rel_tol: float = 0.02) -> np.ndarray:
+    """Group points by tested speed: repeats at one carriage speed share a group.
+
+    Sorted speeds are chained into one group while each lies within ``rel_tol`` of the previous
+    one (single linkage: a gap larger than ``rel_tol`` times the smaller speed starts a group).
+
+    Parameters
+    ----------
+    speed : array_like
+        Speed of each point [m/s], finite
+    rel_tol : float, default 0.02
+        Relative gap that separates two tested speeds [-]
+
+    Returns
+    -------
+    numpy.ndarray
+        Integer group of each point, 0 for the slowest speed, numbered upwards.
+    """
+    u = np.abs(np.atleast_1d(np.asarray(speed, dtype=float)).ravel())
+    if u.size == 0:
+        return np.zeros(0, dtype=int)
+    order = np.argsort(u, kind="stable")
+    gaps = np.diff(u[order]) > rel_tol * u[order][:-1]
+    groups = np.empty(u.size, dtype=int)
+    groups[order] = np.concatenate(([0], np.cumsum(gaps)))
+    return groups
 
 
 def form_factor(
@@ -298,13 +343,17 @@ def form_factor(
     nu: float,
     length: float,
     re_min: float = 2e5,
+    rel_tol: float = 0.02,
 ) -> FormFactor:
     """Form factor ``1 + k = C_T / C_F`` from steady zero-angle model resistance.
 
     For each point ``C_T = R / (1/2 rho S U^2)`` and ``C_F`` is the ITTC-57 line at
     ``Re = U L / nu``; ``(1 + k)_i = C_T / C_F`` (ITTC 7.5-02-02-02, with no wave resistance for a
-    deeply submerged body). The mean and sample standard deviation are taken over the points with
-    ``Re >= re_min``, so that the laminar and transitional range is left out.
+    deeply submerged body). Only the points with ``Re >= re_min`` are used, so that the laminar
+    and transitional range is left out. Their repeats at one tested speed (speeds within
+    ``rel_tol``, :func:`speed_groups`) are averaged first; ``1 + k`` is then the mean over the
+    tested speeds and its spread the sample standard deviation over them, so that a speed run
+    five times weighs no more than a speed run once.
 
     Parameters
     ----------
@@ -322,6 +371,8 @@ def form_factor(
         Model length [m]
     re_min : float, default 2e5
         Smallest Reynolds number used [-]
+    rel_tol : float, default 0.02
+        Relative speed difference within which points are repeats of one tested speed [-]
 
     Returns
     -------
@@ -345,23 +396,31 @@ def form_factor(
     ct = r[valid] / (0.5 * _positive(rho, "rho") * area * u[valid] ** 2)
     values[valid] = ct / ittc57_cf(re[valid])
     used = valid & (re >= re_min)
-    n = int(np.count_nonzero(used))
-    if n == 0:
+    n_runs = int(np.count_nonzero(used))
+    if n_runs == 0:
         top = f"{np.nanmax(re):.3g}" if np.any(np.isfinite(re)) else "undefined"
         raise ValueError(
             f"No steady point reaches Re = {re_min:.3g} (highest Re = {top}), so the form factor "
             "cannot be taken outside the laminar range."
         )
-    chosen = values[used]
-    std = float(np.std(chosen, ddof=1)) if n > 1 else float("nan")
+    groups = speed_groups(u[used], rel_tol)
+    count = np.bincount(groups)
+    speeds = np.bincount(groups, weights=u[used]) / count
+    speed_values = np.bincount(groups, weights=values[used]) / count
+    n = int(speeds.size)
+    std = float(np.std(speed_values, ddof=1)) if n > 1 else float("nan")
     return FormFactor(
-        one_plus_k=float(np.mean(chosen)),
+        one_plus_k=float(np.mean(speed_values)),
         std=std,
         n=n,
+        n_runs=n_runs,
         values=values,
         reynolds=re,
         used=used,
         re_range=(float(np.min(re[used])), float(np.max(re[used]))),
+        speeds=speeds,
+        speed_values=speed_values,
+        speed_runs=count,
     )
 
 
@@ -467,6 +526,56 @@ def prime_value(value: ArrayLike, rho: float, length: float, kind: str) -> float
     return np.asarray(value, dtype=float) / _prime_factor(rho, length, kind)
 
 
+def check_prototype_speeds(
+    speeds: ArrayLike,
+    length: float,
+    nu: float,
+    re_min: float = MIN_PROTOTYPE_REYNOLDS,
+) -> np.ndarray:
+    """Prototype speeds as a 1-D array, checked to be usable for scaling.
+
+    Each speed must be finite, > 0 and give ``Re = U L / nu >= re_min``: the ITTC-57 line
+    ``C_F = 0.075 / (log10 Re - 2)^2`` has its pole at Re = 100 and describes turbulent
+    friction only, so a prototype speed far below ``re_min`` is a unit or typing mistake.
+
+    Parameters
+    ----------
+    speeds : float or array_like
+        Prototype speeds [m/s]
+    length : float
+        Prototype length [m]
+    nu : float
+        Kinematic viscosity of the prototype's water [m^2/s]
+    re_min : float, default 1e3
+        Smallest Reynolds number accepted [-]
+
+    Returns
+    -------
+    numpy.ndarray
+        The speeds [m/s]
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the first unusable speed and why.
+    """
+    u = np.atleast_1d(np.asarray(speeds, dtype=float)).ravel()
+    if u.size == 0:
+        raise ValueError("no prototype speed was given.")
+    l_p, nu_p = _positive(length, "length"), _positive(nu, "nu")
+    for v in u:
+        if not math.isfinite(v) or v <= 0.0:
+            raise ValueError(f"the prototype speed {v:g} m/s is not a finite speed > 0.")
+        re = v * l_p / nu_p
+        if re < re_min:
+            raise ValueError(
+                f"the prototype speed {v:g} m/s gives Re = {re:.3g} (L = {l_p:g} m, "
+                f"nu = {nu_p:.4g} m²/s), below {re_min:.3g}, where the ITTC-57 friction line "
+                f"means nothing; give speeds of at least {re_min * nu_p / l_p:.2g} m/s."
+            )
+    return u
+
+
 def scaling_table(
     speeds_prototype: ArrayLike,
     *,
@@ -479,7 +588,7 @@ def scaling_table(
     nu_p: float,
     resistance_model: Callable[[float], float],
     tested_speed_range: tuple[float, float],
-    wetted_area_model: float,
+    wetted_area_model: float | None,
     one_plus_k: float,
     delta_cf: float = 0.0,
 ) -> pd.DataFrame:
@@ -494,7 +603,8 @@ def scaling_table(
       curve Froude-scaled, which is what it is labelled (a deeply submerged hull's resistance does
       not follow Froude scaling);
     - ``drag_ittc57 = 1/2 rho_p S_p U_p^2 [(1 + k) C_F(Re_p) + Delta C_F]`` with
-      ``S_p = S_m lambda^2`` (:func:`ittc57_drag`);
+      ``S_p = S_m lambda^2`` (:func:`ittc57_drag`); NaN when the wetted area is unknown
+      (``wetted_area_model`` None) or ``one_plus_k`` is NaN;
     - ``froude_in_tested_range`` / ``reynolds_in_tested_range``: whether the corresponding model
       speed lies inside ``tested_speed_range`` (``drag_froude`` is extrapolated where it does not);
     - ``re_model_froude = speed_model_froude L_m / nu_m``.
@@ -506,7 +616,7 @@ def scaling_table(
     Parameters
     ----------
     speeds_prototype : float or array_like
-        Prototype speeds [m/s], > 0
+        Prototype speeds [m/s], > 0, each with ``Re_p >= 1e3`` (:func:`check_prototype_speeds`)
     scale : float
         Scale ratio ``lambda = L_p / L_m`` [-]
     length_model : float
@@ -525,10 +635,10 @@ def scaling_table(
         Steady model resistance [N] as a function of model speed [m/s]
     tested_speed_range : tuple of float
         Lowest and highest model speed tested [m/s]
-    wetted_area_model : float
-        Wetted surface area of the model [m^2]
+    wetted_area_model : float or None
+        Wetted surface area of the model [m^2]; None when it is not known
     one_plus_k : float
-        Form factor ``1 + k`` [-], e.g. from :func:`form_factor`
+        Form factor ``1 + k`` [-], e.g. from :func:`form_factor`; NaN when it is not known
     delta_cf : float, default 0
         Roughness allowance ``Delta C_F`` [-]
 
@@ -540,7 +650,8 @@ def scaling_table(
     Raises
     ------
     ValueError
-        Lengths inconsistent with ``scale``, or an invalid tested speed range.
+        Lengths inconsistent with ``scale``, an invalid tested speed range, or an unusable
+        prototype speed.
     """
     lam = _positive(scale, "scale")
     l_m = _positive(length_model, "length_model")
@@ -552,11 +663,17 @@ def scaling_table(
     lo, hi = (float(v) for v in tested_speed_range)
     if not lo <= hi:
         raise ValueError(f"tested_speed_range must be (lowest, highest), not ({lo}, {hi}).")
-    u_p = np.atleast_1d(np.asarray(speeds_prototype, dtype=float)).ravel()
+    u_p = check_prototype_speeds(speeds_prototype, l_p, nu_p)
     u_m_froude = froude_speed_model(u_p, lam)
     u_m_reynolds = reynolds_speed_model(u_p, lam, nu_m, nu_p)
     r_m = np.array([float(resistance_model(float(u))) for u in u_m_froude], dtype=float)
-    wetted_area_prototype = _positive(wetted_area_model, "wetted_area_model") * lam**2
+    if wetted_area_model is None or not math.isfinite(one_plus_k):
+        drag_ittc57 = np.full(u_p.shape, np.nan)
+    else:
+        wetted_area_prototype = _positive(wetted_area_model, "wetted_area_model") * lam**2
+        drag_ittc57 = ittc57_drag(
+            u_p, l_p, wetted_area_prototype, rho_p, nu_p, one_plus_k, delta_cf
+        )
     table = pd.DataFrame(
         {
             "speed_prototype": u_p,
@@ -565,9 +682,7 @@ def scaling_table(
             "speed_model_froude": u_m_froude,
             "speed_model_reynolds": u_m_reynolds,
             "drag_froude": r_m * froude_force_ratio(lam, rho_m, rho_p),
-            "drag_ittc57": ittc57_drag(
-                u_p, l_p, wetted_area_prototype, rho_p, nu_p, one_plus_k, delta_cf
-            ),
+            "drag_ittc57": drag_ittc57,
             "froude_in_tested_range": (u_m_froude >= lo) & (u_m_froude <= hi),
             "reynolds_in_tested_range": (u_m_reynolds >= lo) & (u_m_reynolds <= hi),
             "re_model_froude": reynolds_number(u_m_froude, l_m, nu_m),
@@ -582,12 +697,14 @@ def similarity_statement(
     re_prototype_range: tuple[float, float],
     depth_m: float | None = None,
     diameter_m: float | None = None,
+    turbulent_re: float = TURBULENT_RE_MODEL,
 ) -> str:
     """Plain-English account of which similarity the model tests met.
 
     States the model and prototype Reynolds ranges and their ratio, whether they overlap
-    (Reynolds similarity), whether the model range reaches the turbulent range (Re > 1e5, as the
-    SUT-2 report required) and, when the depth and diameter are given, whether the depth exceeds
+    (Reynolds similarity), whether the model range lies above ``turbulent_re`` (the threshold
+    below which :func:`form_factor` leaves points out, [processing] laminar_re; the SUT-2
+    report asked for Re > 1e5) and, when the depth and diameter are given, whether the depth exceeds
     3 D so that the body makes no waves and Froude similarity is not needed (the SUT-2 tests ran at
     5 D).
 
@@ -601,6 +718,8 @@ def similarity_statement(
         Submergence of the model's axis during the tests [m]
     diameter_m : float, optional
         Maximum diameter of the model [m]
+    turbulent_re : float, default 2e5
+        Model Reynolds number below which the boundary layer may be laminar [-]
 
     Returns
     -------
@@ -632,19 +751,19 @@ def similarity_statement(
             f"model's, by a factor of {_ratio_text(ratio_lo, ratio_hi)}, so the resistance is "
             "extrapolated with the ITTC-57 line and a form factor."
         )
-    if m_lo >= TURBULENT_RE_MODEL:
+    re_t = _positive(turbulent_re, "turbulent_re")
+    if m_lo >= re_t:
+        sentences.append(f"All model tests were above Re = {re_t:.3g}, in turbulent flow.")
+    elif m_hi >= re_t:
         sentences.append(
-            f"All model tests were above Re = {TURBULENT_RE_MODEL:.0e}, in turbulent flow."
-        )
-    elif m_hi >= TURBULENT_RE_MODEL:
-        sentences.append(
-            f"Part of the model range lies below Re = {TURBULENT_RE_MODEL:.0e}, where the boundary "
-            "layer may be laminar; those tests do not scale to the prototype."
+            f"Part of the model range lies below Re = {re_t:.3g}, where the boundary layer may "
+            "be laminar; those tests do not scale to the prototype and are left out of the "
+            "form factor."
         )
     else:
         sentences.append(
-            f"All model tests were below Re = {TURBULENT_RE_MODEL:.0e}, where the boundary layer "
-            "may be laminar; they do not scale to a turbulent prototype."
+            f"All model tests were below Re = {re_t:.3g}, where the boundary layer may be "
+            "laminar; they do not scale to a turbulent prototype."
         )
     if (depth_m is None) != (diameter_m is None):
         raise ValueError("Give both depth_m and diameter_m, or neither.")

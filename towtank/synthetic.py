@@ -114,6 +114,9 @@ ADDED_MASS_SYMBOLS = ("X_udot", "Y_vdot", "Z_wdot")
 
 HULL_SAMPLE_SEED = 20240521
 FIN_SAMPLE_SEED = 20240522
+#: Test dates written in the sample days' run sheets (the report's test date).
+HULL_SAMPLE_DATE = "2024-05-21"
+FIN_SAMPLE_DATE = "2024-05-22"
 
 Config = Literal["hull", "fin", "sting"]
 ChannelStyle = Literal["canonical", "lab"]
@@ -1355,17 +1358,21 @@ def hull_day_plan() -> list[RunSpec]:
 
 
 def fin_day_plan() -> list[RunSpec]:
-    """The NACA 0015 fin day: post tares, then the fin at 5-35 deg at four speeds.
+    """The NACA 0015 fin day: post tares, then the fin at 0-35 deg at four speeds.
 
-    Run count per config: sting (the fin's post) 5 (4 steady, 1 accelerated), fin 28
-    (7 angles x 4 speeds, steady); 33 in all. All in tare group "post".
+    Angles 0, 2.5, 5 and 7.5 deg (the zero-lift check and points in the linear range, so that
+    every speed keeps three or more distinct angles below its stall, which is 7.5-10 deg at
+    these Re, for a lift slope with an intercept and residual degrees of freedom), then 10-35
+    deg in 5 deg steps into and past stall. Run count per config: sting (the fin's post) 5
+    (4 steady, 1 accelerated), fin 40 (10 angles x 4 speeds, steady); 45 in all. All in tare
+    group "post".
     """
     acc = 0.5
     plan = [RunSpec("sting", 0.0, v, acc, tare_group="post") for v in (0.8, 1.5, 2.0, 2.7)]
     plan.append(RunSpec("sting", 0.0, 2.0, 1.0, test="accel", tare_group="post"))
-    for ang in range(5, 36, 5):
+    for ang in (0.0, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0):
         for v in (1.0, 1.5, 2.0, 2.5):
-            plan.append(RunSpec("fin", float(ang), v, acc, tare_group="post"))
+            plan.append(RunSpec("fin", ang, v, acc, tare_group="post"))
     return plan
 
 
@@ -1500,6 +1507,7 @@ def _make_day(
     accel_channel: bool,
     tank_length_m: float,
     tdms_dtype: Literal["float64", "float32"] = "float64",
+    date: str | _dt.date | None = None,
 ) -> DayTruth:
     if file_format not in ("csv", "csv.gz", "tdms"):
         raise ValueError(f"file_format must be 'csv', 'csv.gz' or 'tdms', not {file_format!r}.")
@@ -1511,6 +1519,7 @@ def _make_day(
     if channel_style == "lab" and channels is None:
         channels = LabChannels()
 
+    test_date = _iso_date(date)
     numbers = [spec.run if spec.run is not None else i + 1 for i, spec in enumerate(plan)]
     if len(set(numbers)) != len(numbers):
         raise ValueError("Run numbers of the plan must be unique.")
@@ -1587,9 +1596,27 @@ def _make_day(
         rows.append(row)
         truth.runs[int(number)] = {**row, "water_temp_C": temp, **run_truth}
 
-    write_run_sheet(rows, out_dir / f"run_sheet.{sheet_format}")
+    columns: tuple[str, ...] = SHEET_COLUMNS
+    if test_date is not None:  # the sheet only: truth.json is the same with or without it
+        columns += ("date",)
+        rows = [{**row, "date": test_date} for row in rows]
+    write_run_sheet(rows, out_dir / f"run_sheet.{sheet_format}", columns)
     write_truth(truth, out_dir / "truth.json")
     return truth
+
+
+def _iso_date(date: str | _dt.date | None) -> str | None:
+    """A test date as ISO text, YYYY-MM-DD (None stays None)."""
+    if date is None:
+        return None
+    if isinstance(date, _dt.datetime):
+        return date.date().isoformat()
+    if isinstance(date, _dt.date):
+        return date.isoformat()
+    try:
+        return _dt.date.fromisoformat(str(date).strip()).isoformat()
+    except ValueError:
+        raise ValueError(f"date must be an ISO date, YYYY-MM-DD, not {date!r}.") from None
 
 
 def make_hull_day(
@@ -1610,6 +1637,7 @@ def make_hull_day(
     temperature_spread_C: tuple[float, float] | None = (-0.2, 0.3),
     water_type: str = "fresh",
     tank_length_m: float = 100.0,
+    date: str | _dt.date | None = None,
 ) -> DayTruth:
     """Write a synthetic SUT-2 hull day: ``data/run_NNN.*``, ``run_sheet.*``, ``truth.json``.
 
@@ -1646,6 +1674,10 @@ def make_hull_day(
     water_type : str, default "fresh"
     tank_length_m : float, default 100.0
         Tank length [m].
+    date : str or datetime.date, optional
+        Test date; if given, the run sheet gets a ``date`` column (ISO ``YYYY-MM-DD``, FORMATS
+        §2: other columns are kept), from which the report takes its test date. Default: no
+        such column.
 
     Returns
     -------
@@ -1672,6 +1704,7 @@ def make_hull_day(
         tares={"A": TareTruth()} if tares is None else tares,
         accel_channel=accel_channel,
         tank_length_m=tank_length_m,
+        date=date,
     )
 
 
@@ -1698,6 +1731,7 @@ def make_fin_day(
     water_type: str = "fresh",
     tank_length_m: float = 100.0,
     tdms_dtype: Literal["float64", "float32"] = "float32",
+    date: str | _dt.date | None = None,
 ) -> DayTruth:
     """Write a synthetic NACA 0015 fin day: ``data/run_NNN.*``, ``run_sheet.*``, ``truth.json``.
 
@@ -1705,7 +1739,8 @@ def make_fin_day(
     chord 0.12 m, span 0.15 m), ``tares`` (default ``{"post": POST_TARE}``), ``runs`` (default
     :func:`fin_day_plan`), ``tdms_dtype`` (storage of the non-time TDMS channels, default
     float32 as LabVIEW's SGL, to keep the day small), and the defaults TDMS files, CSV sheet
-    and canonical channel names.
+    and canonical channel names. ``date`` as in :func:`make_hull_day` (a ``date`` column of the
+    run sheet only if given).
 
     Returns
     -------
@@ -1731,6 +1766,7 @@ def make_fin_day(
         accel_channel=accel_channel,
         tank_length_m=tank_length_m,
         tdms_dtype=tdms_dtype,
+        date=date,
     )
 
 
@@ -1918,6 +1954,7 @@ def fin_protocol_sections(
             "span_m": fin.span,
             "section": fin.section,
             "x_m": -0.61,
+            "linear_max_deg": 10.0,
         },
         "processing": {},
     }
@@ -1951,8 +1988,9 @@ _SAMPLE_README = """\
 # Sample runs (synthetic)
 
 Generated by `towtank.synthetic.write_sample_days` (generator version {version}); do not edit by
-hand, regenerate. Each day holds `data/` (one file per run), a run sheet and `truth.json` with the
-exact truth the data were made from (coefficients, per-run plateau forces, tares, phases).
+hand, regenerate. Each day holds `data/` (one file per run), a run sheet (with the test date in its
+`date` column) and `truth.json` with the exact truth the data were made from (coefficients, per-run
+plateau forces, tares, phases).
 
 - `sut2_hull/`: SUT-2 quarter-scale hull, {hull_n} runs at {hull_fs:g} Hz, gzipped CSV in the lab's
   channel names (load cells in volts), run sheet .xlsx; protocol `protocols/sut2_hull.toml`.
@@ -1967,6 +2005,8 @@ def write_sample_days(
     """Regenerate the shipped sample days ``root/sut2_hull`` and ``root/naca0015_fin``.
 
     Both directories are replaced as a whole; seeds are fixed, so the files are reproducible.
+    Each run sheet carries its day's test date in a ``date`` column (:data:`HULL_SAMPLE_DATE`,
+    :data:`FIN_SAMPLE_DATE`), which the report prints.
 
     Parameters
     ----------
@@ -1985,8 +2025,8 @@ def write_sample_days(
     for name in ("sut2_hull", "naca0015_fin"):
         if (root / name).exists():
             shutil.rmtree(root / name)
-    hull = make_hull_day(root / "sut2_hull")
-    fin = make_fin_day(root / "naca0015_fin")
+    hull = make_hull_day(root / "sut2_hull", date=HULL_SAMPLE_DATE)
+    fin = make_fin_day(root / "naca0015_fin", date=FIN_SAMPLE_DATE)
     (root / "README.md").write_text(
         _SAMPLE_README.format(
             version=GENERATOR_VERSION,

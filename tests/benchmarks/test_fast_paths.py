@@ -74,6 +74,7 @@ def _reference_key(protocol, row):
         "file": str(row["file"]),
         "window": [num(row.get("window_start_s")), num(row.get("window_end_s"))],
         "nominal": [num(row.get("speed_nominal")), num(row.get("accel_nominal"))],
+        "test": str(row.get("test", "")).strip().lower(),
     }
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
@@ -85,6 +86,7 @@ def _reference_key(protocol, row):
      "window_start_s": 5.0, "window_end_s": 7.25},
     {"file": 'odd "name" \\ é\x00.tdms', "speed_nominal": np.float64(0.8)},
     {"file": "run_004.csv"},
+    {"file": "run_005.csv", "test": " Accel"},
 ])
 def test_settings_key_is_unchanged(row):
     p = _protocol()
@@ -162,8 +164,12 @@ def test_cache_reads_the_one_file_per_entry_layout(tmp_path):
                                                                          st.st_mtime_ns,
                                                                          "c" * 64]}))
     c = cache.RunCache(tmp_path)
-    assert c.known_sha(f) == "c" * 64
+    # an index record without ctime and inode (older layout) is not trusted: the file is
+    # hashed again; the entry itself is still read
+    assert c.known_sha(f) is None
     assert c.get("c" * 64, "key")["run"] == 7
+    c.remember_sha(f, "c" * 64)
+    assert c.known_sha(f) == "c" * 64
 
 
 def test_packs_are_merged(tmp_path, monkeypatch):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import platform
 import shutil
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from towtank import __version__
+from towtank.protocol import OUTPUT_NAMES
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -26,11 +28,24 @@ def write_csv(df: pd.DataFrame, path: Path) -> None:
 
 
 def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Inputs with their sha256, program and library versions, settings used."""
+    """Inputs with their sha256, program and library versions, settings used.
+
+    A hull day also records the geometry used (each area and the volume with where it came
+    from: given in the protocol, computed from the Myring description, or a default) and, when
+    scaled, the prototype, its water and the form factor.
+    """
     import numpy
     import scipy
 
+    from towtank.pipeline import geometry_used
+
     p = day.protocol
+    if p.model is not None:
+        extra = {"geometry": {"geometry_source": p.model.geometry_source,
+                              "quantities": geometry_used(day)},
+                 **(extra or {})}
+    if day.scaling is not None:
+        extra = {"scaling": _scaling_provenance(day), **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
@@ -38,6 +53,11 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "channels": {k: asdict(v) for k, v in p.channels.items()},
         "reference": p.campaign.reference,
     }
+    if p.model is not None:  # stated standard uncertainties [kg], [m] (fit, coefficients_table)
+        settings["model_uncertainty"] = {
+            k: getattr(p.model, k)
+            for k in ("mass_uncertainty_kg", "length_uncertainty_m", "diameter_uncertainty_m")
+        }
     return {
         "program": "towtank",
         "version": __version__,
@@ -56,11 +76,29 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     }
 
 
-#: Every entry towtank writes into an output folder (the cache aside).
-OUTPUT_NAMES = frozenset({
-    "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
-    "scaling.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
-})
+def _scaling_provenance(day: DayResult) -> dict[str, Any]:
+    """The prototype, its water and the form factor behind scaling.csv."""
+    sr = day.scaling
+    proto = day.protocol.prototype
+    ff = sr.form_factor
+    return {
+        "scale": sr.scale,
+        "length_prototype_m": sr.length_prototype,
+        "prototype_water": asdict(proto.water) if proto is not None else None,
+        "rho_prototype": sr.rho_p,
+        "nu_prototype": sr.nu_p,
+        "wetted_area_prototype_m2": sr.wetted_area_prototype,
+        "delta_cf": sr.delta_cf,
+        "form_factor": None if ff is None else {
+            "one_plus_k": ff.one_plus_k,
+            "std": ff.std if math.isfinite(ff.std) else None,  # NaN (one speed): null
+            "n_speeds": ff.n,
+            "n_runs": ff.n_runs,
+            "speeds_m_s": [float(v) for v in ff.speeds],
+            "one_plus_k_per_speed": [float(v) for v in ff.speed_values],
+            "re_range": list(ff.re_range),
+        },
+    }
 
 
 def _swap_into_place(tmp: Path, out_dir: Path) -> None:
@@ -110,6 +148,28 @@ def _replace_entries(tmp: Path, out_dir: Path) -> None:
     shutil.rmtree(tmp, ignore_errors=True)
 
 
+#: A temporary output folder older than this was left by a killed run [s].
+STALE_TEMPORARY_S = 600.0
+
+
+def sweep_stale_temporaries(out_dir: Path, max_age_s: float = STALE_TEMPORARY_S) -> list[Path]:
+    """Remove the temporary folders a killed run left beside ``out_dir`` (older than
+    ``max_age_s`` [s], so that a run writing at the same time keeps its own); return them."""
+    import time
+
+    now = time.time()
+    gone = []
+    for pattern in (f".{out_dir.name}.tmp-*", f".{out_dir.name}.old-*"):
+        for path in out_dir.parent.glob(pattern):
+            try:
+                if path.is_dir() and now - path.stat().st_mtime > max_age_s:
+                    shutil.rmtree(path)
+                    gone.append(path)
+            except OSError:
+                pass
+    return gone
+
+
 def foreign_entries(out_dir: Path, keep: tuple[str, ...] = (".cache",)) -> list[str]:
     """Names in ``out_dir`` that towtank did not write (nor keeps, nor left as temporaries)."""
     if not out_dir.is_dir():
@@ -149,6 +209,7 @@ def write_outputs(
     """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
+    sweep_stale_temporaries(out_dir)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
     try:
         from towtank.report import tables

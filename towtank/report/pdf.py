@@ -420,11 +420,13 @@ def geometry_text(day: DayResult) -> str | None:
              "computed from the [model.myring] Myring description": "Myring description"}
     parts = []
     for g in geometry_used(day):
-        source = short.get(g["source"], g["source"].replace("given in the protocol", "given"))
+        source = short.get(g["source"], g["source"])
+        if source.startswith("given in the protocol ("):
+            source = "given as " + source.removeprefix("given in the protocol (").rstrip(")")
         if g["value"] is None:
             parts.append(f"{g['symbol']} not known")
         elif g["symbol"] == "S_p":
-            parts.append(f"prototype S_p = {source} = {_num(g['value'])} {g['unit']}")
+            parts.append(f"prototype S_p = λ²·S_m = {_num(g['value'])} {g['unit']}")
         else:
             parts.append(f"{g['symbol']} = {_num(g['value'])} {g['unit']} ({source})")
     return "; ".join(parts) + "." if parts else None
@@ -621,7 +623,10 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
         for r in day.hull.coefficients.to_dict("records"):
-            if r.get("agreement") and not str(r.get("method", "")).startswith("="):
+            method = str(r.get("method", ""))
+            # the method footnote states the second estimate already (fit.fit_added_mass)
+            if (r.get("agreement") and not method.startswith("=")
+                    and "second estimate" not in method):
                 y += _text_block(fig, y, (
                     f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
                     f"{str(r['alt_method']).split(' (')[0]}; {r['agreement']}."), width=125,
@@ -666,9 +671,14 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
         "and the finite-span expectation at the group's mean Re."), width=125, fontsize=7)
     ctrl = day.fins.control
     if ctrl is not None and len(ctrl):
-        text = "Control derivatives: " + "; ".join(
-            f"{r.get('symbol', '')} = {_v(r.get('value'))} {r.get('unit', '')}".strip()
-            for r in ctrl.to_dict("records"))
+        recs = ctrl.to_dict("records")
+        text = "Control derivatives (pair of fins, Prestero 2001): " + "; ".join(
+            f"{r.get('symbol', '')} = {_v(r.get('value'))} "
+            f"{str(r.get('unit', '')).replace('*', '·')}".strip()
+            for r in recs)
+        if "lift_slope" in recs[0]:
+            text += (f". They use the lift slope c_Lα = {_v(recs[0]['lift_slope'], '.4g')} /rad: "
+                     f"{recs[0].get('lift_slope_source', '')}.")
         used += _text_block(fig, y + used, text, width=125, fontsize=7)
     return used
 

@@ -3,7 +3,8 @@
 Sheets, always all of them (a sheet whose data the day lacks holds a one-line note saying why):
 
 ============  ===========================================================================
-Summary       campaign, model, water, test date, program, run counts, key results
+Summary       campaign, model, water, test date, program, run counts, the geometry used
+              (areas, volume and where each came from), key results
 Coefficients  the SUT-2 coefficient table: value, unit, 95 % interval, prime, reference,
               diff %, method, prototype value, second estimate, its method and agreement
 Runs          runs.csv: every run of the sheet with status, reason, phase windows, means
@@ -275,8 +276,7 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         rows += [("model", m.name or "", ""), ("model length L", m.length_m, "m")]
         if m.diameter_m is not None:
             rows.append(("model diameter D", m.diameter_m, "m"))
-        rows += [("model mass", m.mass_kg, "kg"), ("frontal area A", m.frontal_area, "m²"),
-                 ("lateral area A_lat", m.lateral_area, "m²")]
+        rows.append(("model mass", m.mass_kg, "kg"))
         if m.scale is not None:
             rows.append(("scale λ", m.scale, "-"))
     if p.fin is not None:
@@ -290,6 +290,14 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         ("warnings", len(day.warnings), ""),
     ]
     w.pairs(rows)
+    if m is not None:
+        from towtank.pipeline import geometry_used
+
+        w.gap()
+        w.title("Geometry used")
+        w.table(pd.DataFrame(geometry_used(day)),
+                columns=["quantity", "symbol", "value", "unit", "source"], units={})
+        w.note(f"geometry_source: {m.geometry_source}")
     w.gap()
     w.title("Key results")
     if day.hull is not None and len(day.hull.coefficients):
@@ -383,18 +391,28 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
     ]
     ff = sr.form_factor
     if ff is not None:
-        rows += [("form factor 1 + k", float(ff.one_plus_k), "-"),
-                 ("form factor standard deviation", float(ff.std), "-"),
-                 ("form factor runs", int(ff.n), "-"),
+        rows += [("form factor 1 + k (mean over tested speeds)", float(ff.one_plus_k), "-"),
+                 ("form factor standard deviation over speeds", float(ff.std), "-"),
+                 ("form factor tested speeds", int(ff.n), "-"),
+                 ("form factor runs", int(ff.n_runs), "-"),
                  ("form factor Re, lowest", float(ff.re_range[0]), "-"),
                  ("form factor Re, highest", float(ff.re_range[1]), "-")]
     else:
         rows.append(("form factor 1 + k", None, "-"))
+    rows += [("prototype length L_p", sr.length_prototype, "m"),
+             ("prototype wetted area S_p = λ²·S_m", sr.wetted_area_prototype, "m²"),
+             ("roughness allowance ΔC_F", sr.delta_cf, "-")]
     rows += [("model water density", sr.rho_m, "kg/m³"),
              ("model water kinematic viscosity", sr.nu_m, "m²/s"),
              ("prototype water density", sr.rho_p, "kg/m³"),
              ("prototype water kinematic viscosity", sr.nu_p, "m²/s")]
     w.pairs(rows)
+    if ff is not None:
+        w.gap()
+        w.title("Form factor per tested speed")
+        w.table(pd.DataFrame({"speed": ff.speeds, "runs": ff.speed_runs,
+                              "one_plus_k": ff.speed_values}),
+                units={"speed": "m/s", "runs": "-", "one_plus_k": "-"})
     w.gap()
     w.title("Similarity")
     c = w.ws.cell(row=w.row, column=1, value=sr.statement)

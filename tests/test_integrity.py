@@ -1,0 +1,228 @@
+"""Inputs are never touched and never misread (issue 7 follow-ups).
+
+The output folder can never be the data folder nor overwrite an input; a bad reference CSV or
+a misspelt sheet column stops the day before anything is written; the per-run cache cannot be
+fooled by a file rewritten at the same size with its mtime put back; odd files get a reason
+that says what they are; a killed run's temporary folders are swept.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from conftest import write_hull_protocol
+
+from towtank import cli
+from towtank import synthetic as syn
+from towtank.errors import ProtocolError, RunError
+from towtank.ingest import read_columns
+from towtank.protocol import load_protocol, read_reference_csv
+from towtank.report.outputs import sweep_stale_temporaries
+from towtank.runsheet import read_run_sheet
+
+HIGH = 0.5
+PLAN = [syn.RunSpec("sting", 0.0, v, HIGH) for v in (0.8, 1.6)] + [
+    syn.RunSpec("hull", 0.0, v, HIGH) for v in (0.8, 1.2, 1.6)
+]
+
+
+def _day(root: Path) -> Path:
+    syn.make_hull_day(root, seed=8, runs=PLAN, sheet_format="csv", file_format="csv",
+                      channel_style="canonical")
+    return write_hull_protocol(root, sheet_format="csv", channel_style="canonical")
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _tree_hashes(root: Path) -> dict[str, str]:
+    return {str(p.relative_to(root)): _sha(p) for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def _process(protocol: Path, out: Path, *extra: str) -> int:
+    return cli.main(["process", str(protocol), "--out", str(out), "--quiet", "--no-report",
+                     "--jobs", "1", *extra])
+
+
+# ------------------------------------------------------------------------- output folder
+def test_output_folder_may_not_be_or_hold_the_data(tmp_path, capsys):
+    protocol = _day(tmp_path)
+    before = _tree_hashes(tmp_path)
+    for out in (tmp_path / "data", tmp_path / "data" / "out", tmp_path):
+        assert _process(protocol, out) == 2, out
+        assert "raw run files" in capsys.readouterr().err
+    assert _tree_hashes(tmp_path) == before
+
+
+def test_output_may_not_overwrite_the_run_sheet(tmp_path, capsys):
+    protocol = _day(tmp_path)
+    sheets = tmp_path / "sheets"
+    sheets.mkdir()
+    (tmp_path / "run_sheet.csv").rename(sheets / "runs.csv")
+    text = protocol.read_text(encoding="utf-8").replace('"./run_sheet.csv"',
+                                                        '"./sheets/runs.csv"')
+    protocol.write_text(text, encoding="utf-8")
+    sheet_sha = _sha(sheets / "runs.csv")
+    assert _process(protocol, sheets) == 2
+    assert "would overwrite the input" in capsys.readouterr().err
+    assert _sha(sheets / "runs.csv") == sheet_sha
+
+
+def test_output_folder_that_is_a_file_stops_before_any_work(tmp_path, capsys):
+    protocol = _day(tmp_path)
+    target = tmp_path / "report.txt"
+    target.write_text("not a folder", encoding="utf-8")
+    assert _process(protocol, target) == 2
+    assert "is a file, not a folder" in capsys.readouterr().err
+    assert target.read_text(encoding="utf-8") == "not a folder"
+
+
+# ------------------------------------------------------------------------ reference CSV
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        ("", "is empty"),
+        ("# only a comment\n", "is empty"),
+        ("name,value\nX_udot,-0.0008\n", "needs the columns symbol and prime"),
+        ("symbol,prime\nX_udot,minus one\n", "line 2 needs a symbol and a finite prime"),
+        ("symbol,prime\nX_udot,-0.0008\nX_udot,-0.0009\n", "repeats the symbol"),
+        ("symbol,prime\n", "no coefficient rows"),
+    ],
+)
+def test_bad_reference_csv_stops_the_day_before_anything_is_written(tmp_path, capsys,
+                                                                    content, words):
+    protocol = _day(tmp_path)
+    (tmp_path / "ref.csv").write_text(content, encoding="utf-8")
+    text = protocol.read_text(encoding="utf-8")
+    protocol.write_text(text.replace('reference = "remus"', 'reference = "ref.csv"'),
+                        encoding="utf-8")
+    out = tmp_path / "out"
+    assert _process(protocol, out) == 2
+    assert words in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_good_reference_csv_is_read_and_hashed_in_provenance(tmp_path):
+    protocol = _day(tmp_path)
+    ref = tmp_path / "ref.csv"
+    ref.write_text("# my vehicle\nSymbol , Prime, note\nX_u|u|,-0.0031,towed 2023\n"
+                   "X_udot,-0.0008,\n", encoding="utf-8")
+    assert read_reference_csv(ref) == {"X_u|u|": -0.0031, "X_udot": -0.0008}
+    text = protocol.read_text(encoding="utf-8")
+    protocol.write_text(text.replace('reference = "remus"', 'reference = "ref.csv"'),
+                        encoding="utf-8")
+    out = tmp_path / "out"
+    assert _process(protocol, out) == 0
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    hashes = {Path(i["path"]).name: i["sha256"] for i in prov["inputs"]}
+    assert hashes["ref.csv"] == _sha(ref)
+    coef = pd.read_csv(out / "coefficients.csv").set_index("symbol")
+    assert coef.loc["X_u|u|", "reference_prime"] == pytest.approx(-0.0031)
+
+
+# ------------------------------------------------------------------------------ cache
+def test_cache_sees_a_file_rewritten_at_the_same_size_with_its_mtime_put_back(tmp_path):
+    protocol = _day(tmp_path)
+    out = tmp_path / "out"
+    assert _process(protocol, out) == 0
+    run_file = tmp_path / "data" / "run_005.csv"
+    st = run_file.stat()
+    original = run_file.read_text(encoding="utf-8")
+    # the same bytes with the last digit of every drag value changed: same size
+    lines = original.splitlines(keepends=True)
+    header = lines[0].rstrip("\n").split(",")
+    k = header.index("drag")
+    new_lines = [lines[0]]
+    for line in lines[1:]:
+        cells = line.rstrip("\n").split(",")
+        v = cells[k]
+        digit = next(i for i in range(len(v) - 1, -1, -1) if v[i].isdigit())
+        cells[k] = v[:digit] + str((int(v[digit]) + 5) % 10) + v[digit + 1:]
+        new_lines.append(",".join(cells) + "\n")
+    changed = "".join(new_lines)
+    assert len(changed) == len(original) and changed != original
+    run_file.write_text(changed, encoding="utf-8")
+    os.utime(run_file, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert run_file.stat().st_size == st.st_size
+    assert run_file.stat().st_mtime_ns == st.st_mtime_ns
+    assert _process(protocol, out, "--date", "2024-01-01") == 0  # not a replay: options differ
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    hashes = {Path(i["path"]).name: i["sha256"] for i in prov["inputs"]}
+    assert hashes["run_005.csv"] == _sha(run_file)
+
+
+# ----------------------------------------------------------------------------- run sheet
+def test_misspelt_optional_sheet_column_stops_the_day(tmp_path):
+    _day(tmp_path)
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    frame.rename(columns={"tare_group": "tare_grp"}).to_csv(sheet, index=False)
+    with pytest.raises(ProtocolError, match="'tare_grp' looks like a misspelling of 'tare_group'"):
+        read_run_sheet(sheet, 18.0)
+
+
+def test_sheet_columns_in_another_case_are_the_contract_columns(tmp_path):
+    _day(tmp_path)
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    frame.loc[frame.index[-1], "status"] = "void"
+    frame.columns = [c.capitalize() if c in ("status", "run", "remarks") else c
+                     for c in frame.columns]
+    frame.to_csv(sheet, index=False)
+    runs = read_run_sheet(sheet, 18.0)
+    assert runs["status"].iloc[-1] == "void"
+    assert list(runs["run"]) == list(range(1, len(PLAN) + 1))
+
+
+def test_protocol_with_a_byte_order_mark_loads(tmp_path):
+    protocol = _day(tmp_path)
+    protocol.write_bytes(b"\xef\xbb\xbf" + protocol.read_bytes())
+    assert load_protocol(protocol).campaign.name
+
+
+# ------------------------------------------------------------------------------ odd files
+def test_gzip_file_named_csv_and_nul_file_get_their_own_reason(tmp_path):
+    _day(tmp_path)
+    src = tmp_path / "data" / "run_003.csv"
+    zipped = tmp_path / "zipped.csv"
+    zipped.write_bytes(gzip.compress(src.read_bytes(), mtime=0))
+    with pytest.raises(RunError, match="gzip-compressed although its name does not end in .gz"):
+        read_columns(zipped)
+    nul = tmp_path / "nul.csv"
+    nul.write_bytes(src.read_bytes()[:200] + b"\x00" * 4096)
+    with pytest.raises(RunError, match="holds NUL bytes"):
+        read_columns(nul)
+
+
+def test_few_dropped_rows_are_warned_on_the_terminal(tmp_path, capsys):
+    protocol = _day(tmp_path)
+    run_file = tmp_path / "data" / "run_004.csv"
+    lines = run_file.read_text(encoding="utf-8").splitlines(keepends=True)
+    lines[500] = "n/a,n/a,n/a,n/a\n"
+    run_file.write_text("".join(lines), encoding="utf-8")
+    code = cli.main(["process", str(protocol), "--out", str(tmp_path / "out"), "--no-report",
+                     "--jobs", "1"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "run 4:" in printed and "non-numeric row(s) dropped" in printed
+
+
+def test_a_killed_runs_temporary_folders_are_swept(tmp_path):
+    out = tmp_path / "out"
+    old_tmp = tmp_path / ".out.tmp-abc123"
+    fresh_tmp = tmp_path / ".out.tmp-def456"
+    for d in (old_tmp, fresh_tmp):
+        (d / "figures").mkdir(parents=True)
+        (d / "runs.csv").write_text("x\n", encoding="utf-8")
+    hour_ago = time.time() - 3600
+    os.utime(old_tmp, (hour_ago, hour_ago))
+    assert sweep_stale_temporaries(out) == [old_tmp]
+    assert not old_tmp.exists() and fresh_tmp.exists()  # a run writing now keeps its folder
