@@ -283,9 +283,11 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
     f.h("Fit diagnostics")
     for sym, am in hf.added_mass.items():
         est = am.estimate
+        resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
         f.li(f"{sym}: joint regression {est.value:.5g} kg [{est.ci_low:.5g}, {est.ci_high:.5g}] "
              f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
-             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}.")
+             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
+             f"Mean residual of the joint regression by run [mN]: {resid}.")
         levels = (am.curve_difference or {}).get("levels") or []
         if levels:
             f.mono("     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
@@ -294,8 +296,6 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
                 lo, hi = lv["speed_range"]
                 f.mono(f"     {lv['accel']:8.3f}   {lo:6.3f} – {hi:6.3f}     {lv['n']:7d}   "
                        f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
-        resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
-        f.p(f"Mean residual of the joint regression by run [mN]: {resid}.")
     dm = hf.damping
     if dm is not None:
         t = dm.runs
@@ -307,7 +307,8 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
                 else "no outliers."))
     rep = hf.repeats
     if rep is not None and len(rep):
-        f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats.")
+        f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats "
+             "(C_D on the frontal area, as in runs.csv, also at 90°).")
         f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
                "drag s.d. [mN]")
         for r in rep.itertuples():
