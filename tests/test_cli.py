@@ -71,6 +71,28 @@ def test_the_progress_bar_leaves_no_thread_behind(tmp_path, capsys, monkeypatch)
     assert seen == [["MainThread"]]
 
 
+@pytest.mark.parametrize(
+    ("terminal", "flags", "bar"),
+    [(True, [], True), (True, ["--quiet"], False), (False, [], False)],
+)
+def test_progress_bar_only_on_a_terminal_and_never_with_quiet(tmp_path, capsys, monkeypatch,
+                                                              terminal, flags, bar):
+    import sys
+
+    day = tmp_path / "day"
+    assert main(["synth", str(day), "--day", "fin", "--seed", "2"]) == 0
+    capsys.readouterr()
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: terminal)
+    code = main(["process", str(day / "protocol.toml"), "--no-report", "--no-cache", *flags])
+    assert code == 0
+    captured = capsys.readouterr()
+    if bar:
+        assert "reducing" in captured.err and "run" in captured.err
+    else:
+        assert captured.err == ""
+    assert (captured.out == "") == ("--quiet" in flags)
+
+
 def test_process_without_a_command_or_protocol(tmp_path, capsys):
     assert main([]) == 2
     assert main(["process", str(tmp_path / "missing.toml")]) == 2

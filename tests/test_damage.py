@@ -280,7 +280,7 @@ def test_an_internal_bug_rejects_one_run_and_debug_shows_it(day, monkeypatch, tm
 def test_a_run_whose_worker_dies_is_rejected_in_one_sentence():
     from towtank.reduce import crashed_record
 
-    run, red, reason = crashed_record({"run": 30, "file": "run_030.csv"})
-    assert (run, red) == (30, None)
+    run, red, reason, preview = crashed_record({"run": 30, "file": "run_030.csv"})
+    assert (run, red, preview) == (30, None, None)
     assert reason.startswith("run 30: run_030.csv: the process reducing it stopped abruptly")
     assert reason.count(". ") == 0 and "\n" not in reason

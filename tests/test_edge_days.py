@@ -78,6 +78,21 @@ def test_plateau_too_short_to_detect_is_rejected_without_a_hand_window(tmp_path)
     result = process(protocol)
     assert SHORT_RUN in result.rejected
     assert "plateau" in result.rejected[SHORT_RUN]
+    # the run was read: its traces are kept for the report's appendix, at 10 Hz
+    preview = result.previews[SHORT_RUN]
+    truth = syn.load_truth(tmp_path)["runs"][str(SHORT_RUN)]
+    assert np.median(np.diff(preview["t"])) == pytest.approx(0.1)
+    assert np.nanmax(preview["U"]) == pytest.approx(truth["speed"], rel=0.05)
+    assert set(result.previews) == set(result.rejected)
+
+    from towtank.report import pdf
+
+    grid = pdf.ThumbGrid()
+    grid.draw(result, [SHORT_RUN, SHORT_RUN + 1])
+    ax, twin = grid.cells[0]
+    assert ax.axison and twin.get_visible()
+    assert len(ax.lines) == 1 and len(twin.lines) >= 1  # speed; drag (and lift)
+    assert any("rejected" in t.get_text() and "plateau" in t.get_text() for t in ax.texts)
 
 
 def test_hand_window_rescues_a_run_the_detection_cannot_use(edge_day: Day):
@@ -271,6 +286,7 @@ def test_output_folder_with_the_users_files_keeps_them(tmp_path):
     (out / "notes" / "day.txt").write_text("the carriage squeaked", encoding="utf-8")
     (out / "junk.txt").write_text("mine", encoding="utf-8")
     (out / "fins.csv").write_text("stale output of an earlier fin day\n", encoding="utf-8")
+    (out / "fin_curves.csv").write_text("stale too\n", encoding="utf-8")
     for _ in range(2):  # the second time over its own outputs too
         code = cli.main(["process", str(protocol), "--out", str(out), "--quiet",
                          "--no-report", "--jobs", "1"])
@@ -278,7 +294,10 @@ def test_output_folder_with_the_users_files_keeps_them(tmp_path):
         assert (out / "junk.txt").read_text(encoding="utf-8") == "mine"
         assert (out / "notes" / "day.txt").read_text(encoding="utf-8") == "the carriage squeaked"
         assert (out / "runs.csv").is_file() and (out / "provenance.json").is_file()
-        assert not (out / "fins.csv").exists()  # a towtank output this day does not produce
+        # fins.csv of the earlier fin day is replaced by this hull day's (header only)
+        assert (out / "fins.csv").read_text(encoding="utf-8").startswith("run,angle_deg,")
+        assert len((out / "fins.csv").read_text(encoding="utf-8").splitlines()) == 1
+        assert not (out / "fin_curves.csv").exists()
     leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
     leftovers += [p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".cache"]
     assert leftovers == []

@@ -60,6 +60,8 @@ class DayResult:
     scaling: Any = None  # towtank.similarity results
     inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
     report_date: str | None = None
+    # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
+    previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
 
     @property
     def n_rejected(self) -> int:
@@ -287,7 +289,8 @@ def process_day(
     done = len(todo) - len(to_reduce)
     if progress is not None and done:
         progress(done, len(todo))
-    for i, (run, red, reason) in enumerate(
+    previews: dict[int, dict[str, np.ndarray]] = {}
+    for i, (run, red, reason, preview) in enumerate(
         map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug,
                  on_crash=crashed_record)
     ):
@@ -299,6 +302,8 @@ def process_day(
         else:
             assert reason is not None
             rejected[run] = reason
+            if preview is not None:
+                previews[run] = preview
         if progress is not None:
             progress(done + i + 1, len(todo))
     if cache is not None:
@@ -349,7 +354,7 @@ def process_day(
             inputs[str(path)] = _sha(path)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
-        runs=runs, warnings=day_warnings, inputs=inputs,
+        runs=runs, warnings=day_warnings, inputs=inputs, previews=previews,
     )
     check_prototype_speeds(protocol)
     _analyse(day)

@@ -399,18 +399,35 @@ def _internal_error_sentence(exc: BaseException) -> str:
     )
 
 
-def reduce_record(
-    protocol: Protocol, row: dict[str, Any], *, debug: bool = False
-) -> tuple[int, RunReduction | None, str | None]:
+def run_preview(raw: RawRun) -> dict[str, np.ndarray]:
+    """A run's calibrated time [s], speed [m/s], drag and lift [N] at :data:`THUMB_HZ` (no zero,
+    no filter): what the report shows of a run that was read but could not be reduced."""
+    step = max(1, int(round(raw.fs / THUMB_HZ)))
+    n = raw.time[::step].size
+    return {
+        "t": raw.time[::step].copy(),
+        "U": raw.speed[::step].copy(),
+        "drag": raw.drag[::step].copy(),
+        "lift": raw.lift[::step].copy() if raw.lift is not None else np.full(n, np.nan),
+    }
+
+
+Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | None]
+
+
+def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = False) -> Record:
     """Read and reduce the run of one run-sheet row; never raises for a data problem.
 
-    Returns (run, reduction, None), or (run, None, reason) where ``reason`` is one sentence
-    naming the run, its file and what is wrong. An unexpected error (a bug) is reported the same
-    way, or raised with ``debug``.
+    Returns (run, reduction, None, None), or (run, None, reason, preview) where ``reason`` is
+    one sentence naming the run, its file and what is wrong, and ``preview`` is
+    :func:`run_preview` of a run that was read but could not be reduced (None when it could
+    not be read). An unexpected error (a bug) is reported the same way, or raised with
+    ``debug``.
     """
     run = int(row["run"])
     file = str(row["file"])
     path = protocol.campaign.data_dir / file
+    raw = None
     try:
         p = protocol.processing
         data = file_bytes(path)
@@ -437,22 +454,31 @@ def reduce_record(
         if str(row.get("test", "")).strip().lower() == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
             red.warnings.extend(n for n in red.notes if n.startswith("no usable constant-acc"))
-        return run, red, None
+        return run, red, None, None
     except RunError as exc:
         reason = exc.reason
         if file not in reason and Path(file).name not in reason:
             reason = f"{file}: {reason}"
-        return run, None, f"run {run}: {reason}"
+        return run, None, f"run {run}: {reason}", _safe_preview(raw)
     except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
         if debug:
             raise
-        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}"
+        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}", None
 
 
-def crashed_record(row: dict[str, Any]) -> tuple[int, None, str]:
+def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:
+    if raw is None:
+        return None
+    try:
+        return run_preview(raw)
+    except Exception:  # noqa: BLE001 - a preview is a courtesy; the rejection stands without it
+        return None
+
+
+def crashed_record(row: dict[str, Any]) -> Record:
     """The rejection of a run whose worker process died while reducing it."""
     run, file = int(row["run"]), str(row["file"])
     return run, None, (
         f"run {run}: {file}: the process reducing it stopped abruptly (killed, out of memory, "
         "or a crash inside a reading library); the file is left as it is"
-    )
+    ), None

@@ -338,7 +338,7 @@ def test_a_reduction_worker_never_loads_pandas():
     loaded = _loaded(
         "from towtank.reduce import reduce_record\n"
         "p = load_protocol('protocols/sut2_hull.toml')\n"
-        "run, red, reason = reduce_record(p, {'run': 5, 'file': 'run_005.csv.gz'})\n"
+        "run, red, reason, _ = reduce_record(p, {'run': 5, 'file': 'run_005.csv.gz'})\n"
         "assert red is not None, reason\n"
     )
     assert loaded == set()

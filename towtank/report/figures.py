@@ -112,13 +112,27 @@ _MATH_RE = re.compile(
 )
 
 
+_E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?![\w.])")
+_HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
+
+
+def true_minus(text: str) -> str:
+    """``text`` with a true minus sign (U+2212) for the hyphen before a number."""
+    return _HYPHEN_MINUS.sub("\u2212", text)
+
+
 def math_text(text: str) -> str:
-    """Prose with the program's plain symbols typeset in mathtext: ``X_udot`` → Ẋ-style.
+    """Prose as the report prints it: plain symbols in mathtext (``X_udot`` → X with a dotted
+    u), numbers like ``2.67e+05`` as 2.67×10⁵, and a true minus sign before a number.
 
     A ``$`` already in the text (a run's remarks, say) is escaped first, so that no text
     from the inputs is ever parsed as mathtext.
     """
     table = dict(_MATH_TOKENS)
+    text = _E_NUMBER.sub(
+        lambda m: f"{m.group(1)}×10" + str(int(m.group(2))).translate(_SUPERSCRIPT), text
+    )
+    text = true_minus(text)
     return _MATH_RE.sub(lambda m: table[m.group(1)], text.replace("$", r"\$"))
 
 
@@ -448,12 +462,19 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
     gs = _layout(fig, 2, 1, page=page, hspace=0.32, right=0.84,
                  title="Fin forces against carriage speed at each angle of attack",
                  text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
-                 "Each line joins the runs at one angle of attack α.")
+                 "Each line joins the runs at one angle of attack α. The drag axis is "
+                 "logarithmic when the drags span more than a factor of 30, so that the small "
+                 "drags of the low angles stay apart.")
     axes = [fig.add_subplot(gs[i, 0]) for i in range(2)]
     for col, ax, name in (("drag_mean", axes[0], "Drag"), ("lift_mean", axes[1], "Lift")):
         for a in angles:
             sel = fv[fv["angle_deg"] == a]
             ax.plot(sel["speed_mean"], sel[col], "o-", color=colors[a], ms=4, lw=1.1)
+        values = fv[col].to_numpy(dtype=float)
+        positive = values[np.isfinite(values) & (values > 0)]
+        if (col == "drag_mean" and positive.size == np.isfinite(values).sum() and positive.size
+                and positive.max() > 30 * positive.min()):
+            ax.set_yscale("log")
         sym = "D" if col == "drag_mean" else "L"
         ax.set_ylabel(rf"{name} ${sym}$ [N]")
         ax.set_xlabel(r"Speed $U$ [m/s]")
@@ -782,6 +803,49 @@ def run_thumbnail(
         ax2.set_ylabel(r"$F$ [N]")
     if title:
         ax.set_title(title)
+    return ax2
+
+
+def preview_thumbnail(ax: Axes, preview: dict[str, np.ndarray], *, twin: Axes | None = None,
+                      linewidth: float = 1.0) -> Axes:
+    """The thumbnail of a run that was read but could not be reduced, drawn greyed.
+
+    Draws ``preview`` (:func:`towtank.reduce.run_preview`: calibrated speed and forces at
+    10 Hz, no zero, no filter, no phases), so that the reader sees what made the run unusable.
+
+    Parameters
+    ----------
+    ax : Axes
+        Where to draw the speed [m/s]; the forces [N] go on the twin axes.
+    preview : dict of ndarray
+        t [s], U [m/s], drag [N], lift [N].
+    twin : Axes, optional
+        The forces' axes from :func:`thumbnail_twin` (made here when not given).
+    linewidth : float
+        Line width [pt].
+
+    Returns
+    -------
+    Axes
+        The twin axes of the forces.
+    """
+    t = np.asarray(preview["t"], dtype=float)
+    ax2 = thumbnail_twin(ax) if twin is None else twin
+    ax2.set_visible(True)
+    ax.set_axis_on()
+    u = np.asarray(preview["U"], dtype=float)
+    forces = [np.asarray(preview["drag"], dtype=float)]
+    ax.plot(t, u, color=style.SPEED_COLOR, lw=linewidth, alpha=0.45, zorder=3)
+    ax2.plot(t, forces[0], color=style.DRAG_COLOR, lw=linewidth * 0.9, alpha=0.45, zorder=2)
+    lift = np.asarray(preview["lift"], dtype=float)
+    if np.isfinite(lift).any():
+        ax2.plot(t, lift, color=style.LIFT_COLOR, lw=linewidth * 0.9, alpha=0.45, zorder=2)
+        forces.append(lift)
+    finite = t[np.isfinite(t)]
+    if finite.size >= 2:
+        ax.set_xlim(float(finite.min()), float(finite.max()))
+    ax.set_ylim(*thumbnail_ylim(u, above=0.08, below=0.05))
+    ax2.set_ylim(*thumbnail_ylim(np.concatenate(forces), above=0.55, below=0.08))
     return ax2
 
 

@@ -290,11 +290,12 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
              f"Mean residual of the joint regression by run [mN]: {resid}.")
         levels = (am.curve_difference or {}).get("levels") or []
         if levels:
-            f.mono("     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
-                   "   X [kg]")
+            f.mono(f"     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
+                   f"   {sym} [kg]")
             for lv in levels:
                 lo, hi = lv["speed_range"]
-                f.mono(f"     {lv['accel']:8.3f}   {lo:6.3f} – {hi:6.3f}     {lv['n']:7d}   "
+                speeds = f"{lo:.3f} – {hi:.3f}"
+                f.mono(f"     {lv['accel']:8.3f}   {speeds:>17s}   {lv['n']:7d}   "
                        f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
     dm = hf.damping
     if dm is not None:
@@ -316,7 +317,7 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
                    f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
     if getattr(hf, "lift_slope", None):
         s, lo, hi = hf.lift_slope
-        f.li(f"Hull lift slope dC_L/dα = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
+        f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
 
 
 def short_reason(run: Any, file: Any, reason: Any) -> str:
@@ -738,7 +739,7 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
             fig.text(x0, _y(y + 0.06), text.replace("$", r"\$"), fontsize=10.5,
                      fontweight="bold", va="top")
         elif kind == "mono":
-            fig.text(x0, _y(y), text.replace("$", r"\$"), fontsize=6.8,
+            fig.text(x0, _y(y), figures.true_minus(text.replace("$", r"\$")), fontsize=6.8,
                      family="DejaVu Sans Mono", va="top", color="#222222")
         elif kind in ("p", "li"):
             fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), figures.math_text(text),
@@ -809,14 +810,24 @@ class ThumbGrid:
             title = _thumb_title(row)
             if red is None or row["status"] != "ok":
                 reason = short_reason(run, row.get("file"), row.get("reason"))
-                ax.set_axis_off()
-                twin.set_visible(False)
+                preview = day.previews.get(run) if row["status"] == "rejected" else None
                 ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
-                ax.text(0.5, 0.5, textwrap.fill(f"{row['status']}: {reason}", 38),
-                        ha="center", va="center", fontsize=7,
+                if preview is not None:  # read but not reduced: show what the file holds
+                    figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
+                    ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
+                    where = {"x": 0.5, "y": 0.97, "va": "top"}
+                else:
+                    ax.set_axis_off()
+                    twin.set_visible(False)
+                    where = {"x": 0.5, "y": 0.5, "va": "center"}
+                small = preview is not None  # over a trace: keep the box small
+                ax.text(where["x"], where["y"],
+                        textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38),
+                        ha="center", va=where["va"], fontsize=6.2 if small else 7, zorder=10,
                         color="#7a0000" if row["status"] == "rejected" else "#555555",
                         transform=ax.transAxes,
-                        bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc"})
+                        bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc",
+                              "alpha": 0.92})
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
