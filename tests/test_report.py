@@ -92,6 +92,14 @@ def test_workbook_coefficients_equal_the_csv_exactly(days):
             assert _same(cell, rec[c]), (rec["symbol"], c, cell, rec[c])
             if cell is not None:
                 assert isinstance(cell, int | float) and not isinstance(cell, bool)
+    # shown with four significant digits or more, whatever their size
+    x_udot = ws.cell(2, cols["value"])
+    assert x_udot.number_format == "0.000E+00"  # −0.0172: scientific below 0.1 in size
+    assert ws.cell(2, cols["prime"]).number_format == "0.000E+00"
+    y_vdot = next(r for r in range(2, ws.max_row + 1) if ws.cell(r, 1).value == "Y_vdot")
+    assert ws.cell(y_vdot, cols["value"]).number_format == "0.0000"
+    assert workbook.display_format(2.67e5) == "0.000E+00" and workbook.display_format(0) == (
+        "General")
     # the key results of the Summary sheet are the same floats too
     summary = openpyxl.load_workbook(out / "report.xlsx")["Summary"]
     rows = list(summary.iter_rows(values_only=True))

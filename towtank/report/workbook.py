@@ -113,6 +113,19 @@ def cell_value(v: Any) -> Any:
     return str(v)
 
 
+#: How a float is shown (the cell holds the full double): four significant digits or more.
+SCI_FORMAT = "0.000E+00"
+FIXED_FORMAT = "0.0000"
+
+
+def display_format(value: float) -> str:
+    """Excel number format for ``value``: scientific below 0.1 and from 10⁴, else 4 decimals."""
+    a = abs(value)
+    if a == 0.0 or not math.isfinite(a):
+        return "General"
+    return SCI_FORMAT if a < 0.1 or a >= 1e4 else FIXED_FORMAT
+
+
 def header_label(column: str, units: dict[str, str] | None = None) -> str:
     """``speed_mean`` → ``speed_mean [m/s]``; columns without a unit keep their name."""
     unit = (UNITS if units is None else units).get(column)
@@ -153,6 +166,8 @@ class SheetWriter:
     def _put(self, row: int, col: int, value: Any) -> Any:
         cell = self.ws.cell(row=row, column=col, value=cell_value(value))
         v = cell.value
+        if isinstance(v, float):
+            cell.number_format = display_format(v)
         if v is not None:
             text = f"{v:.6g}" if isinstance(v, float) else str(v)
             w = max(len(line) for line in text.split("\n")) if text else 0
