@@ -83,11 +83,12 @@ def test_make_damaged_day_unpacks_and_covers_every_kind(day):
     expected, ok_with_note = day
     assert set(day.kinds.values()) >= {
         "empty", "truncate", "text_rows_many", "text_rows_few", "drop_channel", "nan_gap_long",
-        "nan_gap_short", "duplicate_block", "time_reset", "irregular_rate", "clip", "spikes",
-        "no_plateau", "no_tare_group", "missing_file",
+        "nan_gap_short", "duplicate_block", "time_reset", "irregular_rate", "time_in_ms",
+        "clip", "spikes", "no_plateau", "no_tare_group", "missing_file",
     }
     assert set(expected) | set(ok_with_note) == set(day.kinds)
-    assert not (day.root / "data" / "run_057.csv").exists()
+    missing = next(r for r, k in day.kinds.items() if k == "missing_file")
+    assert not (day.root / "data" / f"run_{missing:03d}.csv").exists()
     assert (day.root / "data" / day.stray_file).exists()
 
 

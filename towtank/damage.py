@@ -279,6 +279,15 @@ def irregular_rate(frame: pd.DataFrame, seed: int = 0, *, jitter: float = 0.3) -
 
 
 @_frame_level
+def time_in_ms(frame: pd.DataFrame, seed: int = 0) -> pd.DataFrame:
+    """The time channel written in milliseconds under its seconds header (a wrong sample rate:
+    200 Hz read as 0.2 Hz, a 15 s run as 4 hours)."""
+    col = find_column(frame, "time")
+    frame[col] = np.round(frame[col].to_numpy(dtype=float) * 1000.0, 6) + 0.0
+    return frame
+
+
+@_frame_level
 def clip(
     frame: pd.DataFrame,
     channel: str = "drag",
@@ -408,6 +417,7 @@ _DAMAGE_PLAN: tuple[tuple[str, int, str, bool], ...] = (
     ("duplicate_block", 13, "duplicated", False),
     ("time_reset", 14, "reset", False),
     ("irregular_rate", 15, "irregular", False),
+    ("time_in_ms", 21, "sample rate", False),
     ("clip", 13, "clipped", False),
     ("spikes", 14, "spike", True),
     ("no_plateau", 13, "plateau", False),
@@ -439,6 +449,8 @@ def _damage(kind: str, data: bytes, seed: int) -> bytes | None:
         return time_reset(data, seed)
     if kind == "irregular_rate":
         return irregular_rate(data, seed)
+    if kind == "time_in_ms":
+        return time_in_ms(data, seed)
     if kind == "clip":
         return clip(data, "drag")
     if kind == "spikes":
@@ -454,11 +466,12 @@ def make_damaged_day(out_dir: str | Path, seed: int = 1, *, fs: float = 200.0) -
     The good runs are :func:`towtank.synthetic.hull_day_plan` (enough for every coefficient).
     After them come copies of good runs' specs with new run numbers (43 on), each damaged in
     one way (``_DAMAGE_PLAN``): empty, truncated, many and few text rows, the drag column
-    dropped, a long and a short gap, a duplicated block, a clock reset, an irregular clock, drag
-    clipped, spikes, no plateau; then a hull run in tare group "B" that has no sting runs and a
-    sheet row whose file is deleted. A copy of a good file, ``run_099.csv``, is left in
-    ``data/`` without a sheet row. Files are CSV in the lab's channel names (forces in volts),
-    the sheet is ``run_sheet.csv`` and the protocol ``protocol.toml``.
+    dropped, a long and a short gap, a duplicated block, a clock reset, an irregular clock, time
+    in milliseconds (a wrong sample rate), drag clipped, spikes, no plateau; then a hull run in
+    tare group "B" that has no sting runs and a sheet row whose file is deleted. A copy of a
+    good file, ``run_099.csv``, is left in ``data/`` without a sheet row. Files are CSV in the
+    lab's channel names (forces in volts), the sheet is ``run_sheet.csv`` and the protocol
+    ``protocol.toml``.
 
     Parameters
     ----------
