@@ -31,6 +31,20 @@ def test_synth_writes_a_day_that_processes(tmp_path, capsys):
     assert coef.loc["X_u|u|", "value"] == pytest.approx(truth["X_u|u|"], rel=0.01)
 
 
+@pytest.mark.parametrize(("day_kind", "file_format", "sheet"),
+                         [("hull", "tdms", "csv"), ("fin", "csv", "xlsx")])
+def test_synth_writes_the_formats_asked_for(tmp_path, capsys, day_kind, file_format, sheet):
+    day = tmp_path / "day"
+    assert main(["synth", str(day), "--day", day_kind, "--format", file_format,
+                 "--sheet", sheet]) == 0
+    files = sorted((day / "data").iterdir())
+    assert files and all(f.name.endswith("." + file_format) for f in files)
+    assert (day / f"run_sheet.{sheet}").is_file()
+    assert main(["process", str(day / "protocol.toml"), "--no-report", "-q", "--jobs", "1"]) == 0
+    runs = pd.read_csv(day / "out" / "runs.csv")
+    assert set(runs["status"]) <= {"ok", "void"}
+
+
 def test_jobs_from_the_protocol_unless_given(tmp_path, capsys, monkeypatch):
     from towtank import parallel
 

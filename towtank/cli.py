@@ -106,6 +106,11 @@ def _parser() -> argparse.ArgumentParser:
     sy.add_argument("--day", choices=("hull", "fin", "samples"), default="hull",
                     help="hull day, fin day, or regenerate both shipped sample days")
     sy.add_argument("--seed", type=int, default=1)
+    sy.add_argument("--format", choices=("csv", "csv.gz", "tdms"), default=None,
+                    dest="file_format",
+                    help="run-file format (default: csv.gz for the hull day, tdms for the fin day)")
+    sy.add_argument("--sheet", choices=("csv", "xlsx"), default=None, dest="sheet_format",
+                    help="run-sheet format (default: xlsx for the hull day, csv for the fin day)")
     sy.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return p
 
@@ -233,12 +238,15 @@ def cmd_synth(args: argparse.Namespace) -> int:
         synthetic.write_sample_days(args.outdir)
         print(f"sample days written to {args.outdir}")
         return EXIT_OK
+    formats = {k: v for k, v in (("file_format", args.file_format),
+                                 ("sheet_format", args.sheet_format)) if v is not None}
+    sheet = {"sheet_format": args.sheet_format} if args.sheet_format else {}
     if args.day == "hull":
-        synthetic.make_hull_day(args.outdir, seed=args.seed)
-        sections = synthetic.hull_protocol_sections(".", "out")
+        synthetic.make_hull_day(args.outdir, seed=args.seed, **formats)
+        sections = synthetic.hull_protocol_sections(".", "out", **sheet)
     else:
-        synthetic.make_fin_day(args.outdir, seed=args.seed)
-        sections = synthetic.fin_protocol_sections(".", "out")
+        synthetic.make_fin_day(args.outdir, seed=args.seed, **formats)
+        sections = synthetic.fin_protocol_sections(".", "out", **sheet)
     protocol = synthetic.write_protocol(
         Path(args.outdir) / "protocol.toml",
         header=f"Synthetic {args.day} day, seed {args.seed} (towtank synth); truth in truth.json",
