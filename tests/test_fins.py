@@ -476,3 +476,19 @@ def test_no_warnings_for_in_range_table():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fins.fin_curves(fins.fin_table(sandia_runs(), aspect_ratio=4.0), aspect_ratio=4.0)
+
+
+def test_lifting_line_takes_the_attached_root_where_both_exist():
+    """Past the section's stall h(α_i) = α_i − C_l,2D(α − α_i)/(π e AR) has a stalled and an
+    attached root; at 20° and Re 1.14e5 (AR 1.25) the attached one exists (its effective angle
+    is below the section's stall) and is the lifting line's answer, whatever the speed."""
+    alpha, ar = 20.0, 1.25
+    for re in (1.14e5, 1.7e5, 2.3e5, 2.9e5):
+        cl, _ = fins.finite_span_coefficients(alpha, re, ar)
+        cl = float(cl)
+        alpha_i = cl / (np.pi * ar)
+        alpha_eff = alpha - np.rad2deg(alpha_i)
+        assert alpha_eff < float(fins.section_stall_angle(re)), re
+        cl2d, _ = sandia.section_coefficients(alpha_eff, re)
+        assert cl == pytest.approx(float(cl2d), abs=1e-9)  # a root of the lifting line
+        assert cl > 0.7, re  # not the stalled root (C_L ≈ 0.26 at the lowest Re)

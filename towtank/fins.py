@@ -205,12 +205,22 @@ def _induced_angle(
     target = tol * np.clip(np.abs(hx), 1e-6, 1.0)
     lo = np.where(hx < 0, 0.0, np.nan)  # h(lo) < 0
     hi = np.where(hx > 0, 0.0, np.nan)  # h(hi) > 0
+    # past the section's stall h has several roots: start inside the bracket of the attached
+    # branch (the root of largest |alpha_i|, i.e. smallest |alpha_eff|) where a scan finds one
+    found, b_lo, b_hi = _attached_bracket(alpha_deg, reynolds, k, section)
+    found &= active & ~(np.abs(hx) <= target)
+    if found.any():
+        up = np.deg2rad(alpha_deg) > 0  # h < 0 at the bracket end nearer alpha_i = 0
+        lo = np.where(found, np.where(up, b_lo, b_hi), lo)
+        hi = np.where(found, np.where(up, b_hi, b_lo), hi)
+        x = np.where(found, b_lo, x)  # the end nearer alpha_i = 0: a bisection moves it
+        hx = np.where(found, h(x, np.arange(n)), hx)
     x_prev = np.full(n, np.nan)
     h_prev = np.full(n, np.nan)
     expand = np.abs(lam * hx)
     slow = np.zeros(n, dtype=bool)
     done = active & (np.abs(hx) <= target)
-    out[done] = 0.0
+    out[done] = x[done]
     live = active & ~done
 
     for _ in range(max_iter):
@@ -225,7 +235,7 @@ def _induced_angle(
             use_secant, xi - h_i / np.where(use_secant, secant, 1.0), xi - lam[idx] * h_i
         )
         bracketed = np.isfinite(lo_i) & np.isfinite(hi_i)
-        inside = (cand > np.fmin(lo_i, hi_i)) & (cand < np.fmax(lo_i, hi_i))
+        inside = (cand >= np.fmin(lo_i, hi_i)) & (cand <= np.fmax(lo_i, hi_i))
         bisect = bracketed & (slow[idx] | ~inside)
         cand = np.where(bisect, 0.5 * (lo_i + hi_i), cand)
         widen = ~bracketed & slow[idx]
@@ -259,6 +269,44 @@ def _induced_angle(
     return out
 
 
+def _attached_bracket(
+    alpha_deg: np.ndarray,
+    reynolds: np.ndarray,
+    k: np.ndarray,
+    section: Section,
+    n_scan: int = 64,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(found, lo, hi): a bracket [lo, hi] [rad] of the root of h of largest |alpha_i|.
+
+    h(x) = x - k C_L,2D(alpha - x) is scanned at ``n_scan`` points from x = 0 to x = alpha
+    (|alpha| <= 90 deg), where sign(alpha) h goes from <= 0 (x = 0) to |alpha| > 0 (zero
+    effective angle): the last sign change is the attached-flow root, the one the lifting line
+    is meant for (a smaller |x| is a stalled solution of the same equation).
+    """
+    a = np.deg2rad(alpha_deg)
+    m = a.size
+    ok = np.isfinite(a) & np.isfinite(k) & (np.abs(alpha_deg) <= 90.0) & (a != 0.0)
+    found = np.zeros(m, dtype=bool)
+    lo = np.full(m, np.nan)
+    hi = np.full(m, np.nan)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return found, lo, hi
+    frac = np.linspace(0.0, 1.0, n_scan)
+    xs = a[idx, None] * frac[None, :]
+    eff = _wrap_deg(alpha_deg[idx, None] - np.rad2deg(xs))
+    cl, _ = section(eff.ravel(), np.repeat(reynolds[idx], n_scan))
+    g = np.sign(a[idx])[:, None] * (xs - k[idx, None] * np.asarray(cl, float).reshape(-1, n_scan))
+    cross = (g[:, :-1] <= 0) & (g[:, 1:] > 0)
+    has = cross.any(axis=1)
+    last = (n_scan - 2) - np.argmax(cross[:, ::-1], axis=1)
+    rows = np.arange(idx.size)
+    found[idx] = has
+    lo[idx] = np.where(has, xs[rows, last], np.nan)
+    hi[idx] = np.where(has, xs[rows, last + 1], np.nan)
+    return found, lo, hi
+
+
 def finite_span_coefficients(
     alpha_deg: npt.ArrayLike,
     reynolds: npt.ArrayLike,
@@ -286,11 +334,11 @@ def finite_span_coefficients(
     accelerated by the secant slope of h where that is positive (exact in two steps on any
     linear stretch of the 2-D curve) and safeguarded by bisection of a sign-change bracket
     whenever a step fails to halve |h|; vectorised over the inputs. Past stall the 2-D curve
-    falls and h can have several roots (the lifting-line hysteresis): the damped step, which
-    is a contraction only where dh/dalpha_i > 0, settles on a stable root reached from
-    alpha_i = 0, i.e. the branch continuous with attached flow, and the bisection guarantees
-    a root where it cannot. Lifting-line theory is not meant for separated flow: post-stall
-    values are indicative only.
+    falls and h can have several roots (the lifting-line hysteresis): a scan of h from
+    alpha_i = 0 to alpha_i = alpha brackets the root of largest |alpha_i| (smallest effective
+    angle), the attached-flow branch, and the iteration starts inside that bracket; where the
+    attached branch no longer exists the root found is a stalled one. Lifting-line theory is
+    not meant for separated flow: post-stall values are indicative only.
 
     Parameters
     ----------
