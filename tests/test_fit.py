@@ -654,3 +654,36 @@ def test_joint_regression_recovers_parameters(k2, k1, M, n_runs, seed):
     drag = k2 * U * np.abs(U) + k1 * U + M * a
     res = fit.joint_regression(U, a, drag, g)
     assert np.allclose(res.params, [k2, k1, M], rtol=1e-7, atol=1e-9)
+
+
+def test_intervals_carry_the_subtracted_tares_uncertainty(hull_day: Day):
+    """The tare subtracted sample by sample has the regressors of the joint regression, so its
+    m_t error goes one for one into m − X_udot; and its (t2, t1, m_t) covariance reaches C_D(α)
+    through each run's steady regressors: cov_tare = P·R·Σ·Rᵀ·Pᵀ with P = pinv([α², α, 1]),
+    R = (U|U|, U, a)/(½ρA·U²). Computed here from the tare fit alone, independently of fit.py."""
+    from statsmodels.regression.linear_model import OLS
+
+    res = hull_day.result
+    (group,) = res.tares
+    sigma = np.asarray(res.tares[group].drag.cov)
+    hf = res.hull.fit
+    for sym in ("X_udot", "Y_vdot"):
+        assert hf.added_mass[sym].tare_se == pytest.approx(math.sqrt(sigma[2, 2]), rel=1e-9)
+    dm = hf.damping
+    t = dm.runs
+    alpha = t["alpha_rad"].to_numpy(float)
+    x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
+    regression = OLS(t["cd"].to_numpy(float), x).fit()
+    u = t["speed"].to_numpy(float)
+    q = 0.5 * dm.rho * dm.area
+    r = np.array([res.reductions[int(run)].steady_regressors for run in t["run"]])
+    r = r / (q * u * u)[:, None]
+    p = np.linalg.pinv(x)
+    expected = p @ r @ sigma @ r.T @ p.T
+    np.testing.assert_allclose(dm.cov - np.asarray(regression.cov_params()), expected,
+                               rtol=1e-6, atol=1e-18)
+    assert expected[2, 2] > 0.1 * np.asarray(regression.cov_params())[2, 2]  # not negligible
+    # and the interval of X_u|u| = −½ρA·c is as wide as regression and tare together make it
+    est = hf.estimates["X_u|u|"]
+    se_c = math.sqrt(np.asarray(regression.cov_params())[2, 2] + expected[2, 2])
+    assert est.std_error == pytest.approx(q * se_c, rel=1e-6)

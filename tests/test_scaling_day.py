@@ -198,6 +198,16 @@ def test_scale_command_refuses_unusable_speeds(outputs, capsys, speed):
     assert "prototype speed" in err
 
 
+def test_prototype_speeds_below_the_turbulent_range_are_warned(outputs, capsys):
+    code = main(["scale", str(PROTOCOL), "--speeds", "0.05", "2", "--out", str(outputs)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "warning: prototype speeds 0.05 m/s give Re below 200000" in out
+    assert "ITTC-57 drag there is indicative only" in out
+    code = main(["scale", str(PROTOCOL), "--speeds", "2", "--out", str(outputs)])
+    assert code == 0 and "indicative only" not in capsys.readouterr().out
+
+
 def test_protocol_speed_below_minimum_reynolds_exits_2(tmp_path, cache, capsys):
     path = _variant(tmp_path, prototype={"speeds_m_s": "[0.00005, 1.0]"})
     out = tmp_path / "out"

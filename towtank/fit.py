@@ -439,12 +439,27 @@ def fit_cd_alpha(alpha_rad: np.ndarray, cd: np.ndarray):
     return OLS(cd, x).fit()
 
 
-def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: int,
-         method: str, n: int) -> Estimate:
+def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: float,
+         method: str, n: int, tare_cov: np.ndarray | None = None,
+         tare_dof: float = math.inf) -> Estimate:
+    """g·params with its 95 % interval: the regression's covariance ``cov`` (``dof``) plus the
+    subtracted tare's ``tare_cov`` (``tare_dof``), t at the Welch–Satterthwaite d.o.f."""
     value = float(g @ params)
-    se = float(math.sqrt(max(g @ cov @ g, 0.0)))
-    tq = _t95(dof)
+    var_reg = max(float(g @ cov @ g), 0.0)
+    var_tare = max(float(g @ tare_cov @ g), 0.0) if tare_cov is not None else 0.0
+    se = math.sqrt(var_reg + var_tare)
+    tq = _t95(welch_satterthwaite([var_reg, var_tare], [dof, tare_dof]))
     return Estimate(symbol, value, se, value - tq * se, value + tq * se, method, n)
+
+
+def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
+              tares: dict[str, TareModel] | None) -> float:
+    """Degrees of freedom of the tares subtracted from the runs ``sel`` (the smallest)."""
+    if not reductions or not tares:
+        return math.inf
+    groups = {reductions[int(r)].tare_group for r in sel["run"] if int(r) in reductions}
+    dofs = [tares[g].drag.dof for g in groups if g in tares]
+    return float(min(dofs)) if dofs else math.inf
 
 
 def _t95(dof: int) -> float:
@@ -516,7 +531,9 @@ def fit_damping(
         res = fit_cd_alpha(alpha, cd)
         params, cov, dof = np.asarray(res.params), np.asarray(res.cov_params()), int(res.df_resid)
         x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
-        cov = cov + _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
+        cov_tare = _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
+        tare_dof = _tare_dof(sel, reductions, tares)
+        lin = {"tare_cov": cov_tare, "tare_dof": tare_dof}
         student, cooks = _influence(x, np.asarray(res.resid))
         table = pd.DataFrame({
             "run": sel["run"].to_numpy(int), "angle_deg": sel["angle_deg"].to_numpy(float),
@@ -525,12 +542,13 @@ def fit_damping(
             "cooks": cooks,
         })
         outl = table.loc[(np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5)), "run"]
-        fit = DampingFit(params=params, cov=cov, dof=dof, rho=rho, area=area, runs=table,
-                         outliers=[int(r) for r in outl])
-        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, dof, method, n)
-        est["X_uv"] = _lin("X_uv", np.array([0, -q, 0]), params, cov, dof, method, n)
-        est["X_v|v|"] = _lin("X_v|v|", np.array([-q, 0, q / 2]), params, cov, dof, method, n)
-        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, dof, method, n)
+        fit = DampingFit(params=params, cov=cov + cov_tare, dof=dof, rho=rho, area=area,
+                         runs=table, outliers=[int(r) for r in outl])
+        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
+        est["X_uv"] = _lin("X_uv", np.array([0, -q, 0]), params, cov, dof, method, n, **lin)
+        est["X_v|v|"] = _lin("X_v|v|", np.array([-q, 0, q / 2]), params, cov, dof, method, n,
+                             **lin)
+        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
         return fit, est, msgs
     zero = sel[np.abs(sel["angle_deg"]) <= ANGLE_TOL_DEG]
     msgs.append(
@@ -599,10 +617,11 @@ def fit_transverse(
     q_run = 0.5 * tr["rho"].to_numpy(float) * lateral_area
     tare_var = float(_run_tare_cov(np.linalg.pinv(uu) / q_run[None, :], tr, reductions, tares,
                                    0.0)[0, 0])
-    cd90_se = math.sqrt(cd90_se**2 + tare_var)
+    reg_var = cd90_se**2
+    cd90_se = math.sqrt(reg_var + tare_var)
     q90 = 0.5 * rho * lateral_area
     value, se = -q90 * cd90, q90 * cd90_se
-    tq = _t95(dof)
+    tq = _t95(welch_satterthwaite([reg_var, tare_var], [dof, _tare_dof(tr, reductions, tares)]))
     est = Estimate(
         "Y_v|v|", value, se, value - tq * se, value + tq * se,
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "

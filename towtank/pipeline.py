@@ -594,3 +594,10 @@ def _scaling_stage(day: DayResult) -> None:
             "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "
             "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s."
         )
+    laminar = table.loc[table["re_prototype"] < p.processing.laminar_re, "speed_prototype"]
+    if len(laminar):
+        day.warnings.append(
+            "prototype speeds " + ", ".join(f"{v:g}" for v in laminar) + " m/s give Re below "
+            f"{p.processing.laminar_re:g} ([processing] laminar_re), where the flow need not be "
+            "turbulent: the ITTC-57 drag there is indicative only."
+        )

@@ -88,5 +88,8 @@ def scale_command(
     else:
         print("no form factor: R_p ITTC-57 needs the model's wetted area and runs above "
               "the laminar range")
+    for w in day.warnings:
+        if w.startswith("prototype speeds") and "indicative only" in w:
+            print(f"warning: {w}")
     print(sc.statement)
     return 0

@@ -352,6 +352,12 @@ def _coefficients(w: SheetWriter, day: DayResult) -> None:
     w.note(f"value, ci_low, ci_high, prototype_value, alt_value in the row's unit (SI, model "
            f"scale for value; prototype scale for prototype_value); prime non-dimensional. "
            f"Rows with |diff_pct| > {DIFF_HIGHLIGHT_PCT:g} are highlighted.")
+    hf = day.hull.fit
+    w.note(f"prime = value/(½ρL³) (added mass) or value/(½ρL²) (damping) with ρ = "
+           f"{hf.rho:.3f} kg/m³, the mean of the hull runs' water densities, and L = "
+           f"{hf.length:g} m. diff_pct = (prime − reference_prime)/|reference_prime|·100, signed: "
+           "negative where the prime is more negative than the reference (e.g. a larger added "
+           "mass); empty where the reference is 0.")
 
 
 def _runs(w: SheetWriter, day: DayResult) -> None:
@@ -417,8 +423,11 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
     rows += [("prototype length L_p", sr.length_prototype, "m"),
              ("prototype wetted area S_p = λ²·S_m", sr.wetted_area_prototype, "m²"),
              ("roughness allowance ΔC_F", sr.delta_cf, "-")]
-    rows += [("model water density", sr.rho_m, "kg/m³"),
-             ("model water kinematic viscosity", sr.nu_m, "m²/s"),
+    t_m = day.protocol.water.temperature_C
+    rows += [(f"model water density at the protocol's {t_m:g} °C (Froude force ratio)",
+              sr.rho_m, "kg/m³"),
+             (f"model water kinematic viscosity at {t_m:g} °C (Reynolds speed ratio)", sr.nu_m,
+              "m²/s"),
              ("prototype water density", sr.rho_p, "kg/m³"),
              ("prototype water kinematic viscosity", sr.nu_p, "m²/s")]
     w.pairs(rows)
