@@ -163,6 +163,7 @@ def cmd_process(args: argparse.Namespace) -> int:
 def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: ANN001
     from towtank.errors import ProtocolError
     from towtank.pipeline import process_day
+    from towtank.protocol import check_output_dir
     from towtank.report import write_outputs
 
     show = not args.quiet and sys.stderr.isatty()
@@ -196,6 +197,11 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
             bar.close()
     if args.date:
         day.report_date = args.date
+    try:  # the sheet may name run files anywhere: none of them may be an output's target
+        check_output_dir(out, protocol, day.inputs)
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
     write_outputs(day, out, report=not args.no_report)
     text = _summary(day, Path(out))
     if not args.quiet:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import io
+import os
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,8 +70,16 @@ class RawRun:
 
 
 def file_bytes(path: Path) -> bytes:
-    """The file's bytes, opened read-only; a missing or unreadable file is a RunError."""
+    """The file's bytes, opened read-only; a missing or unreadable file is a RunError.
+
+    Only a regular file is opened: a named pipe or a device would block the read forever.
+    """
+    import stat
+
     try:
+        mode = os.stat(path).st_mode
+        if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+            raise RunError(f"{path.name} is not a regular file (a pipe, socket or device)")
         with open(path, "rb") as fh:
             return fh.read()
     except FileNotFoundError:

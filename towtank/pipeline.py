@@ -260,13 +260,22 @@ def process_day(
 
     rejected: dict[int, str] = {}
     todo = []
+    first_run_of: dict[Path, int] = {}
     for rec in sheet.to_dict("records"):
         if rec["status"] == "void":  # listed, never used: a void row's faults do not matter
             continue
         if rec["sheet_error"]:
             rejected[int(rec["run"])] = f"run {rec['run']}: {rec['sheet_error']}"
-        else:
-            todo.append(rec)
+            continue
+        path = (protocol.campaign.data_dir / str(rec["file"])).resolve()
+        if path in first_run_of:  # one recording cannot be two runs: a copy-paste in the sheet
+            rejected[int(rec["run"])] = (
+                f"run {rec['run']}: {rec['file']} is also the file of run {first_run_of[path]} "
+                "in the sheet; a recording is one run (a copied cell?)"
+            )
+            continue
+        first_run_of[path] = int(rec["run"])
+        todo.append(rec)
 
     reductions: dict[int, RunReduction] = {}
     from towtank.parallel import load_in_background, map_runs

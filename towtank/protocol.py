@@ -12,6 +12,7 @@ import difflib
 import math
 import re
 import tomllib
+from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -812,14 +813,18 @@ def read_reference_csv(path: str | Path) -> dict[str, float]:
     return out
 
 
-def check_output_dir(out_dir: str | Path, protocol: Protocol) -> Path:
+def check_output_dir(
+    out_dir: str | Path, protocol: Protocol, inputs: Iterable[str | Path] = ()
+) -> Path:
     """The output folder, resolved, after checking that writing there cannot touch an input.
+
+    ``inputs`` are further input files (the run files the sheet names, wherever they lie).
 
     Raises
     ------
     ProtocolError
         ``out_dir`` is a file; it is, holds or lies inside the data folder; or one of the
-        outputs would replace the protocol, the run sheet or the reference CSV.
+        outputs would replace the protocol, the run sheet, the reference CSV or an input.
     """
     out = Path(out_dir).resolve()
     if out.exists() and not out.is_dir():
@@ -830,7 +835,7 @@ def check_output_dir(out_dir: str | Path, protocol: Protocol) -> Path:
             f"the output folder {out} would mix the outputs with the raw run files in {data}; "
             "choose another folder with --out or [campaign] output_dir."
         )
-    inputs = [protocol.path, protocol.campaign.run_sheet]
+    inputs = [protocol.path, protocol.campaign.run_sheet, *(Path(p) for p in inputs)]
     if protocol.campaign.reference != "remus":
         inputs.append(Path(protocol.campaign.reference))
     for name in sorted(OUTPUT_NAMES):

@@ -39,7 +39,7 @@ def _read_table(path: Path) -> pd.DataFrame:
     suffix = path.suffix.lower()
     try:
         if suffix == ".xlsx":
-            df = pd.read_excel(path, sheet_name=0, engine="openpyxl", dtype=object)
+            df = _read_xlsx(path)
         elif suffix == ".csv":
             df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
         else:
@@ -85,6 +85,32 @@ def known_columns(columns: list[str], src: str) -> list[str]:
                 "as they are, so a misspelt one would be silently ignored)."
             )
     return out
+
+
+def _read_xlsx(path: Path) -> pd.DataFrame:
+    """The first worksheet as text-or-number cells, header in the first row.
+
+    Formulas give their cached values. A merged range (a tare group or a temperature typed
+    once over several runs) gives its value to every cell it covers, as the reader of the
+    sheet sees it; a plain reader would leave all but the first cell empty.
+    """
+    import openpyxl
+
+    wb = openpyxl.load_workbook(path, data_only=True)
+    ws = wb.worksheets[0]
+    for rng in list(ws.merged_cells.ranges):
+        value = ws.cell(rng.min_row, rng.min_col).value
+        ws.unmerge_cells(str(rng))
+        for row in ws.iter_rows(min_row=rng.min_row, max_row=rng.max_row,
+                                min_col=rng.min_col, max_col=rng.max_col):
+            for cell in row:
+                cell.value = value
+    rows = list(ws.iter_rows(values_only=True))
+    wb.close()
+    if not rows:
+        return pd.DataFrame()
+    header = [f"Unnamed: {i}" if h is None else str(h) for i, h in enumerate(rows[0])]
+    return pd.DataFrame([list(r) for r in rows[1:]], columns=header, dtype=object)
 
 
 def _is_blank(v: object) -> bool:
