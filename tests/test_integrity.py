@@ -226,3 +226,67 @@ def test_a_killed_runs_temporary_folders_are_swept(tmp_path):
     os.utime(old_tmp, (hour_ago, hour_ago))
     assert sweep_stale_temporaries(out) == [old_tmp]
     assert not old_tmp.exists() and fresh_tmp.exists()  # a run writing now keeps its folder
+
+
+def test_a_file_listed_for_two_runs_is_one_run(tmp_path):
+    protocol = _day(tmp_path)
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    frame.loc[frame["run"] == "5", "file"] = "./run_004.csv"  # the same file, written otherwise
+    frame.to_csv(sheet, index=False)
+    from conftest import process
+
+    result = process(protocol)
+    assert set(result.rejected) == {5}
+    assert result.rejected[5] == ("run 5: ./run_004.csv is also the file of run 4 in the sheet; "
+                                  "a recording is one run (a copied cell?)")
+    assert result.runs.set_index("run").loc[4, "status"] == "ok"
+
+
+def test_merged_cells_of_an_xlsx_sheet_fill_the_cells_they_cover(tmp_path):
+    import openpyxl
+
+    syn.make_hull_day(tmp_path, seed=8, runs=PLAN, sheet_format="xlsx", file_format="csv",
+                      channel_style="canonical")
+    path = tmp_path / "run_sheet.xlsx"
+    wb = openpyxl.load_workbook(path)
+    ws = wb.worksheets[0]
+    header = [c.value for c in ws[1]]
+    col = header.index("tare_group") + 1
+    for r in range(2, 2 + len(PLAN)):
+        ws.cell(r, col).value = "A" if r == 2 else None
+    ws.merge_cells(start_row=2, start_column=col, end_row=1 + len(PLAN), end_column=col)
+    temp = header.index("water_temp_C") + 1
+    ws.cell(2, temp).value = 17.25
+    ws.merge_cells(start_row=2, start_column=temp, end_row=3, end_column=temp)
+    wb.save(path)
+    runs = read_run_sheet(path, 18.0)
+    assert list(runs["tare_group"]) == ["A"] * len(PLAN)
+    assert list(runs["water_temp_C"][:2]) == [17.25, 17.25]
+
+
+def test_a_named_pipe_in_place_of_a_run_file_is_rejected_not_read(tmp_path):
+    protocol = _day(tmp_path)
+    fifo = tmp_path / "data" / "run_004.csv"
+    fifo.unlink()
+    os.mkfifo(fifo)
+    from conftest import process
+
+    result = process(protocol, jobs=1)
+    assert result.rejected == {4: "run 4: run_004.csv is not a regular file (a pipe, socket or "
+                                  "device)"}
+
+
+def test_outputs_may_not_replace_a_run_file_outside_the_data_folder(tmp_path, capsys):
+    protocol = _day(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    (tmp_path / "data" / "run_004.csv").rename(out / "fins.csv")
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    frame.loc[frame["run"] == "4", "file"] = "../out/fins.csv"
+    frame.to_csv(sheet, index=False)
+    raw = _sha(out / "fins.csv")
+    assert _process(protocol, out) == 2
+    assert "would overwrite the input" in capsys.readouterr().err
+    assert _sha(out / "fins.csv") == raw
