@@ -290,3 +290,14 @@ def test_outputs_may_not_replace_a_run_file_outside_the_data_folder(tmp_path, ca
     assert _process(protocol, out) == 2
     assert "would overwrite the input" in capsys.readouterr().err
     assert _sha(out / "fins.csv") == raw
+
+
+def test_a_file_named_in_another_case_is_suggested(tmp_path):
+    from conftest import process
+
+    protocol = _day(tmp_path)
+    (tmp_path / "data" / "run_004.csv").rename(tmp_path / "data" / "RUN_004.CSV")
+    result = process(protocol, jobs=1)
+    assert set(result.rejected) == {4}
+    assert result.rejected[4].endswith("is not found in "
+                                       f"{tmp_path / 'data'}; did you mean 'RUN_004.CSV'?")

@@ -83,11 +83,29 @@ def file_bytes(path: Path) -> bytes:
         with open(path, "rb") as fh:
             return fh.read()
     except FileNotFoundError:
-        raise RunError(f"the data file {path.name} is not found in {path.parent}") from None
+        raise RunError(
+            f"the data file {path.name} is not found in {path.parent}{_near_name(path)}"
+        ) from None
     except IsADirectoryError:
         raise RunError(f"{path.name} is a folder, not a data file") from None
     except OSError as exc:
         raise RunError(f"{path.name} cannot be read ({exc.strerror or exc})") from None
+
+
+def _near_name(path: Path) -> str:
+    """'; did you mean ...?' for a file of the folder whose name differs only in case or in
+    Unicode normalisation (a sheet typed on another system), else ''."""
+    import unicodedata
+
+    def key(name: str) -> str:
+        return unicodedata.normalize("NFC", name).casefold()
+
+    try:
+        names = [p.name for p in path.parent.iterdir()]
+    except OSError:
+        return ""
+    same = [n for n in names if key(n) == key(path.name) and n != path.name]
+    return f"; did you mean {same[0]!r}?" if same else ""
 
 
 def sha256_bytes(data: bytes) -> str:
