@@ -32,12 +32,20 @@ OVERLAP_RUN = 7  # hull, 0°, 1.6 m/s: its hand window starts inside the acceler
 FAST_RUN = 8  # hull, 0°, 2.4 m/s: faster than every tare run (0.8-2.0 m/s)
 PLATEAU_RUNS = {9: 1.3, 10: 1.6, 11: 2.0}  # run: plateau length [s] at 1.0 m/s
 NO_ACCEL_RUN = 12  # hull, 0°, made for its acceleration, but too slow to have a usable one
+SLIGHT_RUN = 13  # hull, 0°, 1.2 m/s at a gentle 0.1 m/s²: a hand window a little too early
+STILL_RUN = 14  # hull, 0°, 1.6 m/s: a hand window before the carriage moves
+TINY_RUN = 15  # hull, 0°, 1.6 m/s: a hand window of two samples
+STING_WINDOW_RUN = 16  # a sting run whose hand window is the whole run
 PLAN = STINGS + [
     syn.RunSpec("hull", 0.0, 1.2, HIGH, plateau_s=0.9),
     syn.RunSpec("hull", 0.0, 1.6, HIGH),
     syn.RunSpec("hull", 0.0, 2.4, HIGH),
     *[syn.RunSpec("hull", 0.0, 1.0, HIGH, plateau_s=p) for p in PLATEAU_RUNS.values()],
     syn.RunSpec("hull", 0.0, 0.2, 0.5, test="accel"),
+    syn.RunSpec("hull", 0.0, 1.2, 0.1),
+    syn.RunSpec("hull", 0.0, 1.6, HIGH),
+    syn.RunSpec("hull", 0.0, 1.6, HIGH),
+    syn.RunSpec("sting", 0.0, 1.2, HIGH),
 ]
 
 
@@ -54,6 +62,17 @@ def _hand_windows(day_dir: Path) -> None:
     over = truth[str(OVERLAP_RUN)]
     sheet.loc[rows == OVERLAP_RUN, "window_start_s"] = f"{over['t_const_accel_start'] + 0.5:.3f}"
     sheet.loc[rows == OVERLAP_RUN, "window_end_s"] = f"{over['t_plateau_end'] - 1.0:.3f}"
+    slight = truth[str(SLIGHT_RUN)]  # 0.6 s early: into the trimmed acceleration window
+    sheet.loc[rows == SLIGHT_RUN, "window_start_s"] = f"{slight['t_plateau_start'] - 0.6:.3f}"
+    sheet.loc[rows == SLIGHT_RUN, "window_end_s"] = f"{slight['t_plateau_end'] - 1.0:.3f}"
+    sheet.loc[rows == STILL_RUN, "window_start_s"] = "0.5"
+    sheet.loc[rows == STILL_RUN, "window_end_s"] = "2.5"
+    tiny = truth[str(TINY_RUN)]
+    sheet.loc[rows == TINY_RUN, "window_start_s"] = f"{tiny['t_plateau_start'] + 1.0:.3f}"
+    sheet.loc[rows == TINY_RUN, "window_end_s"] = f"{tiny['t_plateau_start'] + 1.005:.3f}"
+    whole = truth[str(STING_WINDOW_RUN)]
+    sheet.loc[rows == STING_WINDOW_RUN, "window_start_s"] = "2.0"
+    sheet.loc[rows == STING_WINDOW_RUN, "window_end_s"] = f"{whole['t_decel_end']:.3f}"
     sheet.to_csv(sheet_path, index=False, lineterminator="\n")
 
 
@@ -106,15 +125,34 @@ def test_hand_window_rescues_a_run_the_detection_cannot_use(edge_day: Day):
     assert row["speed_mean"] == pytest.approx(truth["speed"], rel=3e-3)
 
 
-def test_hand_window_inside_the_acceleration_is_warned(edge_day: Day):
-    row = _row(edge_day, OVERLAP_RUN)
-    assert row["status"] == "ok"
-    assert "overlaps the detected constant acceleration" in row["notes"]
-    assert "speed varies" in row["notes"]
-    warned = [w for w in edge_day.result.warnings if w.startswith(f"run {OVERLAP_RUN}:")]
+def test_hand_window_spanning_the_acceleration_is_rejected(edge_day: Day):
+    """A window from the middle of the acceleration to the plateau's end: its speed varies by
+    ~0.6 m/s, twenty plateau bands; used, it would bias the steady drag. The run is rejected."""
+    reason = edge_day.result.rejected[OVERLAP_RUN]
+    assert reason.startswith(f"run {OVERLAP_RUN}: run_{OVERLAP_RUN:03d}.csv: the speed varies by")
+    assert reason.endswith("the window is not steady")
+
+
+@pytest.mark.parametrize(("run", "words"), [
+    (STILL_RUN, "lies where the carriage is (nearly) still"),
+    (TINY_RUN, "shorter than the 0.5 s a steady mean needs"),
+    (STING_WINDOW_RUN, "the window is not steady"),
+])
+def test_hand_windows_that_cannot_be_steady_reject_their_run(edge_day: Day, run, words):
+    assert words in edge_day.result.rejected[run]
+    assert STING_WINDOW_RUN not in edge_day.result.tares["A"].runs  # it feeds no tare
+
+
+def test_hand_window_a_little_early_is_used_and_warned(edge_day: Day):
+    """0.6 s before the plateau at 0.1 m/s²: 0.06 m/s of spread, within five plateau bands,
+    reaching into the detected acceleration: used, with both warnings on the terminal."""
+    row = _row(edge_day, SLIGHT_RUN)
+    assert row["status"] == "ok", row["reason"]
+    warned = [w for w in edge_day.result.warnings if w.startswith(f"run {SLIGHT_RUN}:")]
     assert any("overlaps the detected constant acceleration" in w for w in warned)
+    assert any("speed varies" in w for w in warned)
     # the good hand window raises no such warning
-    assert not any(w.startswith(f"run {SHORT_RUN}:") and "overlaps" in w
+    assert not any(w.startswith(f"run {SHORT_RUN}:") and ("overlaps" in w or "varies" in w)
                    for w in edge_day.result.warnings)
 
 

@@ -301,3 +301,78 @@ def test_a_file_named_in_another_case_is_suggested(tmp_path):
     assert set(result.rejected) == {4}
     assert result.rejected[4].endswith("is not found in "
                                        f"{tmp_path / 'data'}; did you mean 'RUN_004.CSV'?")
+
+
+@pytest.mark.parametrize(("extra", "words"), [
+    (["air_temp_C", "start_s", "operator", "notes", "file name"], None),
+    (["water_temp_F"], "looks like 'water_temp_C' in another unit"),
+    (["remark"], "looks like a misspelling of 'remarks'"),
+    (["status", "Status"], "has the column 'status' twice"),
+])
+def test_sheet_column_names_a_lab_uses(tmp_path, extra, words):
+    from towtank.runsheet import known_columns
+
+    base = ["run", "file", "config", "angle_deg"]
+    if words is None:
+        assert known_columns(base + extra, "s.csv") == base + extra
+    else:
+        with pytest.raises(ProtocolError, match=words):
+            known_columns(base + extra, "s.csv")
+
+
+def _xlsx_day(tmp_path: Path):
+    import openpyxl
+
+    syn.make_hull_day(tmp_path, seed=8, runs=PLAN, sheet_format="xlsx", file_format="csv",
+                      channel_style="canonical")
+    path = tmp_path / "run_sheet.xlsx"
+    return path, openpyxl.load_workbook(path)
+
+
+def test_the_run_sheet_worksheet_need_not_be_the_first(tmp_path):
+    path, wb = _xlsx_day(tmp_path)
+    notes = wb.create_sheet("Operator notes", 0)
+    notes["A1"] = "Operator notes"
+    notes["A2"] = "carriage squeaked after run 3"
+    wb.save(path)
+    assert list(read_run_sheet(path, 18.0)["run"]) == list(range(1, len(PLAN) + 1))
+    only_notes = tmp_path / "notes.xlsx"
+    del wb[wb.sheetnames[1]]
+    wb.save(only_notes)
+    with pytest.raises(ProtocolError, match="no worksheet has the required columns.*"
+                                            "'Operator notes'"):
+        read_run_sheet(only_notes, 18.0)
+
+
+def test_formulas_without_a_saved_value_stop_the_day(tmp_path):
+    path, wb = _xlsx_day(tmp_path)
+    ws = wb.worksheets[0]
+    header = [c.value for c in ws[1]]
+    col = header.index("water_temp_C") + 1
+    ws.cell(2, col).value = "=17.5+0.5"  # written by a program: no value saved with it
+    wb.save(path)
+    with pytest.raises(ProtocolError, match=r"cell\(s\) [A-Z]+2 hold formulas with no saved"):
+        read_run_sheet(path, 18.0)
+
+
+def test_dollars_and_carets_from_the_inputs_never_break_the_report(tmp_path):
+    """Names, remarks, file names and cells typed by people reach the PDF as text; matplotlib
+    would parse '$…$' as mathtext (and fail on '$\\frac$'): they must be drawn literally."""
+    from pypdf import PdfReader
+
+    protocol = _day(tmp_path)
+    text = protocol.read_text(encoding="utf-8")
+    name_line = next(line for line in text.splitlines() if line.startswith("name = "))
+    protocol.write_text(text.replace(name_line, 'name = "Tank $A_1$ day, cost $\\\\frac$"', 1),
+                        encoding="utf-8")
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    frame.loc[frame["run"] == "3", "remarks"] = "probe $x^2$ moved"
+    frame.loc[frame["run"] == "4", "config"] = "hu$_$ll"
+    frame.loc[frame["run"] == "5", "file"] = "tank$A_run^8.csv"
+    frame.to_csv(sheet, index=False)
+    out = tmp_path / "out"
+    code = cli.main(["process", str(protocol), "--out", str(out), "--quiet", "--jobs", "1"])
+    assert code == 1  # runs 4 and 5 rejected, the report written
+    pages = " ".join(p.extract_text() for p in PdfReader(out / "report.pdf").pages)
+    assert "Tank $A_1$ day" in pages and "tank$A_run^8.csv" in pages

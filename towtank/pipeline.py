@@ -582,7 +582,11 @@ def _scaling_stage(day: DayResult) -> None:
     )
     hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
                      & (np.abs(runs["angle_deg"]) <= p.processing.damping_alpha_max_deg)]
-    re_model = (float(hull_runs["re"].min()), float(hull_runs["re"].max()))
+    # a run towed backwards (negative speed) has no Reynolds range of its own to compare
+    re_ok = hull_runs["re"][np.isfinite(hull_runs["re"]) & (hull_runs["re"] > 0)]
+    if len(re_ok) == 0:  # only backward tows: their size is the Reynolds number
+        re_ok = np.abs(zero["re"])[np.isfinite(zero["re"]) & (zero["re"] != 0)]
+    re_model = (float(re_ok.min()), float(re_ok.max()))
     re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
     depth = model.depth_m if model.diameter_m is not None else None
     statement = similarity.similarity_statement(

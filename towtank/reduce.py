@@ -79,6 +79,13 @@ class RunReduction:
     lift_mean: float = math.nan
 
 
+#: A hand-set steady window whose speed varies by more than this many plateau bands is not
+#: steady: the run is rejected rather than biasing a coefficient.
+MANUAL_SPREAD_REJECT = 5.0
+#: ... nor one whose mean speed is below this fraction of the run's peak speed (still water).
+MANUAL_MIN_SPEED_FRACTION = 0.2
+
+
 def manual_window_checks(
     t: np.ndarray,
     speed: np.ndarray,
@@ -86,13 +93,18 @@ def manual_window_checks(
     ph: phases.Phases,
     *,
     steady_tolerance: float,
+    min_steady_s: float = 0.0,
 ) -> list[str]:
-    """What is wrong with a steady window set by hand, as sentences (empty when nothing is).
+    """What is wrong with a steady window set by hand: sentences to warn, or a RunError.
 
-    A hand window is trusted over the detection, but not blindly: it is checked for overlap
-    with the detected constant-acceleration and deceleration windows (the force there holds
-    the inertia (m − X_udot)·a, which would bias a steady mean), and for a speed spread inside
-    it wider than the plateau band (max − min > 2·``steady_tolerance``·mean, or 4 mm/s).
+    A hand window is trusted over the detection, but not blindly. It is rejected (RunError)
+    when it is shorter than ``min_steady_s``, when its mean speed is below
+    :data:`MANUAL_MIN_SPEED_FRACTION` of the run's peak (the carriage is at rest there), or
+    when its speed varies by more than :data:`MANUAL_SPREAD_REJECT` plateau bands (it spans
+    an acceleration or deceleration). Smaller faults are warnings: an overlap with the detected
+    constant-acceleration or deceleration window (the force there holds the inertia
+    (m − X_udot)·a), or a speed spread wider than the plateau band (max − min >
+    2·``steady_tolerance``·mean, or 4 mm/s).
 
     Parameters
     ----------
@@ -106,23 +118,38 @@ def manual_window_checks(
         The detected phases.
     steady_tolerance : float
         Half-width of the plateau band as a fraction of the speed [-].
+    min_steady_s : float
+        Shortest usable steady window [s].
     """
     i0, i1 = window
+    span = (float(t[i0]), float(t[i1 - 1]))
+    where = f"the hand-set steady window {span[0]:.2f}–{span[1]:.2f} s"
+    if span[1] - span[0] < min_steady_s:
+        raise RunError(f"{where} is {span[1] - span[0]:.2f} s long, shorter than the "
+                       f"{min_steady_s:g} s a steady mean needs (min_steady_s)")
+    u = speed[i0:i1]
+    mean = float(np.mean(u))
+    peak = float(np.max(speed))
+    if not mean > MANUAL_MIN_SPEED_FRACTION * peak:
+        raise RunError(f"{where} lies where the carriage is (nearly) still: mean speed "
+                       f"{mean:.3f} m/s against a peak of {peak:.3f} m/s")
+    spread = float(np.max(u) - np.min(u))
+    allowed = max(2.0 * steady_tolerance * abs(mean), 0.004)
+    if spread > MANUAL_SPREAD_REJECT * allowed:
+        raise RunError(f"the speed varies by {spread:.3f} m/s inside {where} (mean {mean:.3f} "
+                       f"m/s; a plateau varies by at most {allowed:.3f} m/s): the window is "
+                       "not steady")
     out = []
     for name, label in (("accel", "acceleration"), ("decel", "deceleration")):
         w = getattr(ph, name)
         if w is not None and w[0] < i1 and i0 < w[1]:
             out.append(
-                f"the hand-set steady window overlaps the detected constant {label} "
+                f"{where} overlaps the detected constant {label} "
                 f"({t[w[0]]:.2f}–{t[w[1] - 1]:.2f} s): its mean holds inertia force"
             )
-    u = speed[i0:i1]
-    mean = float(np.mean(u))
-    spread = float(np.max(u) - np.min(u))
-    allowed = max(2.0 * steady_tolerance * abs(mean), 0.004)
     if spread > allowed:
         out.append(
-            f"the speed varies by {spread:.3f} m/s inside the hand-set steady window "
+            f"the speed varies by {spread:.3f} m/s inside {where} "
             f"(mean {mean:.3f} m/s; a plateau varies by at most {allowed:.3f} m/s)"
         )
     return out
@@ -202,7 +229,8 @@ def reduce_run(
         notes.append(f"steady window set by hand in the sheet: {window_source}")
         windows["steady"] = (float(t[steady[0]]), float(t[steady[1] - 1]))
         manual_warnings = manual_window_checks(
-            t, speed_f, steady, ph, steady_tolerance=p.steady_tolerance
+            t, speed_f, steady, ph, steady_tolerance=p.steady_tolerance,
+            min_steady_s=p.min_steady_s,
         )
         notes.extend(manual_warnings)
 

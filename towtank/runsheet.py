@@ -9,7 +9,9 @@ pipeline rejects that run while processing the rest.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -54,50 +56,102 @@ def _read_table(path: Path) -> pd.DataFrame:
     return df.loc[~blank].reset_index(drop=True)
 
 
+#: How close (difflib ratio) an unknown column name must be to a known one to be taken for a
+#: misspelling of it (``water_temp``, ``tare_grp``, ``remark``; not ``air_temp_C``, ``start_s``).
+MISSPELLING_RATIO = 0.85
+_UNIT_SUFFIX = re.compile(r"_(c|f|k|s|ms|min|deg|rad|m_s|m_s2|kn)$")
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[\s\-]+", "_", name.strip()).lower()
+
+
 def known_columns(columns: list[str], src: str) -> list[str]:
     """The sheet's column names with the FORMATS §2 ones spelt as the contract spells them.
 
-    A known column written in another case (``Status``, ``Water_Temp_C``) is renamed to its
-    contract name. A column that is not known but is close to a known one (``water_temp``,
-    ``tare grp``) is an error: read as an extra column it would silently lose what it says
-    (a void run processed, every run at the default temperature).
+    A known column written in another case or with spaces or hyphens for underscores
+    (``Status``, ``Tare group``) is renamed to its contract name. A column that is not known
+    but is close to a known one is an error: read as an extra column it would silently lose
+    what it says (a void run processed, every run at the default temperature). So is the
+    same known column twice (``status`` and ``Status``).
 
     Raises
     ------
     ProtocolError
-        Naming the column and the known column it resembles.
+        Naming the column and the known column it resembles (or the unit it is in).
     """
     import difflib
 
-    by_lower = {k.lower(): k for k in KNOWN}
-    out = [by_lower.get(c.lower(), c) if c not in KNOWN else c for c in columns]
-    absent = [k for k in KNOWN if k not in out]
+    by_norm = {_norm(k): k for k in KNOWN}
+    out = [c if c in KNOWN else by_norm.get(_norm(c), c) for c in columns]
+    seen: dict[str, str] = {}
+    for original, name in zip(columns, out, strict=True):
+        if name in KNOWN:
+            if name in seen:
+                raise ProtocolError(
+                    f"{src}: the run sheet has the column {name!r} twice ({seen[name]!r} and "
+                    f"{original!r}); keep one."
+                )
+            seen[name] = original
+    absent = {_norm(k): k for k in KNOWN if k not in out}
     for c in out:
         if c in KNOWN:
             continue
-        close = difflib.get_close_matches(
-            c.lower().replace(" ", "_"), [k.lower() for k in absent], n=1, cutoff=0.75
-        )
-        if close:
+        close = difflib.get_close_matches(_norm(c), list(absent), n=1, cutoff=MISSPELLING_RATIO)
+        if not close:
+            continue
+        known = absent[close[0]]
+        unit_c, unit_k = _UNIT_SUFFIX.search(_norm(c)), _UNIT_SUFFIX.search(_norm(known))
+        if unit_c and unit_k and unit_c.group(1) != unit_k.group(1):
             raise ProtocolError(
-                f"{src}: the run sheet's column {c!r} looks like a misspelling of "
-                f"{by_lower[close[0]]!r}; rename it (other columns are carried to the reports "
-                "as they are, so a misspelt one would be silently ignored)."
+                f"{src}: the run sheet's column {c!r} looks like {known!r} in another unit; "
+                f"towtank reads {known!r} only: convert the values and name the column so."
             )
+        raise ProtocolError(
+            f"{src}: the run sheet's column {c!r} looks like a misspelling of {known!r}; "
+            "rename it (other columns are carried to the reports as they are, so a misspelt "
+            "one would be silently ignored)."
+        )
     return out
 
 
 def _read_xlsx(path: Path) -> pd.DataFrame:
-    """The first worksheet as text-or-number cells, header in the first row.
+    """The run-sheet worksheet as text-or-number cells, header in the first row.
 
-    Formulas give their cached values. A merged range (a tare group or a temperature typed
-    once over several runs) gives its value to every cell it covers, as the reader of the
-    sheet sees it; a plain reader would leave all but the first cell empty.
+    The worksheet is the first one whose header holds the required columns (a notes tab may
+    come first). Formulas give the values Excel saved with them. A merged range (a tare group
+    or a temperature typed once over several runs) gives its value to every cell it covers,
+    as the reader of the sheet sees it; a plain reader would leave all but the first cell
+    empty.
+
+    Raises
+    ------
+    ProtocolError
+        No worksheet has the required columns; or a formula has no saved value (a workbook
+        written by a program and never saved by Excel), which would read as an empty cell.
     """
     import openpyxl
 
     wb = openpyxl.load_workbook(path, data_only=True)
-    ws = wb.worksheets[0]
+    required = {_norm(c) for c in REQUIRED}
+
+    def header(ws: Any) -> list[str]:
+        first = next(ws.iter_rows(max_row=1, values_only=True), ())
+        return [str(h).strip() for h in first if h is not None]
+
+    chosen = next((ws for ws in wb.worksheets
+                   if required <= {_norm(h) for h in header(ws)}), None)
+    if chosen is None:
+        names = ", ".join(repr(ws.title) for ws in wb.worksheets)
+        found = header(wb.worksheets[0])
+        missing = [c for c in REQUIRED if _norm(c) not in {_norm(h) for h in found}]
+        wb.close()
+        raise ProtocolError(
+            f"{path.name}: no worksheet has the required columns {', '.join(REQUIRED)} in its "
+            f"first row; the first, {names.split(', ')[0]}, lacks {', '.join(missing)} "
+            f"(columns found: {', '.join(found) or 'none'}; worksheets: {names})."
+        )
+    ws = chosen
     for rng in list(ws.merged_cells.ranges):
         value = ws.cell(rng.min_row, rng.min_col).value
         ws.unmerge_cells(str(rng))
@@ -106,11 +160,35 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
             for cell in row:
                 cell.value = value
     rows = list(ws.iter_rows(values_only=True))
+    title = ws.title
     wb.close()
+    blanks = [r for r in _unsaved_formulas(path, title) if r[1] > 1]
+    if blanks:
+        cells = ", ".join(f"{col}{row}" for col, row in blanks[:5])
+        more = f" and {len(blanks) - 5} more" if len(blanks) > 5 else ""
+        raise ProtocolError(
+            f"{path.name}: the cell(s) {cells}{more} hold formulas with no saved value (the "
+            "workbook was written by a program, not saved by Excel), so they would read as "
+            "empty; open and save the sheet in Excel, or type the values."
+        )
     if not rows:
         return pd.DataFrame()
-    header = [f"Unnamed: {i}" if h is None else str(h) for i, h in enumerate(rows[0])]
-    return pd.DataFrame([list(r) for r in rows[1:]], columns=header, dtype=object)
+    head = [f"Unnamed: {i}" if h is None else str(h) for i, h in enumerate(rows[0])]
+    return pd.DataFrame([list(r) for r in rows[1:]], columns=head, dtype=object)
+
+
+def _unsaved_formulas(path: Path, title: str) -> list[tuple[str, int]]:
+    """(column letter, row) of the formula cells of worksheet ``title`` with no saved value."""
+    import openpyxl
+
+    formulas = openpyxl.load_workbook(path, data_only=False)[title]
+    values = openpyxl.load_workbook(path, data_only=True)[title]
+    out = []
+    for row in formulas.iter_rows():
+        for cell in row:
+            if cell.data_type == "f" and values[cell.coordinate].value is None:
+                out.append((cell.column_letter, cell.row))
+    return out
 
 
 def _is_blank(v: object) -> bool:

@@ -895,12 +895,12 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
     bottom = 0.21 if note else 0.14
     ax = fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
     run_thumbnail(ax, reduction, linewidth=1.3)
-    ax.set_title(title, loc="left", fontsize=9.5)
+    ax.set_title(title.replace("$", r"\$"), loc="left", fontsize=9.5)
     fig.legend(handles=thumbnail_legend_handles(reduction.has_lift), loc="upper right",
                ncol=7, fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
     if note:
-        fig.text(0.08, 0.035, note, fontsize=7.5, family="DejaVu Sans Mono", va="bottom",
-                 color="#333333")
+        fig.text(0.08, 0.035, note.replace("$", r"\$"), fontsize=7.5,
+                 family="DejaVu Sans Mono", va="bottom", color="#333333")
     return fig
 
 

@@ -320,6 +320,12 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
         f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
 
 
+def literal(text: Any) -> str:
+    """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
+    escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
+    return str(text).replace("$", r"\$")
+
+
 def short_reason(run: Any, file: Any, reason: Any) -> str:
     """A run's reason without the "run N: file:" prefix the pipeline puts in front of it."""
     text = str(reason) if isinstance(reason, str) and reason else "no reason given"
@@ -380,7 +386,7 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
                      color="#555555")
         fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
     fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
-    fig.text(x0, 0.25 / PAGE_H, f"{day.protocol.name}", fontsize=7, color="#555555")
+    fig.text(x0, 0.25 / PAGE_H, literal(day.protocol.name), fontsize=7, color="#555555")
     fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
              fontsize=7, color="#555555", ha="right")
 
@@ -453,7 +459,8 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     x0 = MARGIN_IN / PAGE_W + 0.03
     fig.text(x0, _y(1.6), "Towing-tank test report", fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
-    fig.text(x0, _y(2.4), textwrap.fill(day.protocol.name, 48), fontsize=16, va="top")
+    fig.text(x0, _y(2.4), literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
+             va="top")
     rows = [
         ("Model", _model_text(day) if day.protocol.model is not None else None),
         ("Fin", _fin_text(day)),
@@ -469,7 +476,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
             continue
         wrapped = textwrap.fill(value, 70)
         fig.text(x0, _y(y), label, fontsize=10, fontweight="bold", va="top")
-        fig.text(x0 + 1.5 / PAGE_W, _y(y), wrapped, fontsize=10, va="top")
+        fig.text(x0 + 1.5 / PAGE_W, _y(y), literal(wrapped), fontsize=10, va="top")
         y += 0.3 + 0.19 * wrapped.count("\n")
     if date and source != "given on the command line":
         fig.text(x0 + 1.5 / PAGE_W, _y(y - 0.05), f"(test date: {source})", fontsize=7.5,
@@ -604,7 +611,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
             continue
         fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), label, fontsize=8.5, fontweight="bold",
                  va="baseline")
-        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), value, fontsize=8.5, va="baseline")
+        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), literal(value), fontsize=8.5,
+                 va="baseline")
         y += 0.21
     geometry = geometry_text(day) if has_model else None
     if geometry is not None:
@@ -811,7 +819,7 @@ class ThumbGrid:
             if red is None or row["status"] != "ok":
                 reason = short_reason(run, row.get("file"), row.get("reason"))
                 preview = day.previews.get(run) if row["status"] == "rejected" else None
-                ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
+                ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
@@ -822,7 +830,7 @@ class ThumbGrid:
                     where = {"x": 0.5, "y": 0.5, "va": "center"}
                 small = preview is not None  # over a trace: keep the box small
                 ax.text(where["x"], where["y"],
-                        textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38),
+                        literal(textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38)),
                         ha="center", va=where["va"], fontsize=6.2 if small else 7, zorder=10,
                         color="#7a0000" if row["status"] == "rejected" else "#555555",
                         transform=ax.transAxes,
@@ -831,7 +839,7 @@ class ThumbGrid:
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
-            ax.set_title(title, fontsize=7.5, loc="left", fontweight="normal")
+            ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
         legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
         self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
