@@ -160,9 +160,8 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
             for cell in row:
                 cell.value = value
     rows = list(ws.iter_rows(values_only=True))
-    title = ws.title
+    blanks = [r for r in _unsaved_formulas(path, ws) if r[1] > 1]
     wb.close()
-    blanks = [r for r in _unsaved_formulas(path, title) if r[1] > 1]
     if blanks:
         cells = ", ".join(f"{col}{row}" for col, row in blanks[:5])
         more = f" and {len(blanks) - 5} more" if len(blanks) > 5 else ""
@@ -177,17 +176,17 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
     return pd.DataFrame([list(r) for r in rows[1:]], columns=head, dtype=object)
 
 
-def _unsaved_formulas(path: Path, title: str) -> list[tuple[str, int]]:
-    """(column letter, row) of the formula cells of worksheet ``title`` with no saved value."""
+def _unsaved_formulas(path: Path, values: Any) -> list[tuple[str, int]]:
+    """(column letter, row) of the formula cells of ``values`` (a worksheet read with its
+    saved values) that have no saved value; the formulas are read from ``path``."""
     import openpyxl
 
-    formulas = openpyxl.load_workbook(path, data_only=False)[title]
-    values = openpyxl.load_workbook(path, data_only=True)[title]
-    out = []
-    for row in formulas.iter_rows():
-        for cell in row:
-            if cell.data_type == "f" and values[cell.coordinate].value is None:
-                out.append((cell.column_letter, cell.row))
+    wb = openpyxl.load_workbook(path, data_only=False)
+    formulas = wb[values.title]
+    out = [(cell.column_letter, cell.row)
+           for row in formulas.iter_rows() for cell in row
+           if cell.data_type == "f" and values[cell.coordinate].value is None]
+    wb.close()
     return out
 
 

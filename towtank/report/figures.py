@@ -116,6 +116,12 @@ _E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?![\w.])")
 _HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
 
 
+def literal(text: object) -> str:
+    """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
+    escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
+    return str(text).replace("$", r"\$")
+
+
 def true_minus(text: str) -> str:
     """``text`` with a true minus sign (U+2212) for the hyphen before a number."""
     return _HYPHEN_MINUS.sub("\u2212", text)
@@ -133,7 +139,7 @@ def math_text(text: str) -> str:
         lambda m: f"{m.group(1)}×10" + str(int(m.group(2))).translate(_SUPERSCRIPT), text
     )
     text = true_minus(text)
-    return _MATH_RE.sub(lambda m: table[m.group(1)], text.replace("$", r"\$"))
+    return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
 
 
 def t95(dof: int) -> float:
@@ -779,24 +785,13 @@ def run_thumbnail(
         The twin axes of the forces.
     """
     th = reduction.thumb
-    t = np.asarray(th["t"], dtype=float)
     ax2 = thumbnail_twin(ax) if twin is None else twin
     for name, (color, _label) in style.PHASE_SHADES.items():
         w = reduction.windows.get(name)
         if w is not None:
             ax2.axvspan(w[0], w[1], color=color, lw=0, zorder=0)
-    ax.plot(t, th["U"], color=style.SPEED_COLOR, lw=linewidth, zorder=3)
-    ax2.plot(t, th["drag"], color=style.DRAG_COLOR, lw=linewidth * 0.9, zorder=2)
     lift = reduction.has_lift if show_lift is None else show_lift
-    drawn = [np.asarray(th["drag"], dtype=float)]
-    if lift and np.isfinite(th["lift"]).any():
-        ax2.plot(t, th["lift"], color=style.LIFT_COLOR, lw=linewidth * 0.9, zorder=2)
-        drawn.append(np.asarray(th["lift"], dtype=float))
-    ax.set_xlim(float(t[0]), float(t[-1]))
-    ax.set_ylim(*thumbnail_ylim(np.asarray(th["U"], dtype=float), above=0.08, below=0.05))
-    # the forces keep to the lower two thirds, so that a force that grows like U² is not
-    # drawn on top of the speed it follows
-    ax2.set_ylim(*thumbnail_ylim(np.concatenate(drawn), above=0.55, below=0.08))
+    _traces(ax, ax2, th, lift=lift, linewidth=linewidth)
     if labels:
         ax.set_xlabel(r"$t$ [s]")
         ax.set_ylabel(r"$U$ [m/s]")
@@ -829,24 +824,32 @@ def preview_thumbnail(ax: Axes, preview: dict[str, np.ndarray], *, twin: Axes | 
     Axes
         The twin axes of the forces.
     """
-    t = np.asarray(preview["t"], dtype=float)
     ax2 = thumbnail_twin(ax) if twin is None else twin
     ax2.set_visible(True)
     ax.set_axis_on()
-    u = np.asarray(preview["U"], dtype=float)
-    forces = [np.asarray(preview["drag"], dtype=float)]
-    ax.plot(t, u, color=style.SPEED_COLOR, lw=linewidth, alpha=0.45, zorder=3)
-    ax2.plot(t, forces[0], color=style.DRAG_COLOR, lw=linewidth * 0.9, alpha=0.45, zorder=2)
-    lift = np.asarray(preview["lift"], dtype=float)
-    if np.isfinite(lift).any():
-        ax2.plot(t, lift, color=style.LIFT_COLOR, lw=linewidth * 0.9, alpha=0.45, zorder=2)
-        forces.append(lift)
+    _traces(ax, ax2, preview, lift=True, linewidth=linewidth, alpha=0.45)
+    return ax2
+
+
+def _traces(ax: Axes, ax2: Axes, th: dict[str, np.ndarray], *, lift: bool, linewidth: float,
+            alpha: float = 1.0) -> None:
+    """Speed on ``ax``, drag (and lift, where it has values) on ``ax2``, and their limits."""
+    t = np.asarray(th["t"], dtype=float)
+    u = np.asarray(th["U"], dtype=float)
+    forces = [np.asarray(th["drag"], dtype=float)]
+    ax.plot(t, u, color=style.SPEED_COLOR, lw=linewidth, alpha=alpha, zorder=3)
+    ax2.plot(t, forces[0], color=style.DRAG_COLOR, lw=linewidth * 0.9, alpha=alpha, zorder=2)
+    lift_f = np.asarray(th["lift"], dtype=float)
+    if lift and np.isfinite(lift_f).any():
+        ax2.plot(t, lift_f, color=style.LIFT_COLOR, lw=linewidth * 0.9, alpha=alpha, zorder=2)
+        forces.append(lift_f)
     finite = t[np.isfinite(t)]
     if finite.size >= 2:
         ax.set_xlim(float(finite.min()), float(finite.max()))
     ax.set_ylim(*thumbnail_ylim(u, above=0.08, below=0.05))
+    # the forces keep to the lower two thirds, so that a force that grows like U² is not
+    # drawn on top of the speed it follows
     ax2.set_ylim(*thumbnail_ylim(np.concatenate(forces), above=0.55, below=0.08))
-    return ax2
 
 
 def thumbnail_ylim(values: np.ndarray, *, above: float, below: float) -> tuple[float, float]:
@@ -895,11 +898,11 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
     bottom = 0.21 if note else 0.14
     ax = fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
     run_thumbnail(ax, reduction, linewidth=1.3)
-    ax.set_title(title.replace("$", r"\$"), loc="left", fontsize=9.5)
+    ax.set_title(literal(title), loc="left", fontsize=9.5)
     fig.legend(handles=thumbnail_legend_handles(reduction.has_lift), loc="upper right",
                ncol=7, fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
     if note:
-        fig.text(0.08, 0.035, note.replace("$", r"\$"), fontsize=7.5,
+        fig.text(0.08, 0.035, literal(note), fontsize=7.5,
                  family="DejaVu Sans Mono", va="bottom", color="#333333")
     return fig
 

@@ -320,12 +320,6 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
         f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
 
 
-def literal(text: Any) -> str:
-    """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
-    escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
-    return str(text).replace("$", r"\$")
-
-
 def short_reason(run: Any, file: Any, reason: Any) -> str:
     """A run's reason without the "run N: file:" prefix the pipeline puts in front of it."""
     text = str(reason) if isinstance(reason, str) and reason else "no reason given"
@@ -386,7 +380,7 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
                      color="#555555")
         fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
     fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
-    fig.text(x0, 0.25 / PAGE_H, literal(day.protocol.name), fontsize=7, color="#555555")
+    fig.text(x0, 0.25 / PAGE_H, figures.literal(day.protocol.name), fontsize=7, color="#555555")
     fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
              fontsize=7, color="#555555", ha="right")
 
@@ -459,7 +453,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     x0 = MARGIN_IN / PAGE_W + 0.03
     fig.text(x0, _y(1.6), "Towing-tank test report", fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
-    fig.text(x0, _y(2.4), literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
+    fig.text(x0, _y(2.4), figures.literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
     rows = [
         ("Model", _model_text(day) if day.protocol.model is not None else None),
@@ -476,7 +470,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
             continue
         wrapped = textwrap.fill(value, 70)
         fig.text(x0, _y(y), label, fontsize=10, fontweight="bold", va="top")
-        fig.text(x0 + 1.5 / PAGE_W, _y(y), literal(wrapped), fontsize=10, va="top")
+        fig.text(x0 + 1.5 / PAGE_W, _y(y), figures.literal(wrapped), fontsize=10, va="top")
         y += 0.3 + 0.19 * wrapped.count("\n")
     if date and source != "given on the command line":
         fig.text(x0 + 1.5 / PAGE_W, _y(y - 0.05), f"(test date: {source})", fontsize=7.5,
@@ -611,7 +605,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
             continue
         fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), label, fontsize=8.5, fontweight="bold",
                  va="baseline")
-        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), literal(value), fontsize=8.5,
+        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), figures.literal(value), fontsize=8.5,
                  va="baseline")
         y += 0.21
     geometry = geometry_text(day) if has_model else None
@@ -744,10 +738,10 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
     x0 = MARGIN_IN / PAGE_W
     for kind, text in lines:
         if kind == "h":
-            fig.text(x0, _y(y + 0.06), text.replace("$", r"\$"), fontsize=10.5,
+            fig.text(x0, _y(y + 0.06), figures.literal(text), fontsize=10.5,
                      fontweight="bold", va="top")
         elif kind == "mono":
-            fig.text(x0, _y(y), figures.true_minus(text.replace("$", r"\$")), fontsize=6.8,
+            fig.text(x0, _y(y), figures.true_minus(figures.literal(text)), fontsize=6.8,
                      family="DejaVu Sans Mono", va="top", color="#222222")
         elif kind in ("p", "li"):
             fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), figures.math_text(text),
@@ -819,7 +813,7 @@ class ThumbGrid:
             if red is None or row["status"] != "ok":
                 reason = short_reason(run, row.get("file"), row.get("reason"))
                 preview = day.previews.get(run) if row["status"] == "rejected" else None
-                ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
+                ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
@@ -829,8 +823,8 @@ class ThumbGrid:
                     twin.set_visible(False)
                     where = {"x": 0.5, "y": 0.5, "va": "center"}
                 small = preview is not None  # over a trace: keep the box small
-                ax.text(where["x"], where["y"],
-                        literal(textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38)),
+                box = textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38)
+                ax.text(where["x"], where["y"], figures.literal(box),
                         ha="center", va=where["va"], fontsize=6.2 if small else 7, zorder=10,
                         color="#7a0000" if row["status"] == "rejected" else "#555555",
                         transform=ax.transAxes,
@@ -839,7 +833,7 @@ class ThumbGrid:
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
-            ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
+            ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
         legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
         self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
