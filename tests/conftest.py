@@ -1,6 +1,7 @@
 """Shared fixtures: synthetic days generated once per session and processed by the pipeline.
 
-Every day is written by :mod:`towtank.synthetic` (whose truth is exact) into a session temporary
+Every day is written by :mod:`towtank.testing.synthetic` (whose truth is exact) into a session
+temporary
 folder, with its protocol beside it (paths relative to the protocol), and processed once. Tests
 then compare the pipeline's numbers with the per-run truth of ``truth.json``.
 """
@@ -16,7 +17,7 @@ from typing import Any
 import pandas as pd
 import pytest
 
-from towtank import synthetic as syn
+from towtank.testing import synthetic as syn
 
 JOBS = 2  # the CI machine has two cores
 
@@ -178,9 +179,9 @@ class SeedResult:
     rejected: dict[int, str]
     # what the hull fit was given, to refit the same day with other settings
     runs: pd.DataFrame
-    reductions: dict[int, Any]  # towtank.reduce.RunReduction by run
-    tares: dict[str, Any]  # towtank.tare.TareModel by group
-    model: Any  # towtank.protocol.Model
+    reductions: dict[int, Any]  # towtank.reduce.run.RunReduction by run
+    tares: dict[str, Any]  # towtank.reduce.tare.TareModel by group
+    model: Any  # towtank.ingest.protocol.Model
 
 
 @pytest.fixture(scope="session")

@@ -7,7 +7,7 @@ import json
 import pandas as pd
 import pytest
 
-from towtank.cli import main
+from towtank.commands.cli import main
 
 
 def test_help_names_every_command(capsys):
@@ -46,7 +46,7 @@ def test_synth_writes_the_formats_asked_for(tmp_path, capsys, day_kind, file_for
 
 
 def test_jobs_from_the_protocol_unless_given(tmp_path, capsys, monkeypatch):
-    from towtank import parallel
+    from towtank.runtime import parallel
 
     day = tmp_path / "day"
     assert main(["synth", str(day), "--day", "hull", "--seed", "3"]) == 0
@@ -116,7 +116,7 @@ def test_process_without_a_command_or_protocol(tmp_path, capsys):
 
 def test_sheet_disagreements_are_warned_on_the_terminal(tmp_path, capsys):
     """A set speed the carriage did not run at, and a temperature in °F, reach the user."""
-    from towtank.synthetic import hull_protocol_sections, make_hull_day, write_protocol
+    from towtank.testing.synthetic import hull_protocol_sections, make_hull_day, write_protocol
 
     make_hull_day(tmp_path, seed=11, sheet_format="csv")
     write_protocol(tmp_path / "p.toml", **hull_protocol_sections(".", "out", sheet_format="csv"))

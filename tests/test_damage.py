@@ -17,8 +17,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from towtank import damage
-from towtank.cli import main
+from towtank.commands.cli import main
+from towtank.testing import damage
 
 SEED = 5
 # |relative error| allowed per coefficient (the hull tolerances)
@@ -256,7 +256,7 @@ def test_a_failing_report_writer_leaves_the_old_outputs(day, processed, monkeypa
 
 
 def test_an_internal_bug_rejects_one_run_and_debug_shows_it(day, monkeypatch, tmp_path):
-    from towtank import reduce as reduce_stage
+    from towtank.reduce import run as reduce_stage
 
     real = reduce_stage.reduce_run
 
@@ -279,7 +279,7 @@ def test_an_internal_bug_rejects_one_run_and_debug_shows_it(day, monkeypatch, tm
 
 
 def test_a_run_whose_worker_dies_is_rejected_in_one_sentence():
-    from towtank.reduce import crashed_record
+    from towtank.reduce.run import crashed_record
 
     run, red, reason, preview = crashed_record({"run": 30, "file": "run_030.csv"})
     assert (run, red, preview) == (30, None, None)

@@ -18,10 +18,10 @@ import pandas as pd
 import pytest
 from conftest import Day, process, write_hull_protocol
 
-from towtank import synthetic as syn
 from towtank.errors import ProtocolError
-from towtank.protocol import load_protocol
-from towtank.water import water_properties
+from towtank.ingest.protocol import load_protocol
+from towtank.reference.water import water_properties
+from towtank.testing import synthetic as syn
 
 HIGH = 0.5  # [m/s²] set acceleration of the steady runs
 STINGS = [syn.RunSpec("sting", 0.0, v, HIGH) for v in (0.8, 1.2, 1.6, 2.0)] + [
@@ -250,7 +250,7 @@ def _tiny_day(tmp_path: Path, plan: list[syn.RunSpec]) -> Path:
 def test_day_without_any_coefficient_still_writes_its_outputs(tmp_path):
     """Tare runs and one hull run at 5°: no coefficient can be fitted; every output is written
     and the missing runs are named (this used to end in an internal error, exit 3)."""
-    from towtank import cli
+    from towtank.commands import cli
 
     protocol = _tiny_day(tmp_path, STINGS[:2] + [syn.RunSpec("hull", 5.0, 1.2, HIGH)])
     out = tmp_path / "out"
@@ -315,7 +315,7 @@ def test_cutoff_above_nyquist_rejects_each_run_with_that_reason(tmp_path):
 
 
 def test_output_folder_with_the_users_files_keeps_them(tmp_path):
-    from towtank import cli
+    from towtank.commands import cli
 
     protocol = _tiny_day(tmp_path, STINGS[:2] + [syn.RunSpec("hull", 0.0, 1.2, HIGH),
                                                   syn.RunSpec("hull", 0.0, 1.6, HIGH)])

@@ -15,10 +15,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from towtank import fins, sandia
-from towtank.cli import main
+from towtank.analysis import fins
+from towtank.commands.cli import main
 from towtank.pipeline import process_day
-from towtank.synthetic import (
+from towtank.reference import sandia
+from towtank.testing.synthetic import (
     RunSpec,
     fin_day_plan,
     fin_protocol_sections,
@@ -45,12 +46,12 @@ def test_every_fin_run_is_reduced(fin_day):
     runs = day.runs
     assert (runs["status"] == "ok").all(), runs.loc[runs["status"] != "ok", "reason"].tolist()
     n_fin = sum(1 for r in truth["runs"].values() if r["config"] == "fin")
-    assert len(day.fins.table) == n_fin
+    assert len(day.fin_result.table) == n_fin
 
 
 def test_cl_cd_recovered_up_to_25_deg(fin_day):
     _, truth, day = fin_day
-    t = day.fins.table
+    t = day.fin_result.table
     t = t[t["angle_deg"] <= 25.0]
     assert len(t) >= 16
     for row in t.itertuples():
@@ -61,7 +62,7 @@ def test_cl_cd_recovered_up_to_25_deg(fin_day):
 
 def test_fins_csv_carries_sandia_at_run_re(fin_day):
     _, _, day = fin_day
-    t = day.fins.table
+    t = day.fin_result.table
     assert list(t.columns[: len(FINS_COLUMNS)]) == FINS_COLUMNS
     cl, cd = sandia.section_coefficients(t["angle_deg"].to_numpy(), t["re"].to_numpy())
     np.testing.assert_allclose(t["cl_sandia"], cl, rtol=0, atol=1e-12)
@@ -77,7 +78,7 @@ def test_fins_csv_carries_sandia_at_run_re(fin_day):
 def test_generated_truth_is_the_sandia_section(fin_day):
     """The comparison is meaningful: the measured C_L tracks the 2-D data, not the 3-D one."""
     _, _, day = fin_day
-    t = day.fins.table
+    t = day.fin_result.table
     small = t[t["angle_deg"] <= 10]
     assert np.all(np.abs(small["cl"] - small["cl_sandia"]) < 0.01)
     # the finite-span expectation of this low-aspect-ratio fin is far lower (away from 0 deg)
@@ -93,7 +94,7 @@ def test_stall_found_at_the_last_angle_before_the_fall(fin_day):
     the zero-lift runs.
     """
     _, _, day = fin_day
-    curves = day.fins.curves
+    curves = day.fin_result.curves
     assert curves["stall_reached"].all()
     assert curves["stall_angle_deg"].tolist() == [7.5, 10.0, 10.0, 10.0]
     assert (curves["cd_min_angle_deg"] == 0.0).all()
@@ -106,7 +107,7 @@ def test_lift_slope_interval_contains_sandia_slope(fin_day):
     """The slope comes from the linear range, below each speed's stall: at 1.0 m/s 0-5 deg, at
     the others 0-7.5 deg; three or more angles, so an intercept and a finite interval."""
     _, _, day = fin_day
-    curves = day.fins.curves
+    curves = day.fin_result.curves
     assert curves["slope_angles_deg"].tolist() == ["0 2.5 5"] + ["0 2.5 5 7.5"] * 3
     for row in curves.itertuples():
         assert row.lift_slope_ci_low <= row.lift_slope_sandia_2d <= row.lift_slope_ci_high
@@ -130,7 +131,7 @@ def test_low_reynolds_runs_are_warned(tmp_path):
     sections = fin_protocol_sections(".", "out")
     write_protocol(tmp_path / "p.toml", **sections)
     day = process_day(tmp_path / "p.toml", jobs=1)
-    t = day.fins.table
+    t = day.fin_result.table
     low = t[t["re"] < 1e5]
     assert len(low) == len(t) == 12
     warned = [w for w in day.warnings if "below 1e5" in w]
@@ -139,15 +140,15 @@ def test_low_reynolds_runs_are_warned(tmp_path):
         mine = [w for w in warned if w.startswith(f"run {run}: Re = ")]
         assert len(mine) == 1, (run, warned)
         assert f"Re = {re:.1e}".replace("e+0", "e") in mine[0]
-    assert warned == day.fins.warnings[: len(warned)]
+    assert warned == day.fin_result.warnings[: len(warned)]
 
 
 def test_sandia_re_clamp_reaches_the_day_warnings():
     """A run below the table's Re = 1e4 is clamped; the day (report, provenance) says so."""
     from types import SimpleNamespace
 
+    from towtank.ingest.protocol import Fin
     from towtank.pipeline import _fin_stage
-    from towtank.protocol import Fin
 
     angles = [0.0, 2.5, 5.0, 7.5, 10.0]
     runs = pd.DataFrame({
@@ -156,7 +157,7 @@ def test_sandia_re_clamp_reaches_the_day_warnings():
         "cl": 0.1, "cd": 0.02, "drag_mean": 0.01, "lift_mean": 0.01, "rho": 998.6,
     })
     day = SimpleNamespace(protocol=SimpleNamespace(fin=Fin(0.12, 0.15, x_m=-0.61)), runs=runs,
-                          warnings=[], fins=None)
+                          warnings=[], fin_result=None)
     with warnings.catch_warnings():
         warnings.simplefilter("error", sandia.SandiaRangeWarning)  # none escapes to stderr
         _fin_stage(day)
@@ -166,7 +167,7 @@ def test_sandia_re_clamp_reaches_the_day_warnings():
         "fin: Reynolds number 6.9e3 is below the Sandia NACA 0015 table's lowest Re = 1.0e4; "
         "the section data at Re = 1.0e4 are used instead."
     )
-    assert clamp[0] in day.fins.warnings
+    assert clamp[0] in day.fin_result.warnings
 
 
 def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
@@ -175,13 +176,13 @@ def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
     sections["fin"]["mounting"] = "wall"
     write_protocol(tmp_path / "wall.toml", **sections)
     wall = process_day(tmp_path / "wall.toml", jobs=1)
-    assert wall.fins.aspect_ratio == pytest.approx(2 * day.fins.aspect_ratio)
+    assert wall.fin_result.aspect_ratio == pytest.approx(2 * day.fin_result.aspect_ratio)
     # in the attached-flow range a larger effective aspect ratio lifts the finite-span
     # expectation toward the 2-D data (past stall the effective angle decides, not the slope);
     # at 0 deg both are zero
-    angle = day.fins.table["angle_deg"]
+    angle = day.fin_result.table["angle_deg"]
     attached = (angle > 0.0) & (angle <= 5.0)
-    w, f = wall.fins.table[attached], day.fins.table[attached]
+    w, f = wall.fin_result.table[attached], day.fin_result.table[attached]
     assert np.all(w["cl_3d"] > f["cl_3d"])
     assert np.all(w["cl_3d"] < w["cl_sandia"])
 
@@ -189,10 +190,10 @@ def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
 def test_control_derivatives_follow_the_measured_slope(fin_day):
     """c_La is the mean of the per-speed linear-range slopes, and the table says so."""
     _, _, day = fin_day
-    ctrl = day.fins.control.set_index("symbol")
+    ctrl = day.fin_result.control.set_index("symbol")
     fin = day.protocol.fin
     rho = day.runs.loc[day.runs["config"] == "fin", "rho"].mean()
-    slope = float(np.nanmean(day.fins.curves["lift_slope"]))
+    slope = float(np.nanmean(day.fin_result.curves["lift_slope"]))
     np.testing.assert_allclose(ctrl["lift_slope"], slope, rtol=1e-12)
     assert ctrl["lift_slope_source"].str.startswith(
         "mean of the measured linear-range lift slopes (|α| ≤ 10°, below stall) of the speed "
@@ -246,8 +247,8 @@ def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
     """The section data end at ±180 deg (ValueError): such a run must not stop the day."""
     from types import SimpleNamespace
 
+    from towtank.ingest.protocol import Fin
     from towtank.pipeline import _fin_stage
-    from towtank.protocol import Fin
 
     runs = pd.DataFrame({
         "run": [1, 2, 3, 4], "config": "fin", "status": "ok",
@@ -255,9 +256,9 @@ def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
         "cd": 0.02, "drag_mean": 0.01, "lift_mean": 0.01, "rho": 998.6,
     })
     day = SimpleNamespace(protocol=SimpleNamespace(fin=Fin(0.12, 0.15)), runs=runs,
-                          warnings=[], fins=None)
+                          warnings=[], fin_result=None)
     _fin_stage(day)
-    assert day.fins.table["run"].tolist() == [1, 2, 3]
+    assert day.fin_result.table["run"].tolist() == [1, 2, 3]
     assert day.warnings[0] == (
         "run 4: fin angle 200° is outside −180…180°, the range of the Sandia section data; "
         "the run is left out of the fin analysis."
@@ -266,7 +267,7 @@ def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
 
 def test_protocol_linear_max_deg_sets_the_linear_range(fin_day, tmp_path):
     from towtank.errors import ProtocolError
-    from towtank.protocol import load_protocol
+    from towtank.ingest.protocol import load_protocol
 
     d, _, day = fin_day
     sections = fin_protocol_sections(str(d), str(tmp_path / "out"))
@@ -279,7 +280,7 @@ def test_protocol_linear_max_deg_sets_the_linear_range(fin_day, tmp_path):
     write_protocol(tmp_path / "five.toml", **sections)
     five = process_day(tmp_path / "five.toml", jobs=1)
     assert five.protocol.fin.linear_max_deg == 5.0
-    assert five.fins.curves["slope_angles_deg"].tolist() == ["0 2.5 5"] * 4
-    assert "(|α| ≤ 5°, below stall)" in five.fins.control["lift_slope_source"].iloc[0]
+    assert five.fin_result.curves["slope_angles_deg"].tolist() == ["0 2.5 5"] * 4
+    assert "(|α| ≤ 5°, below stall)" in five.fin_result.control["lift_slope_source"].iloc[0]
     # 0-5 deg is the straight part of the section at every speed: close to its 0.11/deg
-    assert five.fins.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)
+    assert five.fin_result.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)

@@ -1,4 +1,5 @@
-"""Tests of towtank.fins: lifting line, fin table, curves, warnings, control derivatives."""
+"""Tests of towtank.analysis.fins: lifting line, fin table, curves, warnings, control
+derivatives."""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank import fins, sandia
+from towtank.analysis import fins
+from towtank.reference import sandia
 
 A0_SANDIA = 0.11 * 180.0 / math.pi  # Sandia NACA 0015 at Re >= 3.6e5: 0.11 per deg up to 6 deg
 

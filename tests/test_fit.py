@@ -18,8 +18,9 @@ from conftest import Day, SeedResult, process, workbook_block, write_hull_protoc
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank import conditioning, fit
-from towtank import synthetic as syn
+from towtank.analysis import hull as fit
+from towtank.signal import conditioning
+from towtank.testing import synthetic as syn
 
 # |error| / |truth| allowed per coefficient [-] (the mirrored Z/X twins equal their sources)
 TOLERANCE = {
@@ -120,7 +121,7 @@ def test_added_mass_interval_coverage_without_mass_uncertainty(seed_result):
     standard error spread 1.44): the tare fit treated its samples as independent, so the
     standard error of m_t, which goes one-for-one into X_udot and Y_vdot, was 1.8 times too
     small (m_t coverage 70 %). With the tare and the joint regression clustered by run (CR2,
-    towtank.sandwich) and t at the Welch-Satterthwaite degrees of freedom, 200 days at 100 Hz
+    towtank.stats.intervals) and t at the Welch-Satterthwaite degrees of freedom, 200 days at 100 Hz
     give 94.5 % for X_udot, 95.0 % for Y_vdot and 94.5 % for m_t (100 days at 200 Hz: 97 %,
     96 %). These 30 seeds are unluckier than that: 93 % for X_udot, 87 % for Y_vdot and m_t.
     """
@@ -153,7 +154,7 @@ def test_added_mass_interval_coverage_without_mass_uncertainty(seed_result):
 def _table4() -> pd.DataFrame:
     from importlib import resources
 
-    with resources.files("towtank").joinpath("data", "sut2_table4.csv").open() as fh:
+    with resources.files("towtank.reference").joinpath("data", "sut2_table4.csv").open() as fh:
         return pd.read_csv(fh, comment="#")
 
 
@@ -408,8 +409,8 @@ def test_uncertainty_keys_and_user_reference_csv(hull_day: Day, tmp_path):
     reference where the CSV lacks them."""
     from scipy.stats import t
 
-    from towtank.report.outputs import provenance
-    from towtank.sandwich import welch_satterthwaite
+    from towtank.report.provenance import provenance
+    from towtank.stats.intervals import welch_satterthwaite
 
     mass_sd, length_sd, diameter_sd = 0.002, 0.002, 0.01
     ref = {"X_udot": -0.0008, "Y_vdot": -0.03, "X_u|u|": -0.0032, "X_uv": -0.0002,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from towtank.geometry import HullGeometry, myring_geometry, myring_radius
+from towtank.reference.geometry import HullGeometry, myring_geometry, myring_radius
 
 SUT2_MODEL = dict(a=0.05875, b=0.1765, c=0.11775, n=2.0, theta_deg=25.0, d=0.05)
 # Prestero (2001), REMUS Myring hull parameters

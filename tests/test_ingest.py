@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from towtank import damage, synthetic
 from towtank.errors import RunError
-from towtank.ingest import (
+from towtank.ingest.protocol import ChannelMap
+from towtank.ingest.runfile import (
     check_clipping,
     despike,
     file_bytes,
@@ -22,7 +22,7 @@ from towtank.ingest import (
     read_csv_columns,
     time_base,
 )
-from towtank.protocol import ChannelMap
+from towtank.testing import damage, synthetic
 
 LAB = synthetic.LabChannels()
 LAB_MAP = {k: ChannelMap(**v) for k, v in LAB.protocol_section().items()}

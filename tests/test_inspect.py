@@ -9,9 +9,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from towtank import synthetic
-from towtank.cli import main
-from towtank.inspect import inspect_run, plot_name
+from towtank.commands.cli import main
+from towtank.commands.inspect import inspect_run, plot_name
+from towtank.testing import synthetic
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

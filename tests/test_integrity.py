@@ -19,13 +19,13 @@ import pandas as pd
 import pytest
 from conftest import write_hull_protocol
 
-from towtank import cli
-from towtank import synthetic as syn
+from towtank.commands import cli
 from towtank.errors import ProtocolError, RunError
-from towtank.ingest import read_columns
-from towtank.protocol import load_protocol, read_reference_csv
+from towtank.ingest.protocol import load_protocol, read_reference_csv
+from towtank.ingest.runfile import read_columns
+from towtank.ingest.runsheet import read_run_sheet
 from towtank.report.outputs import sweep_stale_temporaries
-from towtank.runsheet import read_run_sheet
+from towtank.testing import synthetic as syn
 
 HIGH = 0.5
 PLAN = [syn.RunSpec("sting", 0.0, v, HIGH) for v in (0.8, 1.6)] + [
@@ -310,7 +310,7 @@ def test_a_file_named_in_another_case_is_suggested(tmp_path):
     (["status", "Status"], "has the column 'status' twice"),
 ])
 def test_sheet_column_names_a_lab_uses(tmp_path, extra, words):
-    from towtank.runsheet import known_columns
+    from towtank.ingest.runsheet import known_columns
 
     base = ["run", "file", "config", "angle_deg"]
     if words is None:

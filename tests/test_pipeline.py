@@ -18,8 +18,8 @@ import pandas as pd
 import pytest
 from conftest import JOBS, MANUAL_OFFSETS, MANUAL_RUN, Day, process, write_hull_protocol
 
-from towtank import cli
-from towtank import synthetic as syn
+from towtank.commands import cli
+from towtank.testing import synthetic as syn
 
 FORMATS_RUN_COLUMNS = [
     "run", "file", "config", "angle_deg", "status", "reason", "speed_mean", "accel_mean",
@@ -303,7 +303,7 @@ def test_deterministic_and_independent_of_jobs(cli_outputs):
 
 
 def test_cache_hit_and_invalidation(cli_outputs, hull_day: Day, monkeypatch):
-    import towtank.reduce as reduce_stage
+    import towtank.reduce.run as reduce_stage
 
     out = cli_outputs["a"]
     assert (out / ".cache").is_dir()
@@ -317,7 +317,7 @@ def test_cache_hit_and_invalidation(cli_outputs, hull_day: Day, monkeypatch):
 
     # a changed filter cut-off invalidates every run's entry
     calls = []
-    from towtank.ingest import load_run as real
+    from towtank.ingest.runfile import load_run as real
 
     def counting(*args, **kwargs):
         calls.append(args[0])

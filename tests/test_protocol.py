@@ -14,9 +14,9 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from towtank import cli
+from towtank.commands import cli
 from towtank.errors import ProtocolError
-from towtank.protocol import SCHEMA, TOP_LEVEL, load_protocol
+from towtank.ingest.protocol import SCHEMA, TOP_LEVEL, load_protocol
 
 # FORMATS.md §1, verbatim
 FORMATS_EXAMPLE = '''\
@@ -455,7 +455,7 @@ def test_salinity_given_for_fresh_water_is_refused(folder):
 
 
 def test_model_geometry_lists_each_quantity_with_its_source(folder):
-    from towtank.protocol import model_geometry
+    from towtank.ingest.protocol import model_geometry
 
     data = _base()
     del data["model"]["lateral_area_m2"]

@@ -23,9 +23,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from pypdf import PdfReader
 
-from towtank import synthetic
 from towtank.pipeline import process_day
-from towtank.report import figures, pdf, style, workbook, write_outputs
+from towtank.report import figures, pdf, provenance, style, workbook, write_outputs
+from towtank.testing import synthetic
 
 REPORT_DATE = "2024-05-21"
 NUMERIC = re.compile(r"^[+-]?\d+(\.\d*)?([eE][+-]?\d+)?$")
@@ -247,12 +247,12 @@ def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
 
 def test_report_date_order(days):
     day, _ = days["fin"]
-    assert pdf.report_date(day) == (None, "not given")
+    assert provenance.report_date(day) == (None, "not given")
     dated = replace(day, report_date="2023-01-02")
-    assert pdf.report_date(dated)[0] == "2023-01-02"
+    assert provenance.report_date(dated)[0] == "2023-01-02"
     sheet = day.sheet.copy()
     sheet["date"] = ["2022-03-04"] * (len(sheet) - 1) + ["2022-03-05"]
-    assert pdf.report_date(replace(day, sheet=sheet))[0] == "2022-03-05"
+    assert provenance.report_date(replace(day, sheet=sheet))[0] == "2022-03-05"
 
 
 # -------------------------------------------------------------------------------- figures
@@ -285,7 +285,8 @@ def test_damping_figure_draws_the_stored_fit(days):
 def test_report_stage_does_not_refit(days, tmp_path, monkeypatch):
     import statsmodels.api as sm
 
-    from towtank import fins, fit, similarity
+    from towtank.analysis import fins, similarity
+    from towtank.analysis import hull as fit
 
     def boom(*args, **kwargs):
         raise AssertionError("the report stage must not fit anything")

@@ -1,4 +1,4 @@
-"""towtank.robust: order statistics, block samples and the robust scale behind the checks."""
+"""towtank.stats.robust: order statistics, block samples and the robust scale behind the checks."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from towtank import robust
+from towtank.stats import robust
 
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
 

@@ -17,11 +17,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from towtank import synthetic
 from towtank.errors import RunError
-from towtank.ingest import RawRun, load_run, read_columns, read_csv_columns
-from towtank.protocol import ChannelMap, Processing
-from towtank.reduce import reduce_run
+from towtank.ingest.protocol import ChannelMap, Processing
+from towtank.ingest.runfile import RawRun, load_run, read_columns, read_csv_columns
+from towtank.reduce.run import reduce_run
+from towtank.testing import synthetic
 
 SETTINGS = settings(
     max_examples=int(__import__("os").environ.get("FUZZ_N", 60)),
@@ -274,7 +274,7 @@ def test_random_damage_to_a_tdms_file(ops):
     seed=st.integers(0, 2**32 - 1),
 )
 def test_fatal_damage_is_always_rejected(kind, seed):
-    from towtank import damage
+    from towtank.testing import damage
 
     fn = getattr(damage, kind)
     data = fn(GOOD) if kind == "empty" else fn(GOOD, "drag") if kind == "drop_channel" else fn(
@@ -291,7 +291,7 @@ def test_fatal_damage_is_always_rejected(kind, seed):
     seed=st.integers(0, 2**32 - 1),
 )
 def test_repairable_damage_is_always_repaired(kind, n, seed):
-    from towtank import damage
+    from towtank.testing import damage
 
     if kind == "spikes":
         data = damage.spikes(GOOD, n, "drag", seed)

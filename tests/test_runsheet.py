@@ -12,9 +12,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from towtank import synthetic as syn
 from towtank.errors import ProtocolError
-from towtank.runsheet import read_run_sheet
+from towtank.ingest.runsheet import read_run_sheet
+from towtank.testing import synthetic as syn
 
 DEFAULT_T = 17.5  # [°C] the protocol's water temperature
 

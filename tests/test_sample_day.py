@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from towtank.cli import main
+from towtank.commands.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 TOLERANCE_PCT = {"X_udot": 5, "Y_vdot": 2, "Z_wdot": 2, "X_u|u|": 1, "Y_uv": 1, "Z_uw": 1,
@@ -29,7 +29,7 @@ def sample(tmp_path_factory):
                  str(out), "-q"])
     coef = pd.read_csv(out / "coefficients.csv").set_index("symbol")
     runs = pd.read_csv(out / "runs.csv")
-    with resources.files("towtank").joinpath("data", "sut2_table4.csv").open() as fh:
+    with resources.files("towtank.reference").joinpath("data", "sut2_table4.csv").open() as fh:
         table4 = pd.read_csv(fh, comment="#").set_index("symbol")
     return code, coef, runs, table4
 

@@ -1,4 +1,5 @@
-"""Tests of towtank.sandia: the Sheldahl & Klimas (1981) NACA 0015 table and its interpolation."""
+"""Tests of towtank.reference.sandia: the Sheldahl & Klimas (1981) NACA 0015 table and its
+interpolation."""
 
 from __future__ import annotations
 
@@ -10,8 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank import sandia
-from towtank.sandia import SandiaRangeWarning, section_coefficients
+from towtank.reference import sandia
+from towtank.reference.sandia import SandiaRangeWarning, section_coefficients
 
 
 def _value(re: float, alpha: float, column: str) -> float:

@@ -1,4 +1,5 @@
-"""towtank.sandwich: the CR2 cluster-robust covariance and the Welch–Satterthwaite formula."""
+"""towtank.stats.intervals: the CR2 cluster-robust covariance and the Welch–Satterthwaite
+formula."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank.sandwich import cr2_covariance, welch_satterthwaite
+from towtank.stats.intervals import cr2_covariance, welch_satterthwaite
 
 
 def _design(seed: int, n_groups: int, size: int) -> tuple[np.ndarray, np.ndarray]:

@@ -19,10 +19,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from towtank import geometry, similarity
-from towtank.cli import main
+from towtank.analysis import similarity
+from towtank.commands.cli import main
 from towtank.pipeline import process_day
-from towtank.water import water_properties
+from towtank.reference import geometry
+from towtank.reference.water import water_properties
 
 ROOT = Path(__file__).resolve().parents[1]
 PROTOCOL = ROOT / "protocols" / "sut2_hull.toml"
@@ -138,10 +139,10 @@ def _spy_on_reductions(monkeypatch) -> list[int]:
     """Record every run handed to the reduction stage, wherever it would then run.
 
     The runs are reduced in worker processes, where a patch of ``load_run`` in this process
-    sees nothing; :func:`towtank.parallel.map_runs` is the one door every reduction passes
+    sees nothing; :func:`towtank.runtime.parallel.map_runs` is the one door every reduction passes
     through, in this process, so the spy sits there.
     """
-    import towtank.parallel as parallel
+    import towtank.runtime.parallel as parallel
 
     reduced: list[int] = []
     real = parallel.map_runs
@@ -161,7 +162,7 @@ def _packs(cache_dir: Path) -> dict[str, str]:
 
 
 def test_scale_command_prints_table_from_cache(outputs, capsys, monkeypatch):
-    import towtank.reduce as reduce_stage
+    import towtank.reduce.run as reduce_stage
 
     def no_read(*args, **kwargs):
         raise AssertionError("the scale command re-read a run file despite the cache")
@@ -244,8 +245,8 @@ def test_myring_geometry_is_used_and_documented(tmp_path, cache):
     workbook, the PDF text and provenance.json say where each came from."""
     import openpyxl
 
-    from towtank.report.outputs import provenance
     from towtank.report.pdf import geometry_text
+    from towtank.report.provenance import provenance
     from towtank.report.workbook import write_workbook
 
     path = _variant(tmp_path, drop=("wetted_area_m2", "lateral_area_m2"),
@@ -261,17 +262,17 @@ def test_myring_geometry_is_used_and_documented(tmp_path, cache):
     rho_m, nu_m = float(zero.rho.mean()), float(zero.nu.mean())
     ff = similarity.form_factor(zero.drag_mean, zero.speed_mean, g.wetted_area, rho_m, nu_m,
                                 0.353)
-    assert day.scaling.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
+    assert day.scaling_result.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
     given = similarity.form_factor(zero.drag_mean, zero.speed_mean, 0.0472, rho_m, nu_m, 0.353)
     assert abs(ff.one_plus_k - given.one_plus_k) > 0.02  # the area matters to 1 + k
     sea = water_properties(15.0, "sea")
-    up = day.scaling.table["speed_prototype"].to_numpy()
+    up = day.scaling_result.table["speed_prototype"].to_numpy()
     cf = 0.075 / (np.log10(up * 1.412 / sea.nu) - 2) ** 2
     s_p = 16 * g.wetted_area
     expected = 0.5 * sea.rho * s_p * up**2 * (ff.one_plus_k * cf + 0.0004)
-    np.testing.assert_allclose(day.scaling.table["drag_ittc57"], expected, rtol=1e-9)
-    assert day.scaling.wetted_area_prototype == pytest.approx(s_p, rel=1e-12)
-    assert "Re = 2e+05" in day.scaling.statement  # the form factor's laminar threshold
+    np.testing.assert_allclose(day.scaling_result.table["drag_ittc57"], expected, rtol=1e-9)
+    assert day.scaling_result.wetted_area_prototype == pytest.approx(s_p, rel=1e-12)
+    assert "Re = 2e+05" in day.scaling_result.statement  # the form factor's laminar threshold
 
     write_workbook(day, tmp_path)
     rows = [r[:5] for r in openpyxl.load_workbook(tmp_path / "report.xlsx")["Summary"]
@@ -298,14 +299,14 @@ def test_roughness_allowance_adds_its_term_exactly(tmp_path, cache):
     rough = process_day(_variant(tmp_path, prototype={"delta_cf": "0.0004"}), cache_dir=cache)
     assert rough.protocol.prototype.delta_cf == 0.0004
     sea = water_properties(15.0, "sea")
-    up = base.scaling.table["speed_prototype"].to_numpy()
+    up = base.scaling_result.table["speed_prototype"].to_numpy()
     rise = 0.5 * sea.rho * up**2 * (16 * 0.0472) * 0.0004
     np.testing.assert_allclose(
-        rough.scaling.table["drag_ittc57"] - base.scaling.table["drag_ittc57"], rise, rtol=1e-9
+        rough.scaling["drag_ittc57"] - base.scaling["drag_ittc57"], rise, rtol=1e-9
     )
-    assert rough.scaling.form_factor.one_plus_k == base.scaling.form_factor.one_plus_k
-    pd.testing.assert_series_equal(rough.scaling.table["drag_froude"],
-                                   base.scaling.table["drag_froude"])
+    assert rough.scaling_result.form_factor.one_plus_k == base.scaling_result.form_factor.one_plus_k
+    pd.testing.assert_series_equal(rough.scaling_result.table["drag_froude"],
+                                   base.scaling_result.table["drag_froude"])
 
 
 def test_hot_prototype_water_is_a_day_warning(tmp_path, cache):
@@ -337,7 +338,7 @@ def test_sample_day_form_factor_is_the_mean_over_tested_speeds(outputs):
 
 
 def test_myring_geometry_feeds_the_model():
-    from towtank.protocol import load_protocol
+    from towtank.ingest.protocol import load_protocol
 
     p = load_protocol(PROTOCOL)
     assert p.model.myring is not None

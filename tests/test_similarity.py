@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank.similarity import (
+from towtank.analysis.similarity import (
     MIN_PROTOTYPE_REYNOLDS,
     SCALING_COLUMNS,
     FormFactor,

@@ -16,16 +16,16 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from towtank import synthetic as syn
+from towtank.testing import synthetic as syn
 
 ROOT = Path(__file__).resolve().parents[1]
-WATER = SimpleNamespace(rho=998.6, nu=1.054e-6)  # stand-in for towtank.water at 18 degC
+WATER = SimpleNamespace(rho=998.6, nu=1.054e-6)  # stand-in for towtank.reference.water at 18 degC
 RHO = WATER.rho
 
 
 def _table4() -> dict[str, float]:
-    path = ROOT / "towtank" / "data" / "sut2_table4.csv"
-    assert path.exists(), "towtank/data/sut2_table4.csv must ship with the package"
+    path = ROOT / "towtank" / "reference" / "data" / "sut2_table4.csv"
+    assert path.exists(), "towtank/reference/data/sut2_table4.csv must ship with the package"
     df = pd.read_csv(path, comment="#")
     return dict(zip(df["symbol"], df["sut2_prime"].astype(float), strict=True))
 
@@ -192,7 +192,7 @@ def test_tare_forces_on_sting_and_hull():
 
 
 def test_quiet_fin_run_uses_sandia_at_each_reynolds():
-    sandia = pytest.importorskip("towtank.sandia")
+    sandia = pytest.importorskip("towtank.reference.sandia")
     fin = syn.FinTruth()
     frame, truth = _quiet_run("fin", 10.0, 2.0, 0.5, fin=fin)
     t = frame["time"].to_numpy()
@@ -241,7 +241,7 @@ def test_sut2_truth_model_scale_values():
 
 
 def test_sut2_truth_at_18C_with_water_module():
-    water = pytest.importorskip("towtank.water")
+    water = pytest.importorskip("towtank.reference.water")
     rho = water.water_properties(18.0).rho
     hull = syn.sut2_hull_truth(rho)
     assert -hull.X_udot == pytest.approx(0.017, rel=0.02)
@@ -404,7 +404,7 @@ SMALL_HULL_PLAN = [
 
 
 def test_make_hull_day_small(tmp_path):
-    pytest.importorskip("towtank.water")
+    pytest.importorskip("towtank.reference.water")
     kw = dict(seed=5, runs=SMALL_HULL_PLAN, file_format="csv", sheet_format="csv")
     truth = syn.make_hull_day(tmp_path / "a", **kw)
     syn.make_hull_day(tmp_path / "b", **kw)
@@ -447,7 +447,7 @@ def test_make_hull_day_small(tmp_path):
 
 
 def test_make_hull_day_quiet_is_exact(tmp_path):
-    pytest.importorskip("towtank.water")
+    pytest.importorskip("towtank.reference.water")
     plan = [syn.RunSpec("hull", 0.0, 1.6, 0.5), syn.RunSpec("sting", 0.0, 1.6, 0.5)]
     truth = syn.make_hull_day(
         tmp_path, runs=plan, noise=syn.Noise.quiet(), file_format="csv",
@@ -466,8 +466,8 @@ def test_make_hull_day_quiet_is_exact(tmp_path):
 
 
 def test_make_fin_day_small(tmp_path):
-    pytest.importorskip("towtank.water")
-    pytest.importorskip("towtank.sandia")
+    pytest.importorskip("towtank.reference.water")
+    pytest.importorskip("towtank.reference.sandia")
     from nptdms import TdmsFile
 
     plan = [
@@ -508,7 +508,7 @@ def test_day_plans():
     fin_runs = [r for r in fin if r.config == "fin"]
     assert sorted({r.angle_deg for r in fin_runs}) == [0.0, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0,
                                                        25.0, 30.0, 35.0]
-    from towtank import fins
+    from towtank.analysis import fins
 
     for v in sorted({r.speed for r in fin_runs}):  # >= 3 angles below the section's stall
         stall = float(fins.section_stall_angle(v * 0.12 / 1.06e-6))
@@ -627,13 +627,14 @@ def test_sheet_date_is_optional(tmp_path):
 def test_sample_days_report_date_comes_from_the_sheet(day, protocol, date):
     """The shipped days' report says "Test date: <date>", found in the run sheet's date column."""
     pytest.importorskip("matplotlib")
-    from towtank.protocol import load_protocol
-    from towtank.report import pdf
-    from towtank.runsheet import read_run_sheet
+    from towtank.ingest.protocol import load_protocol
+    from towtank.ingest.runsheet import read_run_sheet
+    from towtank.report import provenance
 
     p = load_protocol(ROOT / "protocols" / protocol)
     assert p.campaign.run_sheet.parent.name == day
     sheet = read_run_sheet(p.campaign.run_sheet, p.water.temperature_C)
     result = SimpleNamespace(protocol=p, sheet=sheet, reductions={}, report_date=None)
-    assert pdf.date_from_inputs(result) == date
-    assert pdf.report_date(result) == (date, "newest date recorded in the run sheet or run files")
+    assert provenance.date_from_inputs(result) == date
+    source = "newest date recorded in the run sheet or run files"
+    assert provenance.report_date(result) == (date, source)

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from towtank.water import (
+from towtank.reference.water import (
     WaterProperties,
     WaterPropertyWarning,
     density,

@@ -1,12 +1,65 @@
 """towtank: towing-tank run files to hydrodynamic coefficients, fin data, scaling and reports.
 
-Data flows one way through modules named after the stage of the data's path::
+The subpackages are the stages of the data's path, in order::
 
-    protocol, runsheet  ->  ingest  ->  conditioning, phases  ->  tare  ->  reduce
-        ->  fit (hull), fins  ->  similarity  ->  report
+    ingest     protocol, run sheet, run files read as the lab recorded them
+    signal     filter, zero and drift; the run's phases from the speed
+    reduce     one run's steady and accelerated means; the sting tare
+    analysis   hull coefficients with intervals, fins against Sandia, scaling to the prototype
+    report     CSV tables, workbook, PDF and figures
 
-Leaf helpers that any stage may use: ``water`` (ITTC water properties), ``geometry``
-(Myring hull), ``sandia`` (NACA 0015 section data), ``errors``.
+with ``pipeline`` wiring them for a day, ``reference`` (water, Sandia, hull geometry,
+reference coefficient sets), ``stats`` (robust and interval statistics) and ``runtime`` (cache,
+workers) beneath them, ``commands`` (the ``towtank`` command line) above, and ``testing`` (the
+synthetic-day generator) beside, never used by the others.
+
+The public API, for scripts and notebooks (see docs/api.md)::
+
+    import towtank
+    day = towtank.process_day("protocols/sut2_hull.toml")
+    day.coefficients
+
+is loaded on first use, so that ``import towtank`` stays cheap.
 """
 
+from __future__ import annotations
+
+from typing import Any
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "DayResult",
+    "ProtocolError",
+    "RunError",
+    "load_protocol",
+    "process_day",
+    "read_run",
+    "reduce_run",
+]
+
+_API = {
+    "process_day": "towtank.api",
+    "load_protocol": "towtank.api",
+    "read_run": "towtank.api",
+    "reduce_run": "towtank.api",
+    "DayResult": "towtank.pipeline",
+    "ProtocolError": "towtank.errors",
+    "RunError": "towtank.errors",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """The API's names, imported on first use (PEP 562)."""
+    if name in _API:
+        import importlib
+
+        value = getattr(importlib.import_module(_API[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'towtank' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

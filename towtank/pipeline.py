@@ -17,17 +17,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from towtank.cache import RunCache, protocol_settings, settings_key
-from towtank.protocol import Protocol, load_protocol, model_geometry
-from towtank.reduce import (
+from towtank.ingest.protocol import Protocol, load_protocol, model_geometry
+from towtank.ingest.runsheet import read_run_sheet, unlisted_files
+from towtank.reduce.run import (
     RunReduction,
     apply_tare,
     crashed_record,
     force_coefficient,
     reduce_record,
 )
-from towtank.runsheet import read_run_sheet, unlisted_files
-from towtank.tare import TareModel, fit_tare_group
+from towtank.reduce.tare import TareModel, fit_tare_group
+from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 
 G = 9.80665
 
@@ -37,10 +37,10 @@ ANALYSIS_MODULES = (
     "statsmodels.regression.linear_model",
     "iapws",
     "scipy.interpolate",
-    "towtank.fit",
-    "towtank.fins",
-    "towtank.similarity",
-    "towtank.water",
+    "towtank.analysis.hull",
+    "towtank.analysis.fins",
+    "towtank.analysis.similarity",
+    "towtank.reference.water",
 )
 
 
@@ -55,9 +55,9 @@ class DayResult:
     tares: dict[str, TareModel]
     runs: pd.DataFrame
     warnings: list[str] = field(default_factory=list)
-    hull: Any = None  # towtank.fit.HullFit
-    fins: Any = None  # towtank.fins results
-    scaling: Any = None  # towtank.similarity results
+    hull: Any = None  # towtank.analysis.hull.HullFit
+    fin_result: Any = None  # FinResult: table, curves, control, aspect ratio
+    scaling_result: Any = None  # ScalingResult: table, scale, prototype water, form factor
     inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
     report_date: str | None = None
     # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
@@ -65,7 +65,35 @@ class DayResult:
 
     @property
     def n_rejected(self) -> int:
+        """Number of rejected runs."""
         return len(self.rejected)
+
+    @property
+    def coefficients(self) -> pd.DataFrame:
+        """coefficients.csv of the day: one row per hull coefficient (empty without hull runs)."""
+        if self.hull is not None:
+            return self.hull.coefficients
+        from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
+
+        return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
+
+    @property
+    def fins(self) -> pd.DataFrame:
+        """fins.csv of the day: one row per fin run (empty without fin runs)."""
+        if self.fin_result is not None:
+            return self.fin_result.table
+        from towtank.analysis.fins import FIN_TABLE_COLUMNS
+
+        return pd.DataFrame(columns=list(FIN_TABLE_COLUMNS))
+
+    @property
+    def scaling(self) -> pd.DataFrame:
+        """scaling.csv of the day: one row per prototype speed (empty when not scaled)."""
+        if self.scaling_result is not None:
+            return self.scaling_result.table
+        from towtank.analysis.similarity import SCALING_COLUMNS
+
+        return pd.DataFrame(columns=list(SCALING_COLUMNS))
 
 
 def fit_tares(
@@ -99,7 +127,7 @@ def water_at(temperature_C: float, water_type: str, salinity: float | None) -> t
     [prototype.water] into the day's warnings, and each run's temperature is checked in
     :func:`process_day`.
     """
-    from towtank.water import water_properties
+    from towtank.reference.water import water_properties
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -120,13 +148,14 @@ def model_scale(protocol: Protocol) -> float | None:
 def geometry_used(day: DayResult) -> list[dict[str, Any]]:
     """The day's hull geometry with where each quantity came from; empty without a [model].
 
-    See :func:`towtank.protocol.model_geometry`; the prototype's wetted area λ²·S_m is listed
+    See :func:`towtank.ingest.protocol.model_geometry`; the prototype's wetted area λ²·S_m is listed
     when the scale ratio is known.
     """
     model = day.protocol.model
     if model is None:
         return []
-    scale = day.scaling.scale if day.scaling is not None else model_scale(day.protocol)
+    sr = day.scaling_result
+    scale = sr.scale if sr is not None else model_scale(day.protocol)
     return model_geometry(model, scale)
 
 
@@ -134,9 +163,9 @@ def check_prototype_speeds(protocol: Protocol) -> None:
     """Raise ProtocolError unless every [prototype] speed is finite, > 0 and gives Re_p >= 1e3.
 
     Needs the prototype water's viscosity, so it runs once the analysis libraries are loaded
-    (after the reductions), not in :func:`towtank.protocol.load_protocol`.
+    (after the reductions), not in :func:`towtank.ingest.protocol.load_protocol`.
     """
-    from towtank import similarity
+    from towtank.analysis import similarity
     from towtank.errors import ProtocolError
 
     proto = protocol.prototype
@@ -278,7 +307,7 @@ def process_day(
         todo.append(rec)
 
     reductions: dict[int, RunReduction] = {}
-    from towtank.parallel import load_in_background, map_runs
+    from towtank.runtime.parallel import load_in_background, map_runs
 
     cache = RunCache(cache_dir) if cache_dir is not None else None
     common = protocol_settings(protocol) if cache is not None else None
@@ -372,7 +401,7 @@ def process_day(
 
 def _sha(path: Path) -> str:
     """sha256 of a file, or "" when it cannot be read (its run is rejected anyway)."""
-    from towtank.ingest import sha256_bytes
+    from towtank.ingest.runfile import sha256_bytes
 
     try:
         return sha256_bytes(path.read_bytes())
@@ -393,7 +422,7 @@ def _analyse(day: DayResult) -> None:
 
 @dataclass
 class HullResult:
-    fit: Any  # towtank.fit.HullFit
+    fit: Any  # towtank.analysis.hull.HullFit
     coefficients: pd.DataFrame
 
 
@@ -413,7 +442,7 @@ class ScalingResult:
     table: pd.DataFrame  # scaling.csv
     resistance: tuple[float, float]  # k2 [N s²/m²], k1 [N s/m] of R = k2·U|U| + k1·U
     tested_speed_range: tuple[float, float]
-    form_factor: Any  # towtank.similarity.FormFactor or None
+    form_factor: Any  # towtank.analysis.similarity.FormFactor or None
     statement: str
     rho_p: float
     nu_p: float
@@ -426,7 +455,7 @@ class ScalingResult:
 
 
 def _hull_stage(day: DayResult) -> None:
-    from towtank import fit
+    from towtank.analysis import hull as fit
 
     model = day.protocol.model
     runs = day.runs
@@ -476,7 +505,8 @@ def _fin_stage(day: DayResult) -> None:
     sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
     if fin is None or sel.empty:
         return
-    from towtank import fins, sandia
+    from towtank.analysis import fins
+    from towtank.reference import sandia
 
     warn: list[str] = []
     beyond = sel["angle_deg"].abs() > 180.0  # the section data stop there (ValueError)
@@ -512,7 +542,7 @@ def _fin_stage(day: DayResult) -> None:
             control = fins.control_derivatives(slope, fin.area, fin.x_m, rho, source)
         else:
             warn.append(f"fin control derivatives: {source}; fin_control.csv is not written.")
-    day.fins = FinResult(
+    day.fin_result = FinResult(
         table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
         aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=warn,
     )
@@ -522,7 +552,7 @@ def _fin_stage(day: DayResult) -> None:
 def _scaling_stage(day: DayResult) -> None:
     from statsmodels.regression.linear_model import OLS
 
-    from towtank import similarity
+    from towtank.analysis import similarity
 
     p = day.protocol
     model, proto = p.model, p.prototype
@@ -593,7 +623,7 @@ def _scaling_stage(day: DayResult) -> None:
         re_model, re_proto, depth, model.diameter_m if depth is not None else None,
         turbulent_re=p.processing.laminar_re,
     )
-    day.scaling = ScalingResult(
+    day.scaling_result = ScalingResult(
         table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
         form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
         scale=scale, length_prototype=proto.length_m,

@@ -1,4 +1,4 @@
-"""Smoke test of the campaign benchmark (``python -m towtank.bench``) at a tiny size.
+"""Smoke test of the campaign benchmark (``python -m towtank.testing.bench``) at a tiny size.
 
 It runs the whole bench end to end and checks that ``bench.json`` holds every figure. No timing
 is asserted: the figures depend on the machine.
@@ -27,7 +27,7 @@ TARGETS = {"cold_over_parse", "rerun_over_cold", "added_over_cold", "growth_2x"}
 
 
 def _bench(workdir: Path) -> subprocess.CompletedProcess[str]:
-    cmd = [sys.executable, "-m", "towtank.bench", "--runs", "12", "--fs", "200",
+    cmd = [sys.executable, "-m", "towtank.testing.bench", "--runs", "12", "--fs", "200",
            "--scales", "1,2", "--workdir", str(workdir), "--markdown"]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
 

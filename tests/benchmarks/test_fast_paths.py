@@ -22,8 +22,10 @@ import numpy as np
 import pytest
 from scipy.signal import sosfiltfilt
 
-from towtank import __version__, cache, conditioning, parallel
-from towtank.protocol import ChannelMap, Processing
+from towtank import __version__
+from towtank.ingest.protocol import ChannelMap, Processing
+from towtank.runtime import cache, parallel
+from towtank.signal import conditioning
 
 
 # ------------------------------------------------------------------------------------ filter
@@ -315,7 +317,7 @@ REPO = Path(__file__).resolve().parents[2]
 _LOADED = """
 import sys
 from pathlib import Path
-from towtank.protocol import load_protocol
+from towtank.ingest.protocol import load_protocol
 {body}
 print("LOADED:", *(m for m in ("pandas", "statsmodels", "matplotlib") if m in sys.modules))
 """
@@ -336,7 +338,7 @@ def _loaded(body: str) -> set[str]:
 def test_a_reduction_worker_never_loads_pandas():
     """pyarrow's to_numpy loads pandas; in every worker that cost 0.3 s (see ingest)."""
     loaded = _loaded(
-        "from towtank.reduce import reduce_record\n"
+        "from towtank.reduce.run import reduce_record\n"
         "p = load_protocol('protocols/sut2_hull.toml')\n"
         "run, red, reason, _ = reduce_record(p, {'run': 5, 'file': 'run_005.csv.gz'})\n"
         "assert red is not None, reason\n"
@@ -346,7 +348,7 @@ def test_a_reduction_worker_never_loads_pandas():
 
 def test_inspect_loads_neither_pandas_nor_statsmodels():
     loaded = _loaded(
-        "from towtank.cli import main\n"
+        "from towtank.commands.cli import main\n"
         "import tempfile\n"
         "png = Path(tempfile.mkdtemp()) / 'x.png'\n"
         "assert main(['inspect', 'sample_runs/sut2_hull/data/run_005.csv.gz', '--protocol',\n"

@@ -3,10 +3,10 @@
 Each ``fig_*`` function takes the :class:`~towtank.pipeline.DayResult` and returns a
 :class:`matplotlib.figure.Figure` (or None when the day has no data for it). Nothing is fitted
 here: fit lines come from the stored parameters (``DampingFit.params``/``cov``, the
-curve-difference quadratics of :class:`~towtank.fit.AddedMassFit`, the resistance curve of
+curve-difference quadratics of :class:`~towtank.analysis.hull.AddedMassFit`, the resistance curve of
 :class:`~towtank.pipeline.ScalingResult`), and reference curves are given functions evaluated on
-a grid (:func:`towtank.sandia.section_coefficients`,
-:func:`towtank.fins.finite_span_coefficients`).
+a grid (:func:`towtank.reference.sandia.section_coefficients`,
+:func:`towtank.analysis.fins.finite_span_coefficients`).
 
 Figures are made with :class:`matplotlib.figure.Figure` directly (no pyplot state, Agg canvas,
 vector output in the PDF) under one rc style, :func:`towtank.report.style.rc`.
@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from towtank.pipeline import DayResult
-    from towtank.reduce import RunReduction
+    from towtank.reduce.run import RunReduction
 
 PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
@@ -239,7 +239,7 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
 
 
 def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
-    from towtank.reduce import PHASE_ACCEL, PHASE_STEADY
+    from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
 
     cd = am.curve_difference or {}
     levels = list(cd.get("levels") or [])
@@ -458,9 +458,9 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
     page : bool
         Lay the figure out as an A4 report page.
     """
-    if day.fins is None or len(day.fins.force_vs_speed) == 0:
+    if day.fin_result is None or len(day.fin_result.force_vs_speed) == 0:
         return None
-    fv = day.fins.force_vs_speed
+    fv = day.fin_result.force_vs_speed
     angles = sorted(fv["angle_deg"].unique())
     cmap = mpl.colormaps["viridis"]
     colors = {a: cmap(i / max(len(angles) - 1, 1) * 0.9) for i, a in enumerate(angles)}
@@ -495,7 +495,8 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
 def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
                     e: float) -> tuple[np.ndarray, ...]:
     """Sandia 2-D and lifting-line curves of one Re on an angle grid (evaluation only)."""
-    from towtank import fins, sandia
+    from towtank.analysis import fins
+    from towtank.reference import sandia
 
     res = np.full(alpha.shape, re)
     with warnings.catch_warnings():
@@ -529,7 +530,7 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
     page : bool
         Lay the figure out as an A4 report page.
     """
-    fr = day.fins
+    fr = day.fin_result
     if fr is None or len(fr.table) == 0:
         return None
     tab = fr.table
@@ -618,7 +619,7 @@ def sci(x: float, digits: int = 2) -> str:
 
 def scaling_caption(day: DayResult) -> str:
     """Caption of :func:`fig_scaling`."""
-    sr = day.scaling
+    sr = day.scaling_result
     k2, k1 = sr.resistance
     ff = sr.form_factor
     ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (mean and s.d. over "
@@ -645,7 +646,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     page : bool
         Lay the figure out as an A4 report page.
     """
-    sr = day.scaling
+    sr = day.scaling_result
     if sr is None:
         return None
     tab = sr.table
@@ -707,7 +708,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
 
 
 def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
-    sr = day.scaling
+    sr = day.scaling_result
     tab = sr.table
     bars = []
     sel = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
@@ -760,7 +761,7 @@ def run_thumbnail(
     """Speed (left axis) and drag/lift (right axis) of one run with its phases shaded.
 
     Draws from ``reduction.thumb`` (the whole run at 10 Hz, zero and drift removed; tare removed
-    after :func:`towtank.reduce.apply_tare`) and ``reduction.windows``.
+    after :func:`towtank.reduce.run.apply_tare`) and ``reduction.windows``.
 
     Parameters
     ----------
@@ -805,7 +806,7 @@ def preview_thumbnail(ax: Axes, preview: dict[str, np.ndarray], *, twin: Axes | 
                       linewidth: float = 1.0) -> Axes:
     """The thumbnail of a run that was read but could not be reduced, drawn greyed.
 
-    Draws ``preview`` (:func:`towtank.reduce.run_preview`: calibrated speed and forces at
+    Draws ``preview`` (:func:`towtank.reduce.run.run_preview`: calibrated speed and forces at
     10 Hz, no zero, no filter, no phases), so that the reader sees what made the run unusable.
 
     Parameters
@@ -924,9 +925,9 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
     has = {
         "added_mass": hf is not None and bool(hf.added_mass),
         "damping": hf is not None and hf.damping is not None,
-        "fin_forces": day.fins is not None and len(day.fins.force_vs_speed) > 0,
-        "fin_coefficients": day.fins is not None and len(day.fins.table) > 0,
-        "scaling": day.scaling is not None,
+        "fin_forces": day.fin_result is not None and len(day.fin_result.force_vs_speed) > 0,
+        "fin_coefficients": day.fin_result is not None and len(day.fin_result.table) > 0,
+        "scaling": day.scaling_result is not None,
     }
     return [f for f in FIGURES if has[f[0]]]
 

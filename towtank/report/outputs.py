@@ -3,102 +3,18 @@
 from __future__ import annotations
 
 import json
-import math
 import os
-import platform
 import shutil
 import tempfile
 from collections.abc import Callable
-from dataclasses import asdict
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-import pandas as pd
-
-from towtank import __version__
-from towtank.protocol import OUTPUT_NAMES
+from towtank.ingest.protocol import OUTPUT_NAMES
+from towtank.report.provenance import provenance
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
-
-
-def write_csv(df: pd.DataFrame, path: Path) -> None:
-    """A deterministic CSV: full float precision, '\\n' line ends, no index."""
-    df.to_csv(path, index=False, lineterminator="\n")
-
-
-def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Inputs with their sha256, program and library versions, settings used.
-
-    A hull day also records the geometry used (each area and the volume with where it came
-    from: given in the protocol, computed from the Myring description, or a default) and, when
-    scaled, the prototype, its water and the form factor.
-    """
-    import numpy
-    import scipy
-
-    from towtank.pipeline import geometry_used
-
-    p = day.protocol
-    if p.model is not None:
-        extra = {"geometry": {"geometry_source": p.model.geometry_source,
-                              "quantities": geometry_used(day)},
-                 **(extra or {})}
-    if day.scaling is not None:
-        extra = {"scaling": _scaling_provenance(day), **(extra or {})}
-    settings = {
-        "processing": asdict(p.processing),
-        "trim_s_used": p.processing.trim,
-        "water": asdict(p.water),
-        "channels": {k: asdict(v) for k, v in p.channels.items()},
-        "reference": p.campaign.reference,
-    }
-    if p.model is not None:  # stated standard uncertainties [kg], [m] (fit, coefficients_table)
-        settings["model_uncertainty"] = {
-            k: getattr(p.model, k)
-            for k in ("mass_uncertainty_kg", "length_uncertainty_m", "diameter_uncertainty_m")
-        }
-    return {
-        "program": "towtank",
-        "version": __version__,
-        "python": platform.python_version(),
-        "libraries": {
-            "numpy": numpy.__version__,
-            "scipy": scipy.__version__,
-            "pandas": pd.__version__,
-        },
-        "protocol": str(p.path),
-        "campaign": p.campaign.name,
-        "inputs": [{"path": k, "sha256": v} for k, v in day.inputs.items()],
-        "settings": settings,
-        "runs": {"total": int(len(day.sheet)), "rejected": day.n_rejected},
-        **(extra or {}),
-    }
-
-
-def _scaling_provenance(day: DayResult) -> dict[str, Any]:
-    """The prototype, its water and the form factor behind scaling.csv."""
-    sr = day.scaling
-    proto = day.protocol.prototype
-    ff = sr.form_factor
-    return {
-        "scale": sr.scale,
-        "length_prototype_m": sr.length_prototype,
-        "prototype_water": asdict(proto.water) if proto is not None else None,
-        "rho_prototype": sr.rho_p,
-        "nu_prototype": sr.nu_p,
-        "wetted_area_prototype_m2": sr.wetted_area_prototype,
-        "delta_cf": sr.delta_cf,
-        "form_factor": None if ff is None else {
-            "one_plus_k": ff.one_plus_k,
-            "std": ff.std if math.isfinite(ff.std) else None,  # NaN (one speed): null
-            "n_speeds": ff.n,
-            "n_runs": ff.n_runs,
-            "speeds_m_s": [float(v) for v in ff.speeds],
-            "one_plus_k_per_speed": [float(v) for v in ff.speed_values],
-            "re_range": list(ff.re_range),
-        },
-    }
 
 
 def _swap_into_place(tmp: Path, out_dir: Path) -> None:
@@ -249,13 +165,14 @@ def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
 
     Each writer writes its own files into ``folder`` and shares nothing with the others, so the
     later ones run in forked processes while this one draws the first (the PDF, the longest):
-    the report takes about the time of its longest part (:func:`towtank.parallel.run_beside`).
+    the report takes about the time of its longest part
+    (:func:`towtank.runtime.parallel.run_beside`).
     A writer that fails, here or in its process, fails the whole report (the caller then
     writes nothing).
     """
     from functools import partial
 
-    from towtank.parallel import run_beside
+    from towtank.runtime.parallel import run_beside
 
     run_beside([(_writer_name(w), partial(w, day, folder)) for w in writers])
 

@@ -18,10 +18,8 @@ CreationDate is fixed from the report date so the same day gives the same file.
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 import re
-import struct
 import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,13 +27,13 @@ from typing import TYPE_CHECKING, Any
 
 import matplotlib as mpl
 import numpy as np
-import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from towtank import __version__
 from towtank.report import figures, style
+from towtank.report.provenance import creation_date, report_date
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -46,107 +44,6 @@ THUMB_COLS, THUMB_ROWS = 3, 4
 THUMBS_PER_PAGE = THUMB_COLS * THUMB_ROWS
 DIFF_HIGHLIGHT_PCT = 10.0  # |diff %| above which a coefficient is highlighted
 
-
-
-# ------------------------------------------------------------------------------ test date
-def _iso(value: Any) -> str | None:
-    """A date-like value as YYYY-MM-DD, or None."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return None
-    ts = pd.to_datetime(str(value).strip(), errors="coerce")
-    return None if ts is pd.NaT or pd.isna(ts) else ts.strftime("%Y-%m-%d")
-
-
-def _gzip_mtime(path: Path) -> str | None:
-    """The modification time stored in a gzip header (0 = not stored), as a date."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(10)
-    except OSError:
-        return None
-    if len(head) < 10 or head[:2] != b"\x1f\x8b":
-        return None
-    (mtime,) = struct.unpack("<I", head[4:8])
-    if mtime == 0:
-        return None
-    return dt.datetime.fromtimestamp(mtime, dt.UTC).strftime("%Y-%m-%d")
-
-
-def _tdms_date(path: Path) -> str | None:
-    """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
-    try:
-        from nptdms import TdmsFile
-
-        meta = TdmsFile.read_metadata(str(path))
-        objs = [meta] + list(meta.groups())
-        objs += [c for g in meta.groups() for c in g.channels()]
-    except Exception:  # noqa: BLE001 - a date is optional; a damaged file just has none
-        return None
-    dates = []
-    for obj in objs:
-        for value in getattr(obj, "properties", {}).values():
-            if isinstance(value, np.datetime64 | dt.datetime):
-                iso = _iso(value)
-                if iso and iso > "1904-01-01":
-                    dates.append(iso)
-    return max(dates) if dates else None
-
-
-def date_from_inputs(day: DayResult) -> str | None:
-    """The newest date recorded in the inputs themselves, or None.
-
-    Looked for, in this order: a ``date`` or ``test_date`` column of the run sheet; the
-    timestamps stored inside the run files (the gzip header of .csv.gz files, datetime
-    properties of TDMS files). File-system times are never used: they change with a copy.
-    """
-    sheet = day.sheet
-    for col in ("test_date", "date"):
-        if col in sheet.columns:
-            dates = [d for d in (_iso(v) for v in sheet[col]) if d]
-            if dates:
-                return max(dates)
-    data_dir = day.protocol.campaign.data_dir
-    dates = []
-    for red in day.reductions.values():
-        path = data_dir / red.file
-        name = path.name.lower()
-        if name.endswith(".gz"):
-            d = _gzip_mtime(path)
-        elif name.endswith(".tdms"):
-            d = _tdms_date(path)
-        else:
-            d = None
-        if d:
-            dates.append(d)
-    return max(dates) if dates else None
-
-
-def report_date(day: DayResult) -> tuple[str | None, str]:
-    """The test date printed in the report and where it comes from.
-
-    ``day.report_date`` (the command line's --date), then the protocol's [report] date or
-    [campaign] test_date, then :func:`date_from_inputs`; (None, "not given") otherwise.
-    """
-    if day.report_date:
-        return str(day.report_date), "given on the command line"
-    p = day.protocol
-    report = getattr(p, "report", None)
-    if report is not None and getattr(report, "date", None):
-        return str(report.date), "protocol [report] date"
-    if getattr(p.campaign, "test_date", None):
-        return str(p.campaign.test_date), "protocol [campaign] test_date"
-    found = date_from_inputs(day)
-    if found:
-        return found, "newest date recorded in the run sheet or run files"
-    return None, "not given"
-
-
-def creation_date(date: str | None) -> dt.datetime | None:
-    """The PDF's CreationDate: midnight UTC of the report date (None if there is none)."""
-    iso = _iso(date) if date else None
-    if iso is None:
-        return None
-    return dt.datetime.strptime(iso, "%Y-%m-%d").replace(tzinfo=dt.UTC)
 
 
 # ------------------------------------------------------------------------------ page plan
@@ -439,7 +336,8 @@ def _fin_text(day: DayResult) -> str | None:
     if fin is None:
         return None
     return (f"{fin.section}, chord {fin.chord_m:g} m, span {fin.span_m:g} m"
-            + (f", effective aspect ratio {day.fins.aspect_ratio:.3g}" if day.fins else ""))
+            + (f", effective aspect ratio {day.fin_result.aspect_ratio:.3g}"
+               if day.fin_result else ""))
 
 
 def _counts(day: DayResult) -> str:
@@ -640,21 +538,21 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
                          "(see the quality section).", fontsize=8.5) + 0.2
-    if day.fins is not None and len(day.fins.curves):
+    if day.fin_result is not None and len(day.fin_result.curves):
         y += _heading(fig, y, "Fin: lift slope, stall and minimum drag per speed")
         y += _fin_table(fig, y, day) + 0.2
-    if day.fins is not None and len(day.fins.table):
+    if day.fin_result is not None and len(day.fin_result.table):
         y += _fin_runs_table(fig, y, day) + 0.2
-    if day.scaling is not None:
+    if day.scaling_result is not None:
         y += _heading(fig, y, "Prototype resistance")
         y += _scaling_table(fig, y, day)
-    if day.hull is None and day.fins is None and day.protocol.model is None:
+    if day.hull is None and day.fin_result is None and day.protocol.model is None:
         _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
                     fontsize=9)
 
 
 def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
-    c = day.fins.curves
+    c = day.fin_result.curves
     header = [r"$U$ group [m/s]", "Re", "runs", r"$dC_L/d\alpha$ [1/rad]", "95 % interval",
               "Sandia 2-D", "lifting line", "stall [deg]", r"$C_{L,max}$", r"$C_{D,min}$"]
     rows = []
@@ -669,11 +567,12 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
                      stall, _v(r["cl_max"], ".3f"), _v(r["cd_min"], ".4f")])
     used = _table(fig, y, header, rows, [1.0, 0.75, 0.45, 1.15, 1.1, 0.8, 0.8, 0.8, 0.65, 0.65])
     used += 0.08 + _text_block(fig, y + used + 0.08, (
-        f"Effective aspect ratio {day.fins.aspect_ratio:.3g}, span efficiency "
-        f"{day.fins.oswald_e:.3g}. Stall '> x': C_L still rising at the largest angle tested. "
+        f"Effective aspect ratio {day.fin_result.aspect_ratio:.3g}, span efficiency "
+        f"{day.fin_result.oswald_e:.3g}. "
+        "Stall '> x': C_L still rising at the largest angle tested. "
         "Sandia 2-D and lifting line: the same straight-line fit through the 2-D section data "
         "and the finite-span expectation at the group's mean Re."), width=125, fontsize=7)
-    ctrl = day.fins.control
+    ctrl = day.fin_result.control
     if ctrl is not None and len(ctrl):
         recs = ctrl.to_dict("records")
         text = "Control derivatives (pair of fins, Prestero 2001): " + "; ".join(
@@ -689,7 +588,7 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
 
 def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
     """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer."""
-    t = day.fins.table
+    t = day.fin_result.table
     used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
     row_in = 0.19
     room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - (y + used)
@@ -708,7 +607,7 @@ def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
 
 
 def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
-    sr = day.scaling
+    sr = day.scaling_result
     header = [r"$U_p$ [m/s]", r"$Re_p$", r"$Fn_p$", r"$U_m$ Froude [m/s]",
               r"$U_m$ Reynolds [m/s]", r"$R_p$ Froude [N]", r"$R_p$ ITTC-57 [N]"]
     rows = []
@@ -899,7 +798,7 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
 
     from pypdf import PdfWriter
 
-    from towtank.parallel import run_beside
+    from towtank.runtime.parallel import run_beside
 
     folder = Path(folder)
     path = folder / "report.pdf"
@@ -974,6 +873,6 @@ def _render(
 
 
 __all__ = [
-    "creation_date", "date_from_inputs", "page_plan", "quality_flow", "report_date", "write_pdf",
+    "page_plan", "quality_flow", "write_pdf",
 ]
 

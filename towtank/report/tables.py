@@ -5,10 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from towtank.report.outputs import write_csv
-
 if TYPE_CHECKING:
+    import pandas as pd
+
     from towtank.pipeline import DayResult
+
+
+def write_csv(df: pd.DataFrame, path: Path) -> None:
+    """A deterministic CSV: full float precision, '\\n' line ends, no index."""
+    df.to_csv(path, index=False, lineterminator="\n")
 
 
 def write_tables(day: DayResult, out: Path) -> None:
@@ -18,23 +23,11 @@ def write_tables(day: DayResult, out: Path) -> None:
     only when the day has no row for them (a hull day has no fin run, a fin day no hull
     coefficient): a tool reading the folder finds every file of the contract.
     """
-    import pandas as pd
-
-    from towtank.fins import FIN_TABLE_COLUMNS
-    from towtank.fit import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
-    from towtank.similarity import SCALING_COLUMNS
-
-    def empty(columns: list[str] | tuple[str, ...]) -> pd.DataFrame:
-        return pd.DataFrame(columns=list(columns))
-
     write_csv(day.runs, out / "runs.csv")
-    write_csv(day.hull.coefficients if day.hull is not None
-              else empty(COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS), out / "coefficients.csv")
-    write_csv(day.fins.table if day.fins is not None else empty(FIN_TABLE_COLUMNS),
-              out / "fins.csv")
-    if day.fins is not None:
-        write_csv(day.fins.curves, out / "fin_curves.csv")
-        if day.fins.control is not None:
-            write_csv(day.fins.control, out / "fin_control.csv")
-    write_csv(day.scaling.table if day.scaling is not None else empty(SCALING_COLUMNS),
-              out / "scaling.csv")
+    write_csv(day.coefficients, out / "coefficients.csv")
+    write_csv(day.fins, out / "fins.csv")
+    if day.fin_result is not None:
+        write_csv(day.fin_result.curves, out / "fin_curves.csv")
+        if day.fin_result.control is not None:
+            write_csv(day.fin_result.control, out / "fin_control.csv")
+    write_csv(day.scaling, out / "scaling.csv")

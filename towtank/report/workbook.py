@@ -267,7 +267,7 @@ def _note_sheet(w: SheetWriter, text: str) -> None:
 
 # ------------------------------------------------------------------------------- sheets
 def _summary(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.pdf import report_date
+    from towtank.report.provenance import report_date
 
     p = day.protocol
     date, source = report_date(day)
@@ -321,17 +321,17 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         w.table(day.hull.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
         w.note("No hull coefficients: " + _why_no_hull(day))
-    if day.fins is not None and len(day.fins.curves):
+    if day.fin_result is not None and len(day.fin_result.curves):
         w.gap()
         w.title("Fin: lift slope and stall per speed group")
         cols = ["speed_group", "re_mean", "lift_slope", "lift_slope_ci_low",
                 "lift_slope_ci_high", "stall_angle_deg", "cl_max", "cd_min"]
-        w.table(day.fins.curves, columns=[c for c in cols if c in day.fins.curves])
-    if day.scaling is not None:
+        w.table(day.fin_result.curves, columns=[c for c in cols if c in day.fin_result.curves])
+    if day.scaling_result is not None:
         w.gap()
         w.title("Prototype resistance")
         cols = ["speed_prototype", "drag_froude", "drag_ittc57"]
-        w.table(day.scaling.table, columns=cols)
+        w.table(day.scaling_result.table, columns=cols)
 
 
 def _why_no_hull(day: DayResult) -> str:
@@ -368,7 +368,7 @@ def _runs(w: SheetWriter, day: DayResult) -> None:
 
 
 def _fins(w: SheetWriter, day: DayResult) -> None:
-    fr = day.fins
+    fr = day.fin_result
     if fr is None or len(fr.table) == 0:
         why = ("the protocol has no [fin]." if day.protocol.fin is None
                else "the day has no usable fin runs; see the Quality sheet.")
@@ -389,7 +389,7 @@ def _fins(w: SheetWriter, day: DayResult) -> None:
 
 
 def _scaling(w: SheetWriter, day: DayResult) -> None:
-    sr = day.scaling
+    sr = day.scaling_result
     if sr is None:
         if day.protocol.model is None:
             why = "the protocol has no [model] (a fin day)."
@@ -531,7 +531,7 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
 
 
 def _provenance(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.outputs import provenance
+    from towtank.report.provenance import provenance
 
     prov = provenance(day)
     rows: list[tuple[str, Any, str]] = []
@@ -625,7 +625,7 @@ def write_workbook(day: DayResult, folder: str | Path) -> Path:
     """
     from openpyxl import Workbook
 
-    from towtank.report.pdf import creation_date, report_date
+    from towtank.report.provenance import creation_date, report_date
 
     wb = Workbook()
     wb.remove(wb.active)

@@ -5,7 +5,7 @@ F_tare(U, a) = t2·U|U| + t1·U + m_t·a is fitted by least squares over the sti
 constant-acceleration samples, and subtracted sample by sample from the model runs of that
 group. A model run whose speeds lie outside the tare runs' speed range is flagged.
 
-The fit's covariance is clustered by run (:func:`towtank.sandwich.cr2_covariance`): the
+The fit's covariance is clustered by run (:func:`towtank.stats.intervals.cr2_covariance`): the
 samples of one sting run share its zero and noise, and an error of the tare is common to every
 model run of the group, so it is propagated into their coefficients (an error of m_t goes
 one-for-one into X_udot) and must not be understated. Treating the samples as independent
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from towtank.sandwich import cr2_covariance
+from towtank.stats.intervals import cr2_covariance
 
 TARE_TERMS = ("t2", "t1", "m_t")
 
@@ -108,7 +108,7 @@ def fit_channel(
         Zeroed, filtered force of the sting runs [N].
     groups : ndarray, optional
         Sting run of each sample. With four or more runs the covariance is clustered by run
-        (CR2, t with runs − 1 degrees of freedom; :func:`towtank.sandwich.cr2_covariance`);
+        (CR2, t with runs − 1 degrees of freedom; :func:`towtank.stats.intervals.cr2_covariance`);
         otherwise, or without groups, it assumes independent samples (n − p degrees of
         freedom), which understates it.
     """

@@ -1,6 +1,7 @@
 """NACA 0015 section lift and drag from Sheldahl & Klimas (1981), SAND80-2114.
 
-The table shipped in ``towtank/data/naca0015_sandia.csv`` gives the two-dimensional (infinite
+The table shipped in ``towtank/reference/data/naca0015_sandia.csv`` gives the two-dimensional
+(infinite
 aspect ratio) lift and drag coefficients of the NACA 0015 section from 0 to 180 deg angle of
 attack at 11 Reynolds numbers from 1e4 to 1e7 [1]_. It is read once and cached.
 
@@ -57,14 +58,14 @@ class SandiaRangeWarning(UserWarning):
 
 
 def _read_data_text(name: str) -> str:
-    """Text of ``towtank/data/<name>``, through importlib.resources.
+    """Text of ``towtank/reference/data/<name>``, through importlib.resources.
 
     Python 3.11's ``importlib.resources`` cannot open a package that is imported as a namespace
     package through a setuptools editable-install finder ("MultiplexedPath only supports
     directories"); the file is then read from beside this module, where the package ships it.
     """
     try:
-        return (resources.files("towtank") / "data" / name).read_text(encoding="utf-8")
+        return (resources.files("towtank.reference") / "data" / name).read_text(encoding="utf-8")
     except (NotADirectoryError, FileNotFoundError, TypeError):
         return (Path(__file__).resolve().parent / "data" / name).read_text(encoding="utf-8")
 

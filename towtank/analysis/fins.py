@@ -2,7 +2,8 @@
 
 The measured fin coefficients (C_L = L/(q S), C_D = D/(q S), q = rho U^2 / 2, S = chord x span,
 Re = U c / nu on the chord) are set beside the two-dimensional NACA 0015 section data of Sheldahl &
-Klimas (1981) (:mod:`towtank.sandia`) at each run's Reynolds number, and beside the finite-span
+Klimas (1981) (:mod:`towtank.reference.sandia`) at each run's Reynolds number, and beside the
+finite-span
 expectation from Prandtl's lifting-line theory, which lowers the lift slope and adds induced drag
 (METHOD.md, "Fins"; report section 5-4, Figs. 14-16).
 
@@ -30,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from towtank import sandia
+from towtank.reference import sandia
 
 __all__ = [
     "FIN_COLUMNS",
@@ -350,7 +351,7 @@ def finite_span_coefficients(
         Effective aspect ratio [-], see :func:`effective_aspect_ratio`.
     e : array_like, default 1.0
         Span efficiency factor [-].
-    section : callable, default :func:`towtank.sandia.section_coefficients`
+    section : callable, default :func:`towtank.reference.sandia.section_coefficients`
         2-D section data, ``section(alpha_deg, reynolds) -> (cl, cd)``, vectorised. Effective
         angles beyond +-180 deg are wrapped into [-180, 180) before the call.
     tol : float, default 1e-10
@@ -391,7 +392,8 @@ def section_stall_angle(reynolds: npt.ArrayLike) -> np.ndarray:
     """Stall angle of the 2-D NACA 0015 section: the first local maximum of C_L(alpha >= 0).
 
     The Sandia table (Sheldahl & Klimas [3]_) interpolated linearly in alpha at the given Re
-    (:func:`towtank.sandia.section_coefficients`, its Re clamp included) is piecewise linear
+    (:func:`towtank.reference.sandia.section_coefficients`, its Re clamp included) is piecewise
+    linear
     between the tabulated angles, so its first local maximum lies on one of them: the last
     tabulated angle before C_L first falls.
 
@@ -462,7 +464,8 @@ def speed_groups(speed_mean: npt.ArrayLike, rel_tol: float = 0.05) -> np.ndarray
 def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.DataFrame:
     """One row per fin run: measured coefficients beside the Sandia 2-D and 3-D expectations.
 
-    cl_sandia, cd_sandia are :func:`towtank.sandia.section_coefficients` at the run's angle and
+    cl_sandia, cd_sandia are :func:`towtank.reference.sandia.section_coefficients` at the run's
+    angle and
     chord Reynolds number (Sheldahl & Klimas [3]_); cl_3d, cd_3d the lifting-line expectation of
     :func:`finite_span_coefficients` for the fin's effective aspect ratio where the flow is
     attached, i.e. where the effective angle |alpha - alpha_i| (alpha_i = C_L,3D / (pi e AR),

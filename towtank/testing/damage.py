@@ -24,7 +24,7 @@ function                  damage                                           retur
 Channels are found by their canonical name (``time``, ``speed``, ``drag``, ...), or by a
 column name, or by a keyword in the lab's column names (``Fx load cell (V)`` is the drag).
 
-:func:`make_damaged_day` writes a whole synthetic hull day (:mod:`towtank.synthetic`) with
+:func:`make_damaged_day` writes a whole synthetic hull day (:mod:`towtank.testing.synthetic`) with
 enough good runs for every coefficient, plus one damaged copy of a good run per kind, a model
 run whose tare group has no sting runs, a sheet row whose file does not exist and a stray file
 in ``data/`` that the sheet does not name; it returns what each damaged run should come to.
@@ -87,7 +87,8 @@ def read_frame(data: bytes) -> pd.DataFrame:
 
 
 def frame_bytes(frame: pd.DataFrame) -> bytes:
-    """CSV bytes as :mod:`towtank.synthetic` writes them ('\\n' line ends, empty = missing)."""
+    """CSV bytes as :mod:`towtank.testing.synthetic` writes them ('\\n' line ends, empty =
+    missing)."""
     return frame.to_csv(index=False, lineterminator="\n", na_rep="").encode("utf-8")
 
 
@@ -463,7 +464,8 @@ def _damage(kind: str, data: bytes, seed: int) -> bytes | None:
 def make_damaged_day(out_dir: str | Path, seed: int = 1, *, fs: float = 200.0) -> DamagedDay:
     """Write a synthetic hull day with damaged runs among good ones.
 
-    The good runs are :func:`towtank.synthetic.hull_day_plan` (enough for every coefficient).
+    The good runs are :func:`towtank.testing.synthetic.hull_day_plan` (enough for every
+    coefficient).
     After them come copies of good runs' specs with new run numbers (43 on), each damaged in
     one way (``_DAMAGE_PLAN``): empty, truncated, many and few text rows, the drag column
     dropped, a long and a short gap, a duplicated block, a clock reset, an irregular clock, time
@@ -488,7 +490,7 @@ def make_damaged_day(out_dir: str | Path, seed: int = 1, *, fs: float = 200.0) -
         Unpacks as ``expected, ok_with_note``: run → rejection keyword, and the runs that must
         stay ok with a note.
     """
-    from towtank import synthetic
+    from towtank.testing import synthetic
 
     out_dir = Path(out_dir)
     plan = synthetic.hull_day_plan()
@@ -533,7 +535,7 @@ def make_damaged_day(out_dir: str | Path, seed: int = 1, *, fs: float = 200.0) -
     (data_dir / stray).write_bytes((data_dir / "run_014.csv").read_bytes())
     protocol = synthetic.write_protocol(
         out_dir / "protocol.toml",
-        header="Synthetic hull day with damaged runs (towtank.damage.make_damaged_day).",
+        header="Synthetic hull day with damaged runs (towtank.testing.damage.make_damaged_day).",
         **synthetic.hull_protocol_sections(".", "output", sheet_format="csv"),
     )
     return DamagedDay(

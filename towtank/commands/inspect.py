@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TextIO
 
 from towtank.errors import RunError
-from towtank.reduce import RunReduction
+from towtank.reduce.run import RunReduction
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
 
@@ -80,7 +80,7 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = ()) -> list[str]
 
 
 def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - (channels, Processing)
-    from towtank.protocol import Processing, load_protocol
+    from towtank.ingest.protocol import Processing, load_protocol
 
     if protocol_path is None:
         return {}, Processing()
@@ -126,8 +126,8 @@ def inspect_run(
     """
     out = out or sys.stdout
     err = err or sys.stderr
-    from towtank.ingest import load_run
-    from towtank.reduce import reduce_run
+    from towtank.ingest.runfile import load_run
+    from towtank.reduce.run import reduce_run
 
     runfile = Path(runfile)
     channels, p = _settings(protocol_path)

@@ -1,7 +1,9 @@
-"""Campaign-scale benchmark: ``python -m towtank.bench [--runs 500] [--fs 1000] [--scales 1,2,4]``.
+"""Campaign-scale benchmark: ``python -m towtank.testing.bench [--runs 500] [--fs 1000] [--scales
+1,2,4]``.
 
 Separate from the unit tests. It writes a large synthetic campaign (plain CSV run files from
-:mod:`towtank.synthetic`, lab-style channels in volts) into a work folder, keeps it there so that
+:mod:`towtank.testing.synthetic`, lab-style channels in volts) into a work folder, keeps it there
+so that
 the next bench run does not generate it again, and measures, from one bench run:
 
 * ``parse``: :func:`pyarrow.csv.read_csv` of every run file of the 1x campaign, once in this
@@ -52,14 +54,14 @@ TARGETS = {
 # resident memory of the process itself and of its (reaped) worker processes.
 _CHILD = """\
 import json, resource, sys
-from towtank.cli import main
+from towtank.commands.cli import main
 rc = main(sys.argv[2:])
 me = resource.getrusage(resource.RUSAGE_SELF)
 kids = resource.getrusage(resource.RUSAGE_CHILDREN)
 with open(sys.argv[1], "w") as fh:
     json.dump({"rc": rc, "self_kb": me.ru_maxrss, "children_kb": kids.ru_maxrss,
                "cpu_s": me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime}, fh)
-import gc; gc.freeze()  # as towtank.cli.entry does before exiting
+import gc; gc.freeze()  # as towtank.commands.cli.entry does before exiting
 sys.exit(rc)
 """
 
@@ -71,7 +73,7 @@ def block_plan(group: str) -> list[Any]:
     40 runs with short plateaus (2 s) and brisk ramps, so a run at 1 kHz is ~10 s and ~0.4 MB
     of CSV.
     """
-    from towtank.synthetic import RunSpec
+    from towtank.testing.synthetic import RunSpec
 
     plan: list[Any] = []
     for v in (0.4, 0.8, 1.2, 1.6, 2.0):
@@ -103,7 +105,7 @@ def campaign_plan(first: int, last: int) -> list[Any]:
 def _gen_chunk(args: tuple[str, int, float, int]) -> str:
     """Write chunk ``k`` of the pool (runs k·CHUNK_RUNS+1 ...); returns its folder."""
     pool, k, fs, seed = args
-    from towtank import synthetic as syn
+    from towtank.testing import synthetic as syn
 
     d = Path(pool) / f"chunk_{k:04d}"
     if (d / "done").exists():
@@ -179,7 +181,7 @@ def write_sheet(path: Path, header: list[str], rows: list[dict[str, str]]) -> No
 
 def build_campaign(workdir: Path, pool: Path, n_runs: int, name: str) -> dict[str, Any]:
     """A campaign folder of runs 1..n_runs: data/ (hard links into the pool), sheet, protocol."""
-    from towtank.synthetic import hull_protocol_sections, write_protocol
+    from towtank.testing.synthetic import hull_protocol_sections, write_protocol
 
     d = workdir / "campaigns" / name
     shutil.rmtree(d, ignore_errors=True)
@@ -194,7 +196,7 @@ def build_campaign(workdir: Path, pool: Path, n_runs: int, name: str) -> dict[st
     write_sheet(d / "run_sheet.csv", header, rows)
     protocol = write_protocol(
         d / "protocol.toml",
-        header=f"towtank.bench campaign: {n_runs} synthetic runs",
+        header=f"towtank.testing.bench campaign: {n_runs} synthetic runs",
         **hull_protocol_sections(".", "out", sheet_format="csv"),
     )
     return {"dir": d, "protocol": protocol, "files": files, "header": header, "rows": rows}
@@ -393,7 +395,7 @@ def run_bench(
     filters out other load on the machine; peak memory is the largest seen.
     """
     global _CHILD_ENV
-    from towtank.parallel import default_jobs
+    from towtank.runtime.parallel import default_jobs
 
     jobs = default_jobs() if jobs is None else max(1, jobs)
     repeat = max(1, repeat)
@@ -603,7 +605,7 @@ def markdown_row(res: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
-        prog="python -m towtank.bench",
+        prog="python -m towtank.testing.bench",
         description="Time towtank on a large synthetic campaign (see the module docstring).",
     )
     ap.add_argument("--runs", type=int, default=500, help="runs of the 1x campaign (500)")

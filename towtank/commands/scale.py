@@ -16,15 +16,16 @@ def scale_command(
     The day is reduced through the per-run cache in the output folder (``.cache``), so after a
     ``towtank process`` no run file is read again; only the fits and the scaling are redone.
     Speeds that are not finite, not > 0 or give a prototype Re below 1e3 are refused
-    (:func:`towtank.similarity.check_prototype_speeds`) with a ProtocolError (exit status 2).
+    (:func:`towtank.analysis.similarity.check_prototype_speeds`) with a ProtocolError (exit status
+    2).
     """
     import math
 
     import pandas as pd
 
-    from towtank import similarity
+    from towtank.analysis import similarity
+    from towtank.ingest.protocol import Prototype, Water, load_protocol
     from towtank.pipeline import process_day, water_at
-    from towtank.protocol import Prototype, Water, load_protocol
 
     protocol = load_protocol(protocol_path)
     if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
@@ -55,10 +56,10 @@ def scale_command(
     protocol = replace(protocol, prototype=proto)
     out_dir = out if out is not None else protocol.campaign.output_dir
     day = process_day(protocol_path, protocol=protocol, cache_dir=Path(out_dir) / ".cache")
-    if day.scaling is None:
+    if day.scaling_result is None:
         print("no scaling table: " + " ".join(day.warnings[-1:]))
         return 1
-    sc = day.scaling
+    sc = day.scaling_result
     table = sc.table
     show = pd.DataFrame({
         "U_p [m/s]": table["speed_prototype"],

@@ -17,17 +17,23 @@ How the work is spread (campaign scale, hundreds of runs):
 * A worker that dies (killed, out of memory, a crash inside a library) costs only the record
   it was on: the records not yet returned are done again one per worker, and the one whose
   worker dies again gets the caller's ``on_crash`` result (a rejected run).
-* Where there is no fork server (Windows) the records are reduced in this process.
+* Where there is no fork server (Windows), or the calling program could not be imported safely
+  by a worker (a script that calls towtank at its top level, without
+  ``if __name__ == "__main__":``; a program read from standard input), the records are reduced
+  in this process: see :func:`main_is_importable`.
 """
 
 from __future__ import annotations
 
+import ast
 import multiprocessing as mp
 import os
+import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -40,7 +46,7 @@ MAX_CHUNK = 8
 MIN_RECORDS_FOR_POOL = 16
 
 #: Modules the fork server imports once, before it forks any worker.
-PRELOAD = ("numpy", "pyarrow", "pyarrow.csv", "scipy.signal", "scipy.ndimage", "towtank.reduce")
+PRELOAD = ("numpy", "pyarrow", "pyarrow.csv", "scipy.signal", "scipy.ndimage", "towtank.reduce.run")
 
 _lock = threading.Lock()
 _prestarted: dict[str, Any] = {}  # "pool": _Pool started by prestart(), until map_runs takes it
@@ -59,10 +65,66 @@ def chunk_size(n_records: int, jobs: int) -> int:
     return max(1, min(MAX_CHUNK, n_records // (8 * jobs)))
 
 
+_SAFE_TOP_LEVEL = (
+    ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Pass,
+)
+
+
+def _guarded(node: ast.stmt) -> bool:
+    """``if __name__ == "__main__":`` (either way round)."""
+    if not isinstance(node, ast.If) or not isinstance(node.test, ast.Compare):
+        return False
+    sides = [node.test.left, *node.test.comparators]
+    names = [s.id for s in sides if isinstance(s, ast.Name)]
+    consts = [s.value for s in sides if isinstance(s, ast.Constant)]
+    return names == ["__name__"] and consts == ["__main__"]
+
+
+def _harmless(node: ast.stmt) -> bool:
+    """A top-level statement a worker may run again: imports, definitions, constants."""
+    if isinstance(node, _SAFE_TOP_LEVEL) or _guarded(node):
+        return True
+    if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+        return True  # a docstring
+    if isinstance(node, ast.Assign | ast.AnnAssign) and node.value is not None:
+        return all(isinstance(n, ast.Constant | ast.Name | ast.Attribute | ast.Tuple | ast.List |
+                              ast.Dict | ast.Set | ast.Load | ast.Store | ast.expr_context)
+                   or isinstance(n, ast.operator | ast.unaryop | ast.BinOp | ast.UnaryOp)
+                   for n in ast.walk(node.value))
+    return False
+
+
+def main_is_importable() -> bool:
+    """Whether a worker process may import the calling program's ``__main__`` safely.
+
+    A worker started by ``multiprocessing`` (spawn or fork server) runs the parent's main
+    script again as ``__mp_main__``. That is harmless for ``python -m``, ``python -c``, IPython,
+    Jupyter and the ``towtank`` command, and for a script whose top level only imports, defines
+    and assigns constants (its work under ``if __name__ == "__main__":``). A script that calls
+    towtank at its top level would run again in every worker (and multiprocessing refuses
+    that), and a program read from standard input cannot be found again: for those the runs
+    are reduced in the calling process instead.
+    """
+    main = sys.modules.get("__main__")
+    if main is None or getattr(getattr(main, "__spec__", None), "name", None):
+        return True  # python -m, Jupyter's kernel: imported by name, guarded by convention
+    path = getattr(main, "__file__", None)
+    if path is None:
+        return True  # python -c, the interactive interpreter, IPython
+    try:
+        tree = ast.parse(Path(path).read_bytes())
+    except (OSError, SyntaxError, ValueError):
+        return False  # '<stdin>' (python -), a deleted or unreadable script
+    return all(_harmless(node) for node in tree.body)
+
+
 def _context() -> Any | None:
-    """The fork-server context with :data:`PRELOAD`, or None where there is none."""
+    """The fork-server context with :data:`PRELOAD`, or None where there is none or the
+    calling program is not safe for workers to import (:func:`main_is_importable`)."""
     if "forkserver" not in mp.get_all_start_methods():
         return None  # pragma: no cover - Windows
+    if not main_is_importable():
+        return None
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(list(PRELOAD))
     return ctx

@@ -7,7 +7,7 @@ with the run's own peak speed and acceleration, which keeps the detection robust
 transverse tows to 3 m/s; every window is trimmed away from its transitions.
 
 All functions are vectorised over the samples (no per-sample Python loop); levels and peaks
-are order statistics (:mod:`towtank.robust`): the median, the 99th percentile sample.
+are order statistics (:mod:`towtank.stats.robust`): the median, the 99th percentile sample.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.masks import close_gaps, longest_run
-from towtank.robust import quantile, spread_sample
+from towtank.signal.masks import close_gaps, longest_run
+from towtank.stats.robust import quantile, spread_sample
 
 PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
 

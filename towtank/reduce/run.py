@@ -1,6 +1,7 @@
 """Per-run reduction: from a run's calibrated channels to its phases, means and fit samples.
 
-:func:`reduce_run` takes a :class:`~towtank.ingest.RawRun` and does, in this order (METHOD.md,
+:func:`reduce_run` takes a :class:`~towtank.ingest.runfile.RawRun` and does, in this order
+(METHOD.md,
 "A run"): filter the speed and find the phases from it; zero the forces on the still window
 before the run and remove the drift to the still window after it; filter the forces with the
 same zero-phase low-pass as the speed; take acceleration from the filtered speed (or from an
@@ -12,7 +13,8 @@ whole run for the report. Everything it returns is plain data that can be cached
 :func:`force_coefficient` makes a force coefficient C = F / (½ρU²A).
 
 :func:`reduce_record` is the unit of work of the worker processes: one run-sheet row read
-(:func:`towtank.ingest.load_run`) and reduced, any problem turned into the run's one-sentence
+(:func:`towtank.ingest.runfile.load_run`) and reduced, any problem turned into the run's
+one-sentence
 rejection; :func:`crashed_record` is that sentence for a run whose worker died. This module
 and what it imports never load pandas, so the workers start light.
 """
@@ -27,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from towtank import conditioning, phases
 from towtank.errors import RunError
-from towtank.ingest import RawRun, file_bytes, load_run
-from towtank.protocol import Processing, Protocol
-from towtank.tare import TareModel
+from towtank.ingest.protocol import Processing, Protocol
+from towtank.ingest.runfile import RawRun, file_bytes, load_run
+from towtank.reduce.tare import TareModel
+from towtank.signal import conditioning, phases
 
 #: The repair of the ingest that the engineer is told of on the terminal (the others, gaps
 #: interpolated and spikes removed, are listed in runs.csv's notes and the report).
@@ -170,7 +172,7 @@ def reduce_run(
     Parameters
     ----------
     raw : RawRun
-        Calibrated channels from :func:`towtank.ingest.load_run`.
+        Calibrated channels from :func:`towtank.ingest.runfile.load_run`.
     processing : Processing
         Filter and phase-detection settings.
     run : int

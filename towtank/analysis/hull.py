@@ -4,7 +4,7 @@ Added mass (report eqs. 7–8; METHOD.md "Added mass"). At constant acceleration
 the balance drag is D = (m − X_udot)·a + R(U). The primary estimate is the joint regression
 D = k2·U|U| + k1·U + M·a over all steady and constant-acceleration samples of the α = 0 runs
 (α = 90° for Y_vdot), X_udot = m − M. Its interval combines the regression's standard error
-(clustered by run with the small-sample CR2 correction, :mod:`towtank.sandwich`), the tare's
+(clustered by run with the small-sample CR2 correction, :mod:`towtank.stats.intervals`), the tare's
 (clustered likewise) and the stated uncertainty of the weighed mass, with Student's t at the
 Welch–Satterthwaite degrees of freedom. The report's own method, a quadratic D_a(U) per
 acceleration level minus the steady quadratic D_s(U) averaged over their common speed range,
@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from towtank.reduce import PHASE_ACCEL, PHASE_STEADY, RunReduction
-from towtank.sandwich import cr2_covariance, welch_satterthwaite
-from towtank.tare import TareModel, tare_design
+from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
+from towtank.reduce.tare import TareModel, tare_design
+from towtank.stats.intervals import cr2_covariance, welch_satterthwaite
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -222,7 +222,7 @@ def joint_regression(
     The samples of one run share its zero, drift correction and filtered noise, so their errors
     are correlated, and a day has few runs per angle (4 to 10). The covariance is therefore the
     Bell–McCaffrey bias-reduced cluster-robust one (CR2) with Student's t at G − 1 degrees of
-    freedom, G the number of runs (:func:`towtank.sandwich.cr2_covariance`; Bell & McCaffrey
+    freedom, G the number of runs (:func:`towtank.stats.intervals.cr2_covariance`; Bell & McCaffrey
     2002, Imbens & Kolesár 2016, Cameron & Miller 2015 §VI). The usual CR1 correction
     (statsmodels' ``cov_type="cluster"``) is biased low with so few clusters, most where a few
     accelerated runs carry the leverage on M. With fewer than four runs no clustered
@@ -273,7 +273,7 @@ def fit_added_mass(
     independent parts, u_c² = u_reg² + u_tare² + u_m² (GUM, JCGM 100:2008, eq. 10): the
     regression's (CR2, clustered by run, G − 1 degrees of freedom), the subtracted tare's (its
     m_t goes one-for-one into X; its covariance is clustered by sting run likewise in
-    :func:`towtank.tare.fit_channel` and propagated by :func:`tare_covariance`, one component
+    :func:`towtank.reduce.tare.fit_channel` and propagated by :func:`tare_covariance`, one component
     per tare group with that fit's degrees of freedom) and the weighed mass's (``mass_sd``, a
     stated value: infinite degrees of freedom). The 95 % interval is X ± t₀.₉₇₅(ν_eff)·u_c with
     ν_eff from the Welch–Satterthwaite formula (GUM G.4.1). The second estimate, the report's
@@ -764,10 +764,10 @@ def load_reference(reference: str) -> dict[str, float]:
     from importlib import resources
 
     if reference == "remus":
-        with resources.files("towtank").joinpath("data", "sut2_table4.csv").open() as fh:
+        with resources.files("towtank.reference").joinpath("data", "sut2_table4.csv").open() as fh:
             df = pd.read_csv(fh, comment="#")
         return dict(zip(df["symbol"], df["remus_prime"].astype(float), strict=True))
-    from towtank.protocol import read_reference_csv
+    from towtank.ingest.protocol import read_reference_csv
 
     return read_reference_csv(reference)
 

@@ -121,7 +121,7 @@ def _err(msg: str) -> None:
 
 def cmd_process(args: argparse.Namespace) -> int:
     from towtank.errors import ProtocolError
-    from towtank.protocol import check_output_dir, load_protocol
+    from towtank.ingest.protocol import check_output_dir, load_protocol
 
     try:
         protocol = load_protocol(args.protocol)
@@ -137,7 +137,7 @@ def cmd_process(args: argparse.Namespace) -> int:
         return EXIT_UNUSABLE
     stamp = None
     if not args.no_cache:
-        from towtank.cache import DayStamp
+        from towtank.runtime.cache import DayStamp
 
         stamp = DayStamp(Path(out) / ".cache", protocol, Path(out),
                          {"report": not args.no_report, "date": args.date})
@@ -147,7 +147,7 @@ def cmd_process(args: argparse.Namespace) -> int:
             if not args.quiet:
                 print(text.rstrip("\n"))
             return code
-    from towtank import parallel
+    from towtank.runtime import parallel
 
     # --jobs, else the protocol's [processing] jobs, else every core
     if args.jobs is None:
@@ -162,8 +162,8 @@ def cmd_process(args: argparse.Namespace) -> int:
 
 def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: ANN001
     from towtank.errors import ProtocolError
+    from towtank.ingest.protocol import check_output_dir
     from towtank.pipeline import process_day
-    from towtank.protocol import check_output_dir
     from towtank.report import write_outputs
 
     show = not args.quiet and sys.stderr.isatty()
@@ -226,41 +226,21 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:
-    from towtank.inspect import inspect_run
+    from towtank.commands.inspect import inspect_run
 
     return inspect_run(args.runfile, protocol_path=args.protocol, png=args.png)
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    from towtank.scale_cli import scale_command
+    from towtank.commands.scale import scale_command
 
     return scale_command(args.protocol, speeds=args.speeds, out=args.out)
 
 
 def cmd_synth(args: argparse.Namespace) -> int:
-    from towtank import synthetic
+    from towtank.commands.synth import synth_command
 
-    if args.day == "samples":
-        synthetic.write_sample_days(args.outdir)
-        print(f"sample days written to {args.outdir}")
-        return EXIT_OK
-    formats = {k: v for k, v in (("file_format", args.file_format),
-                                 ("sheet_format", args.sheet_format)) if v is not None}
-    sheet = {"sheet_format": args.sheet_format} if args.sheet_format else {}
-    if args.day == "hull":
-        synthetic.make_hull_day(args.outdir, seed=args.seed, **formats)
-        sections = synthetic.hull_protocol_sections(".", "out", **sheet)
-    else:
-        synthetic.make_fin_day(args.outdir, seed=args.seed, **formats)
-        sections = synthetic.fin_protocol_sections(".", "out", **sheet)
-    protocol = synthetic.write_protocol(
-        Path(args.outdir) / "protocol.toml",
-        header=f"Synthetic {args.day} day, seed {args.seed} (towtank synth); truth in truth.json",
-        **sections,
-    )
-    print(f"synthetic {args.day} day written to {args.outdir}; process it with:\n"
-          f"  towtank process {protocol}")
-    return EXIT_OK
+    return synth_command(args)
 
 
 COMMANDS = {

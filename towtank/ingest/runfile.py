@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.masks import runs_of_true
-from towtank.protocol import ChannelMap, channel_map
-from towtank.robust import blocks, quantile, quantiles, robust_scale
+from towtank.ingest.protocol import ChannelMap, channel_map
+from towtank.signal.masks import runs_of_true
+from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
 REQUIRED_CHANNELS = ("time", "speed", "drag")
 OPTIONAL_CHANNELS = ("accel", "lift")
@@ -631,7 +631,7 @@ def despike(
     two samples on either side. The second test keeps real signal: at a kink (the end of a
     constant-acceleration stretch, say) the running median cuts the corner, but one side's
     extrapolation always runs through it. Robust scales come from
-    :func:`towtank.robust.robust_scale`, never below 1e-4 of the channel's range (noise-free
+    :func:`towtank.stats.robust.robust_scale`, never below 1e-4 of the channel's range (noise-free
     synthetic data).
     """
     n = x.size

@@ -57,7 +57,7 @@ class Water:
 
 @dataclass(frozen=True)
 class Myring:
-    """Myring hull description [m, deg]; see :mod:`towtank.geometry`."""
+    """Myring hull description [m, deg]; see :mod:`towtank.reference.geometry`."""
 
     a: float
     b: float
@@ -653,7 +653,7 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
     """Fill the areas and volume the protocol leaves out from the Myring description."""
     from dataclasses import replace
 
-    from towtank import geometry
+    from towtank.reference import geometry
 
     my = model.myring
     assert my is not None

@@ -1,0 +1,220 @@
+"""towtank as a library: the functions a notebook or a script calls.
+
+These are the command line's own steps, callable one by one::
+
+    import towtank
+
+    day = towtank.process_day("protocols/sut2_hull.toml", out="reports/day1")
+    day.coefficients          # coefficients.csv as a DataFrame
+    day.runs, day.fins, day.scaling, day.warnings, day.rejected
+
+    protocol = towtank.load_protocol("protocols/sut2_hull.toml")
+    raw = towtank.read_run("sample_runs/sut2_hull/data/run_020.csv.gz", protocol)
+    red = towtank.reduce_run(raw, protocol, run=20)
+    red.drag_mean_raw, red.speed_mean, red.windows
+
+Every function works from a plain script (with or without ``if __name__ == "__main__":``),
+from ``python -c``, ``python -`` and in IPython or Jupyter: where worker processes cannot be
+started safely for the calling program, the runs are reduced in this process (see
+:func:`towtank.runtime.parallel.main_is_importable`). Nothing is printed; problems come back
+as the DayResult's ``warnings`` and ``rejected``, or as :class:`towtank.errors.ProtocolError`
+for an unusable protocol or run sheet (what the command line turns into exit status 2).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from towtank.errors import ProtocolError
+
+if TYPE_CHECKING:
+    from towtank.ingest.protocol import Protocol
+    from towtank.ingest.runfile import RawRun
+    from towtank.pipeline import DayResult
+    from towtank.reduce.run import RunReduction
+
+
+def load_protocol(path: str | Path) -> Protocol:
+    """Read and check a protocol file (TOML).
+
+    Parameters
+    ----------
+    path : str or Path
+        The campaign's protocol; relative paths inside it are relative to its folder.
+
+    Returns
+    -------
+    Protocol
+        The validated settings: ``.campaign``, ``.model``, ``.water``, ``.channels``,
+        ``.processing`` and the other sections of docs/formats.md.
+
+    Raises
+    ------
+    ProtocolError
+        A missing or misspelt key, a value out of range or a path that does not exist, in one
+        sentence naming the key.
+    """
+    from towtank.ingest.protocol import load_protocol as _load
+
+    return _load(path)
+
+
+def _protocol(protocol: str | Path | Protocol) -> Protocol:
+    return load_protocol(protocol) if isinstance(protocol, str | Path) else protocol
+
+
+def process_day(
+    protocol: str | Path | Protocol,
+    out: str | Path | None = None,
+    jobs: int | None = None,
+    report: bool = True,
+    *,
+    cache: bool = True,
+    date: str | None = None,
+) -> DayResult:
+    """Reduce a test day and, with ``out``, write its tables and reports.
+
+    Parameters
+    ----------
+    protocol : str, Path or Protocol
+        The protocol file, or a protocol already loaded with :func:`load_protocol`.
+    out : str or Path, optional
+        Output folder. None (the default) writes nothing: the results are only returned.
+        Give the protocol's ``output_dir`` explicitly to write where ``towtank process``
+        writes.
+    jobs : int, optional
+        Worker processes; default the protocol's ``[processing] jobs``, else every core.
+        ``jobs=1`` reduces in this process.
+    report : bool, default True
+        With ``out``: also write report.xlsx, report.pdf and figures/ (else the CSV tables and
+        provenance.json only).
+    cache : bool, default True
+        With ``out``: keep and reuse reduced runs in ``out/.cache``.
+    date : str, optional
+        Test date printed in the report (YYYY-MM-DD), instead of the protocol's or the sheet's.
+
+    Returns
+    -------
+    DayResult
+        ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.fins`` (fins.csv),
+        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (list of sentences);
+        ``.rejected`` (run number -> sentence); ``.reductions`` (run number ->
+        :class:`~towtank.reduce.run.RunReduction`); ``.tares``; ``.protocol``.
+
+    Raises
+    ------
+    ProtocolError
+        The protocol, the run sheet or the output folder is unusable; nothing was written.
+    """
+    from towtank.pipeline import process_day as _process
+
+    path = protocol if isinstance(protocol, str | Path) else protocol.path
+    loaded = _protocol(protocol)
+    out_dir = None
+    if out is not None:
+        from towtank.ingest.protocol import check_output_dir
+
+        out_dir = check_output_dir(Path(out), loaded)
+    day = _process(
+        path, protocol=loaded, jobs=jobs,
+        cache_dir=Path(out_dir) / ".cache" if out_dir is not None and cache else None,
+    )
+    if date is not None:
+        day.report_date = date
+    if out_dir is not None:
+        from towtank.ingest.protocol import check_output_dir
+        from towtank.report import write_outputs
+
+        check_output_dir(out_dir, loaded, day.inputs)
+        write_outputs(day, out_dir, report=report)
+    return day
+
+
+def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) -> RawRun:
+    """Read one run file as the day would: calibrated channels in SI units, checked.
+
+    Parameters
+    ----------
+    file : str or Path
+        The run file (.csv, .csv.gz, .tdms and the other formats of docs/formats.md).
+    protocol : str, Path or Protocol, optional
+        Whose ``[channels]`` map the lab's columns and ``[processing]`` set the checks; default
+        the canonical channel names (time, speed, drag[, lift, accel]) in SI units.
+
+    Returns
+    -------
+    RawRun
+        ``.time`` [s], ``.speed`` [m/s], ``.drag`` [N], ``.lift`` [N] or None, ``.accel``
+        [m/s²] or None, ``.fs`` [Hz], ``.sha256`` of the bytes read, ``.notes``.
+
+    Raises
+    ------
+    towtank.errors.RunError
+        The file cannot be used; ``.reason`` is one sentence saying why.
+    """
+    from towtank.ingest.protocol import Processing, channel_map
+    from towtank.ingest.runfile import file_bytes, load_run
+
+    if protocol is None:
+        channels, p = channel_map({}), Processing()
+    else:
+        loaded = _protocol(protocol)
+        channels, p = loaded.channels, loaded.processing
+    path = Path(file)
+    return load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
+                    max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                    data=file_bytes(path))
+
+
+def reduce_run(
+    raw: RawRun,
+    protocol: str | Path | Protocol | None = None,
+    *,
+    run: int = 0,
+    file: str = "",
+    window_s: tuple[float, float] | None = None,
+    speed_nominal: float = math.nan,
+    accel_nominal: float = math.nan,
+) -> RunReduction:
+    """Reduce one run read by :func:`read_run` (before the tare is subtracted).
+
+    Parameters
+    ----------
+    raw : RawRun
+        The run's channels.
+    protocol : str, Path or Protocol, optional
+        Whose ``[processing]`` settings apply (filter, trims, bands); default settings without.
+    run : int
+        Run number, for the sentences of its notes.
+    file : str
+        File name, for the same.
+    window_s : (float, float), optional
+        A hand-set steady window [s] (the run sheet's window_start_s, window_end_s).
+    speed_nominal : float
+        Set speed [m/s] of the run sheet, cross-checked against the measured plateau.
+    accel_nominal : float
+        Set acceleration [m/s²], cross-checked likewise.
+
+    Returns
+    -------
+    RunReduction
+        ``.speed_mean`` [m/s], ``.drag_mean_raw`` [N] (steady mean, zero and drift removed,
+        tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still, accel, steady, decel as
+        (start, end) in seconds), ``.notes``, ``.warnings`` and the decimated samples.
+
+    Raises
+    ------
+    towtank.errors.RunError
+        The run cannot be reduced; ``.reason`` is one sentence saying why.
+    """
+    from towtank.ingest.protocol import Processing
+    from towtank.reduce.run import reduce_run as _reduce
+
+    processing = Processing() if protocol is None else _protocol(protocol).processing
+    return _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
+                   speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+
+
+__all__ = ["ProtocolError", "load_protocol", "process_day", "read_run", "reduce_run"]

@@ -1,0 +1,3 @@
+"""The ``towtank`` command line: ``cli`` (process, synth and the parser), ``inspect`` and
+``scale``.
+"""

@@ -1,0 +1,39 @@
+"""``towtank synth``: synthetic test days with known truth, from :mod:`towtank.testing`.
+
+The only production module that imports the test tooling: the generator stays out of the
+``process`` path, and a lab can still make a day whose truth is known to try towtank on.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+EXIT_OK = 0
+
+
+def synth_command(args: argparse.Namespace) -> int:
+    """``towtank synth OUTDIR --day hull|fin|samples``: write a synthetic day (or the samples)."""
+    from towtank.testing import synthetic
+
+    if args.day == "samples":
+        synthetic.write_sample_days(args.outdir)
+        print(f"sample days written to {args.outdir}")
+        return EXIT_OK
+    formats = {k: v for k, v in (("file_format", args.file_format),
+                                 ("sheet_format", args.sheet_format)) if v is not None}
+    sheet = {"sheet_format": args.sheet_format} if args.sheet_format else {}
+    if args.day == "hull":
+        synthetic.make_hull_day(args.outdir, seed=args.seed, **formats)
+        sections = synthetic.hull_protocol_sections(".", "out", **sheet)
+    else:
+        synthetic.make_fin_day(args.outdir, seed=args.seed, **formats)
+        sections = synthetic.fin_protocol_sections(".", "out", **sheet)
+    protocol = synthetic.write_protocol(
+        Path(args.outdir) / "protocol.toml",
+        header=f"Synthetic {args.day} day, seed {args.seed} (towtank synth); truth in truth.json",
+        **sections,
+    )
+    print(f"synthetic {args.day} day written to {args.outdir}; process it with:\n"
+          f"  towtank process {protocol}")
+    return EXIT_OK

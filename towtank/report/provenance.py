@@ -1,0 +1,198 @@
+"""What the report records of the day besides its tables: provenance (inputs with their sha256,
+versions, settings, geometry and scaling used) and the test date with where it comes from.
+
+Used by the workbook, the PDF and provenance.json alike, so that each says the same.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import platform
+import struct
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from towtank import __version__
+
+if TYPE_CHECKING:
+    from towtank.pipeline import DayResult
+
+
+def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Inputs with their sha256, program and library versions, settings used.
+
+    A hull day also records the geometry used (each area and the volume with where it came
+    from: given in the protocol, computed from the Myring description, or a default) and, when
+    scaled, the prototype, its water and the form factor.
+    """
+    import numpy
+    import scipy
+
+    from towtank.pipeline import geometry_used
+
+    p = day.protocol
+    if p.model is not None:
+        extra = {"geometry": {"geometry_source": p.model.geometry_source,
+                              "quantities": geometry_used(day)},
+                 **(extra or {})}
+    if day.scaling_result is not None:
+        extra = {"scaling": _scaling_provenance(day), **(extra or {})}
+    settings = {
+        "processing": asdict(p.processing),
+        "trim_s_used": p.processing.trim,
+        "water": asdict(p.water),
+        "channels": {k: asdict(v) for k, v in p.channels.items()},
+        "reference": p.campaign.reference,
+    }
+    if p.model is not None:  # stated standard uncertainties [kg], [m] (fit, coefficients_table)
+        settings["model_uncertainty"] = {
+            k: getattr(p.model, k)
+            for k in ("mass_uncertainty_kg", "length_uncertainty_m", "diameter_uncertainty_m")
+        }
+    return {
+        "program": "towtank",
+        "version": __version__,
+        "python": platform.python_version(),
+        "libraries": {
+            "numpy": numpy.__version__,
+            "scipy": scipy.__version__,
+            "pandas": pd.__version__,
+        },
+        "protocol": str(p.path),
+        "campaign": p.campaign.name,
+        "inputs": [{"path": k, "sha256": v} for k, v in day.inputs.items()],
+        "settings": settings,
+        "runs": {"total": int(len(day.sheet)), "rejected": day.n_rejected},
+        **(extra or {}),
+    }
+
+
+def _scaling_provenance(day: DayResult) -> dict[str, Any]:
+    """The prototype, its water and the form factor behind scaling.csv."""
+    sr = day.scaling_result
+    proto = day.protocol.prototype
+    ff = sr.form_factor
+    return {
+        "scale": sr.scale,
+        "length_prototype_m": sr.length_prototype,
+        "prototype_water": asdict(proto.water) if proto is not None else None,
+        "rho_prototype": sr.rho_p,
+        "nu_prototype": sr.nu_p,
+        "wetted_area_prototype_m2": sr.wetted_area_prototype,
+        "delta_cf": sr.delta_cf,
+        "form_factor": None if ff is None else {
+            "one_plus_k": ff.one_plus_k,
+            "std": ff.std if math.isfinite(ff.std) else None,  # NaN (one speed): null
+            "n_speeds": ff.n,
+            "n_runs": ff.n_runs,
+            "speeds_m_s": [float(v) for v in ff.speeds],
+            "one_plus_k_per_speed": [float(v) for v in ff.speed_values],
+            "re_range": list(ff.re_range),
+        },
+    }
+
+
+# ------------------------------------------------------------------------------ test date
+def _iso(value: Any) -> str | None:
+    """A date-like value as YYYY-MM-DD, or None."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return None
+    ts = pd.to_datetime(str(value).strip(), errors="coerce")
+    return None if ts is pd.NaT or pd.isna(ts) else ts.strftime("%Y-%m-%d")
+
+
+def _gzip_mtime(path: Path) -> str | None:
+    """The modification time stored in a gzip header (0 = not stored), as a date."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(10)
+    except OSError:
+        return None
+    if len(head) < 10 or head[:2] != b"\x1f\x8b":
+        return None
+    (mtime,) = struct.unpack("<I", head[4:8])
+    if mtime == 0:
+        return None
+    return dt.datetime.fromtimestamp(mtime, dt.UTC).strftime("%Y-%m-%d")
+
+
+def _tdms_date(path: Path) -> str | None:
+    """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
+    try:
+        from nptdms import TdmsFile
+
+        meta = TdmsFile.read_metadata(str(path))
+        objs = [meta] + list(meta.groups())
+        objs += [c for g in meta.groups() for c in g.channels()]
+    except Exception:  # noqa: BLE001 - a date is optional; a damaged file just has none
+        return None
+    dates = []
+    for obj in objs:
+        for value in getattr(obj, "properties", {}).values():
+            if isinstance(value, np.datetime64 | dt.datetime):
+                iso = _iso(value)
+                if iso and iso > "1904-01-01":
+                    dates.append(iso)
+    return max(dates) if dates else None
+
+
+def date_from_inputs(day: DayResult) -> str | None:
+    """The newest date recorded in the inputs themselves, or None.
+
+    Looked for, in this order: a ``date`` or ``test_date`` column of the run sheet; the
+    timestamps stored inside the run files (the gzip header of .csv.gz files, datetime
+    properties of TDMS files). File-system times are never used: they change with a copy.
+    """
+    sheet = day.sheet
+    for col in ("test_date", "date"):
+        if col in sheet.columns:
+            dates = [d for d in (_iso(v) for v in sheet[col]) if d]
+            if dates:
+                return max(dates)
+    data_dir = day.protocol.campaign.data_dir
+    dates = []
+    for red in day.reductions.values():
+        path = data_dir / red.file
+        name = path.name.lower()
+        if name.endswith(".gz"):
+            d = _gzip_mtime(path)
+        elif name.endswith(".tdms"):
+            d = _tdms_date(path)
+        else:
+            d = None
+        if d:
+            dates.append(d)
+    return max(dates) if dates else None
+
+
+def report_date(day: DayResult) -> tuple[str | None, str]:
+    """The test date printed in the report and where it comes from.
+
+    ``day.report_date`` (the command line's --date), then the protocol's [report] date or
+    [campaign] test_date, then :func:`date_from_inputs`; (None, "not given") otherwise.
+    """
+    if day.report_date:
+        return str(day.report_date), "given on the command line"
+    p = day.protocol
+    report = getattr(p, "report", None)
+    if report is not None and getattr(report, "date", None):
+        return str(report.date), "protocol [report] date"
+    if getattr(p.campaign, "test_date", None):
+        return str(p.campaign.test_date), "protocol [campaign] test_date"
+    found = date_from_inputs(day)
+    if found:
+        return found, "newest date recorded in the run sheet or run files"
+    return None, "not given"
+
+
+def creation_date(date: str | None) -> dt.datetime | None:
+    """The PDF's CreationDate: midnight UTC of the report date (None if there is none)."""
+    iso = _iso(date) if date else None
+    if iso is None:
+        return None
+    return dt.datetime.strptime(iso, "%Y-%m-%d").replace(tzinfo=dt.UTC)
