@@ -559,7 +559,8 @@ def test_missing_unreadable_and_unknown_files(tmp_path):
     (tmp_path / "run_dir.csv").mkdir()
     with pytest.raises(RunError, match="is a folder, not a data file"):
         file_bytes(tmp_path / "run_dir.csv")
-    with pytest.raises(RunError, match=r"run_1.xlsx is neither .csv, .csv.gz nor .tdms"):
+    with pytest.raises(RunError, match=r"run_1.xlsx: towtank does not know the format of a "
+                                       r"'\.xlsx' file \(it reads .*\.csv.*\.tdms"):
         load_run(tmp_path / "run_1.xlsx", {}, data=b"x")
 
 

@@ -157,15 +157,16 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
     from towtank.ingest.protocol import Processing, channel_map
     from towtank.ingest.runfile import file_bytes, load_run
 
+    read = None
     if protocol is None:
         channels, p = channel_map({}), Processing()
     else:
         loaded = _protocol(protocol)
-        channels, p = loaded.channels, loaded.processing
+        channels, p, read = loaded.channels, loaded.processing, loaded.read
     path = Path(file)
     return load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
                     max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                    data=file_bytes(path))
+                    data=file_bytes(path), options=read)
 
 
 def reduce_run(

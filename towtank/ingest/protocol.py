@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
@@ -176,6 +177,7 @@ class Protocol:
     processing: Processing
     report: ReportOptions
     warnings: tuple[str, ...] = field(default=())
+    read: ReadOptions = field(default_factory=ReadOptions)
 
     @property
     def name(self) -> str:
@@ -260,8 +262,17 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "pdf": ("bool", False),
         "figures": ("bool", False),
     },
+    "read": {
+        "format": ("str", False),
+        "delimiter": ("str", False),
+        "decimal": ("str", False),
+        "skip_rows": ("int", False),
+        "group": ("str", False),
+        "sample_rate_hz": (_NUM, False),
+    },
 }
-TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report")
+TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
+             "read")
 
 _KIND_WORDS = {
     "str": "a text string",
@@ -633,6 +644,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             )
     processing = Processing(**proc_values)
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
+    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
 
     warnings = _unit_warnings(model, fin, water, prototype)
     return Protocol(
@@ -646,7 +658,27 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         processing=processing,
         report=report,
         warnings=tuple(warnings),
+        read=read,
     )
+
+
+def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
+    """``[read]``: how run files are read (docs/formats.md, "Run files as recorded")."""
+    choices = {"format": FORMATS, "delimiter": tuple(DELIMITERS), "decimal": ("auto", ".", ",")}
+    for key, allowed in choices.items():
+        if key in values and values[key] not in allowed:
+            listed = ", ".join(repr(a) for a in allowed)
+            raise ProtocolError(
+                f"{src}: '{key}' in [read] is {values[key]!r}; it must be one of {listed}."
+            )
+    if values.get("skip_rows", 0) < 0:
+        raise ProtocolError(f"{src}: 'skip_rows' in [read] must be 0 or more.")
+    rate = values.get("sample_rate_hz")
+    if rate is not None and not 1.0 <= rate <= 1.0e6:
+        raise ProtocolError(
+            f"{src}: 'sample_rate_hz' in [read] must lie in 1–1e6 Hz, but it is {rate:g}."
+        )
+    return ReadOptions(**values)
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:

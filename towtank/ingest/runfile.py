@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import gzip
 import hashlib
-import io
 import os
 import zlib
 from dataclasses import dataclass, field
@@ -27,7 +26,25 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
+from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
+from towtank.ingest.plaincsv import read_csv_columns
 from towtank.ingest.protocol import ChannelMap, channel_map
+from towtank.ingest.readers import (
+    FS_KEY,
+    WF_TIME_KEY,
+    ReadOptions,
+    column_unit,
+    file_format,
+    plain_csv,
+    read_hdf5_columns,
+    read_lvm_columns,
+    read_mat_columns,
+    read_tdms_columns,
+    read_text_columns,
+    stated_units,
+    unit_factor,
+)
 from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
@@ -45,8 +62,6 @@ MAX_SPEED = 50.0  # [m/s] no towing carriage is faster: a larger value is a unit
 MAX_VALUE = 1.0e9  # [SI] larger values are corrupted numbers (and would overflow the filters)
 MAX_TIME = 1.0e11  # [s] over 3000 years: not a time in seconds
 
-_ROWS_KEY = "__rows__"
-_INVALID_KEY = "__invalid_rows__"
 _LABEL_KEY = "__label__"
 
 
@@ -155,12 +170,6 @@ class _Where:
         return _Where(self.rows[keep], self.label)
 
 
-def _list_rows(rows: np.ndarray, limit: int = 5) -> str:
-    shown = ", ".join(str(int(r)) for r in rows[:limit])
-    more = ", …" if rows.size > limit else ""
-    return f"row{'s' if rows.size > 1 else ''} {shown}{more}"
-
-
 # ------------------------------------------------------------------------------------ readers
 def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Float64 array and a mask of entries that hold text that is not a number."""
@@ -178,247 +187,24 @@ def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return num.to_numpy(dtype=np.float64, na_value=np.nan), bad
 
 
-def _sniff_delimiter(header: bytes) -> str:
-    if b"," in header:
-        return ","
-    if b";" in header:
-        return ";"
-    if b"\t" in header:
-        return "\t"
-    return ","
+def read_columns(
+    path: Path, data: bytes | None = None, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Read a run file's columns (raw units) from its bytes, in the format of ``[read]``.
 
-
-def _line_table(data: bytes, delim: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Per line of the file: 1-based number, field count, emptiness; and the header's index.
-
-    A plain count of delimiters (numeric run files do not quote fields); it is used only to
-    give messages the rows a text editor shows, never to parse values.
+    Plain CSV goes through pyarrow (:func:`read_csv_columns`); other text, LVM, TDMS, MATLAB
+    and HDF5 through :mod:`towtank.ingest.readers`.
     """
-    buf = np.frombuffer(data, dtype=np.uint8)
-    nl = np.flatnonzero(buf == 10)
-    starts = np.concatenate(([0], nl + 1))
-    ends = np.concatenate((nl, [buf.size]))
-    if starts[-1] >= buf.size:  # nothing after the final line break
-        starts, ends = starts[:-1], ends[:-1]
-    if starts.size == 0:
-        return np.array([], int), np.array([], int), np.array([], bool), 0
-    last = np.maximum(ends - 1, 0)
-    cr = (ends > starts) & (buf[last] == 13)
-    eff_end = ends - cr
-    empty = eff_end <= starts
-    cum = np.concatenate(([0], np.cumsum(buf == ord(delim))))
-    nfields = cum[eff_end] - cum[starts] + 1
-    numbers = np.arange(1, starts.size + 1)
-    nonempty = np.flatnonzero(~empty)
-    header = int(nonempty[0]) if nonempty.size else 0
-    return numbers, nfields, empty, header
-
-
-def _truncated_tail(data: bytes, delim: str, n_header: int) -> bool:
-    """True when the file does not end with a line break and its last line is cut short.
-
-    A last line with fewer fields than the header is cut, and so is one whose last value is
-    empty or not a number (``1.2e``, ``-``). A complete last line without a final line break is
-    fine (many programs write no final line break); a number cut to a shorter number cannot be
-    told from a complete one, and is at worst one odd sample at the end of the still window.
-    """
-    if data.endswith((b"\n", b"\r")):
-        return False
-    last = data[data.rfind(b"\n") + 1 :].rstrip(b"\r")
-    if not last.strip():
-        return False
-    fields = last.split(delim.encode())
-    if len(fields) != n_header:
-        return len(fields) < n_header  # more fields: a malformed row, skipped and counted
-    tail = fields[-1].strip()
-    try:
-        float(tail)
-    except ValueError:
-        return True
-    return False
-
-
-def _count_byte(data: bytes, byte: int) -> int:
-    """How many times ``byte`` occurs in ``data`` (a line count for ``byte`` 10)."""
-    return int(np.count_nonzero(np.frombuffer(data, dtype=np.uint8) == byte))
-
-
-def _arrow_table(data: bytes, delim: str, handler, whole: bool = False):  # noqa: ANN001
-    import pyarrow as pa
-    import pyarrow.csv as pacsv
-
-    block = max(1 << 22, len(data) + 1) if whole else 1 << 22
-    return pacsv.read_csv(
-        pa.BufferReader(data),
-        read_options=pacsv.ReadOptions(block_size=block),
-        parse_options=pacsv.ParseOptions(delimiter=delim, invalid_row_handler=handler),
-        convert_options=pacsv.ConvertOptions(
-            strings_can_be_null=True,
-            null_values=["", "NaN", "nan", "NA", "N/A", "null", "NULL"],
-        ),
-    )
-
-
-def _numeric_column(column) -> np.ndarray:  # noqa: ANN001 - a pyarrow ChunkedArray
-    """A numeric Arrow column as float64, NaN where a value is missing.
-
-    Read from the Arrow buffers (values and validity bitmap, the Arrow columnar format)
-    rather than with ``to_numpy``, which loads pandas: the reduction's worker processes never
-    need pandas otherwise, and loading it costs each of them about 0.3 s.
-    """
-    parts = []
-    for chunk in column.chunks:
-        n, off = len(chunk), chunk.offset
-        validity, data = chunk.buffers()[:2]
-        dtype = np.dtype(chunk.type.to_pandas_dtype())
-        values = np.frombuffer(data, dtype=dtype, count=off + n)[off:].astype(np.float64)
-        if chunk.null_count:
-            bits = np.unpackbits(np.frombuffer(validity, dtype=np.uint8), bitorder="little")
-            values[~bits[off : off + n].astype(bool)] = np.nan
-        parts.append(values)
-    if not parts:
-        return np.array([], dtype=np.float64)
-    return parts[0] if len(parts) == 1 else np.concatenate(parts)
-
-
-def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Parse CSV text (already decompressed) into columns.
-
-    Returns the columns (float64 where numeric, object arrays where some values are text) and
-    notes. Two private entries come with them: ``__rows__``, the file row of every data row
-    (header = row 1), and ``__invalid_rows__``, the rows skipped for a wrong number of fields.
-    A UTF-8 byte-order mark, Windows line ends and blank lines are accepted. A last line cut
-    short is a RunError naming its row (truncated file).
-    """
-    import pyarrow as pa
-
-    if data.startswith(b"\xef\xbb\xbf"):
-        data = data[3:]
-    if not data or data.isspace():
-        raise RunError(f"{name} is empty (0 data rows)")
-    if not data.isascii():
-        try:
-            data.decode("utf-8")
-        except UnicodeDecodeError:  # not UTF-8: read it as Latin-1 (every byte is a character)
-            data = data.decode("latin-1").encode("utf-8")
-    first = len(data) - len(data.lstrip(b"\r\n")) if data[:1] in (b"\r", b"\n") else 0
-    end = data.find(b"\n", first)
-    header_line = data[first : end if end >= 0 else len(data)]
-    delim = _sniff_delimiter(header_line)
-    n_header = header_line.rstrip(b"\r").count(delim.encode()) + 1
-    if _truncated_tail(data, delim, n_header):
-        last_row = data.count(b"\n") + 1
-        raise RunError(f"{name} ends mid-line at row {last_row} (truncated file)")
-
-    notes: list[str] = []
-    n_invalid = [0]
-
-    def handler(row) -> str:  # noqa: ANN001 - pyarrow.csv.InvalidRow
-        n_invalid[0] += 1
-        return "skip"
-
-    table = None
-    errors: list[str] = []
-    for whole in (False, True):  # the second time, column types are inferred from all rows
-        n_invalid[0] = 0
-        try:
-            table = _arrow_table(data, delim, handler, whole)
-            break
-        except (pa.ArrowException, UnicodeDecodeError, ValueError) as exc:
-            errors.append(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
-    if table is None:
-        raise RunError(f"{name} is not a readable CSV table ({errors[-1]})")
-    if table.num_columns == 0 or table.num_rows == 0:
-        raise RunError(f"{name} has a header but no data rows")
-
-    # file rows of the data rows (and of the skipped ones) for the messages
-    rows = np.arange(table.num_rows) + 2
-    invalid_rows = np.array([], dtype=int)
-    # blank lines shift the rows: more line breaks than header + rows + skipped rows tells
-    # (counting the byte with numpy is ~7x faster than bytes.count, ~15x than searching for
-    # b"\n\n" and b"\n\r\n")
-    n_lines = _count_byte(data, 10) + (not data.endswith(b"\n"))
-    if n_invalid[0] or n_lines > table.num_rows + 1 or data.startswith((b"\n", b"\r")):
-        numbers, nfields, empty, header = _line_table(data, delim)
-        body = np.arange(numbers.size) > header
-        good = body & ~empty & (nfields == n_header)
-        bad = body & ~empty & (nfields != n_header)
-        if int(good.sum()) == table.num_rows:
-            rows = numbers[good]
-            invalid_rows = numbers[bad]
-        else:
-            invalid_rows = np.full(n_invalid[0], -1)
-    if n_invalid[0]:
-        if invalid_rows.size != n_invalid[0]:
-            invalid_rows = np.full(n_invalid[0], -1)
-        known = invalid_rows.size and int(invalid_rows.min()) > 0
-        where = _list_rows(invalid_rows) if known else "rows"
-        notes.append(
-            f"{n_invalid[0]} row(s) with the wrong number of fields skipped ({where})"
-        )
-
-    cols: dict[str, np.ndarray] = {}
-    seen: set[str] = set()
-    for col_name, column in zip(table.column_names, table.columns, strict=True):
-        key = col_name.strip()
-        if key in seen:
-            key = f"{key} (duplicate)"
-        seen.add(key)
-        if pa.types.is_floating(column.type) or pa.types.is_integer(column.type):
-            cols[key] = _numeric_column(column)
-        elif pa.types.is_null(column.type):
-            cols[key] = np.full(table.num_rows, np.nan)
-        elif pa.types.is_timestamp(column.type):
-            ns = column.cast(pa.int64()).to_numpy(zero_copy_only=False).astype(np.float64)
-            first = ns[np.isfinite(ns)][0] if np.isfinite(ns).any() else 0.0
-            cols[key] = (ns - first) * 1e-9
-        else:
-            cols[key] = column.to_numpy(zero_copy_only=False)
-    cols[_ROWS_KEY] = rows
-    cols[_INVALID_KEY] = invalid_rows
-    return cols, notes
-
-
-def read_tdms_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], list[str]]:
-    """All channels of a TDMS file as float64 arrays, keyed by channel name (and group/channel)."""
-    import logging
-
-    from nptdms import TdmsFile
-
-    # nptdms logs what it finds odd in a damaged file; the run's one sentence says it instead
-    logging.getLogger("nptdms").setLevel(logging.ERROR)
-
-    if not data:
-        raise RunError(f"{name} is empty (0 bytes)")
-    try:
-        tdms = TdmsFile.read(io.BytesIO(data))
-        cols: dict[str, np.ndarray] = {}
-        for group in tdms.groups():
-            for channel in group.channels():
-                arr = np.asarray(channel[:])
-                if arr.dtype.kind not in "fiu":
-                    continue
-                with np.errstate(invalid="ignore", over="ignore"):
-                    arr = arr.astype(np.float64, copy=False)
-                cols.setdefault(channel.name, arr)
-                cols[f"{group.name}/{channel.name}"] = arr
-    except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
-        reason = f"{type(exc).__name__}: {exc}"
-        raise RunError(f"{name} is not a readable TDMS file ({reason})") from None
-    if not cols:
-        raise RunError(f"{name} holds no numeric channels")
-    cols[_LABEL_KEY] = np.array([], dtype=float)
-    return cols, []
-
-
-def read_columns(path: Path, data: bytes | None = None) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Read a run file's columns (raw units) from its bytes."""
-    kind = file_kind(path)
     if data is None:
         data = file_bytes(path)
-    if kind == "tdms":
-        return read_tdms_columns(data, path.name)
-    if kind == "csv.gz":
+    fmt, gz = file_format(path, data, options)
+    if fmt == "tdms":
+        return read_tdms_columns(data, path.name, options)
+    if fmt == "mat":
+        return read_mat_columns(data, path.name, options)
+    if fmt == "hdf5":
+        return read_hdf5_columns(data, path.name, options)
+    if gz:
         if not data:
             raise RunError(f"{path.name} is empty (0 bytes)")
         try:
@@ -440,7 +226,13 @@ def read_columns(path: Path, data: bytes | None = None) -> tuple[dict[str, np.nd
             f"{path.name} is not a text file: it holds NUL bytes (the first at byte {nul}), "
             "as a file the DAQ never finished writing does"
         )
-    return read_csv_columns(data, path.name)
+    if fmt == "lvm":
+        return read_lvm_columns(data, path.name, options)
+    opts = options or ReadOptions()
+    if (fmt == "csv" and opts.delimiter in ("auto", ",") and opts.decimal in ("auto", ".")
+            and not opts.skip_rows and plain_csv(data)):
+        return read_csv_columns(data, path.name)
+    return read_text_columns(data, path.name, opts)
 
 
 # ------------------------------------------------------------------------------ checks/repairs
@@ -757,13 +549,20 @@ def _check_range(x: np.ndarray, t: np.ndarray, name: str, file: str, where: _Whe
 
 # ------------------------------------------------------------------------------------ mapping
 def map_channels(
-    cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], name: str
+    cols: dict[str, np.ndarray],
+    mapping: dict[str, ChannelMap],
+    name: str,
+    *,
+    fallback_time: np.ndarray | None = None,
+    used: dict[str, str] | None = None,
 ) -> dict[str, np.ndarray]:
     """Canonical channels from raw columns (not yet calibrated).
 
     The required channels (time, speed, drag) must be present; accel and lift are optional
     unless the protocol maps them explicitly. Column names are matched exactly, then with
-    surrounding blanks ignored.
+    surrounding blanks ignored. ``fallback_time`` (waveform timing or a stated sample rate, see
+    :func:`fallback_time`) stands in for a time column that is neither mapped nor found;
+    ``used`` receives the column each channel came from.
     """
     full = channel_map(mapping)
     out: dict[str, np.ndarray] = {}
@@ -771,6 +570,14 @@ def map_channels(
     stripped = {c.strip(): c for c in found}
     for canon, cm in full.items():
         key = cm.column if cm.column in cols else stripped.get(cm.column.strip())
+        if key is None and canon == "time" and "time" not in mapping and \
+                fallback_time is not None:
+            out["time"] = fallback_time
+            if used is not None:
+                used["time"] = "time (from the file's timing)"
+            continue
+        if key is not None and used is not None:
+            used[canon] = key
         if key is not None:
             if f"{key} (duplicate)" in cols:
                 raise RunError(
@@ -784,10 +591,62 @@ def map_channels(
                 else f"expected as the column '{canon}' (no [channels] mapping)"
             )
             listed = ", ".join(f"'{c}'" for c in found) or "none"
+            if canon == "time" and "time" not in mapping:
+                how += (", no LabVIEW waveform timing (wf_increment) and no [read] "
+                        "sample_rate_hz")
             raise RunError(
                 f"{name}: the {canon} channel is missing ({how}); columns found: {listed}"
             )
     return out
+
+
+def calibrate(
+    numeric: dict[str, np.ndarray],
+    full: dict[str, ChannelMap],
+    used: dict[str, str],
+    units: dict[str, str],
+    name: str,
+    notes: list[str],
+) -> dict[str, np.ndarray]:
+    """Raw columns to SI channels: value = gain·(raw − offset) where ``[channels]`` gives a
+    calibration, else the column's unit (stated by the file or in its name, ``Speed (mm/s)``)
+    converted to SI (:func:`towtank.ingest.readers.unit_factor`); infinities become missing."""
+    out = {}
+    for canon, arr in numeric.items():
+        cm = full[canon]
+        if cm.gain != 1.0 or cm.offset != 0.0:
+            with np.errstate(all="ignore"):
+                arr = cm.gain * (arr - cm.offset)
+        else:
+            column = used.get(canon, cm.column)
+            unit = column_unit(column, units)
+            factor = unit_factor(canon, unit, column, name)
+            if factor != 1.0:
+                arr = arr * factor
+                notes.append(f"{canon} converted from {unit} to SI (×{factor:g})")
+        inf = np.isinf(arr)
+        if inf.any():
+            arr = np.where(inf, np.nan, arr)
+            notes.append(f"{int(inf.sum())} infinite {canon} value(s) treated as missing")
+        out[canon] = arr
+    return out
+
+
+def fallback_time(
+    cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], sample_rate_hz: float = 0.0
+) -> np.ndarray | None:
+    """Time [s] of a file without a time column: LabVIEW waveform timing, else ``k/fs`` with the
+    file's stated sample rate or ``[read] sample_rate_hz``; None when there is neither."""
+    if WF_TIME_KEY in cols:
+        return np.asarray(cols[WF_TIME_KEY], dtype=np.float64)
+    fs = float(cols[FS_KEY][0]) if FS_KEY in cols else float(sample_rate_hz or 0.0)
+    if fs <= 0:
+        return None
+    full = channel_map(mapping)
+    ref = cols.get(full["drag"].column)
+    if ref is None:
+        ref = next((v for k, v in cols.items() if not k.startswith("__")), None)
+    return None if ref is None else np.arange(np.asarray(ref).size, dtype=np.float64) / fs
 
 
 def load_run(
@@ -798,6 +657,7 @@ def load_run(
     max_bad_row_fraction: float = 0.01,
     do_despike: bool = True,
     data: bytes | None = None,
+    options: ReadOptions | None = None,
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -817,6 +677,8 @@ def load_run(
         Replace isolated spikes in speed, forces and accel by interpolation.
     data : bytes, optional
         The file's bytes when already read (for hashing).
+    options : ReadOptions, optional
+        The protocol's ``[read]`` section (format, separator, decimal, group, sample rate).
 
     Raises
     ------
@@ -826,7 +688,8 @@ def load_run(
     if data is None:
         data = file_bytes(path)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike)
+        return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
+                         options or ReadOptions())
 
 
 def _load_run(
@@ -836,14 +699,19 @@ def _load_run(
     max_nan_gap_s: float,
     max_bad_row_fraction: float,
     do_despike: bool,
+    options: ReadOptions,
 ) -> RawRun:
+    """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
+    (:func:`calibrate`) -> time base -> gaps, clipping, spikes, ranges."""
     name = path.name
     digest = sha256_bytes(data)
-    cols, notes = read_columns(path, data)
+    cols, notes = read_columns(path, data, options)
     invalid = cols.pop(_INVALID_KEY, np.array([], dtype=int))
     rows = cols.pop(_ROWS_KEY, None)
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
-    chans = map_channels(cols, mapping, name)
+    used: dict[str, str] = {}
+    chans = map_channels(cols, mapping, name, used=used,
+                         fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
 
     sizes = {k: int(np.asarray(v).size) for k, v in chans.items()}
@@ -886,17 +754,7 @@ def _load_run(
             numeric = {k: v[keep] for k, v in numeric.items()}
             where = where.subset(keep)
 
-    # --- calibration, then infinities are missing values
-    for canon, arr in numeric.items():
-        cm = full[canon]
-        if cm.gain != 1.0 or cm.offset != 0.0:
-            with np.errstate(all="ignore"):
-                arr = cm.gain * (arr - cm.offset)
-        inf = np.isinf(arr)
-        if inf.any():
-            arr = np.where(inf, np.nan, arr)
-            notes.append(f"{int(inf.sum())} infinite {canon} value(s) treated as missing")
-        numeric[canon] = arr
+    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
 
     # --- time: a short stretch of missing times is interpolated by row (the clock is regular;
     # the time checks below still see any irregularity around it); a long one rejects the run

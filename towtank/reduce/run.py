@@ -468,6 +468,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             max_bad_row_fraction=p.max_bad_row_fraction,
             do_despike=p.despike,
             data=data,
+            options=protocol.read,
         )
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)

@@ -33,7 +33,7 @@ import sys
 import tempfile
 import time
 import zlib
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +50,11 @@ def _num(x: Any) -> Any:
     return None if isinstance(x, float) and math.isnan(x) else x
 
 
+@dataclass(frozen=True)
+class _NoRead:
+    """Stand-in for a protocol object without ``[read]`` (tests' stubs)."""
+
+
 def protocol_settings(protocol: Any) -> dict[str, Any]:
     """The part of :func:`settings_key`'s payload that is the same for every run of a day."""
     return {
@@ -57,6 +62,7 @@ def protocol_settings(protocol: Any) -> dict[str, Any]:
         "version": __version__,
         "processing": asdict(protocol.processing),
         "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
+        "read": asdict(getattr(protocol, "read", None) or _NoRead()),
     }
 
 

@@ -27,6 +27,7 @@ from towtank.testing.instruments import (
     simulate_run,
     write_run_file,
 )
+from towtank.testing.layouts import LAYOUTS
 from towtank.testing.truth import (
     FIN_SAMPLE_DATE,
     FIN_SAMPLE_SEED,
@@ -366,8 +367,9 @@ def _make_day(
     tdms_dtype: Literal["float64", "float32"] = "float64",
     date: str | _dt.date | None = None,
 ) -> DayTruth:
-    if file_format not in ("csv", "csv.gz", "tdms"):
-        raise ValueError(f"file_format must be 'csv', 'csv.gz' or 'tdms', not {file_format!r}.")
+    if file_format not in ("csv", "csv.gz", "tdms", *LAYOUTS):
+        raise ValueError(f"file_format must be 'csv', 'csv.gz', 'tdms' or one of "
+                         f"{', '.join(LAYOUTS)}, not {file_format!r}.")
     if sheet_format not in ("csv", "xlsx"):
         raise ValueError(f"sheet_format must be 'csv' or 'xlsx', not {sheet_format!r}.")
     out_dir = Path(out_dir)
@@ -429,13 +431,14 @@ def _make_day(
             tank_length_m=tank_length_m,
             accel_channel=accel_channel,
         )
-        file_name = f"run_{number:03d}.{file_format}"
+        file_name = f"run_{number:03d}.{LAYOUTS.get(file_format, file_format)}"
         write_run_file(
             frame,
             data_dir / file_name,
             channel_style=channel_style,
             channels=channels,
             tdms_dtype=tdms_dtype,
+            layout=file_format if file_format in LAYOUTS else None,
         )
         row = {
             "run": int(number),

@@ -383,8 +383,10 @@ def write_run_file(
     channel_style: ChannelStyle = "canonical",
     channels: LabChannels | None = None,
     tdms_dtype: Literal["float64", "float32"] = "float64",
+    layout: str | None = None,
 ) -> Path:
-    """Write one run file; the format follows the name: ``.csv``, ``.csv.gz`` or ``.tdms``.
+    """Write one run file; the format follows the name: ``.csv``, ``.csv.gz`` or ``.tdms``,
+    or ``layout`` (one of :data:`towtank.testing.layouts.LAYOUTS`: other labs' files).
 
     CSV has a header row; ``.csv.gz`` is gzip with a zero timestamp (same bytes for the same
     data); TDMS has one group ``data`` with one channel per column, time included (time always
@@ -401,6 +403,8 @@ def write_run_file(
     tdms_dtype : {"float64", "float32"}, default "float64"
         Storage of the non-time TDMS channels; float32 (LabVIEW SGL) halves the file and keeps
         ~7 significant digits, far below the noise.
+    layout : str, optional
+        Write the file as another lab's software does (:mod:`towtank.testing.layouts`).
 
     Returns
     -------
@@ -409,6 +413,18 @@ def write_run_file(
     if tdms_dtype not in ("float64", "float32"):
         raise ValueError(f"tdms_dtype must be 'float64' or 'float32', not {tdms_dtype!r}.")
     path = Path(path)
+    if layout is not None:
+        from towtank.testing.layouts import layout_channels, write_layout
+
+        lab = layout_channels(layout, channels or LabChannels())
+        out = to_file_frame(frame, channel_style, lab)
+        units = {}
+        for canon in frame.columns:
+            col = canon if channel_style == "canonical" else getattr(lab, canon)
+            lab_force = channel_style == "lab" and canon in ("drag", "lift")
+            units[col] = "V" if lab_force else _UNITS[canon]
+        time_col = "time" if channel_style == "canonical" else lab.time
+        return write_layout(layout, out, path, time_col, units)
     out = to_file_frame(frame, channel_style, channels)
     name = path.name.lower()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,674 @@
+"""Run files as labs record them: text in any local habit, LabVIEW TDMS and LVM, MATLAB, HDF5.
+
+Every reader takes the file's bytes (read once: the same bytes give the sha256) and returns the
+lab's raw columns, ``name -> float64 array`` (object arrays where a column holds text), with a
+few private entries beside them that the channel mapping of :mod:`towtank.ingest.runfile` uses:
+
+``__units__``
+    0-d object array holding ``{column: unit}`` for the units a file states (a units row under
+    the header, TDMS ``unit_string``, HDF5/MAT attributes); units in a header such as
+    ``Speed (mm/s)`` are read from the name itself.
+``__wf_time__``
+    the time built from LabVIEW waveform timing (``wf_start_offset + k·wf_increment``) when
+    the file has no time channel.
+``__fs__``
+    a sample rate the file states (``fs``, ``sample_rate``, ``Fs`` variables or attributes).
+
+Formats (``[read] format``; ``auto`` takes the extension, then the content):
+
+=========  ==================================================================================
+csv        the fast pyarrow path for plain comma-separated text with its header on line 1;
+           any other text (preamble, ``;``/tab/blank separated, decimal commas, units row)
+           goes through :func:`read_text_columns`
+tdms       LabVIEW TDMS via npTDMS; waveform timing when there is no time channel
+lvm        LabVIEW Measurement text: header blocks ending in ``***End_of_Header***``, one or
+           more segments
+mat        MATLAB v4/v5/v7 (scipy.io.loadmat) and v7.3 (HDF5, h5py): vectors, or the fields
+           of a struct
+hdf5       HDF5 datasets of one group (h5py)
+=========  ==================================================================================
+"""
+
+from __future__ import annotations
+
+import io
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from towtank.errors import RunError
+
+UNITS_KEY = "__units__"
+WF_TIME_KEY = "__wf_time__"
+FS_KEY = "__fs__"
+LABEL_KEY = "__label__"
+
+#: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
+EXTENSIONS = {
+    ".csv": "csv", ".txt": "text", ".dat": "text", ".asc": "text", ".tsv": "text",
+    ".tdms": "tdms", ".lvm": "lvm", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
+    ".hdf": "hdf5", ".he5": "hdf5",
+}
+FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
+DELIMITERS = {"auto": None, ",": ",", ";": ";", "\t": "\t", "tab": "\t",
+              "whitespace": "whitespace", " ": "whitespace"}
+
+#: Names of a sample-rate scalar in MATLAB/HDF5 files (case-insensitive) [Hz].
+_FS_NAMES = ("fs", "sample_rate", "samplerate", "sampling_rate", "sample_rate_hz", "rate")
+_DT_NAMES = ("dt", "wf_increment", "sample_interval", "increment")
+_TIME_NAMES = ("time", "t", "time_s", "x_value", "zeit", "temps")
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """How run files are read: the protocol's ``[read]`` section (docs/formats.md).
+
+    Parameters
+    ----------
+    format : str
+        ``auto`` (extension, then content), ``csv``, ``text``, ``tdms``, ``lvm``, ``mat``,
+        ``hdf5``.
+    delimiter : str
+        Text files: ``auto``, ``","``, ``";"``, ``"\\t"`` or ``"whitespace"``.
+    decimal : str
+        Text files: ``"."``, ``","`` or ``auto`` (a decimal comma is recognised in ``;``, tab
+        or blank separated files).
+    skip_rows : int
+        Text files: lines before the header row; 0 finds them automatically.
+    group : str
+        TDMS group, HDF5 group or MATLAB struct holding the channels ("" = the one that has
+        them).
+    sample_rate_hz : float
+        Sample rate [Hz] for files with neither a time channel nor waveform timing (0 = none).
+    """
+
+    format: str = "auto"
+    delimiter: str = "auto"
+    decimal: str = "auto"
+    skip_rows: int = 0
+    group: str = ""
+    sample_rate_hz: float = 0.0
+
+
+def file_format(path: Path, data: bytes, options: ReadOptions | None = None) -> tuple[str, bool]:
+    """(format, gzipped) of a run file: the ``[read] format``, else its extension and content.
+
+    Raises RunError for an extension towtank does not read (naming the ones it does).
+    """
+    fmt = (options or ReadOptions()).format
+    name = path.name.lower()
+    gz = name.endswith(".gz")
+    stem = name[:-3] if gz else name
+    if fmt != "auto":
+        return fmt, gz or data[:2] == b"\x1f\x8b"
+    suffix = Path(stem).suffix
+    if suffix in EXTENSIONS:
+        kind = EXTENSIONS[suffix]
+        if kind == "mat" and (data[512:520] == _HDF5_SIGNATURE or data[:8] == _HDF5_SIGNATURE):
+            return "mat", False
+        return kind, gz
+    if data[:8] == _HDF5_SIGNATURE:
+        return "hdf5", False
+    if data[:4] == b"TDSm":
+        return "tdms", False
+    if data[:10] == b"LabVIEW Me":
+        return "lvm", gz
+    known = ", ".join(sorted({*EXTENSIONS, ".csv.gz"}))
+    raise RunError(
+        f"{path.name}: towtank does not know the format of a '{suffix or 'no extension'}' file "
+        f"(it reads {known}); name the format with [read] format"
+    )
+
+
+def _units_entry(units: dict[str, str]) -> np.ndarray:
+    holder = np.empty((), dtype=object)
+    holder[()] = {k: v for k, v in units.items() if v}
+    return holder
+
+
+def stated_units(cols: dict[str, Any]) -> dict[str, str]:
+    """``{column: unit}`` stated by the file (see module docstring)."""
+    entry = cols.get(UNITS_KEY)
+    return dict(entry.item()) if entry is not None else {}
+
+
+# ------------------------------------------------------------------------------------- text
+_NUMBER = re.compile(rb"^\s*[-+]?(\d+([.,]\d*)?|[.,]\d+)([eE][-+]?\d+)?\s*$")
+
+
+def _split(line: bytes, delim: str) -> list[bytes]:
+    if delim == "whitespace":
+        return line.split()
+    return line.split(delim.encode())
+
+
+def _is_number(field: bytes) -> bool:
+    return bool(_NUMBER.match(field)) or field.strip().lower() in (b"nan", b"inf", b"-inf", b"")
+
+
+def _numeric_line(line: bytes, delim: str, n: int | None = None) -> bool:
+    fields = _split(line.rstrip(b"\r"), delim)
+    if n is not None and len(fields) != n:
+        return False
+    values = [f for f in fields if f.strip()]
+    return bool(values) and all(_is_number(f) for f in fields)
+
+
+def _guess_delimiter(lines: list[bytes]) -> str:
+    """The separator under which the longest block of lines at the end of the file splits into
+    the same number (> 1) of numeric fields; ``;`` before tab before ``,`` before blanks on a
+    tie. Without numeric lines, the separator that splits the last lines most regularly."""
+    tail = [ln for ln in lines[-200:] if ln.strip()]
+    best, best_len = ",", 0
+    for delim in (";", "\t", ",", "whitespace"):
+        n = len(_split(tail[-1].rstrip(b"\r"), delim)) if tail else 0
+        if n < 2:
+            continue
+        k = 0
+        while k < len(tail) and _numeric_line(tail[-1 - k], delim, n):
+            k += 1
+        if k > best_len:
+            best, best_len = delim, k
+    if best_len:
+        return best
+    for delim in (";", "\t", ",", "whitespace"):
+        counts = {len(_split(ln.rstrip(b"\r"), delim)) for ln in tail[-5:]}
+        if len(counts) == 1 and counts.pop() > 1:
+            return delim
+    return ","
+
+
+def _guess_decimal(lines: list[bytes], delim: str) -> str:
+    """',' when the numbers of the data lines use a decimal comma (never with ',' separators)."""
+    if delim == ",":
+        return "."
+    sample = b" ".join(lines[-20:])
+    commas = len(re.findall(rb"\d,\d", sample))
+    points = len(re.findall(rb"\d\.\d", sample))
+    return "," if commas > points else "."
+
+
+def _header_row(lines: list[bytes], delim: str) -> tuple[int, int]:
+    """(header line, first data line) in ``lines``: the data are the last block of numeric
+    lines with the same number of fields; the header is the non-numeric line above it with that
+    number of fields (a units row between them is allowed)."""
+    n_fields = len(_split(lines[-1].rstrip(b"\r"), delim)) if lines else 0
+    first = len(lines)
+    while first > 0 and (_numeric_line(lines[first - 1], delim, n_fields)
+                         or not lines[first - 1].strip()):
+        first -= 1
+    while first < len(lines) and not lines[first].strip():
+        first += 1
+    head = first - 1
+    while head >= 0 and not lines[head].strip():
+        head -= 1
+    if head < 0:
+        return -1, first
+    if head > 0 and len(_split(lines[head - 1].rstrip(b"\r"), delim)) == n_fields and \
+            _looks_like_units(lines[head], delim):
+        return head - 1, first  # header, units row, data
+    return head, first
+
+
+def _looks_like_units(line: bytes, delim: str) -> bool:
+    fields = [f.strip().decode("utf-8", "replace") for f in _split(line.rstrip(b"\r"), delim)]
+    units = [f.strip("()[] ") for f in fields if f]
+    return bool(units) and all(len(u) <= 8 and not _is_number(u.encode()) for u in units) and \
+        any(u in _UNIT_WORDS for u in units)
+
+
+def read_text_columns(
+    data: bytes, name: str, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Columns of a text run file as a lab's software wrote it.
+
+    Finds the header (lines before it, a title, a date, the operator's notes, are skipped; or
+    ``skip_rows`` of them), the separator (``;``, tab, ``,`` or blanks), a decimal comma, and
+    a units row under the header. Values that are not numbers are kept as text (the run's
+    checks count and drop such rows).
+    """
+    import pandas as pd
+
+    opts = options or ReadOptions()
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError:
+        data = data.decode("latin-1").encode("utf-8")
+    lines = data.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if not lines:
+        raise RunError(f"{name} is empty (0 data rows)")
+    delim = DELIMITERS.get(opts.delimiter, opts.delimiter) or _guess_delimiter(lines)
+    decimal = opts.decimal if opts.decimal in (".", ",") else _guess_decimal(lines, delim)
+    if delim == "," and decimal == ",":
+        raise RunError(f"{name}: a decimal comma cannot be read in comma-separated columns")
+    if opts.skip_rows:
+        head = opts.skip_rows
+        first = head + 1
+        if first < len(lines) and not _numeric_line(lines[first], delim) and \
+                _looks_like_units(lines[first], delim):
+            first += 1
+    else:
+        head, first = _header_row(lines, delim)
+    if first >= len(lines):
+        raise RunError(f"{name}: no rows of numbers found under a header")
+    header = (
+        [f.strip().decode("utf-8", "replace").strip('"') for f in
+         _split(lines[head].rstrip(b"\r"), delim)]
+        if head >= 0 else [f"column {i + 1}" for i in range(len(_split(lines[first], delim)))]
+    )
+    units: dict[str, str] = {}
+    if first - head == 2:  # a units row
+        row = [f.strip().decode("utf-8", "replace").strip("()[]\" ")
+               for f in _split(lines[head + 1].rstrip(b"\r"), delim)]
+        units = dict(zip(header, row, strict=False))
+    body = b"\n".join(lines[first:])
+    sep = r"\s+" if delim == "whitespace" else delim
+    try:
+        frame = pd.read_csv(io.BytesIO(body), sep=sep, header=None, decimal=decimal,
+                            names=header, engine="c" if delim != "whitespace" else "python",
+                            skip_blank_lines=True, on_bad_lines="skip", dtype=str)
+    except Exception as exc:  # noqa: BLE001 - pandas raises many types for odd text
+        raise RunError(f"{name} is not a readable text table ({exc})") from None
+    cols: dict[str, np.ndarray] = {}
+    bad_numbers = 0
+    for col in frame.columns:
+        text = frame[col].str.strip()
+        if decimal == ",":
+            text = text.str.replace(",", ".", regex=False)
+        values = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
+        n_text = int((np.isnan(values) & text.notna().to_numpy()
+                      & ~text.str.lower().isin(["nan", ""]).to_numpy()).sum())
+        if n_text and n_text == text.notna().sum():
+            cols[str(col)] = frame[col].to_numpy(dtype=object)
+        elif n_text:
+            cols[str(col)] = np.where(np.isnan(values), frame[col].to_numpy(dtype=object),
+                                      values.astype(object))
+            bad_numbers += n_text
+        else:
+            cols[str(col)] = values
+    notes = []
+    if head > 0 or (head == 0 and first > 1):
+        skipped = head if head > 0 else 0
+        if skipped:
+            notes.append(f"{skipped} line(s) before the header skipped")
+    cols[UNITS_KEY] = _units_entry(units)
+    cols["__text_layout__"] = np.array([delim, decimal, str(head + 1), str(first - head == 2)],
+                                       dtype=object)
+    cols["__rows__"] = np.arange(len(frame)) + first + 1
+    return cols, notes
+
+
+def text_layout(cols: dict[str, Any]) -> dict[str, str] | None:
+    """What :func:`read_text_columns` detected (separator, decimal, header line, units row)."""
+    entry = cols.get("__text_layout__")
+    if entry is None:
+        return None
+    delim, decimal, header, units = (str(v) for v in entry)
+    return {"delimiter": {"\t": "tab"}.get(delim, delim), "decimal": decimal,
+            "header_line": header, "units_row": units}
+
+
+# -------------------------------------------------------------------------------------- LVM
+def read_lvm_columns(
+    data: bytes, name: str, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Columns of a LabVIEW Measurement (.lvm) file, every segment joined.
+
+    The file header and each segment's header end in ``***End_of_Header***``; the segment's
+    data start with a column-name line (``X_Value`` is the time of the first channel). The
+    header's ``Separator`` and ``Decimal_Separator`` are used; a segment without times gets them
+    from its ``Delta_X`` and ``X0``.
+    """
+    text = data.decode("utf-8", "replace") if isinstance(data, bytes) else data
+    lines = text.splitlines()
+    sep, dec = "\t", "."
+    for ln in lines[:40]:
+        key, _, value = ln.partition("\t")
+        if key.strip() == "Separator":
+            sep = {"Tab": "\t", "Comma": ",", "Semicolon": ";"}.get(value.strip(), "\t")
+        elif key.strip() == "Decimal_Separator":
+            dec = value.strip() or "."
+    marks = [i for i, ln in enumerate(lines) if ln.strip().startswith("***End_of_Header***")]
+    if len(marks) < 2:
+        raise RunError(f"{name} is not a LabVIEW measurement file (no segment header found)")
+    segments: list[dict[str, np.ndarray]] = []
+    head_from = marks[0] + 1
+    for k in range(1, len(marks)):
+        seg_head = lines[head_from : marks[k]]
+        i = marks[k] + 1
+        while i < len(lines) and not lines[i].strip():
+            i += 1
+        if i >= len(lines):
+            break
+        names = [c.strip() for c in lines[i].split(sep)]
+        i += 1
+        table = []
+        while i < len(lines) and _lvm_data_line(lines[i], sep):
+            table.append(lines[i].split(sep))
+            i += 1
+        head_from = i
+        head_vals = {ln.split(sep)[0].strip(): ln.split(sep)[1:] for ln in seg_head if sep in ln}
+        seg: dict[str, np.ndarray] = {}
+        for j, col in enumerate(names):
+            if not col or col.lower() == "comment":
+                continue
+            raw = [r[j].strip() if j < len(r) else "" for r in table]
+            if dec == ",":
+                raw = [v.replace(",", ".") for v in raw]
+            vals = np.array([float(v) if v else np.nan for v in raw], dtype=np.float64) \
+                if all(_is_number(v.encode()) for v in raw) else np.array(raw, dtype=object)
+            seg[col] = vals
+        units = dict(zip([c for c in names if c and c != "X_Value"],
+                         [u.strip() for u in head_vals.get("Y_Unit_Label", [])], strict=False))
+        if "X_Value" in seg and (seg["X_Value"].dtype == object
+                                 or np.isnan(seg["X_Value"]).all()):
+            dx = _first_float(head_vals.get("Delta_X"))
+            x0 = _first_float(head_vals.get("X0")) or 0.0
+            if dx:
+                seg["X_Value"] = x0 + dx * np.arange(len(table))
+        seg[UNITS_KEY] = _units_entry(units)
+        if table:
+            segments.append(seg)
+    if not segments:
+        raise RunError(f"{name} holds no data rows")
+    names = [c for c in segments[0] if c != UNITS_KEY]
+    cols = {c: np.concatenate([np.asarray(s.get(c, np.full(_seg_len(s), np.nan)))
+                               for s in segments]) for c in names}
+    if "X_Value" in cols and "time" not in {c.lower() for c in cols}:
+        cols["time"] = cols["X_Value"]  # LabVIEW's name for the time of the first channel
+    cols[UNITS_KEY] = segments[0][UNITS_KEY]
+    notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
+    return cols, notes
+
+
+def _lvm_data_line(line: str, sep: str) -> bool:
+    """A data row of an LVM segment: numbers (or empty fields), the comment column aside."""
+    fields = [f.strip() for f in line.split(sep)]
+    values = [f for f in fields if f]
+    return bool(values) and all(_is_number(f.replace(",", ".").encode()) for f in values[:-1]) \
+        and (_is_number(values[-1].replace(",", ".").encode()) or len(values) > 1)
+
+
+def _seg_len(seg: dict[str, np.ndarray]) -> int:
+    return max((v.size for k, v in seg.items() if k != UNITS_KEY), default=0)
+
+
+def _first_float(values: list[str] | None) -> float | None:
+    for v in values or []:
+        try:
+            return float(v.replace(",", "."))
+        except ValueError:
+            continue
+    return None
+
+
+# ------------------------------------------------------------------------------------- TDMS
+def read_tdms_columns(
+    data: bytes, name: str, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """All numeric channels of a TDMS file, keyed by channel name (and ``group/channel``).
+
+    LabVIEW's waveform timing (``wf_increment``, ``wf_start_offset``) gives ``__wf_time__``
+    when a channel carries it; ``unit_string`` properties give the units. With several groups
+    the channels of ``[read] group`` (or of every group) are listed.
+    """
+    import logging
+
+    from nptdms import TdmsFile
+
+    # nptdms logs what it finds odd in a damaged file; the run's one sentence says it instead
+    logging.getLogger("nptdms").setLevel(logging.ERROR)
+    opts = options or ReadOptions()
+    if not data:
+        raise RunError(f"{name} is empty (0 bytes)")
+    cols: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    wf: tuple[float, float, int] | None = None
+    try:
+        tdms = TdmsFile.read(io.BytesIO(data))
+        groups = tdms.groups()
+        if opts.group:
+            groups = [g for g in groups if g.name == opts.group]
+            if not groups:
+                found = ", ".join(f"'{g.name}'" for g in tdms.groups()) or "none"
+                raise RunError(f"{name} has no TDMS group '{opts.group}' (groups: {found})")
+        for group in groups:
+            for channel in group.channels():
+                arr = np.asarray(channel[:])
+                if arr.dtype.kind not in "fiu":
+                    continue
+                with np.errstate(invalid="ignore", over="ignore"):
+                    arr = arr.astype(np.float64, copy=False)
+                cols.setdefault(channel.name, arr)
+                cols[f"{group.name}/{channel.name}"] = arr
+                props = channel.properties
+                if "unit_string" in props:
+                    units.setdefault(channel.name, str(props["unit_string"]))
+                inc = props.get("wf_increment")
+                if wf is None and inc:
+                    wf = (float(props.get("wf_start_offset", 0.0) or 0.0), float(inc), arr.size)
+    except RunError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
+        reason = f"{type(exc).__name__}: {exc}"
+        raise RunError(f"{name} is not a readable TDMS file ({reason})") from None
+    if not cols:
+        raise RunError(f"{name} holds no numeric channels")
+    if wf is not None:
+        cols[WF_TIME_KEY] = wf[0] + wf[1] * np.arange(wf[2], dtype=np.float64)
+    cols[UNITS_KEY] = _units_entry(units)
+    cols[LABEL_KEY] = np.array([], dtype=float)
+    return cols, []
+
+
+# ---------------------------------------------------------------------------- MATLAB / HDF5
+def _vector(value: Any) -> np.ndarray | None:
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "fiub" or arr.ndim > 2:
+        return None
+    if arr.ndim == 2 and min(arr.shape) != 1:
+        return None
+    with np.errstate(invalid="ignore", over="ignore"):
+        return arr.astype(np.float64).ravel()
+
+
+def _collect(items: dict[str, Any], cols: dict[str, np.ndarray], fs: list[float]) -> None:
+    """Vectors of a MATLAB/HDF5 namespace as columns; a sample rate or interval noted."""
+    for key, value in items.items():
+        vec = _vector(value)
+        if vec is None:
+            continue
+        low = key.lower()
+        if vec.size == 1:
+            if low in _FS_NAMES and vec[0] > 0:
+                fs.append(float(vec[0]))
+            elif low in _DT_NAMES and vec[0] > 0:
+                fs.append(1.0 / float(vec[0]))
+            continue
+        cols[key] = vec
+
+
+def read_mat_columns(
+    data: bytes, name: str, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Vectors of a MATLAB .mat file (v4–v7 with scipy.io, v7.3 with h5py) as columns.
+
+    The channels are the file's vectors, or the fields of the struct ``[read] group`` (default:
+    the struct holding the most vectors when the top level holds none). A scalar ``fs``,
+    ``sample_rate`` or ``dt`` gives the sample rate of a file without a time vector.
+    """
+    if data[512:520] == _HDF5_SIGNATURE or data[:8] == _HDF5_SIGNATURE:
+        return read_hdf5_columns(data, name, options, matlab=True)
+    import scipy.io
+
+    opts = options or ReadOptions()
+    try:
+        mat = scipy.io.loadmat(io.BytesIO(data), squeeze_me=True, struct_as_record=False)
+    except NotImplementedError:  # v7.3 without the usual header offset
+        return read_hdf5_columns(data, name, options, matlab=True)
+    except Exception as exc:  # noqa: BLE001 - scipy raises many types for damaged files
+        raise RunError(f"{name} is not a readable MATLAB file ({type(exc).__name__}: {exc})") \
+            from None
+    top = {k: v for k, v in mat.items() if not k.startswith("__")}
+    structs = {k: v for k, v in top.items() if hasattr(v, "_fieldnames")}
+    cols: dict[str, np.ndarray] = {}
+    fs: list[float] = []
+    if opts.group:
+        if opts.group not in structs:
+            found = ", ".join(f"'{k}'" for k in structs) or "none"
+            raise RunError(f"{name} has no struct '{opts.group}' (structs: {found})")
+        chosen = [opts.group]
+    else:
+        _collect(top, cols, fs)
+        chosen = [] if len(cols) >= 2 else list(structs)
+    for key in chosen:
+        s = structs[key]
+        _collect({f: getattr(s, f) for f in s._fieldnames}, cols, fs)
+    if not cols:
+        raise RunError(f"{name} holds no numeric vectors (variables: "
+                       f"{', '.join(top) or 'none'})")
+    if fs:
+        cols[FS_KEY] = np.array([fs[0]])
+    cols[LABEL_KEY] = np.array([], dtype=float)
+    return cols, []
+
+
+def read_hdf5_columns(
+    data: bytes, name: str, options: ReadOptions | None = None, *, matlab: bool = False
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Datasets of an HDF5 file (or a MATLAB v7.3 file) as columns.
+
+    The channels are the 1-D datasets of ``[read] group`` or, by default, of the group (root
+    first) holding the most of them. Units come from a ``unit``/``units`` attribute; the sample
+    rate from an ``fs``/``sample_rate`` attribute or scalar dataset, or ``wf_increment``.
+    """
+    import h5py
+
+    opts = options or ReadOptions()
+    what = "MATLAB v7.3" if matlab else "HDF5"
+    try:
+        fh = h5py.File(io.BytesIO(data), "r")
+    except Exception as exc:  # noqa: BLE001 - h5py raises OSError and others for bad files
+        raise RunError(f"{name} is not a readable {what} file ({type(exc).__name__}: {exc})") \
+            from None
+    with fh:
+        groups: dict[str, Any] = {"/": fh}
+        fh.visititems(lambda key, obj: groups.setdefault(key, obj)
+                      if isinstance(obj, h5py.Group) and not key.startswith("#") else None)
+        if opts.group:
+            key = opts.group.strip("/") or "/"
+            if key not in groups:
+                found = ", ".join(f"'{k}'" for k in groups) or "none"
+                raise RunError(f"{name} has no group '{opts.group}' (groups: {found})")
+            chosen = groups[key]
+        else:
+            counts = {k: sum(1 for v in g.values() if isinstance(v, h5py.Dataset)
+                             and v.ndim in (1, 2) and max(v.shape or (0,)) > 1)
+                      for k, g in groups.items()}
+            chosen = groups[max(counts, key=lambda k: (counts[k], k == "/"))]
+        cols: dict[str, np.ndarray] = {}
+        units: dict[str, str] = {}
+        fs: list[float] = []
+        items = {}
+        for key, obj in chosen.items():
+            if isinstance(obj, h5py.Dataset) and obj.dtype.kind in "fiub":
+                items[key] = obj[()]
+                unit = obj.attrs.get("unit", obj.attrs.get("units"))
+                if unit is not None:
+                    units[key] = unit.decode() if isinstance(unit, bytes) else str(unit)
+                inc = obj.attrs.get("wf_increment")
+                if inc is not None and float(np.ravel(inc)[0]) > 0:
+                    fs.append(1.0 / float(np.ravel(inc)[0]))
+        for attr_owner in (chosen, fh):
+            for key, value in attr_owner.attrs.items():
+                if key.lower() in _FS_NAMES:
+                    fs.append(float(np.ravel(value)[0]))
+                elif key.lower() in _DT_NAMES:
+                    fs.append(1.0 / float(np.ravel(value)[0]))
+        _collect(items, cols, fs)
+    if not cols:
+        raise RunError(f"{name} holds no numeric datasets")
+    if fs and fs[0] > 0:
+        cols[FS_KEY] = np.array([fs[0]])
+    cols[UNITS_KEY] = _units_entry(units)
+    cols[LABEL_KEY] = np.array([], dtype=float)
+    return cols, []
+
+
+def plain_csv(data: bytes) -> bool:
+    """Whether text is plain CSV for the fast path: header on its first line, then numbers,
+    no units row, no decimal comma. Damaged rows further down do not matter here (the fast
+    path's own checks name them)."""
+    lines = data[:65536].lstrip(b"\r\n\xef\xbb\xbf").splitlines()[:40]
+    lines = [ln for ln in lines if ln.strip()]
+    if len(lines) < 3:
+        return True
+    header = lines[0]
+    delim = "," if b"," in header else ";" if b";" in header else "\t" if b"\t" in header else ","
+    n = len(_split(header.rstrip(b"\r"), delim))
+    body = lines[1:]
+    same = sum(len(_split(ln.rstrip(b"\r"), delim)) == n for ln in body)
+    if same < 0.8 * len(body) or n == 1:
+        return False  # a preamble (title, date, notes) above the header, or another separator
+    if not _numeric_line(body[0], delim) and _numeric_line(body[1], delim):
+        return False  # a units row under the header
+    if delim != "," and len(re.findall(rb"\d,\d", b" ".join(body))) > 0:
+        return False  # decimal commas
+    return True
+
+
+# ------------------------------------------------------------------------------------ units
+#: Unit spellings per quantity and the factor to SI [SI per unit].
+UNIT_FACTORS: dict[str, dict[str, float]] = {
+    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "min": 60.0},
+    "speed": {"m/s": 1.0, "mm/s": 1e-3, "cm/s": 1e-2, "km/h": 1 / 3.6, "kn": 0.514444,
+              "knots": 0.514444, "kt": 0.514444, "m s-1": 1.0, "m.s-1": 1.0},
+    "accel": {"m/s^2": 1.0, "m/s²": 1.0, "m/s2": 1.0, "mm/s^2": 1e-3, "mm/s²": 1e-3,
+              "m s-2": 1.0, "g": 9.80665},
+    "force": {"n": 1.0, "kn": 1e3, "mn": 1e-3, "kgf": 9.80665, "lbf": 4.4482216152605,
+              "gf": 9.80665e-3},
+}
+_VOLTS = {"v": 1.0, "mv": 1e-3, "µv": 1e-6, "uv": 1e-6}
+_UNIT_WORDS = {u for table in UNIT_FACTORS.values() for u in table} | set(_VOLTS) | {
+    "N", "V", "mV", "kN", "mN", "-", "deg", "°", "rad", "Hz", "%"}
+_UNIT_IN_NAME = re.compile(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]\s*$")
+_QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force",
+             "lift": "force"}
+
+
+def column_unit(column: str, stated: dict[str, str]) -> str | None:
+    """The unit of a column: stated by the file, else written in its name ``Speed (mm/s)``."""
+    if stated.get(column):
+        return stated[column].strip()
+    m = _UNIT_IN_NAME.search(column)
+    return m.group(1).strip() if m else None
+
+
+def unit_factor(canon: str, unit: str | None, column: str, name: str) -> float:
+    """Factor that brings a column's values in ``unit`` to the SI unit of channel ``canon``.
+
+    1 for the SI unit and for units towtank does not know; a voltage is a RunError, since a
+    channel recorded in volts needs its calibration (``gain`` in ``[channels]``).
+    """
+    if not unit:
+        return 1.0
+    key = unit.strip()
+    quantity = _QUANTITY.get(canon)
+    table = UNIT_FACTORS.get(quantity or "", {})
+    for k, v in table.items():
+        if key == k or key.lower() == k.lower():
+            return v
+    if key.lower() in _VOLTS:
+        raise RunError(
+            f"{name}: the {canon} column '{column}' is recorded in {key}: give its calibration "
+            f"in [channels] ({canon} = {{ column = \"{column}\", gain = <N per {key}> }})"
+        )
+    return 1.0

@@ -1,0 +1,221 @@
+"""Run files written as other labs' software writes them (the generator's file layouts).
+
+Each layout takes the file frame of :func:`towtank.testing.instruments.to_file_frame` (the
+columns as the lab names them, rounded as recorded) and writes it the way a real acquisition
+or processing program does, so that towtank's readers are tested on the files labs keep:
+
+================  ===========  ===================================================================
+layout            extension    as written by
+================  ===========  ===================================================================
+tdms-waveform     .tdms        LabVIEW's default: waveform channels, NO time channel; the timing
+                               in ``wf_start_offset``, ``wf_increment``, ``wf_samples``
+lvm               .lvm         LabVIEW Measurement text: file header, two segments each with its
+                               header (``Delta_X``, ``Y_Unit_Label``), ``X_Value`` times
+txt-eu            .txt         a European Excel export: three preamble lines, ``;`` separators,
+                               decimal commas, a units row; the speed in mm/s
+mat               .mat         MATLAB v5: a struct ``run`` with one field per channel
+mat73             .mat         MATLAB v7.3 (HDF5 with MATLAB's 512-byte header): vectors at the
+                               top level, no time vector, a scalar ``fs`` [Hz]
+hdf5              .h5          HDF5: group ``data``, one dataset per channel with a ``unit``
+                               attribute, ``sample_rate`` on the group
+================  ===========  ===================================================================
+
+Names that are not MATLAB identifiers (``Time (s)``) are written as identifiers (``Time_s``)
+in the MATLAB layouts; :func:`variable_name` gives the name a protocol then maps.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import io
+import re
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+if TYPE_CHECKING:
+    from towtank.testing.instruments import LabChannels
+
+#: Layout -> file extension.
+LAYOUTS = {
+    "tdms-waveform": "tdms",
+    "lvm": "lvm",
+    "txt-eu": "txt",
+    "mat": "mat",
+    "mat73": "mat",
+    "hdf5": "h5",
+}
+
+_FIXED = _dt.datetime(2024, 5, 21, 9, 0, 0)
+
+#: Layouts without a time column (the time comes from the file's timing).
+NO_TIME_COLUMN = ("tdms-waveform", "lvm", "mat73")
+
+
+def protocol_channels(layout: str, section: dict[str, dict]) -> dict[str, dict]:
+    """A ``[channels]`` table for a layout: the time left unmapped where the file has no time
+    column (LabVIEW waveform timing, LVM's X_Value, a MATLAB ``fs``)."""
+    if layout in NO_TIME_COLUMN:
+        return {k: v for k, v in section.items() if k != "time"}
+    return section
+
+
+def variable_name(column: str) -> str:
+    """A column name as a MATLAB identifier: other characters to '_', a letter first."""
+    name = re.sub(r"\W+", "_", column).strip("_") or "x"
+    return name if name[0].isalpha() else f"x_{name}"
+
+
+def layout_channels(layout: str, channels: LabChannels | None) -> LabChannels | None:
+    """The lab's channel names as a layout stores them (MATLAB identifiers in .mat files, no
+    '/' in HDF5 names), for the protocol's ``[channels]``."""
+    if channels is None or layout not in ("mat", "mat73", "hdf5"):
+        return channels
+    fix = variable_name if layout != "hdf5" else (lambda c: c.replace("/", "_per_"))
+    return replace(channels, **{k: fix(getattr(channels, k))
+                                for k in ("time", "speed", "accel", "drag", "lift")})
+
+
+def _time_column(frame: pd.DataFrame, time_col: str) -> np.ndarray:
+    return frame[time_col].to_numpy(dtype=np.float64)
+
+
+def write_layout(
+    layout: str, frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]
+) -> Path:
+    """Write ``frame`` (columns as the lab names them; ``time_col`` the time [s]) to ``path``.
+
+    ``units`` gives each column's unit (SI, or V for load cells).
+    """
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout must be one of {', '.join(LAYOUTS)}, not {layout!r}.")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = {
+        "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
+        "mat73": _mat_v73, "hdf5": _hdf5,
+    }[layout]
+    writer(frame, path, time_col, units)
+    return path
+
+
+def _tdms_waveform(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
+
+    t = _time_column(frame, time_col)
+    dt = float(np.median(np.diff(t)))
+    objects = [RootObject(properties={"name": path.stem}), GroupObject("Untitled")]
+    for col in frame.columns:
+        if col == time_col:
+            continue
+        props = {
+            "wf_start_time": np.datetime64(_FIXED),
+            "wf_start_offset": float(t[0]),
+            "wf_increment": dt,
+            "wf_samples": int(t.size),
+            "unit_string": units.get(col, ""),
+        }
+        objects.append(ChannelObject("Untitled", col, frame[col].to_numpy(np.float64), props))
+    with TdmsWriter(str(path)) as writer:
+        writer.write_segment(objects)
+
+
+def _number(x: float) -> str:
+    return "" if not np.isfinite(x) else repr(float(x))
+
+
+def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    t = _time_column(frame, time_col)
+    cols = [c for c in frame.columns if c != time_col]
+    dt = float(np.median(np.diff(t)))
+    head = ["LabVIEW Measurement\t", "Writer_Version\t2", "Reader_Version\t2", "Separator\tTab",
+            "Decimal_Separator\t.", "Multi_Headings\tNo", "X_Columns\tOne",
+            "Time_Pref\tRelative", "Operator\ttowtank synth", "Date\t2024/05/21",
+            "Time\t09:00:00", "***End_of_Header***", ""]
+    half = t.size // 2
+    out = io.StringIO()
+    out.write("\n".join(head) + "\n")
+    for lo, hi in ((0, half), (half, t.size)):
+        n = len(cols)
+        out.write("\n".join([
+            f"Channels\t{n}\t",
+            "Samples\t" + "\t".join([str(hi - lo)] * n),
+            "Date\t" + "\t".join(["2024/05/21"] * n),
+            "Time\t" + "\t".join(["09:00:00"] * n),
+            "Y_Unit_Label\t" + "\t".join(units.get(c, "") for c in cols),
+            "X_Dimension\t" + "\t".join(["Time"] * n),
+            "X0\t" + "\t".join([repr(float(t[lo]))] * n),
+            "Delta_X\t" + "\t".join([repr(dt)] * n),
+            "***End_of_Header***\t",
+            "X_Value\t" + "\t".join(cols) + "\tComment",
+        ]) + "\n")
+        block = np.column_stack([t[lo:hi]] + [frame[c].to_numpy(np.float64)[lo:hi] for c in cols])
+        for row in block:
+            out.write("\t".join(_number(v) for v in row) + "\t\n")
+        out.write("\n")
+    path.write_text(out.getvalue(), encoding="utf-8")
+
+
+def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    """A European export: a preamble, ';' separators, decimal commas, a units row; the speed
+    column (whose unit is m/s) is written in mm/s to exercise the unit conversion."""
+    out = {}
+    unit_row = []
+    for col in frame.columns:
+        values = frame[col].to_numpy(np.float64)
+        unit = units.get(col, "")
+        if unit == "m/s" and "(" not in col:
+            values, unit = values * 1000.0, "mm/s"
+        out[col] = values
+        unit_row.append(unit)
+    lines = ["Lab B towing tank;;;", "Datum: 21.05.2024;Operator: synth;;",
+             "Messung exportiert aus DAQ;;;", ";".join(frame.columns), ";".join(unit_row)]
+    table = np.column_stack(list(out.values()))
+    text = "\n".join(";".join("" if not np.isfinite(v) else f"{v:.9g}".replace(".", ",")
+                              for v in row) for row in table)
+    path.write_text("\n".join(lines) + "\n" + text + "\n", encoding="latin-1")
+
+
+def _mat_v5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    import scipy.io
+
+    run = {variable_name(c): frame[c].to_numpy(np.float64) for c in frame.columns}
+    scipy.io.savemat(str(path), {"run": run, "description": "towtank synth"}, format="5",
+                     oned_as="column")
+
+
+def _mat_v73(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    import h5py
+
+    t = _time_column(frame, time_col)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    with h5py.File(str(path), "w", userblock_size=512) as fh:
+        for col in frame.columns:
+            if col == time_col:
+                continue
+            ds = fh.create_dataset(variable_name(col),
+                                   data=frame[col].to_numpy(np.float64)[None, :])
+            ds.attrs["MATLAB_class"] = np.bytes_("double")
+        ds = fh.create_dataset("fs", data=np.array([[fs]]))
+        ds.attrs["MATLAB_class"] = np.bytes_("double")
+    header = (b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Tue May 21 09:00:00 2024 "
+              b"HDF5 schema 1.00 .").ljust(116, b" ")
+    with open(path, "r+b") as fh:
+        fh.write(header + b"\x00" * 8 + b"\x00\x02" + b"IM")
+
+
+def _hdf5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    import h5py
+
+    t = _time_column(frame, time_col)
+    with h5py.File(str(path), "w") as fh:
+        grp = fh.create_group("data")
+        grp.attrs["sample_rate"] = 1.0 / float(np.median(np.diff(t)))
+        fh.attrs["description"] = "towtank synth"
+        for col in frame.columns:
+            ds = grp.create_dataset(col.replace("/", "_per_"),
+                                    data=frame[col].to_numpy(np.float64))
+            ds.attrs["unit"] = units.get(col, "")
