@@ -185,3 +185,26 @@ def test_plain_csv_keeps_the_fast_path():
     assert not plain_csv(ok.replace(b"time,speed,drag\n", b"time,speed,drag\ns,m/s,N\n"))
     frame = pd.read_csv(io.BytesIO(ok))
     assert list(frame.columns) == ["time", "speed", "drag"]
+
+
+def test_inspect_says_what_an_unknown_file_holds_and_prints_a_protocol_block(tmp_path):
+    """`towtank inspect` on a LabVIEW file without a protocol: format, timing, channels with
+    units, and a [read]/[channels] block that, pasted into a protocol, reads the run."""
+    import io as _io
+    import tomllib
+
+    from towtank.commands.inspect import inspect_run
+
+    _day(tmp_path, "tdms-waveform")
+    f = tmp_path / "data" / "run_013.tdms"
+    out, err = _io.StringIO(), _io.StringIO()
+    assert inspect_run(f, png=tmp_path / "x.png", out=out, err=err) == 1
+    text = out.getvalue()
+    assert "tdms file" in text and "LabVIEW waveform timing" in text and "200 Hz" in text
+    assert "'Carriage speed (m/s)'" in text and "m/s" in text
+    block = text[text.index("[read]"):]
+    parsed = tomllib.loads(block)
+    assert parsed["read"]["format"] == "tdms"
+    assert parsed["channels"]["speed"]["column"] == "Carriage speed (m/s)"
+    assert parsed["channels"]["drag"]["column"] == "Fx load cell (V)"
+    assert "one sentence" not in err.getvalue() and err.getvalue().count("\n") == 1

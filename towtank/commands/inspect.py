@@ -24,7 +24,7 @@ PHASE_NAMES = {
     "decel": "deceleration",
     "still_post": "still after",
 }
-RUN_EXTENSIONS = (".gz", ".csv", ".tdms", ".txt")
+RUN_EXTENSIONS = (".gz", ".csv", ".tdms", ".txt", ".dat", ".lvm", ".mat", ".h5", ".hdf5")
 
 
 def plot_name(runfile: str | Path) -> str:
@@ -79,13 +79,27 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = ()) -> list[str]
     return lines
 
 
-def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - (channels, Processing)
+def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Processing, Read
     from towtank.ingest.protocol import Processing, load_protocol
 
     if protocol_path is None:
-        return {}, Processing()
+        return {}, Processing(), None
     protocol = load_protocol(protocol_path, check_paths=False)
-    return protocol.channels, protocol.processing
+    return protocol.channels, protocol.processing, protocol.read
+
+
+def _describe(runfile: Path, read, out: TextIO) -> None:  # noqa: ANN001 - ReadOptions | None
+    """What the file holds and a ``[read]``/``[channels]`` block to paste into a protocol."""
+    from towtank.ingest.describe import describe_file, protocol_block
+
+    try:
+        desc = describe_file(runfile, read)
+    except RunError:
+        return
+    for line in desc.lines():
+        print(line, file=out)
+    print("a start for the protocol (check each line):", file=out)
+    print(protocol_block(desc), file=out, end="")
 
 
 def _same_folder(a: Path, b: Path) -> bool:
@@ -130,18 +144,21 @@ def inspect_run(
     from towtank.reduce.run import reduce_run
 
     runfile = Path(runfile)
-    channels, p = _settings(protocol_path)
+    channels, p, read = _settings(protocol_path)
     try:
         raw = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
-                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike)
+                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                       options=read)
         red = reduce_run(raw, p, run=0, file=runfile.name)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "
         hint = ""
-        if protocol_path is None and "missing" in reason and "columns found" in reason:
+        if "missing" in reason and "columns found" in reason:
             hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
-                    "[channels] mapping names the lab's columns.")
+                    "[channels] mapping names the lab's columns; what the file holds and a "
+                    "block to start the protocol from are printed above.")
+            _describe(runfile, read, out)
         print(f"towtank: {head}{reason}.{hint}", file=err)
         return EXIT_RUN_ERROR
     for line in summary_lines(red, raw.columns):
