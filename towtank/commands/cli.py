@@ -97,6 +97,17 @@ def _parser() -> argparse.ArgumentParser:
     sc.add_argument("--out", type=Path, metavar="DIR", help="output folder holding the cache")
     sc.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
 
+    pd_ = sub.add_parser(
+        "predict",
+        help="predict the coefficients of the protocol's [vehicle] from its geometry",
+        description="Write predicted.csv (symbol, value, unit, prime, method, reference) and "
+        "model.json for the hull and fins described in the protocol's [vehicle] section.",
+    )
+    pd_.add_argument("protocol", type=Path)
+    pd_.add_argument("--out", type=Path, metavar="DIR",
+                     help="output folder (default: output_dir of the protocol)")
+    pd_.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
     sy = sub.add_parser(
         "synth",
         help="generate a synthetic test day (for training, testing and benchmarks)",
@@ -243,7 +254,14 @@ def cmd_synth(args: argparse.Namespace) -> int:
     return synth_command(args)
 
 
+def cmd_predict(args: argparse.Namespace) -> int:
+    from towtank.commands.predict import predict_command
+
+    return predict_command(args.protocol, out=args.out)
+
+
 COMMANDS = {
+    "predict": cmd_predict,
     "process": cmd_process,
     "inspect": cmd_inspect,
     "scale": cmd_scale,

@@ -176,6 +176,7 @@ class Protocol:
     processing: Processing
     report: ReportOptions
     warnings: tuple[str, ...] = field(default=())
+    vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
 
     @property
     def name(self) -> str:
@@ -261,7 +262,8 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "figures": ("bool", False),
     },
 }
-TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report")
+TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
+             "vehicle")
 
 _KIND_WORDS = {
     "str": "a text string",
@@ -433,7 +435,9 @@ def _unit_warnings(
     return out
 
 
-def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
+def load_protocol(
+    path: str | Path, *, check_paths: bool = True, require_runs: bool = True
+) -> Protocol:
     """Read and validate a protocol file.
 
     Parameters
@@ -442,6 +446,9 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
         The protocol (TOML) file.
     check_paths : bool
         Check that the run sheet and the data folder exist.
+    require_runs : bool
+        False for a protocol read by ``towtank predict``: [campaign] may leave out the run
+        sheet and the data folder (and its name: the file's stem).
 
     Returns
     -------
@@ -468,6 +475,13 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
     for key in data:
         if key not in TOP_LEVEL:
             raise ProtocolError(f"{src}: unknown section [{key}]{_suggest(key, TOP_LEVEL)}")
+    if not require_runs:  # towtank predict: the vehicle and the water are enough
+        camp = data.setdefault("campaign", {})
+        if isinstance(camp, dict):
+            camp.setdefault("name", path.stem)
+            for key in ("run_sheet", "data_dir"):
+                if key not in camp:
+                    camp[key], check_paths = ".", False
     for required in ("campaign", "water"):
         if required not in data:
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
@@ -569,7 +583,13 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             )
         fin = Fin(**f)
 
-    if model is None and fin is None:
+    vehicle = None
+    if "vehicle" in data:
+        from towtank.ingest.vehicle_protocol import parse_vehicle
+
+        vehicle = parse_vehicle(data["vehicle"], base, src,
+                                model.myring if model is not None else None, check_paths)
+    if model is None and fin is None and vehicle is None:
         raise ProtocolError(f"{src}: the protocol needs a [model] or a [fin] section.")
 
     prototype = None
@@ -646,6 +666,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         processing=processing,
         report=report,
         warnings=tuple(warnings),
+        vehicle=vehicle,
     )
 
 
