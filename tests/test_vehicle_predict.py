@@ -215,3 +215,32 @@ def test_bad_vehicle_sections_stop_with_exit_2(tmp_path, capsys, edit, message):
     assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_remus_prestero2001_reference_set_normalised_consistently():
+    from towtank.analysis.hull import load_reference
+    from towtank.reference.sets import reference_table
+
+    prestero = load_reference("remus-prestero2001")
+    sut2 = load_reference("remus")
+    # the numbers: X_u|u|' -0.00178 from -1.62 kg/m, Y_v|v|' -0.144
+    assert prestero["X_u|u|"] == pytest.approx(-0.00178, abs=1e-5)
+    assert prestero["Y_v|v|"] == pytest.approx(-0.144, abs=1e-3)
+    # same added masses as the SUT-2 table's REMUS column (0.2 % and 1 %)
+    assert prestero["X_udot"] == pytest.approx(sut2["X_udot"], rel=0.005)
+    assert prestero["Y_vdot"] == pytest.approx(sut2["Y_vdot"], rel=0.015)
+    table = reference_table("remus-prestero2001").set_index("symbol")
+    for sym, row in table.iterrows():  # every prime is value / (1/2 rho L^k), rho 1030, L 1.33
+        assert row["prime"] == pytest.approx(
+            row["value"] / (0.5 * 1030 * 1.33 ** prime_exponent(sym)), rel=1e-5)
+
+
+def test_protocol_accepts_the_builtin_reference_names(tmp_path):
+    from towtank.ingest.protocol import load_protocol
+
+    proto = tmp_path / "p.toml"
+    proto.write_text(PROTOCOL.replace('name = "remus prediction"',
+                                      'name = "r"\nreference = "remus-prestero2001"'))
+    p = load_protocol(proto, require_runs=False)
+    assert p.campaign.reference == "remus-prestero2001"
+    assert p.vehicle.fins[1].plane == "sternplane"

@@ -27,6 +27,7 @@ from towtank.reduce.run import (
     reduce_record,
 )
 from towtank.reduce.tare import TareModel, fit_tare_group
+from towtank.reference.sets import BUILTIN_REFERENCES
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 
 G = 9.80665
@@ -381,7 +382,7 @@ def process_day(
     runs = run_table(protocol, sheet, reductions, rejected)
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
-    if protocol.campaign.reference != "remus":  # a user reference CSV is an input too
+    if protocol.campaign.reference not in BUILTIN_REFERENCES:  # a user CSV is an input too
         inputs[str(protocol.campaign.reference)] = _sha(Path(protocol.campaign.reference))
     shas = {red.file: red.sha256 for red in reductions.values()}
     for file in sheet["file"]:  # every input the sheet names, rejected runs' files too

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.reference.sets import BUILTIN_REFERENCES
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
@@ -504,12 +505,12 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         else Path.cwd() / "reports" / slugify(camp["name"])
     )
     reference = camp.get("reference", "remus")
-    if reference != "remus":
+    if reference not in BUILTIN_REFERENCES:
         ref_path = base / reference
         if check_paths and not ref_path.is_file():
             raise ProtocolError(
-                f"{src}: the reference '{reference}' in [campaign] is neither the built-in "
-                f"set 'remus' nor an existing CSV file ({ref_path})."
+                f"{src}: the reference '{reference}' in [campaign] is neither a built-in "
+                f"set ({', '.join(BUILTIN_REFERENCES)}) nor an existing CSV file ({ref_path})."
             )
         reference = str(ref_path)
         if check_paths:
@@ -857,7 +858,7 @@ def check_output_dir(
             "choose another folder with --out or [campaign] output_dir."
         )
     inputs = [protocol.path, protocol.campaign.run_sheet, *(Path(p) for p in inputs)]
-    if protocol.campaign.reference != "remus":
+    if protocol.campaign.reference not in BUILTIN_REFERENCES:
         inputs.append(Path(protocol.campaign.reference))
     for name in sorted(OUTPUT_NAMES):
         target = out / name
