@@ -46,4 +46,5 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     masses = vmodel.mass_properties(vehicle, profile, rho)
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
+    model["length_m"] = float(profile.length)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model)
