@@ -52,6 +52,11 @@ def test_hull_day_with_a_vehicle_writes_predicted_beside_measured(hull_day: Day,
     symbols = model["covariance"]["symbols"]
     assert "Y_vdot" in symbols and len(model["covariance"]["matrix"]) == len(symbols)
     assert (out / "predicted.csv").is_file()
+    assert not (out / "figures").exists()  # --no-report: no figure
+    from towtank.report.vehicle import predicted_figure
+
+    fig = predicted_figure(day.coefficients)
+    assert [t.get_text() for t in fig.axes[0].get_yticklabels()][:2] == ["X_udot", "Y_vdot"]
     written = pd.read_csv(out / "coefficients.csv")
     assert "predicted_diff_pct" in written.columns
     # the measured covariance carries into the manoeuvre: 95 % bands

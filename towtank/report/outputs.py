@@ -134,7 +134,7 @@ def write_outputs(
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
             from towtank.report.vehicle import write_vehicle
 
-            write_vehicle(day, tmp)
+            write_vehicle(day, tmp, figure=report)
         if report:
             run_writers(writers or _report_writers(), day, tmp)
         (tmp / "provenance.json").write_text(
