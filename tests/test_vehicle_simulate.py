@@ -103,12 +103,25 @@ def test_zigzag_switches_at_the_check_angle_and_overshoots():
     assert ts["psi_deg"].iloc[switch[1]] == pytest.approx(-20.0, abs=0.05)
 
 
-def test_glide_of_a_heavy_vehicle_goes_down():
-    model = _model(LINEAR | {"Y_v|v|": -131.0, "Z_w|w|": -131.0, "M_q|q|": -9.4,
+def test_simulated_glide_settles_on_the_steady_glide_solution():
+    from towtank.vehicle.glider import glide_table, steady_glide
+
+    # a heavy glider trimmed nose down by its centre of gravity forward of the buoyancy's
+    model = _model(LINEAR | {"M_uq": -20.0, "Z_w|w|": -131.0, "M_q|q|": -9.4,
                              "Z_wdot": -35.5, "M_qdot": -4.88, "X_udot": -0.93},
-                   cg=(0.0, 0.0, 0.02))
-    ts = simulate(model, "glide", 0.5, net_buoyancy_n=-5.0, duration_s=200.0)
+                   cg=(0.01, 0.0, 0.02))
+    ts = simulate(model, "glide", 0.5, net_buoyancy_n=-5.0, duration_s=300.0)
     met = manoeuvre_metrics(ts).set_index("metric")["value"]
-    assert met["depth_rate_m_s"] > 0 and met["speed_m_s"] > 0
-    # steady: the net weight is carried by drag and lift, the depth rate settles
-    assert abs(met["glide_angle_deg"]) > 5
+    assert met["depth_rate_m_s"] > 0 and met["glide_angle_deg"] < -5  # down, forward
+    steady = steady_glide(model, -5.0, met["steady_pitch_deg"])
+    assert steady["converged"]
+    assert steady["speed_m_s"] == pytest.approx(met["speed_m_s"], rel=1e-4)
+    assert steady["glide_angle_deg"] == pytest.approx(met["glide_angle_deg"], abs=0.01)
+    assert steady["depth_rate_m_s"] == pytest.approx(met["depth_rate_m_s"], rel=1e-4)
+    assert abs(steady["trim_moment_Nm"]) < 1e-6  # the pitch the vehicle chose is its trim
+    table = glide_table(model, [-2.0, -5.0], [-10.0, -20.0, 10.0])
+    ok = table[table["converged"]]
+    assert len(ok) == 4 and table.loc[~table["converged"], "pitch_deg"].tolist() == [10.0, 10.0]
+    # more net weight, faster glide at the same pitch
+    fast = ok.set_index(["net_buoyancy_N", "pitch_deg"])["speed_m_s"]
+    assert fast[(-5.0, -20.0)] > fast[(-2.0, -20.0)]

@@ -61,6 +61,14 @@ def simulate_command(
     folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
     folder.mkdir(parents=True, exist_ok=True)
     ts.to_csv(folder / "manoeuvre.csv", index=False, float_format="%.6g")
+    if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+        from towtank.vehicle.glider import glide_table
+
+        sign = -1.0 if net_buoyancy_n <= 0 else 1.0
+        size = abs(net_buoyancy_n) or 1.0
+        table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
+                            [sign * p for p in range(5, 50, 5)])
+        table.to_csv(folder / "glide_table.csv", index=False, float_format="%.6g")
     metrics.to_csv(folder / "metrics.csv", index=False, float_format="%.6g")
     _figure(ts, metrics, manoeuvre, folder / "manoeuvre.png", model.get("name", "model"))
     with pd.option_context("display.width", 120):
