@@ -125,3 +125,47 @@ def test_simulated_glide_settles_on_the_steady_glide_solution():
     # more net weight, faster glide at the same pitch
     fast = ok.set_index(["net_buoyancy_N", "pitch_deg"])["speed_m_s"]
     assert fast[(-5.0, -20.0)] > fast[(-2.0, -20.0)]
+
+
+def _write(path, model):
+    import json
+
+    path.write_text(json.dumps(model))
+    return path
+
+
+def test_bad_model_files_stop_with_one_sentence_and_exit_2(tmp_path, capsys):
+    from towtank.commands.cli import main
+
+    good = _model(LINEAR)
+    cases = {
+        "missing": (None, "cannot be read"),
+        "text": ("not json", "cannot be read"),
+        "nokey": ({k: v for k, v in good.items() if k != "mass_kg"}, "lacks the key 'mass_kg'"),
+        "symbol": (good | {"coefficients": {"Y_foo": 1.0}}, "'Y_foo' is not a coefficient"),
+        "nan": (good | {"coefficients": {"Y_uv": float("nan")}}, "not a finite number"),
+        "cg": (good | {"cg_m": [0, 0]}, "three numbers"),
+    }
+    for name, (content, message) in cases.items():
+        path = tmp_path / f"{name}.json"
+        if isinstance(content, dict):
+            _write(path, content)
+        elif content is not None:
+            path.write_text(content)
+        out = tmp_path / f"out_{name}"
+        assert main(["simulate", str(path), "--manoeuvre", "turning", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, (name, err)
+        assert not out.exists()
+
+
+def test_a_diverging_model_is_refused_not_crashed(tmp_path, capsys):
+    from towtank.commands.cli import main
+
+    bad = _model(LINEAR | {"X_u|u|": 50.0, "Y_uv": 500.0, "N_ur": 300.0})  # wrong signs
+    path = _write(tmp_path / "bad.json", bad)
+    code = main(["simulate", str(path), "--manoeuvre", "turning", "--duration-s", "200",
+                 "--out", str(tmp_path / "o")])
+    assert code == 2
+    assert "diverges" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

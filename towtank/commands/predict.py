@@ -19,7 +19,7 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
     from towtank.vehicle import model as vmodel
     from towtank.vehicle.stage import predict_vehicle
 
-    protocol = load_protocol(protocol_path, require_runs=False)
+    protocol = load_protocol(protocol_path, check_paths=False, require_runs=False)
     if protocol.vehicle is None:
         raise ProtocolError(f"{protocol.path.name}: prediction needs a [vehicle] section.")
     try:

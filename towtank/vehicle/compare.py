@@ -75,7 +75,12 @@ def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
         VehiclePrediction, pd.DataFrame | None, list[str]]:
     """The day's prediction and model (measured values first), coefficients.csv with the
     predicted columns (None without measured coefficients) and the warnings."""
-    first = predict_vehicle(protocol)
+    from towtank.errors import TowtankError
+
+    try:
+        first = predict_vehicle(protocol)
+    except ValueError as exc:  # e.g. a hull table that cannot be read: the day goes on
+        raise TowtankError(f"[vehicle]: no prediction ({exc})") from None
     if coefficients is None or coefficients.empty:
         return first, None, []
     length = first.profile.length

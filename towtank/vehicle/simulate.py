@@ -202,6 +202,7 @@ def simulate(
     if manoeuvre != "zigzag":
         sol = solve_ivp(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
                         method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
+        _check(sol)
         times, states = sol.t, sol.y.T
         rudder = np.full(len(times), dr)
     else:
@@ -220,6 +221,7 @@ def simulate(
             sol = solve_ivp(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
                             (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
                             max_step=h, events=event)
+            _check(sol)
             t_parts.append(sol.t)
             y_parts.append(sol.y.T)
             r_parts.append(np.full(len(sol.t), command))
@@ -241,6 +243,14 @@ def simulate(
     out.attrs["manoeuvre"] = manoeuvre
     out.attrs["check_deg"] = abs(rudder_deg)
     return out
+
+
+def _check(sol: Any) -> None:
+    """A failed integration (a model whose motion diverges) is one sentence, not a crash."""
+    if sol.status == -1 or not np.all(np.isfinite(sol.y)):
+        t = float(sol.t[-1]) if len(sol.t) else 0.0
+        raise ValueError(f"the simulation stopped at t = {t:.3g} s ({sol.message}): the "
+                         "model's motion diverges; check the signs of its damping terms.")
 
 
 def _at_heading(ts: pd.DataFrame, change_deg: float) -> pd.Series | None:
