@@ -244,3 +244,82 @@ def test_protocol_accepts_the_builtin_reference_names(tmp_path):
     p = load_protocol(proto, require_runs=False)
     assert p.campaign.reference == "remus-prestero2001"
     assert p.vehicle.fins[1].plane == "sternplane"
+
+
+@pytest.mark.parametrize("hull", ["suboff", "table"])
+def test_predict_other_hull_libraries(tmp_path, hull):
+    from towtank.commands.cli import main
+
+    head = PROTOCOL.split("[vehicle]")[0]
+    if hull == "suboff":
+        body = '[vehicle]\nhull = "suboff"\nlength_m = 4.356\nspeed_m_s = 2.0\n'
+    else:
+        x = np.linspace(0, 1.2, 61)
+        r = 0.1 * np.sqrt(np.clip(1 - (2 * x / 1.2 - 1) ** 2, 0, None))
+        pd.DataFrame({"x_m": x, "r_m": r}).to_csv(tmp_path / "hull.csv", index=False)
+        body = '[vehicle]\nhull = "table"\nhull_table = "hull.csv"\n'
+    proto = tmp_path / "p.toml"
+    proto.write_text(head + body)
+    assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 0
+    pred = pd.read_csv(tmp_path / "out" / "predicted.csv").set_index("symbol")
+    model = json.loads((tmp_path / "out" / "model.json").read_text())
+    # neutrally buoyant by default, no fins: no control derivatives
+    assert model["weight_N"] == pytest.approx(model["buoyancy_N"])
+    assert "Y_uudr" not in pred.index and pred.loc["Y_vdot", "value"] < 0
+    if hull == "suboff":  # about 0.70 m^3 displaced: Y_vdot close to -k2 rho V, k2 ~ 0.97
+        assert -pred.loc["Y_vdot", "value"] / (model["rho_kg_m3"] * 0.70) == pytest.approx(
+            0.97, abs=0.03)
+
+
+def test_predict_a_missing_hull_table_is_exit_2(tmp_path, capsys):
+    from towtank.commands.cli import main
+
+    proto = tmp_path / "p.toml"
+    proto.write_text(PROTOCOL.split("[vehicle]")[0]
+                     + '[vehicle]\nhull = "table"\nhull_table = "nope.csv"\n')
+    assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
+    assert "nope.csv" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_vehicle_section_never_crashes_the_loader(tmp_path_factory):
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from towtank.errors import ProtocolError
+    from towtank.ingest.protocol import load_protocol
+
+    values = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-5, 5),
+                       st.text(max_size=8), st.booleans(),
+                       st.lists(st.floats(-2, 2), max_size=4))
+    keys = st.sampled_from(["hull", "mass_kg", "cg_m", "inertia_kg_m2", "scale", "origin_m",
+                            "speed_m_s", "hull_table", "length_m", "nme"])
+    fin_keys = st.sampled_from(["plane", "x_m", "span_m", "chord_m", "taper", "section"])
+    folder = tmp_path_factory.mktemp("fuzz")
+
+    @settings(max_examples=60, deadline=None)
+    @given(st.dictionaries(keys, values, max_size=5),
+           st.lists(st.dictionaries(fin_keys, values, max_size=6), max_size=2))
+    def check(vehicle, fins):
+        def val(v):
+            if isinstance(v, bool):
+                return "true" if v else "false"
+            if isinstance(v, float):
+                return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) \
+                    else repr(v)
+            if isinstance(v, list):
+                return "[" + ", ".join(val(x) for x in v) + "]"
+            return json.dumps(v) if isinstance(v, str) else str(v)
+
+        lines = ["[campaign]", 'name = "x"', "[water]", "temperature_C = 15.0", "[vehicle]"]
+        lines += [f"{k} = {val(v)}" for k, v in ({"hull": "suboff"} | vehicle).items()]
+        for fin in fins:
+            lines += ["[[vehicle.fins]]"] + [f"{k} = {val(v)}" for k, v in fin.items()]
+        path = folder / "p.toml"
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        try:
+            load_protocol(path, check_paths=False, require_runs=False)
+        except ProtocolError as exc:
+            assert str(exc).count("\n") == 0
+
+    check()

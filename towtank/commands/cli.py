@@ -32,6 +32,8 @@ examples:
   towtank inspect sample_runs/sut2_hull/data/run_020.csv.gz --protocol protocols/sut2_hull.toml
   towtank scale protocols/sut2_hull.toml --speeds 1 2 3
   towtank synth /tmp/day --day hull                   generate a synthetic test day
+  towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
+  towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
 in runs.csv); 2 the protocol or run sheet is unusable (nothing written); 3 internal error.
