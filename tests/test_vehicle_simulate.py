@@ -169,3 +169,30 @@ def test_a_diverging_model_is_refused_not_crashed(tmp_path, capsys):
     assert code == 2
     assert "diverges" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_shipped_remus_protocol_predicts_and_turns(tmp_path, capsys):
+    """protocols/remus_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s (the MATLAB
+    tool's Table 6 case; its 150 kg vehicles turn 3-8 times wider, docs/method.md)."""
+    import json
+    from pathlib import Path
+
+    from towtank.commands.cli import main
+
+    proto = Path(__file__).resolve().parents[1] / "protocols" / "remus_vehicle.toml"
+    assert main(["predict", str(proto), "--out", str(tmp_path / "p")]) == 0
+    model = json.loads((tmp_path / "p" / "model.json").read_text())
+    assert model["length_m"] == pytest.approx(1.33, abs=0.005)
+    assert main(["simulate", str(tmp_path / "p" / "model.json"), "--manoeuvre", "turning",
+                 "--rudder-deg", "10", "--speed", "1.25", "--out", str(tmp_path / "t")]) == 0
+    met = pd_read(tmp_path / "t" / "metrics.csv")
+    radius, td = met["steady_turn_radius_m"], met["tactical_diameter_m"]
+    assert 0.5 * td < met["advance_m"] < 2 * td and met["transfer_m"] < td
+    assert 1.5 * radius < td < 3 * radius  # the turn tightens as the speed falls
+    assert 2.0 < td / model["length_m"] < 5.0  # 3.2 L (docs/method.md)
+
+
+def pd_read(path):
+    import pandas as pd
+
+    return pd.read_csv(path).set_index("metric")["value"]
