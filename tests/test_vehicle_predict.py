@@ -323,3 +323,22 @@ def test_vehicle_section_never_crashes_the_loader(tmp_path_factory):
             assert str(exc).count("\n") == 0
 
     check()
+
+
+def test_measured_values_carry_to_a_prototype_through_their_primes():
+    from towtank.vehicle.compare import measured_for_vehicle, with_predicted
+
+    rho, length = 1000.0, 0.5
+    coef = pd.DataFrame({"symbol": ["Y_vdot", "Y_v|v|"], "value": [-2.0, -30.0],
+                         "std_error": [0.1, 3.0]})
+    coef["prime"] = [-2.0 / (0.5 * rho * length**3), -30.0 / (0.5 * rho * length**2)]
+    values, (symbols, cov) = measured_for_vehicle(coef, 1025.0, 4 * length)
+    assert values["Y_vdot"] == pytest.approx(-2.0 * 1.025 * 4**3)
+    assert values["Y_v|v|"] == pytest.approx(-30.0 * 1.025 * 4**2)
+    assert np.sqrt(np.diag(cov)) == pytest.approx([0.1 * 1.025 * 64, 3.0 * 1.025 * 16])
+    same, _ = measured_for_vehicle(coef, 1025.0, None)  # the tested model itself
+    assert same == {"Y_vdot": -2.0, "Y_v|v|": -30.0}
+    pred = pd.DataFrame({"symbol": ["Y_vdot"], "prime": [coef["prime"][0] / 2]})
+    table, warnings = with_predicted(coef, pred)
+    assert table["predicted_diff_pct"].iloc[0] == pytest.approx(-100.0)
+    assert len(warnings) == 1 and "Y_vdot" in warnings[0] and "predicted" in warnings[0]

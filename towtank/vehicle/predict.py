@@ -167,9 +167,11 @@ def _units(symbol: str) -> str:
     n_rad = sum(ch in "pqr" for ch in sub.removesuffix("dot").removesuffix("dr").removesuffix("ds"))
     n_rad += symbol.endswith(("dr", "ds"))
     power = k - 3
-    base = "kg" if power == 0 else ("kg*m" if power == 1 else
-                                     ("kg/m" if power == -1 else f"kg*m^{power}"))
-    return base + ("" if n_rad == 0 else ("/rad" if n_rad == 1 else f"/rad^{n_rad}"))
+    rad = "" if n_rad == 0 else ("rad" if n_rad == 1 else f"rad^{n_rad}")
+    if power == -1:
+        return f"kg/(m*{rad})" if rad else "kg/m"
+    base = "kg" if power == 0 else ("kg*m" if power == 1 else f"kg*m^{power}")
+    return base + (f"/{rad}" if rad else "")
 
 
 def _fin_strip(profile: HullProfile, pair: FinPair, x_origin: float) -> tuple[np.ndarray, ...]:
