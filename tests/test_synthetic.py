@@ -548,6 +548,7 @@ FORMATS_KEYS = {
     "prototype": {"length_m", "speeds_m_s", "water"},
     "channels": {"time", "speed", "drag", "lift", "accel"},
     "processing": set(),
+    "vehicle": {"hull", "hull_table", "mass_kg", "cg_m", "cb_m", "inertia_kg_m2", "fins"},
 }  # fmt: skip
 
 
@@ -557,7 +558,8 @@ def test_sample_protocols(tmp_path):
     fin = tomllib.loads(paths[1].read_text())
     # only FORMATS keys, plus the extensions towtank documents in docs/formats.md (the hull
     # day shows the submergence depth and a Myring description, the fin day its position)
-    extensions = {"model": {"depth_m", "myring"}, "fin": {"x_m", "linear_max_deg"}}
+    extensions = {"model": {"depth_m", "myring"}, "fin": {"x_m", "linear_max_deg"},
+                  "vehicle": {"name", "speed_m_s"}}
     for data in (hull, fin):
         for section, values in data.items():
             assert set(values) <= FORMATS_KEYS[section] | extensions.get(section, set()), section

@@ -27,6 +27,7 @@ from towtank.reduce.run import (
     reduce_record,
 )
 from towtank.reduce.tare import TareModel, fit_tare_group
+from towtank.reference.sets import BUILTIN_REFERENCES
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 
 G = 9.80665
@@ -62,6 +63,7 @@ class DayResult:
     report_date: str | None = None
     # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
     previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
+    vehicle: Any = None  # towtank.vehicle.stage.VehiclePrediction of a [vehicle] section
 
     @property
     def n_rejected(self) -> int:
@@ -381,7 +383,7 @@ def process_day(
     runs = run_table(protocol, sheet, reductions, rejected)
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
-    if protocol.campaign.reference != "remus":  # a user reference CSV is an input too
+    if protocol.campaign.reference not in BUILTIN_REFERENCES:  # a user CSV is an input too
         inputs[str(protocol.campaign.reference)] = _sha(Path(protocol.campaign.reference))
     shas = {red.file: red.sha256 for red in reductions.values()}
     for file in sheet["file"]:  # every input the sheet names, rejected runs' files too
@@ -413,7 +415,7 @@ def _analyse(day: DayResult) -> None:
     """The fitting stages: hull coefficients, fins, similarity (each on the reduced runs)."""
     from towtank.errors import TowtankError
 
-    for stage in (_hull_stage, _fin_stage, _scaling_stage):
+    for stage in (_hull_stage, _fin_stage, _scaling_stage, _vehicle_stage):
         try:
             stage(day)
         except TowtankError as exc:
@@ -497,6 +499,19 @@ def _hull_stage(day: DayResult) -> None:
             f"{'it is' if one else 'they are'} still in the fit: check "
             f"{'it' if one else 'them'} before trusting X_u|u|, X_uv, X_v|v| and Y_uv."
         )
+
+
+def _vehicle_stage(day: DayResult) -> None:
+    """Prediction and model of the protocol's [vehicle]; predicted beside measured."""
+    if getattr(day.protocol, "vehicle", None) is None:
+        return
+    from towtank.vehicle.compare import day_vehicle
+
+    day.vehicle, table, warnings = day_vehicle(
+        day.protocol, day.hull.coefficients if day.hull is not None else None)
+    if table is not None:
+        day.hull.coefficients = table
+    day.warnings.extend(warnings)
 
 
 def _fin_stage(day: DayResult) -> None:

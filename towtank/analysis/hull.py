@@ -760,13 +760,12 @@ def fit_hull(
 
 
 def load_reference(reference: str) -> dict[str, float]:
-    """Reference prime values by symbol: the built-in 'remus' set or a CSV (symbol, prime)."""
-    from importlib import resources
+    """Reference prime values by symbol: a built-in set ('remus', 'remus-prestero2001') or a
+    CSV (symbol, prime)."""
+    from towtank.reference.sets import BUILTIN_REFERENCES, builtin_reference
 
-    if reference == "remus":
-        with resources.files("towtank.reference").joinpath("data", "sut2_table4.csv").open() as fh:
-            df = pd.read_csv(fh, comment="#")
-        return dict(zip(df["symbol"], df["remus_prime"].astype(float), strict=True))
+    if reference in BUILTIN_REFERENCES:
+        return builtin_reference(reference)
     from towtank.ingest.protocol import read_reference_csv
 
     return read_reference_csv(reference)

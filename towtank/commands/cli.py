@@ -32,6 +32,8 @@ examples:
   towtank inspect sample_runs/sut2_hull/data/run_020.csv.gz --protocol protocols/sut2_hull.toml
   towtank scale protocols/sut2_hull.toml --speeds 1 2 3
   towtank synth /tmp/day --day hull                   generate a synthetic test day
+  towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
+  towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
 in runs.csv); 2 the protocol or run sheet is unusable (nothing written); 3 internal error.
@@ -96,6 +98,40 @@ def _parser() -> argparse.ArgumentParser:
                     help="prototype speeds [m/s] (default: [prototype] speeds_m_s)")
     sc.add_argument("--out", type=Path, metavar="DIR", help="output folder holding the cache")
     sc.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
+    pd_ = sub.add_parser(
+        "predict",
+        help="predict the coefficients of the protocol's [vehicle] from its geometry",
+        description="Write predicted.csv (symbol, value, unit, prime, method, reference) and "
+        "model.json for the hull and fins described in the protocol's [vehicle] section.",
+    )
+    pd_.add_argument("protocol", type=Path)
+    pd_.add_argument("--out", type=Path, metavar="DIR",
+                     help="output folder (default: output_dir of the protocol)")
+    pd_.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
+    si = sub.add_parser(
+        "simulate",
+        help="simulate a manoeuvre of a model.json (turning, zigzag, dive, spiral, glide)",
+        description="6-DOF simulation of the Fossen-form model written by 'predict' or "
+        "'process': manoeuvre.csv (time series), metrics.csv and manoeuvre.png.",
+    )
+    si.add_argument("model", type=Path, help="model.json")
+    si.add_argument("--manoeuvre", required=True,
+                    choices=("turning", "zigzag", "dive", "spiral", "glide"))
+    si.add_argument("--rudder-deg", type=float, metavar="D",
+                    help="rudder angle (zigzag: also the check angle) [deg]")
+    si.add_argument("--sternplane-deg", type=float, metavar="D", help="stern-plane angle [deg]")
+    si.add_argument("--speed", type=float, metavar="U",
+                    help="speed [m/s] (default: the model's design speed)")
+    si.add_argument("--net-buoyancy-N", type=float, metavar="B", dest="net_buoyancy",
+                    help="buoyancy minus weight [N] (default: the model's)")
+    si.add_argument("--duration-s", type=float, metavar="T", help="simulated time [s]")
+    si.add_argument("--samples", type=int, default=0, metavar="N",
+                    help="draw the measured coefficients N times for 95 %% bands")
+    si.add_argument("--out", type=Path, metavar="DIR",
+                    help="output folder (default: ./simulate_<manoeuvre>)")
+    si.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
 
     sy = sub.add_parser(
         "synth",
@@ -247,7 +283,25 @@ def cmd_synth(args: argparse.Namespace) -> int:
     return synth_command(args)
 
 
+def cmd_predict(args: argparse.Namespace) -> int:
+    from towtank.commands.predict import predict_command
+
+    return predict_command(args.protocol, out=args.out)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from towtank.commands.simulate import simulate_command
+
+    return simulate_command(
+        args.model, args.manoeuvre, rudder_deg=args.rudder_deg,
+        sternplane_deg=args.sternplane_deg, speed=args.speed,
+        net_buoyancy_n=args.net_buoyancy, out=args.out, samples=args.samples,
+        duration_s=args.duration_s)
+
+
 COMMANDS = {
+    "predict": cmd_predict,
+    "simulate": cmd_simulate,
     "process": cmd_process,
     "inspect": cmd_inspect,
     "scale": cmd_scale,

@@ -19,6 +19,7 @@ from typing import Any
 
 from towtank.errors import ProtocolError
 from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
+from towtank.reference.sets import BUILTIN_REFERENCES
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
@@ -178,6 +179,7 @@ class Protocol:
     report: ReportOptions
     warnings: tuple[str, ...] = field(default=())
     read: ReadOptions = field(default_factory=ReadOptions)
+    vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
 
     @property
     def name(self) -> str:
@@ -272,7 +274,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read")
+             "read", "vehicle")
 
 _KIND_WORDS = {
     "str": "a text string",
@@ -444,7 +446,9 @@ def _unit_warnings(
     return out
 
 
-def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
+def load_protocol(
+    path: str | Path, *, check_paths: bool = True, require_runs: bool = True
+) -> Protocol:
     """Read and validate a protocol file.
 
     Parameters
@@ -453,6 +457,9 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
         The protocol (TOML) file.
     check_paths : bool
         Check that the run sheet and the data folder exist.
+    require_runs : bool
+        False for a protocol read by ``towtank predict``: [campaign] may leave out the run
+        sheet and the data folder (and its name: the file's stem).
 
     Returns
     -------
@@ -479,6 +486,13 @@ def load_protocol(path: str | Path, *, check_paths: bool = True) -> Protocol:
     for key in data:
         if key not in TOP_LEVEL:
             raise ProtocolError(f"{src}: unknown section [{key}]{_suggest(key, TOP_LEVEL)}")
+    if not require_runs:  # towtank predict: the vehicle and the water are enough
+        camp = data.setdefault("campaign", {})
+        if isinstance(camp, dict):
+            camp.setdefault("name", path.stem)
+            for key in ("run_sheet", "data_dir"):
+                if key not in camp:
+                    camp[key], check_paths = ".", False
     for required in ("campaign", "water"):
         if required not in data:
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
@@ -501,12 +515,12 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         else Path.cwd() / "reports" / slugify(camp["name"])
     )
     reference = camp.get("reference", "remus")
-    if reference != "remus":
+    if reference not in BUILTIN_REFERENCES:
         ref_path = base / reference
         if check_paths and not ref_path.is_file():
             raise ProtocolError(
-                f"{src}: the reference '{reference}' in [campaign] is neither the built-in "
-                f"set 'remus' nor an existing CSV file ({ref_path})."
+                f"{src}: the reference '{reference}' in [campaign] is neither a built-in "
+                f"set ({', '.join(BUILTIN_REFERENCES)}) nor an existing CSV file ({ref_path})."
             )
         reference = str(ref_path)
         if check_paths:
@@ -580,7 +594,13 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             )
         fin = Fin(**f)
 
-    if model is None and fin is None:
+    vehicle = None
+    if "vehicle" in data:
+        from towtank.ingest.vehicle_protocol import parse_vehicle
+
+        vehicle = parse_vehicle(data["vehicle"], base, src,
+                                model.myring if model is not None else None, check_paths)
+    if model is None and fin is None and vehicle is None:
         raise ProtocolError(f"{src}: the protocol needs a [model] or a [fin] section.")
 
     prototype = None
@@ -659,6 +679,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         report=report,
         warnings=tuple(warnings),
         read=read,
+        vehicle=vehicle,
     )
 
 
@@ -788,6 +809,7 @@ def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMa
 OUTPUT_NAMES = frozenset({
     "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
     "scaling.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
+    "predicted.csv", "model.json",
 })
 
 
@@ -868,7 +890,7 @@ def check_output_dir(
             "choose another folder with --out or [campaign] output_dir."
         )
     inputs = [protocol.path, protocol.campaign.run_sheet, *(Path(p) for p in inputs)]
-    if protocol.campaign.reference != "remus":
+    if protocol.campaign.reference not in BUILTIN_REFERENCES:
         inputs.append(Path(protocol.campaign.reference))
     for name in sorted(OUTPUT_NAMES):
         target = out / name

@@ -131,6 +131,10 @@ def write_outputs(
         from towtank.report import tables
 
         tables.write_tables(day, tmp)
+        if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
+            from towtank.report.vehicle import write_vehicle
+
+            write_vehicle(day, tmp, figure=report)
         if report:
             run_writers(writers or _report_writers(), day, tmp)
         (tmp / "provenance.json").write_text(

@@ -1,0 +1,40 @@
+"""``towtank predict``: the coefficients of the protocol's [vehicle] predicted from geometry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from towtank.errors import ProtocolError
+
+
+def predict_command(protocol_path: Path, out: Path | None = None) -> int:
+    """Write predicted.csv and model.json for the protocol's [vehicle]; print the table.
+
+    The protocol needs [water] and [vehicle] (its [campaign] may leave out the run sheet and
+    the data folder). Output folder: ``--out``, else the protocol's output folder.
+    """
+    import pandas as pd
+
+    from towtank.ingest.protocol import load_protocol
+    from towtank.vehicle import model as vmodel
+    from towtank.vehicle.stage import predict_vehicle
+
+    protocol = load_protocol(protocol_path, check_paths=False, require_runs=False)
+    if protocol.vehicle is None:
+        raise ProtocolError(f"{protocol.path.name}: prediction needs a [vehicle] section.")
+    try:
+        result = predict_vehicle(protocol)
+    except ValueError as exc:  # a bad hull table or hull description
+        raise ProtocolError(f"{protocol.path.name}: {exc}") from None
+    folder = Path(out) if out is not None else protocol.campaign.output_dir
+    folder.mkdir(parents=True, exist_ok=True)
+    result.predicted.to_csv(folder / "predicted.csv", index=False, float_format="%.6g")
+    vmodel.write_model(result.model, folder / "model.json")
+    with pd.option_context("display.max_rows", None, "display.width", 120,
+                           "display.max_colwidth", 60):
+        print(result.predicted[["symbol", "value", "unit", "prime"]].to_string(index=False))
+    p = result.profile
+    print(f"\nhull {p.name}: L = {p.length:.4g} m, D = {p.max_diameter:.4g} m, "
+          f"V = {p.volume:.4g} m^3, S_w = {p.wetted_area:.4g} m^2; rho = {result.rho:.2f} kg/m^3")
+    print(f"wrote {folder / 'predicted.csv'} and {folder / 'model.json'}")
+    return 0

@@ -1,0 +1,106 @@
+"""``towtank simulate``: a manoeuvre of a model.json (turning, zigzag, dive, spiral, glide)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from towtank.errors import ProtocolError
+
+DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, "glide": 0.0}
+DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0}
+
+
+def simulate_command(
+    model_path: Path, manoeuvre: str, *, rudder_deg: float | None = None,
+    sternplane_deg: float | None = None, speed: float | None = None,
+    net_buoyancy_n: float | None = None, out: Path | None = None, samples: int = 0,
+    duration_s: float | None = None, seed: int = 1,
+) -> int:
+    """Simulate, write manoeuvre.csv, metrics.csv and manoeuvre.png; print the metrics.
+
+    With ``samples`` > 0 the measured coefficients are drawn ``samples`` times from their
+    covariance and metrics.csv gains ci_low, ci_high (2.5 and 97.5 percentiles).
+    """
+    import pandas as pd
+
+    from towtank.vehicle.model import read_model
+    from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate
+
+    try:
+        model = read_model(model_path)
+    except ValueError as exc:
+        raise ProtocolError(str(exc)) from None
+    rudder = DEFAULT_RUDDER[manoeuvre] if rudder_deg is None else rudder_deg
+    stern = DEFAULT_STERN[manoeuvre] if sternplane_deg is None else sternplane_deg
+    u = speed if speed is not None else float(model.get("design_speed_m_s", 1.5))
+    for name, value in (("--rudder-deg", rudder), ("--sternplane-deg", stern)):
+        if not (math.isfinite(value) and abs(value) <= 45.0):
+            raise ProtocolError(f"{name} must lie within ±45 degrees, not {value}.")
+    if not (math.isfinite(u) and u > 0):
+        raise ProtocolError(f"--speed must be a speed > 0 m/s, not {u}.")
+    if manoeuvre == "glide" and net_buoyancy_n is None:
+        net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
+    if samples < 0:
+        raise ProtocolError(f"--samples must be >= 0, not {samples}.")
+    kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s)
+    try:
+        ts = simulate(model, manoeuvre, **kwargs)
+        metrics = manoeuvre_metrics(ts)
+        if samples:
+            draws = [manoeuvre_metrics(simulate(m, manoeuvre, **kwargs))
+                     .set_index("metric")["value"] for m in sample_models(model, samples, seed)]
+            table = pd.concat(draws, axis=1)
+            lo = table.quantile(0.025, axis=1)
+            hi = table.quantile(0.975, axis=1)
+            metrics["ci_low"] = metrics["metric"].map(lo)
+            metrics["ci_high"] = metrics["metric"].map(hi)
+    except ValueError as exc:
+        raise ProtocolError(f"{Path(model_path).name}: {exc}") from None
+    folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
+    folder.mkdir(parents=True, exist_ok=True)
+    ts.to_csv(folder / "manoeuvre.csv", index=False, float_format="%.6g")
+    if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+        from towtank.vehicle.glider import glide_table
+
+        sign = -1.0 if net_buoyancy_n <= 0 else 1.0
+        size = abs(net_buoyancy_n) or 1.0
+        table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
+                            [sign * p for p in range(5, 50, 5)])
+        table.to_csv(folder / "glide_table.csv", index=False, float_format="%.6g")
+    metrics.to_csv(folder / "metrics.csv", index=False, float_format="%.6g")
+    _figure(ts, metrics, manoeuvre, folder / "manoeuvre.png", model.get("name", "model"))
+    with pd.option_context("display.width", 120):
+        print(metrics.to_string(index=False))
+    print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"
+          + (f" ({samples} samples of the measured coefficients)" if samples else ""))
+    return 0
+
+
+def _figure(ts, metrics, manoeuvre: str, path: Path, name: str) -> None:  # noqa: ANN001
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2), layout="constrained")
+    if manoeuvre in ("dive", "glide"):
+        ax1.plot(ts["x_m"], ts["z_m"])
+        ax1.invert_yaxis()
+        ax1.set(xlabel="x [m]", ylabel="depth z [m]")
+        ax2.plot(ts["t_s"], ts["theta_deg"], label="pitch θ")
+        ax2.set(ylabel="[deg]")
+    else:
+        ax1.plot(ts["y_m"], ts["x_m"])
+        ax1.set(xlabel="y (starboard) [m]", ylabel="x (north) [m]", aspect="equal")
+        ax2.plot(ts["t_s"], ts["psi_deg"], label="heading ψ")
+        ax2.plot(ts["t_s"], ts["rudder_deg"], label="rudder δr")
+        ax2.set(ylabel="[deg]")
+    ax2.set(xlabel="t [s]")
+    ax2.legend()
+    ax1.set_title(f"{name}: {manoeuvre}", loc="left")
+    for a in (ax1, ax2):
+        a.grid(True, alpha=0.3)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,186 @@
+"""The protocol's ``[vehicle]`` section and its ``[[vehicle.fins]]`` (docs/formats.md).
+
+The body a prediction and a manoeuvring model are for: its hull (Myring, DARPA SUBOFF or a
+radius table), mass properties and fin pairs. Validated like the rest of the protocol: an
+unknown key, a wrong type or an impossible value is a :class:`~towtank.errors.ProtocolError`
+with one sentence naming the key.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from towtank.errors import ProtocolError
+
+HULLS = ("myring", "suboff", "table")
+FIN_PLANES = ("rudder", "sternplane")
+
+VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
+    "name": ("str", False),
+    "hull": ("str", True),
+    "hull_table": ("path", False),
+    "myring": ("table", False),
+    "length_m": ("float", False),
+    "scale": ("float", False),
+    "mass_kg": ("float", False),
+    "cg_m": ("floats", False),
+    "cb_m": ("floats", False),
+    "inertia_kg_m2": ("floats", False),
+    "speed_m_s": ("float", False),
+    "origin_m": ("float", False),
+}
+FIN_SCHEMA: dict[str, tuple[str, bool]] = {
+    "plane": ("str", True),
+    "x_m": ("float", True),
+    "span_m": ("float", True),
+    "chord_m": ("float", True),
+    "section": ("str", False),
+    "taper": ("float", False),
+}
+
+
+@dataclass(frozen=True)
+class VehicleFin:
+    """One ``[[vehicle.fins]]`` entry: a pair of fins (both sides of the hull) [m]."""
+
+    plane: str
+    x_m: float
+    span_m: float
+    chord_m: float
+    section: str = "NACA0012"
+    taper: float = 1.0
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """The validated ``[vehicle]`` section.
+
+    ``myring`` holds the Myring parameters (a, b, c, n, theta_deg, d, a_offset, c_offset) of
+    ``[vehicle.myring]``, else of ``[model.myring]``; ``scale`` multiplies every length of the
+    hull (a prototype described by its model's hull); ``mass_kg`` None means neutrally
+    buoyant; ``origin_m`` is the reference point aft of the nose tip, None for the centre of
+    buoyancy.
+    """
+
+    hull: str
+    name: str = "vehicle"
+    hull_table: Path | None = None
+    myring: dict[str, float] | None = None
+    length_m: float | None = None
+    scale: float = 1.0
+    mass_kg: float | None = None
+    cg_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    cb_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    inertia_kg_m2: tuple[float, float, float] | None = None
+    speed_m_s: float = 1.5
+    origin_m: float | None = None
+    fins: tuple[VehicleFin, ...] = ()
+
+
+def _check(values: dict[str, Any], spec: dict[str, tuple[str, bool]], label: str,
+           src: str) -> dict[str, Any]:
+    from towtank.ingest import protocol as _p
+
+    if not isinstance(values, dict):
+        raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {values!r}.")
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        if key not in spec:
+            raise ProtocolError(
+                f"{src}: unknown key '{key}' in [{label}]{_p._suggest(key, list(spec))}")
+        out[key] = _p._coerce(value, spec[key][0], f"'{key}' in [{label}]", src)
+    for key, (_, required) in spec.items():
+        if required and key not in out:
+            raise ProtocolError(f"{src}: [{label}] is missing the required key '{key}'.")
+    return out
+
+
+def _triple(values: dict[str, Any], key: str, src: str) -> None:
+    if key in values and len(values[key]) != 3:
+        raise ProtocolError(
+            f"{src}: '{key}' in [vehicle] must be three numbers [x, y, z], not "
+            f"{len(values[key])}.")
+
+
+def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
+                  check_paths: bool = True) -> Vehicle:
+    """The validated ``[vehicle]`` section.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML table ``[vehicle]`` (with its ``fins`` array of tables)
+    base : Path
+        Folder of the protocol (``hull_table`` is relative to it)
+    src : str
+        The protocol's file name, for the messages
+    model_myring : object, optional
+        The ``[model.myring]`` description, used when ``hull = "myring"`` has none of its own
+    check_paths : bool
+        Check that the hull table exists
+
+    Raises
+    ------
+    ProtocolError
+        One sentence naming the key and what is wrong.
+    """
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{src}: [vehicle] must be a table of keys, but it is {data!r}.")
+    data = dict(data)
+    fins_raw = data.pop("fins", [])
+    v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
+    if v["hull"] not in HULLS:
+        from towtank.ingest import protocol as _p
+
+        raise ProtocolError(f"{src}: 'hull' in [vehicle] must be one of {', '.join(HULLS)}, "
+                            f"but it is {v['hull']!r}{_p._suggest(v['hull'], HULLS)}")
+    for key in ("length_m", "scale", "mass_kg", "speed_m_s"):
+        if key in v and v[key] <= 0:
+            raise ProtocolError(f"{src}: '{key}' in [vehicle] must be positive, but it is "
+                                f"{v[key]}.")
+    for key in ("cg_m", "cb_m", "inertia_kg_m2"):
+        _triple(v, key, src)
+    if "inertia_kg_m2" in v and min(v["inertia_kg_m2"]) <= 0:
+        raise ProtocolError(f"{src}: 'inertia_kg_m2' in [vehicle] must be three positive "
+                            "moments of inertia [Ixx, Iyy, Izz].")
+    myring = None
+    if "myring" in v:
+        from towtank.ingest import protocol as _p
+
+        myring = _check(v.pop("myring"), {k: s for k, s in _p.SCHEMA["model.myring"].items()},
+                        "vehicle.myring", src)
+    elif model_myring is not None:
+        myring = {k: float(getattr(model_myring, k)) for k in
+                  ("a", "b", "c", "n", "theta_deg", "d", "a_offset", "c_offset")}
+    if v["hull"] == "myring" and myring is None:
+        raise ProtocolError(f"{src}: [vehicle] hull = \"myring\" needs a [vehicle.myring] or "
+                            "[model.myring] description.")
+    table = None
+    if v["hull"] == "table":
+        if "hull_table" not in v:
+            raise ProtocolError(f"{src}: [vehicle] hull = \"table\" needs 'hull_table', a CSV "
+                                "with the columns x_m, r_m.")
+        table = (base / v.pop("hull_table")).resolve()
+        if check_paths and not table.is_file():
+            raise ProtocolError(f"{src}: the hull table in [vehicle] does not exist ({table}).")
+    else:
+        v.pop("hull_table", None)
+    if not isinstance(fins_raw, list):
+        raise ProtocolError(f"{src}: [[vehicle.fins]] must be an array of tables (one "
+                            "[[vehicle.fins]] header per fin pair).")
+    fins = []
+    for i, f in enumerate(fins_raw, start=1):
+        label = f"vehicle.fins #{i}"
+        fv = _check(f, FIN_SCHEMA, label, src)
+        if fv["plane"] not in FIN_PLANES:
+            raise ProtocolError(f"{src}: 'plane' in [{label}] must be one of "
+                                f"{', '.join(FIN_PLANES)}, but it is {fv['plane']!r}.")
+        for key in ("span_m", "chord_m", "taper"):
+            if key in fv and not (math.isfinite(fv[key]) and fv[key] > 0):
+                raise ProtocolError(f"{src}: '{key}' in [{label}] must be positive, but it is "
+                                    f"{fv[key]}.")
+        fins.append(VehicleFin(**fv))
+    return Vehicle(**v, hull_table=table, myring=myring, fins=tuple(fins))

@@ -1,0 +1,44 @@
+"""The packaged reference coefficient sets, by name (``[campaign] reference``).
+
+- ``"remus"``: the REMUS column of the SUT-2 report's Table 4 (Sadeghzadeh Parapari, Seif &
+  Mahdigholi), prime values as printed (``data/sut2_table4.csv``);
+- ``"remus-prestero2001"``: Prestero's (2001) REMUS coefficients in SI, normalised here with his
+  rho = 1030 kg/m^3 and L = 1.33 m (``data/remus_prestero2001.csv``). The added masses agree with
+  "remus" (0.2 %, 1 %), the damping primes do not (X_u|u|' -0.00178 against -0.00344, Y_v|v|'
+  -0.144 against -0.100): the SUT-2 table's REMUS damping is not Prestero's.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["BUILTIN_REFERENCES", "builtin_reference", "reference_table"]
+
+#: Name -> (file in data/, column of the prime values, where it comes from).
+BUILTIN_REFERENCES: dict[str, tuple[str, str, str]] = {
+    "remus": ("sut2_table4.csv", "remus_prime",
+              "REMUS column of the SUT-2 report's Table 4, primes as printed"),
+    "remus-prestero2001": ("remus_prestero2001.csv", "prime",
+                           "Prestero (2001) REMUS coefficients, primes with rho = 1030 kg/m^3, "
+                           "L = 1.33 m"),
+}
+
+
+def reference_table(name: str) -> pd.DataFrame:
+    """The packaged CSV of the built-in set ``name`` (comments dropped)."""
+    import pandas as pd
+
+    file, _, _ = BUILTIN_REFERENCES[name]
+    with resources.files("towtank.reference").joinpath("data", file).open() as fh:
+        return pd.read_csv(fh, comment="#")
+
+
+def builtin_reference(name: str) -> dict[str, float]:
+    """Prime values by symbol of the built-in set ``name`` (KeyError for an unknown name)."""
+    _, column, _ = BUILTIN_REFERENCES[name]
+    df = reference_table(name)
+    return dict(zip(df["symbol"], df[column].astype(float), strict=True))

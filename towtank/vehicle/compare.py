@@ -1,0 +1,94 @@
+"""Predicted beside measured: coefficients.csv's ``predicted`` columns and the day's model.
+
+For a processed day whose protocol has a ``[vehicle]``, every measured coefficient is set beside
+its prediction (:mod:`towtank.vehicle.predict`) as prime values, so that a prediction for the
+prototype (``[vehicle] scale``) compares with the model's measurement:
+``predicted_diff_pct = (prime - predicted_prime) / |predicted_prime| * 100``. The model.json of
+the day takes the measured values (converted through their primes to the vehicle's length and
+the protocol's water) with the covariance of their standard errors, and the prediction for
+every other term.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from towtank.vehicle.predict import prime_exponent
+from towtank.vehicle.stage import VehiclePrediction, predict_vehicle
+
+__all__ = ["FAR_PCT", "measured_for_vehicle", "with_predicted", "day_vehicle"]
+
+#: A measured prime further than this from its prediction is a warning [%].
+FAR_PCT = 50.0
+
+
+def measured_for_vehicle(
+    coefficients: pd.DataFrame, rho: float, length_m: float | None
+) -> tuple[dict[str, float], tuple[list[str], np.ndarray]]:
+    """Measured SI values for the vehicle and their covariance (diagonal of the standard
+    errors: the fits report no correlations between coefficients).
+
+    ``length_m`` None: the vehicle is the tested model, the values are taken as measured.
+    Otherwise value_vehicle = prime * 1/2 rho L^k and std = std_error * value_vehicle / value,
+    k from :func:`towtank.vehicle.predict.prime_exponent`.
+    """
+    values: dict[str, float] = {}
+    sds: dict[str, float] = {}
+    for _, row in coefficients.iterrows():
+        sym, prime, value = str(row["symbol"]), row.get("prime"), row.get("value")
+        if prime is None or not np.isfinite(float(prime)) or float(value) == 0.0:
+            continue
+        factor = (float(value) / float(prime) if length_m is None
+                  else 0.5 * rho * length_m ** prime_exponent(sym))
+        values[sym] = float(prime) * factor
+        sd = float(row.get("std_error", math.nan))
+        if math.isfinite(sd):
+            sds[sym] = abs(sd / float(value) * float(prime) * factor)
+    symbols = list(sds)
+    return values, (symbols, np.diag([sds[s] ** 2 for s in symbols]))
+
+
+def with_predicted(coefficients: pd.DataFrame, predicted: pd.DataFrame) -> tuple[
+        pd.DataFrame, list[str]]:
+    """coefficients.csv with ``predicted`` (prime) and ``predicted_diff_pct``; the warnings."""
+    out = coefficients.copy()
+    pred = dict(zip(predicted["symbol"], predicted["prime"], strict=True))
+    out["predicted"] = [pred.get(s, math.nan) for s in out["symbol"]]
+    p = out["prime"].astype(float)
+    q = out["predicted"].astype(float)
+    out["predicted_diff_pct"] = np.where(np.isfinite(q) & (q != 0), (p - q) / q.abs() * 100.0,
+                                         np.nan)
+    warnings = [
+        f"{s}: the measured prime {pm:.4g} is {d:+.0f} % from the predicted {pq:.4g} "
+        f"(more than ±{FAR_PCT:g} %): check the measurement or the [vehicle] geometry."
+        for s, pm, pq, d in zip(out["symbol"], p, q, out["predicted_diff_pct"], strict=True)
+        if math.isfinite(d) and abs(d) > FAR_PCT
+    ]
+    return out, warnings
+
+
+def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
+        VehiclePrediction, pd.DataFrame | None, list[str]]:
+    """The day's prediction and model (measured values first), coefficients.csv with the
+    predicted columns (None without measured coefficients) and the warnings."""
+    from towtank.errors import TowtankError
+
+    try:
+        first = predict_vehicle(protocol)
+    except ValueError as exc:  # e.g. a hull table that cannot be read: the day goes on
+        raise TowtankError(f"[vehicle]: no prediction ({exc})") from None
+    if coefficients is None or coefficients.empty:
+        return first, None, []
+    length = first.profile.length
+    model, vehicle = getattr(protocol, "model", None), protocol.vehicle
+    if model is not None and model.myring is not None and vehicle.hull == "myring" and (
+            vehicle.myring == {k: float(getattr(model.myring, k)) for k in vehicle.myring}):
+        length = None if vehicle.scale == 1.0 else model.length_m * vehicle.scale
+    measured, cov = measured_for_vehicle(coefficients, first.rho, length)
+    result = predict_vehicle(protocol, measured, cov)
+    table, warnings = with_predicted(coefficients, result.predicted)
+    return result, table, warnings

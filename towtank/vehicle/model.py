@@ -1,0 +1,246 @@
+"""The Fossen-form manoeuvring model of a vehicle and its ``model.json`` (docs/formats.md).
+
+``M nu_dot + C_RB(nu) nu + C_A(nu) nu + D(nu) nu + g(eta) = tau`` (Fossen 2011, eqs. 7.190 and
+6.43; SUT-2 report eqs. 1-6), SI, body axes x forward, y starboard, z down, SNAME signs. The
+added-mass matrix M_A comes from the ``..dot`` coefficients; the added-mass Coriolis and
+centripetal terms C_A(nu) are computed from M_A (Fossen eq. 6.43), never folded into Y_ur,
+N_uv and their twins. A coefficient set in Prestero's (2001) lumped form, whose Y_ur, N_uv,
+N_ur... contain the added-mass terms (e.g. N_uv = N_uva + N_uvl + N_uvf with the Munk moment
+N_uva), is converted by :func:`lumped_to_fossen`, which subtracts exactly the bilinear terms
+that C_A(nu) gives.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from towtank.vehicle import hull as hulls
+
+__all__ = [
+    "G",
+    "SYMBOL_RE",
+    "added_mass_matrix",
+    "coriolis_added_mass",
+    "lumped_to_fossen",
+    "vehicle_profile",
+    "mass_properties",
+    "build_model",
+    "write_model",
+    "read_model",
+]
+
+G = 9.80665
+SYMBOL_RE = re.compile(r"^[XYZKMN]_(\|[uvwpqr]\||[uvwpqr]|dr|ds)+$")
+_DOF = "XYZKMN"
+_VEL = "uvwpqr"
+#: Prestero's lumped terms that carry an added-mass part, and the pair of velocities.
+LUMPED = {"Y_ur": ("u", "r"), "Z_uq": ("u", "q"), "N_uv": ("u", "v"), "M_uw": ("u", "w"),
+          "N_ur": ("u", "r"), "M_uq": ("u", "q"), "Y_uv": ("u", "v"), "Z_uw": ("u", "w")}
+
+
+def added_mass_matrix(coefficients: dict[str, float]) -> np.ndarray:
+    """M_A (6x6, symmetric) from the ``<F>_<v>dot`` coefficients: M_A[i, j] = -F_i,vdot_j.
+
+    A missing coefficient is zero; where only one of a symmetric pair is given (Y_rdot,
+    N_vdot) it stands for both.
+    """
+    ma = np.zeros((6, 6))
+    for i, f in enumerate(_DOF):
+        for j, v in enumerate(_VEL):
+            a = coefficients.get(f"{f}_{v}dot")
+            b = coefficients.get(f"{_DOF[j]}_{_VEL[i]}dot")
+            val = a if a is not None else b
+            if val is not None:
+                ma[i, j] = -float(val)
+    return 0.5 * (ma + ma.T)
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """C_A(nu) nu of Fossen (2011) eq. 6.43, the force the added mass exerts is its negative.
+
+    ``C_A = [[0, -S(A11 nu1 + A12 nu2)], [-S(A11 nu1 + A12 nu2), -S(A21 nu1 + A22 nu2)]]``.
+    """
+    nu1, nu2 = nu[:3], nu[3:]
+    a = ma[:3, :3] @ nu1 + ma[:3, 3:] @ nu2
+    b = ma[3:, :3] @ nu1 + ma[3:, 3:] @ nu2
+    return np.concatenate((-_skew(a) @ nu2, -_skew(a) @ nu1 - _skew(b) @ nu2))
+
+
+def _ca_bilinear(ma: np.ndarray, symbol: str) -> float:
+    """The coefficient of the product of two velocities in the force -C_A(nu) nu."""
+    dof = _DOF.index(symbol[0])
+    i, j = (_VEL.index(c) for c in LUMPED[symbol])
+
+    def force(x: float, y: float) -> float:
+        nu = np.zeros(6)
+        nu[i] += x
+        nu[j] += y
+        return -coriolis_added_mass(ma, nu)[dof]
+
+    return force(1.0, 1.0) - force(1.0, 0.0) - force(0.0, 1.0)
+
+
+def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
+    """Prestero-style lumped coefficients to the Fossen-form ones of this model.
+
+    Each of Y_ur, Z_uq, N_uv, M_uw, N_ur, M_uq (and Y_uv, Z_uw, whose added-mass part is zero)
+    loses the bilinear term that -C_A(nu) nu gives: e.g. N_uv = N_uv,lumped - (Y_vdot - X_udot)
+    (the Munk moment), Y_ur = Y_ur,lumped - X_udot, N_ur = N_ur,lumped - Y_rdot. Prestero's
+    pure added-mass terms (X_vr, X_wq, X_qq, X_rr, Y_wp, Y_pq, Z_vp, Z_rp, M_vp, M_rp, N_wp,
+    N_pq) are dropped: C_A(nu) gives them.
+    """
+    ma = added_mass_matrix(coefficients)
+    out = {}
+    dropped = {"X_vr", "X_wq", "X_qq", "X_rr", "Y_wp", "Y_pq", "Z_vp", "Z_rp", "M_vp", "M_rp",
+               "N_wp", "N_pq"}
+    for sym, val in coefficients.items():
+        if sym in dropped:
+            continue
+        out[sym] = float(float(val) - (_ca_bilinear(ma, sym) if sym in LUMPED else 0.0))
+    return out
+
+
+def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
+    """The hull profile of a ``[vehicle]`` section (times its ``scale``)."""
+    if vehicle.hull == "myring":
+        profile = hulls.myring_profile(**vehicle.myring)
+    elif vehicle.hull == "suboff":
+        profile = hulls.suboff_profile(vehicle.length_m or hulls.SUBOFF_LENGTH_M)
+    else:
+        profile = hulls.table_profile(vehicle.hull_table)
+    return profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
+
+
+def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dict[str, Any]:
+    """Mass, weight, buoyancy, centres and inertia of the vehicle about the reference point.
+
+    Missing values: mass = rho V (neutrally buoyant); centre of buoyancy = the hull's, in body
+    axes from the reference point; centre of gravity = the centre of buoyancy; inertia = that
+    of a body of uniform density filling the hull (Ixx = integral of m'(x) r^2/2 dx,
+    Iyy = Izz = integral of m'(x) ((x - x_ref)^2 + r^2/4) dx, m' the mass per length).
+    """
+    volume = profile.volume
+    x_ref = profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
+    mass = vehicle.mass_kg if vehicle.mass_kg is not None else rho * volume
+    cb_default = (x_ref - profile.x_buoyancy, 0.0, 0.0)
+    cb = tuple(vehicle.cb_m) if vehicle.cb_m != (0.0, 0.0, 0.0) else cb_default
+    cg = tuple(vehicle.cg_m) if vehicle.cg_m != (0.0, 0.0, 0.0) else cb
+    source = "given in [vehicle]"
+    if vehicle.inertia_kg_m2 is not None:
+        inertia = tuple(float(v) for v in vehicle.inertia_kg_m2)
+    else:
+        area = np.pi * profile.r_m**2
+        per_len = mass * area / np.trapezoid(area, profile.x_m)
+        xb = x_ref - profile.x_m
+        ixx = float(np.trapezoid(per_len * profile.r_m**2 / 2.0, profile.x_m))
+        iyy = float(np.trapezoid(per_len * (xb**2 + profile.r_m**2 / 4.0), profile.x_m))
+        inertia = (ixx, iyy, iyy)
+        source = "estimated: uniform density filling the hull"
+    return {"mass_kg": float(mass), "weight_N": float(mass * G),
+            "buoyancy_N": float(rho * G * volume), "cg_m": [float(c) for c in cg],
+            "cb_m": [float(c) for c in cb], "inertia_kg_m2": [float(i) for i in inertia],
+            "inertia_source": source, "volume_m3": float(volume)}
+
+
+def build_model(
+    name: str, rho: float, masses: dict[str, Any], predicted: pd.DataFrame | None = None,
+    measured: dict[str, float] | None = None,
+    covariance: tuple[list[str], np.ndarray] | None = None,
+    reference: dict[str, float] | None = None,
+) -> dict[str, Any]:
+    """The model.json dictionary: measured values first, then predicted, then reference.
+
+    Parameters
+    ----------
+    name : str
+        The vehicle's name
+    rho : float
+        Water density [kg/m^3]
+    masses : dict
+        :func:`mass_properties`
+    predicted : pandas.DataFrame, optional
+        predicted.csv (symbol, value)
+    measured : dict, optional
+        Measured coefficients in SI {symbol: value}
+    covariance : (symbols, matrix), optional
+        Covariance of the measured coefficients [SI^2]
+    reference : dict, optional
+        Reference values in SI, used where neither measured nor predicted
+    """
+    coefficients: dict[str, float] = {}
+    sources: dict[str, str] = {}
+    for source, values in (("reference", reference or {}),
+                           ("predicted", {} if predicted is None else
+                            dict(zip(predicted["symbol"], predicted["value"], strict=True))),
+                           ("measured", measured or {})):
+        for sym, val in values.items():
+            if val is not None and math.isfinite(float(val)):
+                coefficients[sym] = float(val)
+                sources[sym] = source
+    symbols, matrix = ([], np.zeros((0, 0))) if covariance is None else covariance
+    return {
+        "name": name,
+        "rho_kg_m3": float(rho),
+        **{k: masses[k] for k in ("mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
+                                  "inertia_kg_m2")},
+        "coefficients": coefficients,
+        "sources": sources,
+        "covariance": {"symbols": list(symbols),
+                       "matrix": np.asarray(matrix, dtype=float).tolist()},
+        "notes": {
+            "axes": "body axes x forward, y starboard, z down; SNAME signs; SI units",
+            "added_mass_coriolis": "C_A(nu) is computed from the ..dot coefficients "
+                                   "(Fossen 2011 eq. 6.43); it is not folded into Y_ur, N_uv",
+            "missing": "a coefficient not listed is zero",
+            "inertia": masses.get("inertia_source", "given"),
+        },
+    }
+
+
+def write_model(model: dict[str, Any], path: str | Path) -> Path:
+    """Write model.json (UTF-8, indented)."""
+    path = Path(path)
+    path.write_text(json.dumps(model, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
+                 "inertia_kg_m2", "coefficients")
+
+
+def read_model(path: str | Path) -> dict[str, Any]:
+    """Read and check a model.json; ValueError with one sentence when it is unusable."""
+    path = Path(path)
+    try:
+        model = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path.name}: the model file cannot be read ({exc}).") from None
+    if not isinstance(model, dict):
+        raise ValueError(f"{path.name}: the model file is not a JSON object.")
+    for key in REQUIRED_KEYS:
+        if key not in model:
+            raise ValueError(f"{path.name}: the model lacks the key '{key}'.")
+    for key in ("cg_m", "cb_m", "inertia_kg_m2"):
+        if not (isinstance(model[key], list) and len(model[key]) == 3):
+            raise ValueError(f"{path.name}: '{key}' must be a list of three numbers.")
+    for sym, val in model["coefficients"].items():
+        if not (SYMBOL_RE.match(sym) or re.match(r"^[XYZKMN]_[uvwpqr]dot$", sym)):
+            raise ValueError(f"{path.name}: '{sym}' is not a coefficient symbol this model "
+                             "knows (e.g. Y_uv, N_r|r|, Y_vdot, N_uudr).")
+        if not isinstance(val, int | float) or not math.isfinite(val):
+            raise ValueError(f"{path.name}: the coefficient {sym} is not a finite number.")
+    model.setdefault("sources", {})
+    model.setdefault("covariance", {"symbols": [], "matrix": []})
+    model.setdefault("name", path.stem)
+    return model

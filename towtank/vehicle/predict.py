@@ -1,0 +1,378 @@
+"""Semi-empirical prediction of the manoeuvring coefficients of a finned body of revolution.
+
+The hull is a radius profile (:mod:`towtank.vehicle.hull`), the fins are pairs (rudders or stern
+planes) of rectangular fins. Body axes x forward, y starboard, z down, origin at the reference
+point (``x_origin_m`` aft of the nose); SNAME symbols. Every term is the one of Prestero (2001)
+[1]_, chapter 3, except where the method column says otherwise:
+
+- added mass: slender-body strip theory, the section added mass ``rho pi r^2`` of a circle and
+  ``rho pi (a^2 - r^2 + r^4/a^2)`` of a circle with a pair of fins (a = r + span; Blevins [2]_),
+  integrated along the body; the axial term from the spheroid of the same length and diameter
+  (Lamb's k1 [3]_). Strip theory ignores the flow round the ends and overestimates the
+  transverse added mass of the hull (by 1/k2 - 1 = 9 % for a 6:1 spheroid): the hull's strip
+  integrals are multiplied by Lamb's k2 of the spheroid of the same volume and maximum diameter
+  (the "equivalent spheroid"), the fins' are not;
+- axial drag: ITTC-57 friction line on the wetted area with Hoerner's form factor of a body of
+  revolution ``1 + 1.5 (D/L)^1.5 + 7 (D/L)^3`` [4]_, plus the fins' section drag
+  ``2 C_F (1 + 2 t/c + 60 (t/c)^4)`` on their planform area;
+- cross-flow drag: ``-1/2 rho c_dc integral of 2 r x^k |x|^m dx`` with c_dc = 1.1 (circular
+  cylinder, Hoerner) and the fins' ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner [5]_);
+- body lift ``-1/2 rho D^2 c_ydb`` with c_ydb = 1.2 at 0.65 L aft of the nose (Hoerner [4]_,
+  Prestero [1]_); the Munk moment and the other added-mass Coriolis terms are NOT folded into
+  Y_uv, N_uv, Y_ur, N_ur (the Fossen-form model computes them from the added masses, see
+  :func:`towtank.vehicle.model.lumped_to_fossen`);
+- fin lift: lifting line ``c_La = a0 / (1 + a0/(pi AR_e))`` with the section slope
+  a0 = 0.9 * 2 pi and the hull-mirrored aspect ratio AR_e = 2 span/chord
+  (:func:`towtank.analysis.fins.finite_span_slope`), giving Y_uvf, Y_urf, N_uvf, N_urf and the
+  control derivatives (:func:`towtank.analysis.fins.control_derivatives`).
+
+References
+----------
+.. [1] Prestero, T. (2001), Verification of a six-degree of freedom simulation model for the
+   REMUS autonomous underwater vehicle, MSc thesis, MIT/WHOI, chapter 3.
+.. [2] Blevins, R. D. (1979), Formulas for natural frequency and mode shape, Van Nostrand,
+   table 14-1 (added mass of a circle with fins).
+.. [3] Lamb, H. (1932), Hydrodynamics, 6th ed., section 373 (prolate spheroid: alpha0, beta0,
+   k1 = alpha0/(2 - alpha0), k2 = beta0/(2 - beta0), k').
+.. [4] Hoerner, S. F. (1965), Fluid-dynamic drag, chapters 3 and 6; ITTC (1957) friction line.
+.. [5] Whicker, L. F. and Fehlner, L. F. (1958), Free-stream characteristics of a family of
+   low-aspect-ratio control surfaces, DTMB report 933.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from towtank.analysis import fins as fin_analysis
+from towtank.vehicle.hull import HullProfile
+
+__all__ = [
+    "PREDICTED_COLUMNS",
+    "FinPair",
+    "lamb_k_factors",
+    "ittc57_cf",
+    "prime_exponent",
+    "predict_coefficients",
+]
+
+PREDICTED_COLUMNS = ("symbol", "value", "unit", "prime", "method", "reference")
+C_DC = 1.1  # cross-flow drag coefficient of a circular cylinder (Hoerner)
+C_YDB = 1.2  # body lift coefficient (Hoerner; Prestero 2001)
+X_CP_FRACTION = 0.65  # body lift centre of pressure, fraction of L aft of the nose
+SECTION_EFFICIENCY = 0.9  # a0 = 0.9 * 2 pi (Prestero 2001, after Hoerner)
+PRESTERO = "Prestero (2001) ch. 3"
+
+
+@dataclass(frozen=True)
+class FinPair:
+    """A pair of rectangular fins on the hull (both sides).
+
+    Attributes
+    ----------
+    plane : str
+        "rudder" (vertical fins: sway and yaw) or "sternplane" (horizontal: heave and pitch)
+    x_m : float
+        Quarter-chord position from the reference point, negative aft [m]
+    span_m : float
+        Span of one fin, root (hull) to tip [m]
+    chord_m : float
+        Chord [m]
+    section : str
+        NACA 4-digit section (its thickness ratio is used for the section drag)
+    taper : float
+        Tip chord / root chord [-]
+    """
+
+    plane: str
+    x_m: float
+    span_m: float
+    chord_m: float
+    section: str = "NACA0012"
+    taper: float = 1.0
+
+    @property
+    def area(self) -> float:
+        """Planform area of one fin [m^2]."""
+        return self.span_m * self.chord_m
+
+    @property
+    def thickness_ratio(self) -> float:
+        """t/c from the last two digits of a NACA 4-digit name, 0.12 if not given."""
+        m = re.fullmatch(r"NACA\s*\d\d(\d\d)", self.section.strip().upper())
+        return int(m.group(1)) / 100.0 if m else 0.12
+
+
+def lamb_k_factors(length_m: float, diameter_m: float) -> tuple[float, float, float]:
+    """Lamb's added-mass coefficients of a prolate spheroid, k1 (axial), k2 (transverse), k'.
+
+    With e = sqrt(1 - (D/L)^2): alpha0 = 2(1-e^2)/e^3 (ln((1+e)/(1-e))/2 - e),
+    beta0 = 1/e^2 - (1-e^2)/(2e^3) ln((1+e)/(1-e)), k1 = alpha0/(2-alpha0),
+    k2 = beta0/(2-beta0), k' = e^4 (beta0-alpha0) / ((2-e^2)(2e^2 - (2-e^2)(beta0-alpha0)))
+    (Lamb 1932, section 373). The added masses are k1 rho V, k2 rho V and k' rho I_fluid.
+
+    Parameters
+    ----------
+    length_m, diameter_m : float
+        Length and diameter of the spheroid [m], length > diameter
+
+    Returns
+    -------
+    tuple of float
+        (k1, k2, k_rot) [-]
+    """
+    e = math.sqrt(1.0 - (diameter_m / length_m) ** 2)
+    log = math.log((1.0 + e) / (1.0 - e))
+    alpha0 = 2.0 * (1.0 - e * e) / e**3 * (0.5 * log - e)
+    beta0 = 1.0 / (e * e) - (1.0 - e * e) / (2.0 * e**3) * log
+    k1 = alpha0 / (2.0 - alpha0)
+    k2 = beta0 / (2.0 - beta0)
+    d = beta0 - alpha0
+    k_rot = e**4 * d / ((2.0 - e * e) * (2.0 * e * e - (2.0 - e * e) * d))
+    return k1, k2, k_rot
+
+
+def ittc57_cf(reynolds: float) -> float:
+    """ITTC-1957 model-ship correlation line ``C_F = 0.075 / (log10 Re - 2)^2``."""
+    return 0.075 / (math.log10(reynolds) - 2.0) ** 2
+
+
+def prime_exponent(symbol: str) -> int:
+    """The power of L in the SNAME prime ``value / (1/2 rho L^k)`` of a coefficient symbol.
+
+    Forces (X, Y, Z) 2, moments (K, M, N) 3; +1 for each angular rate (p, q, r) among the
+    motion variables and +1 for an acceleration (``dot``); a control angle (``dr``, ``ds``)
+    counts nothing: Y_uv 2, Y_ur 3, N_uv 3, N_r|r| 5, X_udot 3, N_rdot 5, N_uudr 3.
+    """
+    head, _, sub = symbol.partition("_")
+    k = 2 if head in ("X", "Y", "Z") else 3
+    sub = sub.replace("|", "")
+    if sub.endswith("dot"):
+        k += 1
+        sub = sub[:-3]
+    if sub.endswith(("dr", "ds")):
+        sub = sub[:-2]
+    return k + sum(ch in "pqr" for ch in sub)
+
+
+def _units(symbol: str) -> str:
+    k = prime_exponent(symbol)
+    # 1/2 rho L^k has units kg m^(k-3); an angular variable adds /rad
+    sub = symbol.partition("_")[2].replace("|", "")
+    n_rad = sum(ch in "pqr" for ch in sub.removesuffix("dot").removesuffix("dr").removesuffix("ds"))
+    n_rad += symbol.endswith(("dr", "ds"))
+    power = k - 3
+    rad = "" if n_rad == 0 else ("rad" if n_rad == 1 else f"rad^{n_rad}")
+    if power == -1:
+        return f"kg/(m*{rad})" if rad else "kg/m"
+    base = "kg" if power == 0 else ("kg*m" if power == 1 else f"kg*m^{power}")
+    return base + (f"/{rad}" if rad else "")
+
+
+def _fin_strip(profile: HullProfile, pair: FinPair, x_origin: float) -> tuple[np.ndarray, ...]:
+    """Stations (body x) over the fin's chord, hull radius there and the fin-tip radius."""
+    x_le = pair.x_m + 0.25 * pair.chord_m
+    x_te = pair.x_m - 0.75 * pair.chord_m
+    xb = np.linspace(x_te, x_le, 201)
+    r = np.interp(x_origin - xb, profile.x_m, profile.r_m, left=0.0, right=0.0)
+    return xb, r, r + pair.span_m
+
+
+def _added_mass_strips(
+    profile: HullProfile, pairs: Sequence[FinPair], plane: str, x_origin: float, rho: float,
+    hull_factor: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sectional transverse added mass m(x) [kg/m] at body stations x for one plane."""
+    xb = x_origin - profile.x_m[::-1]
+    m = hull_factor * rho * np.pi * profile.r_m[::-1] ** 2
+    extra_x, extra_m = [], []
+    for pair in pairs:
+        if pair.plane != plane:
+            continue
+        xs, r, a = _fin_strip(profile, pair, x_origin)
+        extra_x.append(xs)
+        # the fins' section replaces the bare circle: add (finned - circle) there
+        extra_m.append(rho * np.pi * (a**2 - r**2 + r**4 / a**2) - hull_factor * rho * np.pi * r**2)
+    return xb, m, extra_x, extra_m
+
+
+def _moments(xb, m, extra_x, extra_m, power: int) -> float:
+    total = float(np.trapezoid(m * xb**power, xb))
+    for xs, ms in zip(extra_x, extra_m, strict=True):
+        total += float(np.trapezoid(ms * xs**power, xs))
+    return total
+
+
+def predict_coefficients(
+    profile: HullProfile,
+    fins: Sequence[FinPair] = (),
+    rho: float = 1000.0,
+    nu: float = 1.0e-6,
+    speed_m_s: float = 1.5,
+    x_origin_m: float | None = None,
+) -> pd.DataFrame:
+    """The predicted coefficient set of a finned body of revolution (module docstring).
+
+    Parameters
+    ----------
+    profile : HullProfile
+        The bare hull
+    fins : sequence of FinPair
+        Fin pairs (rudders, stern planes); none for a bare hull
+    rho : float
+        Water density [kg/m^3]
+    nu : float
+        Kinematic viscosity [m^2/s]
+    speed_m_s : float
+        Speed of the Reynolds number of the axial drag [m/s]
+    x_origin_m : float, optional
+        Reference point aft of the nose tip [m]; default the centre of buoyancy
+
+    Returns
+    -------
+    pandas.DataFrame
+        predicted.csv: symbol, value, unit, prime, method, reference
+    """
+    length = profile.length
+    diameter = profile.max_diameter
+    x0 = profile.x_buoyancy if x_origin_m is None else float(x_origin_m)
+    rows: list[tuple[str, float, str, str]] = []
+
+    def add(symbol: str, value: float, method: str, reference: str = PRESTERO) -> None:
+        rows.append((symbol, float(value), method, reference))
+
+    # ---- added mass
+    k1, _, _ = lamb_k_factors(length, diameter)
+    volume_ld = math.pi / 6.0 * length * diameter**2
+    add("X_udot", -k1 * rho * volume_ld,
+        f"-k1 rho V of the spheroid of the same L and D (Lamb k1 = {k1:.4f})",
+        "Lamb (1932) s. 373; Prestero (2001) eq. 3.17")
+    # the spheroid of the same volume and maximum diameter: a parallel midbody acts as a longer
+    # body, whose ends (where strip theory fails) are those of a fuller spheroid
+    l_eq = 6.0 * profile.volume / (math.pi * diameter**2)
+    _, k2_eq, _ = lamb_k_factors(max(l_eq, 1.0001 * diameter), diameter)
+    corr = (f"strip theory, hull strips x Lamb k2 = {k2_eq:.4f} of the equivalent spheroid "
+            f"(same volume and max diameter, L/D = {l_eq / diameter:.2f}); fins by Blevins")
+    ref_am = "Lamb (1932); Blevins (1979); Prestero (2001) eqs. 3.18-3.24"
+    for plane, (force, moment, sgn) in {"rudder": ("Y", "N", -1.0),
+                                         "sternplane": ("Z", "M", 1.0)}.items():
+        strips = _added_mass_strips(profile, fins, plane, x0, rho, k2_eq)
+        m0 = _moments(*strips, 0)
+        m1 = _moments(*strips, 1)
+        m2 = _moments(*strips, 2)
+        vel, rate = ("v", "r") if plane == "rudder" else ("w", "q")
+        add(f"{force}_{vel}dot", -m0, corr, ref_am)
+        add(f"{force}_{rate}dot", sgn * m1, corr, ref_am)
+        add(f"{moment}_{vel}dot", sgn * m1, corr, ref_am)
+        add(f"{moment}_{rate}dot", -m2, corr, ref_am)
+    k_pdot = 0.0
+    stations: dict[tuple[float, float], float] = {}  # a cruciform station counts once
+    for pair in fins:
+        key = (round(pair.x_m, 6), round(pair.chord_m, 6))
+        stations[key] = max(stations.get(key, 0.0), pair.span_m)
+    for (x_m, chord), span in stations.items():
+        xs, r, a = _fin_strip(profile, FinPair("rudder", x_m, span, chord), x0)
+        k_pdot -= float(np.trapezoid(2.0 / math.pi * rho * a**4, xs))
+    add("K_pdot", k_pdot,
+        "fins only: -integral of (2/pi) rho a^4 dx over each fin station (a = r + span)",
+        "Blevins (1979); Prestero (2001) eq. 3.25")
+
+    # ---- axial drag
+    reynolds = speed_m_s * length / nu
+    cf = ittc57_cf(reynolds)
+    form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
+    drag_area = profile.wetted_area * cf * form
+    fin_text = ""
+    if fins:
+        fin_area = 0.0
+        for pair in fins:
+            cf_fin = ittc57_cf(max(speed_m_s * pair.chord_m / nu, 1.0e3))
+            tc = pair.thickness_ratio
+            fin_area += 2.0 * pair.area * 2.0 * cf_fin * (1 + 2 * tc + 60 * tc**4)
+        drag_area += fin_area
+        fin_text = "; fins 2 C_F (1 + 2t/c + 60(t/c)^4) S"
+    add("X_u|u|", -0.5 * rho * drag_area,
+        f"ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g} ({speed_m_s:g} m/s) x form factor "
+        f"{form:.3f} on S_w = {profile.wetted_area:.4g} m^2{fin_text}",
+        "ITTC (1957); Hoerner (1965) ch. 6")
+
+    # ---- cross-flow drag
+    xb = x0 - profile.x_m[::-1]
+    w = 2.0 * profile.r_m[::-1]
+    hq = 0.5 * rho * C_DC
+
+    def fin_cd(plane: str, fx) -> float:
+        return sum(0.5 * rho * (0.1 + 0.7 * p.taper) * 2.0 * p.area * fx(p.x_m)
+                   for p in fins if p.plane == plane)
+
+    xflow = f"cross-flow drag, hull c_dc = {C_DC} (Hoerner), fins c_df = 0.1 + 0.7 taper"
+    ref_xf = "Hoerner (1965); Whicker & Fehlner (1958); Prestero (2001) eqs. 3.9-3.13"
+    for plane, (force, moment, vel, rate, s) in {
+        "rudder": ("Y", "N", "v", "r", 1.0), "sternplane": ("Z", "M", "w", "q", -1.0)
+    }.items():
+        add(f"{force}_{vel}|{vel}|", -hq * np.trapezoid(w, xb) - fin_cd(plane, lambda x: 1.0),
+            xflow, ref_xf)
+        add(f"{force}_{rate}|{rate}|",
+            s * (-hq * np.trapezoid(w * xb * np.abs(xb), xb) - fin_cd(plane, lambda x: x * abs(x))),
+            xflow, ref_xf)
+        add(f"{moment}_{vel}|{vel}|",
+            s * (-hq * np.trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)), xflow, ref_xf)
+        add(f"{moment}_{rate}|{rate}|",
+            -hq * np.trapezoid(w * xb**2 * np.abs(xb), xb) - fin_cd(plane, lambda x: x**2 * abs(x)),
+            xflow, ref_xf)
+    k_pp = 0.0
+    for pair in fins:
+        xs, r, a = _fin_strip(profile, pair, x0)
+        r_mean = float(np.mean(r + 0.5 * pair.span_m))
+        k_pp -= 0.5 * rho * (0.1 + 0.7 * pair.taper) * 2.0 * pair.area * r_mean**3
+    add("K_p|p|", k_pp, "fins' cross-flow drag at their mean radius, Y_v|v|f r_mean^3",
+        "Prestero (2001) eq. 3.14")
+
+    # ---- body lift (no Munk moment here: C_A(v) of the model carries it)
+    x_cp = x0 - X_CP_FRACTION * length
+    lift = 0.5 * rho * diameter**2 * C_YDB
+    body = f"body lift c_ydb = {C_YDB} on D^2 at x_cp = {x_cp:+.4f} m (0.65 L aft of the nose)"
+    fins_y = [p for p in fins if p.plane == "rudder"]
+    fins_z = [p for p in fins if p.plane == "sternplane"]
+
+    def fin_slope(pair: FinPair) -> float:
+        a0 = SECTION_EFFICIENCY * 2.0 * math.pi
+        ar = fin_analysis.effective_aspect_ratio(pair.span_m, pair.chord_m, "wall")
+        return float(fin_analysis.finite_span_slope(a0, ar))
+
+    def fsum(pairs, fx) -> float:
+        return sum(rho * fin_slope(p) * p.area * fx(p.x_m) for p in pairs)
+
+    lift_txt = body + "; fins: lifting line c_La = a0/(1 + a0/(pi 2 span/chord)), a0 = 0.9 2 pi"
+    ref_lift = "Hoerner (1965); Prestero (2001) eqs. 3.29-3.40; Anderson s. 5.3"
+    add("Y_uv", -lift - fsum(fins_y, lambda x: 1.0), lift_txt, ref_lift)
+    add("Z_uw", -lift - fsum(fins_z, lambda x: 1.0), lift_txt, ref_lift)
+    add("N_uv", -lift * x_cp - fsum(fins_y, lambda x: x), lift_txt, ref_lift)
+    add("M_uw", lift * x_cp + fsum(fins_z, lambda x: x), lift_txt, ref_lift)
+    add("Y_ur", -fsum(fins_y, lambda x: x), "fin lift (lifting line); added-mass part in C_A(v)",
+        ref_lift)
+    add("Z_uq", fsum(fins_z, lambda x: x), "fin lift (lifting line); added-mass part in C_A(v)",
+        ref_lift)
+    add("N_ur", -fsum(fins_y, lambda x: x * x),
+        "fin lift (lifting line); added-mass part in C_A(v)", ref_lift)
+    add("M_uq", -fsum(fins_z, lambda x: x * x),
+        "fin lift (lifting line); added-mass part in C_A(v)", ref_lift)
+    ctrl = "control derivative, pair lift rho c_La S_fin (lifting line)"
+    ref_ctrl = "Prestero (2001) eqs. 3.41-3.44"
+    if fins_y:
+        add("Y_uudr", fsum(fins_y, lambda x: 1.0), ctrl, ref_ctrl)
+        add("N_uudr", fsum(fins_y, lambda x: x), ctrl, ref_ctrl)
+    if fins_z:
+        add("Z_uuds", -fsum(fins_z, lambda x: 1.0), ctrl, ref_ctrl)
+        add("M_uuds", fsum(fins_z, lambda x: x), ctrl, ref_ctrl)
+
+    out = pd.DataFrame(rows, columns=["symbol", "value", "method", "reference"])
+    out["unit"] = [_units(s) for s in out["symbol"]]
+    out["prime"] = [v / (0.5 * rho * length ** prime_exponent(s))
+                    for s, v in zip(out["symbol"], out["value"], strict=True)]
+    return out[list(PREDICTED_COLUMNS)]

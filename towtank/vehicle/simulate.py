@@ -1,0 +1,352 @@
+"""6-DOF manoeuvre simulation of a Fossen-form model (model.json; docs/method.md).
+
+``M nu_dot = tau_hydro(nu, delta) + tau_thrust - C_RB(nu) nu - C_A(nu) nu - g(eta)`` with
+``eta_dot = J(eta) nu`` (Fossen 2011, eqs. 2.40, 3.56, 4.6, 6.43, 7.190), integrated by
+:func:`scipy.integrate.solve_ivp` (RK45, tolerances rtol 1e-8, atol 1e-9, and a largest step).
+Every coefficient ``F_<product>`` of the model that is not an added mass adds
+``F * product`` to the force F, where the product reads the subscript: ``u`` a velocity,
+``|u|`` its magnitude, ``dr``/``ds`` the rudder/stern-plane angle [rad] (``Y_uudr`` gives
+``Y_uudr u u delta_r``, ``N_r|r|`` gives ``N_r|r| r |r|``). The constant thrust balances the
+axial drag ``X_u|u|`` at the commanded speed on a straight course (none for a glide).
+
+Manoeuvres (metrics.csv ``metric, value, unit``):
+
+- turning: rudder step at t = 0; advance and transfer at 90 deg of heading change, tactical
+  diameter at 180 deg, steady turn radius V/|psi_dot| over the last full turn;
+- zigzag: rudder +-delta switched when the heading passes -+delta (the classic delta/delta test,
+  the first execute to positive heading); first and second overshoot angles, period;
+- dive: stern-plane step; steady pitch and depth rate;
+- spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
+- glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.integrate import solve_ivp
+
+from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
+
+__all__ = ["MANOEUVRES", "Dynamics", "simulate", "manoeuvre_metrics", "sample_models"]
+
+MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide")
+_DOF = "XYZKMN"
+_VEL = "uvwpqr"
+_TOKEN = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
+COLUMNS = ("t_s", "x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
+           "w_m_s", "p_deg_s", "q_deg_s", "r_deg_s", "rudder_deg", "sternplane_deg")
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def _terms(coefficients: dict[str, float]) -> list[tuple[int, float, list[tuple[str, int]]]]:
+    out = []
+    for sym, val in coefficients.items():
+        head, _, sub = sym.partition("_")
+        if sub.endswith("dot") or float(val) == 0.0:
+            continue
+        tokens = _TOKEN.findall(sub)
+        if "".join(tokens) != sub:
+            raise ValueError(f"the coefficient symbol {sym!r} cannot be read as a product of "
+                             "u, v, w, p, q, r, |.|, dr, ds.")
+        spec = []
+        for tok in tokens:
+            if tok in ("dr", "ds"):
+                spec.append((tok, 0))
+            elif tok.startswith("|"):
+                spec.append(("abs", _VEL.index(tok[1])))
+            else:
+                spec.append(("vel", _VEL.index(tok)))
+        out.append((_DOF.index(head), float(val), spec))
+    return out
+
+
+@dataclass
+class Dynamics:
+    """The model's matrices and terms, ready for the right-hand side."""
+
+    model: dict[str, Any]
+    weight: float | None = None  # overrides the model's weight [N] (glide: B - net buoyancy)
+    mass: float = field(init=False)
+    m_total: np.ndarray = field(init=False)
+    m_inv: np.ndarray = field(init=False)
+    ma: np.ndarray = field(init=False)
+    terms: list = field(init=False)
+
+    def __post_init__(self) -> None:
+        mdl = self.model
+        self.weight_n = float(mdl["weight_N"] if self.weight is None else self.weight)
+        self.mass = float(mdl["mass_kg"])
+        self.buoyancy = float(mdl["buoyancy_N"])
+        self.rg = np.asarray(mdl["cg_m"], dtype=float)
+        self.rb = np.asarray(mdl["cb_m"], dtype=float)
+        self.io = np.diag(np.asarray(mdl["inertia_kg_m2"], dtype=float))
+        m_rb = np.zeros((6, 6))
+        m_rb[:3, :3] = self.mass * np.eye(3)
+        m_rb[:3, 3:] = -self.mass * _skew(self.rg)
+        m_rb[3:, :3] = self.mass * _skew(self.rg)
+        m_rb[3:, 3:] = self.io
+        self.ma = added_mass_matrix(mdl["coefficients"])
+        self.m_total = m_rb + self.ma
+        self.m_inv = np.linalg.inv(self.m_total)
+        self.terms = _terms(mdl["coefficients"])
+        self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
+
+    def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
+        tau = np.zeros(6)
+        for dof, val, spec in self.terms:
+            prod = val
+            for kind, i in spec:
+                prod *= (dr if kind == "dr" else ds) if kind in ("dr", "ds") else (
+                    abs(nu[i]) if kind == "abs" else nu[i])
+            tau[dof] += prod
+        return tau
+
+    def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
+        nu1, nu2 = nu[:3], nu[3:]
+        s2 = _skew(nu2)
+        top = self.mass * s2 @ nu1 - self.mass * s2 @ _skew(self.rg) @ nu2
+        bottom = self.mass * _skew(self.rg) @ s2 @ nu1 - _skew(self.io @ nu2) @ nu2
+        return np.concatenate((top, bottom))
+
+    def restoring(self, phi: float, theta: float) -> np.ndarray:
+        w, b = self.weight_n, self.buoyancy
+        xg, yg, zg = self.rg
+        xb, yb, zb = self.rb
+        sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+        return np.array([
+            (w - b) * sth,
+            -(w - b) * cth * sph,
+            -(w - b) * cth * cph,
+            -(yg * w - yb * b) * cth * cph + (zg * w - zb * b) * cth * sph,
+            (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cph,
+            -(xg * w - xb * b) * cth * sph - (yg * w - yb * b) * sth,
+        ])
+
+    def rhs(self, state: np.ndarray, dr: float, ds: float, thrust: float) -> np.ndarray:
+        phi, theta, psi = state[3:6]
+        nu = state[6:]
+        tau = self.hydro(nu, dr, ds)
+        tau[0] += thrust
+        tau -= self.coriolis_rb(nu) + coriolis_added_mass(self.ma, nu)
+        tau -= self.restoring(phi, theta)
+        nu_dot = self.m_inv @ tau
+        cph, sph, cth, sth = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+        cps, sps = math.cos(psi), math.sin(psi)
+        rot = np.array([
+            [cps * cth, -sps * cph + cps * sth * sph, sps * sph + cps * cph * sth],
+            [sps * cth, cps * cph + sph * sth * sps, -cps * sph + sth * sps * cph],
+            [-sth, cth * sph, cth * cph],
+        ])
+        tmat = np.array([[1.0, sph * sth / cth, cph * sth / cth],
+                         [0.0, cph, -sph],
+                         [0.0, sph / cth, cph / cth]])
+        return np.concatenate((rot @ nu[:3], tmat @ nu[3:], nu_dot))
+
+
+def simulate(
+    model: dict[str, Any],
+    manoeuvre: str,
+    speed_m_s: float,
+    rudder_deg: float = 0.0,
+    sternplane_deg: float = 0.0,
+    net_buoyancy_n: float | None = None,
+    duration_s: float | None = None,
+    max_step_s: float | None = None,
+) -> pd.DataFrame:
+    """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
+
+    Parameters
+    ----------
+    model : dict
+        model.json (:func:`towtank.vehicle.model.read_model`)
+    manoeuvre : {"turning", "zigzag", "dive", "spiral", "glide"}
+    speed_m_s : float
+        Initial (and, with thrust, commanded) speed [m/s]
+    rudder_deg, sternplane_deg : float
+        Control angles [deg] (zigzag: rudder_deg is both the rudder and the check angle)
+    net_buoyancy_n : float, optional
+        Buoyancy minus weight [N]; replaces the model's weight (weight = B - this)
+    duration_s : float, optional
+        Simulated time [s]; default enough for the manoeuvre (40 vehicle lengths of travel,
+        a glide 200 lengths)
+    max_step_s : float, optional
+        Largest integration step [s]; default duration/2000
+    """
+    if manoeuvre not in MANOEUVRES:
+        raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
+                         f"{manoeuvre!r}.")
+    if not (math.isfinite(speed_m_s) and speed_m_s > 0):
+        raise ValueError(f"the speed must be > 0 m/s, not {speed_m_s}.")
+    weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
+    dyn = Dynamics(model, weight)
+    length = float(model.get("length_m", 1.0))
+    if duration_s is None:
+        duration_s = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
+        if manoeuvre in ("turning", "spiral", "zigzag"):
+            duration_s = max(duration_s, 120.0 * length / speed_m_s)
+    h = max_step_s if max_step_s is not None else duration_s / 2000.0
+    thrust = 0.0 if manoeuvre == "glide" else -dyn.x_uu * speed_m_s * abs(speed_m_s)
+    dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag") else 0.0
+    ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
+    state0 = np.zeros(12)
+    state0[6] = speed_m_s
+    if manoeuvre != "zigzag":
+        sol = solve_ivp(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
+                        method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
+        _check(sol)
+        times, states = sol.t, sol.y.T
+        rudder = np.full(len(times), dr)
+    else:
+        # first execute towards positive heading: the sign of N_uudr decides the rudder's
+        sigma = 1.0 if model["coefficients"].get("N_uudr", -1.0) > 0 else -1.0
+        check = abs(dr)
+        command = sigma * abs(dr)
+        t0, y0 = 0.0, state0
+        t_parts, y_parts, r_parts = [], [], []
+        target = 1.0
+        while t0 < duration_s:
+            def event(t, y, target=target):  # noqa: ANN001
+                return y[5] - target * check
+            event.terminal = True
+            event.direction = target
+            sol = solve_ivp(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
+                            (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
+                            max_step=h, events=event)
+            _check(sol)
+            t_parts.append(sol.t)
+            y_parts.append(sol.y.T)
+            r_parts.append(np.full(len(sol.t), command))
+            if sol.status != 1:
+                break
+            t0, y0 = float(sol.t[-1]), sol.y[:, -1]
+            command, target = -command, -target
+        times = np.concatenate(t_parts)
+        states = np.concatenate(y_parts)
+        rudder = np.concatenate(r_parts)
+    out = pd.DataFrame({
+        "t_s": times, "x_m": states[:, 0], "y_m": states[:, 1], "z_m": states[:, 2],
+        "phi_deg": np.degrees(states[:, 3]), "theta_deg": np.degrees(states[:, 4]),
+        "psi_deg": np.degrees(states[:, 5]), "u_m_s": states[:, 6], "v_m_s": states[:, 7],
+        "w_m_s": states[:, 8], "p_deg_s": np.degrees(states[:, 9]),
+        "q_deg_s": np.degrees(states[:, 10]), "r_deg_s": np.degrees(states[:, 11]),
+        "rudder_deg": np.degrees(rudder), "sternplane_deg": np.degrees(ds),
+    })
+    out.attrs["manoeuvre"] = manoeuvre
+    out.attrs["check_deg"] = abs(rudder_deg)
+    return out
+
+
+def _check(sol: Any) -> None:
+    """A failed integration (a model whose motion diverges) is one sentence, not a crash."""
+    if sol.status == -1 or not np.all(np.isfinite(sol.y)):
+        t = float(sol.t[-1]) if len(sol.t) else 0.0
+        raise ValueError(f"the simulation stopped at t = {t:.3g} s ({sol.message}): the "
+                         "model's motion diverges; check the signs of its damping terms.")
+
+
+def _at_heading(ts: pd.DataFrame, change_deg: float) -> pd.Series | None:
+    dpsi = np.abs(ts["psi_deg"].to_numpy() - ts["psi_deg"].iloc[0])
+    idx = np.nonzero(dpsi >= change_deg)[0]
+    if len(idx) == 0 or idx[0] == 0:
+        return None
+    i = idx[0]
+    f = (change_deg - dpsi[i - 1]) / (dpsi[i] - dpsi[i - 1])
+    return ts.iloc[i - 1] + f * (ts.iloc[i] - ts.iloc[i - 1])
+
+
+def _steady(ts: pd.DataFrame, fraction: float = 0.2) -> pd.DataFrame:
+    return ts[ts["t_s"] >= ts["t_s"].iloc[-1] * (1.0 - fraction)]
+
+
+def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
+    """metrics.csv of a simulated manoeuvre (module docstring): metric, value, unit."""
+    kind = ts.attrs.get("manoeuvre", "turning")
+    rows: list[tuple[str, float, str]] = []
+    speed = np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2 + ts["w_m_s"] ** 2)
+    if kind in ("turning", "spiral"):
+        psi_rate = np.gradient(np.radians(ts["psi_deg"].to_numpy()), ts["t_s"].to_numpy())
+        last = ts["t_s"] >= ts["t_s"].iloc[-1] * 0.75
+        radius = float(np.mean(speed[last] * np.cos(np.radians(ts["theta_deg"][last]))
+                               / np.abs(psi_rate[last])))
+        rows.append(("steady_turn_radius_m", radius, "m"))
+        at90, at180 = _at_heading(ts, 90.0), _at_heading(ts, 180.0)
+        nan = float("nan")
+        rows.append(("advance_m", float(at90["x_m"] - ts["x_m"].iloc[0]) if at90 is not None
+                     else nan, "m"))
+        rows.append(("transfer_m", float(abs(at90["y_m"])) if at90 is not None else nan, "m"))
+        rows.append(("tactical_diameter_m", float(abs(at180["y_m"])) if at180 is not None
+                     else nan, "m"))
+        rows.append(("steady_speed_m_s", float(np.mean(speed[last])), "m/s"))
+        rows.append(("steady_yaw_rate_deg_s", float(np.degrees(np.mean(psi_rate[last]))),
+                     "deg/s"))
+        drift = np.degrees(np.arctan2(ts["v_m_s"][last], ts["u_m_s"][last]))
+        rows.append(("steady_drift_angle_deg", float(np.mean(drift)), "deg"))
+        if kind == "spiral":
+            zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())
+            rows.append(("steady_pitch_deg", float(ts["theta_deg"][last].mean()), "deg"))
+            rows.append(("depth_rate_m_s", float(np.mean(zr[last])), "m/s"))
+            rows.append(("depth_change_per_turn_m",
+                         float(np.mean(zr[last]) * 2 * math.pi / np.mean(np.abs(psi_rate[last]))),
+                         "m"))
+    elif kind == "zigzag":
+        check = float(ts.attrs.get("check_deg", 20.0))
+        switch = np.nonzero(np.diff(ts["rudder_deg"].to_numpy()) != 0)[0] + 1
+        psi = ts["psi_deg"].to_numpy()
+        t = ts["t_s"].to_numpy()
+        for k in range(2):
+            if len(switch) > k + 1:
+                seg = psi[switch[k]:switch[k + 1]]
+                over = (seg.max() - check) if k % 2 == 0 else (-seg.min() - check)
+                rows.append((f"overshoot_{k + 1}_deg", float(over), "deg"))
+        if len(switch) >= 3:
+            rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s"))
+        if len(switch) >= 1:
+            rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s"))
+    else:  # dive, glide
+        st = _steady(ts)
+        zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
+        xr = np.gradient(ts["x_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
+        rows.append(("steady_pitch_deg", float(st["theta_deg"].mean()), "deg"))
+        rows.append(("depth_rate_m_s", float(np.mean(zr)), "m/s"))
+        rows.append(("speed_m_s", float(np.mean(speed[st.index])), "m/s"))
+        rows.append(("glide_angle_deg", float(np.degrees(np.arctan2(np.mean(-zr), np.mean(xr)))),
+                     "deg"))
+        alpha = np.degrees(np.arctan2(st["w_m_s"], st["u_m_s"]))
+        rows.append(("angle_of_attack_deg", float(alpha.mean()), "deg"))
+        rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m"))
+    return pd.DataFrame(rows, columns=["metric", "value", "unit"])
+
+
+def sample_models(model: dict[str, Any], n: int, seed: int = 1) -> list[dict[str, Any]]:
+    """``n`` copies of the model with the measured coefficients drawn from their covariance.
+
+    Raises
+    ------
+    ValueError
+        The model has no covariance of measured coefficients.
+    """
+    cov = model.get("covariance") or {}
+    symbols = list(cov.get("symbols") or [])
+    if not symbols:
+        raise ValueError("the model has no covariance of measured coefficients; --samples "
+                         "needs a model written by 'towtank process' with measured values.")
+    matrix = np.asarray(cov["matrix"], dtype=float)
+    mean = np.array([model["coefficients"].get(s, 0.0) for s in symbols])
+    rng = np.random.default_rng(seed)
+    draws = rng.multivariate_normal(mean, matrix, size=n, method="eigh")
+    out = []
+    for row in draws:
+        m = dict(model)
+        m["coefficients"] = dict(model["coefficients"]) | dict(zip(symbols, map(float, row),
+                                                                   strict=True))
+        out.append(m)
+    return out
