@@ -1,6 +1,7 @@
-"""Run files as other labs record them: each layout of the same synthetic day gives the same
-coefficients as the plain CSV day, and the text, LVM, TDMS, MATLAB and HDF5 readers find what
-the lab wrote (timing, separators, decimal commas, units) or say in one sentence what is wrong.
+"""Run files as other labs record them: each layout of the same synthetic day (file formats,
+two load cells per force, a balance's interaction matrix) gives the same coefficients as the
+plain CSV day, and the text, LVM, TDMS, MATLAB and HDF5 readers find what the lab wrote
+(timing, separators, decimal commas, units) or say in one sentence what is wrong.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from towtank.ingest.protocol import ChannelMap
 from towtank.ingest.readers import ReadOptions, read_text_columns, stated_units
 from towtank.ingest.runfile import load_run, read_columns
 from towtank.testing import synthetic as syn
-from towtank.testing.layouts import LAYOUTS, layout_channels, protocol_channels
+from towtank.testing.layouts import LAYOUTS, layout_channels, protocol_sections
 
 SEED = 5
 TOLERANCE = 1e-3  # relative: "the same coefficients within 0.1 %"
@@ -33,8 +34,7 @@ def _day(root: Path, file_format: str, channel_style: str = "lab") -> Path:
     channels = layout_channels(file_format, syn.LabChannels())
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv", channels=channels,
                                           channel_style=channel_style)
-    if "channels" in sections:
-        sections["channels"] = protocol_channels(file_format, sections["channels"])
+    sections = protocol_sections(file_format, sections)
     return syn.write_protocol(root / "protocol.toml", **sections)
 
 
@@ -208,3 +208,31 @@ def test_inspect_says_what_an_unknown_file_holds_and_prints_a_protocol_block(tmp
     assert parsed["channels"]["speed"]["column"] == "Carriage speed (m/s)"
     assert parsed["channels"]["drag"]["column"] == "Fx load cell (V)"
     assert "one sentence" not in err.getvalue() and err.getvalue().count("\n") == 1
+
+
+def test_balance_matrix_and_summed_cells_are_validated(tmp_path):
+    from towtank.ingest.protocol import load_protocol
+
+    base = _day(tmp_path, "matrix").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(base.replace("matrix = [[20.0, 0.3], [-0.2, -25.0]]", "matrix = [[20.0, 0.3]]"))
+    with pytest.raises(towtank.ProtocolError, match=r"'matrix' in \[balance\] must have one row "
+                                                    r"per output \(2\)"):
+        load_protocol(bad)
+    bad.write_text(base + '\n[channels.drag]\ncolumn = "Fx (V)"\n')
+    with pytest.raises(towtank.ProtocolError, match="given both by \\[balance\\] and by"):
+        load_protocol(bad)
+    both = _day(tmp_path / "cells", "two-cell").read_text().replace(
+        'columns = ["DragL (V)", "DragR (V)"]', 'columns = ["DragL (V)"], column = "x"')
+    bad.write_text(both)
+    with pytest.raises(towtank.ProtocolError, match="either 'column' .* or 'columns'"):
+        load_protocol(bad)
+
+
+def test_two_cells_are_summed(tmp_path):
+    protocol = _day(tmp_path, "two-cell")
+    frame = pd.read_csv(tmp_path / "data" / "run_021.csv")
+    left, right = frame["DragL (V)"].to_numpy(), frame["DragR (V)"].to_numpy()
+    assert np.std(left - right) > 1e-4  # the cells share the load unevenly
+    raw = towtank.read_run(tmp_path / "data" / "run_021.csv", protocol)
+    np.testing.assert_allclose(raw.drag, 20.0 * (left + right), rtol=0, atol=1e-6)

@@ -166,7 +166,8 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
     path = Path(file)
     return load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
                     max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                    data=file_bytes(path), options=read)
+                    data=file_bytes(path), options=read,
+                    balance=None if protocol is None else loaded.balance)
 
 
 def reduce_run(

@@ -25,13 +25,12 @@ def synth_command(args: argparse.Namespace) -> int:
     sheet = {"sheet_format": args.sheet_format} if args.sheet_format else {}
     if args.day == "hull":
         synthetic.make_hull_day(args.outdir, seed=args.seed, **formats)
-        from towtank.testing.layouts import layout_channels, protocol_channels
+        from towtank.testing.layouts import layout_channels, protocol_sections
 
         layout = args.file_format or ""
         channels = layout_channels(layout, synthetic.LabChannels())
         sections = synthetic.hull_protocol_sections(".", "out", channels=channels, **sheet)
-        if "channels" in sections:
-            sections["channels"] = protocol_channels(layout, sections["channels"])
+        sections = protocol_sections(layout, sections)
     else:
         synthetic.make_fin_day(args.outdir, seed=args.seed, **formats)
         sections = synthetic.fin_protocol_sections(".", "out", **sheet)

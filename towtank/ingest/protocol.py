@@ -33,11 +33,33 @@ FIN_MOUNTINGS = ("free", "wall")
 
 @dataclass(frozen=True)
 class ChannelMap:
-    """How a canonical channel is found in a run file: value = gain·(raw − offset)."""
+    """How a canonical channel is found in a run file: value = gain·(raw − offset), where raw
+    is the column, or the sum of ``columns`` (a balance with several load cells per force)."""
 
     column: str
     gain: float = 1.0
     offset: float = 0.0
+    columns: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Balance:
+    """A multi-component dynamometer's calibration: outputs = matrix · inputs (docs/formats.md).
+
+    Parameters
+    ----------
+    inputs : tuple of str
+        Raw columns (e.g. bridge voltages [V]).
+    outputs : tuple of str
+        Canonical force channels they give (``drag``, ``lift``).
+    matrix : tuple of tuples of float
+        len(outputs) × len(inputs) interaction matrix [output unit per input unit], cross-talk
+        terms included.
+    """
+
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    matrix: tuple[tuple[float, ...], ...]
 
 
 @dataclass(frozen=True)
@@ -179,6 +201,7 @@ class Protocol:
     report: ReportOptions
     warnings: tuple[str, ...] = field(default=())
     read: ReadOptions = field(default_factory=ReadOptions)
+    balance: Balance | None = None
     vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
 
     @property
@@ -251,9 +274,15 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
     "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
     "channel": {
-        "column": ("str", True),
+        "column": ("str", False),
+        "columns": ("strs", False),
         "gain": (_NUM, False),
         "offset": (_NUM, False),
+    },
+    "balance": {
+        "inputs": ("strs", True),
+        "outputs": ("strs", True),
+        "matrix": ("matrix", True),
     },
     "processing": {
         f.name: ({"int": "int", "bool": "bool"}.get(str(f.type).split(" ")[0], _NUM), False)
@@ -274,7 +303,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read", "vehicle")
+             "read", "vehicle", "balance")
 
 _KIND_WORDS = {
     "str": "a text string",
@@ -283,6 +312,8 @@ _KIND_WORDS = {
     "int": "a whole number",
     "bool": "true or false",
     "floats": "a list of numbers",
+    "strs": "a list of text strings",
+    "matrix": "a list of rows, each a list of numbers",
     "table": "a table",
 }
 
@@ -335,6 +366,15 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
         if not isinstance(value, dict):
             raise bad
         return value
+    if kind == "strs":
+        if not isinstance(value, list) or not value or not all(
+                isinstance(v, str) and v.strip() for v in value):
+            raise bad
+        return tuple(value)
+    if kind == "matrix":
+        if not isinstance(value, list) or not value:
+            raise bad
+        return tuple(_coerce(row, "floats", where, src) for row in value)
     raise AssertionError(kind)
 
 
@@ -652,7 +692,15 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             c = _section(spec, "channel", f"channels.{name}", src)
             if c.get("gain", 1.0) == 0:
                 raise ProtocolError(f"{src}: 'gain' in [channels.{name}] must not be zero.")
+            if ("column" in c) == ("columns" in c):
+                raise ProtocolError(
+                    f"{src}: [channels.{name}] needs either 'column' (one column) or 'columns' "
+                    "(load cells summed), not both nor neither."
+                )
+            if "columns" in c:
+                c["column"] = " + ".join(c["columns"])
             channels[name] = ChannelMap(**c)
+    balance = _balance(data["balance"], channels, src) if "balance" in data else None
 
     proc_values = _section(data.get("processing", {}), "processing", "processing", src)
     _positive(proc_values, _PROCESSING_POSITIVE, "processing", src)
@@ -680,7 +728,31 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         warnings=tuple(warnings),
         read=read,
         vehicle=vehicle,
+        balance=balance,
     )
+
+
+def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
+    """``[balance]``: the interaction matrix of a multi-component dynamometer, checked."""
+    b = _section(data, "balance", "balance", src)
+    inputs, outputs, matrix = b["inputs"], b["outputs"], b["matrix"]
+    if len(matrix) != len(outputs) or any(len(row) != len(inputs) for row in matrix):
+        raise ProtocolError(
+            f"{src}: 'matrix' in [balance] must have one row per output ({len(outputs)}) and one "
+            f"number per input ({len(inputs)}) in each row."
+        )
+    for out in outputs:
+        if out not in ("drag", "lift"):
+            raise ProtocolError(
+                f"{src}: the [balance] output '{out}' is not a force channel (drag, lift)."
+            )
+        if out in channels:
+            raise ProtocolError(
+                f"{src}: '{out}' is given both by [balance] and by [channels.{out}]; keep one."
+            )
+    if len(set(outputs)) != len(outputs) or len(set(inputs)) != len(inputs):
+        raise ProtocolError(f"{src}: [balance] names an input or output twice.")
+    return Balance(inputs=inputs, outputs=outputs, matrix=matrix)
 
 
 def _read_options(values: dict[str, Any], src: str) -> ReadOptions:

@@ -29,7 +29,7 @@ from towtank.errors import RunError
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns
-from towtank.ingest.protocol import ChannelMap, channel_map
+from towtank.ingest.protocol import Balance, ChannelMap, channel_map
 from towtank.ingest.readers import (
     FS_KEY,
     WF_TIME_KEY,
@@ -555,6 +555,7 @@ def map_channels(
     *,
     fallback_time: np.ndarray | None = None,
     used: dict[str, str] | None = None,
+    balance: Balance | None = None,
 ) -> dict[str, np.ndarray]:
     """Canonical channels from raw columns (not yet calibrated).
 
@@ -562,13 +563,37 @@ def map_channels(
     unless the protocol maps them explicitly. Column names are matched exactly, then with
     surrounding blanks ignored. ``fallback_time`` (waveform timing or a stated sample rate, see
     :func:`fallback_time`) stands in for a time column that is neither mapped nor found;
-    ``used`` receives the column each channel came from.
+    ``used`` receives the column each channel came from. A channel with ``columns`` is the
+    sum of those load cells; the outputs of ``balance`` are its matrix times its inputs.
     """
     full = channel_map(mapping)
     out: dict[str, np.ndarray] = {}
     found = [c for c in cols if not c.startswith("__")]
     stripped = {c.strip(): c for c in found}
+
+    def column(col: str, canon: str) -> np.ndarray:
+        key = col if col in cols else stripped.get(col.strip())
+        if key is None:
+            listed = ", ".join(f"'{c}'" for c in found) or "none"
+            raise RunError(f"{name}: the column '{col}' of the {canon} channel is missing; "
+                           f"columns found: {listed}")
+        arr, _ = _to_float_array(np.asarray(cols[key]))
+        return arr
+
     for canon, cm in full.items():
+        if cm.columns:  # load cells summed
+            out[canon] = np.sum([column(c, canon) for c in cm.columns], axis=0)
+            if used is not None:
+                used[canon] = cm.column
+            continue
+        if balance is not None and canon in balance.outputs:
+            i = balance.outputs.index(canon)
+            inputs = [column(c, canon) for c in balance.inputs]
+            out[canon] = np.sum([m * x for m, x in zip(balance.matrix[i], inputs, strict=True)],
+                                axis=0)
+            if used is not None:
+                used[canon] = "[balance]"
+            continue
         key = cm.column if cm.column in cols else stripped.get(cm.column.strip())
         if key is None and canon == "time" and "time" not in mapping and \
                 fallback_time is not None:
@@ -658,6 +683,7 @@ def load_run(
     do_despike: bool = True,
     data: bytes | None = None,
     options: ReadOptions | None = None,
+    balance: Balance | None = None,
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -679,6 +705,8 @@ def load_run(
         The file's bytes when already read (for hashing).
     options : ReadOptions, optional
         The protocol's ``[read]`` section (format, separator, decimal, group, sample rate).
+    balance : Balance, optional
+        The protocol's ``[balance]``: force channels from a calibration matrix.
 
     Raises
     ------
@@ -689,7 +717,7 @@ def load_run(
         data = file_bytes(path)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
-                         options or ReadOptions())
+                         options or ReadOptions(), balance)
 
 
 def _load_run(
@@ -700,6 +728,7 @@ def _load_run(
     max_bad_row_fraction: float,
     do_despike: bool,
     options: ReadOptions,
+    balance: Balance | None = None,
 ) -> RawRun:
     """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
     (:func:`calibrate`) -> time base -> gaps, clipping, spikes, ranges."""
@@ -710,7 +739,7 @@ def _load_run(
     rows = cols.pop(_ROWS_KEY, None)
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
     used: dict[str, str] = {}
-    chans = map_channels(cols, mapping, name, used=used,
+    chans = map_channels(cols, mapping, name, used=used, balance=balance,
                          fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
 

@@ -469,6 +469,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             do_despike=p.despike,
             data=data,
             options=protocol.read,
+            balance=protocol.balance,
         )
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)

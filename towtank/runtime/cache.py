@@ -63,6 +63,7 @@ def protocol_settings(protocol: Any) -> dict[str, Any]:
         "processing": asdict(protocol.processing),
         "channels": {k: asdict(v) for k, v in sorted(protocol.channels.items())},
         "read": asdict(getattr(protocol, "read", None) or _NoRead()),
+        "balance": asdict(protocol.balance) if getattr(protocol, "balance", None) else None,
     }
 
 

@@ -414,7 +414,7 @@ def write_run_file(
         raise ValueError(f"tdms_dtype must be 'float64' or 'float32', not {tdms_dtype!r}.")
     path = Path(path)
     if layout is not None:
-        from towtank.testing.layouts import layout_channels, write_layout
+        from towtank.testing.layouts import layout_channels, write_layout  # noqa: I001
 
         lab = layout_channels(layout, channels or LabChannels())
         out = to_file_frame(frame, channel_style, lab)
@@ -424,6 +424,12 @@ def write_run_file(
             lab_force = channel_style == "lab" and canon in ("drag", "lift")
             units[col] = "V" if lab_force else _UNITS[canon]
         time_col = "time" if channel_style == "canonical" else lab.time
+        if layout in ("two-cell", "matrix"):
+            if channel_style != "lab":
+                raise ValueError(f"the {layout} layout records load cells: channel_style='lab'")
+            from towtank.testing.layouts import balance_frame
+
+            out = balance_frame(layout, out, lab)
         return write_layout(layout, out, path, time_col, units)
     out = to_file_frame(frame, channel_style, channels)
     name = path.name.lower()

@@ -47,7 +47,13 @@ LAYOUTS = {
     "mat": "mat",
     "mat73": "mat",
     "hdf5": "h5",
+    "two-cell": "csv",
+    "matrix": "csv",
 }
+
+#: The [balance] matrix of the "matrix" layout: outputs (drag, lift) [N] per input [V], with
+#: cross-talk (the example of docs/formats.md).
+BALANCE_MATRIX = ((20.0, 0.3), (-0.2, -25.0))
 
 _FIXED = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
@@ -96,10 +102,59 @@ def write_layout(
     path.parent.mkdir(parents=True, exist_ok=True)
     writer = {
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
-        "mat73": _mat_v73, "hdf5": _hdf5,
+        "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
     }[layout]
     writer(frame, path, time_col, units)
     return path
+
+
+def _csv(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+    path.write_bytes(frame.to_csv(index=False, lineterminator="\n").encode())
+
+
+def balance_frame(layout: str, frame: pd.DataFrame, lab: LabChannels) -> pd.DataFrame:
+    """The lab-style file frame as a balance with two load cells per force ("two-cell": DragL
+    + DragR, the sum is the drag bridge's voltage, split unevenly as a moment would) or as a
+    two-component dynamometer whose bridges see both forces ("matrix": inputs = M⁻¹·forces
+    with :data:`BALANCE_MATRIX`)."""
+    out = frame.copy()
+    v_drag = frame[lab.drag].to_numpy(np.float64)
+    v_lift = frame[lab.lift].to_numpy(np.float64)
+    if layout == "two-cell":
+        share = 0.5 + 0.1 * np.tanh(v_lift)  # the lift's moment loads one cell more
+        left = np.round(v_drag * share, 8)
+        out = out.drop(columns=[lab.drag])
+        out.insert(1 + list(frame.columns).index(lab.drag) - 1, "DragL (V)", left)
+        out.insert(list(out.columns).index("DragL (V)") + 1, "DragR (V)",
+                   np.round(v_drag - left, 8))
+    elif layout == "matrix":
+        forces = np.vstack([lab.drag_gain * (v_drag - lab.drag_offset),
+                            lab.lift_gain * (v_lift - lab.lift_offset)])
+        inputs = np.linalg.solve(np.array(BALANCE_MATRIX), forces)
+        out = out.drop(columns=[lab.drag, lab.lift])
+        out["Fx (V)"] = np.round(inputs[0], 9)
+        out["Fy (V)"] = np.round(inputs[1], 9)
+    return out
+
+
+def protocol_sections(layout: str, sections: dict[str, dict]) -> dict[str, dict]:
+    """The protocol sections for a layout: [channels] as the layout names them (no time for
+    files without a time column, summed cells, none for the balance's forces) and
+    [balance]."""
+    sections = dict(sections)
+    if "channels" not in sections:
+        return sections
+    ch = protocol_channels(layout, sections["channels"])
+    if layout == "two-cell":
+        drag = dict(ch["drag"])
+        drag.pop("column")
+        ch = {**ch, "drag": {"columns": ["DragL (V)", "DragR (V)"], **drag}}
+    elif layout == "matrix":
+        ch = {k: v for k, v in ch.items() if k not in ("drag", "lift")}
+        sections["balance"] = {"inputs": ["Fx (V)", "Fy (V)"], "outputs": ["drag", "lift"],
+                               "matrix": [list(r) for r in BALANCE_MATRIX]}
+    sections["channels"] = ch
+    return sections
 
 
 def _tdms_waveform(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:

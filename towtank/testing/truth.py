@@ -54,7 +54,7 @@ FIN_SAMPLE_DATE = "2024-05-22"
 Config = Literal["hull", "fin", "sting"]
 ChannelStyle = Literal["canonical", "lab"]
 FileFormat = Literal["csv", "csv.gz", "tdms", "tdms-waveform", "lvm", "txt-eu", "mat", "mat73",
-                     "hdf5"]
+                     "hdf5", "two-cell", "matrix"]
 SheetFormat = Literal["csv", "xlsx"]
 
 _REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
