@@ -121,6 +121,35 @@ def fit_tares(
     return out
 
 
+def tare_models(
+    protocol: Protocol,
+    sheet: pd.DataFrame,
+    reductions: dict[int, RunReduction],
+    day_warnings: list[str],
+) -> dict[str, TareModel]:
+    """The tare of every group, as ``[tare] source`` says: fitted to the sting runs (default),
+    from the tare table (one model for every group of the sheet) or none (empty)."""
+    source = protocol.tare
+    if source.source == "none":
+        day_warnings.append("no tare is subtracted ([tare] source = \"none\"): the forces are "
+                            "those of the model and its mounting together.")
+        return {}
+    if source.source == "table":
+        from towtank.reduce.tare import table_tare
+
+        out = {}
+        for group in sorted({str(g) for g in sheet["tare_group"]}):
+            out[group], departure = table_tare(group, source.speeds_m_s, source.drag_N,
+                                               source.lift_N or None)
+        if departure > 0.02 * max(abs(v) for v in source.drag_N):
+            day_warnings.append(
+                f"the tare table {Path(source.table).name} departs from t2·U|U| + t1·U by up to "
+                f"{departure:.3g} N; check its points."
+            )
+        return out
+    return fit_tares(sheet, reductions)
+
+
 def water_at(temperature_C: float, water_type: str, salinity: float | None) -> tuple[float, float]:
     """(rho [kg/m³], nu [m²/s]) of the tank or the prototype's water.
 
@@ -354,11 +383,11 @@ def process_day(
     order = {int(r): k for k, r in enumerate(sheet["run"])}
     reductions = dict(sorted(reductions.items(), key=lambda kv: order[kv[0]]))
 
-    tares = fit_tares(sheet, reductions)
+    tares = tare_models(protocol, sheet, reductions, day_warnings)
     config_of = dict(zip(sheet["run"].astype(int), sheet["config"], strict=True))
     group_of = dict(zip(sheet["run"].astype(int), sheet["tare_group"], strict=True))
     for run in list(reductions):
-        if config_of[run] == "sting":
+        if config_of[run] == "sting" or protocol.tare.source == "none":
             reductions[run] = apply_tare(reductions[run], None)
             continue
         tare = tares.get(group_of[run])

@@ -43,6 +43,22 @@ class ChannelMap:
 
 
 @dataclass(frozen=True)
+class TareSource:
+    """Where the mounting's force comes from (``[tare]``, docs/formats.md).
+
+    ``sting``: the sheet's sting runs (default); ``table``: a table of tare drag (and lift)
+    against speed measured once (``speeds_m_s`` [m/s], ``drag_N``, ``lift_N`` [N]); ``none``:
+    nothing is subtracted.
+    """
+
+    source: str = "sting"
+    table: str = ""
+    speeds_m_s: tuple[float, ...] = ()
+    drag_N: tuple[float, ...] = ()
+    lift_N: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
 class Balance:
     """A multi-component dynamometer's calibration: outputs = matrix · inputs (docs/formats.md).
 
@@ -202,6 +218,7 @@ class Protocol:
     warnings: tuple[str, ...] = field(default=())
     read: ReadOptions = field(default_factory=ReadOptions)
     balance: Balance | None = None
+    tare: TareSource = field(default_factory=TareSource)
     vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
 
     @property
@@ -279,6 +296,10 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "gain": (_NUM, False),
         "offset": (_NUM, False),
     },
+    "tare": {
+        "source": ("str", False),
+        "table": ("path", False),
+    },
     "balance": {
         "inputs": ("strs", True),
         "outputs": ("strs", True),
@@ -303,7 +324,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read", "vehicle", "balance")
+             "read", "vehicle", "balance", "tare")
 
 _KIND_WORDS = {
     "str": "a text string",
@@ -729,7 +750,56 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         read=read,
         vehicle=vehicle,
         balance=balance,
+        tare=_tare_source(data.get("tare", {}), base, src, check_paths),
     )
+
+
+def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
+    """``[tare]``: sting runs, a tare table (read and checked here) or none."""
+    t = _section(data, "tare", "tare", src)
+    source = t.get("source", "sting")
+    if source not in ("sting", "table", "none"):
+        raise ProtocolError(
+            f"{src}: 'source' in [tare] is {source!r}; it must be 'sting', 'table' or 'none'."
+        )
+    if source != "table":
+        if "table" in t:
+            raise ProtocolError(f"{src}: 'table' in [tare] needs source = \"table\".")
+        return TareSource(source=source)
+    if "table" not in t:
+        raise ProtocolError(f"{src}: [tare] source = \"table\" needs 'table' (a CSV file).")
+    path = base / t["table"]
+    if not check_paths:
+        return TareSource(source="table", table=str(path))
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+    except OSError as exc:
+        raise ProtocolError(f"{src}: the tare table {path} cannot be read ({exc.strerror}).") \
+            from None
+    cols = {k.strip().lower(): k for k in (rows[0] if rows else {})}
+    if "speed_m_s" not in cols or "drag_n" not in cols:
+        raise ProtocolError(
+            f"{src}: the tare table {path.name} needs columns speed_m_s and drag_N (and "
+            f"optionally lift_N); it has {', '.join(cols) or 'none'}."
+        )
+    try:
+        u = [float(r[cols["speed_m_s"]]) for r in rows]
+        d = [float(r[cols["drag_n"]]) for r in rows]
+        lift = [float(r[cols["lift_n"]]) for r in rows] if "lift_n" in cols else []
+    except (TypeError, ValueError):
+        raise ProtocolError(f"{src}: the tare table {path.name} holds a value that is not a "
+                            "number.") from None
+    if len(u) < 2 or any(b <= a for a, b in zip(u, u[1:], strict=False)) or \
+            not all(math.isfinite(v) for v in u + d + lift):
+        raise ProtocolError(
+            f"{src}: the tare table {path.name} needs two or more rows with finite values and "
+            "speeds increasing from row to row."
+        )
+    return TareSource(source="table", table=str(path), speeds_m_s=tuple(u), drag_N=tuple(d),
+                      lift_N=tuple(lift))
 
 
 def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:

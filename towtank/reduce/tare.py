@@ -176,3 +176,44 @@ def fit_tare_group(
         speed_range=(float(min(steady_speeds)), float(max(steady_speeds))),
         accel_range=(float(np.min(acc)), float(np.max(acc))) if acc.size else (0.0, 0.0),
     )
+
+
+def table_tare(
+    group: str,
+    speeds: Sequence[float],
+    drag: Sequence[float],
+    lift: Sequence[float] | None = None,
+) -> tuple[TareModel, float]:
+    """The tare of a group from a tare table measured once (``[tare] source = "table"``).
+
+    The table's points (U [m/s], F_tare [N]) are fitted with the sting tare's own form
+    F = t2·U|U| + t1·U by least squares; a table holds no acceleration, so m_t = 0 (the
+    accelerated runs then carry the mounting's mass in their added mass: weigh it into
+    ``mass_kg`` or use sting runs). The table's uncertainty is not known to towtank: the fit's
+    covariance is zero, and the intervals hold the regression's and the mass's parts only.
+
+    Returns
+    -------
+    (TareModel, float)
+        The model (speed range = the table's) and the largest departure of the table from the
+        fitted form [N], which the day reports when it matters.
+    """
+    u = np.asarray(speeds, dtype=float)
+    x = tare_design(u, np.zeros_like(u))[:, :2]
+
+    def fit(force: Sequence[float]) -> tuple[TareFit, float]:
+        y = np.asarray(force, dtype=float)
+        beta, *_ = np.linalg.lstsq(x, y, rcond=None)
+        resid = y - x @ beta
+        coef = np.array([beta[0], beta[1], 0.0])
+        return (TareFit(coef=coef, cov=np.zeros((3, 3)), residual_std=float(np.std(resid)),
+                        n_samples=int(u.size), dof=math.inf), float(np.max(np.abs(resid))))
+
+    drag_fit, departure = fit(drag)
+    lift_fit = None
+    if lift is not None and len(lift):
+        lift_fit, dep_l = fit(lift)
+        departure = max(departure, dep_l)
+    model = TareModel(group=group, runs=(), drag=drag_fit, lift=lift_fit,
+                      speed_range=(float(u.min()), float(u.max())), accel_range=(0.0, 0.0))
+    return model, departure
