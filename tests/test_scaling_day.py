@@ -59,6 +59,7 @@ def _variant(folder: Path, *, drop: tuple[str, ...] = (), myring: bool = True,
     if not myring:
         text, n = re.subn(r"(?ms)^\[model\.myring\]\n.*?(?=^\[)", "", text)
         assert n == 1
+        text = re.sub(r"(?ms)^\[vehicle\]\n.*?(?=^\[|\Z)", "", text)  # its hull is the Myring
     for key, value in (prototype or {}).items():
         text, n = re.subn(r"(?m)^(\[prototype\]\n)", rf"\g<1>{key} = {value}\n", text)
         assert n == 1
