@@ -150,6 +150,9 @@ class Processing:
     damping_alpha_max_deg: float = 30.0
     laminar_re: float = 2.0e5
     jobs: int | None = None
+    zero_at: str = "before_motion"
+    drift: str = "linear"
+    drift_settle_s: float = 1.0
 
     @property
     def trim(self) -> float:
@@ -252,7 +255,8 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "offset": (_NUM, False),
     },
     "processing": {
-        f.name: ({"int": "int", "bool": "bool"}.get(str(f.type).split(" ")[0], _NUM), False)
+        f.name: ({"int": "int", "bool": "bool", "str": "str"}.get(str(f.type).split(" ")[0], _NUM),
+                 False)
         for f in fields(Processing)
     },  # annotations are strings here: "float", "int | None", "bool", ...
     "report": {
@@ -357,6 +361,12 @@ _PROCESSING_RANGES = {
     "steady_tolerance": (0.0, 0.5),
     "nominal_tolerance": (0.0, 1.0),
     "damping_alpha_max_deg": (0.0, 90.0),
+    "drift_settle_s": (0.0, 60.0),
+}
+#: [processing] keys that take one of a few words.
+_PROCESSING_CHOICES = {
+    "zero_at": ("before_motion", "file_start"),
+    "drift": ("linear", "none"),
 }
 
 
@@ -630,6 +640,13 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         if value is not None and not low <= value <= high:
             raise ProtocolError(
                 f"{src}: '{key}' in [processing] must lie in {low:g}–{high:g}, but it is {value}."
+            )
+    for key, choices in _PROCESSING_CHOICES.items():
+        value = proc_values.get(key)
+        if value is not None and value not in choices:
+            raise ProtocolError(
+                f"{src}: '{key}' in [processing] must be one of {', '.join(choices)}, but it is "
+                f"{value!r}{_suggest(value, choices)}"
             )
     processing = Processing(**proc_values)
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
