@@ -476,6 +476,14 @@ def _hull_stage(day: DayResult) -> None:
     table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
     day.hull = HullResult(fit=hf, coefficients=table)
     day.warnings.extend(hf.messages)
+    from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
+
+    hull_rho = runs.loc[(runs["config"] == "hull") & (runs["status"] == "ok"), "rho"].mean()
+    day.warnings.extend(plausibility_warnings(
+        table, rho=float(hull_rho),
+        volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
+        frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
+    ))
     for sym, am in hf.added_mass.items():
         if am.estimate.agreement.startswith("DISAGREE"):
             day.warnings.append(

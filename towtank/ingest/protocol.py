@@ -555,6 +555,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         model = Model(**m, myring=myring)
         if myring is not None:
             model = _with_myring_geometry(model, src)
+        _check_mass(model, src)
 
     fin = None
     if "fin" in data:
@@ -664,6 +665,33 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         report=report,
         warnings=tuple(warnings),
     )
+
+
+#: [model] mass_kg against the displaced mass ρV (ρ ≈ 1000 kg/m³): outside this range of
+#: ratios it is in other units (grams give ~1000, tonnes ~0.001); a solid steel body is ~8.
+MASS_RATIO_RANGE = (0.05, 20.0)
+
+
+def _check_mass(model: Model, src: str) -> None:
+    """Stop on a weighed mass that no body of this size can have (a unit slip)."""
+    from towtank.reference.geometry import displaced_volume
+
+    if not 0.05 <= model.length_m <= 20.0 or not 0.005 <= (model.diameter_m or 0.05) <= 3.0:
+        return  # a length or diameter in other units: the unit warnings name it
+    volume = displaced_volume(model.length_m, model.diameter_m, model.volume_m3)
+    if volume is None:
+        return
+    disp = 1000.0 * volume
+    ratio = model.mass_kg / disp
+    lo, hi = MASS_RATIO_RANGE
+    if not lo <= ratio <= hi:
+        unit = "grams" if ratio > hi else "tonnes, or the geometry in other units"
+        raise ProtocolError(
+            f"{src}: [model] mass_kg = {model.mass_kg:g} is {ratio:.3g} times the mass of the "
+            f"water the hull displaces (about {disp:.3g} kg for its "
+            f"{'given' if model.volume_m3 else 'estimated'} volume {volume:.3g} m³); a towed "
+            f"model weighs {lo:g}–{hi:g} times that: was it given in {unit}?"
+        )
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:
