@@ -31,7 +31,7 @@ DRIFT_REJECT_FRACTION = 0.25
 #: straight drift, by more than this many standard deviations of the filtered force's noise...
 SETTLE_SIGMAS = 4.0
 #: ... and by more than this fraction of the run's steady force [-].
-SETTLE_FRACTION = 0.02
+SETTLE_FRACTION = 0.005
 #: Forces below this are treated as this when taking fractions of the steady force [N].
 FORCE_FLOOR_N = 0.005
 #: A drift below this is never worth a warning: a few mN over a run are common [N].

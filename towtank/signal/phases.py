@@ -135,7 +135,8 @@ def detect_phases(
     else:
         pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
     post_start = motion[1] + max(margin, int(round(drift_settle_s * fs)))
-    post = (post_start, min(n, post_start + int(zero_window_s * fs)))
+    # the post window keeps clear of the file's end by the trim, where the filter starts up
+    post = (post_start, min(n - int(round(trim_s * fs)), post_start + int(zero_window_s * fs)))
     still_post = post if post[1] - post[0] >= int(min_still_s * fs) else None
 
     # --- steady plateau: speed within a narrow band of the level where acceleration is ~0
