@@ -383,17 +383,26 @@ def test_length_in_millimetres_warns(folder):
 
 @pytest.mark.parametrize(
     "section, key, value, hint",
-    [("model", "mass_kg", 552.0, None), ("model", "diameter_m", 50.0, "mm"),
+    [("model", "diameter_m", 50.0, "mm"),
      ("water", "temperature_C", 291.15, "K"), ("fin", "chord_m", 120.0, "mm")],
 )
 def test_other_unit_warnings(folder, section, key, value, hint):
     data = _base()
     data[section][key] = value
     p = load_protocol(_write(folder, data))
-    if hint is None:  # 552 kg is a plausible model mass: no warning
-        assert not any(key in w for w in p.warnings)
-    else:
-        assert any(key in w and hint in w for w in p.warnings), p.warnings
+    assert any(key in w and hint in w for w in p.warnings), p.warnings
+
+
+@pytest.mark.parametrize("mass, unit", [(552.0, "grams"), (0.000552, "tonnes")])
+def test_mass_in_other_units_stops_the_day(folder, mass, unit):
+    """mass_kg = 552 for a 0.353 m × 50 mm hull (it displaces about 0.55 kg of water): the
+    mass was typed in grams; it would make X_udot = +551 kg. Exit 2, naming the unit."""
+    data = _base()
+    data["model"]["mass_kg"] = mass
+    with pytest.raises(ProtocolError, match=f"mass_kg = {mass:g} is .* was it given in {unit}"):
+        load_protocol(_write(folder, data))
+    data["model"]["mass_kg"] = 0.552 * 7.8  # a solid steel body of that size is fine
+    load_protocol(_write(folder, data))
 
 
 def test_cli_exit_2_and_nothing_written_for_an_unusable_protocol(folder, capsys):

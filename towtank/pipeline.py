@@ -502,11 +502,20 @@ def _hull_stage(day: DayResult) -> None:
         lateral_area=model.lateral_area,
         alpha_max_deg=day.protocol.processing.damping_alpha_max_deg,
         tares=day.tares,
+        rho=water_at(day.protocol.water.temperature_C, day.protocol.water.type,
+                     day.protocol.water.salinity_g_kg)[0],
     )
     ref = fit.load_reference(day.protocol.campaign.reference)
     table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
     day.hull = HullResult(fit=hf, coefficients=table)
     day.warnings.extend(hf.messages)
+    from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
+
+    day.warnings.extend(plausibility_warnings(
+        table, rho=hf.rho,
+        volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
+        frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
+    ))
     for sym, am in hf.added_mass.items():
         if am.estimate.agreement.startswith("DISAGREE"):
             day.warnings.append(

@@ -680,6 +680,7 @@ def fit_hull(
     lateral_area: float,
     alpha_max_deg: float = 30.0,
     tares: dict[str, TareModel] | None = None,
+    rho: float | None = None,
 ) -> HullFit:
     """Every hull coefficient the day supports (model scale, SI, SNAME signs).
 
@@ -703,10 +704,17 @@ def fit_hull(
         Largest |α| of the C_D(α) fit [deg].
     tares : dict, optional
         Tare models by group: their uncertainty is propagated into every interval.
+    rho : float, optional
+        Reference water density of the dimensional damping values and the primes [kg/m³]:
+        the day's nominal water ([water] of the protocol). Each run's C_D is normalised with its
+        own water; the coefficients are C_D's made dimensional at this one density, so that
+        normalising and rescaling never use different waters. Default: the mean of the hull
+        runs' densities.
     """
     messages: list[str] = []
     hull_ok = runs[(runs["status"] == "ok") & (runs["config"] == "hull")]
-    rho = float(hull_ok["rho"].mean()) if len(hull_ok) else math.nan
+    if rho is None:
+        rho = float(hull_ok["rho"].mean()) if len(hull_ok) else math.nan
     estimates: dict[str, Estimate] = {}
     added: dict[str, AddedMassFit] = {}
     for symbol, angle in (("X_udot", 0.0), ("Y_vdot", 90.0)):

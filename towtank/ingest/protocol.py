@@ -8,20 +8,42 @@ value. All errors are :class:`~towtank.errors.ProtocolError` with one sentence f
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import tomllib
 from collections.abc import Iterable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from towtank.errors import ProtocolError
-from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
+from towtank.ingest.readers import ReadOptions
+from towtank.ingest.schema import (  # noqa: F401  (SCHEMA, TOP_LEVEL: public names)
+    _NUM,
+    _PROCESSING_CHOICES,
+    _PROCESSING_POSITIVE,
+    _PROCESSING_RANGES,
+    CANONICAL_CHANNELS,
+    SCHEMA,
+    TOP_LEVEL,
+    Processing,
+    ReportOptions,
+    _coerce,
+    _positive,
+    _section,
+    _suggest,
+)
+from towtank.ingest.sections import (  # noqa: F401
+    MASS_RATIO_RANGE,
+    Balance,
+    TareSource,
+    _balance,
+    _check_mass,
+    _read_options,
+    _tare_source,
+)
 from towtank.reference.sets import BUILTIN_REFERENCES
 
-CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
 MAX_DELTA_CF = 0.002
@@ -40,42 +62,6 @@ class ChannelMap:
     gain: float = 1.0
     offset: float = 0.0
     columns: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class TareSource:
-    """Where the mounting's force comes from (``[tare]``, docs/formats.md).
-
-    ``sting``: the sheet's sting runs (default); ``table``: a table of tare drag (and lift)
-    against speed measured once (``speeds_m_s`` [m/s], ``drag_N``, ``lift_N`` [N]); ``none``:
-    nothing is subtracted.
-    """
-
-    source: str = "sting"
-    table: str = ""
-    speeds_m_s: tuple[float, ...] = ()
-    drag_N: tuple[float, ...] = ()
-    lift_N: tuple[float, ...] = ()
-
-
-@dataclass(frozen=True)
-class Balance:
-    """A multi-component dynamometer's calibration: outputs = matrix · inputs (docs/formats.md).
-
-    Parameters
-    ----------
-    inputs : tuple of str
-        Raw columns (e.g. bridge voltages [V]).
-    outputs : tuple of str
-        Canonical force channels they give (``drag``, ``lift``).
-    matrix : tuple of tuples of float
-        len(outputs) × len(inputs) interaction matrix [output unit per input unit], cross-talk
-        terms included.
-    """
-
-    inputs: tuple[str, ...]
-    outputs: tuple[str, ...]
-    matrix: tuple[tuple[float, ...], ...]
 
 
 @dataclass(frozen=True)
@@ -172,39 +158,6 @@ class Prototype:
 
 
 @dataclass(frozen=True)
-class Processing:
-    """Signal-processing knobs; every one has a default a lab can live with."""
-
-    cutoff_hz: float = 4.0
-    filter_order: int = 4
-    zero_window_s: float = 2.0
-    trim_s: float | None = None
-    min_steady_s: float = 0.5
-    min_accel_s: float = 0.3
-    steady_tolerance: float = 0.01
-    nominal_tolerance: float = 0.05
-    fit_sample_hz: float | None = None
-    max_nan_gap_s: float = 0.05
-    max_bad_row_fraction: float = 0.01
-    despike: bool = True
-    damping_alpha_max_deg: float = 30.0
-    laminar_re: float = 2.0e5
-    jobs: int | None = None
-
-    @property
-    def trim(self) -> float:
-        """Time cut from each end of a phase window [s]: default 1.5 filter time constants."""
-        return self.trim_s if self.trim_s is not None else 1.5 / self.cutoff_hz
-
-
-@dataclass(frozen=True)
-class ReportOptions:
-    date: str | None = None
-    pdf: bool = True
-    figures: bool = True
-
-
-@dataclass(frozen=True)
 class Protocol:
     path: Path
     campaign: Campaign
@@ -224,222 +177,6 @@ class Protocol:
     @property
     def name(self) -> str:
         return self.campaign.name
-
-
-# --------------------------------------------------------------------------------------------
-# Schema: key -> (kind, required). kinds: str, float, int, bool, path, floats, table
-_NUM = "float"
-SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
-    "campaign": {
-        "name": ("str", True),
-        "run_sheet": ("path", True),
-        "data_dir": ("path", True),
-        "output_dir": ("path", False),
-        "reference": ("str", False),
-        "test_date": ("str", False),
-    },
-    "water": {
-        "type": ("str", False),
-        "temperature_C": (_NUM, True),
-        "salinity_g_kg": (_NUM, False),
-    },
-    "model": {
-        "name": ("str", False),
-        "length_m": (_NUM, True),
-        "diameter_m": (_NUM, False),
-        "mass_kg": (_NUM, True),
-        "frontal_area_m2": (_NUM, False),
-        "lateral_area_m2": (_NUM, False),
-        "wetted_area_m2": (_NUM, False),
-        "volume_m3": (_NUM, False),
-        "scale": (_NUM, False),
-        "depth_m": (_NUM, False),
-        "mass_uncertainty_kg": (_NUM, False),
-        "length_uncertainty_m": (_NUM, False),
-        "diameter_uncertainty_m": (_NUM, False),
-        "myring": ("table", False),
-    },
-    "model.myring": {
-        "a": (_NUM, True),
-        "b": (_NUM, True),
-        "c": (_NUM, True),
-        "n": (_NUM, True),
-        "theta_deg": (_NUM, True),
-        "d": (_NUM, True),
-        "a_offset": (_NUM, False),
-        "c_offset": (_NUM, False),
-    },
-    "fin": {
-        "chord_m": (_NUM, True),
-        "span_m": (_NUM, True),
-        "section": ("str", False),
-        "mounting": ("str", False),
-        "oswald_e": (_NUM, False),
-        "x_m": (_NUM, False),
-        "linear_max_deg": (_NUM, False),
-    },
-    "prototype": {
-        "length_m": (_NUM, False),
-        "speeds_m_s": ("floats", True),
-        "delta_cf": (_NUM, False),
-        "water": ("table", False),
-    },
-    "prototype.water": {
-        "type": ("str", False),
-        "temperature_C": (_NUM, True),
-        "salinity_g_kg": (_NUM, False),
-    },
-    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
-    "channel": {
-        "column": ("str", False),
-        "columns": ("strs", False),
-        "gain": (_NUM, False),
-        "offset": (_NUM, False),
-    },
-    "tare": {
-        "source": ("str", False),
-        "table": ("path", False),
-    },
-    "balance": {
-        "inputs": ("strs", True),
-        "outputs": ("strs", True),
-        "matrix": ("matrix", True),
-    },
-    "processing": {
-        f.name: ({"int": "int", "bool": "bool"}.get(str(f.type).split(" ")[0], _NUM), False)
-        for f in fields(Processing)
-    },  # annotations are strings here: "float", "int | None", "bool", ...
-    "report": {
-        "date": ("str", False),
-        "pdf": ("bool", False),
-        "figures": ("bool", False),
-    },
-    "read": {
-        "format": ("str", False),
-        "delimiter": ("str", False),
-        "decimal": ("str", False),
-        "skip_rows": ("int", False),
-        "group": ("str", False),
-        "sample_rate_hz": (_NUM, False),
-    },
-}
-TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read", "vehicle", "balance", "tare")
-
-_KIND_WORDS = {
-    "str": "a text string",
-    "path": "a path (text)",
-    "float": "a number",
-    "int": "a whole number",
-    "bool": "true or false",
-    "floats": "a list of numbers",
-    "strs": "a list of text strings",
-    "matrix": "a list of rows, each a list of numbers",
-    "table": "a table",
-}
-
-
-def _suggest(key: str, valid: list[str] | tuple[str, ...]) -> str:
-    near = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
-    if not near:
-        near = difflib.get_close_matches(key.lower(), [v.lower() for v in valid], n=1, cutoff=0.4)
-        near = [v for v in valid if v.lower() in near]
-    if near:
-        return f"; did you mean '{near[0]}'?"
-    return f"; valid keys are: {', '.join(valid)}"
-
-
-def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
-    bad = ProtocolError(
-        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
-    )
-    if kind in ("str", "path"):
-        if not isinstance(value, str) or not value.strip():
-            raise bad
-        if kind == "path" and ("\x00" in value or any(len(part) > 255
-                                                      for part in value.split("/"))):
-            raise ProtocolError(f"{src}: {where} is not a usable path ({value[:60]!r}...).")
-        return value
-    if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise bad
-        if not math.isfinite(value):
-            raise bad
-        return float(value)
-    if kind == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise bad
-        return value
-    if kind == "bool":
-        if not isinstance(value, bool):
-            raise bad
-        return value
-    if kind == "floats":
-        if not isinstance(value, list) or not value:
-            raise bad
-        out = []
-        for v in value:
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise bad
-            out.append(float(v))
-        return tuple(out)
-    if kind == "table":
-        if not isinstance(value, dict):
-            raise bad
-        return value
-    if kind == "strs":
-        if not isinstance(value, list) or not value or not all(
-                isinstance(v, str) and v.strip() for v in value):
-            raise bad
-        return tuple(value)
-    if kind == "matrix":
-        if not isinstance(value, list) or not value:
-            raise bad
-        return tuple(_coerce(row, "floats", where, src) for row in value)
-    raise AssertionError(kind)
-
-
-def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
-    """Validate one table against SCHEMA[schema_name]; return the coerced values."""
-    if not isinstance(data, dict):
-        raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {data!r}.")
-    spec = SCHEMA[schema_name]
-    out: dict[str, Any] = {}
-    for key, value in data.items():
-        if key not in spec:
-            raise ProtocolError(
-                f"{src}: unknown key '{key}' in [{label}]{_suggest(key, list(spec))}"
-            )
-        kind, _ = spec[key]
-        out[key] = _coerce(value, kind, f"'{key}' in [{label}]", src)
-    for key, (_kind, required) in spec.items():
-        if required and key not in out:
-            raise ProtocolError(f"{src}: [{label}] is missing the required key '{key}'.")
-    return out
-
-
-#: [processing] keys that must be > 0, and the closed ranges of the others.
-_PROCESSING_POSITIVE = (
-    "cutoff_hz", "filter_order", "zero_window_s", "min_steady_s", "min_accel_s",
-    "steady_tolerance", "nominal_tolerance", "fit_sample_hz", "damping_alpha_max_deg",
-    "laminar_re", "jobs",
-)
-_PROCESSING_RANGES = {
-    "trim_s": (0.0, 60.0),
-    "max_nan_gap_s": (0.0, 60.0),
-    "max_bad_row_fraction": (0.0, 0.5),
-    "steady_tolerance": (0.0, 0.5),
-    "nominal_tolerance": (0.0, 1.0),
-    "damping_alpha_max_deg": (0.0, 90.0),
-}
-
-
-def _positive(values: dict[str, Any], keys: tuple[str, ...], label: str, src: str) -> None:
-    for key in keys:
-        if key in values and values[key] is not None and values[key] <= 0:
-            raise ProtocolError(
-                f"{src}: '{key}' in [{label}] must be positive, but it is {values[key]}."
-            )
 
 
 def _water(values: dict[str, Any], label: str, src: str) -> Water:
@@ -631,6 +368,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         model = Model(**m, myring=myring)
         if myring is not None:
             model = _with_myring_geometry(model, src)
+        _check_mass(model, src)
 
     fin = None
     if "fin" in data:
@@ -731,6 +469,13 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             raise ProtocolError(
                 f"{src}: '{key}' in [processing] must lie in {low:g}–{high:g}, but it is {value}."
             )
+    for key, choices in _PROCESSING_CHOICES.items():
+        value = proc_values.get(key)
+        if value is not None and value not in choices:
+            raise ProtocolError(
+                f"{src}: '{key}' in [processing] must be one of {', '.join(choices)}, but it is "
+                f"{value!r}{_suggest(value, choices)}"
+            )
     processing = Processing(**proc_values)
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
     read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
@@ -752,96 +497,6 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         balance=balance,
         tare=_tare_source(data.get("tare", {}), base, src, check_paths),
     )
-
-
-def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
-    """``[tare]``: sting runs, a tare table (read and checked here) or none."""
-    t = _section(data, "tare", "tare", src)
-    source = t.get("source", "sting")
-    if source not in ("sting", "table", "none"):
-        raise ProtocolError(
-            f"{src}: 'source' in [tare] is {source!r}; it must be 'sting', 'table' or 'none'."
-        )
-    if source != "table":
-        if "table" in t:
-            raise ProtocolError(f"{src}: 'table' in [tare] needs source = \"table\".")
-        return TareSource(source=source)
-    if "table" not in t:
-        raise ProtocolError(f"{src}: [tare] source = \"table\" needs 'table' (a CSV file).")
-    path = base / t["table"]
-    if not check_paths:
-        return TareSource(source="table", table=str(path))
-    import csv
-
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
-    except OSError as exc:
-        raise ProtocolError(f"{src}: the tare table {path} cannot be read ({exc.strerror}).") \
-            from None
-    cols = {k.strip().lower(): k for k in (rows[0] if rows else {})}
-    if "speed_m_s" not in cols or "drag_n" not in cols:
-        raise ProtocolError(
-            f"{src}: the tare table {path.name} needs columns speed_m_s and drag_N (and "
-            f"optionally lift_N); it has {', '.join(cols) or 'none'}."
-        )
-    try:
-        u = [float(r[cols["speed_m_s"]]) for r in rows]
-        d = [float(r[cols["drag_n"]]) for r in rows]
-        lift = [float(r[cols["lift_n"]]) for r in rows] if "lift_n" in cols else []
-    except (TypeError, ValueError):
-        raise ProtocolError(f"{src}: the tare table {path.name} holds a value that is not a "
-                            "number.") from None
-    if len(u) < 2 or any(b <= a for a, b in zip(u, u[1:], strict=False)) or \
-            not all(math.isfinite(v) for v in u + d + lift):
-        raise ProtocolError(
-            f"{src}: the tare table {path.name} needs two or more rows with finite values and "
-            "speeds increasing from row to row."
-        )
-    return TareSource(source="table", table=str(path), speeds_m_s=tuple(u), drag_N=tuple(d),
-                      lift_N=tuple(lift))
-
-
-def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
-    """``[balance]``: the interaction matrix of a multi-component dynamometer, checked."""
-    b = _section(data, "balance", "balance", src)
-    inputs, outputs, matrix = b["inputs"], b["outputs"], b["matrix"]
-    if len(matrix) != len(outputs) or any(len(row) != len(inputs) for row in matrix):
-        raise ProtocolError(
-            f"{src}: 'matrix' in [balance] must have one row per output ({len(outputs)}) and one "
-            f"number per input ({len(inputs)}) in each row."
-        )
-    for out in outputs:
-        if out not in ("drag", "lift"):
-            raise ProtocolError(
-                f"{src}: the [balance] output '{out}' is not a force channel (drag, lift)."
-            )
-        if out in channels:
-            raise ProtocolError(
-                f"{src}: '{out}' is given both by [balance] and by [channels.{out}]; keep one."
-            )
-    if len(set(outputs)) != len(outputs) or len(set(inputs)) != len(inputs):
-        raise ProtocolError(f"{src}: [balance] names an input or output twice.")
-    return Balance(inputs=inputs, outputs=outputs, matrix=matrix)
-
-
-def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
-    """``[read]``: how run files are read (docs/formats.md, "Run files as recorded")."""
-    choices = {"format": FORMATS, "delimiter": tuple(DELIMITERS), "decimal": ("auto", ".", ",")}
-    for key, allowed in choices.items():
-        if key in values and values[key] not in allowed:
-            listed = ", ".join(repr(a) for a in allowed)
-            raise ProtocolError(
-                f"{src}: '{key}' in [read] is {values[key]!r}; it must be one of {listed}."
-            )
-    if values.get("skip_rows", 0) < 0:
-        raise ProtocolError(f"{src}: 'skip_rows' in [read] must be 0 or more.")
-    rate = values.get("sample_rate_hz")
-    if rate is not None and not 1.0 <= rate <= 1.0e6:
-        raise ProtocolError(
-            f"{src}: 'sample_rate_hz' in [read] must lie in 1–1e6 Hz, but it is {rate:g}."
-        )
-    return ReadOptions(**values)
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:

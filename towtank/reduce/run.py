@@ -1,11 +1,11 @@
 """Per-run reduction: from a run's calibrated channels to its phases, means and fit samples.
 
 :func:`reduce_run` takes a :class:`~towtank.ingest.runfile.RawRun` and does, in this order
-(METHOD.md,
-"A run"): filter the speed and find the phases from it; zero the forces on the still window
-before the run and remove the drift to the still window after it; filter the forces with the
-same zero-phase low-pass as the speed; take acceleration from the filtered speed (or from an
-accel channel filtered the same way); average over the trimmed steady window; keep decimated
+(docs/method.md, "A run"): filter speed and forces with one zero-phase low-pass and find the
+phases from the speed; zero the filtered forces on the still window before the run (or at the
+file's start) and remove the drift to the still window after it, once the balance has
+settled; take acceleration from the filtered speed (or from an accel channel filtered the same
+way); average over the trimmed steady window; keep decimated
 samples of the steady and constant-acceleration windows for the fitters and a thumbnail of the
 whole run for the report. Everything it returns is plain data that can be cached.
 
@@ -34,6 +34,7 @@ from towtank.ingest.protocol import Processing, Protocol
 from towtank.ingest.runfile import RawRun, file_bytes, load_run
 from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
+from towtank.signal.drift import drift_verdict
 
 #: The repair of the ingest that the engineer is told of on the terminal (the others, gaps
 #: interpolated and spikes removed, are listed in runs.csv's notes and the report).
@@ -169,6 +170,12 @@ def reduce_run(
 ) -> RunReduction:
     """Reduce one run (before tare).
 
+    The steps, each a function of this module: :func:`filter_channels` (one zero-phase
+    low-pass for every channel), :func:`find_phases`, :func:`choose_steady_window` (detected
+    or set by hand), :func:`zero_forces` (zero and drift from the filtered forces, with the
+    drift check), :func:`check_force_signal` (a dead channel), :func:`nominal_checks`,
+    :func:`fit_samples` and :func:`thumbnail`.
+
     Parameters
     ----------
     raw : RawRun
@@ -186,26 +193,93 @@ def reduce_run(
     accel_nominal : float
         Set carriage acceleration [m/s²] (cross-check only).
     """
-    fs = raw.fs
-    t = raw.time
-    p = processing
+    fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
+    filt, speed_f, accel_f = filter_channels(raw, p)
+    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None)
+    windows = ph.windows_s(t)
+    steady, window_source, manual_warnings = choose_steady_window(
+        t, speed_f, ph, windows, window_s, p, notes
+    )
+    drag_f, lift_f, zeros, drift_warnings = zero_forces(t, filt, raw.lift is not None, ph,
+                                                        steady, p, notes)
+    check_force_signal(raw, speed_f, steady, ph)
+    s0, s1 = steady
+    u_s = speed_f[s0:s1]
+    speed_mean = float(np.mean(u_s))
+    accel_mean = math.nan
+    if ph.accel is not None:
+        accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
+    nominal_warnings = nominal_checks(speed_mean, accel_mean, ph, p, notes,
+                                      speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+    warn = (
+        [n for n in raw.notes if WARNED_REPAIRS in n]  # dropped rows: said, not only noted
+        + manual_warnings
+        + drift_warnings
+        + nominal_warnings
+    )
+    a_s = accel_f[s0:s1]
+    return RunReduction(
+        run=run,
+        file=file,
+        sha256=raw.sha256,
+        fs=fs,
+        n_samples=raw.n,
+        duration_s=float(t[-1] - t[0]),
+        windows=windows,
+        window_source=window_source,
+        speed_level=ph.speed_level,
+        speed_mean=speed_mean,
+        speed_std=float(np.std(u_s)),
+        accel_mean=accel_mean,
+        zero_drag=zeros[0],
+        drift_drag=zeros[1],
+        zero_lift=zeros[2],
+        drift_lift=zeros[3],
+        drag_mean_raw=float(np.mean(drag_f[s0:s1])),
+        drag_std=float(np.std(drag_f[s0:s1])),
+        lift_mean_raw=float(np.mean(lift_f[s0:s1])) if raw.lift is not None else math.nan,
+        steady_regressors=(
+            float(np.mean(u_s * np.abs(u_s))),
+            speed_mean,
+            float(np.mean(a_s)),
+        ),
+        samples=fit_samples(t, speed_f, accel_f, drag_f, lift_f, steady, ph, accel_mean, fs, p),
+        thumb=thumbnail(t, speed_f, accel_f, drag_f, lift_f, fs),
+        has_lift=raw.lift is not None,
+        notes=notes,
+        warnings=warn,
+    )
+
+
+def filter_channels(
+    raw: RawRun, p: Processing
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One zero-phase low-pass for speed, forces (and accel): (stack, speed [m/s], a [m/s²]).
+
+    The stack's columns are speed, drag, [lift], [accel]; acceleration is the derivative of the
+    filtered speed unless the file has an accel channel (filtered the same way).
+    """
+    fs = raw.fs
     if p.cutoff_hz >= 0.5 * fs:
         raise RunError(
             f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
             f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered"
         )
-    # one zero-phase filter, identical for every channel
     forces = [raw.drag] + ([raw.lift] if raw.lift is not None else [])
     stack = np.column_stack([raw.speed] + forces + ([raw.accel] if raw.accel is not None else []))
     filt = conditioning.lowpass(stack, fs, p.cutoff_hz, p.filter_order)
     speed_f = filt[:, 0]
-    if raw.accel is not None:
-        accel_f = filt[:, -1]
-    else:
-        accel_f = conditioning.derivative(speed_f, fs)
+    accel_f = filt[:, -1] if raw.accel is not None else conditioning.derivative(speed_f, fs)
+    return filt, speed_f, accel_f
 
-    ph = phases.detect_phases(
+
+def find_phases(
+    t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, fs: float, p: Processing,
+    *, steady_required: bool,
+) -> phases.Phases:
+    """The run's phases from the filtered speed, with the protocol's settings."""
+    return phases.detect_phases(
         t,
         speed_f,
         accel_f,
@@ -215,48 +289,103 @@ def reduce_run(
         min_accel_s=p.min_accel_s,
         zero_window_s=p.zero_window_s,
         steady_tolerance=p.steady_tolerance,
-        steady_required=window_s is None,
+        steady_required=steady_required,
+        zero_at=p.zero_at,
+        drift_settle_s=p.drift_settle_s,
     )
-    windows = ph.windows_s(t)
-    manual_warnings: list[str] = []
+
+
+def choose_steady_window(
+    t: np.ndarray,
+    speed_f: np.ndarray,
+    ph: phases.Phases,
+    windows: dict[str, tuple[float, float] | None],
+    window_s: tuple[float, float] | None,
+    p: Processing,
+    notes: list[str],
+) -> tuple[tuple[int, int], str, list[str]]:
+    """(steady window, its source, warnings): the detected plateau or the sheet's hand window.
+
+    ``windows`` and ``notes`` are updated in place for a hand window.
+    """
     if window_s is None:
         assert ph.steady is not None
-        steady = ph.steady
-        window_source = "detected"
-    else:
-        steady = phases.manual_window(t, *window_s)
-        det = windows["steady"]
-        found = f"detected {det[0]:.2f}–{det[1]:.2f} s" if det else "no plateau detected"
-        window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s ({found})"
-        notes.append(f"steady window set by hand in the sheet: {window_source}")
-        windows["steady"] = (float(t[steady[0]]), float(t[steady[1] - 1]))
-        manual_warnings = manual_window_checks(
-            t, speed_f, steady, ph, steady_tolerance=p.steady_tolerance,
-            min_steady_s=p.min_steady_s,
-        )
-        notes.extend(manual_warnings)
+        return ph.steady, "detected", []
+    steady = phases.manual_window(t, *window_s)
+    det = windows["steady"]
+    found = f"detected {det[0]:.2f}–{det[1]:.2f} s" if det else "no plateau detected"
+    window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s ({found})"
+    notes.append(f"steady window set by hand in the sheet: {window_source}")
+    windows["steady"] = (float(t[steady[0]]), float(t[steady[1] - 1]))
+    manual_warnings = manual_window_checks(
+        t, speed_f, steady, ph, steady_tolerance=p.steady_tolerance,
+        min_steady_s=p.min_steady_s,
+    )
+    notes.extend(manual_warnings)
+    return steady, window_source, manual_warnings
 
-    # zero and drift: on the raw forces' still windows, then the same filter (linear, so the
-    # order does not matter) -- subtract the zero line from the filtered force
-    zero_d, z_d, drift_d = conditioning.zero_line(t, raw.drag, ph.still_pre, ph.still_post)
-    drag_f = filt[:, 1] - zero_d
-    if raw.lift is not None:
-        zero_l, z_l, drift_l = conditioning.zero_line(t, raw.lift, ph.still_pre, ph.still_post)
-        lift_f = filt[:, 2] - zero_l
-    else:
-        z_l = drift_l = math.nan
-        lift_f = np.full(t.shape, np.nan)
-    if ph.still_post is None:
+
+def zero_forces(
+    t: np.ndarray,
+    filt: np.ndarray,
+    has_lift: bool,
+    ph: phases.Phases,
+    steady: tuple[int, int],
+    p: Processing,
+    notes: list[str],
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float, float], list[str]]:
+    """Zeroed filtered drag and lift, (zero_drag, drift_drag, zero_lift, drift_lift), warnings.
+
+    The zero and the drift are taken from the FILTERED forces (docs/method.md "A run"), so that
+    mains hum and vibration in the still windows do not leak into them. With [processing]
+    drift = "linear" and a post-run still window, the zero is a straight line between the two
+    windows, after :func:`towtank.signal.drift.drift_verdict` has judged the drift: a run whose
+    balance had not settled after the stop is rejected, a large drift is a warning.
+    """
+    post = ph.still_post if p.drift == "linear" else None
+    if p.drift == "linear" and ph.still_post is None:
         notes.append("the file does not end at rest: zero held constant (no drift correction)")
+    elif p.drift == "none":
+        notes.append("zero held constant ([processing] drift = \"none\")")
+    out: list[np.ndarray] = []
+    zeros: list[float] = []
+    warnings: list[str] = []
+    cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
+    pre = ph.still_pre
+    steady_force = max(
+        abs(float(np.mean(filt[steady[0] : steady[1], k]) - np.mean(filt[pre[0] : pre[1], k])))
+        for k, _ in cols
+    )
+    for k, name in cols:
+        force = filt[:, k]
+        if post is not None and post[1] - post[0] >= 2:
+            verdict = drift_verdict(t, force, pre, post, steady_force, name)
+            if verdict.reject is not None:
+                raise RunError(verdict.reject)
+            if verdict.warning is not None:
+                notes.append(verdict.warning)
+                warnings.append(verdict.warning)
+        zero, z, drift = conditioning.zero_line(t, force, pre, post)
+        out.append(force - zero)
+        zeros += [z, drift]
+    if not has_lift:
+        out.append(np.full(t.shape, np.nan))
+        zeros += [math.nan, math.nan]
+    return out[0], out[1], (zeros[0], zeros[1], zeros[2], zeros[3]), warnings
 
-    s0, s1 = steady
-    u_s = speed_f[s0:s1]
-    speed_mean = float(np.mean(u_s))
-    accel_mean = math.nan
-    if ph.accel is not None:
-        accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
 
-    # cross-checks against the sheet's set values (warnings: the sheet or the carriage is off)
+def nominal_checks(
+    speed_mean: float,
+    accel_mean: float,
+    ph: phases.Phases,
+    p: Processing,
+    notes: list[str],
+    *,
+    speed_nominal: float,
+    accel_nominal: float,
+) -> list[str]:
+    """Cross-checks against the sheet's set values: notes (appended) and the warnings among
+    them (the sheet or the carriage is off)."""
     n_notes = len(notes)
     tol = p.nominal_tolerance
     if math.isfinite(speed_nominal) and speed_nominal > 0:
@@ -277,14 +406,57 @@ def reduce_run(
                 f"measured acceleration {accel_mean:.3f} m/s² differs from the set "
                 f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
             )
+    return [n for n in notes[n_notes:] if "differs from the set" in n]
 
-    warn = (
-        [n for n in raw.notes if WARNED_REPAIRS in n]  # dropped rows: said, not only noted
-        + manual_warnings
-        + [n for n in notes[n_notes:] if "differs from the set" in n]
-    )
 
-    # decimated fit samples: steady and constant-acceleration windows
+#: A force channel whose filtered signal varies by less than this while the carriage moves at
+#: speed shows no signal (a dead cell, an unplugged cable, a channel of zeros) [N].
+DEAD_CHANNEL_SPAN_N = 1e-6
+
+
+def check_force_signal(
+    raw: RawRun, speed_f: np.ndarray, steady: tuple[int, int], ph: phases.Phases
+) -> None:
+    """Reject a run whose drag (or lift) channel is flat while the carriage moves.
+
+    A channel recorded as a constant (all 0.0: a dead cell or an unplugged cable) would enter
+    the fits as zero force at speed and move every coefficient; it is rejected, naming the
+    channel ("drag channel shows no signal").
+    """
+    m0, m1 = ph.motion
+    for name, x in (("drag", raw.drag), ("lift", raw.lift)):
+        if x is None or m1 - m0 < 3:
+            continue
+        seg = x[m0:m1]
+        if float(np.max(seg) - np.min(seg)) <= DEAD_CHANNEL_SPAN_N:
+            raise RunError(
+                f"{name} channel shows no signal: it reads {float(seg[0]):g} throughout the "
+                f"run while the carriage moves at up to {float(np.max(speed_f)):.3f} m/s (a "
+                "dead load cell, an unplugged cable, or the wrong column?)"
+            )
+
+
+def fit_samples(
+    t: np.ndarray,
+    speed_f: np.ndarray,
+    accel_f: np.ndarray,
+    drag_f: np.ndarray,
+    lift_f: np.ndarray,
+    steady: tuple[int, int],
+    ph: phases.Phases,
+    accel_mean: float,
+    fs: float,
+    p: Processing,
+) -> dict[str, np.ndarray]:
+    """Decimated fit samples of the steady and constant-acceleration windows.
+
+    Each sample's acceleration is its window's mean: within a trimmed steady or constant-
+    acceleration window the carriage's acceleration is constant, and the sample-by-sample
+    derivative of the (noisy) speed would put noise into a regressor, which biases the fitted
+    inertia toward zero (errors in variables: attenuation by var(noise)/var(a), ~0.2 % of the
+    transverse added mass at 1 mm/s speed noise).
+    """
+    s0, s1 = steady
     rate = p.fit_sample_hz or 4.0 * p.cutoff_hz
     idx_s = conditioning.decimate_indices(s0, s1, fs, rate)
     idx_a = (
@@ -293,14 +465,9 @@ def reduce_run(
         else np.array([], dtype=int)
     )
     idx = np.concatenate([idx_s, idx_a])
-    # Each sample's acceleration is its window's mean: within a trimmed steady or constant-
-    # acceleration window the carriage's acceleration is constant, and the sample-by-sample
-    # derivative of the (noisy) speed would put noise into a regressor, which biases the fitted
-    # inertia toward zero (errors in variables: attenuation by var(noise)/var(a), ~0.2 % of the
-    # transverse added mass at 1 mm/s speed noise).
     a_steady = float(np.mean(accel_f[s0:s1]))
     a_accel = accel_mean if ph.accel is not None else math.nan
-    samples = {
+    return {
         "phase": np.concatenate(
             [np.full(idx_s.size, PHASE_STEADY), np.full(idx_a.size, PHASE_ACCEL)]
         ).astype(np.int8),
@@ -310,46 +477,21 @@ def reduce_run(
         "drag": drag_f[idx],
         "lift": lift_f[idx],
     }
+
+
+def thumbnail(
+    t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, drag_f: np.ndarray,
+    lift_f: np.ndarray, fs: float,
+) -> dict[str, np.ndarray]:
+    """The whole run (zeroed, filtered) at :data:`THUMB_HZ` for the report."""
     step = max(1, int(round(fs / THUMB_HZ)))
-    thumb = {
+    return {
         "t": t[::step].copy(),
         "U": speed_f[::step].copy(),
         "a": accel_f[::step].copy(),
         "drag": drag_f[::step].copy(),
         "lift": lift_f[::step].copy(),
     }
-    a_s = accel_f[s0:s1]
-    return RunReduction(
-        run=run,
-        file=file,
-        sha256=raw.sha256,
-        fs=fs,
-        n_samples=raw.n,
-        duration_s=float(t[-1] - t[0]),
-        windows=windows,
-        window_source=window_source,
-        speed_level=ph.speed_level,
-        speed_mean=speed_mean,
-        speed_std=float(np.std(u_s)),
-        accel_mean=accel_mean,
-        zero_drag=z_d,
-        drift_drag=drift_d,
-        zero_lift=z_l,
-        drift_lift=drift_l,
-        drag_mean_raw=float(np.mean(drag_f[s0:s1])),
-        drag_std=float(np.std(drag_f[s0:s1])),
-        lift_mean_raw=float(np.mean(lift_f[s0:s1])) if raw.lift is not None else math.nan,
-        steady_regressors=(
-            float(np.mean(u_s * np.abs(u_s))),
-            speed_mean,
-            float(np.mean(a_s)),
-        ),
-        samples=samples,
-        thumb=thumb,
-        has_lift=raw.lift is not None,
-        notes=notes,
-        warnings=warn,
-    )
 
 
 def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:

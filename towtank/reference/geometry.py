@@ -334,3 +334,15 @@ def myring_geometry(
         nose_radius=float(myring_radius(0.0, *params)),
         tail_radius=float(myring_radius(length, *params)),
     )
+
+
+def displaced_volume(length_m: float, diameter_m: float | None,
+                     volume_m3: float | None) -> float | None:
+    """A hull's displaced volume [m³]: given (or from the Myring description), else estimated
+    as 0.75 of the circumscribing cylinder π/4·D²·L (a prismatic coefficient typical of
+    torpedo-shaped bodies); None without a diameter."""
+    if volume_m3 is not None and volume_m3 > 0:
+        return float(volume_m3)
+    if diameter_m is None or diameter_m <= 0:
+        return None
+    return 0.75 * math.pi / 4.0 * diameter_m**2 * length_m

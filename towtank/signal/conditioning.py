@@ -60,8 +60,12 @@ def lowpass(x: np.ndarray, fs: float, cutoff_hz: float, order: int = 4) -> np.nd
     from scipy.signal import sosfiltfilt
 
     sos = butter_sos(float(cutoff_hz), float(fs), int(order))
-    padlen = min(x.shape[0] - 1, 3 * (2 * sos.shape[0] + 1))
-    return sosfiltfilt(sos, x, axis=0, padlen=padlen)
+    # pad by an even (mirror) extension over two periods of the cut-off: the still windows at
+    # the file's ends hold the zero and the drift, and an odd extension about the last sample
+    # (scipy's default) shifts the padding's level by twice that sample's hum or noise, which
+    # the filter then smears back into the window (0.7 mN of drift from 0.05 N of hum)
+    padlen = min(x.shape[0] - 1, max(3 * (2 * sos.shape[0] + 1), int(2.0 * fs / cutoff_hz)))
+    return sosfiltfilt(sos, x, axis=0, padtype="even", padlen=padlen)
 
 
 def derivative(x: np.ndarray, fs: float) -> np.ndarray:

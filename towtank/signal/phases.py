@@ -65,6 +65,8 @@ def detect_phases(
     zero_window_s: float = 2.0,
     steady_tolerance: float = 0.01,
     steady_required: bool = True,
+    zero_at: str = "before_motion",
+    drift_settle_s: float = 0.0,
 ) -> Phases:
     """Split a run into its phases from the filtered speed.
 
@@ -89,6 +91,12 @@ def detect_phases(
         Longest still window used for the zero (the part nearest the motion) [s].
     steady_tolerance : float
         Half-width of the plateau band as a fraction of the plateau speed [-].
+    zero_at : {"before_motion", "file_start"}
+        Where the zero window lies: the last ``zero_window_s`` before the carriage moves, or
+        the first ``zero_window_s`` of the file (a model active in still water).
+    drift_settle_s : float
+        Time after the carriage stops before the post-run still window starts [s] (at least
+        the trim margin), so that the balance has settled there.
     steady_required : bool, default True
         False when the steady window is set by hand in the run sheet: a run whose plateau is
         not found (too short, too unsteady) then still gets its still, acceleration and
@@ -105,10 +113,11 @@ def detect_phases(
         ``steady_required``) the speed never settles on a plateau.
     """
     n = speed.size
-    v_peak = quantile(spread_sample(speed), 0.99)
+    # peaks held for a stated time, not percentiles of the file: independent of the run's length
+    v_peak = sustained_peak(speed, max(3, int(0.5 * min_steady_s * fs)))
     if not v_peak > 0.02:
         raise RunError(f"the carriage never moves (peak speed {v_peak:.3f} m/s)")
-    a_abs_peak = quantile(np.abs(spread_sample(accel)), 0.995)
+    a_abs_peak = sustained_peak(np.abs(accel), max(3, int(0.5 * min_accel_s * fs)))
     # --- motion: where speed or acceleration rises above small fractions of their peaks
     moving = (speed > 0.03 * v_peak) | (np.abs(accel) > 0.1 * a_abs_peak)
     moving = close_gaps(moving, int(0.5 * fs))
@@ -121,9 +130,13 @@ def detect_phases(
             f"there is no still window before the carriage moves (motion starts at "
             f"t = {t[motion[0]]:.2f} s): the zero cannot be found"
         )
-    pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
-    post_start = motion[1] + margin
-    post = (post_start, min(n, post_start + int(zero_window_s * fs)))
+    if zero_at == "file_start":
+        pre = (0, min(pre_end, max(int(zero_window_s * fs), 2)))
+    else:
+        pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
+    post_start = motion[1] + max(margin, int(round(drift_settle_s * fs)))
+    # the post window keeps clear of the file's end by the trim, where the filter starts up
+    post = (post_start, min(n - int(round(trim_s * fs)), post_start + int(zero_window_s * fs)))
     still_post = post if post[1] - post[0] >= int(min_still_s * fs) else None
 
     # --- steady plateau: speed within a narrow band of the level where acceleration is ~0
@@ -140,9 +153,10 @@ def detect_phases(
     n_trim = int(round(trim_s * fs))
 
     # --- constant acceleration between motion start and plateau; deceleration after it
-    accel_w, accel_level = _constant_stretch(accel, motion[0], plateau[0], +1, fs)
+    noise_a = accel_noise(accel, steady if steady is not None else plateau)
+    accel_w, accel_level = _constant_stretch(accel, motion[0], plateau[0], +1, fs, noise_a)
     accel_w = _trim(accel_w, n_trim, int(min_accel_s * fs))
-    decel_w, _ = _constant_stretch(accel, plateau[1], motion[1], -1, fs)
+    decel_w, _ = _constant_stretch(accel, plateau[1], motion[1], -1, fs, noise_a)
     decel_w = _trim(decel_w, n_trim, int(min_accel_s * fs))
     if accel_w is not None:
         accel_level = float(np.mean(accel[accel_w[0] : accel_w[1]]))
@@ -210,10 +224,45 @@ def _plateau(
     return plateau, level, steady
 
 
+def sustained_peak(x: np.ndarray, k: int) -> float:
+    """The largest value that ``x`` reaches or exceeds on at least ``k`` samples.
+
+    A peak held for a stated time (k samples), unlike a percentile of the whole file, does not
+    depend on the length of the run: the ramps of a 1200 s run are well under 0.5 % of it.
+    """
+    k = int(min(max(k, 1), x.size))
+    return float(np.partition(x, x.size - k)[x.size - k])
+
+
+#: Half-width of the constant-acceleration band in standard deviations of the measured noise
+#: of the acceleration (the derivative of the filtered speed) [-].
+ACCEL_BAND_SIGMAS = 3.0
+
+
+def accel_noise(accel: np.ndarray, window: tuple[int, int]) -> float:
+    """Robust standard deviation of the acceleration on a window of constant speed [m/s²].
+
+    The noise of the derivative of the filtered speed grows with the sample rate's noise and
+    falls with the cut-off: measured on the run itself, it scales the band within which the
+    acceleration counts as constant.
+    """
+    a = accel[window[0] : window[1]]
+    if a.size < 5:
+        return 0.0
+    med = float(np.median(a))
+    return 1.4826 * float(np.median(np.abs(a - med)))
+
+
 def _constant_stretch(
-    accel: np.ndarray, i0: int, i1: int, sign: int, fs: float
+    accel: np.ndarray, i0: int, i1: int, sign: int, fs: float, noise: float = 0.0
 ) -> tuple[tuple[int, int] | None, float | None]:
-    """The constant-acceleration stretch of sign ``sign`` in [i0, i1)."""
+    """The constant-acceleration stretch of sign ``sign`` in [i0, i1).
+
+    The band around the stretch's level is ±max(5 % of the level, 0.004 m/s²,
+    :data:`ACCEL_BAND_SIGMAS` × ``noise``), at most half the level; ``noise`` is the measured
+    noise of the acceleration [m/s²]: at low sample rates or with a noisy speed a fixed 5 %
+    band is narrower than the noise, and the stretch is lost.
+    """
     if i1 - i0 < 3:
         return None, None
     a = sign * accel[i0:i1]
@@ -225,7 +274,8 @@ def _constant_stretch(
     if core is None:
         return None, None
     level = quantile(a[core[0] : core[1]], 0.5)
-    band = close_gaps(np.abs(a - level) <= max(0.05 * level, 0.004), int(0.05 * fs))
+    half = min(max(0.05 * level, 0.004, ACCEL_BAND_SIGMAS * noise), 0.5 * level)
+    band = close_gaps(np.abs(a - level) <= half, int(0.05 * fs))
     w = longest_run(band)
     if w is None:
         return None, None

@@ -53,6 +53,11 @@ class Noise:
         Resolution of the recorded speed [m/s]; 0 for none.
     accel_sigma : float, default 0.02
         White noise of the optional accel channel at 1 kHz [m/s^2].
+    wake : float, default 0.0
+        A wake (or ringing) still on the balance when the carriage stops, as a fraction of the
+        plateau drag [-]; it decays exponentially after the stop.
+    wake_decay_s : float, default 3.0
+        Time constant of the wake's decay [s].
     """
 
     zero_offset: float = 0.3
@@ -65,6 +70,8 @@ class Noise:
     speed_sigma: float = 0.001
     speed_quantum: float = 1e-4
     accel_sigma: float = 0.02
+    wake: float = 0.0
+    wake_decay_s: float = 3.0
 
     @classmethod
     def quiet(cls) -> Noise:
@@ -191,24 +198,60 @@ def simulate_run(
     )
     t = _sample_times(plan.duration, fs)
     u, a = plan.evaluate(t)
-    n = t.size
 
     d_model, l_model = _model_forces(config, angle_deg, u, a, hull=hull, fin=fin, rho=rho, nu=nu)
     d_tare, l_tare = tare_forces(u, a, tare)
+    draws = _draw_imperfections(noise, t.size, rng, accel_channel)
+    truth = _plateau_truth(config, angle_deg, plan, hull=hull, fin=fin, tare=tare, rho=rho,
+                           nu=nu, fs=fs, t=t, draws=draws)
+    wake = np.zeros_like(t)
+    if noise.wake:
+        t_stop = float(plan.phases()["t_decel_end"])
+        after = t >= t_stop
+        wake[after] = (noise.wake * truth["drag_model"]
+                       * np.exp(-(t[after] - t_stop) / noise.wake_decay_s))
+    frame = _recorded_channels(t, u, a, d_model + d_tare + wake, l_model + l_tare, noise,
+                               draws, fs)
+    truth["inertia_drag"] = truth["m_eff"] * plan.accel
+    truth["tare_m_t"] = float(tare.m_t)
+    return frame, truth
 
-    # random draws, always in this order (so a seed gives the same run whatever the amplitudes)
+
+def _draw_imperfections(
+    noise: Noise, n: int, rng: np.random.Generator, accel_channel: bool
+) -> dict[str, Any]:
+    """A run's random draws, always in this order (so a seed gives the same run whatever the
+    amplitudes): zero offsets and drifts [-1, 1) of drag and lift, vibration frequency [Hz],
+    four phases [rad], white noise of drag, lift and speed, and of the accel channel."""
     zero = noise.zero_offset * rng.uniform(-1.0, 1.0, size=2)
     drift = noise.drift * rng.uniform(-1.0, 1.0, size=2)
     vib_hz = float(rng.uniform(*noise.vibration_hz))
     phases = rng.uniform(0.0, 2.0 * np.pi, size=4)
     white = rng.standard_normal((3, n))
     accel_white = rng.standard_normal(n) if accel_channel else None
+    return {"zero": zero, "drift": drift, "vib_hz": vib_hz, "phases": phases, "white": white,
+            "accel_white": accel_white}
 
+
+def _recorded_channels(
+    t: np.ndarray,
+    u: np.ndarray,
+    a: np.ndarray,
+    drag: np.ndarray,
+    lift: np.ndarray,
+    noise: Noise,
+    draws: dict[str, Any],
+    fs: float,
+) -> pd.DataFrame:
+    """The recorded channels: forces [N] plus zero, drift, vibration, hum and white noise;
+    speed [m/s] plus white noise, quantised; the optional accel [m/s^2] plus white noise."""
+    n = t.size
     scale = math.sqrt(fs / _REFERENCE_FS)
     ramp = t / t[-1] if n > 1 else np.zeros_like(t)
-    w_vib = 2.0 * np.pi * vib_hz * t
+    w_vib = 2.0 * np.pi * draws["vib_hz"] * t
     w_hum = 2.0 * np.pi * noise.hum_hz * t
     vib_amp = noise.vibration_per_speed * np.abs(u)
+    zero, drift, phases, white = draws["zero"], draws["drift"], draws["phases"], draws["white"]
 
     def disturbance(k: int) -> np.ndarray:
         return (
@@ -219,20 +262,33 @@ def simulate_run(
             + noise.balance_sigma * scale * white[k]
         )
 
-    drag_rec = d_model + d_tare + disturbance(0)
-    lift_rec = l_model + l_tare + disturbance(1)
     speed_rec = u + noise.speed_sigma * scale * white[2]
     if noise.speed_quantum > 0.0:
         speed_rec = np.round(speed_rec / noise.speed_quantum) * noise.speed_quantum
-
     columns: dict[str, np.ndarray] = {"time": t, "speed": speed_rec}
-    if accel_white is not None:
-        columns["accel"] = a + noise.accel_sigma * scale * accel_white
-    columns["drag"] = drag_rec
-    columns["lift"] = lift_rec
-    frame = pd.DataFrame(columns)
+    if draws["accel_white"] is not None:
+        columns["accel"] = a + noise.accel_sigma * scale * draws["accel_white"]
+    columns["drag"] = drag + disturbance(0)
+    columns["lift"] = lift + disturbance(1)
+    return pd.DataFrame(columns)
 
-    # plateau truth through the very same functions, so it equals the plateau samples bit for bit
+
+def _plateau_truth(
+    config: Config,
+    angle_deg: float,
+    plan: Any,
+    *,
+    hull: HullTruth | None,
+    fin: FinTruth | None,
+    tare: TareTruth,
+    rho: float,
+    nu: float,
+    fs: float,
+    t: np.ndarray,
+    draws: dict[str, Any],
+) -> dict[str, Any]:
+    """The run's truth on its plateau, through the very same force functions as the samples
+    (so it equals the plateau samples bit for bit), and the realised imperfections."""
     v_arr, zero_arr = np.array([plan.speed]), np.array([0.0])
     d_plat, l_plat = _model_forces(
         config, angle_deg, v_arr, zero_arr, hull=hull, fin=fin, rho=rho, nu=nu
@@ -248,7 +304,7 @@ def simulate_run(
         "jerk": plan.jerk_up,
         "jerk_decel": plan.jerk_down,
         "fs": float(fs),
-        "n_samples": int(n),
+        "n_samples": int(t.size),
         "duration_s": float(t[-1]),
         "distance_m": plan.distance,
         **plan.phases(),
@@ -262,11 +318,11 @@ def simulate_run(
         "cd": None,
         "cl": None,
         "reynolds": None,
-        "zero_drag": float(zero[0]),
-        "zero_lift": float(zero[1]),
-        "drift_drag": float(drift[0]),
-        "drift_lift": float(drift[1]),
-        "vibration_hz": vib_hz,
+        "zero_drag": float(draws["zero"][0]),
+        "zero_lift": float(draws["zero"][1]),
+        "drift_drag": float(draws["drift"][0]),
+        "drift_lift": float(draws["drift"][1]),
+        "vibration_hz": draws["vib_hz"],
     }
     if config == "hull":
         assert hull is not None
@@ -282,9 +338,7 @@ def simulate_run(
         truth["cd"] = float(d_plat[0] / (q * fin.area))
         truth["cl"] = float(l_plat[0] / (q * fin.area))
         truth["reynolds"] = plan.speed * fin.chord / nu
-    truth["inertia_drag"] = truth["m_eff"] * plan.accel
-    truth["tare_m_t"] = float(tare.m_t)
-    return frame, truth
+    return truth
 
 
 # =================================================================================== writers

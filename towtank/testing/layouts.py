@@ -121,7 +121,9 @@ def balance_frame(layout: str, frame: pd.DataFrame, lab: LabChannels) -> pd.Data
     v_drag = frame[lab.drag].to_numpy(np.float64)
     v_lift = frame[lab.lift].to_numpy(np.float64)
     if layout == "two-cell":
-        share = 0.5 + 0.1 * np.tanh(v_lift)  # the lift's moment loads one cell more
+        # the left cell carries 60 % ± 10 % (the lift's moment loads one cell more)
+        swing = v_lift - np.median(v_lift)
+        share = 0.6 + 0.1 * np.tanh(swing / (np.std(swing) or 1.0))
         left = np.round(v_drag * share, 8)
         out = out.drop(columns=[lab.drag])
         out.insert(1 + list(frame.columns).index(lab.drag) - 1, "DragL (V)", left)

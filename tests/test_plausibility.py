@@ -1,0 +1,126 @@
+"""Plausibility checks: a lab's slips (grams, mV, a dead channel, a reversed sign, a wake on
+the balance after the stop) caught with one sentence naming the likely cause."""
+
+from __future__ import annotations
+
+import gzip
+import io
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import process, write_hull_protocol
+
+import towtank.testing.synthetic as syn
+from towtank.analysis.plausibility import plausibility_warnings
+from towtank.reference.geometry import displaced_volume
+
+RHO = 998.6
+VOLUME = displaced_volume(0.353, 0.05, None)  # ~5.2e-4 m³: ~0.52 kg of water
+FRONTAL = math.pi * 0.05**2 / 4
+LATERAL = 0.0152
+TRUTH = {"X_udot": -0.0171, "Y_vdot": -0.681, "X_u|u|": -0.2053, "X_uv": -0.0087,
+         "X_v|v|": 0.0641, "Y_uv": -0.2053, "Y_v|v|": -5.97}
+
+
+def _warn(**values: float) -> list[str]:
+    table = pd.DataFrame({"symbol": list({**TRUTH, **values}),
+                          "value": list({**TRUTH, **values}.values())})
+    return plausibility_warnings(table, rho=RHO, volume_m3=VOLUME, frontal_area_m2=FRONTAL,
+                                 lateral_area_m2=LATERAL)
+
+
+def test_the_truth_is_plausible():
+    assert _warn() == []
+
+
+def test_added_mass_of_a_mass_in_grams_is_named():
+    """X_udot = +551 kg (mass_kg = 552 typed in grams) for a 0.55 kg-class body."""
+    text = " ".join(_warn(X_udot=551.0))
+    assert "X_udot = +551 is positive" in text and "mass_kg" in text
+
+
+def test_added_mass_of_forces_in_mv_is_named():
+    """X_udot = −28 kg (drag in mV) is ~50 times the displaced mass: other units."""
+    text = " ".join(_warn(X_udot=-27.9))
+    assert "times the displaced mass" in text and "mV" in text
+
+
+def test_cd_of_forces_in_mv_is_named():
+    """C_D = 10.5 at α = 0 (drag left in mV): outside 0.05–1.5, with the units hint."""
+    text = " ".join(_warn(**{"X_u|u|": -0.2053 * 50}))
+    assert "C_D at α = 0 = 10.5" in text and "mV" in text
+
+
+@pytest.mark.parametrize("symbol", ["X_udot", "Y_vdot", "X_u|u|", "Y_uv", "Y_v|v|"])
+def test_sign_flip_is_named(symbol):
+    text = " ".join(_warn(**{symbol: -TRUTH[symbol]}))
+    assert f"{symbol} = +" in text and "sign" in text
+
+
+# ------------------------------------------------------------------------ on a whole day
+PLAN = [
+    syn.RunSpec("sting", 0.0, 0.8, 0.5),
+    syn.RunSpec("sting", 0.0, 1.6, 0.5),
+    syn.RunSpec("sting", 0.0, 1.2, 1.0, test="accel"),
+    syn.RunSpec("hull", 0.0, 0.8, 0.5),
+    syn.RunSpec("hull", 0.0, 1.2, 0.5),
+    syn.RunSpec("hull", 0.0, 1.6, 0.5),
+    syn.RunSpec("hull", 0.0, 1.2, 1.0, test="accel"),
+    syn.RunSpec("hull", 0.0, 1.2, 0.25, test="accel"),
+    syn.RunSpec("hull", 5.0, 1.2, 0.5),
+    syn.RunSpec("hull", 10.0, 1.2, 0.5),
+    syn.RunSpec("hull", 15.0, 1.2, 0.5),
+]
+
+
+@pytest.fixture(scope="module")
+def small_day(tmp_path_factory):
+    d = tmp_path_factory.mktemp("plausible")
+    syn.make_hull_day(d, seed=5, fs=100.0, runs=PLAN, file_format="csv.gz")
+    return d
+
+
+def _process_with(day_dir, edit=None):
+    protocol = write_hull_protocol(day_dir)
+    if edit is not None:
+        protocol.write_text(edit(protocol.read_text(encoding="utf-8")), encoding="utf-8")
+    return process(protocol, jobs=1)
+
+
+def test_small_day_is_plausible(small_day):
+    day = _process_with(small_day)
+    assert day.rejected == {}
+    assert not any("positive" in w or "displaced mass" in w or "outside the" in w
+                   for w in day.warnings), day.warnings
+
+
+def test_drag_in_mv_is_named(small_day):
+    """The drag's gain 20 N/V read as N/mV (1000): C_D ≈ 10, a warning naming the units."""
+    day = _process_with(small_day, lambda s: s.replace("gain = 20.0", "gain = 1000.0", 1))
+    text = " ".join(day.warnings)
+    assert "C_D at α = 0 =" in text and "mV" in text, day.warnings
+
+
+def test_drag_sign_flip_is_named(small_day):
+    day = _process_with(small_day, lambda s: s.replace("gain = 20.0", "gain = -20.0", 1))
+    text = " ".join(day.warnings)
+    assert "X_u|u| = +" in text and "X_udot = +" in text and "sign" in text, day.warnings
+
+
+def test_dead_drag_channel_rejects_its_run(tmp_path):
+    """One run's drag and lift columns all 0.0: that run is rejected ("drag channel shows no
+    signal"), the rest of the day is processed."""
+    syn.make_hull_day(tmp_path, seed=5, fs=100.0, runs=PLAN, file_format="csv.gz")
+    path = tmp_path / "data" / "run_005.csv.gz"
+    frame = pd.read_csv(io.BytesIO(gzip.decompress(path.read_bytes())))
+    force_cols = [c for c in frame.columns if "load cell" in c]
+    assert len(force_cols) == 2
+    frame[force_cols] = 0.0
+    path.write_bytes(gzip.compress(frame.to_csv(index=False).encode()))
+    day = _process_with(tmp_path)
+    assert list(day.rejected) == [5]
+    assert "drag channel shows no signal" in day.rejected[5]
+    assert "run_005" in day.rejected[5]
+    assert np.isfinite(day.coefficients.set_index("symbol").loc["X_u|u|", "value"])

@@ -1,0 +1,272 @@
+"""The protocol's schema: every section's keys with their kind, and the checks that coerce a
+table of TOML values to them (one sentence per mistake, with the nearest valid key)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from towtank.errors import ProtocolError
+
+CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
+
+
+@dataclass(frozen=True)
+class Processing:
+    """Signal-processing knobs; every one has a default a lab can live with."""
+
+    cutoff_hz: float = 4.0
+    filter_order: int = 4
+    zero_window_s: float = 2.0
+    trim_s: float | None = None
+    min_steady_s: float = 0.5
+    min_accel_s: float = 0.3
+    steady_tolerance: float = 0.01
+    nominal_tolerance: float = 0.05
+    fit_sample_hz: float | None = None
+    max_nan_gap_s: float = 0.05
+    max_bad_row_fraction: float = 0.01
+    despike: bool = True
+    damping_alpha_max_deg: float = 30.0
+    laminar_re: float = 2.0e5
+    jobs: int | None = None
+    zero_at: str = "before_motion"
+    drift: str = "linear"
+    drift_settle_s: float = 1.0
+
+    @property
+    def trim(self) -> float:
+        """Time cut from each end of a phase window [s]: default 1.5 filter time constants."""
+        return self.trim_s if self.trim_s is not None else 1.5 / self.cutoff_hz
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    date: str | None = None
+    pdf: bool = True
+    figures: bool = True
+
+
+# --------------------------------------------------------------------------------------------
+# Schema: key -> (kind, required). kinds: str, float, int, bool, path, floats, table
+_NUM = "float"
+SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
+    "campaign": {
+        "name": ("str", True),
+        "run_sheet": ("path", True),
+        "data_dir": ("path", True),
+        "output_dir": ("path", False),
+        "reference": ("str", False),
+        "test_date": ("str", False),
+    },
+    "water": {
+        "type": ("str", False),
+        "temperature_C": (_NUM, True),
+        "salinity_g_kg": (_NUM, False),
+    },
+    "model": {
+        "name": ("str", False),
+        "length_m": (_NUM, True),
+        "diameter_m": (_NUM, False),
+        "mass_kg": (_NUM, True),
+        "frontal_area_m2": (_NUM, False),
+        "lateral_area_m2": (_NUM, False),
+        "wetted_area_m2": (_NUM, False),
+        "volume_m3": (_NUM, False),
+        "scale": (_NUM, False),
+        "depth_m": (_NUM, False),
+        "mass_uncertainty_kg": (_NUM, False),
+        "length_uncertainty_m": (_NUM, False),
+        "diameter_uncertainty_m": (_NUM, False),
+        "myring": ("table", False),
+    },
+    "model.myring": {
+        "a": (_NUM, True),
+        "b": (_NUM, True),
+        "c": (_NUM, True),
+        "n": (_NUM, True),
+        "theta_deg": (_NUM, True),
+        "d": (_NUM, True),
+        "a_offset": (_NUM, False),
+        "c_offset": (_NUM, False),
+    },
+    "fin": {
+        "chord_m": (_NUM, True),
+        "span_m": (_NUM, True),
+        "section": ("str", False),
+        "mounting": ("str", False),
+        "oswald_e": (_NUM, False),
+        "x_m": (_NUM, False),
+        "linear_max_deg": (_NUM, False),
+    },
+    "prototype": {
+        "length_m": (_NUM, False),
+        "speeds_m_s": ("floats", True),
+        "delta_cf": (_NUM, False),
+        "water": ("table", False),
+    },
+    "prototype.water": {
+        "type": ("str", False),
+        "temperature_C": (_NUM, True),
+        "salinity_g_kg": (_NUM, False),
+    },
+    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
+    "channel": {
+        "column": ("str", False),
+        "columns": ("strs", False),
+        "gain": (_NUM, False),
+        "offset": (_NUM, False),
+    },
+    "tare": {
+        "source": ("str", False),
+        "table": ("path", False),
+    },
+    "balance": {
+        "inputs": ("strs", True),
+        "outputs": ("strs", True),
+        "matrix": ("matrix", True),
+    },
+    "processing": {
+        f.name: ({"int": "int", "bool": "bool", "str": "str"}.get(str(f.type).split(" ")[0], _NUM),
+                 False)
+        for f in fields(Processing)
+    },  # annotations are strings here: "float", "int | None", "bool", ...
+    "report": {
+        "date": ("str", False),
+        "pdf": ("bool", False),
+        "figures": ("bool", False),
+    },
+    "read": {
+        "format": ("str", False),
+        "delimiter": ("str", False),
+        "decimal": ("str", False),
+        "skip_rows": ("int", False),
+        "group": ("str", False),
+        "sample_rate_hz": (_NUM, False),
+    },
+}
+TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
+             "read", "vehicle", "balance", "tare")
+
+_KIND_WORDS = {
+    "str": "a text string",
+    "path": "a path (text)",
+    "float": "a number",
+    "int": "a whole number",
+    "bool": "true or false",
+    "floats": "a list of numbers",
+    "strs": "a list of text strings",
+    "matrix": "a list of rows, each a list of numbers",
+    "table": "a table",
+}
+
+
+def _suggest(key: str, valid: list[str] | tuple[str, ...]) -> str:
+    near = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
+    if not near:
+        near = difflib.get_close_matches(key.lower(), [v.lower() for v in valid], n=1, cutoff=0.4)
+        near = [v for v in valid if v.lower() in near]
+    if near:
+        return f"; did you mean '{near[0]}'?"
+    return f"; valid keys are: {', '.join(valid)}"
+
+
+def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
+    bad = ProtocolError(
+        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
+    )
+    if kind in ("str", "path"):
+        if not isinstance(value, str) or not value.strip():
+            raise bad
+        if kind == "path" and ("\x00" in value or any(len(part) > 255
+                                                      for part in value.split("/"))):
+            raise ProtocolError(f"{src}: {where} is not a usable path ({value[:60]!r}...).")
+        return value
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise bad
+        if not math.isfinite(value):
+            raise bad
+        return float(value)
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise bad
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise bad
+        return value
+    if kind == "floats":
+        if not isinstance(value, list) or not value:
+            raise bad
+        out = []
+        for v in value:
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise bad
+            out.append(float(v))
+        return tuple(out)
+    if kind == "table":
+        if not isinstance(value, dict):
+            raise bad
+        return value
+    if kind == "strs":
+        if not isinstance(value, list) or not value or not all(
+                isinstance(v, str) and v.strip() for v in value):
+            raise bad
+        return tuple(value)
+    if kind == "matrix":
+        if not isinstance(value, list) or not value:
+            raise bad
+        return tuple(_coerce(row, "floats", where, src) for row in value)
+    raise AssertionError(kind)
+
+
+def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
+    """Validate one table against SCHEMA[schema_name]; return the coerced values."""
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {data!r}.")
+    spec = SCHEMA[schema_name]
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        if key not in spec:
+            raise ProtocolError(
+                f"{src}: unknown key '{key}' in [{label}]{_suggest(key, list(spec))}"
+            )
+        kind, _ = spec[key]
+        out[key] = _coerce(value, kind, f"'{key}' in [{label}]", src)
+    for key, (_kind, required) in spec.items():
+        if required and key not in out:
+            raise ProtocolError(f"{src}: [{label}] is missing the required key '{key}'.")
+    return out
+
+
+#: [processing] keys that must be > 0, and the closed ranges of the others.
+_PROCESSING_POSITIVE = (
+    "cutoff_hz", "filter_order", "zero_window_s", "min_steady_s", "min_accel_s",
+    "steady_tolerance", "nominal_tolerance", "fit_sample_hz", "damping_alpha_max_deg",
+    "laminar_re", "jobs",
+)
+_PROCESSING_RANGES = {
+    "trim_s": (0.0, 60.0),
+    "max_nan_gap_s": (0.0, 60.0),
+    "max_bad_row_fraction": (0.0, 0.5),
+    "steady_tolerance": (0.0, 0.5),
+    "nominal_tolerance": (0.0, 1.0),
+    "damping_alpha_max_deg": (0.0, 90.0),
+    "drift_settle_s": (0.0, 60.0),
+}
+#: [processing] keys that take one of a few words.
+_PROCESSING_CHOICES = {
+    "zero_at": ("before_motion", "file_start"),
+    "drift": ("linear", "none"),
+}
+
+
+def _positive(values: dict[str, Any], keys: tuple[str, ...], label: str, src: str) -> None:
+    for key in keys:
+        if key in values and values[key] is not None and values[key] <= 0:
+            raise ProtocolError(
+                f"{src}: '{key}' in [{label}] must be positive, but it is {values[key]}."
+            )

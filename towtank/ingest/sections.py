@@ -1,0 +1,170 @@
+"""Protocol sections for real labs' set-ups: ``[tare]`` (sting runs, a tare table or none),
+``[balance]`` (a dynamometer's interaction matrix), ``[read]`` (how run files are read), and the
+plausibility of ``[model] mass_kg`` (docs/formats.md)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from towtank.errors import ProtocolError
+from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
+from towtank.ingest.schema import _section
+
+if TYPE_CHECKING:
+    from towtank.ingest.protocol import ChannelMap, Model
+
+@dataclass(frozen=True)
+class TareSource:
+    """Where the mounting's force comes from (``[tare]``, docs/formats.md).
+
+    ``sting``: the sheet's sting runs (default); ``table``: a table of tare drag (and lift)
+    against speed measured once (``speeds_m_s`` [m/s], ``drag_N``, ``lift_N`` [N]); ``none``:
+    nothing is subtracted.
+    """
+
+    source: str = "sting"
+    table: str = ""
+    speeds_m_s: tuple[float, ...] = ()
+    drag_N: tuple[float, ...] = ()
+    lift_N: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class Balance:
+    """A multi-component dynamometer's calibration: outputs = matrix · inputs (docs/formats.md).
+
+    Parameters
+    ----------
+    inputs : tuple of str
+        Raw columns (e.g. bridge voltages [V]).
+    outputs : tuple of str
+        Canonical force channels they give (``drag``, ``lift``).
+    matrix : tuple of tuples of float
+        len(outputs) × len(inputs) interaction matrix [output unit per input unit], cross-talk
+        terms included.
+    """
+
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    matrix: tuple[tuple[float, ...], ...]
+
+
+
+def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
+    """``[tare]``: sting runs, a tare table (read and checked here) or none."""
+    t = _section(data, "tare", "tare", src)
+    source = t.get("source", "sting")
+    if source not in ("sting", "table", "none"):
+        raise ProtocolError(
+            f"{src}: 'source' in [tare] is {source!r}; it must be 'sting', 'table' or 'none'."
+        )
+    if source != "table":
+        if "table" in t:
+            raise ProtocolError(f"{src}: 'table' in [tare] needs source = \"table\".")
+        return TareSource(source=source)
+    if "table" not in t:
+        raise ProtocolError(f"{src}: [tare] source = \"table\" needs 'table' (a CSV file).")
+    path = base / t["table"]
+    if not check_paths:
+        return TareSource(source="table", table=str(path))
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+    except OSError as exc:
+        raise ProtocolError(f"{src}: the tare table {path} cannot be read ({exc.strerror}).") \
+            from None
+    cols = {k.strip().lower(): k for k in (rows[0] if rows else {})}
+    if "speed_m_s" not in cols or "drag_n" not in cols:
+        raise ProtocolError(
+            f"{src}: the tare table {path.name} needs columns speed_m_s and drag_N (and "
+            f"optionally lift_N); it has {', '.join(cols) or 'none'}."
+        )
+    try:
+        u = [float(r[cols["speed_m_s"]]) for r in rows]
+        d = [float(r[cols["drag_n"]]) for r in rows]
+        lift = [float(r[cols["lift_n"]]) for r in rows] if "lift_n" in cols else []
+    except (TypeError, ValueError):
+        raise ProtocolError(f"{src}: the tare table {path.name} holds a value that is not a "
+                            "number.") from None
+    if len(u) < 2 or any(b <= a for a, b in zip(u, u[1:], strict=False)) or \
+            not all(math.isfinite(v) for v in u + d + lift):
+        raise ProtocolError(
+            f"{src}: the tare table {path.name} needs two or more rows with finite values and "
+            "speeds increasing from row to row."
+        )
+    return TareSource(source="table", table=str(path), speeds_m_s=tuple(u), drag_N=tuple(d),
+                      lift_N=tuple(lift))
+
+
+def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
+    """``[balance]``: the interaction matrix of a multi-component dynamometer, checked."""
+    b = _section(data, "balance", "balance", src)
+    inputs, outputs, matrix = b["inputs"], b["outputs"], b["matrix"]
+    if len(matrix) != len(outputs) or any(len(row) != len(inputs) for row in matrix):
+        raise ProtocolError(
+            f"{src}: 'matrix' in [balance] must have one row per output ({len(outputs)}) and one "
+            f"number per input ({len(inputs)}) in each row."
+        )
+    for out in outputs:
+        if out not in ("drag", "lift"):
+            raise ProtocolError(
+                f"{src}: the [balance] output '{out}' is not a force channel (drag, lift)."
+            )
+        if out in channels:
+            raise ProtocolError(
+                f"{src}: '{out}' is given both by [balance] and by [channels.{out}]; keep one."
+            )
+    if len(set(outputs)) != len(outputs) or len(set(inputs)) != len(inputs):
+        raise ProtocolError(f"{src}: [balance] names an input or output twice.")
+    return Balance(inputs=inputs, outputs=outputs, matrix=matrix)
+
+
+def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
+    """``[read]``: how run files are read (docs/formats.md, "Run files as recorded")."""
+    choices = {"format": FORMATS, "delimiter": tuple(DELIMITERS), "decimal": ("auto", ".", ",")}
+    for key, allowed in choices.items():
+        if key in values and values[key] not in allowed:
+            listed = ", ".join(repr(a) for a in allowed)
+            raise ProtocolError(
+                f"{src}: '{key}' in [read] is {values[key]!r}; it must be one of {listed}."
+            )
+    if values.get("skip_rows", 0) < 0:
+        raise ProtocolError(f"{src}: 'skip_rows' in [read] must be 0 or more.")
+    rate = values.get("sample_rate_hz")
+    if rate is not None and not 1.0 <= rate <= 1.0e6:
+        raise ProtocolError(
+            f"{src}: 'sample_rate_hz' in [read] must lie in 1–1e6 Hz, but it is {rate:g}."
+        )
+    return ReadOptions(**values)
+
+
+#: [model] mass_kg against the displaced mass ρV (ρ ≈ 1000 kg/m³): outside this range of
+#: ratios it is in other units (grams give ~1000, tonnes ~0.001); a solid steel body is ~8.
+MASS_RATIO_RANGE = (0.05, 20.0)
+
+
+def _check_mass(model: Model, src: str) -> None:
+    """Stop on a weighed mass that no body of this size can have (a unit slip)."""
+    from towtank.reference.geometry import displaced_volume
+
+    if not 0.05 <= model.length_m <= 20.0 or not 0.005 <= (model.diameter_m or 0.05) <= 3.0:
+        return  # a length or diameter in other units: the unit warnings name it
+    volume = displaced_volume(model.length_m, model.diameter_m, model.volume_m3)
+    if volume is None:
+        return
+    disp = 1000.0 * volume
+    ratio = model.mass_kg / disp
+    lo, hi = MASS_RATIO_RANGE
+    if not lo <= ratio <= hi:
+        unit = "grams" if ratio > hi else "tonnes, or the geometry in other units"
+        raise ProtocolError(
+            f"{src}: [model] mass_kg = {model.mass_kg:g} is {ratio:.3g} times the mass of the "
+            f"water the hull displaces (about {disp:.3g} kg for its "
+            f"{'given' if model.volume_m3 else 'estimated'} volume {volume:.3g} m³); a towed "
+            f"model weighs {lo:g}–{hi:g} times that: was it given in {unit}?"
+        )

@@ -1,0 +1,117 @@
+"""Coverage study: generated days under one signal condition, processed, against their truth.
+
+For each condition (sample rate, mains hum, vibration in the filter's passband, 4× noise, long
+runs, ...) and seed a synthetic SUT-2 day is written, processed in-process and compared with
+its truth: whether each coefficient is present, its relative error, and whether its 95 %
+interval holds the truth. :func:`summarise` gives the coverage per coefficient with its
+Clopper–Pearson 95 % interval. ``scripts/coverage_study.py`` runs it from the command line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import shutil
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from towtank.testing.days import (
+    hull_day_plan,
+    hull_protocol_sections,
+    make_hull_day,
+    write_protocol,
+)
+from towtank.testing.instruments import Noise
+
+#: The coefficients whose intervals the study checks.
+SYMBOLS = ("X_udot", "Y_vdot", "X_u|u|", "X_uv", "X_v|v|", "Y_v|v|")
+
+
+def _long_plan() -> list[Any]:
+    """The day's plan with every plateau 1200 s long (a long run: ramps < 0.5 % of it)."""
+    return [dataclasses.replace(spec, plateau_s=1200.0) if spec.status != "void" else spec
+            for spec in hull_day_plan()]
+
+
+def _noise(**kw: Any) -> Noise:
+    return dataclasses.replace(Noise(), **kw)
+
+
+_BASE = Noise()
+#: name -> keyword arguments of :func:`towtank.testing.days.make_hull_day`.
+CONDITIONS: dict[str, dict[str, Any]] = {
+    "200hz": {"fs": 200.0},
+    "1khz": {"fs": 1000.0},
+    "100hz": {"fs": 100.0},
+    "50hz": {"fs": 50.0},
+    "hum_50hz": {"fs": 200.0, "noise": _noise(hum_amplitude=0.05)},
+    "vibration_2.5hz": {"fs": 200.0, "noise": _noise(vibration_hz=(2.5, 2.5),
+                                                     vibration_per_speed=0.005)},
+    "noise_4x": {"fs": 200.0, "noise": _noise(balance_sigma=4 * _BASE.balance_sigma,
+                                              speed_sigma=4 * _BASE.speed_sigma)},
+    "long_runs": {"fs": 50.0, "runs": "long", "tank_length_m": 5000.0},
+}
+
+
+def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[dict[str, Any]]:
+    """One generated day under ``condition``: a row per symbol (present, value, interval,
+    truth, relative error, inside)."""
+    from towtank.pipeline import process_day
+
+    kw = dict(CONDITIONS[condition])
+    if kw.get("runs") == "long":
+        kw["runs"] = _long_plan()
+    tmp = Path(tempfile.mkdtemp(prefix=f"cov_{condition}_", dir=workdir))
+    try:
+        truth = make_hull_day(tmp, seed=seed, file_format="csv", sheet_format="csv", **kw)
+        protocol = write_protocol(tmp / "p.toml",
+                                  **hull_protocol_sections(".", "out", sheet_format="csv"))
+        day = process_day(protocol, jobs=1)
+        coef = (day.hull.coefficients.set_index("symbol") if day.hull is not None
+                else pd.DataFrame())
+        rows = []
+        for sym in SYMBOLS:
+            t = float((truth.coefficients or {})[sym])
+            present = sym in coef.index
+            v = float(coef.loc[sym, "value"]) if present else math.nan
+            lo = float(coef.loc[sym, "ci_low"]) if present else math.nan
+            hi = float(coef.loc[sym, "ci_high"]) if present else math.nan
+            rows.append({"condition": condition, "seed": seed, "symbol": sym,
+                         "present": present, "value": v, "ci_low": lo, "ci_high": hi,
+                         "truth": t, "rel_error": (v - t) / abs(t),
+                         "inside": bool(present and lo <= t <= hi),
+                         "rejected": len(day.rejected)})
+        return rows
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """Exact binomial interval for k successes in n trials (Clopper & Pearson 1934)."""
+    from scipy.stats import beta
+
+    a = 1.0 - level
+    lo = 0.0 if k == 0 else float(beta.ppf(a / 2, k, n - k + 1))
+    hi = 1.0 if k == n else float(beta.ppf(1 - a / 2, k + 1, n - k))
+    return lo, hi
+
+
+def summarise(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
+    """Per condition and symbol: days, present, coverage with its Clopper–Pearson interval,
+    median and largest |relative error|."""
+    df = pd.DataFrame(list(rows))
+    out = []
+    for (cond, sym), g in df.groupby(["condition", "symbol"], sort=False):
+        n = len(g)
+        k = int(g["inside"].sum())
+        lo, hi = clopper_pearson(k, n)
+        err = g["rel_error"].abs()
+        out.append({"condition": cond, "symbol": sym, "days": n,
+                    "present": int(g["present"].sum()), "coverage": k / n,
+                    "cp_low": lo, "cp_high": hi, "median_abs_err": float(err.median()),
+                    "max_abs_err": float(err.max())})
+    return pd.DataFrame(out)
