@@ -164,10 +164,16 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
         loaded = _protocol(protocol)
         channels, p, read = loaded.channels, loaded.processing, loaded.read
     path = Path(file)
+    log = None
+    if protocol is not None and loaded.speed_log is not None:
+        from towtank.ingest.speedlog import run_speed_log
+
+        digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
+        log = run_speed_log(loaded.speed_log, path.parent, path.name, int(digits or 0))
     return load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
                     max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                     data=file_bytes(path), options=read,
-                    balance=None if protocol is None else loaded.balance)
+                    balance=None if protocol is None else loaded.balance, speed_log=log)
 
 
 def reduce_run(

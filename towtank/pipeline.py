@@ -19,6 +19,7 @@ import pandas as pd
 
 from towtank.ingest.protocol import Protocol, load_protocol, model_geometry
 from towtank.ingest.runsheet import read_run_sheet, unlisted_files
+from towtank.ingest.speedlog import log_path, log_sha
 from towtank.reduce.run import (
     RunReduction,
     apply_tare,
@@ -315,7 +316,12 @@ def process_day(
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
     day_warnings = list(protocol.warnings)
+    logs = set() if protocol.speed_log is None else {
+        log_path(protocol.speed_log, Path("."), str(f), int(r)).as_posix()
+        for r, f in zip(sheet["run"], sheet["file"], strict=True)}
     for f in unlisted_files(sheet, protocol.campaign.data_dir):
+        if f in logs:  # a run's carriage log ([speed_log])
+            continue
         day_warnings.append(f"{f} is in the data folder but not in the run sheet; it is ignored.")
 
     rejected: dict[int, str] = {}
@@ -347,7 +353,9 @@ def process_day(
     for rec in todo:
         run = int(rec["run"])
         if cache is not None:
-            keys[run] = settings_key(protocol, rec, common)
+            log = log_sha(protocol.speed_log, protocol.campaign.data_dir, str(rec["file"]), run)
+            keys[run] = settings_key(protocol, {**rec, "speed_log_sha": log} if log else rec,
+                                     common)
             sha = cache.known_sha(protocol.campaign.data_dir / str(rec["file"]))
             hit = cache.get(sha, keys[run]) if sha else None
             if hit is not None:
@@ -421,6 +429,11 @@ def process_day(
             inputs[str(path)] = shas[str(file)]
         elif str(file) and path.is_file():
             inputs[str(path)] = _sha(path)
+    if protocol.speed_log is not None:  # the carriage logs are inputs too
+        for run, file in zip(sheet["run"], sheet["file"], strict=True):
+            log = log_path(protocol.speed_log, protocol.campaign.data_dir, str(file), int(run))
+            if log.is_file():
+                inputs[str(log)] = _sha(log)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
         runs=runs, warnings=day_warnings, inputs=inputs, previews=previews,

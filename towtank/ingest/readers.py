@@ -633,6 +633,7 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
               "knots": 0.514444, "kt": 0.514444, "m s-1": 1.0, "m.s-1": 1.0},
     "accel": {"m/s^2": 1.0, "m/s²": 1.0, "m/s2": 1.0, "mm/s^2": 1e-3, "mm/s²": 1e-3,
               "m s-2": 1.0, "g": 9.80665},
+    "length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2},
     "force": {"n": 1.0, "kn": 1e3, "mn": 1e-3, "kgf": 9.80665, "lbf": 4.4482216152605,
               "gf": 9.80665e-3},
 }
@@ -641,7 +642,7 @@ _UNIT_WORDS = {u for table in UNIT_FACTORS.values() for u in table} | set(_VOLTS
     "N", "V", "mV", "kN", "mN", "-", "deg", "°", "rad", "Hz", "%"}
 _UNIT_IN_NAME = re.compile(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]\s*$")
 _QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force",
-             "lift": "force"}
+             "lift": "force", "position": "length"}
 
 
 def column_unit(column: str, stated: dict[str, str]) -> str | None:

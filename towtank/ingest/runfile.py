@@ -556,6 +556,7 @@ def map_channels(
     fallback_time: np.ndarray | None = None,
     used: dict[str, str] | None = None,
     balance: Balance | None = None,
+    external: tuple[str, ...] = (),
 ) -> dict[str, np.ndarray]:
     """Canonical channels from raw columns (not yet calibrated).
 
@@ -565,8 +566,9 @@ def map_channels(
     :func:`fallback_time`) stands in for a time column that is neither mapped nor found;
     ``used`` receives the column each channel came from. A channel with ``columns`` is the
     sum of those load cells; the outputs of ``balance`` are its matrix times its inputs.
+    Channels in ``external`` come from another file (``[speed_log]``) and are skipped.
     """
-    full = channel_map(mapping)
+    full = {k: v for k, v in channel_map(mapping).items() if k not in external}
     out: dict[str, np.ndarray] = {}
     found = [c for c in cols if not c.startswith("__")]
     stripped = {c.strip(): c for c in found}
@@ -684,6 +686,7 @@ def load_run(
     data: bytes | None = None,
     options: ReadOptions | None = None,
     balance: Balance | None = None,
+    speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -707,6 +710,9 @@ def load_run(
         The protocol's ``[read]`` section (format, separator, decimal, group, sample rate).
     balance : Balance, optional
         The protocol's ``[balance]``: force channels from a calibration matrix.
+    speed_log : tuple, optional
+        (time on the run's clock [s], carriage speed [m/s], file name) of the run's speed log
+        (:mod:`towtank.ingest.speedlog`): the speed comes from it, not from the run file.
 
     Raises
     ------
@@ -717,7 +723,7 @@ def load_run(
         data = file_bytes(path)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
-                         options or ReadOptions(), balance)
+                         options or ReadOptions(), balance, speed_log)
 
 
 def _load_run(
@@ -729,6 +735,7 @@ def _load_run(
     do_despike: bool,
     options: ReadOptions,
     balance: Balance | None = None,
+    speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
 ) -> RawRun:
     """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
     (:func:`calibrate`) -> time base -> gaps, clipping, spikes, ranges."""
@@ -739,9 +746,13 @@ def _load_run(
     rows = cols.pop(_ROWS_KEY, None)
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
     used: dict[str, str] = {}
-    chans = map_channels(cols, mapping, name, used=used, balance=balance,
+    external = ("speed",) if speed_log is not None else ()
+    chans = map_channels(cols, mapping, name, used=used, balance=balance, external=external,
                          fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
+    if speed_log is not None:  # a placeholder until the time base is known
+        chans["speed"] = np.zeros(np.asarray(chans["time"]).size)
+        used["speed"] = "[speed_log]"
 
     sizes = {k: int(np.asarray(v).size) for k, v in chans.items()}
     if len(set(sizes.values())) > 1:
@@ -837,6 +848,11 @@ def _load_run(
         rows_full[pos] = where.rows
         where = _Where(np.maximum.accumulate(rows_full), where.label)  # a lost one: row before
         notes.append(f"{tb.n_lost} lost sample(s) put back by interpolation")
+    if speed_log is not None:
+        from towtank.ingest.speedlog import speed_on_run_time
+
+        numeric["speed"] = speed_on_run_time(t, *speed_log)
+        notes.append(f"carriage speed from the speed log {speed_log[2]}")
 
     for canon in ("speed",) + FORCE_CHANNELS + ("accel",):
         if canon not in numeric:

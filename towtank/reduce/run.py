@@ -32,6 +32,7 @@ import numpy as np
 from towtank.errors import RunError
 from towtank.ingest.protocol import Processing, Protocol
 from towtank.ingest.runfile import RawRun, file_bytes, load_run
+from towtank.ingest.speedlog import run_speed_log
 from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
 from towtank.signal.drift import drift_verdict
@@ -603,6 +604,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
     try:
         p = protocol.processing
         data = file_bytes(path)
+        log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
         raw = load_run(
             path,
             protocol.channels,
@@ -612,6 +614,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             data=data,
             options=protocol.read,
             balance=protocol.balance,
+            speed_log=log,
         )
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)

@@ -484,6 +484,12 @@ def write_run_file(
             from towtank.testing.layouts import balance_frame
 
             out = balance_frame(layout, out, lab)
+        if layout in ("speed-log", "position-log"):
+            from towtank.testing.layouts import write_carriage_log
+
+            speed_col = "speed" if channel_style == "canonical" else lab.speed
+            write_carriage_log(layout, out, path, time_col, speed_col)
+            out = out.drop(columns=[speed_col])
         return write_layout(layout, out, path, time_col, units)
     out = to_file_frame(frame, channel_style, channels)
     name = path.name.lower()

@@ -18,6 +18,11 @@ mat73             .mat         MATLAB v7.3 (HDF5 with MATLAB's 512-byte header):
                                top level, no time vector, a scalar ``fs`` [Hz]
 hdf5              .h5          HDF5: group ``data``, one dataset per channel with a ``unit``
                                attribute, ``sample_rate`` on the group
+two-cell          .csv         the drag from two load cells (``DragL``, ``DragR``) to be summed
+matrix            .csv         a two-component dynamometer: bridges ``Fx``, ``Fy`` with cross-talk
+speed-log         .csv         no speed column; the carriage speed in ``run_NNN_carriage.csv`` at
+                               100 Hz on a clock 0.35 s behind the balance's
+position-log      .csv         as speed-log, but the log holds the encoder's position ``x (mm)``
 ================  ===========  ===================================================================
 
 Names that are not MATLAB identifiers (``Time (s)``) are written as identifiers (``Time_s``)
@@ -49,7 +54,16 @@ LAYOUTS = {
     "hdf5": "h5",
     "two-cell": "csv",
     "matrix": "csv",
+    "speed-log": "csv",
+    "position-log": "csv",
 }
+
+#: The carriage logs of the "speed-log" and "position-log" layouts: their rate [Hz], the
+#: motion controller's clock (log time + offset = run-file time) [s], and the encoder's
+#: resolution [m].
+CARRIAGE_LOG_HZ = 100.0
+CARRIAGE_OFFSET_S = 0.35
+ENCODER_STEP_M = 1e-5
 
 #: The [balance] matrix of the "matrix" layout: outputs (drag, lift) [N] per input [V], with
 #: cross-talk (the example of docs/formats.md).
@@ -103,6 +117,7 @@ def write_layout(
     writer = {
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
         "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
+        "speed-log": _csv, "position-log": _csv,
     }[layout]
     writer(frame, path, time_col, units)
     return path
@@ -110,6 +125,33 @@ def write_layout(
 
 def _csv(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
     path.write_bytes(frame.to_csv(index=False, lineterminator="\n").encode())
+
+
+def carriage_log_name(run_file: str | Path) -> str:
+    """The carriage log beside a run file: ``run_021.csv`` -> ``run_021_carriage.csv``."""
+    return f"{Path(run_file).name.split('.', 1)[0]}_carriage.csv"
+
+
+def write_carriage_log(layout: str, frame: pd.DataFrame, run_path: Path, time_col: str,
+                       speed_col: str) -> Path:
+    """The motion controller's log of a run: its speed ("speed-log", ``v (m/s)``) or its
+    position ("position-log", ``x (mm)`` to the encoder's step) at :data:`CARRIAGE_LOG_HZ` on
+    its own clock, which runs :data:`CARRIAGE_OFFSET_S` behind the balance's."""
+    t = _time_column(frame, time_col)
+    u = frame[speed_col].to_numpy(np.float64)
+    t_log = np.arange(t[0] - CARRIAGE_OFFSET_S + 0.004, t[-1] - CARRIAGE_OFFSET_S + 0.2,
+                      1.0 / CARRIAGE_LOG_HZ)
+    if layout == "speed-log":
+        speed = np.interp(t_log + CARRIAGE_OFFSET_S, t, u)
+        log = pd.DataFrame({"t (s)": np.round(t_log, 4), "v (m/s)": np.round(speed, 5)})
+    else:  # the encoder counts the carriage's travel
+        x = np.concatenate(([0.0], np.cumsum(0.5 * (u[1:] + u[:-1]) * np.diff(t))))
+        pos = np.round(np.interp(t_log + CARRIAGE_OFFSET_S, t, x) / ENCODER_STEP_M) * \
+            ENCODER_STEP_M
+        log = pd.DataFrame({"t (s)": np.round(t_log, 4), "x (mm)": np.round(pos * 1e3, 3)})
+    path = Path(run_path).with_name(carriage_log_name(run_path))
+    path.write_bytes(log.to_csv(index=False, lineterminator="\n").encode())
+    return path
 
 
 def balance_frame(layout: str, frame: pd.DataFrame, lab: LabChannels) -> pd.DataFrame:
@@ -155,6 +197,12 @@ def protocol_sections(layout: str, sections: dict[str, dict]) -> dict[str, dict]
         ch = {k: v for k, v in ch.items() if k not in ("drag", "lift")}
         sections["balance"] = {"inputs": ["Fx (V)", "Fy (V)"], "outputs": ["drag", "lift"],
                                "matrix": [list(r) for r in BALANCE_MATRIX]}
+    elif layout in ("speed-log", "position-log"):
+        ch = {k: v for k, v in ch.items() if k != "speed"}
+        how = ({"speed": {"column": "v (m/s)"}} if layout == "speed-log"
+               else {"position": {"column": "x (mm)"}})
+        sections["speed_log"] = {"file": "{stem}_carriage.csv", "time": {"column": "t (s)"},
+                                 **how, "offset_s": CARRIAGE_OFFSET_S}
     sections["channels"] = ch
     return sections
 

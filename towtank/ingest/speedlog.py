@@ -1,0 +1,246 @@
+"""Carriage speed from its own file: the motion controller's log of each run (``[speed_log]``).
+
+Many tanks log the carriage on the motion controller, in a file per run, at another rate and
+on another clock than the balance. The log gives the speed directly, or the carriage position,
+whose derivative is the speed. Its samples are brought onto the run file's time base by linear
+interpolation after shifting the log's clock:
+
+    t_run = t_log + offset_s                                                         (1)
+
+    U(t_run) = interp(t_run; t_log + offset_s, U_log)                                (2)
+
+    U_log = dx/dt (central differences, numpy.gradient) when the log gives position x  (3)
+
+Before the log starts and after it ends the carriage must be still (the log's first and last
+speeds are held); a log that stops while the carriage moves does not cover the run and rejects
+it. The speed then goes through the same zero-phase filter as the forces (docs/method.md), so
+a 100 Hz log and a 1 kHz balance give the same filtered speed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+import numpy as np
+
+from towtank.errors import ProtocolError, RunError
+
+__all__ = ["SpeedLog", "parse_speed_log", "log_path", "read_speed_log", "speed_on_run_time",
+           "STILL_FRACTION"]
+
+#: The log's first and last speeds count as "still" below this fraction of its peak speed [-].
+STILL_FRACTION = 0.02
+
+
+@dataclass(frozen=True)
+class SpeedLog:
+    """The protocol's ``[speed_log]`` (docs/formats.md).
+
+    Parameters
+    ----------
+    file : str
+        Name pattern of the log relative to the data folder; ``{stem}`` (the run file's name
+        without extensions), ``{name}`` (its name), ``{dir}`` (its folder in the data folder)
+        and ``{run}`` (the run number, ``{run:03d}`` for 001) are filled in.
+    time : tuple
+        (column, gain, offset) of the log's time [s after gain·(raw − offset)].
+    speed : tuple or None
+        (column, gain, offset) of the carriage speed [m/s].
+    position : tuple or None
+        (column, gain, offset) of the carriage position [m] (speed by eq. 3).
+    offset_s : float
+        Log time + ``offset_s`` = run-file time [s] (eq. 1).
+    """
+
+    file: str
+    time: tuple[str, float, float]
+    speed: tuple[str, float, float] | None = None
+    position: tuple[str, float, float] | None = None
+    offset_s: float = 0.0
+
+
+_KEYS = ("file", "time", "speed", "position", "offset_s")
+
+
+def _column(value: Any, key: str, src: str) -> tuple[str, float, float]:
+    """``{ column = "...", gain = 1.0, offset = 0.0 }`` (or a bare column name)."""
+    where = f"'{key}' in [speed_log]"
+    if isinstance(value, str):
+        value = {"column": value}
+    if not isinstance(value, dict) or not isinstance(value.get("column"), str) \
+            or not value["column"].strip():
+        raise ProtocolError(f"{src}: {where} must be {{ column = \"...\" }} (with optional gain "
+                            f"and offset), but it is {value!r}.")
+    extra = set(value) - {"column", "gain", "offset"}
+    if extra:
+        raise ProtocolError(f"{src}: {where} has the unknown key '{sorted(extra)[0]}'; it takes "
+                            "column, gain and offset.")
+    out = []
+    for k, default in (("gain", 1.0), ("offset", 0.0)):
+        v = value.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ProtocolError(f"{src}: '{k}' of {where} must be a number, but it is {v!r}.")
+        out.append(float(v))
+    if out[0] == 0.0:
+        raise ProtocolError(f"{src}: the gain of {where} is 0.")
+    return value["column"], out[0], out[1]
+
+
+def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
+    """The ``[speed_log]`` table checked (None when the protocol has none)."""
+    if data is None:
+        return None
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{src}: [speed_log] must be a table of keys, but it is {data!r}.")
+    for key in data:
+        if key not in _KEYS:
+            import difflib
+
+            near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.5)
+            hint = (f"; did you mean '{near[0]}'?" if near
+                    else f"; valid keys are: {', '.join(_KEYS)}")
+            raise ProtocolError(f"{src}: unknown key '{key}' in [speed_log]{hint}")
+    pattern = data.get("file")
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ProtocolError(f"{src}: [speed_log] needs 'file', the log's name pattern (e.g. "
+                            "\"{stem}_carriage.csv\").")
+    try:
+        pattern.format(stem="s", name="n", dir=".", run=1)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ProtocolError(f"{src}: 'file' in [speed_log] is {pattern!r}: only {{stem}}, "
+                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    if "time" not in data:
+        raise ProtocolError(f"{src}: [speed_log] needs 'time' (the log's time column).")
+    if ("speed" in data) == ("position" in data):
+        raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
+                            "them).")
+    offset = data.get("offset_s", 0.0)
+    if isinstance(offset, bool) or not isinstance(offset, int | float) \
+            or not math.isfinite(offset) or abs(offset) > 3600.0:
+        raise ProtocolError(f"{src}: 'offset_s' in [speed_log] must be a number of seconds "
+                            f"(within ±3600), but it is {offset!r}.")
+    return SpeedLog(
+        file=pattern,
+        time=_column(data["time"], "time", src),
+        speed=_column(data["speed"], "speed", src) if "speed" in data else None,
+        position=_column(data["position"], "position", src) if "position" in data else None,
+        offset_s=float(offset),
+    )
+
+
+def log_path(spec: SpeedLog, data_dir: Path, file: str, run: int) -> Path:
+    """The log of the run in ``file`` (relative to ``data_dir``) with number ``run``."""
+    rel = PurePosixPath(str(file).replace("\\", "/"))
+    name = rel.name
+    stem = name.split(".", 1)[0] if not name.startswith(".") else name
+    folder = str(rel.parent)
+    return data_dir / spec.file.format(stem=stem, name=name, dir=folder, run=run)
+
+
+def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """The log's time on the run file's clock [s] (eq. 1) and the carriage speed [m/s].
+
+    The log is read in any layout towtank reads (format detected from its name and content),
+    its columns' units taken from the file or header when no gain is given.
+    """
+    from towtank.ingest.readers import column_unit, stated_units, unit_factor
+    from towtank.ingest.runfile import read_columns
+
+    name = path.name
+    cols, _ = read_columns(path, data)
+    units = stated_units(cols)
+    found = [c for c in cols if not c.startswith("__")]
+    stripped = {c.strip(): c for c in found}
+
+    def channel(col: tuple[str, float, float], canon: str) -> np.ndarray:
+        column, gain, offset = col
+        key = column if column in cols else stripped.get(column.strip())
+        if key is None:
+            listed = ", ".join(f"'{c}'" for c in found) or "none"
+            raise RunError(f"the speed log {name} has no column '{column}' ({canon}); columns "
+                           f"found: {listed}")
+        raw = np.asarray(cols[key])
+        try:
+            arr = raw.astype(np.float64)
+        except (TypeError, ValueError):
+            arr = np.array([_number(v) for v in raw], dtype=np.float64)
+        if gain != 1.0 or offset != 0.0:
+            return gain * (arr - offset)
+        unit = column_unit(key, units)
+        return arr * unit_factor("speed" if canon == "speed" else canon, unit, key, name)
+
+    t = channel(spec.time, "time")
+    x = channel(spec.position, "position") if spec.position else channel(spec.speed, "speed")
+    ok = np.isfinite(t) & np.isfinite(x)
+    t, x = t[ok], x[ok]
+    if t.size < 3:
+        raise RunError(f"the speed log {name} holds fewer than 3 numeric samples")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise RunError(f"the speed log {name}: its time does not increase after t = {t[i]:.4g} s")
+    u = np.gradient(x, t) if spec.position else x
+    return t + spec.offset_s, u
+
+
+def _number(v: Any) -> float:
+    try:
+        return float(str(v).replace(",", "."))
+    except ValueError:
+        return math.nan
+
+
+def speed_on_run_time(t_run: np.ndarray, t_log: np.ndarray, u_log: np.ndarray,
+                      name: str) -> np.ndarray:
+    """Carriage speed [m/s] at the run file's times (eq. 2); the log's end speeds are held
+    where it does not reach, if the carriage is still there, else RunError."""
+    peak = float(np.max(np.abs(u_log))) if u_log.size else 0.0
+    still = STILL_FRACTION * peak
+    before, after = t_run[0] < t_log[0], t_run[-1] > t_log[-1]
+    moving_start, moving_end = abs(u_log[0]) > still, abs(u_log[-1]) > still
+    if (before and moving_start) or (after and moving_end):
+        raise RunError(
+            f"the speed log {name} covers t = {t_log[0]:.2f}–{t_log[-1]:.2f} s of the run file's "
+            f"{t_run[0]:.2f}–{t_run[-1]:.2f} s (offset_s applied) and the carriage moves at its "
+            f"{'start' if before and moving_start else 'end'}: a wrong offset_s, or the log of "
+            "another run?"
+        )
+    if t_log[-1] < t_run[0] or t_log[0] > t_run[-1]:
+        raise RunError(
+            f"the speed log {name} (t = {t_log[0]:.2f}–{t_log[-1]:.2f} s with offset_s) does "
+            f"not overlap the run file ({t_run[0]:.2f}–{t_run[-1]:.2f} s): check offset_s"
+        )
+    return np.interp(t_run, t_log, u_log)
+
+
+def log_sha(spec: SpeedLog | None, data_dir: Path, file: str, run: int) -> str:
+    """sha256 of a run's speed log ("" without one or when it cannot be read): part of the
+    run's cache key, since the reduction depends on the log's bytes as on the run file's."""
+    if spec is None:
+        return ""
+    import hashlib
+
+    try:
+        return hashlib.sha256(log_path(spec, data_dir, file, run).read_bytes()).hexdigest()
+    except OSError:
+        return ""
+
+
+def run_speed_log(spec: SpeedLog | None, data_dir: Path, file: str,
+                  run: int) -> tuple[np.ndarray, np.ndarray, str] | None:
+    """The speed log of one run, read and on the run's clock, for
+    :func:`towtank.ingest.runfile.load_run` (None without ``[speed_log]``)."""
+    if spec is None:
+        return None
+    from towtank.ingest.runfile import file_bytes
+
+    path = log_path(spec, data_dir, file, run)
+    try:
+        data = file_bytes(path)
+    except RunError as exc:
+        raise RunError(f"its speed log ([speed_log] file = {spec.file!r}): {exc.reason}") \
+            from None
+    t, u = read_speed_log(path, spec, data)
+    return t, u, path.name
