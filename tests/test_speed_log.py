@@ -129,7 +129,8 @@ def test_bad_sections_are_one_sentence(tmp_path, section, match):
         rest = rest[rest.index("\n[", 1) + 1:] if "\n[" in rest[1:] else ""
     lines = ["[speed_log]"]
     for k, v in section.items():
-        lines.append(f"{k} = {json.dumps(v).replace(':', ' =') if isinstance(v, dict) else json.dumps(v)}")
+        text_v = json.dumps(v)
+        lines.append(f"{k} = {text_v.replace(':', ' =') if isinstance(v, dict) else text_v}")
     protocol.write_text(head + "\n".join(lines) + "\n" + rest)
     with pytest.raises(ProtocolError, match=match):
         towtank.load_protocol(protocol)

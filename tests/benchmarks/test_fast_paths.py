@@ -1,6 +1,7 @@
 """The speed-ups behind the campaign benchmark change nothing but the time.
 
-The filter gives scipy's result bit for bit (even padding over two periods of the cut-off), the settings key is the same hash as before, the
+The filter gives scipy's result bit for bit (even padding over two periods of the cut-off),
+the settings key is the same hash as before, the
 packed cache returns what was stored (and a damaged entry is a miss), the parallel map returns
 the serial results in sheet order, and the day's fingerprint notices every kind of change.
 """
