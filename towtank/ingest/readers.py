@@ -197,10 +197,12 @@ def _header_row(lines: list[bytes], delim: str) -> tuple[int, int]:
     lines with the same number of fields; the header is the non-numeric line above it with that
     number of fields (a units row between them is allowed)."""
     n_fields = len(_split(lines[-1].rstrip(b"\r"), delim)) if lines else 0
-    first = len(lines)
-    while first > 0 and (_numeric_line(lines[first - 1], delim, n_fields)
-                         or not lines[first - 1].strip()):
-        first -= 1
+    first = _first_data_line(lines, delim, n_fields)
+    if first is None:  # the data are the last block of numeric lines
+        first = len(lines)
+        while first > 0 and (_numeric_line(lines[first - 1], delim, n_fields)
+                             or not lines[first - 1].strip()):
+            first -= 1
     while first < len(lines) and not lines[first].strip():
         first += 1
     head = first - 1
@@ -212,6 +214,22 @@ def _header_row(lines: list[bytes], delim: str) -> tuple[int, int]:
             _looks_like_units(lines[head], delim):
         return head - 1, first  # header, units row, data
     return head, first
+
+
+def _first_data_line(lines: list[bytes], delim: str, n_fields: int,
+                     run: int = 20) -> int | None:
+    """The first line, from the top, that starts ``run`` numeric lines of ``n_fields`` fields
+    running to the end of the file or ``run`` of them at least (a long file is not walked line
+    by line); None when no such line is within the first 1000."""
+    n = len(lines)
+    for i in range(min(n, 1000)):
+        if not _numeric_line(lines[i], delim, n_fields):
+            continue
+        block = [ln for ln in lines[i : i + 2 * run] if ln.strip()][:run]
+        if all(_numeric_line(ln, delim, n_fields) for ln in block) and \
+                all(_numeric_line(ln, delim, n_fields) for ln in lines[-run:] if ln.strip()):
+            return i
+    return None
 
 
 def _looks_like_units(line: bytes, delim: str) -> bool:
@@ -270,6 +288,11 @@ def read_text_columns(
                for f in _split(lines[head + 1].rstrip(b"\r"), delim)]
         units = dict(zip(header, row, strict=False))
     body = b"\n".join(lines[first:])
+    fast = _numeric_body(body, header, delim, decimal)
+    if fast is not None:
+        cols = fast
+        frame_len = len(next(iter(cols.values()))) if cols else 0
+        return _text_result(cols, units, delim, decimal, head, first, frame_len)
     sep = r"\s+" if delim == "whitespace" else delim
     try:
         frame = pd.read_csv(io.BytesIO(body), sep=sep, header=None, decimal=decimal,
@@ -294,15 +317,43 @@ def read_text_columns(
             bad_numbers += n_text
         else:
             cols[str(col)] = values
+    return _text_result(cols, units, delim, decimal, head, first, len(frame))
+
+
+def _numeric_body(body: bytes, header: list[str], delim: str,
+                  decimal: str) -> dict[str, np.ndarray] | None:
+    """The body's columns through pyarrow when every cell is a number (decimal commas turned
+    to points first: the separator is then not a comma); None sends it to the general path."""
+    if delim == "whitespace" or len(set(header)) != len(header) or not body.strip():
+        return None
+    import pyarrow as pa
+    from pyarrow import csv as pacsv
+
+    if decimal == ",":
+        body = body.replace(b",", b".")
+    try:
+        table = pacsv.read_csv(
+            io.BytesIO(body),
+            read_options=pacsv.ReadOptions(column_names=header),
+            parse_options=pacsv.ParseOptions(delimiter=delim),
+            convert_options=pacsv.ConvertOptions(
+                column_types={h: pa.float64() for h in header}, strings_can_be_null=True),
+        )
+    except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
+        return None
+    return {h: table.column(h).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
+            for h in header}
+
+
+def _text_result(cols: dict[str, np.ndarray], units: dict[str, str], delim: str, decimal: str,
+                 head: int, first: int, n_rows: int) -> tuple[dict[str, np.ndarray], list[str]]:
     notes = []
-    if head > 0 or (head == 0 and first > 1):
-        skipped = head if head > 0 else 0
-        if skipped:
-            notes.append(f"{skipped} line(s) before the header skipped")
+    if head > 0:
+        notes.append(f"{head} line(s) before the header skipped")
     cols[UNITS_KEY] = _units_entry(units)
     cols["__text_layout__"] = np.array([delim, decimal, str(head + 1), str(first - head == 2)],
                                        dtype=object)
-    cols["__rows__"] = np.arange(len(frame)) + first + 1
+    cols["__rows__"] = np.arange(n_rows) + first + 1
     return cols, notes
 
 
@@ -350,22 +401,31 @@ def read_lvm_columns(
             break
         names = [c.strip() for c in lines[i].split(sep)]
         i += 1
-        table = []
-        while i < len(lines) and _lvm_data_line(lines[i], sep):
-            table.append(lines[i].split(sep))
-            i += 1
-        head_from = i
+        end = marks[k + 1] if k + 1 < len(marks) else len(lines)
+        while end > i and not _lvm_data_line(lines[end - 1], sep):
+            end -= 1  # back over the next segment's header (a few lines)
+        fast = _lvm_block(lines[i:end], names, sep, dec)
         head_vals = {ln.split(sep)[0].strip(): ln.split(sep)[1:] for ln in seg_head if sep in ln}
         seg: dict[str, np.ndarray] = {}
-        for j, col in enumerate(names):
-            if not col or col.lower() == "comment":
-                continue
-            raw = [r[j].strip() if j < len(r) else "" for r in table]
-            if dec == ",":
-                raw = [v.replace(",", ".") for v in raw]
-            vals = np.array([float(v) if v else np.nan for v in raw], dtype=np.float64) \
-                if all(_is_number(v.encode()) for v in raw) else np.array(raw, dtype=object)
-            seg[col] = vals
+        if fast is not None:
+            seg, n_rows = fast
+            i = end
+        else:
+            table = []
+            while i < len(lines) and _lvm_data_line(lines[i], sep):
+                table.append(lines[i].split(sep))
+                i += 1
+            n_rows = len(table)
+            for j, col in enumerate(names):
+                if not col or col.lower() == "comment":
+                    continue
+                raw = [r[j].strip() if j < len(r) else "" for r in table]
+                if dec == ",":
+                    raw = [v.replace(",", ".") for v in raw]
+                vals = np.array([float(v) if v else np.nan for v in raw], dtype=np.float64) \
+                    if all(_is_number(v.encode()) for v in raw) else np.array(raw, dtype=object)
+                seg[col] = vals
+        head_from = i
         units = dict(zip([c for c in names if c and c != "X_Value"],
                          [u.strip() for u in head_vals.get("Y_Unit_Label", [])], strict=False))
         if "X_Value" in seg and (seg["X_Value"].dtype == object
@@ -373,9 +433,9 @@ def read_lvm_columns(
             dx = _first_float(head_vals.get("Delta_X"))
             x0 = _first_float(head_vals.get("X0")) or 0.0
             if dx:
-                seg["X_Value"] = x0 + dx * np.arange(len(table))
+                seg["X_Value"] = x0 + dx * np.arange(n_rows)
         seg[UNITS_KEY] = _units_entry(units)
-        if table:
+        if n_rows:
             segments.append(seg)
     if not segments:
         raise RunError(f"{name} holds no data rows")
@@ -387,6 +447,38 @@ def read_lvm_columns(
     cols[UNITS_KEY] = segments[0][UNITS_KEY]
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
+
+
+def _lvm_block(block: list[str], names: list[str], sep: str,
+               dec: str) -> tuple[dict[str, np.ndarray], int] | None:
+    """A segment's data lines through pyarrow when every named cell is a number (the comment
+    column aside); None sends the segment to the line-by-line reader."""
+    import pyarrow as pa
+    from pyarrow import csv as pacsv
+
+    if not block or sep == "," and dec == ",":
+        return None
+    keep = [j for j, c in enumerate(names) if c and c.lower() != "comment"]
+    body = "\n".join(block).encode()
+    if dec == ",":
+        body = body.replace(b",", b".")
+    width = len(block[0].split(sep))
+    cols = [f"c{j}" for j in range(width)]
+    if any(j >= width for j in keep):
+        return None
+    try:
+        table = pacsv.read_csv(
+            io.BytesIO(body),
+            read_options=pacsv.ReadOptions(column_names=cols),
+            parse_options=pacsv.ParseOptions(delimiter=sep),
+            convert_options=pacsv.ConvertOptions(
+                column_types={cols[j]: pa.float64() for j in keep},
+                include_columns=[cols[j] for j in keep]),
+        )
+    except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
+        return None
+    return ({names[j]: table.column(cols[j]).to_numpy(zero_copy_only=False).astype(np.float64)
+             for j in keep}, table.num_rows)
 
 
 def _lvm_data_line(line: str, sep: str) -> bool:
@@ -554,37 +646,51 @@ def read_hdf5_columns(
 
     opts = options or ReadOptions()
     what = "MATLAB v7.3" if matlab else "HDF5"
-    try:
-        fh = h5py.File(io.BytesIO(data), "r")
+    try:  # the bytes as an in-memory file image (no Python call per read)
+        fh = h5py.File(h5py.h5f.open_file_image(data), "r")
     except Exception as exc:  # noqa: BLE001 - h5py raises OSError and others for bad files
         raise RunError(f"{name} is not a readable {what} file ({type(exc).__name__}: {exc})") \
             from None
     with fh:
         groups: dict[str, Any] = {"/": fh}
-        fh.visititems(lambda key, obj: groups.setdefault(key, obj)
-                      if isinstance(obj, h5py.Group) and not key.startswith("#") else None)
+        members: dict[str, dict[str, Any]] = {}
+
+        def datasets(key: str) -> dict[str, Any]:
+            if key not in members:
+                members[key] = {k: v for k, v in groups[key].items()
+                                if isinstance(v, h5py.Dataset)}
+            return members[key]
+
+        def vectors(key: str) -> int:
+            return sum(1 for v in datasets(key).values()
+                       if len(v.shape) in (1, 2) and max(v.shape or (0,)) > 1)
+
+        if opts.group or vectors("/") < 2:
+            fh.visititems(lambda key, obj: groups.setdefault(key, obj)
+                          if isinstance(obj, h5py.Group) and not key.startswith("#") else None)
         if opts.group:
-            key = opts.group.strip("/") or "/"
-            if key not in groups:
+            group_key = opts.group.strip("/") or "/"
+            if group_key not in groups:
                 found = ", ".join(f"'{k}'" for k in groups) or "none"
                 raise RunError(f"{name} has no group '{opts.group}' (groups: {found})")
-            chosen = groups[key]
         else:
-            counts = {k: sum(1 for v in g.values() if isinstance(v, h5py.Dataset)
-                             and v.ndim in (1, 2) and max(v.shape or (0,)) > 1)
-                      for k, g in groups.items()}
-            chosen = groups[max(counts, key=lambda k: (counts[k], k == "/"))]
+            counts = {k: vectors(k) for k in groups}
+            group_key = max(counts, key=lambda k: (counts[k], k == "/"))
+        chosen = groups[group_key]
         cols: dict[str, np.ndarray] = {}
         units: dict[str, str] = {}
         fs: list[float] = []
         items = {}
-        for key, obj in chosen.items():
-            if isinstance(obj, h5py.Dataset) and obj.dtype.kind in "fiub":
+        for key, obj in datasets(group_key).items():
+            if obj.dtype.kind in "fiub":
                 items[key] = obj[()]
-                unit = obj.attrs.get("unit", obj.attrs.get("units"))
+                attrs = obj.attrs
+                names = set(attrs.keys()) if len(attrs) else set()
+                unit = attrs["unit"] if "unit" in names else \
+                    attrs["units"] if "units" in names else None
                 if unit is not None:
                     units[key] = unit.decode() if isinstance(unit, bytes) else str(unit)
-                inc = obj.attrs.get("wf_increment")
+                inc = attrs["wf_increment"] if "wf_increment" in names else None
                 if inc is not None and float(np.ravel(inc)[0]) > 0:
                     fs.append(1.0 / float(np.ravel(inc)[0]))
         for attr_owner in (chosen, fh):
