@@ -54,7 +54,15 @@ def test_every_layout_gives_the_plain_days_coefficients(layout, plain, tmp_path)
     got = day.coefficients.set_index("symbol")["value"]
     ref = base.coefficients.set_index("symbol")["value"]
     rel = ((got - ref) / ref.abs()).abs()
-    assert rel.max() < TOLERANCE, rel.to_dict()
+    if layout == "zero-file":
+        # a zeros file is another recording of the zero (other noise samples, the raw mean
+        # of 1.5 s rather than the filtered still window): the same within half of
+        # each coefficient's interval, not to 0.1 %
+        table = base.coefficients.set_index("symbol")
+        half = (table["ci_high"] - table["ci_low"]) / 2
+        assert ((got - ref).abs() / half).max() < 0.5, ((got - ref).abs() / half).to_dict()
+    else:
+        assert rel.max() < TOLERANCE, rel.to_dict()
     # and the truth as the plain day finds it (the existing tolerances of tests/test_fit.py)
     for sym in ("X_udot", "Y_vdot", "X_u|u|", "Y_v|v|"):
         assert got[sym] == pytest.approx(truth["coefficients"][sym], rel=0.02)

@@ -170,10 +170,19 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
 
         digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
         log = run_speed_log(loaded.speed_log, path.parent, path.name, int(digits or 0))
-    return load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
-                    max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                    data=file_bytes(path), options=read,
-                    balance=None if protocol is None else loaded.balance, speed_log=log)
+    raw = load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
+                   max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                   data=file_bytes(path), options=read,
+                   balance=None if protocol is None else loaded.balance, speed_log=log)
+    if protocol is not None and loaded.zeros is not None:
+        from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+
+        digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
+        zeros = run_zero_levels(loaded.zeros, path.parent, path.name, int(digits or 0),
+                                channels, read, loaded.balance)
+        assert zeros is not None
+        raw = with_zero_levels(raw, *zeros)
+    return raw
 
 
 def reduce_run(

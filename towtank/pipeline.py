@@ -316,11 +316,11 @@ def process_day(
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
     day_warnings = list(protocol.warnings)
-    logs = set() if protocol.speed_log is None else {
-        log_path(protocol.speed_log, Path("."), str(f), int(r)).as_posix()
-        for r, f in zip(sheet["run"], sheet["file"], strict=True)}
+    sides = [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
+    logs = {log_path(spec, Path("."), str(f), int(r)).as_posix() for spec in sides
+            for r, f in zip(sheet["run"], sheet["file"], strict=True)}
     for f in unlisted_files(sheet, protocol.campaign.data_dir):
-        if f in logs:  # a run's carriage log ([speed_log])
+        if f in logs:  # a run's carriage log ([speed_log]) or zeros file ([zeros])
             continue
         day_warnings.append(f"{f} is in the data folder but not in the run sheet; it is ignored.")
 
@@ -353,8 +353,9 @@ def process_day(
     for rec in todo:
         run = int(rec["run"])
         if cache is not None:
-            log = log_sha(protocol.speed_log, protocol.campaign.data_dir, str(rec["file"]), run)
-            keys[run] = settings_key(protocol, {**rec, "speed_log_sha": log} if log else rec,
+            side = "".join(log_sha(spec, protocol.campaign.data_dir, str(rec["file"]), run)
+                           for spec in sides)
+            keys[run] = settings_key(protocol, {**rec, "side_files_sha": side} if side else rec,
                                      common)
             sha = cache.known_sha(protocol.campaign.data_dir / str(rec["file"]))
             hit = cache.get(sha, keys[run]) if sha else None
@@ -429,9 +430,9 @@ def process_day(
             inputs[str(path)] = shas[str(file)]
         elif str(file) and path.is_file():
             inputs[str(path)] = _sha(path)
-    if protocol.speed_log is not None:  # the carriage logs are inputs too
+    for spec in sides:  # the carriage logs and zeros files are inputs too
         for run, file in zip(sheet["run"], sheet["file"], strict=True):
-            log = log_path(protocol.speed_log, protocol.campaign.data_dir, str(file), int(run))
+            log = log_path(spec, protocol.campaign.data_dir, str(file), int(run))
             if log.is_file():
                 inputs[str(log)] = _sha(log)
     day = DayResult(

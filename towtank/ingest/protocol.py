@@ -43,6 +43,7 @@ from towtank.ingest.sections import (  # noqa: F401
     _tare_source,
 )
 from towtank.ingest.speedlog import SpeedLog, parse_speed_log
+from towtank.ingest.zerofile import ZeroFile, parse_zero_file
 from towtank.reference.sets import BUILTIN_REFERENCES
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
@@ -175,6 +176,7 @@ class Protocol:
     tare: TareSource = field(default_factory=TareSource)
     vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
     speed_log: SpeedLog | None = None  # [speed_log]: carriage speed from its own file
+    zeros: ZeroFile | None = None  # [zeros]: the balance zero from its own file
 
     @property
     def name(self) -> str:
@@ -499,6 +501,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         balance=balance,
         tare=_tare_source(data.get("tare", {}), base, src, check_paths),
         speed_log=parse_speed_log(data.get("speed_log"), src),
+        zeros=parse_zero_file(data.get("zeros"), src),
     )
 
 

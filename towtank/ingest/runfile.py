@@ -78,6 +78,8 @@ class RawRun:
     sha256: str = ""
     columns: tuple[str, ...] = ()
     notes: list[str] = field(default_factory=list)
+    #: drag and lift zeros [N] from the run's zeros file (``[zeros]``), else None
+    zero_levels: dict[str, float] | None = None
 
     @property
     def n(self) -> int:

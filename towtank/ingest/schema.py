@@ -148,7 +148,8 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read", "vehicle", "balance", "tare", "speed_log")
+             "read", "vehicle", "balance", "tare", "speed_log",
+             "zeros")
 
 _KIND_WORDS = {
     "str": "a text string",

@@ -131,8 +131,9 @@ def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
     )
 
 
-def log_path(spec: SpeedLog, data_dir: Path, file: str, run: int) -> Path:
-    """The log of the run in ``file`` (relative to ``data_dir``) with number ``run``."""
+def log_path(spec: Any, data_dir: Path, file: str, run: int) -> Path:
+    """The log (or zeros file: any spec with a ``file`` pattern) of the run in ``file``
+    (relative to ``data_dir``) with number ``run``."""
     rel = PurePosixPath(str(file).replace("\\", "/"))
     name = rel.name
     stem = name.split(".", 1)[0] if not name.startswith(".") else name
@@ -215,7 +216,7 @@ def speed_on_run_time(t_run: np.ndarray, t_log: np.ndarray, u_log: np.ndarray,
     return np.interp(t_run, t_log, u_log)
 
 
-def log_sha(spec: SpeedLog | None, data_dir: Path, file: str, run: int) -> str:
+def log_sha(spec: Any, data_dir: Path, file: str, run: int) -> str:
     """sha256 of a run's speed log ("" without one or when it cannot be read): part of the
     run's cache key, since the reduction depends on the log's bytes as on the run file's."""
     if spec is None:

@@ -33,6 +33,7 @@ from towtank.errors import RunError
 from towtank.ingest.protocol import Processing, Protocol
 from towtank.ingest.runfile import RawRun, file_bytes, load_run
 from towtank.ingest.speedlog import run_speed_log
+from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
 from towtank.signal.drift import drift_verdict
@@ -203,7 +204,8 @@ def reduce_run(
         t, speed_f, ph, windows, window_s, p, notes
     )
     drag_f, lift_f, zeros, drift_warnings = zero_forces(t, filt, raw.lift is not None, ph,
-                                                        steady, p, notes)
+                                                        steady, p, notes,
+                                                        levels=raw.zero_levels)
     check_force_signal(raw, speed_f, steady, ph)
     s0, s1 = steady
     u_s = speed_f[s0:s1]
@@ -334,6 +336,7 @@ def zero_forces(
     steady: tuple[int, int],
     p: Processing,
     notes: list[str],
+    levels: dict[str, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float, float], list[str]]:
     """Zeroed filtered drag and lift, (zero_drag, drift_drag, zero_lift, drift_lift), warnings.
 
@@ -342,7 +345,9 @@ def zero_forces(
     drift = "linear" and a post-run still window, the zero is a straight line between the two
     windows, after :func:`towtank.signal.drift.drift_verdict` has judged the drift: a run whose
     balance had not settled after the stop is rejected, a large drift is a warning.
+    ``levels`` (drag, lift [N] of a zeros file, ``[zeros]``) replace the pre-run window's means.
     """
+    levels = levels or {}
     post = ph.still_post if p.drift == "linear" else None
     if p.drift == "linear" and ph.still_post is None:
         notes.append("the file does not end at rest: zero held constant (no drift correction)")
@@ -354,19 +359,21 @@ def zero_forces(
     cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
     pre = ph.still_pre
     steady_force = max(
-        abs(float(np.mean(filt[steady[0] : steady[1], k]) - np.mean(filt[pre[0] : pre[1], k])))
-        for k, _ in cols
+        abs(float(np.mean(filt[steady[0] : steady[1], k])
+                  - levels.get(name, np.mean(filt[pre[0] : pre[1], k]))))
+        for k, name in cols
     )
     for k, name in cols:
         force = filt[:, k]
         if post is not None and post[1] - post[0] >= 2:
-            verdict = drift_verdict(t, force, pre, post, steady_force, name)
+            verdict = drift_verdict(t, force, pre, post, steady_force, name,
+                                    level=levels.get(name))
             if verdict.reject is not None:
                 raise RunError(verdict.reject)
             if verdict.warning is not None:
                 notes.append(verdict.warning)
                 warnings.append(verdict.warning)
-        zero, z, drift = conditioning.zero_line(t, force, pre, post)
+        zero, z, drift = conditioning.zero_line(t, force, pre, post, level=levels.get(name))
         out.append(force - zero)
         zeros += [z, drift]
     if not has_lift:
@@ -605,6 +612,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         p = protocol.processing
         data = file_bytes(path)
         log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
+        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
+                                protocol.channels, protocol.read, protocol.balance)
         raw = load_run(
             path,
             protocol.channels,
@@ -616,6 +625,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             balance=protocol.balance,
             speed_log=log,
         )
+        if zeros is not None:
+            raw = with_zero_levels(raw, *zeros)
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)
         window = (float(ws), float(we)) if math.isfinite(ws) and math.isfinite(we) else None

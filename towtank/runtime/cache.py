@@ -84,8 +84,8 @@ def settings_key(
         "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
         "test": str(row.get("test", "")).strip().lower(),
     })
-    if row.get("speed_log_sha"):  # the run's carriage log ([speed_log]) is read with it
-        payload["speed_log"] = row["speed_log_sha"]
+    if row.get("side_files_sha"):  # its carriage log and zeros file are read with the run
+        payload["side_files"] = row["side_files_sha"]
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 

@@ -91,6 +91,7 @@ def zero_line(
     force: np.ndarray,
     pre: tuple[int, int],
     post: tuple[int, int] | None,
+    level: float | None = None,
 ) -> tuple[np.ndarray, float, float]:
     """The balance zero along the run: constant, or linear between still windows.
 
@@ -104,6 +105,8 @@ def zero_line(
         Index range [i0, i1) of the still window before the carriage moves.
     post : tuple of int or None
         Index range of the still window after the carriage stops, if the file ends at rest.
+    level : float, optional
+        The zero measured apart (a zeros file) [N]: it replaces the pre-window mean.
 
     Returns
     -------
@@ -115,7 +118,7 @@ def zero_line(
     drift : float
         Post-run minus pre-run zero [N] (0 without a post window).
     """
-    z0 = float(np.mean(force[pre[0] : pre[1]]))
+    z0 = float(np.mean(force[pre[0] : pre[1]])) if level is None else float(level)
     if post is None or post[1] - post[0] < 2:
         return np.full(t.shape, z0), z0, 0.0
     z1 = float(np.mean(force[post[0] : post[1]]))

@@ -66,6 +66,7 @@ def drift_verdict(
     post: tuple[int, int],
     steady_force: float,
     channel: str = "drag",
+    level: float | None = None,
 ) -> DriftVerdict:
     """Judge the drift of a filtered, not yet zeroed force between two still windows.
 
@@ -82,13 +83,16 @@ def drift_verdict(
         [N].
     channel : str
         The channel's name, for the sentences.
+    level : float, optional
+        The pre-run zero measured apart (a zeros file) [N], in place of the pre window's mean.
 
     Returns
     -------
     DriftVerdict
     """
     a, b = force_f[pre[0] : pre[1]], force_f[post[0] : post[1]]
-    z0, z1 = float(np.mean(a)), float(np.mean(b))
+    z0 = float(np.mean(a)) if level is None else float(level)
+    z1 = float(np.mean(b))
     drift = z1 - z0
     t0, t1 = float(np.mean(t[pre[0] : pre[1]])), float(np.mean(t[post[0] : post[1]]))
     rate = drift / (t1 - t0) if t1 > t0 else 0.0

@@ -484,6 +484,11 @@ def write_run_file(
             from towtank.testing.layouts import balance_frame
 
             out = balance_frame(layout, out, lab)
+        if layout == "zero-file":
+            from towtank.testing.layouts import write_zero_file
+
+            write_zero_file(out, path, time_col,
+                            "speed" if channel_style == "canonical" else lab.speed)
         if layout in ("speed-log", "position-log"):
             from towtank.testing.layouts import write_carriage_log
 

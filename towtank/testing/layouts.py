@@ -23,6 +23,8 @@ matrix            .csv         a two-component dynamometer: bridges ``Fx``, ``Fy
 speed-log         .csv         no speed column; the carriage speed in ``run_NNN_carriage.csv`` at
                                100 Hz on a clock 0.35 s behind the balance's
 position-log      .csv         as speed-log, but the log holds the encoder's position ``x (mm)``
+zero-file         .csv         the plain run file, and the balance at rest before the run in
+                               ``run_NNN_zero.csv`` (the lab's zeros file, 1.5 s)
 ================  ===========  ===================================================================
 
 Names that are not MATLAB identifiers (``Time (s)``) are written as identifiers (``Time_s``)
@@ -56,6 +58,7 @@ LAYOUTS = {
     "matrix": "csv",
     "speed-log": "csv",
     "position-log": "csv",
+    "zero-file": "csv",
 }
 
 #: The carriage logs of the "speed-log" and "position-log" layouts: their rate [Hz], the
@@ -117,7 +120,7 @@ def write_layout(
     writer = {
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
         "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
-        "speed-log": _csv, "position-log": _csv,
+        "speed-log": _csv, "position-log": _csv, "zero-file": _csv,
     }[layout]
     writer(frame, path, time_col, units)
     return path
@@ -151,6 +154,24 @@ def write_carriage_log(layout: str, frame: pd.DataFrame, run_path: Path, time_co
         log = pd.DataFrame({"t (s)": np.round(t_log, 4), "x (mm)": np.round(pos * 1e3, 3)})
     path = Path(run_path).with_name(carriage_log_name(run_path))
     path.write_bytes(log.to_csv(index=False, lineterminator="\n").encode())
+    return path
+
+
+#: Length of the zeros file of the "zero-file" layout [s].
+ZERO_FILE_S = 1.5
+
+
+def write_zero_file(frame: pd.DataFrame, run_path: Path, time_col: str,
+                    speed_col: str) -> Path:
+    """The lab's zeros file of a run: the balance at rest just before the carriage moves
+    (here :data:`ZERO_FILE_S` of the run's own still start, ending 0.5 s before the motion),
+    with the run file's columns."""
+    t = _time_column(frame, time_col)
+    u = frame[speed_col].to_numpy(np.float64)
+    start = t[int(np.argmax(u > 0.03 * np.max(u)))] - 0.5
+    zero = frame[(t >= start - ZERO_FILE_S) & (t < start)]
+    path = Path(run_path).with_name(f"{Path(run_path).name.split('.', 1)[0]}_zero.csv")
+    path.write_bytes(zero.to_csv(index=False, lineterminator="\n").encode())
     return path
 
 
@@ -197,6 +218,8 @@ def protocol_sections(layout: str, sections: dict[str, dict]) -> dict[str, dict]
         ch = {k: v for k, v in ch.items() if k not in ("drag", "lift")}
         sections["balance"] = {"inputs": ["Fx (V)", "Fy (V)"], "outputs": ["drag", "lift"],
                                "matrix": [list(r) for r in BALANCE_MATRIX]}
+    elif layout == "zero-file":
+        sections["zeros"] = {"file": "{stem}_zero.csv"}
     elif layout in ("speed-log", "position-log"):
         ch = {k: v for k, v in ch.items() if k != "speed"}
         how = ({"speed": {"column": "v (m/s)"}} if layout == "speed-log"

@@ -1,5 +1,6 @@
-"""Carriage speed in its own file per run ([speed_log]): the motion controller's log at 100 Hz
-on another clock, as speed or as the encoder's position, read beside the balance's file.
+"""Files kept beside each run: the carriage speed in its own file ([speed_log]: the motion
+controller's log at 100 Hz on another clock, as speed or as the encoder's position) and the
+balance zero in its own file ([zeros]).
 
 The coefficients of the same day with its speed logged apart are those of the plain day
 (tests/test_readers.py, layouts speed-log and position-log); here: the log's clock offset is
@@ -132,5 +133,59 @@ def test_bad_sections_are_one_sentence(tmp_path, section, match):
         text_v = json.dumps(v)
         lines.append(f"{k} = {text_v.replace(':', ' =') if isinstance(v, dict) else text_v}")
     protocol.write_text(head + "\n".join(lines) + "\n" + rest)
+    with pytest.raises(ProtocolError, match=match):
+        towtank.load_protocol(protocol)
+
+
+# ------------------------------------------------------------------------------ zeros files
+def _zero_day(root: Path, **processing) -> Path:
+    syn.make_hull_day(root, seed=SEED, file_format="zero-file", sheet_format="csv",
+                      channel_style="lab")
+    sections = syn.hull_protocol_sections(".", "out", sheet_format="csv",
+                                          channels=syn.LabChannels(), channel_style="lab")
+    sections.setdefault("processing", {}).update(processing)
+    return syn.write_protocol(root / "protocol.toml", **protocol_sections("zero-file", sections))
+
+
+def test_the_zeros_file_gives_the_zero(tmp_path):
+    """A zeros file whose drag reads δ higher moves the run's zeroed drag by −gain·δ (with
+    drift = "none"; with the linear drift, by the zero line's value in the steady window)."""
+    protocol = _zero_day(tmp_path, drift="none")
+    lab = syn.LabChannels()
+    first = towtank.process_day(protocol, jobs=1, report=False)
+    red = first.reductions[5]
+    assert any("zeros file run_005_zero.csv" in n for n in red.notes)
+    path = tmp_path / "data" / "run_005_zero.csv"
+    zero = pd.read_csv(path)
+    delta_v = 0.0005
+    zero[lab.drag] += delta_v
+    path.write_text(zero.to_csv(index=False))
+    second = towtank.process_day(protocol, jobs=1, report=False)
+    shift = second.reductions[5].drag_mean - red.drag_mean
+    assert shift == pytest.approx(-lab.drag_gain * delta_v, rel=1e-6, abs=1e-9)
+    assert str(path) in second.inputs
+    assert not any("run_005_zero.csv" in w for w in second.warnings)  # not "unlisted"
+
+
+def test_a_missing_zeros_file_rejects_its_run_only(tmp_path):
+    protocol = _zero_day(tmp_path)
+    (tmp_path / "data" / "run_009_zero.csv").unlink()
+    day = towtank.process_day(protocol, jobs=1, report=False)
+    assert set(day.rejected) == {9}
+    assert "zeros file" in day.rejected[9] and "run_009_zero.csv" in day.rejected[9]
+
+
+@pytest.mark.parametrize("section, match", [
+    ({}, "needs 'file'"),
+    ({"file": "{stem}_zero.csv", "column": "x"}, "unknown key 'column'"),
+    ({"file": "{step}.csv"}, "can be filled in"),
+])
+def test_bad_zeros_sections(tmp_path, section, match):
+    protocol = _zero_day(tmp_path)
+    text = protocol.read_text()
+    head, tail = text.split("[zeros]", 1)
+    rest = tail[tail.index("\n[") + 1:] if "\n[" in tail else ""
+    body = "".join(f"{k} = {json.dumps(v)}\n" for k, v in section.items())
+    protocol.write_text(head + "[zeros]\n" + body + rest)
     with pytest.raises(ProtocolError, match=match):
         towtank.load_protocol(protocol)

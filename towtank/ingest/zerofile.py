@@ -1,0 +1,118 @@
+"""The balance zero from its own file: a zeros file recorded per run (``[zeros]``).
+
+Some tanks record the balance at rest, in still water, into a separate file before each run,
+and take the zero of every force from it instead of from a still window of the run file. The
+zeros file is read like the run file (same ``[read]``, ``[channels]`` and ``[balance]``); the
+zero of each force is the mean of its calibrated samples:
+
+    F_zero = mean(gain·(raw − offset))   over the zeros file                          (1)
+
+and it replaces the pre-run still window's mean as the zero of the run (docs/formats.md §3.4);
+the drift to the post-run window is then taken from the file's start (docs/method.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from towtank.errors import ProtocolError, RunError
+
+__all__ = ["ZeroFile", "parse_zero_file", "zero_levels", "run_zero_levels",
+           "with_zero_levels"]
+
+
+@dataclass(frozen=True)
+class ZeroFile:
+    """The protocol's ``[zeros]``: ``file`` is the name pattern of each run's zeros file,
+    relative to the data folder, with ``{stem}``, ``{name}``, ``{dir}`` and ``{run}`` as in
+    ``[speed_log]``."""
+
+    file: str
+
+
+def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
+    """The ``[zeros]`` table checked (None when the protocol has none)."""
+    if data is None:
+        return None
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{src}: [zeros] must be a table of keys, but it is {data!r}.")
+    extra = set(data) - {"file"}
+    if extra:
+        raise ProtocolError(f"{src}: unknown key '{sorted(extra)[0]}' in [zeros]; it takes "
+                            "only 'file'.")
+    pattern = data.get("file")
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ProtocolError(f"{src}: [zeros] needs 'file', the zeros file's name pattern (e.g. "
+                            "\"{stem}_zero.csv\").")
+    try:
+        pattern.format(stem="s", name="n", dir=".", run=1)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ProtocolError(f"{src}: 'file' in [zeros] is {pattern!r}: only {{stem}}, "
+                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    return ZeroFile(file=pattern)
+
+
+def zero_levels(path: Path, data: bytes, mapping: dict[str, Any], options: Any = None,
+                balance: Any = None) -> dict[str, float]:
+    """Mean calibrated drag and lift [N] of a zeros file (eq. 1); lift only where mapped or
+    found. The file needs no time or speed channel."""
+    from towtank.ingest.readers import stated_units
+    from towtank.ingest.runfile import calibrate, channel_map, map_channels, read_columns
+
+    name = path.name
+    cols, _ = read_columns(path, data, options)
+    used: dict[str, str] = {}
+    chans = map_channels(cols, mapping, f"the zeros file {name}", used=used, balance=balance,
+                         external=("time", "speed", "accel"))
+    numeric = {}
+    for canon, raw in chans.items():
+        arr = np.asarray(raw)
+        if arr.dtype == object:
+            arr = np.array([_number(v) for v in arr], dtype=np.float64)
+        numeric[canon] = arr.astype(np.float64)
+    full = channel_map(mapping)
+    numeric = calibrate(numeric, full, used, stated_units(cols), name, [])
+    out = {}
+    for canon, arr in numeric.items():
+        ok = arr[np.isfinite(arr)]
+        if ok.size < 10:
+            raise RunError(f"the zeros file {name} holds fewer than 10 numbers of {canon}")
+        out[canon] = float(np.mean(ok))
+    return out
+
+
+def _number(v: Any) -> float:
+    try:
+        return float(str(v).replace(",", "."))
+    except ValueError:
+        return float("nan")
+
+
+def run_zero_levels(spec: ZeroFile | None, data_dir: Path, file: str, run: int,
+                    mapping: dict[str, Any], options: Any = None,
+                    balance: Any = None) -> tuple[dict[str, float], str] | None:
+    """The zeros of one run (levels, file name), None without ``[zeros]``."""
+    if spec is None:
+        return None
+    from towtank.ingest.runfile import file_bytes
+    from towtank.ingest.speedlog import log_path
+
+    path = log_path(spec, data_dir, file, run)
+    try:
+        data = file_bytes(path)
+    except RunError as exc:
+        raise RunError(f"its zeros file ([zeros] file = {spec.file!r}): {exc.reason}") from None
+    return zero_levels(path, data, mapping, options, balance), path.name
+
+
+def with_zero_levels(raw: Any, levels: dict[str, float], name: str) -> Any:
+    """The run with its zeros from the zeros file ``name`` (and a note saying so)."""
+    from dataclasses import replace
+
+    told = ", ".join(f"{k} {v:+.5g} N" for k, v in levels.items())
+    return replace(raw, zero_levels=dict(levels),
+                   notes=[*raw.notes, f"zeros from the zeros file {name} ({told})"])
