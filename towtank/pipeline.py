@@ -344,7 +344,7 @@ def process_day(
         todo.append(rec)
 
     reductions: dict[int, RunReduction] = {}
-    from towtank.runtime.parallel import load_in_background, map_runs
+    from towtank.runtime.parallel import map_runs
 
     cache = RunCache(cache_dir) if cache_dir is not None else None
     common = protocol_settings(protocol) if cache is not None else None
@@ -363,14 +363,13 @@ def process_day(
                 reductions[run] = replace(hit, run=run)
                 continue
         to_reduce.append(rec)
-    loading = load_in_background(ANALYSIS_MODULES) if to_reduce else None
     done = len(todo) - len(to_reduce)
     if progress is not None and done:
         progress(done, len(todo))
     previews: dict[int, dict[str, np.ndarray]] = {}
     for i, (run, red, reason, preview) in enumerate(
         map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug,
-                 on_crash=crashed_record)
+                 on_crash=crashed_record, preload=ANALYSIS_MODULES)
     ):
         if red is not None:
             reductions[run] = red
@@ -386,8 +385,6 @@ def process_day(
             progress(done + i + 1, len(todo))
     if cache is not None:
         cache.flush()
-    if loading is not None:
-        loading.join()  # the later stages import nothing while another thread does
     # keep the sheet's order whatever the order of cache hits and fresh reductions
     order = {int(r): k for k, r in enumerate(sheet["run"])}
     reductions = dict(sorted(reductions.items(), key=lambda kv: order[kv[0]]))

@@ -226,8 +226,15 @@ def map_runs(
     jobs: int | None = None,
     debug: bool = False,
     on_crash: Callable[[dict[str, Any]], T] | None = None,
+    preload: Sequence[str] = (),
 ) -> Iterator[T]:
     """``func(protocol, record, debug=debug)`` for every record, in order.
+
+    ``preload`` names modules the later stages need: while worker processes reduce the records
+    and this process only waits, a thread imports them (:func:`load_in_background`). The
+    thread runs only then, and is joined before anything runs here, so that this process
+    never imports a module while the thread does (two threads importing one package at once
+    can see it half-initialised: "module 'scipy' has no attribute '_lib'").
 
     With ``jobs`` > 1 the records are spread over worker processes (``func`` must be a
     module-level function, ``protocol`` and the records picklable); results still come back in
@@ -254,6 +261,7 @@ def map_runs(
         return
     done = 0
     broken: BaseException | None = None
+    loading = load_in_background(preload) if preload else None
     try:
         chunk = chunk_size(len(records), pool.jobs)
         tasks = [
@@ -272,6 +280,8 @@ def map_runs(
             broken = exc
     finally:
         pool.close()
+        if loading is not None:
+            loading.join()  # nothing is imported here while the thread imports
     if broken is None:
         return
     if isinstance(broken, OSError):
