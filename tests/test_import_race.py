@@ -22,18 +22,25 @@ import pytest
 from towtank.testing import synthetic as syn
 
 SCRIPT = textwrap.dedent("""
-    import json, sys, threading
+    import json
+    import sys
+    import threading
 
-    events = []
 
     class Recorder:
+        def __init__(self):
+            self.events = []
+
         def find_spec(self, name, path=None, target=None):
             alive = any(t.name == "towtank-imports" for t in threading.enumerate())
-            events.append((threading.current_thread().name, name, alive))
+            self.events.append((threading.current_thread().name, name, alive))
             return None
 
-    sys.meta_path.insert(0, Recorder())
+
     if __name__ == "__main__":
+        recorder = Recorder()
+        events = recorder.events
+        sys.meta_path.insert(0, recorder)
         import towtank
         day = towtank.process_day(sys.argv[1], jobs=int(sys.argv[2]), report=False,
                                   cache=False)
