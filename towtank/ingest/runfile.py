@@ -768,7 +768,56 @@ def _load_run(
         rows = np.arange(n_rows) + (2 if label == "row" else 1)
     where = _Where(rows, label)
 
-    # --- non-numeric and malformed rows: drop a few, reject many
+    numeric, where = _drop_bad_rows(chans, rows, invalid, where, name, max_bad_row_fraction,
+                                    notes)
+
+    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
+
+    t = _fill_missing_times(numeric, where, name, max_nan_gap_s, notes)
+
+    n = t.size
+    if n < MIN_SAMPLES:
+        raise RunError(f"{name} has only {n} usable samples")
+    _check_range(t, t, "time", name, where)
+    tb = time_base(
+        t,
+        name,
+        where=where,
+        max_gap_s=max_nan_gap_s,
+        max_lost=int(max_bad_row_fraction * (n + 1)),
+        values=numeric["drag"],
+    )
+    fs = tb.fs
+    max_gap = max(1, int(round(max_nan_gap_s * fs)))
+    if tb.n_lost:
+        t, where = _put_back_lost(numeric, tb, where, notes)
+    if speed_log is not None:
+        from towtank.ingest.speedlog import speed_on_run_time
+
+        numeric["speed"] = speed_on_run_time(t, *speed_log)
+        notes.append(f"carriage speed from the speed log {speed_log[2]}")
+
+    _repair_and_check(numeric, t, fs, full, tb.n_lost, max_gap, do_despike, name, where, notes)
+    return RawRun(
+        time=t,
+        speed=numeric["speed"],
+        drag=numeric["drag"],
+        lift=numeric.get("lift"),
+        accel=numeric.get("accel"),
+        fs=fs,
+        sha256=digest,
+        columns=tuple(c for c in cols if not c.startswith("__")),
+        notes=notes,
+    )
+
+
+def _drop_bad_rows(
+    chans: dict[str, np.ndarray], rows: np.ndarray, invalid: np.ndarray, where: _Where,
+    name: str, max_bad_row_fraction: float, notes: list[str],
+) -> tuple[dict[str, np.ndarray], _Where]:
+    """Channels as floats with non-numeric and malformed rows dropped (a few, with a note) or
+    the run rejected (more than ``max_bad_row_fraction`` of them)."""
+    n_rows = len(rows)
     bad_rows = np.zeros(n_rows, dtype=bool)
     numeric: dict[str, np.ndarray] = {}
     for canon, raw in chans.items():
@@ -795,67 +844,61 @@ def _load_run(
             keep = ~bad_rows
             numeric = {k: v[keep] for k, v in numeric.items()}
             where = where.subset(keep)
+    return numeric, where
 
-    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
 
-    # --- time: a short stretch of missing times is interpolated by row (the clock is regular;
-    # the time checks below still see any irregularity around it); a long one rejects the run
+def _fill_missing_times(numeric: dict[str, np.ndarray], where: _Where, name: str,
+                        max_nan_gap_s: float, notes: list[str]) -> np.ndarray:
+    """The time channel with a short stretch of missing times interpolated by row (the clock
+    is regular; the time checks still see any irregularity around it); a long one rejects
+    the run."""
     t = numeric["time"]
     no_t = np.isnan(t)
-    if no_t.any():
-        if np.count_nonzero(~no_t) < MIN_SAMPLES:
-            raise RunError(f"{name}: the time channel holds no numbers")
-        starts, lengths = runs_of_true(no_t)
-        tt = t[~no_t]
-        dt_est = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
-        gap_max = max(1, int(round(max_nan_gap_s / dt_est))) if dt_est > 0 else 1
-        k = int(np.argmax(lengths))
-        if lengths[k] > gap_max:
-            i0, n = int(starts[k]), int(lengths[k])
-            raise RunError(
-                f"{name}: the time channel is empty for {n} rows ({where.span(i0, i0 + n - 1)}), "
-                f"longer than the {max_nan_gap_s:g} s that may be interpolated"
-            )
-        idx = np.arange(t.size)
-        t = np.interp(idx, idx[~no_t], t[~no_t])
-        numeric["time"] = t
-        notes.append(f"{int(no_t.sum())} missing time value(s) interpolated")
+    if not no_t.any():
+        return t
+    if np.count_nonzero(~no_t) < MIN_SAMPLES:
+        raise RunError(f"{name}: the time channel holds no numbers")
+    starts, lengths = runs_of_true(no_t)
+    tt = t[~no_t]
+    dt_est = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
+    gap_max = max(1, int(round(max_nan_gap_s / dt_est))) if dt_est > 0 else 1
+    k = int(np.argmax(lengths))
+    if lengths[k] > gap_max:
+        i0, n = int(starts[k]), int(lengths[k])
+        raise RunError(
+            f"{name}: the time channel is empty for {n} rows ({where.span(i0, i0 + n - 1)}), "
+            f"longer than the {max_nan_gap_s:g} s that may be interpolated"
+        )
+    idx = np.arange(t.size)
+    t = np.interp(idx, idx[~no_t], t[~no_t])
+    numeric["time"] = t
+    notes.append(f"{int(no_t.sum())} missing time value(s) interpolated")
+    return t
 
-    n = t.size
-    if n < MIN_SAMPLES:
-        raise RunError(f"{name} has only {n} usable samples")
-    _check_range(t, t, "time", name, where)
-    tb = time_base(
-        t,
-        name,
-        where=where,
-        max_gap_s=max_nan_gap_s,
-        max_lost=int(max_bad_row_fraction * (n + 1)),
-        values=numeric["drag"],
-    )
-    fs = tb.fs
-    max_gap = max(1, int(round(max_nan_gap_s * fs)))
-    if tb.n_lost:
-        # put lost samples back as missing values on a regular time base
-        pos = np.concatenate(([0], np.cumsum(tb.steps)))
-        m = int(pos[-1]) + 1
-        grid = np.interp(np.arange(m), pos, t)
-        for canon in list(numeric):
-            full_arr = np.full(m, np.nan)
-            full_arr[pos] = numeric[canon]
-            numeric[canon] = full_arr
-        numeric["time"] = grid
-        t = grid
-        rows_full = np.zeros(m, dtype=np.int64)
-        rows_full[pos] = where.rows
-        where = _Where(np.maximum.accumulate(rows_full), where.label)  # a lost one: row before
-        notes.append(f"{tb.n_lost} lost sample(s) put back by interpolation")
-    if speed_log is not None:
-        from towtank.ingest.speedlog import speed_on_run_time
 
-        numeric["speed"] = speed_on_run_time(t, *speed_log)
-        notes.append(f"carriage speed from the speed log {speed_log[2]}")
+def _put_back_lost(numeric: dict[str, np.ndarray], tb: TimeBase, where: _Where,
+                   notes: list[str]) -> tuple[np.ndarray, _Where]:
+    """Lost samples put back as missing values on a regular time base (in ``numeric``)."""
+    pos = np.concatenate(([0], np.cumsum(tb.steps)))
+    m = int(pos[-1]) + 1
+    grid = np.interp(np.arange(m), pos, numeric["time"])
+    for canon in list(numeric):
+        full_arr = np.full(m, np.nan)
+        full_arr[pos] = numeric[canon]
+        numeric[canon] = full_arr
+    numeric["time"] = grid
+    rows_full = np.zeros(m, dtype=np.int64)
+    rows_full[pos] = where.rows
+    notes.append(f"{tb.n_lost} lost sample(s) put back by interpolation")
+    return grid, _Where(np.maximum.accumulate(rows_full), where.label)  # a lost one: row before
 
+
+def _repair_and_check(
+    numeric: dict[str, np.ndarray], t: np.ndarray, fs: float, full: dict[str, ChannelMap],
+    n_lost: int, max_gap: int, do_despike: bool, name: str, where: _Where, notes: list[str],
+) -> None:
+    """Per channel (in ``numeric``): gaps filled, clipping checked, spikes removed, range
+    checked; an optional channel without numbers dropped."""
     for canon in ("speed",) + FORCE_CHANNELS + ("accel",):
         if canon not in numeric:
             continue
@@ -865,10 +908,10 @@ def _load_run(
             notes.append(f"the {canon} column holds no numbers; the channel is ignored")
             continue
         arr, n_filled = fill_gaps(arr, t, max_gap, canon, file=name, where=where)
-        if n_filled and not tb.n_lost:
+        if n_filled and not n_lost:
             notes.append(f"{n_filled} missing {canon} value(s) interpolated")
-        elif n_filled > tb.n_lost:
-            notes.append(f"{n_filled - tb.n_lost} missing {canon} value(s) interpolated")
+        elif n_filled > n_lost:
+            notes.append(f"{n_filled - n_lost} missing {canon} value(s) interpolated")
         cm = full[canon]
         check_clipping(
             arr, t, fs, canon, file=name, where=where, calibration=(cm.gain, cm.offset)
@@ -879,14 +922,3 @@ def _load_run(
                 notes.append(f"{n_spikes} spike(s) removed from {canon}")
         _check_range(arr, t, canon, name, where)
         numeric[canon] = arr
-    return RawRun(
-        time=t,
-        speed=numeric["speed"],
-        drag=numeric["drag"],
-        lift=numeric.get("lift"),
-        accel=numeric.get("accel"),
-        fs=fs,
-        sha256=digest,
-        columns=tuple(c for c in cols if not c.startswith("__")),
-        notes=notes,
-    )
