@@ -308,8 +308,54 @@ def load_protocol(
 def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Protocol:
     """The validated protocol from parsed TOML (see :func:`load_protocol`)."""
     base = path.resolve().parent
-    camp = _section(data["campaign"], "campaign", "campaign", src)
+    campaign = _campaign(data["campaign"], base, src, check_paths)
     water = _water(_section(data["water"], "water", "water", src), "water", src)
+
+    model = _model(data["model"], src) if "model" in data else None
+    fin = _fin(data["fin"], src) if "fin" in data else None
+
+    vehicle = None
+    if "vehicle" in data:
+        from towtank.ingest.vehicle_protocol import parse_vehicle
+
+        vehicle = parse_vehicle(data["vehicle"], base, src,
+                                model.myring if model is not None else None, check_paths)
+    if model is None and fin is None and vehicle is None:
+        raise ProtocolError(f"{src}: the protocol needs a [model] or a [fin] section.")
+
+    prototype = _prototype(data["prototype"], model, src) if "prototype" in data else None
+    channels = _channels(data["channels"], src) if "channels" in data else {}
+    balance = _balance(data["balance"], channels, src) if "balance" in data else None
+
+    processing = _processing(data.get("processing", {}), src)
+    report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
+    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+
+    warnings = _unit_warnings(model, fin, water, prototype)
+    return Protocol(
+        path=path.resolve(),
+        campaign=campaign,
+        water=water,
+        model=model,
+        fin=fin,
+        prototype=prototype,
+        channels=channels,
+        processing=processing,
+        report=report,
+        warnings=tuple(warnings),
+        read=read,
+        vehicle=vehicle,
+        balance=balance,
+        tare=_tare_source(data.get("tare", {}), base, src, check_paths),
+        speed_log=parse_speed_log(data.get("speed_log"), src),
+        zeros=parse_zero_file(data.get("zeros"), src),
+    )
+
+
+def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
+    """``[campaign]``: paths resolved, the reference and (with ``check_paths``) the sheet and
+    data folder checked."""
+    camp = _section(data, "campaign", "campaign", src)
 
     output_dir = (
         base / camp["output_dir"]
@@ -350,122 +396,124 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
                 f"{src}: the data folder '{camp['data_dir']}' in [campaign] does not exist "
                 f"({campaign.data_dir})."
             )
+    return campaign
 
-    model = None
-    if "model" in data:
-        m = _section(data["model"], "model", "model", src)
-        _positive(
-            m,
-            tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == _NUM and k != "depth_m"),
-            "model",
-            src,
+
+def _model(data: Any, src: str) -> Model:
+    """``[model]`` checked, its Myring geometry filled in and its mass checked."""
+    m = _section(data, "model", "model", src)
+    _positive(
+        m,
+        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == _NUM and k != "depth_m"),
+        "model",
+        src,
+    )
+    myring = None
+    if "myring" in m:
+        my = _section(m.pop("myring"), "model.myring", "model.myring", src)
+        _positive(my, ("a", "b", "c", "n", "d"), "model.myring", src)
+        myring = Myring(**my)
+    if "diameter_m" not in m and "frontal_area_m2" not in m and myring is None:
+        raise ProtocolError(
+            f"{src}: [model] needs 'diameter_m' (or 'frontal_area_m2') for the frontal area."
         )
-        myring = None
-        if "myring" in m:
-            my = _section(m.pop("myring"), "model.myring", "model.myring", src)
-            _positive(my, ("a", "b", "c", "n", "d"), "model.myring", src)
-            myring = Myring(**my)
-        if "diameter_m" not in m and "frontal_area_m2" not in m and myring is None:
-            raise ProtocolError(
-                f"{src}: [model] needs 'diameter_m' (or 'frontal_area_m2') for the frontal area."
-            )
-        model = Model(**m, myring=myring)
-        if myring is not None:
-            model = _with_myring_geometry(model, src)
-        _check_mass(model, src)
+    model = Model(**m, myring=myring)
+    if myring is not None:
+        model = _with_myring_geometry(model, src)
+    _check_mass(model, src)
+    return model
 
-    fin = None
-    if "fin" in data:
-        f = _section(data["fin"], "fin", "fin", src)
-        _positive(f, ("chord_m", "span_m", "oswald_e", "linear_max_deg"), "fin", src)
-        if f.get("linear_max_deg", 0.0) > 90.0:
-            raise ProtocolError(
-                f"{src}: 'linear_max_deg' in [fin] is the largest angle of attack of the "
-                f"linear range, 0–90°, but it is {f['linear_max_deg']}."
-            )
-        mounting = f.get("mounting", "free")
-        if mounting not in FIN_MOUNTINGS:
-            raise ProtocolError(
-                f"{src}: 'mounting' in [fin] must be one of {', '.join(FIN_MOUNTINGS)}, "
-                f"but it is {mounting!r}{_suggest(mounting, FIN_MOUNTINGS)}"
-            )
-        section = f.get("section", "NACA0015")
-        if section.replace(" ", "").upper() != "NACA0015":
-            raise ProtocolError(
-                f"{src}: [fin] section {section!r} has no shipped section data; "
-                "only NACA0015 (Sandia, SAND80-2114) is available."
-            )
-        fin = Fin(**f)
 
-    vehicle = None
-    if "vehicle" in data:
-        from towtank.ingest.vehicle_protocol import parse_vehicle
-
-        vehicle = parse_vehicle(data["vehicle"], base, src,
-                                model.myring if model is not None else None, check_paths)
-    if model is None and fin is None and vehicle is None:
-        raise ProtocolError(f"{src}: the protocol needs a [model] or a [fin] section.")
-
-    prototype = None
-    if "prototype" in data:
-        p = _section(data["prototype"], "prototype", "prototype", src)
-        if "length_m" in p:
-            length_p = p["length_m"]
-        elif model is not None and model.scale is not None:
-            length_p = model.length_m * model.scale
-        else:
-            raise ProtocolError(
-                f"{src}: [prototype] needs 'length_m', or [model] needs 'scale' to derive it."
-            )
-        if model is not None and model.scale is not None and "length_m" in p:
-            expected = model.length_m * model.scale
-            if abs(length_p - expected) > LENGTH_SCALE_TOLERANCE * expected:
-                raise ProtocolError(
-                    f"{src}: [prototype] length_m = {length_p:g} m does not match [model] "
-                    f"length_m × scale = {model.length_m:g} × {model.scale:g} = {expected:.4g} m "
-                    f"(they must agree within {LENGTH_SCALE_TOLERANCE:.0%}); correct one of them "
-                    "or leave [prototype] length_m out."
-                )
-        if any(s <= 0 for s in p["speeds_m_s"]):
-            raise ProtocolError(f"{src}: 'speeds_m_s' in [prototype] must all be positive.")
-        delta_cf = p.get("delta_cf", 0.0)
-        if abs(delta_cf) > MAX_DELTA_CF:
-            raise ProtocolError(
-                f"{src}: 'delta_cf' in [prototype] is {delta_cf:g}, but a roughness allowance "
-                f"ΔC_F lies within ±{MAX_DELTA_CF:g} (the ITTC value for a full-size hull is "
-                "about 0.0004)."
-            )
-        pw = (
-            _water(_section(p["water"], "prototype.water", "prototype.water", src),
-                   "prototype.water", src)
-            if "water" in p
-            else Water(type="sea", temperature_C=15.0)
+def _fin(data: Any, src: str) -> Fin:
+    """``[fin]`` checked (NACA 0015 only: the shipped section data)."""
+    f = _section(data, "fin", "fin", src)
+    _positive(f, ("chord_m", "span_m", "oswald_e", "linear_max_deg"), "fin", src)
+    if f.get("linear_max_deg", 0.0) > 90.0:
+        raise ProtocolError(
+            f"{src}: 'linear_max_deg' in [fin] is the largest angle of attack of the "
+            f"linear range, 0–90°, but it is {f['linear_max_deg']}."
         )
-        prototype = Prototype(
-            length_m=length_p,
-            speeds_m_s=p["speeds_m_s"],
-            water=pw,
-            delta_cf=delta_cf,
+    mounting = f.get("mounting", "free")
+    if mounting not in FIN_MOUNTINGS:
+        raise ProtocolError(
+            f"{src}: 'mounting' in [fin] must be one of {', '.join(FIN_MOUNTINGS)}, "
+            f"but it is {mounting!r}{_suggest(mounting, FIN_MOUNTINGS)}"
         )
+    section = f.get("section", "NACA0015")
+    if section.replace(" ", "").upper() != "NACA0015":
+        raise ProtocolError(
+            f"{src}: [fin] section {section!r} has no shipped section data; "
+            "only NACA0015 (Sandia, SAND80-2114) is available."
+        )
+    return Fin(**f)
 
+
+def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
+    """``[prototype]``: its length (given, or the model's × scale, which must agree), speeds,
+    roughness allowance and water."""
+    p = _section(data, "prototype", "prototype", src)
+    if "length_m" in p:
+        length_p = p["length_m"]
+    elif model is not None and model.scale is not None:
+        length_p = model.length_m * model.scale
+    else:
+        raise ProtocolError(
+            f"{src}: [prototype] needs 'length_m', or [model] needs 'scale' to derive it."
+        )
+    if model is not None and model.scale is not None and "length_m" in p:
+        expected = model.length_m * model.scale
+        if abs(length_p - expected) > LENGTH_SCALE_TOLERANCE * expected:
+            raise ProtocolError(
+                f"{src}: [prototype] length_m = {length_p:g} m does not match [model] "
+                f"length_m × scale = {model.length_m:g} × {model.scale:g} = {expected:.4g} m "
+                f"(they must agree within {LENGTH_SCALE_TOLERANCE:.0%}); correct one of them "
+                "or leave [prototype] length_m out."
+            )
+    if any(s <= 0 for s in p["speeds_m_s"]):
+        raise ProtocolError(f"{src}: 'speeds_m_s' in [prototype] must all be positive.")
+    delta_cf = p.get("delta_cf", 0.0)
+    if abs(delta_cf) > MAX_DELTA_CF:
+        raise ProtocolError(
+            f"{src}: 'delta_cf' in [prototype] is {delta_cf:g}, but a roughness allowance "
+            f"ΔC_F lies within ±{MAX_DELTA_CF:g} (the ITTC value for a full-size hull is "
+            "about 0.0004)."
+        )
+    pw = (
+        _water(_section(p["water"], "prototype.water", "prototype.water", src),
+               "prototype.water", src)
+        if "water" in p
+        else Water(type="sea", temperature_C=15.0)
+    )
+    return Prototype(
+        length_m=length_p,
+        speeds_m_s=p["speeds_m_s"],
+        water=pw,
+        delta_cf=delta_cf,
+    )
+
+
+def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
+    """``[channels]``: each channel's column (or summed load cells), gain and offset."""
     channels: dict[str, ChannelMap] = {}
-    if "channels" in data:
-        ch = _section(data["channels"], "channels", "channels", src)
-        for name, spec in ch.items():
-            c = _section(spec, "channel", f"channels.{name}", src)
-            if c.get("gain", 1.0) == 0:
-                raise ProtocolError(f"{src}: 'gain' in [channels.{name}] must not be zero.")
-            if ("column" in c) == ("columns" in c):
-                raise ProtocolError(
-                    f"{src}: [channels.{name}] needs either 'column' (one column) or 'columns' "
-                    "(load cells summed), not both nor neither."
-                )
-            if "columns" in c:
-                c["column"] = " + ".join(c["columns"])
-            channels[name] = ChannelMap(**c)
-    balance = _balance(data["balance"], channels, src) if "balance" in data else None
+    ch = _section(data, "channels", "channels", src)
+    for name, spec in ch.items():
+        c = _section(spec, "channel", f"channels.{name}", src)
+        if c.get("gain", 1.0) == 0:
+            raise ProtocolError(f"{src}: 'gain' in [channels.{name}] must not be zero.")
+        if ("column" in c) == ("columns" in c):
+            raise ProtocolError(
+                f"{src}: [channels.{name}] needs either 'column' (one column) or 'columns' "
+                "(load cells summed), not both nor neither."
+            )
+        if "columns" in c:
+            c["column"] = " + ".join(c["columns"])
+        channels[name] = ChannelMap(**c)
+    return channels
 
-    proc_values = _section(data.get("processing", {}), "processing", "processing", src)
+
+def _processing(data: Any, src: str) -> Processing:
+    """``[processing]``: positive values, ranges and choices checked."""
+    proc_values = _section(data, "processing", "processing", src)
     _positive(proc_values, _PROCESSING_POSITIVE, "processing", src)
     for key, (low, high) in _PROCESSING_RANGES.items():
         value = proc_values.get(key)
@@ -480,29 +528,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
                 f"{src}: '{key}' in [processing] must be one of {', '.join(choices)}, but it is "
                 f"{value!r}{_suggest(value, choices)}"
             )
-    processing = Processing(**proc_values)
-    report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
-    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
-
-    warnings = _unit_warnings(model, fin, water, prototype)
-    return Protocol(
-        path=path.resolve(),
-        campaign=campaign,
-        water=water,
-        model=model,
-        fin=fin,
-        prototype=prototype,
-        channels=channels,
-        processing=processing,
-        report=report,
-        warnings=tuple(warnings),
-        read=read,
-        vehicle=vehicle,
-        balance=balance,
-        tare=_tare_source(data.get("tare", {}), base, src, check_paths),
-        speed_log=parse_speed_log(data.get("speed_log"), src),
-        zeros=parse_zero_file(data.get("zeros"), src),
-    )
+    return Processing(**proc_values)
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:
