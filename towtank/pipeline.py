@@ -315,15 +315,50 @@ def process_day(
     if jobs is None:
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
-    day_warnings = list(protocol.warnings)
-    sides = [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
-    logs = {log_path(spec, Path("."), str(f), int(r)).as_posix() for spec in sides
-            for r, f in zip(sheet["run"], sheet["file"], strict=True)}
-    for f in unlisted_files(sheet, protocol.campaign.data_dir):
-        if f in logs:  # a run's carriage log ([speed_log]) or zeros file ([zeros])
-            continue
-        day_warnings.append(f"{f} is in the data folder but not in the run sheet; it is ignored.")
+    day_warnings = list(protocol.warnings) + unlisted_warnings(protocol, sheet)
+    todo, rejected = runs_to_reduce(protocol, sheet)
+    reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
+                                       progress=progress, debug=debug, cache_dir=cache_dir)
+    tares = tare_models(protocol, sheet, reductions, day_warnings)
+    apply_tares(protocol, sheet, reductions, tares, rejected)
+    for red in reductions.values():
+        day_warnings.extend(f"run {red.run}: {w}." for w in red.warnings)
+    for rec in sheet.to_dict("records"):
+        temp = rec["water_temp_C"]
+        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
+            day_warnings.append(
+                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
+                "ITTC water properties are extrapolated (a unit mistake?)."
+            )
+    runs = run_table(protocol, sheet, reductions, rejected)
+    day = DayResult(
+        protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
+        runs=runs, warnings=day_warnings, inputs=day_inputs(protocol, sheet, reductions),
+        previews=previews,
+    )
+    check_prototype_speeds(protocol)
+    _analyse(day)
+    return day
 
+
+def _side_files(protocol: Protocol) -> list[Any]:
+    """The protocol's per-run side files: carriage log ([speed_log]), zeros file ([zeros])."""
+    return [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
+
+
+def unlisted_warnings(protocol: Protocol, sheet: pd.DataFrame) -> list[str]:
+    """A warning per data file that no sheet row names (side files of the runs aside)."""
+    logs = {log_path(spec, Path("."), str(f), int(r)).as_posix()
+            for spec in _side_files(protocol)
+            for r, f in zip(sheet["run"], sheet["file"], strict=True)}
+    return [f"{f} is in the data folder but not in the run sheet; it is ignored."
+            for f in unlisted_files(sheet, protocol.campaign.data_dir) if f not in logs]
+
+
+def runs_to_reduce(protocol: Protocol, sheet: pd.DataFrame) -> tuple[
+        list[dict[str, Any]], dict[int, str]]:
+    """The sheet rows to reduce, and the rejections the sheet alone decides (a row's own
+    error, a file named by two rows); void rows are neither."""
     rejected: dict[int, str] = {}
     todo = []
     first_run_of: dict[Path, int] = {}
@@ -342,12 +377,28 @@ def process_day(
             continue
         first_run_of[path] = int(rec["run"])
         todo.append(rec)
+    return todo, rejected
 
-    reductions: dict[int, RunReduction] = {}
+
+def reduce_runs(
+    protocol: Protocol,
+    sheet: pd.DataFrame,
+    todo: list[dict[str, Any]],
+    rejected: dict[int, str],
+    *,
+    jobs: int | None,
+    progress: Callable[[int, int], None] | None,
+    debug: bool,
+    cache_dir: str | Path | None,
+) -> tuple[dict[int, RunReduction], dict[int, dict[str, np.ndarray]]]:
+    """Every run of ``todo`` reduced (from the cache, or in worker processes), in sheet order,
+    and the previews of runs read but not reduced; rejections are added to ``rejected``."""
     from towtank.runtime.parallel import map_runs
 
+    reductions: dict[int, RunReduction] = {}
     cache = RunCache(cache_dir) if cache_dir is not None else None
     common = protocol_settings(protocol) if cache is not None else None
+    sides = _side_files(protocol)
     keys: dict[int, str] = {}
     to_reduce = []
     for rec in todo:
@@ -387,9 +438,18 @@ def process_day(
         cache.flush()
     # keep the sheet's order whatever the order of cache hits and fresh reductions
     order = {int(r): k for k, r in enumerate(sheet["run"])}
-    reductions = dict(sorted(reductions.items(), key=lambda kv: order[kv[0]]))
+    return dict(sorted(reductions.items(), key=lambda kv: order[kv[0]])), previews
 
-    tares = tare_models(protocol, sheet, reductions, day_warnings)
+
+def apply_tares(
+    protocol: Protocol,
+    sheet: pd.DataFrame,
+    reductions: dict[int, RunReduction],
+    tares: dict[str, TareModel],
+    rejected: dict[int, str],
+) -> None:
+    """Each model run's tare subtracted (in ``reductions``); a run whose tare group has no
+    usable sting run is moved to ``rejected``."""
     config_of = dict(zip(sheet["run"].astype(int), sheet["config"], strict=True))
     group_of = dict(zip(sheet["run"].astype(int), sheet["tare_group"], strict=True))
     for run in list(reductions):
@@ -406,39 +466,28 @@ def process_day(
             continue
         reductions[run] = apply_tare(reductions[run], tare)
 
-    for red in reductions.values():
-        day_warnings.extend(f"run {red.run}: {w}." for w in red.warnings)
-    for rec in sheet.to_dict("records"):
-        temp = rec["water_temp_C"]
-        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
-            day_warnings.append(
-                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
-                "ITTC water properties are extrapolated (a unit mistake?)."
-            )
-    runs = run_table(protocol, sheet, reductions, rejected)
+
+def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
+               reductions: dict[int, RunReduction]) -> dict[str, str]:
+    """sha256 of every input of the day: protocol, sheet, a reference CSV, every file the
+    sheet names (rejected runs' too) and the runs' side files."""
     inputs = {str(protocol.path): _sha(protocol.path),
               str(protocol.campaign.run_sheet): _sha(protocol.campaign.run_sheet)}
     if protocol.campaign.reference not in BUILTIN_REFERENCES:  # a user CSV is an input too
         inputs[str(protocol.campaign.reference)] = _sha(Path(protocol.campaign.reference))
     shas = {red.file: red.sha256 for red in reductions.values()}
-    for file in sheet["file"]:  # every input the sheet names, rejected runs' files too
+    for file in sheet["file"]:
         path = protocol.campaign.data_dir / str(file)
         if str(file) in shas:
             inputs[str(path)] = shas[str(file)]
         elif str(file) and path.is_file():
             inputs[str(path)] = _sha(path)
-    for spec in sides:  # the carriage logs and zeros files are inputs too
+    for spec in _side_files(protocol):  # the carriage logs and zeros files are inputs too
         for run, file in zip(sheet["run"], sheet["file"], strict=True):
             log = log_path(spec, protocol.campaign.data_dir, str(file), int(run))
             if log.is_file():
                 inputs[str(log)] = _sha(log)
-    day = DayResult(
-        protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
-        runs=runs, warnings=day_warnings, inputs=inputs, previews=previews,
-    )
-    check_prototype_speeds(protocol)
-    _analyse(day)
-    return day
+    return inputs
 
 
 def _sha(path: Path) -> str:
