@@ -3,7 +3,7 @@
 Synthetic SUT-2 days at realistic noise give the twelve coefficients; their errors, their 95 %
 intervals (per seed and as a coverage rate over many seeds), the prime values and the diff %
 against REMUS (Table 4 arithmetic), the report's curve-difference cross-check, the coefficients a
-day cannot support, and the filter pitfall of METHOD.md are tested here.
+day cannot support, and the filter pitfall of docs/method.md are tested here.
 """
 
 from __future__ import annotations
@@ -579,7 +579,7 @@ def _speed_late(real):
 
 @pytest.mark.parametrize("mismatch", [_speed_one_way, _speed_late], ids=["one-way", "5ms"])
 def test_filter_mismatch_is_caught(hull_day: Day, monkeypatch, mismatch):
-    """METHOD.md: filtering speed and force differently biases the added mass. With the speed
+    """docs/method.md: filtering speed and force differently biases the added mass. With the speed
     filtered differently from the forces, X_udot leaves its 5 % tolerance (so the tolerance test
     above would fail), while the unpatched pipeline on the same day is within it.
 

@@ -1,4 +1,4 @@
-"""The protocol loader (FORMATS.md §1): the shipped example, path resolution, and every kind of
+"""The protocol loader (docs/formats.md §1): the shipped example, path resolution, and every kind of
 mistake a lab makes in a TOML file, each a ProtocolError of one sentence naming what is wrong."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from towtank.commands import cli
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import SCHEMA, TOP_LEVEL, load_protocol
 
-# FORMATS.md §1, verbatim
+# docs/formats.md §1, verbatim
 FORMATS_EXAMPLE = '''\
 [campaign]
 name = "SUT-2 quarter-scale hull, day 1"

@@ -5,7 +5,7 @@ Re = U c / nu on the chord) are set beside the two-dimensional NACA 0015 section
 Klimas (1981) (:mod:`towtank.reference.sandia`) at each run's Reynolds number, and beside the
 finite-span
 expectation from Prandtl's lifting-line theory, which lowers the lift slope and adds induced drag
-(METHOD.md, "Fins"; report section 5-4, Figs. 14-16).
+(docs/method.md, "Fins"; report section 5-4, Figs. 14-16).
 
 Conventions: angles of attack ``alpha_deg`` in degrees, lift slopes per radian, induced angle in
 radians. The fin's reference area is its planform chord x span, as in runs.csv.
@@ -52,7 +52,7 @@ __all__ = [
     "speed_groups",
 ]
 
-#: The fins.csv columns of FORMATS.md section 5, in order.
+#: The fins.csv columns of docs/formats.md section 5, in order.
 FIN_COLUMNS: tuple[str, ...] = (
     "run", "angle_deg", "speed_mean", "re", "cl", "cd", "cl_sandia", "cd_sandia",
 )
@@ -487,7 +487,7 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
     Returns
     -------
     pandas.DataFrame
-        Columns :data:`FIN_TABLE_COLUMNS`: the fins.csv columns of FORMATS.md section 5 (run,
+        Columns :data:`FIN_TABLE_COLUMNS`: the fins.csv columns of docs/formats.md section 5 (run,
         angle_deg, speed_mean, re, cl, cd, cl_sandia, cd_sandia), then cl_3d, cd_3d (NaN past
         the section's stall), speed_group [m/s] (see :func:`speed_groups`), drag_mean [N],
         lift_mean [N]. Rows in the order of ``runs``.

@@ -1,6 +1,6 @@
 """Hull coefficients: added mass and quadratic damping with 95 % intervals (SUT-2 report §2).
 
-Added mass (report eqs. 7–8; METHOD.md "Added mass"). At constant acceleration a and speed U
+Added mass (report eqs. 7–8; docs/method.md "Added mass"). At constant acceleration a and speed U
 the balance drag is D = (m − X_udot)·a + R(U). The primary estimate is the joint regression
 D = k2·U|U| + k1·U + M·a over all steady and constant-acceleration samples of the α = 0 runs
 (α = 90° for Y_vdot), X_udot = m − M. Its interval combines the regression's standard error
@@ -11,7 +11,7 @@ acceleration level minus the steady quadratic D_s(U) averaged over their common 
 is the second estimate, reported beside it (in the method text too) with a check of their
 agreement.
 
-Damping (report eqs. 13–15; METHOD.md "Damping from C_D(α)"). C_D = R/(½ρAU²) per steady hull
+Damping (report eqs. 13–15; docs/method.md "Damping from C_D(α)"). C_D = R/(½ρAU²) per steady hull
 run with |α| ≤ 30°; C_D(α) = a·α² + b·α + c (α in rad) by OLS (statsmodels); then
 X_u|u| = −½ρA·c, X_uv = X_uw = −½ρA·b, X_v|v| = X_w|w| = −½ρA·(a − c/2), Y_uv = Z_uw = −½ρA·c,
 and Y_v|v| = Z_w|w| = −½ρ·A_lat·C_D,90 from the transverse steady runs' R = K·U|U|. The frontal

@@ -1,6 +1,6 @@
 """Similarity laws, model-to-prototype scaling and resistance extrapolation.
 
-Conventions follow METHOD.md, "Similarity and scaling" (the SUT-2 report, section 3): the scale
+Conventions follow docs/method.md, "Similarity and scaling" (the SUT-2 report, section 3): the scale
 ratio is ``lambda = L_p / L_m`` (prototype over model), ``Fn = U / sqrt(g L)``, ``Re = U L / nu``.
 Resistance is extrapolated with the ITTC 1957 model-ship correlation line and a form factor
 (ITTC Recommended Procedure 7.5-02-02-02, *1978 ITTC Performance Prediction Method*, with the
@@ -481,7 +481,7 @@ def prototype_value(
     """Dimensional prototype coefficient from its prime (non-dimensional) value.
 
     Added mass: ``prime * 1/2 rho L^3`` [kg]; quadratic damping: ``prime * 1/2 rho L^2`` [kg/m]
-    (SNAME 1950 prime system, as in METHOD.md "Conventions").
+    (SNAME 1950 prime system, as in docs/method.md "Conventions").
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The ``towtank`` command line (FORMATS.md §4).
+"""The ``towtank`` command line (docs/formats.md §4).
 
 Imports of the heavy libraries are deferred to the sub-command that needs them, so that
 ``towtank --help`` answers at once.

@@ -1,4 +1,4 @@
-"""Protocol loader: the campaign's TOML file (FORMATS.md §1), validated.
+"""Protocol loader: the campaign's TOML file (docs/formats.md §1), validated.
 
 Every key is checked against a schema: an unknown or misspelt key is an error that names it and
 suggests the nearest valid key, a missing required key or a value of the wrong type likewise, and

@@ -1,6 +1,6 @@
 """Ingest: read one run file, map and calibrate its channels, and check it is sound.
 
-Run files (FORMATS.md §3) are CSV, CSV.gz or LabVIEW TDMS. The file is read once as bytes (the
+Run files (docs/formats.md §3) are CSV, CSV.gz or LabVIEW TDMS. The file is read once as bytes (the
 same bytes give its sha256 for the cache and the provenance), parsed with pyarrow (CSV) or npTDMS
 (TDMS) into float64 arrays, mapped to the canonical channels with value = gain·(raw − offset),
 and checked: truncated last line, non-numeric or malformed rows, missing and infinite values,

@@ -503,7 +503,7 @@ def thumbnail(
 
 
 def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
-    """Subtract a tare group's F_tare(U, a) sample by sample (METHOD.md "Sting tare").
+    """Subtract a tare group's F_tare(U, a) sample by sample (docs/method.md "Sting tare").
 
     The steady means use the window means of U|U|, U and a, which equals averaging the
     sample-by-sample difference. Returns a new reduction; ``red`` is not changed.

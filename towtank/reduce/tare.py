@@ -1,4 +1,5 @@
-"""Sting tare (report §4: "test the rod without the model and subtract"; METHOD.md "Sting tare").
+"""Sting tare (report §4: "test the rod without the model and subtract"; docs/method.md,
+"Sting tare").
 
 Runs with config = sting measure the mounting alone. Per tare group and per force channel,
 F_tare(U, a) = t2·U|U| + t1·U + m_t·a is fitted by least squares over the sting runs' steady and

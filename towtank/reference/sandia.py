@@ -5,7 +5,7 @@ The table shipped in ``towtank/reference/data/naca0015_sandia.csv`` gives the tw
 aspect ratio) lift and drag coefficients of the NACA 0015 section from 0 to 180 deg angle of
 attack at 11 Reynolds numbers from 1e4 to 1e7 [1]_. It is read once and cached.
 
-Interpolation (METHOD.md, "Fins"): linear in the angle of attack at each of the two tabulated
+Interpolation (docs/method.md, "Fins"): linear in the angle of attack at each of the two tabulated
 Reynolds numbers that bracket the requested one, then linear in log10(Re) between those two. The
 section is symmetric, so negative angles use C_L(-alpha) = -C_L(alpha), C_D(-alpha) = C_D(alpha).
 
@@ -138,7 +138,7 @@ def section_coefficients(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Two-dimensional NACA 0015 lift and drag coefficients from the Sandia table.
 
-    Bilinear interpolation of Sheldahl & Klimas (1981) [1]_ as prescribed in METHOD.md ("Fins"):
+    Bilinear interpolation of Sheldahl & Klimas (1981) [1]_ as docs/method.md prescribes ("Fins"):
     at each of the two tabulated Reynolds numbers Re_i <= Re <= Re_(i+1),
 
         C(alpha, Re_i) = C_ij + (C_i(j+1) - C_ij) (|alpha| - alpha_j) / (alpha_(j+1) - alpha_j),

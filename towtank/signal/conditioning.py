@@ -1,6 +1,6 @@
 """Signal conditioning: zero, drift, zero-phase low-pass filter, acceleration from speed.
 
-METHOD.md "A run": the force channels' zero is their mean over the still window before the
+docs/method.md "A run": the force channels' zero is their mean over the still window before the
 carriage moves; where the file also ends at rest the zero is interpolated linearly in time
 between the pre- and post-run windows (balance drift). One zero-phase low-pass filter is applied
 identically to speed and forces, and acceleration is taken from the filtered speed: filtering
@@ -112,7 +112,7 @@ def zero_line(
     -------
     zero : ndarray
         Zero at every sample [N]: the pre-window mean, or the straight line through the pre-
-        and post-window means at their mid-times (METHOD.md: zero and drift).
+        and post-window means at their mid-times (docs/method.md: zero and drift).
     zero_pre : float
         Pre-run zero [N].
     drift : float

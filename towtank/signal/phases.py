@@ -1,4 +1,4 @@
-"""Automatic phase detection from the carriage speed (report Fig. 2; METHOD.md "A run").
+"""Automatic phase detection from the carriage speed (report Fig. 2; docs/method.md "A run").
 
 A run is: still water (zero window) → acceleration → speed settling → steady measurement zone →
 deceleration → stop. The phases are found from the filtered speed and its derivative alone, so

@@ -172,7 +172,8 @@ def sut2_hull_truth(
     """The SUT-2 quarter-scale hull of the SUT-2 report, from its Table 4 (SUT-2 column).
 
     Prime values are made dimensional with 0.5 rho L^3 (added mass) and 0.5 rho L^2 (damping)
-    and inverted through METHOD.md's mappings: c0 = -X_u|u|/(0.5 rho A), b1 = -X_uv/(0.5 rho A),
+    and inverted through docs/method.md's mappings: c0 = -X_u|u|/(0.5 rho A),
+    b1 = -X_uv/(0.5 rho A),
     a2 = -X_v|v|/(0.5 rho A) + c0/2, cd90 = -Y_v|v|/(0.5 rho A_lat).
 
     Parameters
