@@ -13,8 +13,8 @@ and whole days are made by :func:`make_hull_day` and :func:`make_fin_day`, which
 coefficients at the tank water's density, and per-run truth (plateau forces, tare, phases).
 
 Conventions are those of docs/formats.md and docs/method.md: SI units, angles in degrees at the
-interface, SNAME signs (added mass and damping negative). ``drag`` is the balance force along the tow
-direction, positive when it pulls the model forward, so that at constant acceleration ``a``
+interface, SNAME signs (added mass and damping negative). ``drag`` is the balance force along the
+tow direction, positive when it pulls the model forward, so that at constant acceleration ``a``
 
     D_model = R(U, alpha) + (m - X_udot cos^2 alpha - Y_vdot sin^2 alpha) a.
 
