@@ -114,8 +114,8 @@ def test_missing_required_column(tmp_path, missing):
 
 
 def test_misspelt_required_column_lists_what_is_there(tmp_path):
-    rows = [{("angle" if k == "angle_deg" else k): v for k, v in r.items()} for r in ROWS]
-    with pytest.raises(ProtocolError, match=r"angle_deg .*columns found: .*angle"):
+    rows = [{("heading" if k == "angle_deg" else k): v for k, v in r.items()} for r in ROWS]
+    with pytest.raises(ProtocolError, match=r"angle_deg .*columns found: .*heading"):
         _read(_write(tmp_path / "s.xlsx", rows))
 
 
@@ -136,7 +136,7 @@ def test_typo_in_one_row_only_rejects_that_row(tmp_path):
      ("angle_deg", "", "angle_deg '' is not a number"),
      ("speed_nominal", "1,2", "speed_nominal '1,2' is not a number"),
      ("test", "stedy", "test 'stedy'"),
-     ("status", "bad", "status 'bad'"),
+     ("status", "maybe", "status 'maybe'"),
      ("file", "", "no data file")],
 )
 def test_row_faults(tmp_path, column, value, words):

@@ -314,8 +314,15 @@ def process_day(
         protocol = load_protocol(protocol_path)
     if jobs is None:
         jobs = protocol.processing.jobs  # None too: every core
-    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C)
+    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
+                           protocol.sheet)
     day_warnings = list(protocol.warnings) + unlisted_warnings(protocol, sheet)
+    notes = sheet.attrs.get("notes", [])
+    if notes:
+        shown = "; ".join(repr(n if len(n) <= 80 else n[:77] + "...") for n in notes[:3])
+        shown += "; ..." if len(notes) > 3 else ""
+        day_warnings.append(f"the run sheet's {len(notes)} line(s) of text among or below the "
+                            f"table are read as notes, not runs: {shown}.")
     todo, rejected = runs_to_reduce(protocol, sheet)
     reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
                                        progress=progress, debug=debug, cache_dir=cache_dir)

@@ -152,8 +152,12 @@ def _parser() -> argparse.ArgumentParser:
                     "two-cell (DragL + DragR), matrix (a 2x2 interaction matrix), speed-log and "
                     "position-log (carriage speed or position in its own file per run, 100 Hz, "
                     "another clock), zero-file (a zeros file per run) are other labs' layouts")
-    sy.add_argument("--sheet", choices=("csv", "xlsx"), default=None, dest="sheet_format",
-                    help="run-sheet format (default: xlsx for the hull day, csv for the fin day)")
+    sy.add_argument("--sheet", choices=("csv", "xlsx", "hand-xlsx", "hand-csv"), default=None,
+                    dest="sheet_format",
+                    help="run-sheet format (default: xlsx for the hull day, csv for the fin "
+                    "day); hand-xlsx and hand-csv are typed as a lab types them (title row, "
+                    "the lab's column names and status words, notes below; hand-csv is ';' "
+                    "separated with decimal commas and the speed in mm/s)")
     sy.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return p
 

@@ -20,9 +20,11 @@ def synth_command(args: argparse.Namespace) -> int:
         synthetic.write_sample_days(args.outdir)
         print(f"sample days written to {args.outdir}")
         return EXIT_OK
+    hand = args.sheet_format if args.sheet_format in ("hand-xlsx", "hand-csv") else None
+    plain = args.sheet_format.removeprefix("hand-") if args.sheet_format else None
     formats = {k: v for k, v in (("file_format", args.file_format),
-                                 ("sheet_format", args.sheet_format)) if v is not None}
-    sheet = {"sheet_format": args.sheet_format} if args.sheet_format else {}
+                                 ("sheet_format", plain)) if v is not None}
+    sheet = {"sheet_format": plain} if plain else {}
     if args.day == "hull":
         synthetic.make_hull_day(args.outdir, seed=args.seed, **formats)
         from towtank.testing.layouts import layout_channels, protocol_sections
@@ -34,6 +36,11 @@ def synth_command(args: argparse.Namespace) -> int:
     else:
         synthetic.make_fin_day(args.outdir, seed=args.seed, **formats)
         sections = synthetic.fin_protocol_sections(".", "out", **sheet)
+    if hand:  # the same runs, typed as a lab types them
+        from towtank.testing.handsheet import write_hand_typed_sheet
+
+        path = Path(args.outdir) / f"run_sheet.{plain}"
+        write_hand_typed_sheet(path, hand, path)
     protocol = synthetic.write_protocol(
         Path(args.outdir) / "protocol.toml",
         header=f"Synthetic {args.day} day, seed {args.seed} (towtank synth); truth in truth.json",

@@ -42,6 +42,7 @@ from towtank.ingest.sections import (  # noqa: F401
     _read_options,
     _tare_source,
 )
+from towtank.ingest.sheetlayout import SheetOptions, parse_sheet_options
 from towtank.ingest.speedlog import SpeedLog, parse_speed_log
 from towtank.ingest.zerofile import ZeroFile, parse_zero_file
 from towtank.reference.sets import BUILTIN_REFERENCES
@@ -177,6 +178,7 @@ class Protocol:
     vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
     speed_log: SpeedLog | None = None  # [speed_log]: carriage speed from its own file
     zeros: ZeroFile | None = None  # [zeros]: the balance zero from its own file
+    sheet: SheetOptions = field(default_factory=SheetOptions)  # [sheet]: a hand-typed sheet
 
     @property
     def name(self) -> str:
@@ -349,6 +351,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         tare=_tare_source(data.get("tare", {}), base, src, check_paths),
         speed_log=parse_speed_log(data.get("speed_log"), src),
         zeros=parse_zero_file(data.get("zeros"), src),
+        sheet=parse_sheet_options(data.get("sheet"), src),
     )
 
 

@@ -1,4 +1,4 @@
-"""Run sheet reader (FORMATS.md §2): one row per run, .csv or .xlsx.
+"""Run sheet reader (docs/formats.md §2, §2.1): one row per run, .csv or .xlsx.
 
 Sheet-level faults (missing required columns, duplicated run numbers, an unreadable file) stop
 the day with a :class:`~towtank.errors.ProtocolError`. A fault confined to one row (a typo in
@@ -17,6 +17,13 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import ProtocolError
+from towtank.ingest.sheetlayout import (
+    STATUS_WORDS,
+    TEST_WORDS,
+    SheetOptions,
+    header_names,
+    words,
+)
 
 REQUIRED = ("run", "file", "config", "angle_deg")
 CONFIGS = ("hull", "fin", "sting")
@@ -37,23 +44,114 @@ KNOWN = REQUIRED + (
 DEFAULT_TARE_GROUP = "default"
 
 
-def _read_table(path: Path) -> pd.DataFrame:
+def _read_table(path: Path, options: SheetOptions | None = None) -> tuple[
+        pd.DataFrame, list[int], dict[str, tuple[float, float]], list[str]]:
+    """The sheet's table: (rows with the contract's column names, each row's line in the
+    sheet (1-based), unit conversions of eq. 1 of :mod:`towtank.ingest.sheetlayout`, notes
+    found below the table)."""
+    opts = options or SheetOptions()
     suffix = path.suffix.lower()
     try:
         if suffix == ".xlsx":
-            df = _read_xlsx(path)
+            grid = _read_xlsx(path, opts)
         elif suffix == ".csv":
-            df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+            grid = _read_csv_grid(path, opts)
         else:
             raise ProtocolError(f"{path.name}: a run sheet must be .csv or .xlsx.")
     except ProtocolError:
         raise
     except Exception as exc:  # noqa: BLE001 - any reader failure is a sheet-level fault
         raise ProtocolError(f"{path.name}: the run sheet cannot be read ({exc}).") from None
-    df.columns = known_columns([str(c).strip() for c in df.columns], path.name)
-    # drop rows that are entirely empty (trailing rows in spreadsheets)
-    blank = df.apply(lambda col: col.map(_is_blank)).all(axis=1)
-    return df.loc[~blank].reset_index(drop=True)
+    head = _header_index(grid, opts, path.name)
+    names, units = header_names(list(grid[head]) if grid else [], opts, path.name)
+    names = [n if n else f"Unnamed: {i}" for i, n in enumerate(names)]
+    names = known_columns(names, path.name)
+    body, lines, notes = _table_body(grid, head, len(names))
+    df = pd.DataFrame(body, columns=names, dtype=object) if body else \
+        pd.DataFrame(columns=names, dtype=object)
+    return df, lines, units, notes
+
+
+def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
+    """A CSV sheet's cells as text, separated by ``,``, ``;`` or tab (found from the lines)."""
+    import csv
+
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")  # an Excel export on a European system
+    lines = text.splitlines()
+    delim = opts.delimiter
+    if delim == "auto":
+        sample = [ln for ln in lines[:40] if ln.strip()]
+        counts = {d: sum(ln.count(d) for ln in sample) for d in (";", "\t", ",")}
+        delim = ";" if counts[";"] >= max(1, counts[","] // 2) else \
+            "\t" if counts["\t"] > counts[","] else ","
+    grid = [row for row in csv.reader(lines, delimiter=delim, skipinitialspace=True)]
+    decimal = opts.decimal if opts.decimal != "auto" else ("," if delim != "," else ".")
+    if decimal == ",":
+        grid = [[_decimal_comma(c) for c in row] for row in grid]
+    return grid
+
+
+_COMMA_NUMBER = re.compile(r"^\s*[-+]?\d+,\d*\s*$|^\s*[-+]?,\d+\s*$")
+
+
+def _decimal_comma(cell: str) -> str:
+    return cell.replace(",", ".") if _COMMA_NUMBER.match(cell) else cell
+
+
+def _header_index(grid: list[list[Any]], opts: SheetOptions, src: str) -> int:
+    """0-based row of the header: ``[sheet] header_row``, else the first of the first 30 rows
+    that names the required columns (title, date and operator rows above it are skipped)."""
+    if opts.header_row:
+        if opts.header_row > len(grid):
+            raise ProtocolError(f"{src}: [sheet] header_row = {opts.header_row}, but the sheet "
+                                f"has {len(grid)} rows.")
+        return opts.header_row - 1
+    for i, row in enumerate(grid[:30]):
+        try:
+            names, _ = header_names(list(row), opts, src)
+        except ProtocolError:
+            continue
+        normed = {_norm(n) for n in names if n}
+        if {_norm(c) for c in REQUIRED} <= normed:
+            return i
+    return 0  # the missing columns are named by the caller
+
+
+def _is_note(row: list[Any]) -> bool:
+    """A line of text below (or in) the table, not a run: fewer filled cells than the required
+    columns, none of them a number (a run row has its run number; a note typed with a ``;`` in
+    a CSV sheet fills two cells)."""
+    filled = [c for c in row if not _is_blank(c)]
+    if not filled or len(filled) >= len(REQUIRED):
+        return False
+    for cell in filled:
+        try:
+            float(str(cell).strip())
+            return False
+        except ValueError:
+            continue
+    return True
+
+
+def _table_body(grid: list[list[Any]], head: int, width: int) -> tuple[
+        list[list[Any]], list[int], list[str]]:
+    """The table's rows under the header, each padded to ``width``, their lines (1-based),
+    and the notes typed among or below them (a line of one text cell), which are not runs."""
+    body, lines, notes = [], [], []
+    for k, row in enumerate(grid[head + 1:], start=head + 2):
+        row = list(row)
+        if all(_is_blank(c) for c in row):
+            continue
+        if _is_note(row):
+            notes.append("; ".join(str(c).strip() for c in row if not _is_blank(c)))
+            continue
+        body.append((row + [None] * width)[:width])
+        lines.append(k)
+    return body, lines, notes
 
 
 #: How close (difflib ratio) an unknown column name must be to a known one to be taken for a
@@ -115,14 +213,14 @@ def known_columns(columns: list[str], src: str) -> list[str]:
     return out
 
 
-def _read_xlsx(path: Path) -> pd.DataFrame:
-    """The run-sheet worksheet as text-or-number cells, header in the first row.
+def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
+    """The run-sheet worksheet's cells, as text or numbers.
 
-    The worksheet is the first one whose header holds the required columns (a notes tab may
-    come first). Formulas give the values Excel saved with them. A merged range (a tare group
-    or a temperature typed once over several runs) gives its value to every cell it covers,
-    as the reader of the sheet sees it; a plain reader would leave all but the first cell
-    empty.
+    The worksheet is the first one with a header row that names the required columns (a
+    notes tab may come first; title rows above the header are allowed). Formulas give the
+    values Excel saved with them. A merged range (a tare group or a temperature typed once
+    over several runs) gives its value to every cell it covers, as the reader of the sheet
+    sees it; a plain reader would leave all but the first cell empty.
 
     Raises
     ------
@@ -132,24 +230,31 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
     """
     import openpyxl
 
+    opts = opts or SheetOptions()
     wb = openpyxl.load_workbook(path, data_only=True)
-    required = {_norm(c) for c in REQUIRED}
 
-    def header(ws: Any) -> list[str]:
-        first = next(ws.iter_rows(max_row=1, values_only=True), ())
-        return [str(h).strip() for h in first if h is not None]
+    def top(ws: Any) -> list[list[Any]]:
+        return [list(r) for r in ws.iter_rows(max_row=30, values_only=True)]
 
-    chosen = next((ws for ws in wb.worksheets
-                   if required <= {_norm(h) for h in header(ws)}), None)
+    chosen = None
+    for ws in wb.worksheets:
+        grid = top(ws)
+        i = _header_index(grid, opts, path.name)
+        names, _ = header_names(grid[i] if grid else [], opts, path.name)
+        if {_norm(c) for c in REQUIRED} <= {_norm(str(n)) for n in names if n}:
+            chosen = ws
+            break
     if chosen is None:
         names = ", ".join(repr(ws.title) for ws in wb.worksheets)
-        found = header(wb.worksheets[0])
+        first = top(wb.worksheets[0])
+        found = [str(h).strip() for h in (first[0] if first else []) if h is not None]
         missing = [c for c in REQUIRED if _norm(c) not in {_norm(h) for h in found}]
         wb.close()
         raise ProtocolError(
-            f"{path.name}: no worksheet has the required columns {', '.join(REQUIRED)} in its "
-            f"first row; the first, {names.split(', ')[0]}, lacks {', '.join(missing)} "
-            f"(columns found: {', '.join(found) or 'none'}; worksheets: {names})."
+            f"{path.name}: no worksheet has the required columns {', '.join(REQUIRED)} in a "
+            f"header row (within its first 30 rows); the first, {names.split(', ')[0]}, lacks "
+            f"{', '.join(missing)} (columns found: {', '.join(found) or 'none'}; worksheets: "
+            f"{names}; the lab's own column names can be mapped in [sheet] columns)."
         )
     ws = chosen
     for rng in list(ws.merged_cells.ranges):
@@ -159,7 +264,7 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
                                 min_col=rng.min_col, max_col=rng.max_col):
             for cell in row:
                 cell.value = value
-    rows = list(ws.iter_rows(values_only=True))
+    rows = [list(r) for r in ws.iter_rows(values_only=True)]
     blanks = [r for r in _unsaved_formulas(path, ws) if r[1] > 1]
     wb.close()
     if blanks:
@@ -170,10 +275,7 @@ def _read_xlsx(path: Path) -> pd.DataFrame:
             "workbook was written by a program, not saved by Excel), so they would read as "
             "empty; open and save the sheet in Excel, or type the values."
         )
-    if not rows:
-        return pd.DataFrame()
-    head = [f"Unnamed: {i}" if h is None else str(h) for i, h in enumerate(rows[0])]
-    return pd.DataFrame([list(r) for r in rows[1:]], columns=head, dtype=object)
+    return rows
 
 
 def _unsaved_formulas(path: Path, values: Any) -> list[tuple[str, int]]:
@@ -216,15 +318,19 @@ def _as_text(v: object) -> str:
     return str(v).strip()
 
 
-def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFrame:
+def read_run_sheet(path: str | Path, default_temperature_C: float,
+                   options: SheetOptions | None = None) -> pd.DataFrame:
     """Read and validate a run sheet.
 
     Parameters
     ----------
     path : str or Path
-        The run sheet, .csv or .xlsx (first worksheet).
+        The run sheet, .csv or .xlsx (the first worksheet with the required columns).
     default_temperature_C : float
         Water temperature for rows without ``water_temp_C`` [°C].
+    options : SheetOptions, optional
+        The protocol's ``[sheet]``: header row, the lab's column names, CSV separator and
+        decimal mark (:mod:`towtank.ingest.sheetlayout`).
 
     Returns
     -------
@@ -233,7 +339,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
         angle_deg [deg], speed_nominal [m/s], accel_nominal [m/s²], tare_group,
         water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], sheet_row
         (1-based row in the sheet, header = row 1), sheet_error (one sentence, or "") and
-        every extra column of the sheet, unchanged.
+        every extra column of the sheet, unchanged. ``.attrs["notes"]`` holds the lines of
+        text typed among or below the table (not runs).
 
     Raises
     ------
@@ -242,7 +349,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
     """
     path = Path(path)
     src = path.name
-    raw = _read_table(path)
+    raw, lines, units, notes = _read_table(path, options)
     missing = [c for c in REQUIRED if c not in raw.columns]
     if missing:
         found = ", ".join(raw.columns) or "none"
@@ -255,7 +362,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
 
     rows = []
     for i, rec in enumerate(raw.to_dict("records")):
-        sheet_row = i + 2
+        sheet_row = lines[i]
         errors: list[str] = []
         run_text = _as_text(rec["run"])
         try:
@@ -275,12 +382,12 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
         if config not in CONFIGS:
             errors.append(f"config {config!r} is not one of {', '.join(CONFIGS)}")
         out["config"] = config
-        test = _as_text(rec.get("test", "")).lower()
+        test = words(_as_text(rec.get("test", "")), TEST_WORDS)
         if test and test not in TESTS:
             errors.append(f"test {test!r} is not one of {', '.join(TESTS)}")
         out["test"] = test
         try:
-            out["angle_deg"] = _as_float(rec["angle_deg"])
+            out["angle_deg"] = _converted(_as_float(rec["angle_deg"]), units.get("angle_deg"))
             if math.isnan(out["angle_deg"]):  # type: ignore[arg-type]
                 raise ValueError
         except ValueError:
@@ -288,15 +395,16 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
             out["angle_deg"] = float("nan")
         for col in NUMERIC:
             try:
-                out[col] = _as_float(rec.get(col))
+                out[col] = _converted(_as_float(rec.get(col)), units.get(col))
             except ValueError:
                 errors.append(f"{col} {_as_text(rec.get(col))!r} is not a number")
                 out[col] = float("nan")
         if math.isnan(out["water_temp_C"]):  # type: ignore[arg-type]
             out["water_temp_C"] = float(default_temperature_C)
-        status = _as_text(rec.get("status", "")).lower() or "ok"
+        status = words(_as_text(rec.get("status", "")), STATUS_WORDS) or "ok"
         if status not in STATUSES:
-            errors.append(f"status {status!r} is not one of {', '.join(STATUSES)}")
+            errors.append(f"status {status!r} is not one of {', '.join(STATUSES)} (or a word "
+                          "for them: x, bad, skip, excluded...; good, valid, ✓...)")
         out["status"] = status
         out["tare_group"] = _as_text(rec.get("tare_group", "")) or DEFAULT_TARE_GROUP
         out["remarks"] = _as_text(rec.get("remarks", ""))
@@ -322,7 +430,13 @@ def read_run_sheet(path: str | Path, default_temperature_C: float) -> pd.DataFra
         }
         detail = "; ".join(f"run {r} on rows {', '.join(map(str, w))}" for r, w in where.items())
         raise ProtocolError(f"{src}: duplicated run numbers ({detail}).")
+    df.attrs["notes"] = notes
     return df
+
+
+def _converted(value: float, unit: tuple[float, float] | None) -> float:
+    """A sheet value in the contract's unit (eq. 1 of :mod:`towtank.ingest.sheetlayout`)."""
+    return value if unit is None or math.isnan(value) else unit[0] * value + unit[1]
 
 
 def unlisted_files(sheet: pd.DataFrame, data_dir: Path) -> list[str]:

@@ -149,7 +149,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
              "read", "vehicle", "balance", "tare", "speed_log",
-             "zeros")
+             "zeros", "sheet")
 
 _KIND_WORDS = {
     "str": "a text string",

@@ -75,15 +75,20 @@ def _xlsx_bytes(rows: list[dict[str, Any]], columns: Sequence[str]) -> bytes:
     wb.properties.created = _FIXED_TIME
     buf = io.BytesIO()
     wb.save(buf)
-    # openpyxl stamps the save time and the zip entries' dates: pin both
+    return pinned_xlsx(buf.getvalue())
+
+
+def pinned_xlsx(data: bytes) -> bytes:
+    """An .xlsx file's bytes with its save time and zip entries' dates pinned (reproducible)."""
     stamp = _FIXED_TIME.strftime("%Y-%m-%dT%H:%M:%SZ").encode()
     out = io.BytesIO()
-    with zipfile.ZipFile(buf) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
+    with zipfile.ZipFile(io.BytesIO(data)) as src, \
+            zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
         for info in src.infolist():
             data = src.read(info.filename)
             if info.filename == "docProps/core.xml":
                 data = re.sub(
-                    rb"(<dcterms:modified[^>]*>)[^<]*(</dcterms:modified>)",
+                    rb"(<dcterms:(?:modified|created)[^>]*>)[^<]*(</dcterms:(?:modified|created)>)",
                     rb"\g<1>" + stamp + rb"\g<2>",
                     data,
                 )
