@@ -266,7 +266,9 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
         f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
         f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
     ]
-    lines += [f"  rejected: {reason}" for reason in day.rejected.values()]
+    from towtank.analysis.daywide import group_rejections
+
+    lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs)]
     lines += [f"  warning: {w}" for w in day.warnings]
     lines.append(f"outputs in {out}")
     return "\n".join(lines) + "\n"

@@ -32,6 +32,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from towtank import __version__
+from towtank.analysis.daywide import group_rejections, own_reason
 from towtank.report import figures, style
 from towtank.report.provenance import creation_date, report_date
 
@@ -147,7 +148,13 @@ def quality_flow(day: DayResult) -> Flow:
         f"{int(counts.get('void', 0))} voided by the operator.")
     bad = runs[runs["status"] != "ok"]
     if len(bad):
+        day_wide = [g for g in group_rejections(runs) if g.day_wide]
+        for g in day_wide:
+            f.li(f"rejected — {g.sentence}")
+        grouped = {r for g in day_wide for r in g.runs}
         for r in bad.itertuples():
+            if int(r.run) in grouped:
+                continue
             reason = short_reason(int(r.run), r.file, r.reason)
             f.li(f"run {int(r.run)} ({r.config}, α = {_num(r.angle_deg)}°, {r.file}): "
                  f"{r.status} — {reason}")
@@ -217,13 +224,7 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
         f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
 
 
-def short_reason(run: Any, file: Any, reason: Any) -> str:
-    """A run's reason without the "run N: file:" prefix the pipeline puts in front of it."""
-    text = str(reason) if isinstance(reason, str) and reason else "no reason given"
-    for prefix in (f"run {run}:", f"{file}:"):
-        if text.startswith(prefix):
-            text = text[len(prefix):].strip()
-    return text
+short_reason = own_reason  # a run's reason without the "run N: file:" prefix
 
 
 def _num(x: Any, digits: int = 4) -> str:
@@ -232,6 +233,17 @@ def _num(x: Any, digits: int = 4) -> str:
     except (TypeError, ValueError):
         return str(x)
     return "–" if not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+def thumbnail_runs(day: DayResult) -> list[int]:
+    """The runs the appendix draws: all but those a day-wide fault rejected before anything
+    was read (their thumbnails would be empty; the quality page says the fault once)."""
+    skip = {r for g in group_rejections(day.runs) if g.day_wide for r in g.runs
+            if day.previews.get(r) is None}
+    runs = [r for r in day.runs["run"].astype(int) if r not in skip]
+    if skip and not any(r in day.reductions or day.previews.get(r) is not None for r in runs):
+        return []  # what is left has nothing to draw either (void runs)
+    return runs
 
 
 def page_plan(day: DayResult) -> list[Page]:
@@ -243,11 +255,12 @@ def page_plan(day: DayResult) -> list[Page]:
     for i, chunk in enumerate(q):
         pages.append(Page("quality", "Quality", chunk,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
-    runs = list(day.runs["run"].astype(int))
+    runs = thumbnail_runs(day)
     for k in range(0, len(runs), THUMBS_PER_PAGE):
         chunk = runs[k:k + THUMBS_PER_PAGE]
         pages.append(Page("thumbs", "Appendix", chunk,
-                          subtitle=f"run thumbnails, runs {chunk[0]}–{chunk[-1]}"))
+                          subtitle=f"run thumbnails, runs {chunk[0]}–{chunk[-1]}"
+                          if len(chunk) > 1 else f"run thumbnail, run {chunk[0]}"))
     numbers: dict[str, str] = {}
     for page in pages[1:]:
         if page.section not in numbers:

@@ -1,0 +1,110 @@
+"""Day-wide faults: one mistake that rejects every run said once, not once per run.
+
+A wrong extension, a missing gain or a misnamed column rejects every run for the same reason;
+listing it 41 times (and drawing 41 empty thumbnails) hides it. A reason is the same for two
+runs when it is word for word the same once each run's own file name and number are taken out.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import PurePath
+from typing import Any
+
+import pandas as pd
+
+__all__ = ["RejectionGroup", "group_rejections", "run_ranges", "own_reason", "MIN_GROUP"]
+
+#: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
+#: not void (a fault in 3 of 40 files is those files' own, and is listed run by run).
+MIN_GROUP = 3
+
+
+@dataclass(frozen=True)
+class RejectionGroup:
+    """Runs rejected for one reason.
+
+    Attributes
+    ----------
+    runs : list of int
+        The runs, ascending.
+    sentence : str
+        One sentence for all of them (a single run: its own reason).
+    day_wide : bool
+        True when the same fault rejected at least :data:`MIN_GROUP` runs and half the day.
+    """
+
+    runs: list[int]
+    sentence: str
+    day_wide: bool
+
+
+def run_ranges(runs: list[int]) -> str:
+    """Run numbers as ranges: ``1–39, 41, 42``."""
+    out: list[str] = []
+    runs = sorted(runs)
+    i = 0
+    while i < len(runs):
+        j = i
+        while j + 1 < len(runs) and runs[j + 1] == runs[j] + 1:
+            j += 1
+        out.append(f"{runs[i]}–{runs[j]}" if j - i >= 2 else
+                   ", ".join(str(r) for r in runs[i:j + 1]))
+        i = j + 1
+    return ", ".join(out)
+
+
+def own_reason(run: Any, file: Any, reason: Any) -> str:
+    """The reason without the ``run N:`` and ``file:`` prefixes the pipeline puts in front."""
+    text = str(reason).strip() if isinstance(reason, str) and reason else "no reason given"
+    for prefix in (f"run {run}:", f"{file}:"):
+        if text.startswith(prefix):
+            text = text[len(prefix):].strip()
+    return text
+
+
+def _generic(run: int, file: Any, reason: str) -> str:
+    """The reason with this run's file name, stem and number replaced by placeholders."""
+    text = own_reason(run, file, reason)
+    name = str(file) if isinstance(file, str) else ""
+    for part in sorted({name, PurePath(name).name, PurePath(name).stem} - {""}, key=len,
+                       reverse=True):
+        text = text.replace(part, "\x00file")
+    return re.sub(rf"\brun {run}\b", "run \x00n", text)
+
+
+def group_rejections(runs: pd.DataFrame, min_group: int = MIN_GROUP) -> list[RejectionGroup]:
+    """The rejected runs of ``runs`` (runs.csv's table: run, file, status, reason) grouped by
+    reason: a fault shared by at least ``min_group`` runs and half the runs that are not void
+    is one :class:`RejectionGroup`; every other rejected run is its own.
+
+    Returns
+    -------
+    list of RejectionGroup
+        In order of each group's first run.
+    """
+    bad = runs[runs["status"] == "rejected"]
+    if bad.empty:
+        return []
+    n_used = int((runs["status"] != "void").sum())
+    by_reason: dict[str, list[tuple[int, Any, str]]] = {}
+    for r in bad.itertuples():
+        reason = str(r.reason) if isinstance(r.reason, str) and r.reason else "no reason given"
+        by_reason.setdefault(_generic(int(r.run), r.file, reason), []).append(
+            (int(r.run), r.file, reason))
+    groups: list[RejectionGroup] = []
+    for members in by_reason.values():
+        if len(members) >= min_group and 2 * len(members) >= n_used:
+            numbers = [m[0] for m in members]
+            run, file, reason = members[0]
+            every = "every run that is not void" if len(members) == n_used else \
+                f"{len(members)} of the {n_used} runs that are not void"
+            groups.append(RejectionGroup(
+                numbers,
+                f"one fault rejected {every} (runs {run_ranges(numbers)}), shown for "
+                f"{file}: {own_reason(run, file, reason)}",
+                True))
+        else:
+            groups += [RejectionGroup([m[0]], m[2], False) for m in members]
+    return sorted(groups, key=lambda g: g.runs[0])
