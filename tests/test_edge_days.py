@@ -316,6 +316,7 @@ def test_cutoff_above_nyquist_rejects_each_run_with_that_reason(tmp_path):
 
 def test_output_folder_with_the_users_files_keeps_them(tmp_path):
     from towtank.commands import cli
+    from towtank.runtime import manifest
 
     protocol = _tiny_day(tmp_path, STINGS[:2] + [syn.RunSpec("hull", 0.0, 1.2, HIGH),
                                                   syn.RunSpec("hull", 0.0, 1.6, HIGH)])
@@ -325,6 +326,8 @@ def test_output_folder_with_the_users_files_keeps_them(tmp_path):
     (out / "junk.txt").write_text("mine", encoding="utf-8")
     (out / "fins.csv").write_text("stale output of an earlier fin day\n", encoding="utf-8")
     (out / "fin_curves.csv").write_text("stale too\n", encoding="utf-8")
+    # written by an earlier towtank run (its manifest says so): they may be replaced
+    manifest.write_manifest(out, manifest.describe(out, {"fins.csv", "fin_curves.csv"}))
     for _ in range(2):  # the second time over its own outputs too
         code = cli.main(["process", str(protocol), "--out", str(out), "--quiet",
                          "--no-report", "--jobs", "1"])
@@ -337,6 +340,7 @@ def test_output_folder_with_the_users_files_keeps_them(tmp_path):
         assert len((out / "fins.csv").read_text(encoding="utf-8").splitlines()) == 1
         assert not (out / "fin_curves.csv").exists()
     leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
-    leftovers += [p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".cache"]
+    leftovers += [p.name for p in out.iterdir() if p.name.startswith(".")
+                  and p.name not in (".cache", manifest.MANIFEST)]
     assert leftovers == []
     assert not math.isnan(pd.read_csv(out / "runs.csv")["drag_mean"].iloc[-1])

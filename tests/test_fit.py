@@ -279,7 +279,7 @@ def test_curve_difference_agrees_with_joint_regression(hull_day: Day):
     assert not any("disagree" in w.lower() for w in hull_day.result.warnings)
 
     # the second estimate is in the method column of the primary rows, beside the primary
-    assert table.loc["Z_wdot", "method"].startswith("= Y_vdot")
+    assert table.loc["Z_wdot", "method"].startswith("same as Y_vdot")
     for symbol in ("X_udot", "Y_vdot"):
         method = table.loc[symbol, "method"]
         assert method.startswith("joint regression"), method

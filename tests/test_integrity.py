@@ -288,7 +288,8 @@ def test_outputs_may_not_replace_a_run_file_outside_the_data_folder(tmp_path, ca
     frame.to_csv(sheet, index=False)
     raw = _sha(out / "fins.csv")
     assert _process(protocol, out) == 2
-    assert "would overwrite the input" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "would overwrite the input" in err or "towtank did not write" in err
     assert _sha(out / "fins.csv") == raw
 
 

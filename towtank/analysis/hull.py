@@ -749,7 +749,7 @@ def fit_hull(
             e = estimates[source]
             estimates[target] = Estimate(
                 target, e.value, e.std_error, e.ci_low, e.ci_high,
-                f"= {source} (axisymmetric hull)", e.n_runs, e.alt_value, e.alt_method,
+                f"same as {source} (axisymmetric hull)", e.n_runs, e.alt_value, e.alt_method,
                 e.agreement,
             )
     lift_slope = None

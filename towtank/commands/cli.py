@@ -158,18 +158,29 @@ def _parser() -> argparse.ArgumentParser:
                     "day); hand-xlsx and hand-csv are typed as a lab types them (title row, "
                     "the lab's column names and status words, notes below; hand-csv is ';' "
                     "separated with decimal commas and the speed in mm/s)")
+    sy.add_argument("--force", action="store_true",
+                    help="write into a folder that is not empty, replacing the files an earlier "
+                    "synth wrote there (never a file synth did not write)")
     sy.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return p
 
 
 def _err(msg: str) -> None:
-    print(f"towtank: {msg}", file=sys.stderr)
+    from towtank.report.safetext import clean_text
+
+    print(f"towtank: {clean_text(msg)}", file=sys.stderr)
 
 
 def cmd_process(args: argparse.Namespace) -> int:
     from towtank.errors import ProtocolError
     from towtank.ingest.protocol import check_output_dir, load_protocol
 
+    if args.out is not None:  # a set an interrupted run left aside is put back first
+        from towtank.runtime.manifest import recover_outputs
+
+        recovered = recover_outputs(Path(args.out).resolve())
+        if recovered:
+            _err(recovered)
     try:
         protocol = load_protocol(args.protocol)
     except ProtocolError as exc:
@@ -271,7 +282,9 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
     lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs)]
     lines += [f"  warning: {w}" for w in day.warnings]
     lines.append(f"outputs in {out}")
-    return "\n".join(lines) + "\n"
+    from towtank.report.safetext import clean_text  # no escape sequence from a file reaches
+
+    return "\n".join(clean_text(line) for line in lines) + "\n"
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:

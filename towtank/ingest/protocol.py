@@ -702,17 +702,27 @@ def read_reference_csv(path: str | Path) -> dict[str, float]:
 def check_output_dir(
     out_dir: str | Path, protocol: Protocol, inputs: Iterable[str | Path] = ()
 ) -> Path:
-    """The output folder, resolved, after checking that writing there cannot touch an input.
+    """The output folder, resolved, after checking that writing there cannot touch an input
+    nor a file towtank did not write (docs/formats.md §4).
+
+    A set of outputs that an interrupted run left beside a missing output folder is put back
+    first (:func:`towtank.runtime.manifest.recover_outputs`; said in the day's warnings).
 
     ``inputs`` are further input files (the run files the sheet names, wherever they lie).
 
     Raises
     ------
     ProtocolError
-        ``out_dir`` is a file; it is, holds or lies inside the data folder; or one of the
-        outputs would replace the protocol, the run sheet, the reference CSV or an input.
+        ``out_dir`` is a file; it is, holds or lies inside the data folder; one of the
+        outputs would replace the protocol, the run sheet, the reference CSV or an input; or
+        it holds an entry with an output's name that towtank did not write.
     """
+    from towtank.runtime import manifest
+
     out = Path(out_dir).resolve()
+    recovered = manifest.recover_outputs(out)
+    if recovered and recovered not in protocol.warnings:  # said with the day's warnings
+        object.__setattr__(protocol, "warnings", (*protocol.warnings, recovered))
     if out.exists() and not out.is_dir():
         raise ProtocolError(f"the output folder {out} is a file, not a folder.")
     data = protocol.campaign.data_dir.resolve()
@@ -732,4 +742,5 @@ def check_output_dir(
                     f"the output folder {out} would overwrite the input {path} with the "
                     f"output {name}; choose another folder with --out or [campaign] output_dir."
                 )
+    manifest.refuse_foreign(out, OUTPUT_NAMES)
     return out

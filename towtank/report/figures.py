@@ -42,6 +42,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from towtank.report import style
+from towtank.report.safetext import clean_text
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -119,7 +120,7 @@ _HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
 def literal(text: object) -> str:
     """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
     escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
-    return str(text).replace("$", r"\$")
+    return clean_text(str(text)).replace("$", r"\$")
 
 
 def true_minus(text: str) -> str:

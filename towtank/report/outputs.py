@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -12,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.provenance import provenance
+from towtank.runtime import manifest
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -33,34 +35,54 @@ def _swap_into_place(tmp: Path, out_dir: Path) -> None:
         os.rename(tmp, out_dir)
 
 
+INCOMPLETE_TEXT = (
+    "towtank is replacing the outputs in this folder one by one (the folder also holds files "
+    "towtank did not write, which it leaves alone). If this file is still here, that run was "
+    "interrupted: the outputs are a mix of two runs. Process the day again.\n"
+)
+
+
 def _replace_entries(tmp: Path, out_dir: Path) -> None:
     """Put the entries of ``tmp`` into ``out_dir`` one by one, each by a rename.
 
-    Used when ``out_dir`` holds files towtank did not write: those are left alone. Earlier
-    towtank outputs the new set lacks (e.g. fins.csv of a fin day) are removed, and
-    provenance.json goes last, so that it marks a complete set.
+    Used when ``out_dir`` holds files towtank did not write: those are left alone. While the
+    entries are swapped, ``OUTPUTS-INCOMPLETE.txt`` says that the set is mixed and the manifest
+    lists both sets; earlier towtank outputs the new set lacks (e.g. fins.csv of a fin day)
+    are removed; provenance.json goes last, then the new manifest, then the marker goes.
     """
-    names = sorted(p.name for p in tmp.iterdir())
+    new_files = manifest.describe(tmp, OUTPUT_NAMES)
+    old = manifest.read_manifest(out_dir)
+    both = {k: list(v) for k, v in (old["files"] if old else {}).items()}
+    for key, entries in new_files.items():
+        both.setdefault(key, []).extend(entries)
+    marker = INCOMPLETE_TEXT.encode()
+    both[manifest.INCOMPLETE] = [{"size": len(marker), "mtime_ns": -1,
+                                  "sha256": hashlib.sha256(marker).hexdigest()}]
+    manifest.write_manifest(out_dir, both, complete=False)
+    manifest.atomic_write_text(out_dir / manifest.INCOMPLETE, INCOMPLETE_TEXT)
+    names = sorted(p.name for p in tmp.iterdir() if p.name != manifest.MANIFEST)
     names.sort(key=lambda n: n == "provenance.json")
     for name in names:
         src, dst = tmp / name, out_dir / name
         if src.is_dir():
-            old = None
+            old_dir = None
             if dst.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{name}.old-", dir=out_dir))
-                old.rmdir()
-                os.rename(dst, old)
+                old_dir = Path(tempfile.mkdtemp(prefix=f".{name}.old-", dir=out_dir))
+                old_dir.rmdir()
+                os.rename(dst, old_dir)
             os.rename(src, dst)
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+            if old_dir is not None:
+                shutil.rmtree(old_dir, ignore_errors=True)
         else:
             os.replace(src, dst)
-    for name in OUTPUT_NAMES.difference(names):
+    for name in OUTPUT_NAMES.difference(names):  # ours: foreign ones stopped the day before
         stale = out_dir / name
-        if stale.is_dir():
+        if stale.is_dir() and not stale.is_symlink():
             shutil.rmtree(stale, ignore_errors=True)
-        elif stale.exists():
+        elif stale.is_file() and not stale.is_symlink():
             stale.unlink()
+    manifest.write_manifest(out_dir, new_files, complete=True)
+    (out_dir / manifest.INCOMPLETE).unlink(missing_ok=True)
     shutil.rmtree(tmp, ignore_errors=True)
 
 
@@ -93,8 +115,15 @@ def foreign_entries(out_dir: Path, keep: tuple[str, ...] = (".cache",)) -> list[
     return sorted(
         p.name for p in out_dir.iterdir()
         if p.name not in OUTPUT_NAMES and p.name not in keep
+        and p.name not in (manifest.MANIFEST, manifest.INCOMPLETE)
         and not p.name.startswith((f".{out_dir.name}.", ".figures.old-"))
     )
+
+
+def refuse_foreign_outputs(out_dir: Path) -> None:
+    """Stop (ProtocolError) when ``out_dir`` holds an entry with an output's name that towtank
+    did not write (:func:`towtank.runtime.manifest.refuse_foreign`)."""
+    manifest.refuse_foreign(out_dir, OUTPUT_NAMES)
 
 
 Writer = Callable[["DayResult", Path], None]
@@ -125,8 +154,11 @@ def write_outputs(
     """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
+    manifest.recover_outputs(out_dir)
+    refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    manifest.folder_mode(tmp, out_dir if out_dir.is_dir() else None)
     try:
         from towtank.report import tables
 
@@ -141,6 +173,8 @@ def write_outputs(
             json.dumps(provenance(day), indent=2, sort_keys=False, default=str) + "\n",
             encoding="utf-8",
         )
+        manifest.write_manifest(tmp, manifest.describe(tmp, OUTPUT_NAMES))  # marks it complete
+        refuse_foreign_outputs(out_dir)  # again: a file may have appeared while we worked
         if foreign_entries(out_dir, keep):
             # a folder with the user's own files in it: replace our entries one by one and
             # leave everything else (and the kept cache) where it is

@@ -466,7 +466,7 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
     rows, hl = [], {}
     for i, r in enumerate(coef.to_dict("records")):
         m = str(r.get("method", ""))
-        mirror = re.match(r"=\s*(\S+)", m)
+        mirror = re.match(r"(?:=|same as)\s*(\S+)", m)
         if mirror:
             ref = "= " + figures.math_symbol(mirror.group(1))
         else:

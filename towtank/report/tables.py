@@ -12,8 +12,17 @@ if TYPE_CHECKING:
 
 
 def write_csv(df: pd.DataFrame, path: Path) -> None:
-    """A deterministic CSV: full float precision, '\\n' line ends, no index."""
-    df.to_csv(path, index=False, lineterminator="\n")
+    """A deterministic CSV: full float precision, '\\n' line ends, no index; text cells (and
+    column names) a spreadsheet would run as formulas neutralised
+    (:func:`towtank.report.safetext.csv_text`)."""
+    from towtank.report.safetext import csv_text
+
+    out = df.copy(deep=False)
+    for col in out.columns:
+        if out[col].dtype == object or str(out[col].dtype) in ("string", "str"):
+            out[col] = out[col].map(lambda v: csv_text(v) if isinstance(v, str) else v)
+    out.columns = [csv_text(str(c)) for c in out.columns]
+    out.to_csv(path, index=False, lineterminator="\n")
 
 
 def write_tables(day: DayResult, out: Path) -> None:

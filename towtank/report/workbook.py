@@ -39,6 +39,7 @@ import pandas as pd
 
 from towtank import __version__
 from towtank.report import style
+from towtank.report.safetext import clean_text
 
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
@@ -87,6 +88,15 @@ COEFFICIENT_ORDER = (
 
 
 # ------------------------------------------------------------------------------- cells
+def text_cell(cell: Any, value: Any) -> Any:
+    """``cell`` holding ``value``; text is stored as text, never as a formula (openpyxl takes a
+    string beginning with ``=`` for one: a remark ``=HYPERLINK(...)`` would become a link)."""
+    cell.value = value
+    if isinstance(value, str) and cell.data_type == "f":
+        cell.data_type = "s"
+    return cell
+
+
 def cell_value(v: Any) -> Any:
     """A value openpyxl stores faithfully: numbers as numbers, NaN as an empty cell.
 
@@ -103,7 +113,7 @@ def cell_value(v: Any) -> Any:
         f = float(v)
         return f if math.isfinite(f) else None
     if isinstance(v, str):
-        return v
+        return clean_text(v)
     if isinstance(v, pd.Timestamp):
         return v.to_pydatetime()
     if isinstance(v, dt.datetime | dt.date):
@@ -164,7 +174,7 @@ class SheetWriter:
 
     # -- low level
     def _put(self, row: int, col: int, value: Any) -> Any:
-        cell = self.ws.cell(row=row, column=col, value=cell_value(value))
+        cell = text_cell(self.ws.cell(row=row, column=col), cell_value(value))
         v = cell.value
         if isinstance(v, float):
             cell.number_format = display_format(v)
@@ -185,13 +195,13 @@ class SheetWriter:
     # -- blocks
     def title(self, text: str) -> None:
         """A bold block title on its own row."""
-        c = self.ws.cell(row=self.row, column=1, value=text)
+        c = text_cell(self.ws.cell(row=self.row, column=1), cell_value(text))
         c.font = self.st["title_font"]
         self.row += 1
 
     def note(self, text: str) -> None:
         """An italic one-line note."""
-        c = self.ws.cell(row=self.row, column=1, value=text)
+        c = text_cell(self.ws.cell(row=self.row, column=1), cell_value(text))
         c.font = self.st["note_font"]
         self.row += 1
 
@@ -439,7 +449,7 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
                 units={"speed": "m/s", "runs": "-", "one_plus_k": "-"})
     w.gap()
     w.title("Similarity")
-    c = w.ws.cell(row=w.row, column=1, value=sr.statement)
+    c = text_cell(w.ws.cell(row=w.row, column=1), cell_value(sr.statement))
     c.alignment = w.st["wrap"]
     w.ws.merge_cells(start_row=w.row, start_column=1, end_row=w.row, end_column=7)
     w.ws.row_dimensions[w.row].height = 15 * (1 + len(sr.statement) // 110)
@@ -636,7 +646,12 @@ def write_workbook(day: DayResult, folder: str | Path) -> Path:
     stamp = creation_date(report_date(day)[0]) or dt.datetime(2000, 1, 1, tzinfo=dt.UTC)
     stamp = stamp.replace(tzinfo=None)
     wb.properties.creator = "towtank"
-    wb.properties.title = f"{day.protocol.name}: towing-tank test workbook"
+    wb.properties.title = clean_text(f"{day.protocol.name}: towing-tank test workbook")
+    for ws in wb.worksheets:  # towtank writes no formula: any text a formula would be is text
+        for row in ws.iter_rows():
+            for cell in row:
+                if cell.data_type == "f":
+                    cell.data_type = "s"
     wb.properties.created = stamp
     buf = io.BytesIO()
     with exact_floats():

@@ -17,6 +17,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from towtank.testing.days import (
@@ -37,6 +38,14 @@ def _long_plan() -> list[Any]:
             for spec in hull_day_plan()]
 
 
+def _two_level_plan() -> list[Any]:
+    """The day's plan with its transverse tows at two accelerations instead of three: the
+    steady tows ramp at 0.2 m/s² like the second accelerated tow (Y_vdot from two levels)."""
+    return [dataclasses.replace(spec, accel=0.2)
+            if spec.angle_deg == 90.0 and spec.test != "accel" else spec
+            for spec in hull_day_plan()]
+
+
 def _noise(**kw: Any) -> Noise:
     return dataclasses.replace(Noise(), **kw)
 
@@ -54,7 +63,20 @@ CONDITIONS: dict[str, dict[str, Any]] = {
     "noise_4x": {"fs": 200.0, "noise": _noise(balance_sigma=4 * _BASE.balance_sigma,
                                               speed_sigma=4 * _BASE.speed_sigma)},
     "long_runs": {"fs": 50.0, "runs": "long", "tank_length_m": 5000.0},
+    "two_levels": {"fs": 200.0, "runs": "two_levels"},
 }
+
+
+def weighed_mass(model: dict[str, Any], seed: int) -> float:
+    """The model's mass as the lab weighs it: the true mass plus a weighing error drawn with
+    the protocol's ``mass_uncertainty_kg`` (default 0.5 g) as its standard deviation [kg].
+
+    The added masses' intervals include that uncertainty (docs/method.md); a study that gave the
+    fit the exact mass would find them too wide (X_udot's 2.3× its errors at 0.5 g).
+    """
+    sigma = float(model.get("mass_uncertainty_kg", 0.0005))
+    rng = np.random.default_rng([seed, 0x3A55])
+    return round(float(model["mass_kg"]) + sigma * float(rng.standard_normal()), 7)
 
 
 def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[dict[str, Any]]:
@@ -65,11 +87,14 @@ def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[d
     kw = dict(CONDITIONS[condition])
     if kw.get("runs") == "long":
         kw["runs"] = _long_plan()
+    elif kw.get("runs") == "two_levels":
+        kw["runs"] = _two_level_plan()
     tmp = Path(tempfile.mkdtemp(prefix=f"cov_{condition}_", dir=workdir))
     try:
         truth = make_hull_day(tmp, seed=seed, file_format="csv", sheet_format="csv", **kw)
-        protocol = write_protocol(tmp / "p.toml",
-                                  **hull_protocol_sections(".", "out", sheet_format="csv"))
+        sections = hull_protocol_sections(".", "out", sheet_format="csv")
+        sections["model"]["mass_kg"] = weighed_mass(sections["model"], seed)
+        protocol = write_protocol(tmp / "p.toml", **sections)
         day = process_day(protocol, jobs=1)
         coef = (day.hull.coefficients.set_index("symbol") if day.hull is not None
                 else pd.DataFrame())

@@ -661,6 +661,7 @@ def _toml_value(value: Any) -> str:
         text = str(value)
         text = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
         text = text.replace("\t", "\\t")
+        text = re.sub("[\x00-\x1f\x7f]", lambda m: f"\\u{ord(m.group()):04X}", text)
         return f'"{text}"'
     if isinstance(value, list | tuple):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
