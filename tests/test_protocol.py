@@ -384,13 +384,26 @@ def test_length_in_millimetres_warns(folder):
 @pytest.mark.parametrize(
     "section, key, value, hint",
     [("model", "diameter_m", 50.0, "mm"),
-     ("water", "temperature_C", 291.15, "K"), ("fin", "chord_m", 120.0, "mm")],
+     ("water", "temperature_C", 45.0, "K or °F"), ("fin", "chord_m", 120.0, "mm")],
 )
 def test_other_unit_warnings(folder, section, key, value, hint):
     data = _base()
     data[section][key] = value
     p = load_protocol(_write(folder, data))
     assert any(key in w and hint in w for w in p.warnings), p.warnings
+
+
+@pytest.mark.parametrize("value, hint", [(291.15, "kelvin (18.0 °C)"), (100.0, "°F (37.8 °C)"),
+                                         (180.0, "a typo for 18"), (-273.16, ""),
+                                         (1e300, "not a water temperature")])
+def test_water_that_is_not_liquid_stops_the_day(folder, value, hint):
+    """A protocol temperature at which there is no liquid water (a kelvin or °F value, a lost
+    decimal point, absolute zero) is exit 2 with the likely slip, not an IAPWS error (exit 3)."""
+    data = _base()
+    data["water"]["temperature_C"] = value
+    with pytest.raises(ProtocolError, match=r"'temperature_C' in \[water\]") as err:
+        load_protocol(_write(folder, data))
+    assert hint in str(err.value)
 
 
 @pytest.mark.parametrize("mass, unit", [(552.0, "grams"), (0.000552, "tonnes")])
@@ -443,7 +456,7 @@ def test_plausible_roughness_allowance_is_kept(folder, delta_cf):
 
 @pytest.mark.parametrize(
     "key, value, words",
-    [("temperature_C", 45.0, "temperature_C = 45"), ("temperature_C", -5.0, "temperature_C = -5"),
+    [("temperature_C", 45.0, "temperature_C = 45"), ("temperature_C", -1.5, "temperature_C = -1.5"),
      ("salinity_g_kg", 350.0, "salinity_g_kg = 350")],
 )
 def test_prototype_water_outside_the_ittc_range_warns(folder, key, value, words):

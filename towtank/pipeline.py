@@ -375,7 +375,13 @@ def runs_to_reduce(protocol: Protocol, sheet: pd.DataFrame) -> tuple[
         if rec["sheet_error"]:
             rejected[int(rec["run"])] = f"run {rec['run']}: {rec['sheet_error']}"
             continue
-        path = (protocol.campaign.data_dir / str(rec["file"])).resolve()
+        try:
+            path = (protocol.campaign.data_dir / str(rec["file"])).resolve()
+        except (OSError, RuntimeError) as exc:  # a symlink loop; a name too long
+            reason = "a symlink loop" if isinstance(exc, RuntimeError) else exc.strerror or exc
+            rejected[int(rec["run"])] = (
+                f"run {rec['run']}: {rec['file']} cannot be opened ({reason}).")
+            continue
         if path in first_run_of:  # one recording cannot be two runs: a copy-paste in the sheet
             rejected[int(rec["run"])] = (
                 f"run {rec['run']}: {rec['file']} is also the file of run {first_run_of[path]} "

@@ -7,6 +7,7 @@ Imports of the heavy libraries are deferred to the sub-command that needs them, 
 from __future__ import annotations
 
 import argparse
+import errno
 import gc
 import sys
 from pathlib import Path
@@ -61,10 +62,10 @@ def _parser() -> argparse.ArgumentParser:
                     help="output folder (default: output_dir of the protocol)")
     pr.add_argument("--no-report", action="store_true",
                     help="write the CSV tables only (no workbook, PDF or figures)")
-    pr.add_argument("--jobs", "-j", type=int, metavar="N",
+    pr.add_argument("--jobs", "-j", type=_jobs, metavar="N",
                     help="runs reduced in parallel (default: the protocol's [processing] "
                          "jobs, else all cores)")
-    pr.add_argument("--date", metavar="YYYY-MM-DD",
+    pr.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
                     help="test date printed in the report (default: from the inputs)")
     pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
     pr.add_argument("--no-cache", action="store_true",
@@ -165,6 +166,28 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _iso_date(text: str) -> str:
+    """``--date``: a date that exists, written YYYY-MM-DD."""
+    import datetime as dt
+
+    try:
+        return dt.datetime.strptime(text.strip(), "%Y-%m-%d").date().isoformat()
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a date that exists, written YYYY-MM-DD") from None
+
+
+def _jobs(text: str) -> int:
+    """``--jobs``: a whole number of at least 1."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return n
+
+
 def _err(msg: str) -> None:
     from towtank.report.safetext import clean_text
 
@@ -210,6 +233,11 @@ def cmd_process(args: argparse.Namespace) -> int:
     # --jobs, else the protocol's [processing] jobs, else every core
     if args.jobs is None:
         args.jobs = protocol.processing.jobs
+    if args.jobs is not None and args.jobs > parallel.default_jobs():
+        if not args.quiet:
+            _err(f"note: {args.jobs} jobs asked for, but this machine gives towtank "
+                 f"{parallel.default_jobs()} cores: {parallel.default_jobs()} jobs are used.")
+        args.jobs = parallel.default_jobs()
     # the workers load the reduction's libraries while this process loads pandas and the sheet
     parallel.prestart(args.jobs)
     try:
@@ -260,7 +288,14 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
-    write_outputs(day, out, report=not args.no_report)
+    try:
+        write_outputs(day, out, report=not args.no_report)
+    except OSError as exc:
+        if exc.errno not in _STORAGE_ERRNOS:
+            raise
+        _err(f"the outputs could not be written to {out} ({exc.strerror}); the folder is as "
+             "it was before this run.")
+        return EXIT_UNUSABLE
     text = _summary(day, Path(out))
     if not args.quiet:
         print(text, end="")
@@ -268,6 +303,13 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     if stamp is not None:
         stamp.record(code, text)
     return code
+
+
+#: Errors of the storage, not of towtank: a full disk or quota, a read-only or failing file
+#: system, no permission.
+_STORAGE_ERRNOS = frozenset(
+    getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EACCES", "EPERM",
+                                      "EFBIG", "ENAMETOOLONG") if hasattr(errno, name))
 
 
 def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazily
@@ -337,6 +379,21 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_UNUSABLE
+    import signal
+    import warnings
+
+    if not getattr(args, "debug", False):
+        warnings.showwarning = _warning_line
+    before = signal.getsignal(signal.SIGINT)
+    interrupted = _watch_interrupt()
+    try:
+        return _run(args, interrupted)
+    finally:
+        if before is not None and signal.getsignal(signal.SIGINT) is not before:
+            signal.signal(signal.SIGINT, before)  # only ever changed in the main thread
+
+
+def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
     from towtank.errors import TowtankError
 
     try:
@@ -345,9 +402,12 @@ def main(argv: list[str] | None = None) -> int:
         _err(str(exc))
         return EXIT_UNUSABLE
     except KeyboardInterrupt:
-        _err("interrupted; nothing was written.")
-        return 130
+        _err(INTERRUPTED)
+        return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - one sentence, not a traceback, for users
+        if interrupted:  # a library stopped by Ctrl-C (zlib mid-flush...): not a bug
+            _err(INTERRUPTED)
+            return EXIT_INTERRUPTED
         if getattr(args, "debug", False):
             raise
         _err(
@@ -355,6 +415,43 @@ def main(argv: list[str] | None = None) -> int:
             "Rerun with --debug for the traceback and please report it."
         )
         return EXIT_BUG
+
+
+def _warning_line(message: Warning | str, category: type[Warning], filename: str,
+                  lineno: int, file: object = None, line: str | None = None) -> None:
+    """Python warnings on the terminal: towtank's own as one line without a source path;
+    the libraries' (matplotlib, npTDMS, numpy...) not at all, their effects are the day's
+    warnings and notes (``--debug`` shows everything)."""
+    if not category.__module__.startswith("towtank"):
+        return
+    first = str(message).strip().splitlines()[0] if str(message).strip() else category.__name__
+    _err(f"warning: {first}")
+
+
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, the shell's convention
+INTERRUPTED = ("interrupted; the output folder holds the outputs of the last complete run "
+               "(or none), never a part of this one.")
+
+
+def _watch_interrupt() -> list[bool]:
+    """Record a Ctrl-C (SIGINT) in the returned list as well as raising KeyboardInterrupt,
+    so that an exception a library raises because it was interrupted maps to exit 130."""
+    import signal
+    import threading
+
+    seen: list[bool] = []
+    if threading.current_thread() is not threading.main_thread():
+        return seen
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.default_int_handler:
+        return seen  # someone else (a notebook, a test harness) handles Ctrl-C
+
+    def handler(signum: int, frame: object) -> None:
+        seen.append(True)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+    return seen
 
 
 def entry() -> None:

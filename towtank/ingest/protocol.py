@@ -46,10 +46,15 @@ from towtank.ingest.sheetlayout import SheetOptions, parse_sheet_options
 from towtank.ingest.speedlog import SpeedLog, parse_speed_log
 from towtank.ingest.zerofile import ZeroFile, parse_zero_file
 from towtank.reference.sets import BUILTIN_REFERENCES
+from towtank.reference.water import temperature_problem
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
 MAX_DELTA_CF = 0.002
+
+#: Fastest prototype speed taken in [prototype] speeds_m_s [m/s] (a torpedo runs at 25-35).
+MAX_PROTOTYPE_SPEED = 100.0
+
 #: Largest mismatch between [prototype] length_m and [model] length_m × scale [-].
 LENGTH_SCALE_TOLERANCE = 0.01
 WATER_TYPES = ("fresh", "sea")
@@ -202,6 +207,9 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
         raise ProtocolError(
             f"{src}: 'salinity_g_kg' in [{label}] must not be negative, but it is {salinity:g}."
         )
+    problem = temperature_problem(values["temperature_C"])
+    if problem is not None:
+        raise ProtocolError(f"{src}: 'temperature_C' in [{label}]: {problem}.")
     return Water(type=wtype, temperature_C=values["temperature_C"], salinity_g_kg=salinity)
 
 
@@ -286,6 +294,9 @@ def load_protocol(
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ProtocolError(f"{src}: not valid TOML ({exc}).") from None
+    except RecursionError:
+        raise ProtocolError(f"{src}: its tables or lists are nested too deeply to be a "
+                            "protocol.") from None
 
     for key in data:
         if key not in TOP_LEVEL:
@@ -386,8 +397,11 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     )
     if check_paths:
         if not campaign.run_sheet.is_file():
+            what = ("is a folder" if campaign.run_sheet.is_dir() else
+                    "is not a regular file (a pipe or a device)" if campaign.run_sheet.exists()
+                    else "does not exist")
             raise ProtocolError(
-                f"{src}: the run sheet '{camp['run_sheet']}' in [campaign] does not exist "
+                f"{src}: the run sheet '{camp['run_sheet']}' in [campaign] {what} "
                 f"({campaign.run_sheet})."
             )
         if campaign.run_sheet.suffix.lower() not in (".csv", ".xlsx"):
@@ -407,7 +421,7 @@ def _model(data: Any, src: str) -> Model:
     m = _section(data, "model", "model", src)
     _positive(
         m,
-        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == _NUM and k != "depth_m"),
+        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == _NUM),
         "model",
         src,
     )
@@ -472,8 +486,12 @@ def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
                 f"(they must agree within {LENGTH_SCALE_TOLERANCE:.0%}); correct one of them "
                 "or leave [prototype] length_m out."
             )
-    if any(s <= 0 for s in p["speeds_m_s"]):
-        raise ProtocolError(f"{src}: 'speeds_m_s' in [prototype] must all be positive.")
+    if not all(0 < s <= MAX_PROTOTYPE_SPEED for s in p["speeds_m_s"]):
+        raise ProtocolError(
+            f"{src}: 'speeds_m_s' in [prototype] must all be positive speeds up to "
+            f"{MAX_PROTOTYPE_SPEED:g} m/s, but they are "
+            f"{', '.join(f'{s:g}' for s in p['speeds_m_s'])}."
+        )
     delta_cf = p.get("delta_cf", 0.0)
     if abs(delta_cf) > MAX_DELTA_CF:
         raise ProtocolError(
@@ -743,4 +761,8 @@ def check_output_dir(
                     f"output {name}; choose another folder with --out or [campaign] output_dir."
                 )
     manifest.refuse_foreign(out, OUTPUT_NAMES)
+    problem = manifest.unwritable(out)
+    if problem:
+        raise ProtocolError(f"the output folder {out} cannot be written ({problem}); choose "
+                            "another folder with --out or [campaign] output_dir.")
     return out

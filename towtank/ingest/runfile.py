@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import io
 import os
 import zlib
 from dataclasses import dataclass, field
@@ -86,6 +87,19 @@ class RawRun:
         return int(self.time.size)
 
 
+#: Largest run file read [bytes] (after decompression): 1 GiB, about 8 hours of four channels
+#: at 1 kHz in binary, 3 hours as text. A run's samples are held in memory several times
+#: over while it is reduced; a larger file is rejected with one sentence, not left to the
+#: out-of-memory killer.
+MAX_RUN_FILE_BYTES = 1 << 30
+
+
+def _too_large(name: str, what: str, size: int | None = None) -> str:
+    amount = f"{size / 2**30:.1f} GiB" if size is not None else "larger than that"
+    return (f"{name} is too large for one run ({what} {amount}; towtank reads run files up to "
+            f"{MAX_RUN_FILE_BYTES / 2**30:g} GiB): split the recording into its runs")
+
+
 def file_bytes(path: Path) -> bytes:
     """The file's bytes, opened read-only; a missing or unreadable file is a RunError.
 
@@ -97,6 +111,9 @@ def file_bytes(path: Path) -> bytes:
         mode = os.stat(path).st_mode
         if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
             raise RunError(f"{path.name} is not a regular file (a pipe, socket or device)")
+        size = os.stat(path).st_size
+        if size > MAX_RUN_FILE_BYTES:
+            raise RunError(_too_large(path.name, "it is", size))
         with open(path, "rb") as fh:
             return fh.read()
     except FileNotFoundError:
@@ -210,7 +227,10 @@ def read_columns(
         if not data:
             raise RunError(f"{path.name} is empty (0 bytes)")
         try:
-            data = gzip.decompress(data)
+            with gzip.GzipFile(fileobj=io.BytesIO(data)) as gzf:
+                data = gzf.read(MAX_RUN_FILE_BYTES + 1)
+            if len(data) > MAX_RUN_FILE_BYTES:
+                raise RunError(_too_large(path.name, "decompressed, it is"))
         except EOFError:
             raise RunError(
                 f"{path.name} cannot be decompressed: the gzip stream ends early (truncated file)"

@@ -8,8 +8,10 @@ pipeline rejects that run while processing the rest.
 
 from __future__ import annotations
 
+import io
 import math
 import re
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -24,11 +26,15 @@ from towtank.ingest.sheetlayout import (
     header_names,
     words,
 )
+from towtank.reference.water import temperature_problem
 
 REQUIRED = ("run", "file", "config", "angle_deg")
 CONFIGS = ("hull", "fin", "sting")
 TESTS = ("steady", "accel")
 STATUSES = ("ok", "void")
+#: Largest run number taken (a run number is an identifier, not a quantity).
+MAX_RUN_NUMBER = 999_999_999
+
 NUMERIC = ("speed_nominal", "accel_nominal", "water_temp_C", "window_start_s", "window_end_s")
 KNOWN = REQUIRED + (
     "test",
@@ -51,6 +57,7 @@ def _read_table(path: Path, options: SheetOptions | None = None) -> tuple[
     found below the table)."""
     opts = options or SheetOptions()
     suffix = path.suffix.lower()
+    _check_size(path)
     try:
         if suffix == ".xlsx":
             grid = _read_xlsx(path, opts)
@@ -72,6 +79,102 @@ def _read_table(path: Path, options: SheetOptions | None = None) -> tuple[
     return df, lines, units, notes
 
 
+#: Bounds of a run sheet: a campaign's sheet has hundreds of rows and a few kB of text; a
+#: file beyond these is not a run sheet (or is one damaged) and is refused in one sentence
+#: rather than read for minutes into all of the memory.
+MAX_SHEET_BYTES = 64 << 20  # the file (a .csv, or an .xlsx as stored)
+MAX_SHEET_UNPACKED = 256 << 20  # an .xlsx's parts once unzipped
+MAX_SHEET_ROWS = 100_000
+
+
+def _check_size(path: Path) -> None:
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return  # the reader says what is wrong with it
+    if size > MAX_SHEET_BYTES:
+        raise ProtocolError(
+            f"{path.name}: the run sheet is {size / 2**20:.0f} MiB, but towtank reads run sheets "
+            f"up to {MAX_SHEET_BYTES >> 20} MiB (a day's sheet is a few kB): is it the right "
+            "file?")
+
+
+def _check_rows(path: Path, rows: int, where: str = "") -> None:
+    if rows > MAX_SHEET_ROWS:
+        raise ProtocolError(
+            f"{path.name}: the run sheet{where} has {rows:,} rows, but towtank reads run sheets "
+            f"of up to {MAX_SHEET_ROWS:,} rows (a day has hundreds): is it the right file, or "
+            "are the empty rows below the table formatted?")
+
+
+_CELL_REF = re.compile(rb'<(?:\w+:)?c\b[^>]*?\br="([A-Z]{1,3})(\d{1,7})"')
+_MERGE_REF = re.compile(rb'(<(?:\w+:)?mergeCell\b[^>]*?\bref=")([A-Z]{1,3})(\d{1,7}):'
+                        rb'([A-Z]{1,3})(\d{1,7})("[^>]*/>)')
+
+
+def _column_number(letters: bytes) -> int:
+    n = 0
+    for ch in letters:
+        n = n * 26 + (ch - 64)
+    return n
+
+
+def _column_letters(n: int) -> str:
+    out = ""
+    while n:
+        n, r = divmod(n - 1, 26)
+        out = chr(65 + r) + out
+    return out
+
+
+def _bounded_xlsx(path: Path) -> Path | io.BytesIO:
+    """The workbook to open: ``path`` itself, or a copy in memory whose merged ranges are cut
+    to the worksheet's used area (a range down to row 1,048,576 would make the reader create
+    billions of cells). Refuses a workbook too large to be a run sheet."""
+    try:
+        zf = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError):
+        return path  # openpyxl says what is wrong
+    with zf:
+        infos = zf.infolist()
+        unpacked = sum(i.file_size for i in infos)
+        if unpacked > MAX_SHEET_UNPACKED:
+            raise ProtocolError(
+                f"{path.name}: the workbook unpacks to {unpacked / 2**20:.0f} MiB, but towtank "
+                f"reads run sheets up to {MAX_SHEET_UNPACKED >> 20} MiB (a day's sheet is a "
+                "few kB; a huge remark or pasted data?).")
+        changed: dict[str, bytes] = {}
+        for info in infos:
+            if not (info.filename.startswith("xl/worksheets/") and
+                    info.filename.endswith(".xml")):
+                continue
+            xml = zf.read(info)
+            cells = [(int(r), _column_number(c)) for c, r in _CELL_REF.findall(xml)]
+            last_row = max((r for r, _ in cells), default=1)
+            last_col = max((c for _, c in cells), default=1)
+            _check_rows(path, last_row, f" (worksheet file {info.filename.rsplit('/', 1)[-1]})")
+
+            def clip(m: re.Match[bytes], last_row: int = last_row,
+                     last_col: int = last_col) -> bytes:
+                c0, r0 = _column_number(m.group(2)), int(m.group(3))
+                c1, r1 = _column_number(m.group(4)), int(m.group(5))
+                c1, r1 = min(c1, max(c0, last_col)), min(r1, max(r0, last_row))
+                ref = f"{_column_letters(c0)}{r0}:{_column_letters(c1)}{r1}".encode()
+                return m.group(1) + ref + m.group(6)
+
+            clipped = _MERGE_REF.sub(clip, xml)
+            if clipped != xml:
+                changed[info.filename] = clipped
+        if not changed:
+            return path
+        buf = io.BytesIO()
+        with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as out:
+            for info in infos:
+                out.writestr(info, changed.get(info.filename) or zf.read(info))
+        buf.seek(0)
+        return buf
+
+
 def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
     """A CSV sheet's cells as text, separated by ``,``, ``;`` or tab (found from the lines)."""
     import csv
@@ -88,6 +191,7 @@ def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
         counts = {d: sum(ln.count(d) for ln in sample) for d in (";", "\t", ",")}
         delim = ";" if counts[";"] >= max(1, counts[","] // 2) else \
             "\t" if counts["\t"] > counts[","] else ","
+    _check_rows(path, len(lines))
     grid = [row for row in csv.reader(lines, delimiter=delim, skipinitialspace=True)]
     decimal = opts.decimal if opts.decimal != "auto" else ("," if delim != "," else ".")
     if decimal == ",":
@@ -231,7 +335,8 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
     import openpyxl
 
     opts = opts or SheetOptions()
-    wb = openpyxl.load_workbook(path, data_only=True)
+    source = _bounded_xlsx(path)
+    wb = openpyxl.load_workbook(_reopen(source), data_only=True)
 
     def top(ws: Any) -> list[list[Any]]:
         return [list(r) for r in ws.iter_rows(max_row=30, values_only=True)]
@@ -265,7 +370,7 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
             for cell in row:
                 cell.value = value
     rows = [list(r) for r in ws.iter_rows(values_only=True)]
-    blanks = [r for r in _unsaved_formulas(path, ws) if r[1] > 1]
+    blanks = [r for r in _unsaved_formulas(_reopen(source), ws) if r[1] > 1]
     wb.close()
     if blanks:
         cells = ", ".join(f"{col}{row}" for col, row in blanks[:5])
@@ -278,7 +383,12 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
     return rows
 
 
-def _unsaved_formulas(path: Path, values: Any) -> list[tuple[str, int]]:
+def _reopen(source: Path | io.BytesIO) -> Path | io.BytesIO:
+    """A workbook source to open once more (a file again, or a fresh view of the bytes)."""
+    return io.BytesIO(source.getvalue()) if isinstance(source, io.BytesIO) else source
+
+
+def _unsaved_formulas(path: Path | io.BytesIO, values: Any) -> list[tuple[str, int]]:
     """(column letter, row) of the formula cells of ``values`` (a worksheet read with its
     saved values) that have no saved value; the formulas are read from ``path``."""
     import openpyxl
@@ -369,10 +479,13 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
             run_f = float(run_text)
             if not run_f.is_integer():
                 raise ValueError
+            if not 0 <= run_f <= MAX_RUN_NUMBER:
+                raise ValueError
             run = int(run_f)
-        except ValueError:
+        except (ValueError, OverflowError):
             raise ProtocolError(
-                f"{src}: row {sheet_row} has run number {run_text!r}, which is not a whole number."
+                f"{src}: row {sheet_row} has run number {run_text!r}, which is not a whole number "
+                f"from 0 to {MAX_RUN_NUMBER}."
             ) from None
         out: dict[str, object] = {"run": run, "sheet_row": sheet_row}
         out["file"] = _as_text(rec["file"])
@@ -401,6 +514,11 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
                 out[col] = float("nan")
         if math.isnan(out["water_temp_C"]):  # type: ignore[arg-type]
             out["water_temp_C"] = float(default_temperature_C)
+        else:
+            problem = temperature_problem(out["water_temp_C"])  # type: ignore
+            if problem is not None:
+                errors.append(f"water_temp_C: {problem}")
+                out["water_temp_C"] = float(default_temperature_C)
         status = words(_as_text(rec.get("status", "")), STATUS_WORDS) or "ok"
         if status not in STATUSES:
             errors.append(f"status {status!r} is not one of {', '.join(STATUSES)} (or a word "

@@ -3,8 +3,10 @@ table of TOML values to them (one sentence per mistake, with the nearest valid k
 
 from __future__ import annotations
 
+import datetime as dt
 import difflib
 import math
+import re
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -59,7 +61,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "data_dir": ("path", True),
         "output_dir": ("path", False),
         "reference": ("str", False),
-        "test_date": ("str", False),
+        "test_date": ("date", False),
     },
     "water": {
         "type": ("str", False),
@@ -134,7 +136,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         for f in fields(Processing)
     },  # annotations are strings here: "float", "int | None", "bool", ...
     "report": {
-        "date": ("str", False),
+        "date": ("date", False),
         "pdf": ("bool", False),
         "figures": ("bool", False),
     },
@@ -153,6 +155,7 @@ TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "proc
 
 _KIND_WORDS = {
     "str": "a text string",
+    "date": "a date (2024-05-17, written bare or as text)",
     "path": "a path (text)",
     "float": "a number",
     "int": "a whole number",
@@ -174,6 +177,23 @@ def _suggest(key: str, valid: list[str] | tuple[str, ...]) -> str:
     return f"; valid keys are: {', '.join(valid)}"
 
 
+def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
+    """A date given as a TOML date (``2024-05-17``) or as text, as text; a text that looks
+    like an ISO date (YYYY-MM-DD) must be one that exists."""
+    if isinstance(value, dt.datetime):
+        return value.date().isoformat()
+    if isinstance(value, dt.date):
+        return value.isoformat()
+    if not isinstance(value, str) or not value.strip():
+        raise bad
+    if re.fullmatch(r"\s*\d{4}-\d{1,2}-\d{1,2}\s*", value):
+        try:
+            dt.datetime.strptime(value.strip(), "%Y-%m-%d")
+        except ValueError:
+            raise ProtocolError(f"{src}: {where} = {value!r} is not a date that exists.") from None
+    return value
+
+
 def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
         f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
@@ -185,6 +205,8 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
                                                       for part in value.split("/"))):
             raise ProtocolError(f"{src}: {where} is not a usable path ({value[:60]!r}...).")
         return value
+    if kind == "date":
+        return _date_text(value, bad, where, src)
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise bad
@@ -250,6 +272,9 @@ _PROCESSING_POSITIVE = (
     "laminar_re", "jobs",
 )
 _PROCESSING_RANGES = {
+    "cutoff_hz": (0.05, 100000.0),  # below 0.05 Hz a run of tens of seconds is filtered away
+    "filter_order": (1, 10),  # a Butterworth of a higher order rings and is ill-conditioned
+    "jobs": (1, 4096),
     "trim_s": (0.0, 60.0),
     "max_nan_gap_s": (0.0, 60.0),
     "max_bad_row_fraction": (0.0, 0.5),

@@ -42,6 +42,37 @@ WATER_TYPES = ("fresh", "sea")
 
 _KELVIN = 273.15
 
+#: Temperatures at which water is liquid at atmospheric pressure [°C]: from sea water's
+#: freezing point (about -1.9 °C at 35 g/kg) to just below fresh water's boiling point. The
+#: properties are computed (extrapolated) anywhere inside; outside it there is no water.
+LIQUID_RANGE_C = (-2.0, 99.0)
+
+
+def temperature_problem(
+    temperature_C: float, span: tuple[float, float] = LIQUID_RANGE_C,
+    what: str = "of liquid water at atmospheric pressure",
+) -> str | None:
+    """Why ``temperature_C`` [°C] cannot be a water temperature, with the likely slip, or None.
+
+    A value inside ``span`` [°C] is accepted; outside it the sentence names the unit or the
+    typo that would explain it (kelvin, degrees Fahrenheit, a lost decimal point).
+    """
+    t = float(temperature_C)
+    lo, hi = span
+    if math.isfinite(t) and lo <= t <= hi:
+        return None
+    if not math.isfinite(t) or abs(t) > 1e6:
+        return f"{temperature_C:g} °C is not a water temperature"
+    hints = []
+    if t > 0 and lo <= t / 10.0 <= hi:
+        hints.append(f"a typo for {t / 10.0:g}")
+    if lo <= t - _KELVIN <= hi:
+        hints.append(f"in kelvin ({t - _KELVIN:.1f} °C)")
+    elif lo <= (t - 32.0) / 1.8 <= hi:
+        hints.append(f"in °F ({(t - 32.0) / 1.8:.1f} °C)")
+    hint = f" (was it {' or '.join(hints)}?)" if hints else ""
+    return f"{t:g} °C is outside the {lo:g}–{hi:g} °C {what}{hint}"
+
 
 class WaterPropertyWarning(UserWarning):
     """A water property was evaluated outside the range its formulation is validated for."""

@@ -20,7 +20,7 @@ from typing import Any
 
 __all__ = ["MANIFEST", "INCOMPLETE", "describe", "read_manifest", "write_manifest",
            "foreign_outputs", "refuse_foreign", "known", "recover_outputs",
-           "atomic_write_text", "folder_mode"]
+           "atomic_write_text", "folder_mode", "unwritable"]
 
 MANIFEST = ".towtank-outputs.json"
 INCOMPLETE = "OUTPUTS-INCOMPLETE.txt"
@@ -180,3 +180,22 @@ def folder_mode(folder: Path, like: Path | None) -> None:
             os.chmod(folder, 0o777 & ~umask)
     except OSError:
         pass
+
+
+def unwritable(out_dir: Path) -> str | None:
+    """Why no outputs can be written at ``out_dir`` (its parent is not a folder this process
+    may create files in: read-only, no permission, a virtual file system), or None.
+
+    Checked by creating (and removing) a temporary folder beside it, as the outputs will be.
+    """
+    import tempfile
+
+    parent = out_dir.parent
+    while not parent.exists() and parent != parent.parent:  # created only when writing
+        parent = parent.parent
+    try:
+        probe = tempfile.mkdtemp(prefix=f".{out_dir.name}.probe-", dir=parent)
+        os.rmdir(probe)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    return None

@@ -30,6 +30,8 @@ import multiprocessing as mp
 import os
 import sys
 import threading
+import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -58,6 +60,13 @@ def default_jobs() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+def usable_jobs(jobs: int | None) -> int:
+    """Worker processes for a request of ``jobs`` (None: every core): at least one and never
+    more than the cores this process may use (each worker holds a day's libraries, ~200 MB)."""
+    cores = default_jobs()
+    return cores if jobs is None else max(1, min(int(jobs), cores))
 
 
 def chunk_size(n_records: int, jobs: int) -> int:
@@ -130,8 +139,61 @@ def _context() -> Any | None:
     return ctx
 
 
-def _worker_init() -> None:
-    """In each worker: pyarrow parses on this worker's core only (the others have workers)."""
+#: Seconds between a worker's checks that the process that started it is still there.
+WATCH_INTERVAL_S = 0.5
+
+
+def _die_with(parent_pid: int) -> None:
+    """Make this worker end as soon as ``parent_pid`` (the process that asked for the pool)
+    ends, however it ends (SIGKILL, SIGTERM, the out-of-memory killer).
+
+    Nothing else would end it: a worker's own parent is the fork server, and the fork server
+    stays as long as any worker holds its "alive" pipe, which every worker does. A daemon
+    thread waits on a pidfd of ``parent_pid`` (Linux ≥ 5.3: readable the moment the process
+    exits, even before it is reaped); elsewhere it looks every :data:`WATCH_INTERVAL_S`
+    seconds whether the process still exists.
+    """
+
+    def gone() -> bool:
+        try:
+            os.kill(parent_pid, 0)
+        except OSError:  # no such process (or it is another user's now)
+            return True
+        try:  # a zombie is gone too: killed, waiting for its own parent to reap it
+            with open(f"/proc/{parent_pid}/stat", "rb") as fh:
+                return fh.read().rsplit(b")", 1)[1].split()[0] == b"Z"
+        except (OSError, IndexError):
+            return False
+
+    def watch() -> None:
+        try:
+            fd = os.pidfd_open(parent_pid)
+        except (AttributeError, OSError):
+            fd = None
+        if fd is not None:
+            import select
+
+            select.select([fd], [], [])
+            os._exit(1)
+        while not gone():
+            time.sleep(WATCH_INTERVAL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="towtank-parent-watch", daemon=True).start()
+
+
+def _worker_init(parent_pid: int | None = None) -> None:
+    """In each worker: Ctrl-C is the main process's to handle (no traceback from every
+    worker), the worker dies with the main process, and pyarrow parses on this worker's core
+    only (the others have workers)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # a library's warning (numpy, npTDMS...) is not for the terminal: what matters reaches
+    # the run's notes and reasons
+    warnings.simplefilter("ignore")
+    if parent_pid is not None:
+        _die_with(parent_pid)
     try:
         import pyarrow
 
@@ -155,7 +217,8 @@ class _Pool:
         self.jobs = jobs
         self.ctx = ctx
         self.executor: Executor = ProcessPoolExecutor(
-            max_workers=jobs, mp_context=ctx, initializer=_worker_init
+            max_workers=jobs, mp_context=ctx, initializer=_worker_init,
+            initargs=(os.getpid(),),
         )
         self._starter = threading.Thread(target=self._start, name="towtank-pool", daemon=True)
         self._starter.start()
@@ -178,7 +241,7 @@ def prestart(jobs: int | None = None) -> bool:
     The workers load the reduction's libraries while this process reads the sheet; returns
     False (and starts nothing) for one job or where there is no fork server.
     """
-    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    jobs = usable_jobs(jobs)
     ctx = _context() if jobs > 1 else None
     if ctx is None:
         return False
@@ -250,7 +313,7 @@ def map_runs(
     with _lock:
         pool = _prestarted.pop("pool", None)
     if pool is None:
-        n_jobs = default_jobs() if jobs is None else max(1, int(jobs))
+        n_jobs = usable_jobs(jobs)
         n_jobs = min(n_jobs, len(records))
         ctx = _context() if n_jobs > 1 and len(records) >= MIN_RECORDS_FOR_POOL else None
         if ctx is not None:

@@ -116,6 +116,11 @@ def detect_phases(
     # peaks held for a stated time, not percentiles of the file: independent of the run's length
     v_peak = sustained_peak(speed, max(3, int(0.5 * min_steady_s * fs)))
     if not v_peak > 0.02:
+        v_low = -sustained_peak(-speed, max(3, int(0.5 * min_steady_s * fs)))
+        if v_low < -0.02:  # it moves, but backwards: a towing carriage tows forwards
+            raise RunError(
+                f"the carriage speed is negative (down to {v_low:.3f} m/s): is the speed "
+                "channel's sign or gain wrong (a negative gain in [channels] speed)?")
         raise RunError(f"the carriage never moves (peak speed {v_peak:.3f} m/s)")
     a_abs_peak = sustained_peak(np.abs(accel), max(3, int(0.5 * min_accel_s * fs)))
     # --- motion: where speed or acceleration rises above small fractions of their peaks
