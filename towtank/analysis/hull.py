@@ -36,7 +36,7 @@ import pandas as pd
 
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
 from towtank.reduce.tare import TareModel, tare_design
-from towtank.stats.intervals import cr2_covariance, welch_satterthwaite
+from towtank.stats.intervals import bm_dof, cr2_covariance, welch_satterthwaite
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -83,7 +83,7 @@ class AddedMassFit:
     estimate: Estimate
     curve_difference: dict[str, object] = field(default_factory=dict)
     regression_se: float = math.nan  # the regression's alone (CR2, clustered by run) [kg]
-    regression_dof: float = math.nan  # runs − 1 (clustered), samples − 3 otherwise
+    regression_dof: float = math.nan  # Bell–McCaffrey (clustered), samples − 3 otherwise
     tare_se: float = math.nan  # the subtracted tare's [kg]
 
 
@@ -221,12 +221,14 @@ def joint_regression(
 
     The samples of one run share its zero, drift correction and filtered noise, so their errors
     are correlated, and a day has few runs per angle (4 to 10). The covariance is therefore the
-    Bell–McCaffrey bias-reduced cluster-robust one (CR2) with Student's t at G − 1 degrees of
-    freedom, G the number of runs (:func:`towtank.stats.intervals.cr2_covariance`; Bell & McCaffrey
-    2002, Imbens & Kolesár 2016, Cameron & Miller 2015 §VI). The usual CR1 correction
-    (statsmodels' ``cov_type="cluster"``) is biased low with so few clusters, most where a few
-    accelerated runs carry the leverage on M. With fewer than four runs no clustered
-    covariance can be estimated and the samples are taken as independent (n − 3 degrees of
+    Bell–McCaffrey bias-reduced cluster-robust one (CR2) (:func:`towtank.stats.intervals.
+    cr2_covariance`; Bell & McCaffrey 2002, Imbens & Kolesár 2016, Cameron & Miller 2015 §VI)
+    with Student's t at the Bell–McCaffrey degrees of freedom of M
+    (:func:`towtank.stats.intervals.bm_dof`), which fall below G − 1 (G the number of runs)
+    when a few accelerated runs hold M's leverage, e.g. with two acceleration levels. The
+    usual CR1 correction (statsmodels' ``cov_type="cluster"``) is biased low with so few
+    clusters, most where a few accelerated runs carry the leverage on M. With fewer than four
+    runs no clustered covariance can be estimated and the samples are taken as independent (n − 3 degrees of
     freedom), which understates the interval.
 
     Parameters
@@ -251,7 +253,8 @@ def joint_regression(
     res = OLS(drag, x).fit()
     resid = np.asarray(res.resid)
     if len(np.unique(groups)) >= 4:
-        cov, dof = cr2_covariance(x, resid, groups)
+        cov, _ = cr2_covariance(x, resid, groups)
+        dof = bm_dof(x, groups, np.array([0.0, 0.0, 1.0]))  # the added mass's: M
         clustered = True
     else:
         cov, dof, clustered = np.asarray(res.cov_params()), res.df_resid, False
@@ -271,7 +274,8 @@ def fit_added_mass(
 
     X = m − M, M from :func:`joint_regression`. Its standard uncertainty combines three
     independent parts, u_c² = u_reg² + u_tare² + u_m² (GUM, JCGM 100:2008, eq. 10): the
-    regression's (CR2, clustered by run, G − 1 degrees of freedom), the subtracted tare's (its
+    regression's (CR2, clustered by run, Bell–McCaffrey degrees of freedom), the subtracted
+    tare's (its
     m_t goes one-for-one into X; its covariance is clustered by sting run likewise in
     :func:`towtank.reduce.tare.fit_channel` and propagated by :func:`tare_covariance`, one component
     per tare group with that fit's degrees of freedom) and the weighed mass's (``mass_sd``, a
@@ -449,7 +453,8 @@ def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: f
     var_tare = max(float(g @ tare_cov @ g), 0.0) if tare_cov is not None else 0.0
     se = math.sqrt(var_reg + var_tare)
     tq = _t95(welch_satterthwaite([var_reg, var_tare], [dof, tare_dof]))
-    return Estimate(symbol, value, se, value - tq * se, value + tq * se, method, n)
+    half = tq * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
+    return Estimate(symbol, value, se, value - half, value + half, method, n)
 
 
 def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
