@@ -228,8 +228,8 @@ def joint_regression(
     when a few accelerated runs hold M's leverage, e.g. with two acceleration levels. The
     usual CR1 correction (statsmodels' ``cov_type="cluster"``) is biased low with so few
     clusters, most where a few accelerated runs carry the leverage on M. With fewer than four
-    runs no clustered covariance can be estimated and the samples are taken as independent (n − 3 degrees of
-    freedom), which understates the interval.
+    runs no clustered covariance can be estimated and the samples are taken as independent
+    (n − 3 degrees of freedom), which understates the interval.
 
     Parameters
     ----------
