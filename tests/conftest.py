@@ -8,6 +8,7 @@ then compare the pipeline's numbers with the per-run truth of ``truth.json``.
 
 from __future__ import annotations
 
+import os
 import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -230,3 +231,17 @@ def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
             break  # a blank row, or a note under the table
         body.append(r[: len(header)])
     return pd.DataFrame(body, columns=header)
+
+
+def pytest_addoption(parser):
+    parser.addoption("--run-slow", action="store_true", default=False,
+                     help="also run the tests marked slow (the coverage study: hours)")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--run-slow") or os.environ.get("TOWTANK_RUN_SLOW"):
+        return
+    skip = pytest.mark.skip(reason="slow: run with --run-slow (or TOWTANK_RUN_SLOW=1)")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)

@@ -376,3 +376,99 @@ def test_workers_die_with_the_main_process(tmp_path, sig):
     while time.monotonic() < end and any(_alive(p) for p in workers):
         time.sleep(0.1)
     assert not [p for p in workers if _alive(p)]
+
+
+# ------------------------------------------------------------ 5, 6, 7: never a stale cache
+def _runs(out: Path) -> pd.DataFrame:
+    return pd.read_csv(out / "runs.csv").set_index("run")
+
+
+def test_a_sheet_edited_while_the_day_runs_is_never_replayed(tmp_path, capsys, monkeypatch):
+    """The angle of a run is changed (5 -> 7) after the sheet was read, into an empty folder:
+    the outputs are not recorded as those of the edited sheet; the next run sees 7."""
+    import towtank.pipeline as pipeline
+
+    protocol = _day(tmp_path)
+    out = tmp_path / "out"
+    sheet = tmp_path / "run_sheet.csv"
+    frame = pd.read_csv(sheet, dtype=str, keep_default_na=False)
+    i = frame.index[(frame.config == "hull") & (frame.status != "void")][3]
+    run = int(frame.loc[i, "run"])
+    original = pipeline.process_day
+
+    def edit_during(*args, **kwargs):
+        day = original(*args, **kwargs)
+        edited = frame.copy()
+        edited.loc[i, "angle_deg"] = str(float(frame.loc[i, "angle_deg"]) + 2.0)
+        edited.to_csv(sheet, index=False)
+        return day
+
+    monkeypatch.setattr(pipeline, "process_day", edit_during)
+    assert main(["process", str(protocol), "--out", str(out), "--no-report"]) == 0
+    assert "changed while towtank was working" in capsys.readouterr().err
+    before = _runs(out).loc[run, "angle_deg"]
+    monkeypatch.setattr(pipeline, "process_day", original)
+    assert main(["process", str(protocol), "--out", str(out), "--no-report"]) == 0
+    assert _runs(out).loc[run, "angle_deg"] == pytest.approx(before + 2.0)
+
+
+def _scale_drag(path: Path, factor: float) -> None:
+    df = pd.read_csv(path)
+    df["Fx load cell (V)"] *= factor
+    df.to_csv(path, index=False)
+
+
+def test_a_run_file_outside_the_data_folder_is_checked_again(tmp_path):
+    """A sheet row names a file by absolute path elsewhere; replaced after a run, the next
+    run reads it again (new sha256, new drag), it does not replay the old outputs."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    moved = {}
+
+    def point_away(frame, root):
+        i = frame.index[(frame.config == "hull") & (frame.status != "void")][2]
+        run, name = _row(frame, i)
+        target = elsewhere / name
+        (root / "data" / name).rename(target)
+        frame.loc[i, "file"] = str(target)
+        moved.update(run=run, path=target)
+
+    protocol = _day(tmp_path / "day", point_away)
+    out = tmp_path / "out"
+    assert main(["process", str(protocol), "--out", str(out), "--no-report", "-q"]) == 0
+    old = _runs(out).loc[moved["run"]]
+    _scale_drag(moved["path"], 1.1)
+    assert main(["process", str(protocol), "--out", str(out), "--no-report", "-q"]) == 0
+    new = _runs(out).loc[moved["run"]]
+    import hashlib
+
+    assert new["sha256"] == hashlib.sha256(moved["path"].read_bytes()).hexdigest()
+    assert new["sha256"] != old["sha256"]
+    assert abs(new["drag_mean"] / old["drag_mean"] - 1.0) > 0.05  # the new file's drag
+
+
+def test_a_file_changed_after_it_was_read_is_not_cached_as_the_new_one(tmp_path, monkeypatch):
+    """The file changes between the reduction reading it and the cache recording its
+    size/mtime: the cache must not pair the new file with the old reduction."""
+    import towtank.pipeline as pipeline
+
+    protocol = _day(tmp_path)
+    out = tmp_path / "out"
+    frame = pd.read_csv(tmp_path / "run_sheet.csv")
+    i = frame.index[(frame.config == "hull") & (frame.status != "void")][1]
+    run, name = int(frame.loc[i, "run"]), str(frame.loc[i, "file"])
+    original = pipeline.reduce_record
+
+    def change_after_read(protocol_, row, *args, **kwargs):
+        result = original(protocol_, row, *args, **kwargs)
+        if int(row["run"]) == run:
+            _scale_drag(tmp_path / "data" / name, 1.1)
+        return result
+
+    monkeypatch.setattr(pipeline, "reduce_record", change_after_read)
+    assert main(["process", str(protocol), "--out", str(out), "--no-report", "-q",
+                 "--jobs", "1"]) == 0
+    first = _runs(out).loc[run, "drag_mean"]
+    monkeypatch.setattr(pipeline, "reduce_record", original)
+    assert main(["process", str(protocol), "--out", str(out), "--no-report", "-q"]) == 0
+    assert abs(_runs(out).loc[run, "drag_mean"] / first - 1.0) > 0.05  # read again

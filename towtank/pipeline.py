@@ -421,10 +421,11 @@ def reduce_runs(
                            for spec in sides)
             keys[run] = settings_key(protocol, {**rec, "side_files_sha": side} if side else rec,
                                      common)
-            sha = cache.known_sha(protocol.campaign.data_dir / str(rec["file"]))
+            path = protocol.campaign.data_dir / str(rec["file"])
+            sha = cache.known_sha(path)
             hit = cache.get(sha, keys[run]) if sha else None
             if hit is not None:
-                reductions[run] = replace(hit, run=run)
+                reductions[run] = replace(hit, run=run, file_stamp=cache.known_stamp(path))
                 continue
         to_reduce.append(rec)
     done = len(todo) - len(to_reduce)
@@ -439,7 +440,8 @@ def reduce_runs(
             reductions[run] = red
             if cache is not None:
                 cache.put(red.sha256, keys[run], red)
-                cache.remember_sha(protocol.campaign.data_dir / red.file, red.sha256)
+                cache.remember_sha(protocol.campaign.data_dir / red.file, red.sha256,
+                                   getattr(red, "file_stamp", None))
         else:
             assert reason is not None
             rejected[run] = reason

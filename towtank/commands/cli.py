@@ -301,8 +301,30 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
         print(text, end="")
     code = EXIT_REJECTED if day.rejected else EXIT_OK
     if stamp is not None:
-        stamp.record(code, text)
+        changed = stamp.record(code, text, _read_stamps(day))
+        if changed:
+            _err(f"warning: {changed}")
     return code
+
+
+def _read_stamps(day) -> dict[str, tuple[int, int, int, int] | None]:  # noqa: ANN001
+    """Every input file of the day with its (size, mtime_ns, ctime_ns, inode): the run files
+    as their bytes were read, the other inputs as they are now."""
+    import os
+
+    out: dict[str, tuple[int, int, int, int] | None] = {}
+    for path in day.inputs:
+        try:
+            st = os.stat(path)
+            out[str(path)] = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+        except OSError:
+            continue  # a file that could not be read: its run was rejected
+    data_dir = day.protocol.campaign.data_dir
+    for red in day.reductions.values():
+        path = str(data_dir / red.file)
+        if path in out:
+            out[path] = getattr(red, "file_stamp", None)
+    return out
 
 
 #: Errors of the storage, not of towtank: a full disk or quota, a read-only or failing file

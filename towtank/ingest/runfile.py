@@ -105,6 +105,16 @@ def file_bytes(path: Path) -> bytes:
 
     Only a regular file is opened: a named pipe or a device would block the read forever.
     """
+    return file_bytes_stamped(path)[0]
+
+
+def file_bytes_stamped(path: Path) -> tuple[bytes, tuple[int, int, int, int] | None]:
+    """:func:`file_bytes` and the file's (size, mtime_ns, ctime_ns, inode) as it was read, or
+    None for the stamp when the file changed while it was being read.
+
+    The stamp is what the cache may remember with the sha256 of these bytes: a stat taken
+    later could belong to a newer version of the file.
+    """
     import stat
 
     try:
@@ -115,7 +125,12 @@ def file_bytes(path: Path) -> bytes:
         if size > MAX_RUN_FILE_BYTES:
             raise RunError(_too_large(path.name, "it is", size))
         with open(path, "rb") as fh:
-            return fh.read()
+            before = os.fstat(fh.fileno())
+            data = fh.read()
+            after = os.fstat(fh.fileno())
+        stamps = [(st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino) for st in (before, after)]
+        return data, (stamps[0] if stamps[0] == stamps[1] and len(data) == before.st_size
+                      else None)
     except FileNotFoundError:
         raise RunError(
             f"the data file {path.name} is not found in {path.parent}{_near_name(path)}"

@@ -31,7 +31,7 @@ import numpy as np
 
 from towtank.errors import RunError
 from towtank.ingest.protocol import Processing, Protocol
-from towtank.ingest.runfile import RawRun, file_bytes, load_run
+from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 from towtank.reduce.tare import TareModel
@@ -80,6 +80,9 @@ class RunReduction:
     tare_drag: float = 0.0
     tare_lift: float = 0.0
     tare_group: str = ""
+    #: (size, mtime_ns, ctime_ns, inode) of the run file as its bytes were read, or None when
+    #: it changed during the read: what the cache may remember with ``sha256``
+    file_stamp: tuple[int, int, int, int] | None = None
     drag_mean: float = math.nan
     lift_mean: float = math.nan
 
@@ -610,7 +613,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
     raw = None
     try:
         p = protocol.processing
-        data = file_bytes(path)
+        data, stamp = file_bytes_stamped(path)
         log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
         zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
                                 protocol.channels, protocol.read, protocol.balance)
@@ -642,6 +645,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         if str(row.get("test", "")).strip().lower() == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
             red.warnings.extend(n for n in red.notes if n.startswith("no usable constant-acc"))
+        red.file_stamp = stamp
         return run, red, None, None
     except RunError as exc:
         reason = exc.reason

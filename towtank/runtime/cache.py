@@ -161,11 +161,32 @@ class RunCache:
             return str(rec[2])
         return None
 
-    def remember_sha(self, path: Path, sha: str) -> None:
+    def known_stamp(self, path: Path) -> tuple[int, int, int, int] | None:
+        """(size, mtime_ns, ctime_ns, inode) recorded with the file's sha256 when
+        :meth:`known_sha` knows it (the file as the reduction cached for it read it)."""
         found = self._stat(path)
-        if found is None:
+        rec = self._files.get(found[0]) if found is not None else None
+        if self.known_sha(path) is None or not rec:
+            return None
+        return (int(rec[0]), int(rec[1]), int(rec[3]), int(rec[4]))
+
+    def remember_sha(self, path: Path, sha: str,
+                     stamp: tuple[int, int, int, int] | None | bool = True) -> None:
+        """Remember that ``path`` holds the bytes of ``sha``.
+
+        ``stamp`` is (size, mtime_ns, ctime_ns, inode) of the file as those bytes were read
+        (:func:`towtank.ingest.runfile.file_bytes_stamped`): the file is remembered only if
+        it is still that file, so a file changed after it was read is read again next time.
+        None (the file changed while it was read) remembers nothing; True (no stamp known)
+        takes the file as it is now.
+        """
+        found = self._stat(path)
+        if found is None or stamp is None or stamp is False:
             return
         key, st = found
+        now = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+        if stamp is not True and tuple(stamp) != now:
+            return
         self._files[key] = [st.st_size, st.st_mtime_ns, sha, st.st_ctime_ns, st.st_ino]
         self._dirty = True
 
@@ -281,6 +302,15 @@ class RunCache:
 DAY_FORMAT = 1
 
 
+def _stamp(path: Path) -> tuple[int, int, int, int] | None:
+    """(size, mtime_ns, ctime_ns, inode) of a file now, or None if it cannot be stat'ed."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+
+
 def _sha_file(path: Path) -> str | None:
     try:
         return hashlib.sha256(path.read_bytes()).hexdigest()
@@ -368,22 +398,48 @@ class DayStamp:
         return {rel: _sha_file(self.out_dir / rel) for rel, *_ in _tree(self.out_dir, skip)}
 
     def replay(self) -> tuple[int, str] | None:
-        """(exit code, summary) of the last run if nothing changed since, else None."""
+        """(exit code, summary) of the last run if nothing changed since, else None.
+
+        The fingerprint is taken here, before the day is read: :meth:`record` compares it with
+        the inputs as they are at the end, so that a sheet edited while the day was being
+        processed is never recorded as the one the outputs came from.
+        """
         try:
+            key = self.key
             rec = json.loads(self.path.read_bytes())
-            if rec.get("key") != self.key:
+            if rec.get("key") != key:
                 return None
             if rec.get("outputs") != self._outputs():
                 return None
+            for path, stamp in (rec.get("inputs") or {}).items():
+                if stamp is None or list(_stamp(Path(path)) or ()) != list(stamp):
+                    return None  # a run file (perhaps outside the data folder) has changed
             return int(rec["exit_code"]), str(rec["summary"])
         except Exception:  # noqa: BLE001 - any doubt: process the day
             return None
 
-    def record(self, exit_code: int, summary: str) -> None:
-        """Remember a completed run (call once its outputs are in place)."""
+    def record(self, exit_code: int, summary: str,
+               inputs: dict[str, tuple[int, int, int, int] | None] | None = None) -> str | None:
+        """Remember a completed run (call once its outputs are in place).
+
+        ``inputs`` maps every file the day read (run files wherever they are, side files) to
+        its (size, mtime_ns, ctime_ns, inode) as it was read. Nothing is remembered (and the
+        returned sentence says why) when the protocol, the sheet, the data folder or one of
+        ``inputs`` changed while the day was processed: the next run then processes it again.
+        """
+        fresh = DayStamp(self.path.parent, self._protocol, self.out_dir, self._options).key
+        changed = [p for p, st in (inputs or {}).items() if st is None or _stamp(Path(p)) != st]
+        if fresh != self.key or changed:
+            self.forget()
+            what = (f"{Path(changed[0]).name}{' and others' if len(changed) > 1 else ''}"
+                    if changed else "the protocol, the run sheet or the data folder")
+            return (f"{what} changed while towtank was working: the outputs may mix the old "
+                    "and the new version; run process again.")
         rec = {"key": self.key, "exit_code": int(exit_code), "summary": summary,
-               "outputs": self._outputs()}
+               "outputs": self._outputs(),
+               "inputs": {p: list(st) for p, st in (inputs or {}).items() if st is not None}}
         _atomic_write(self.path, json.dumps(rec, indent=1).encode())
+        return None
 
     def forget(self) -> None:
         self.path.unlink(missing_ok=True)
