@@ -760,10 +760,15 @@ def _scaling_stage(day: DayResult) -> None:
         delta_cf=proto.delta_cf,
     )
     outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
-    if outside:
+    deep = (depth is not None and model.diameter_m is not None
+            and depth / model.diameter_m > similarity.DEEP_SUBMERGENCE_DEPTH_RATIO)
+    if outside and not deep:  # deeply submerged, Froude scaling is not what counts
         day.warnings.append(
             "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "
-            "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s."
+            "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s" + (
+                " (the model ran near the surface, where Froude similarity is needed)."
+                if depth is not None else
+                " (give [model] depth_m: deeply submerged, Froude similarity is not needed).")
         )
     laminar = table.loc[table["re_prototype"] < p.processing.laminar_re, "speed_prototype"]
     if len(laminar):

@@ -658,7 +658,7 @@ def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMa
 #: Every entry towtank writes into an output folder (FORMATS §5; the cache aside).
 OUTPUT_NAMES = frozenset({
     "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
-    "scaling.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
+    "scaling.csv", "tare.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
     "predicted.csv", "model.json",
 })
 

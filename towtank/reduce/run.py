@@ -642,9 +642,12 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
         )
-        if str(row.get("test", "")).strip().lower() == "accel" and red.windows["accel"] is None:
+        test = str(row.get("test", "")).strip().lower()
+        if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
             red.warnings.extend(n for n in red.notes if n.startswith("no usable constant-acc"))
+        elif test == "steady":  # made for its plateau: a missing stretch is no news
+            red.notes = [n for n in red.notes if not n.startswith("no usable constant-acc")]
         red.file_stamp = stamp
         return run, red, None, None
     except RunError as exc:

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from towtank.stats.intervals import cr2_covariance
 
@@ -218,3 +219,46 @@ def table_tare(
     model = TareModel(group=group, runs=(), drag=drag_fit, lift=lift_fit,
                       speed_range=(float(u.min()), float(u.max())), accel_range=(0.0, 0.0))
     return model, departure
+
+
+#: Columns of :func:`tare_table` (tare.csv), units in docs/formats.md §5.
+TARE_COLUMNS = (
+    "tare_group", "channel", "runs", "t2", "t2_ci_low", "t2_ci_high", "t1", "t1_ci_low",
+    "t1_ci_high", "m_t", "m_t_ci_low", "m_t_ci_high", "residual_std", "n_samples", "dof",
+    "speed_min", "speed_max", "accel_min", "accel_max",
+)
+
+
+def tare_table(tares: dict[str, TareModel]) -> pd.DataFrame:
+    """The tare fits of a day, one row per tare group and force channel.
+
+    Each fit is the sting's tare force T = t2·U|U| + t1·U + m_t·a (docs/method.md, "Sting
+    tare"): t2 [N s²/m²], t1 [N s/m] and m_t [kg] with their 95 % intervals (Student's t at
+    the fit's degrees of freedom, its covariance clustered by sting run), the residual
+    standard deviation [N], the samples and runs it was fitted on, and the steady speeds [m/s]
+    and accelerations [m/s²] it covers.
+    """
+    from scipy.stats import t as student
+
+    rows = []
+    for group in sorted(tares):
+        model = tares[group]
+        for channel, fit in (("drag", model.drag), ("lift", model.lift)):
+            if fit is None:
+                continue
+            q = float(student.ppf(0.975, fit.dof)) if math.isfinite(fit.dof) and fit.dof > 0 \
+                else 1.959963984540054
+            se = np.sqrt(np.clip(np.diag(fit.cov), 0.0, None))
+            row: dict[str, object] = {"tare_group": group, "channel": channel,
+                                      "runs": " ".join(str(r) for r in model.runs)}
+            for name, value, s in zip(("t2", "t1", "m_t"), fit.coef, se, strict=True):
+                row[name] = float(value)
+                row[f"{name}_ci_low"] = float(value - q * s)
+                row[f"{name}_ci_high"] = float(value + q * s)
+            row.update(residual_std=float(fit.residual_std), n_samples=int(fit.n_samples),
+                       dof=float(fit.dof), speed_min=float(model.speed_range[0]),
+                       speed_max=float(model.speed_range[1]),
+                       accel_min=float(model.accel_range[0]),
+                       accel_max=float(model.accel_range[1]))
+            rows.append(row)
+    return pd.DataFrame(rows, columns=list(TARE_COLUMNS))

@@ -113,7 +113,7 @@ _MATH_RE = re.compile(
 )
 
 
-_E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?![\w.])")
+_E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?!\w|\.\d)")  # "…e+06." too
 _HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
 
 
@@ -286,7 +286,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"Drag $D$ [N]")
     ax.set_xlim(left=0)
-    ax.legend(handles=handles, loc="upper left", fontsize=6.8)
+    ax.legend(handles=handles, loc="lower right", fontsize=6.8)  # upper left: the a = 1 curve
 
     ax_d.set_title(r"Difference $\Delta D = D_a(U) - D_s(U)$", fontsize=8.8)
     ax_d.set_xlabel(r"Speed $U$ [m/s]")
@@ -298,10 +298,11 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
         f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
         f"curve difference: {_fmt(alt)} kg" + (
             f" ({est.agreement.split(':')[0]})" if est.agreement else ""),
-        f"m = {_fmt(am.mass)} kg, m − X = {_fmt(am.M)} kg",
+        math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
     ])
     ax_d.legend(handles=[Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
-                         Line2D([], [], color="#555555", ls=":", label=r"$(m - X)\,a$, joint")],
+                         Line2D([], [], color="#555555", ls=":",
+                                label=math_text(f"(m − {am.symbol})·a, joint"))],
                 loc="upper left", fontsize=6.8, title=title, title_fontsize=6.8,
                 alignment="left", ncol=2)
 
@@ -911,7 +912,91 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
 
 # ----------------------------------------------------------------------------- all figures
 #: name, report section, function; the order of the PDF's figure pages.
+def tare_caption(day: DayResult) -> str:
+    """Caption of :func:`fig_tare`."""
+    parts = []
+    for group in sorted(day.tares):
+        d = day.tares[group].drag
+        t2, t1, m_t = (float(v) for v in d.coef)
+        parts.append(f"group {group} (runs {_run_list(day.tares[group].runs)}): "
+                     f"t2 = {t2:.4g} N s²/m², t1 = {t1:.4g} N s/m, m_t = {m_t:.4g} kg")
+    return ("The sting alone, towed like the model: the steady means of the sting runs (points) "
+            "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line, with its 95 % "
+            "band), per tare group; the tare is subtracted sample by sample from the group's "
+            "model runs (with m_t·a while accelerating) and its uncertainty is part of every "
+            "coefficient's interval. Drag: " + "; ".join(parts) + ". tare.csv and the "
+            "workbook's Tare sheet give every term with its interval.")
+
+
+def _run_list(runs: tuple[int, ...]) -> str:
+    """Run numbers as ranges: (1, 2, 3, 5) -> "1–3, 5"."""
+    out, start, prev = [], None, None
+    for r in sorted(runs):
+        if start is None:
+            start = prev = r
+        elif r == prev + 1:
+            prev = r
+        else:
+            out.append(f"{start}–{prev}" if prev != start else f"{start}")
+            start = prev = r
+    if start is not None:
+        out.append(f"{start}–{prev}" if prev != start else f"{start}")
+    return ", ".join(out)
+
+
+@styled
+def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
+    """Sting tare against speed: the sting runs' steady drag and lift with the fitted tare.
+
+    Parameters
+    ----------
+    day : DayResult
+        The processed day.
+    page : bool
+        Lay the figure out as an A4 report page.
+    """
+    tares = getattr(day, "tares", None) or {}
+    if not tares:
+        return None
+    has_lift = any(m.lift is not None for m in tares.values())
+    fig = _new_figure(page)
+    gs = _layout(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
+                 title="Sting tare", text=tare_caption(day))
+    runs = day.runs
+    sting = runs[(runs["config"] == "sting") & (runs["status"] == "ok")]
+    channels = [("drag", "drag_mean", r"Tare drag $T_D$ [N]")]
+    if has_lift:
+        channels.append(("lift", "lift_mean", r"Tare lift $T_L$ [N]"))
+    for col, (channel, column, label) in enumerate(channels):
+        ax = fig.add_subplot(gs[0, col])
+        for i, group in enumerate(sorted(tares)):
+            model = tares[group]
+            fit = model.drag if channel == "drag" else model.lift
+            if fit is None:
+                continue
+            color = style.PALETTE[i % len(style.PALETTE)]
+            pts = sting[sting["tare_group"].astype(str) == str(group)]
+            lo, hi = model.speed_range
+            u = np.linspace(0.0, hi * 1.05, 120)
+            a = np.zeros_like(u)
+            curve = fit(u, a)
+            band = t95(fit.dof if math.isfinite(fit.dof) else 10**6) * fit.std_error(u, a)
+            ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.2, lw=0)
+            name = f"group {group}" if len(tares) > 1 else "fitted tare"
+            ax.plot(u, curve, color=color, lw=1.2, label=f"{name}, a = 0")
+            if column in pts:
+                ax.plot(pts["speed_mean"], pts[column], "o", color=color, ms=4, mec="black",
+                        mew=0.4, label="sting runs, steady means")
+        ax.set_xlim(left=0)
+        ax.set_xlabel(r"Carriage speed $U$ [m/s]")
+        ax.set_ylabel(label)
+        ax.set_title(channel.capitalize())
+        ax.legend(loc="upper left", fontsize=6.8)
+    return fig
+
+
 FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
+    ("tare", "Tare", fig_tare),
     ("added_mass", "Added mass", fig_added_mass),
     ("damping", "Damping", fig_damping),
     ("fin_forces", "Fins", fig_fin_forces),
@@ -924,6 +1009,7 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
     """The entries of :data:`FIGURES` the day has data for (without drawing them)."""
     hf = _hull_fit(day)
     has = {
+        "tare": bool(getattr(day, "tares", None)),
         "added_mass": hf is not None and bool(hf.added_mass),
         "damping": hf is not None and hf.damping is not None,
         "fin_forces": day.fin_result is not None and len(day.fin_result.force_vs_speed) > 0,

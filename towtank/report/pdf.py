@@ -405,7 +405,8 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     fig.text(x0, _y(PAGE_H - 1.0), textwrap.fill(
         "Model-scale values are SI with SNAME signs (added mass and damping negative); prime "
         "values divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %. Method: "
-        "the SUT-2 model test report; see METHOD.md of the program.", 100),
+        "the SUT-2 model test report, as set out in the method chapter of towtank's documentation "
+        "(docs/method.md of its source).", 100),
         fontsize=7.5, color="#555555", va="bottom")
 
 

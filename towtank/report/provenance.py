@@ -68,8 +68,18 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "inputs": [{"path": k, "sha256": v} for k, v in day.inputs.items()],
         "settings": settings,
         "runs": {"total": int(len(day.sheet)), "rejected": day.n_rejected},
+        "tare": _tare_provenance(day),
         **(extra or {}),
     }
+
+
+def _tare_provenance(day: DayResult) -> list[dict[str, Any]]:
+    """The sting tare fits (tare.csv's rows): coefficients, intervals, runs and ranges."""
+    from towtank.reduce.tare import tare_table
+
+    table = tare_table(getattr(day, "tares", None) or {})
+    return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+            for row in table.to_dict("records")]
 
 
 def _scaling_provenance(day: DayResult) -> dict[str, Any]:

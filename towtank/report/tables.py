@@ -40,3 +40,6 @@ def write_tables(day: DayResult, out: Path) -> None:
         if day.fin_result.control is not None:
             write_csv(day.fin_result.control, out / "fin_control.csv")
     write_csv(day.scaling, out / "scaling.csv")
+    from towtank.reduce.tare import tare_table
+
+    write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")

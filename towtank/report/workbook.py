@@ -46,7 +46,8 @@ if TYPE_CHECKING:
 
     from towtank.pipeline import DayResult
 
-SHEETS = ("Summary", "Coefficients", "Runs", "Fins", "Scaling", "Quality", "Provenance")
+SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Scaling", "Quality",
+          "Provenance")
 DIFF_HIGHLIGHT_PCT = 10.0
 MAX_WIDTH = 60
 
@@ -59,6 +60,11 @@ UNITS: dict[str, str] = {
     "nu": "m²/s", "speed_std": "m/s", "drag_std": "N", "lift_tare": "N", "cd_lateral": "-",
     "zero_drag": "N", "drift_drag": "N", "zero_lift": "N", "drift_lift": "N", "fs_hz": "Hz",
     "n_samples": "-", "window_start_s": "s", "window_end_s": "s",
+    # tare.csv
+    "t2": "N s²/m²", "t2_ci_low": "N s²/m²", "t2_ci_high": "N s²/m²", "t1": "N s/m",
+    "t1_ci_low": "N s/m", "t1_ci_high": "N s/m", "m_t": "kg", "m_t_ci_low": "kg",
+    "m_t_ci_high": "kg", "residual_std": "N", "speed_min": "m/s", "speed_max": "m/s",
+    "accel_min": "m/s²", "accel_max": "m/s²",
     # coefficients.csv
     "value": "SI", "ci_low": "SI", "ci_high": "SI", "prime": "-", "reference_prime": "-",
     "diff_pct": "%", "prototype_value": "SI", "std_error": "SI", "prime_ci_low": "-",
@@ -377,6 +383,23 @@ def _runs(w: SheetWriter, day: DayResult) -> None:
            "*_start_s/*_end_s in seconds from the start of the file.")
 
 
+def _tare(w: SheetWriter, day: DayResult) -> None:
+    from towtank.reduce.tare import tare_table
+
+    table = tare_table(getattr(day, "tares", None) or {})
+    if len(table) == 0:
+        _note_sheet(w, "No sting tare was fitted: the day has no sting runs, or its tare "
+                    "comes from a table or is none ([tare] in the protocol).")
+        return
+    w.table(table)
+    w.gap()
+    w.note("Sting tare T = t2·U|U| + t1·U + m_t·a per tare group and force channel, fitted "
+           "on the sting runs' steady and constant-acceleration samples (covariance clustered "
+           "by sting run); 95 % intervals with Student's t at dof. It is subtracted sample by "
+           "sample from the group's model runs, and its uncertainty is part of every "
+           "coefficient's interval.")
+
+
 def _fins(w: SheetWriter, day: DayResult) -> None:
     fr = day.fin_result
     if fr is None or len(fr.table) == 0:
@@ -586,6 +609,7 @@ WRITERS: dict[str, Callable[[SheetWriter, Any], None]] = {
     "Summary": _summary,
     "Coefficients": _coefficients,
     "Runs": _runs,
+    "Tare": _tare,
     "Fins": _fins,
     "Scaling": _scaling,
     "Quality": _quality,

@@ -1,0 +1,45 @@
+"""The sting tare as a lab checks it first (issue 16): tare.csv, the workbook's Tare sheet,
+provenance.json's ``tare`` and the report's tare figure, with the generator's tare inside the
+fitted intervals."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from towtank.report import write_outputs
+from towtank.testing.truth import TareTruth
+
+
+@pytest.fixture(scope="module")
+def out(hull_day, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("tare_out") / "out"
+    write_outputs(hull_day.result, folder)
+    return folder
+
+
+def test_tare_csv_holds_the_generators_tare_inside_its_intervals(out):
+    truth = TareTruth()
+    table = pd.read_csv(out / "tare.csv").set_index("channel")
+    expected = {"drag": (truth.t2, truth.t1, truth.m_t),
+                "lift": (truth.lift_t2, truth.lift_t1, truth.lift_m_t)}
+    for channel, values in expected.items():
+        row = table.loc[channel]
+        for name, value in zip(("t2", "t1", "m_t"), values, strict=True):
+            assert row[f"{name}_ci_low"] <= value <= row[f"{name}_ci_high"], (channel, name)
+            assert row[name] == pytest.approx(value, rel=0.1, abs=2e-3)
+        assert row["speed_min"] < row["speed_max"] and row["dof"] >= 3
+        assert len(str(row["runs"]).split()) >= 4
+
+
+def test_tare_is_in_the_workbook_and_the_provenance(out):
+    from openpyxl import load_workbook
+
+    ws = load_workbook(out / "report.xlsx", read_only=True)["Tare"]
+    header = [c for c in next(ws.iter_rows(min_row=1, max_row=1, values_only=True)) if c]
+    assert "t2 [N s²/m²]" in header and "m_t [kg]" in header
+    table = pd.read_csv(out / "tare.csv")
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))["tare"]
+    assert [r["m_t"] for r in prov] == pytest.approx(table["m_t"].tolist(), rel=1e-12)
