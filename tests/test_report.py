@@ -96,8 +96,16 @@ def test_workbook_coefficients_equal_the_csv_exactly(days):
     x_udot = ws.cell(2, cols["value"])
     assert x_udot.number_format == "0.000E+00"  # −0.0172: scientific below 0.1 in size
     assert ws.cell(2, cols["prime"]).number_format == "0.000E+00"
+    # one format per column (issue 16): Y_vdot's −0.68 as −6.807E-01 beside X_udot's
+    # −1.711E-02, never 0.6807 in one row and 1.711E-02 in the next
     y_vdot = next(r for r in range(2, ws.max_row + 1) if ws.cell(r, 1).value == "Y_vdot")
-    assert ws.cell(y_vdot, cols["value"]).number_format == "0.0000"
+    assert ws.cell(y_vdot, cols["value"]).number_format == "0.000E+00"
+    for c in numeric:
+        formats = {ws.cell(r, cols[c]).number_format for r in range(2, len(csv) + 2)
+                   if ws.cell(r, cols[c]).value is not None}
+        assert len(formats) <= 1, (c, formats)
+    assert workbook.column_format([0, 5.0, 2]) == "0"  # angles, sample counts
+    assert workbook.column_format([0.2, 1.5, 0.0]) == "0.0000"
     assert workbook.display_format(2.67e5) == "0.000E+00" and workbook.display_format(0) == (
         "General")
     # the key results of the Summary sheet are the same floats too
@@ -187,10 +195,11 @@ def test_hull_pdf_pages_and_sections(days):
     day, out = days["hull"]
     reader = PdfReader(out / "report.pdf")
     assert len(reader.pages) == _expected_pages(day)
-    # title, summary, added mass, damping, scaling, quality, 42 runs on 4 appendix pages
-    assert len(reader.pages) == 10
+    # title, summary, tare, added mass, damping, scaling, quality, 42 runs on 4 appendix pages
+    assert len(reader.pages) == 11
     text = [p.extract_text() for p in reader.pages]
-    for section in ("Summary", "Added mass", "Damping", "Scaling", "Quality", "Appendix"):
+    for section in ("Summary", "Tare", "Added mass", "Damping", "Scaling", "Quality",
+                    "Appendix"):
         assert any(section in t for t in text[1:]), section
     assert "Fins" not in " ".join(text)
     assert REPORT_DATE in text[0]
@@ -203,7 +212,8 @@ def test_fin_pdf_has_no_hull_pages(days):
     day, out = days["fin"]
     reader = PdfReader(out / "report.pdf")
     assert len(reader.pages) == _expected_pages(day)
-    assert len(reader.pages) == 2 + 2 + 1 + math.ceil(len(day.runs) / 12)
+    # title, summary, the fin post's tare, two fin pages, quality, the runs
+    assert len(reader.pages) == 2 + 1 + 2 + 1 + math.ceil(len(day.runs) / 12)
     text = " ".join(p.extract_text() for p in reader.pages)
     assert "Fins" in text and "Quality" in text
     assert "Added mass" not in text and "Damping" not in text
@@ -257,8 +267,8 @@ def test_report_date_order(days):
 
 # -------------------------------------------------------------------------------- figures
 def test_figures_written(days):
-    for name, expected in (("hull", {"added_mass", "damping", "scaling"}),
-                           ("fin", {"fin_forces", "fin_coefficients"})):
+    for name, expected in (("hull", {"tare", "added_mass", "damping", "scaling"}),
+                           ("fin", {"tare", "fin_forces", "fin_coefficients"})):
         _, out = days[name]
         pngs = {p.stem: p for p in (out / "figures").glob("*.png")}
         assert set(pngs) == expected

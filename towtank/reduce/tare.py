@@ -18,9 +18,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from towtank.stats.intervals import cr2_covariance
 
@@ -229,7 +229,7 @@ TARE_COLUMNS = (
 )
 
 
-def tare_table(tares: dict[str, TareModel]) -> pd.DataFrame:
+def tare_table(tares: dict[str, TareModel]) -> Any:
     """The tare fits of a day, one row per tare group and force channel.
 
     Each fit is the sting's tare force T = t2·U|U| + t1·U + m_t·a (docs/method.md, "Sting
@@ -238,6 +238,7 @@ def tare_table(tares: dict[str, TareModel]) -> pd.DataFrame:
     standard deviation [N], the samples and runs it was fitted on, and the steady speeds [m/s]
     and accelerations [m/s²] it covers.
     """
+    import pandas as pd  # not at import: the reduction's workers never load pandas
     from scipy.stats import t as student
 
     rows = []

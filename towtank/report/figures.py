@@ -14,6 +14,7 @@ vector output in the PDF) under one rc style, :func:`towtank.report.style.rc`.
 =======================  ============================================================
 function                 content (SUT-2 report figure)
 =======================  ============================================================
+fig_tare                 the sting tare against speed with its fit (towtank.report.tare_figure)
 fig_added_mass           drag against speed per acceleration, α = 0 and 90° (Figs. 11–12)
 fig_damping              C_D against α with the quadratic fit and its 95 % band (Fig. 13)
 fig_fin_forces           fin drag and lift against speed per angle (Figs. 14–15)
@@ -26,10 +27,7 @@ thumbnail_twin           the forces' axes of a thumbnail (made once, reused page
 
 from __future__ import annotations
 
-import functools
 import math
-import re
-import textwrap
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -41,8 +39,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from towtank.report import figure_base as _base
 from towtank.report import style
-from towtank.report.safetext import clean_text
+from towtank.report.tare_figure import fig_tare
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -50,144 +49,27 @@ if TYPE_CHECKING:
     from towtank.pipeline import DayResult
     from towtank.reduce.run import RunReduction
 
-PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
-PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
-CAPTION_CHARS = 118  # wrap width of captions on a page-wide figure
-CAPTION_LINE_IN = 7.8 * 1.35 / 72  # height of one caption line [in]
-Z95 = 1.959963984540054  # two-sided 95 % normal quantile
-
-
-# ------------------------------------------------------------------------------------ helpers
-def styled(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Run ``func`` inside the report's rc style."""
-
-    @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with mpl.rc_context(style.rc()):
-            return func(*args, **kwargs)
-
-    return wrapper
-
-
-def math_symbol(symbol: str) -> str:
-    """A coefficient's ASCII symbol in mathtext: ``X_udot`` → ``$X_{\\dot u}$``.
-
-    Parameters
-    ----------
-    symbol : str
-        FORMATS.md symbol such as ``X_udot``, ``X_u|u|`` or ``Y_uv``.
-    """
-    head, _, sub = symbol.partition("_")
-    if not sub:
-        return symbol
-    if sub.endswith("dot"):
-        sub = r"\dot " + sub[:-3]
-    return f"${head}_{{{sub}}}$"
-
-
-#: Plain-text symbols of the program's messages and their mathtext (no spaces inside, so that
-#: wrapping never splits one), longest first.
-_MATH_TOKENS: tuple[tuple[str, str], ...] = tuple(
-    sorted(
-        {
-            **{s: f"${s[0]}_{{\\dot{{{s[2]}}}}}$" for s in ("X_udot", "Y_vdot", "Z_wdot")},
-            **{s: f"${s[0]}_{{{s[2:]}}}$" for s in (
-                "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|", "Y_uv", "Z_uw", "Y_v|v|",
-                "Z_w|w|")},
-            **{s: f"${s[0]}_{{uu\\delta_{s[-1]}}}$" for s in (
-                "Y_uudr", "Z_uuds", "M_uuds", "N_uudr")},
-            "C_D(α)": r"$C_D(\alpha)$", "C_D,90": r"$C_{D,90}$", "C_D,min": r"$C_{D,min}$",
-            "C_L,max": r"$C_{L,max}$", "C_D": r"$C_D$", "C_L": r"$C_L$", "C_F": r"$C_F$",
-            "A_lat": r"$A_{lat}$", "ρ_p": r"$\rho_p$", "ρ_m": r"$\rho_m$", "L_p": r"$L_p$",
-            "U_p": r"$U_p$", "U_m": r"$U_m$", "R_p": r"$R_p$", "S_p": r"$S_p$", "S_m": r"$S_m$",
-            "D_a": r"$D_a$",
-            "D_s": r"$D_s$", "k2": r"$k_2$", "k1": r"$k_1$", "q2": r"$q_2$", "q1": r"$q_1$",
-        }.items(),
-        key=lambda kv: -len(kv[0]),
-    )
-)
-_MATH_RE = re.compile(
-    r"(?<![A-Za-z0-9_$\\])("
-    + "|".join(re.escape(k) for k, _ in _MATH_TOKENS)
-    + r")(?![A-Za-z0-9_])"
-)
-
-
-_E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?!\w|\.\d)")  # "…e+06." too
-_HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
-
-
-def literal(text: object) -> str:
-    """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
-    escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
-    return clean_text(str(text)).replace("$", r"\$")
-
-
-def true_minus(text: str) -> str:
-    """``text`` with a true minus sign (U+2212) for the hyphen before a number."""
-    return _HYPHEN_MINUS.sub("\u2212", text)
-
-
-def math_text(text: str) -> str:
-    """Prose as the report prints it: plain symbols in mathtext (``X_udot`` → X with a dotted
-    u), numbers like ``2.67e+05`` as 2.67×10⁵, and a true minus sign before a number.
-
-    A ``$`` already in the text (a run's remarks, say) is escaped first, so that no text
-    from the inputs is ever parsed as mathtext.
-    """
-    table = dict(_MATH_TOKENS)
-    text = _E_NUMBER.sub(
-        lambda m: f"{m.group(1)}×10" + str(int(m.group(2))).translate(_SUPERSCRIPT), text
-    )
-    text = true_minus(text)
-    return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
-
-
-def t95(dof: int) -> float:
-    """Two-sided 95 % Student-t quantile for ``dof`` degrees of freedom (inf if dof ≤ 0)."""
-    from scipy.stats import t
-
-    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
-
-
-def _new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Figure:
-    return Figure(figsize=style.PAGE_SIZE if page else size)
-
-
-def _layout(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text: str,
-            top_in: float = 0.8, xlabel_in: float = 0.5, left: float = 0.1,
-            right: float = 0.95, **kw: Any) -> Any:
-    """Title, caption and a GridSpec between them, with margins in inches.
-
-    A page figure keeps room for the PDF page's header and footer; the caption's height is
-    known from its wrapped line count, so the axes end just above it.
-    """
-    h = fig.get_size_inches()[1]
-    header = PAGE_HEADER_IN if page else 0.0
-    footer = PAGE_FOOTER_IN if page else 0.0
-    fig.text(0.5, 1 - (header + 0.22) / h, title, ha="center", va="top", fontsize=10.5,
-             fontweight="bold")
-    wrapped = wrap_caption(text)
-    n_lines = wrapped.count("\n") + 1
-    cap_top = footer + 0.25 + n_lines * CAPTION_LINE_IN
-    fig.text(0.08, cap_top / h, wrapped, ha="left", va="top", fontsize=7.8, linespacing=1.35,
-             color="#333333")
-    bottom = cap_top + 0.2 + xlabel_in
-    return fig.add_gridspec(nrows, ncols, left=left, right=right, top=1 - (header + top_in) / h,
-                            bottom=bottom / h, **kw)
-
-
-def wrap_caption(text: str, width: int = CAPTION_CHARS) -> str:
-    """``text`` wrapped to ``width`` characters; paragraphs (blank-line separated) kept apart."""
-    paras = [textwrap.fill(" ".join(p.split()), width) for p in text.split("\n\n") if p.strip()]
-    return math_text("\n".join(paras))
-
-
-def _fmt(x: float, digits: int = 4) -> str:
-    """A number for a label: ``digits`` significant digits, a true minus sign, '–' for NaN."""
-    if x is None or not math.isfinite(float(x)):
-        return "–"
-    return f"{float(x):.{digits}g}".replace("-", "\u2212")
+# the figures' shared basics, also reached as figures.<name> by the PDF and the tests
+_E_NUMBER = _base._E_NUMBER
+_HYPHEN_MINUS = _base._HYPHEN_MINUS
+_MATH_RE = _base._MATH_RE
+_MATH_TOKENS = _base._MATH_TOKENS
+_SUPERSCRIPT = _base._SUPERSCRIPT
+CAPTION_CHARS = _base.CAPTION_CHARS
+CAPTION_LINE_IN = _base.CAPTION_LINE_IN
+PAGE_FOOTER_IN = _base.PAGE_FOOTER_IN
+PAGE_HEADER_IN = _base.PAGE_HEADER_IN
+Z95 = _base.Z95
+_fmt = _base._fmt
+_layout = _base._layout
+_new_figure = _base._new_figure
+literal = _base.literal
+math_symbol = _base.math_symbol
+math_text = _base.math_text
+styled = _base.styled
+t95 = _base.t95
+true_minus = _base.true_minus
+wrap_caption = _base.wrap_caption
 
 
 def _hull_fit(day: DayResult) -> Any:
@@ -595,7 +477,6 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
 
 
 # ------------------------------------------------------------------------------ (f) scaling
-_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 
 
 def sci(x: float, digits: int = 2) -> str:
@@ -912,89 +793,6 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
 
 # ----------------------------------------------------------------------------- all figures
 #: name, report section, function; the order of the PDF's figure pages.
-def tare_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_tare`."""
-    parts = []
-    for group in sorted(day.tares):
-        d = day.tares[group].drag
-        t2, t1, m_t = (float(v) for v in d.coef)
-        parts.append(f"group {group} (runs {_run_list(day.tares[group].runs)}): "
-                     f"t2 = {t2:.4g} N s²/m², t1 = {t1:.4g} N s/m, m_t = {m_t:.4g} kg")
-    return ("The sting alone, towed like the model: the steady means of the sting runs (points) "
-            "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line, with its 95 % "
-            "band), per tare group; the tare is subtracted sample by sample from the group's "
-            "model runs (with m_t·a while accelerating) and its uncertainty is part of every "
-            "coefficient's interval. Drag: " + "; ".join(parts) + ". tare.csv and the "
-            "workbook's Tare sheet give every term with its interval.")
-
-
-def _run_list(runs: tuple[int, ...]) -> str:
-    """Run numbers as ranges: (1, 2, 3, 5) -> "1–3, 5"."""
-    out, start, prev = [], None, None
-    for r in sorted(runs):
-        if start is None:
-            start = prev = r
-        elif r == prev + 1:
-            prev = r
-        else:
-            out.append(f"{start}–{prev}" if prev != start else f"{start}")
-            start = prev = r
-    if start is not None:
-        out.append(f"{start}–{prev}" if prev != start else f"{start}")
-    return ", ".join(out)
-
-
-@styled
-def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
-    """Sting tare against speed: the sting runs' steady drag and lift with the fitted tare.
-
-    Parameters
-    ----------
-    day : DayResult
-        The processed day.
-    page : bool
-        Lay the figure out as an A4 report page.
-    """
-    tares = getattr(day, "tares", None) or {}
-    if not tares:
-        return None
-    has_lift = any(m.lift is not None for m in tares.values())
-    fig = _new_figure(page)
-    gs = _layout(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
-                 title="Sting tare", text=tare_caption(day))
-    runs = day.runs
-    sting = runs[(runs["config"] == "sting") & (runs["status"] == "ok")]
-    channels = [("drag", "drag_mean", r"Tare drag $T_D$ [N]")]
-    if has_lift:
-        channels.append(("lift", "lift_mean", r"Tare lift $T_L$ [N]"))
-    for col, (channel, column, label) in enumerate(channels):
-        ax = fig.add_subplot(gs[0, col])
-        for i, group in enumerate(sorted(tares)):
-            model = tares[group]
-            fit = model.drag if channel == "drag" else model.lift
-            if fit is None:
-                continue
-            color = style.PALETTE[i % len(style.PALETTE)]
-            pts = sting[sting["tare_group"].astype(str) == str(group)]
-            lo, hi = model.speed_range
-            u = np.linspace(0.0, hi * 1.05, 120)
-            a = np.zeros_like(u)
-            curve = fit(u, a)
-            band = t95(fit.dof if math.isfinite(fit.dof) else 10**6) * fit.std_error(u, a)
-            ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.2, lw=0)
-            name = f"group {group}" if len(tares) > 1 else "fitted tare"
-            ax.plot(u, curve, color=color, lw=1.2, label=f"{name}, a = 0")
-            if column in pts:
-                ax.plot(pts["speed_mean"], pts[column], "o", color=color, ms=4, mec="black",
-                        mew=0.4, label="sting runs, steady means")
-        ax.set_xlim(left=0)
-        ax.set_xlabel(r"Carriage speed $U$ [m/s]")
-        ax.set_ylabel(label)
-        ax.set_title(channel.capitalize())
-        ax.legend(loc="upper left", fontsize=6.8)
-    return fig
-
-
 FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
     ("tare", "Tare", fig_tare),
     ("added_mass", "Added mass", fig_added_mass),

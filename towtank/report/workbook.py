@@ -142,6 +142,23 @@ def display_format(value: float) -> str:
     return SCI_FORMAT if a < 0.1 or a >= 1e4 else FIXED_FORMAT
 
 
+def column_format(values: Iterable[Any]) -> str | None:
+    """One Excel number format for a whole column, so that a column never mixes notations
+    (``9.999E-02`` beside ``0.2000``, ``3001.0000`` samples): whole numbers as ``0``; a
+    column whose non-zero magnitudes all lie in 0.1–10⁴ with 4 decimals; anything else
+    scientific. None for a column without numbers."""
+    nums = [float(v) for v in values
+            if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)]
+    if not nums:
+        return None
+    if all(v.is_integer() and abs(v) < 1e15 for v in nums):
+        return "0"
+    mags = [abs(v) for v in nums if v != 0.0]
+    if all(0.1 <= m < 1e4 for m in mags):
+        return FIXED_FORMAT
+    return SCI_FORMAT
+
+
 def header_label(column: str, units: dict[str, str] | None = None) -> str:
     """``speed_mean`` → ``speed_mean [m/s]``; columns without a unit keep their name."""
     unit = (UNITS if units is None else units).get(column)
@@ -179,11 +196,14 @@ class SheetWriter:
         self.widths: dict[int, int] = {}
 
     # -- low level
-    def _put(self, row: int, col: int, value: Any) -> Any:
+    def _put(self, row: int, col: int, value: Any, fmt: str | None = None) -> Any:
         cell = text_cell(self.ws.cell(row=row, column=col), cell_value(value))
         v = cell.value
-        if isinstance(v, float):
-            cell.number_format = display_format(v)
+        if isinstance(v, int | float) and not isinstance(v, bool):
+            if fmt is not None:
+                cell.number_format = fmt
+            elif isinstance(v, float):
+                cell.number_format = display_format(v)
         if v is not None:
             text = f"{v:.6g}" if isinstance(v, float) else str(v)
             w = max(len(line) for line in text.split("\n")) if text else 0
@@ -222,16 +242,24 @@ class SheetWriter:
         units: dict[str, str] | None = None,
         row_fill: Callable[[dict[str, Any]], str | None] | None = None,
         wrap: Iterable[str] = (),
+        per_column: bool = True,
     ) -> tuple[int, int]:
-        """Write ``df`` with a unit-labelled header; returns (header row, last row)."""
+        """Write ``df`` with a unit-labelled header; returns (header row, last row).
+
+        With ``per_column`` every number of a column has that column's format
+        (:func:`column_format`); without it (a key–value list, one quantity per row) each
+        number has its own."""
         cols = list(columns) if columns is not None else list(df.columns)
         head = self.row
         self._header(head, [header_label(c, units) for c in cols])
         wrap = set(wrap)
-        for i, rec in enumerate(df.to_dict("records"), start=1):
+        records = df.to_dict("records")
+        formats = {c: column_format(cell_value(r.get(c)) for r in records) if per_column
+                   else None for c in cols}
+        for i, rec in enumerate(records, start=1):
             fill = self.st.get(row_fill(rec)) if row_fill else None
             for j, c in enumerate(cols, start=1):
-                cell = self._put(head + i, j, rec.get(c))
+                cell = self._put(head + i, j, rec.get(c), formats[c])
                 if fill is not None:
                     cell.fill = fill
                 if c in wrap:
@@ -247,7 +275,7 @@ class SheetWriter:
         """A key–value–unit list as a table."""
         df = pd.DataFrame(rows, columns=list(header))
         df["value"] = pd.Series([r[1] for r in rows], dtype=object)
-        return self.table(df, units={})
+        return self.table(df, units={}, per_column=False)
 
     def finish(self, *, min_width: int = 6) -> None:
         """Freeze and filter the first table, size the columns."""

@@ -1,0 +1,158 @@
+"""The basics every report figure shares: page margins, the figure and caption layout, the
+one rc style (:func:`styled`), and the text helpers that typeset symbols and numbers
+(``X_udot`` as X with a dotted u, ``2.67e+05`` as 2.67×10⁵, a true minus sign)."""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+import textwrap
+from collections.abc import Callable
+from typing import Any
+
+import matplotlib as mpl
+from matplotlib.figure import Figure
+
+from towtank.report import style
+from towtank.report.safetext import clean_text
+
+PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
+PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
+CAPTION_CHARS = 118  # wrap width of captions on a page-wide figure
+CAPTION_LINE_IN = 7.8 * 1.35 / 72  # height of one caption line [in]
+Z95 = 1.959963984540054
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")  # two-sided 95 % normal quantile
+
+
+# ------------------------------------------------------------------------------------ helpers
+def styled(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Run ``func`` inside the report's rc style."""
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with mpl.rc_context(style.rc()):
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
+def math_symbol(symbol: str) -> str:
+    """A coefficient's ASCII symbol in mathtext: ``X_udot`` → ``$X_{\\dot u}$``.
+
+    Parameters
+    ----------
+    symbol : str
+        FORMATS.md symbol such as ``X_udot``, ``X_u|u|`` or ``Y_uv``.
+    """
+    head, _, sub = symbol.partition("_")
+    if not sub:
+        return symbol
+    if sub.endswith("dot"):
+        sub = r"\dot " + sub[:-3]
+    return f"${head}_{{{sub}}}$"
+
+
+#: Plain-text symbols of the program's messages and their mathtext (no spaces inside, so that
+#: wrapping never splits one), longest first.
+_MATH_TOKENS: tuple[tuple[str, str], ...] = tuple(
+    sorted(
+        {
+            **{s: f"${s[0]}_{{\\dot{{{s[2]}}}}}$" for s in ("X_udot", "Y_vdot", "Z_wdot")},
+            **{s: f"${s[0]}_{{{s[2:]}}}$" for s in (
+                "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|", "Y_uv", "Z_uw", "Y_v|v|",
+                "Z_w|w|")},
+            **{s: f"${s[0]}_{{uu\\delta_{s[-1]}}}$" for s in (
+                "Y_uudr", "Z_uuds", "M_uuds", "N_uudr")},
+            "C_D(α)": r"$C_D(\alpha)$", "C_D,90": r"$C_{D,90}$", "C_D,min": r"$C_{D,min}$",
+            "C_L,max": r"$C_{L,max}$", "C_D": r"$C_D$", "C_L": r"$C_L$", "C_F": r"$C_F$",
+            "A_lat": r"$A_{lat}$", "ρ_p": r"$\rho_p$", "ρ_m": r"$\rho_m$", "L_p": r"$L_p$",
+            "U_p": r"$U_p$", "U_m": r"$U_m$", "R_p": r"$R_p$", "S_p": r"$S_p$", "S_m": r"$S_m$",
+            "D_a": r"$D_a$",
+            "D_s": r"$D_s$", "k2": r"$k_2$", "k1": r"$k_1$", "q2": r"$q_2$", "q1": r"$q_1$",
+        }.items(),
+        key=lambda kv: -len(kv[0]),
+    )
+)
+_MATH_RE = re.compile(
+    r"(?<![A-Za-z0-9_$\\])("
+    + "|".join(re.escape(k) for k, _ in _MATH_TOKENS)
+    + r")(?![A-Za-z0-9_])"
+)
+
+
+_E_NUMBER = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?)e([+-]?\d+)(?!\w|\.\d)")  # "…e+06." too
+_HYPHEN_MINUS = re.compile(r"(?<![\w.)\]])-(?=\d)")
+
+
+def literal(text: object) -> str:
+    """Text from the inputs (names, file names, reasons) drawn as it is: a ``$`` in it is
+    escaped, so that matplotlib never parses it as mathtext (which could fail the report)."""
+    return clean_text(str(text)).replace("$", r"\$")
+
+
+def true_minus(text: str) -> str:
+    """``text`` with a true minus sign (U+2212) for the hyphen before a number."""
+    return _HYPHEN_MINUS.sub("\u2212", text)
+
+
+def math_text(text: str) -> str:
+    """Prose as the report prints it: plain symbols in mathtext (``X_udot`` → X with a dotted
+    u), numbers like ``2.67e+05`` as 2.67×10⁵, and a true minus sign before a number.
+
+    A ``$`` already in the text (a run's remarks, say) is escaped first, so that no text
+    from the inputs is ever parsed as mathtext.
+    """
+    table = dict(_MATH_TOKENS)
+    text = _E_NUMBER.sub(
+        lambda m: f"{m.group(1)}×10" + str(int(m.group(2))).translate(_SUPERSCRIPT), text
+    )
+    text = true_minus(text)
+    return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
+
+
+def t95(dof: int) -> float:
+    """Two-sided 95 % Student-t quantile for ``dof`` degrees of freedom (inf if dof ≤ 0)."""
+    from scipy.stats import t
+
+    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
+
+
+def _new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Figure:
+    return Figure(figsize=style.PAGE_SIZE if page else size)
+
+
+def _layout(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text: str,
+            top_in: float = 0.8, xlabel_in: float = 0.5, left: float = 0.1,
+            right: float = 0.95, **kw: Any) -> Any:
+    """Title, caption and a GridSpec between them, with margins in inches.
+
+    A page figure keeps room for the PDF page's header and footer; the caption's height is
+    known from its wrapped line count, so the axes end just above it.
+    """
+    h = fig.get_size_inches()[1]
+    header = PAGE_HEADER_IN if page else 0.0
+    footer = PAGE_FOOTER_IN if page else 0.0
+    fig.text(0.5, 1 - (header + 0.22) / h, title, ha="center", va="top", fontsize=10.5,
+             fontweight="bold")
+    wrapped = wrap_caption(text)
+    n_lines = wrapped.count("\n") + 1
+    cap_top = footer + 0.25 + n_lines * CAPTION_LINE_IN
+    fig.text(0.08, cap_top / h, wrapped, ha="left", va="top", fontsize=7.8, linespacing=1.35,
+             color="#333333")
+    bottom = cap_top + 0.2 + xlabel_in
+    return fig.add_gridspec(nrows, ncols, left=left, right=right, top=1 - (header + top_in) / h,
+                            bottom=bottom / h, **kw)
+
+
+def wrap_caption(text: str, width: int = CAPTION_CHARS) -> str:
+    """``text`` wrapped to ``width`` characters; paragraphs (blank-line separated) kept apart."""
+    paras = [textwrap.fill(" ".join(p.split()), width) for p in text.split("\n\n") if p.strip()]
+    return math_text("\n".join(paras))
+
+
+def _fmt(x: float, digits: int = 4) -> str:
+    """A number for a label: ``digits`` significant digits, a true minus sign, '–' for NaN."""
+    if x is None or not math.isfinite(float(x)):
+        return "–"
+    return f"{float(x):.{digits}g}".replace("-", "\u2212")

@@ -1,0 +1,99 @@
+"""The sting tare figure of the report: the sting runs' steady means against speed with the
+fitted tare T = t2·U|U| + t1·U + m_t·a (docs/method.md, "Sting tare") and its 95 % band."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from towtank.report import style
+from towtank.report.figure_base import _layout, _new_figure, styled, t95
+
+if TYPE_CHECKING:
+    from towtank.pipeline import DayResult
+
+
+def tare_caption(day: DayResult) -> str:
+    """Caption of :func:`fig_tare`."""
+    parts = []
+    for group in sorted(day.tares):
+        d = day.tares[group].drag
+        t2, t1, m_t = (float(v) for v in d.coef)
+        parts.append(f"group {group} (runs {_run_list(day.tares[group].runs)}): "
+                     f"t2 = {t2:.4g} N s²/m², t1 = {t1:.4g} N s/m, m_t = {m_t:.4g} kg")
+    return ("The sting alone, towed like the model: the steady means of the sting runs (points) "
+            "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line, with its 95 % "
+            "band), per tare group; the tare is subtracted sample by sample from the group's "
+            "model runs (with m_t·a while accelerating) and its uncertainty is part of every "
+            "coefficient's interval. Drag: " + "; ".join(parts) + ". tare.csv and the "
+            "workbook's Tare sheet give every term with its interval.")
+
+
+def _run_list(runs: tuple[int, ...]) -> str:
+    """Run numbers as ranges: (1, 2, 3, 5) -> "1–3, 5"."""
+    out, start, prev = [], None, None
+    for r in sorted(runs):
+        if start is None:
+            start = prev = r
+        elif r == prev + 1:
+            prev = r
+        else:
+            out.append(f"{start}–{prev}" if prev != start else f"{start}")
+            start = prev = r
+    if start is not None:
+        out.append(f"{start}–{prev}" if prev != start else f"{start}")
+    return ", ".join(out)
+
+
+@styled
+def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
+    """Sting tare against speed: the sting runs' steady drag and lift with the fitted tare.
+
+    Parameters
+    ----------
+    day : DayResult
+        The processed day.
+    page : bool
+        Lay the figure out as an A4 report page.
+    """
+    tares = getattr(day, "tares", None) or {}
+    if not tares:
+        return None
+    has_lift = any(m.lift is not None for m in tares.values())
+    fig = _new_figure(page)
+    gs = _layout(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
+                 title="Sting tare", text=tare_caption(day))
+    runs = day.runs
+    sting = runs[(runs["config"] == "sting") & (runs["status"] == "ok")]
+    channels = [("drag", "drag_mean", r"Tare drag $T_D$ [N]")]
+    if has_lift:
+        channels.append(("lift", "lift_mean", r"Tare lift $T_L$ [N]"))
+    for col, (channel, column, label) in enumerate(channels):
+        ax = fig.add_subplot(gs[0, col])
+        for i, group in enumerate(sorted(tares)):
+            model = tares[group]
+            fit = model.drag if channel == "drag" else model.lift
+            if fit is None:
+                continue
+            color = style.PALETTE[i % len(style.PALETTE)]
+            pts = sting[sting["tare_group"].astype(str) == str(group)]
+            lo, hi = model.speed_range
+            u = np.linspace(0.0, hi * 1.05, 120)
+            a = np.zeros_like(u)
+            curve = fit(u, a)
+            band = t95(fit.dof if math.isfinite(fit.dof) else 10**6) * fit.std_error(u, a)
+            ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.2, lw=0)
+            name = f"group {group}" if len(tares) > 1 else "fitted tare"
+            ax.plot(u, curve, color=color, lw=1.2, label=f"{name}, a = 0")
+            if column in pts:
+                ax.plot(pts["speed_mean"], pts[column], "o", color=color, ms=4, mec="black",
+                        mew=0.4, label="sting runs, steady means")
+        ax.set_xlim(left=0)
+        ax.set_xlabel(r"Carriage speed $U$ [m/s]")
+        ax.set_ylabel(label)
+        ax.set_title(channel.capitalize())
+        ax.legend(loc="upper left", fontsize=6.8)
+    return fig
