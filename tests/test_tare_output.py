@@ -43,3 +43,18 @@ def test_tare_is_in_the_workbook_and_the_provenance(out):
     table = pd.read_csv(out / "tare.csv")
     prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))["tare"]
     assert [r["m_t"] for r in prov] == pytest.approx(table["m_t"].tolist(), rel=1e-12)
+
+
+def test_every_coefficient_has_its_uncertainty_budget(out):
+    """u_regression, u_tare, u_mass add in quadrature to std_error, and the interval's
+    half-width is t(dof)·std_error (issue 16: the budget behind each interval)."""
+    from scipy.stats import t
+
+    coef = pd.read_csv(out / "coefficients.csv").set_index("symbol")
+    for sym, row in coef.iterrows():
+        total = (row["u_regression"] ** 2 + row["u_tare"] ** 2 + row["u_mass"] ** 2) ** 0.5
+        assert total == pytest.approx(row["std_error"], rel=1e-9), sym
+        half = (row["ci_high"] - row["ci_low"]) / 2
+        assert half == pytest.approx(t.ppf(0.975, row["dof"]) * row["std_error"], rel=1e-6), sym
+    assert coef.loc["X_udot", "u_mass"] == pytest.approx(0.0005)  # the stated 0.5 g
+    assert coef.loc["X_udot", "u_tare"] > 0 and coef.loc["X_u|u|", "u_mass"] == 0

@@ -28,7 +28,7 @@ missing; nothing is ever extrapolated into a value.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -64,6 +64,12 @@ class Estimate:
     alt_value: float = math.nan
     alt_method: str = ""
     agreement: str = ""
+    # the uncertainty budget, u_c² = u_regression² + u_tare² + u_mass² (GUM eq. 10), in the
+    # value's unit, and the degrees of freedom of the interval's t (Welch–Satterthwaite)
+    u_regression: float = math.nan
+    u_tare: float = math.nan
+    u_mass: float = math.nan
+    dof: float = math.nan
 
 
 @dataclass
@@ -334,6 +340,8 @@ def fit_added_mass(
         f"constant-acceleration samples of {len(run_ids)} runs (report eqs. 7–8; "
         f"errors {errors})",
         n_runs=len(run_ids),
+        u_regression=math.sqrt(reg_var), u_tare=math.sqrt(tare_var), u_mass=float(mass_sd),
+        dof=float(dof),
     )
     fit = AddedMassFit(
         symbol=symbol, mass=mass, M=M, M_se=M_se, k2=k2, k1=k1, dof=dof, runs=list(run_ids),
@@ -452,9 +460,11 @@ def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: f
     var_reg = max(float(g @ cov @ g), 0.0)
     var_tare = max(float(g @ tare_cov @ g), 0.0) if tare_cov is not None else 0.0
     se = math.sqrt(var_reg + var_tare)
-    tq = _t95(welch_satterthwaite([var_reg, var_tare], [dof, tare_dof]))
-    half = tq * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
-    return Estimate(symbol, value, se, value - half, value + half, method, n)
+    nu = welch_satterthwaite([var_reg, var_tare], [dof, tare_dof])
+    half = _t95(nu) * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
+    return Estimate(symbol, value, se, value - half, value + half, method, n,
+                    u_regression=math.sqrt(var_reg), u_tare=math.sqrt(var_tare), u_mass=0.0,
+                    dof=float(nu))
 
 
 def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
@@ -626,11 +636,14 @@ def fit_transverse(
     cd90_se = math.sqrt(reg_var + tare_var)
     q90 = 0.5 * rho * lateral_area
     value, se = -q90 * cd90, q90 * cd90_se
-    tq = _t95(welch_satterthwaite([reg_var, tare_var], [dof, _tare_dof(tr, reductions, tares)]))
+    nu = welch_satterthwaite([reg_var, tare_var], [dof, _tare_dof(tr, reductions, tares)])
+    tq = _t95(nu)
     est = Estimate(
         "Y_v|v|", value, se, value - tq * se, value + tq * se,
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
         "(report eq. 15)", len(tr),
+        u_regression=q90 * math.sqrt(reg_var), u_tare=q90 * math.sqrt(tare_var), u_mass=0.0,
+        dof=float(nu),
     )
     # residual of each run's drag [N]: R − ½ρ_run·A_lat·C_D,90·U|U|
     table = pd.DataFrame({"run": tr["run"].to_numpy(int), "speed": u, "drag": r,
@@ -752,11 +765,8 @@ def fit_hull(
     for target, source in MIRROR.items():
         if source in estimates:
             e = estimates[source]
-            estimates[target] = Estimate(
-                target, e.value, e.std_error, e.ci_low, e.ci_high,
-                f"same as {source} (axisymmetric hull)", e.n_runs, e.alt_value, e.alt_method,
-                e.agreement,
-            )
+            estimates[target] = replace(e, symbol=target,
+                                        method=f"same as {source} (axisymmetric hull)")
     lift_slope = None
     small = hull_ok[np.abs(hull_ok["angle_deg"]) <= alpha_max_deg]
     if small["cl"].notna().sum() >= 3 and small["angle_deg"].nunique() >= 2:
@@ -791,7 +801,7 @@ COEFFICIENT_COLUMNS = [
 #: Extension columns of coefficients.csv after the FORMATS §5 ones (docs/formats.md).
 COEFFICIENT_EXTRA_COLUMNS = [
     "std_error", "prime_ci_low", "prime_ci_high", "n_runs", "alt_value", "alt_method",
-    "agreement",
+    "agreement", "u_regression", "u_tare", "u_mass", "dof",
 ]
 
 
@@ -841,5 +851,7 @@ def coefficients_table(
             "std_error": e.std_error, "prime_ci_low": prime - factor * prime_se,
             "prime_ci_high": prime + factor * prime_se, "n_runs": e.n_runs,
             "alt_value": e.alt_value, "alt_method": e.alt_method, "agreement": e.agreement,
+            "u_regression": e.u_regression, "u_tare": e.u_tare, "u_mass": e.u_mass,
+            "dof": e.dof,
         })
     return pd.DataFrame(rows, columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
