@@ -222,6 +222,28 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
     if getattr(hf, "lift_slope", None):
         s, lo, hi = hf.lift_slope
         f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
+    _budget_flow(f, hf)
+
+
+def _budget_flow(f: Flow, hf: Any) -> None:
+    """The uncertainty budget behind each interval (coefficients.csv's u_* columns)."""
+    rows = [e for sym, e in hf.estimates.items()
+            if not e.method.startswith("same as") and math.isfinite(e.u_regression)]
+    if not rows:
+        return
+    f.li("Uncertainty budget: standard uncertainties of each coefficient's parts, in its own "
+         "unit; u_c² = u_fit² + u_tare² + u_mass², 95 % half-width = t(ν)·u_c (ν by "
+         "Welch–Satterthwaite).")
+    f.mono("     coefficient        u_fit      u_tare      u_mass         u_c       ν"
+           "   half-width")
+    for e in rows:
+        f.mono(f"     {e.symbol:<14s} {e.u_regression:10.3e}  {e.u_tare:10.3e}  "
+               f"{e.u_mass:10.3e}  {e.std_error:10.3e}  {_dof(e.dof):>6s}   "
+               f"{(e.ci_high - e.ci_low) / 2:10.3e}")
+
+
+def _dof(nu: float) -> str:
+    return "∞" if not math.isfinite(nu) or nu > 1e6 else f"{nu:.1f}"
 
 
 short_reason = own_reason  # a run's reason without the "run N: file:" prefix
