@@ -67,6 +67,11 @@ def _parser() -> argparse.ArgumentParser:
                          "jobs, else all cores)")
     pr.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
                     help="test date printed in the report (default: from the inputs)")
+    pr.add_argument("--export", action="append", choices=("mat", "hdf5", "parquet"),
+                    default=None, metavar="FORMAT",
+                    help="also write every usable run's reduced time series (zeroed, filtered, "
+                    "tared, with its phases) into DIR/export/: mat (MATLAB), hdf5 or parquet; "
+                    "may be given more than once")
     pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
     pr.add_argument("--no-cache", action="store_true",
                     help="ignore and rebuild the per-run cache in the output folder")
@@ -221,7 +226,8 @@ def cmd_process(args: argparse.Namespace) -> int:
         from towtank.runtime.cache import DayStamp
 
         stamp = DayStamp(Path(out) / ".cache", protocol, Path(out),
-                         {"report": not args.no_report, "date": args.date})
+                         {"report": not args.no_report, "date": args.date,
+                          "export": sorted(set(args.export or ()))})
         replay = stamp.replay()
         if replay is not None:  # nothing changed since the last run: its outputs stand
             code, text = replay
@@ -289,7 +295,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
         _err(str(exc))
         return EXIT_UNUSABLE
     try:
-        write_outputs(day, out, report=not args.no_report)
+        write_outputs(day, out, report=not args.no_report, export=tuple(args.export or ()))
     except OSError as exc:
         if exc.errno not in _STORAGE_ERRNOS:
             raise

@@ -659,7 +659,7 @@ def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMa
 OUTPUT_NAMES = frozenset({
     "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
     "scaling.csv", "tare.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
-    "predicted.csv", "model.json",
+    "predicted.csv", "model.json", "export",
 })
 
 

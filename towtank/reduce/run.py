@@ -83,6 +83,10 @@ class RunReduction:
     #: (size, mtime_ns, ctime_ns, inode) of the run file as its bytes were read, or None when
     #: it changed during the read: what the cache may remember with ``sha256``
     file_stamp: tuple[int, int, int, int] | None = None
+    #: the whole run at its own rate (t, U, a, drag, lift: zeroed, filtered; tared once
+    #: :func:`apply_tare` ran; "phase": the index into PHASE_NAMES, −1 outside every phase),
+    #: only when asked for (``keep_series``), for the time-series export
+    series: dict[str, np.ndarray] | None = None
     drag_mean: float = math.nan
     lift_mean: float = math.nan
 
@@ -172,6 +176,7 @@ def reduce_run(
     window_s: tuple[float, float] | None = None,
     speed_nominal: float = math.nan,
     accel_nominal: float = math.nan,
+    keep_series: bool = False,
 ) -> RunReduction:
     """Reduce one run (before tare).
 
@@ -197,6 +202,8 @@ def reduce_run(
         Set carriage speed [m/s] (cross-check only).
     accel_nominal : float
         Set carriage acceleration [m/s²] (cross-check only).
+    keep_series : bool
+        Keep the whole conditioned run in ``series`` (for the export; never cached).
     """
     fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
@@ -255,7 +262,26 @@ def reduce_run(
         has_lift=raw.lift is not None,
         notes=notes,
         warnings=warn,
+        series=(series_of(t, speed_f, accel_f, drag_f, lift_f, ph, steady)
+                if keep_series else None),
     )
+
+
+def series_of(
+    t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, drag_f: np.ndarray,
+    lift_f: np.ndarray, ph: phases.Phases, steady: tuple[int, int],
+) -> dict[str, np.ndarray]:
+    """The whole run at its own rate with each sample's phase: t [s], U [m/s], a [m/s²],
+    drag, lift [N] (zeroed, filtered) and ``phase``, the index into
+    :data:`towtank.signal.phases.PHASE_NAMES` (−1 between phases); the steady phase is the
+    window used (set by hand or detected)."""
+    label = np.full(t.size, -1, dtype=np.int8)
+    for k, name in enumerate(phases.PHASE_NAMES):
+        w = steady if name == "steady" else getattr(ph, name)
+        if w is not None:
+            label[w[0]:w[1]] = k
+    return {"t": t.copy(), "U": speed_f.copy(), "a": accel_f.copy(), "drag": drag_f.copy(),
+            "lift": lift_f.copy(), "phase": label}
 
 
 def filter_channels(
@@ -522,9 +548,14 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
     s["drag"] = s["drag"] - tare.drag(s["U"], s["a"])
     th = dict(red.thumb)
     th["drag"] = th["drag"] - tare.drag(th["U"], th["a"])
+    series = dict(red.series) if red.series is not None else None
+    if series is not None:
+        series["drag"] = series["drag"] - tare.drag(series["U"], series["a"])
     if tare.lift is not None and red.has_lift:
         s["lift"] = s["lift"] - tare.lift(s["U"], s["a"])
         th["lift"] = th["lift"] - tare.lift(th["U"], th["a"])
+        if series is not None:
+            series["lift"] = series["lift"] - tare.lift(series["U"], series["a"])
     notes = list(red.notes)
     warn = list(red.warnings)
     if not tare.covers(red.speed_mean):
@@ -539,6 +570,7 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
         red,
         samples=s,
         thumb=th,
+        series=series,
         tare_drag=tare_d,
         tare_lift=tare_l,
         tare_group=tare.group,
@@ -598,7 +630,8 @@ def run_preview(raw: RawRun) -> dict[str, np.ndarray]:
 Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | None]
 
 
-def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = False) -> Record:
+def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = False,
+                  keep_series: bool = False) -> Record:
     """Read and reduce the run of one run-sheet row; never raises for a data problem.
 
     Returns (run, reduction, None, None), or (run, None, reason, preview) where ``reason`` is
@@ -641,6 +674,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             window_s=window,
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
+            keep_series=keep_series,
         )
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:

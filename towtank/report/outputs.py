@@ -136,6 +136,7 @@ def write_outputs(
     report: bool = True,
     writers: list[Writer] | None = None,
     keep: tuple[str, ...] = (".cache",),
+    export: tuple[str, ...] | list[str] = (),
 ) -> Path:
     """Write every output of the day into ``out_dir``, replacing the previous outputs.
 
@@ -151,6 +152,9 @@ def write_outputs(
         own rename and the other files are left untouched.
     report : bool
         Also write the workbook, the PDF and the figures.
+    export : sequence of str
+        Also write every usable run's reduced time series in these formats ("mat", "hdf5",
+        "parquet") into ``export/`` (:mod:`towtank.report.export`).
     """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -162,6 +166,11 @@ def write_outputs(
     try:
         from towtank.report import tables
 
+        if export:  # first: a run that cannot be exported is a warning of the report
+            from towtank.report.export import export_runs
+
+            day.warnings.extend(w for w in export_runs(day, tmp, tuple(export))
+                                if w not in day.warnings)
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
             from towtank.report.vehicle import write_vehicle
