@@ -75,6 +75,14 @@ ADDED_MASSES = ("X_udot", "Y_vdot", "Z_wdot")
 TOLERANCE = {"X_udot": 0.05, "Y_vdot": 0.02, "X_u|u|": 0.01, "Y_uv": 0.01, "Y_v|v|": 0.015,
              "X_uv": 0.20, "X_v|v|": 0.35}
 
+#: Conditions whose errors scale with a larger noise: the tolerances grow with it.
+NOISE_FACTOR = {"noise_4x": 4.0}
+
+
+def tolerance(condition: str, symbol: str) -> float:
+    """The largest |relative error| allowed for ``symbol`` on a day of ``condition``."""
+    return TOLERANCE[symbol] * NOISE_FACTOR.get(condition, 1.0)
+
 
 def weighed_mass(model: dict[str, Any], seed: int) -> float:
     """The model's mass as the lab weighs it: the true mass plus a weighing error drawn with
