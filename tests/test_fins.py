@@ -494,3 +494,21 @@ def test_lifting_line_takes_the_attached_root_where_both_exist():
         cl2d, _ = sandia.section_coefficients(alpha_eff, re)
         assert cl == pytest.approx(float(cl2d), abs=1e-9)  # a root of the lifting line
         assert cl > 0.7, re  # not the stalled root (C_L ≈ 0.26 at the lowest Re)
+
+
+def test_slopes_of_a_section_not_a_finite_fin_are_named():
+    """Issue 16: the fin day's measured slope (6.12 /rad) equals the 2-D section's (6.12)
+    while lifting-line theory gives 2.42 for AR 1.25: the report must say the fin behaved
+    as a section; a fin whose slopes match the finite span gets no sentence."""
+    import pandas as pd
+
+    from towtank.analysis.fins import two_dimensional_warning
+
+    curves = pd.DataFrame({"lift_slope": [6.12, 5.8], "lift_slope_ci_low": [4.8, 4.6],
+                           "lift_slope_ci_high": [7.5, 7.0], "lift_slope_sandia_2d": [6.12, 5.8],
+                           "lift_slope_3d": [2.42, 2.40]})
+    (sentence,) = two_dimensional_warning(curves, 1.25)
+    assert "match the 2-D NACA 0015 section" in sentence and "(2.41 /rad)" in sentence
+    finite = curves.assign(lift_slope=[2.5, 2.4], lift_slope_ci_low=[2.0, 1.9],
+                           lift_slope_ci_high=[3.0, 2.9])
+    assert two_dimensional_warning(finite, 1.25) == []

@@ -662,6 +662,7 @@ def _fin_stage(day: DayResult) -> None:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     warn += fins.low_reynolds_warnings(table)
     warn += fins.lift_slope_warnings(curves, linear_max)
+    warn += fins.two_dimensional_warning(curves, ar)
     control = None
     if fin.x_m is not None and len(curves):
         slope, source = fins.control_lift_slope(curves, linear_max)

@@ -708,6 +708,38 @@ def _deg_list(text: str) -> list[str]:
     return [f"{float(v):g}°" for v in str(text).split()]
 
 
+def two_dimensional_warning(curves: pd.DataFrame, aspect_ratio: float) -> list[str]:
+    """A sentence when the measured lift slopes match the 2-D section rather than the finite
+    span, or an empty list.
+
+    A fin of effective aspect ratio AR should lose lift slope to its tip vortices (lifting
+    line, Anderson 5.3: a = a₀/(1 + a₀/(π·e·AR)), 2.42 /rad for AR 1.25 against 6.1 for the
+    section). When every speed group's 95 % interval holds the 2-D slope but not the
+    finite-span one, the fin behaved as a section: it spans the test section or has end
+    plates or a wall at both ends ([fin] mounting), or the data are two-dimensional by
+    construction (towtank's synthetic fin day is made from the 2-D Sandia data).
+    """
+    ok = curves.dropna(subset=["lift_slope_ci_low", "lift_slope_ci_high",
+                               "lift_slope_sandia_2d", "lift_slope_3d"])
+    if ok.empty:
+        return []
+    lo, hi = ok["lift_slope_ci_low"], ok["lift_slope_ci_high"]
+    holds_2d = ((lo <= ok["lift_slope_sandia_2d"]) & (ok["lift_slope_sandia_2d"] <= hi)).all()
+    holds_3d = ((lo <= ok["lift_slope_3d"]) & (ok["lift_slope_3d"] <= hi)).any()
+    if not holds_2d or holds_3d:
+        return []
+    return [
+        f"fin: the measured lift slopes ({ok['lift_slope'].min():.2f}–"
+        f"{ok['lift_slope'].max():.2f} /rad) match the 2-D NACA 0015 section "
+        f"({ok['lift_slope_sandia_2d'].mean():.2f} /rad), not the finite span of effective "
+        f"aspect ratio {aspect_ratio:.3g} ({ok['lift_slope_3d'].mean():.2f} /rad): the fin "
+        "behaved as a section (it spans the tank's test section, or has end plates or walls "
+        "at both ends; or the data are two-dimensional by construction, as towtank's "
+        "synthetic fin day is). Check [fin] span_m and mounting before using the finite-span "
+        "columns."
+    ]
+
+
 def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0) -> list[str]:
     """One sentence per speed group of :func:`fin_curves` that has no lift slope.
 
