@@ -188,17 +188,19 @@ def test_workbook_provenance_lists_inputs_with_sha256(days):
 def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
     n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
-    return 2 + n_figs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
+    n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
+    return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
 
 
 def test_hull_pdf_pages_and_sections(days):
     day, out = days["hull"]
     reader = PdfReader(out / "report.pdf")
     assert len(reader.pages) == _expected_pages(day)
-    # title, summary, tare, added mass, damping, scaling, quality, 42 runs on 4 appendix pages
-    assert len(reader.pages) == 11
+    # title, summary, tare, added mass, damping, scaling, the runs' table, quality, 42 runs on
+    # 4 appendix pages
+    assert len(reader.pages) == 12
     text = [p.extract_text() for p in reader.pages]
-    for section in ("Summary", "Tare", "Added mass", "Damping", "Scaling", "Quality",
+    for section in ("Summary", "Tare", "Added mass", "Damping", "Scaling", "Runs", "Quality",
                     "Appendix"):
         assert any(section in t for t in text[1:]), section
     assert "Fins" not in " ".join(text)
@@ -212,8 +214,8 @@ def test_fin_pdf_has_no_hull_pages(days):
     day, out = days["fin"]
     reader = PdfReader(out / "report.pdf")
     assert len(reader.pages) == _expected_pages(day)
-    # title, summary, the fin post's tare, two fin pages, quality, the runs
-    assert len(reader.pages) == 2 + 1 + 2 + 1 + math.ceil(len(day.runs) / 12)
+    # title, summary, the fin post's tare, two fin pages, the runs' table, quality, thumbnails
+    assert len(reader.pages) == 2 + 1 + 2 + 1 + 1 + math.ceil(len(day.runs) / 12)
     text = " ".join(p.extract_text() for p in reader.pages)
     assert "Fins" in text and "Quality" in text
     assert "Added mass" not in text and "Damping" not in text
@@ -371,3 +373,15 @@ def test_math_symbol():
     assert figures.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
     assert figures.sci(2.7e5) == "2.7×10⁵"
     assert Path(pdf.__file__).name == "pdf.py"
+
+
+def test_the_runs_table_lists_every_run_with_its_status(days):
+    """Issue 16: a per-run table in the PDF (run, config, test, α, U, a, drag, C_D, Re, tare,
+    status), one row per run of the sheet."""
+    day, out = days["hull"]
+    reader = PdfReader(out / "report.pdf")
+    text = next(p.extract_text() for p in reader.pages if "Runs" in p.extract_text()
+                and "tare [N]" in p.extract_text())
+    for r in day.runs.itertuples():
+        assert str(int(r.run)) in text
+    assert "rejected" in text and "status" in text

@@ -626,7 +626,10 @@ def thumbnail_twin(ax: Axes) -> Axes:
     # the force axes lie below: shading, then forces; the speed axes on top are transparent
     ax.set_zorder(twin.get_zorder() + 1)
     ax.patch.set_visible(False)
-    twin.grid(False)
+    # horizontal gridlines belong to the forces (read against them), not to the speed
+    ax.grid(axis="y", visible=False)
+    twin.grid(axis="x", visible=False)
+    twin.grid(axis="y", visible=True)
     twin.spines["right"].set_visible(True)
     return twin
 

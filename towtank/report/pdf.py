@@ -52,7 +52,7 @@ DIFF_HIGHLIGHT_PCT = 10.0  # |diff %| above which a coefficient is highlighted
 class Page:
     """One page of the report: its kind, section title and what it draws."""
 
-    kind: str  # title | summary | figure | quality | thumbs
+    kind: str  # title | summary | figure | runs | quality | thumbs
     section: str
     payload: Any = None
     subtitle: str = ""
@@ -273,6 +273,11 @@ def page_plan(day: DayResult) -> list[Page]:
     pages = [Page("title", "Title"), Page("summary", "Summary")]
     for name, section, func in figures.available_figures(day):
         pages.append(Page("figure", section, (name, func)))
+    ids = [int(r) for r in day.runs["run"]]
+    for k in range(0, len(ids), RUNS_PER_PAGE):
+        chunk = ids[k:k + RUNS_PER_PAGE]
+        pages.append(Page("runs", "Runs", chunk,
+                          subtitle=f"runs {chunk[0]}–{chunk[-1]}" if len(chunk) > 1 else ""))
     q = _paginate(quality_flow(day), QUALITY_HEIGHT_IN)
     for i, chunk in enumerate(q):
         pages.append(Page("quality", "Quality", chunk,
@@ -685,7 +690,9 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
 
 
 def _thumb_title(row: dict[str, Any]) -> str:
-    head = f"run {int(row['run'])} · {row['config']} α = {_num(row['angle_deg'], 3)}°"
+    test = str(row.get("test") or "").strip()
+    kind = f" {test}" if test in ("steady", "accel") else ""
+    head = f"run {int(row['run'])} · {row['config']}{kind} · α = {_num(row['angle_deg'], 3)}°"
     u = row.get("speed_mean")
     if u is not None and isinstance(u, float) and math.isfinite(u):
         head += f" · {u:.2f} m/s"
@@ -705,7 +712,7 @@ class ThumbGrid:
         self.fig = _page()
         top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
         bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
-        gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.93, top=1 - top,
+        gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.905, top=1 - top,
                                    bottom=bottom, hspace=0.5, wspace=0.55)
         self.cells = []
         for k in range(THUMBS_PER_PAGE):
@@ -783,7 +790,8 @@ PDF_PARTS = 4
 
 #: Rough drawing time of a page by kind, relative (to split the pages evenly between cores);
 #: a thumbnail page costs in proportion to its runs.
-PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "quality": 0.3, "thumbs": 1.0}
+PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "runs": 0.4, "quality": 0.3,
+             "thumbs": 1.0}
 
 
 def _page_cost(page: Page) -> float:
@@ -905,7 +913,48 @@ def _render(
         _draw_summary(fig, day)
     elif page.kind == "quality":
         _draw_quality(fig, page.payload)
+    elif page.kind == "runs":
+        _draw_runs(fig, day, page.payload)
     return fig
+
+
+#: Rows of the per-run table on one page.
+RUNS_PER_PAGE = 46
+
+_STATUS_FILL = {"rejected": "#f4cccc", "void": "#e6e6e6"}
+
+
+def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
+    """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
+    tare-corrected steady drag and its coefficients; rejected and void runs shaded."""
+    runs = day.runs.set_index("run", drop=False)
+    y = figures.PAGE_HEADER_IN + 0.25
+    header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
+              r"$C_D$", "Re", "tare [N]", "status"]
+    rows, fill = [], {}
+    for i, run in enumerate(run_ids):
+        r = runs.loc[run]
+        ok = r["status"] == "ok"
+        rows.append([str(run), str(r["config"]), str(r.get("test") or ""),
+                     _v(r["angle_deg"], "g"),
+                     _v(r["speed_mean"], ".3f") if ok else "–",
+                     _v(r["accel_mean"], ".3f") if ok else "–",
+                     _v(r["drag_mean"], ".4g") if ok else "–",
+                     _v(r["cd"], ".4f") if ok else "–",
+                     figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
+                     _v(r["tare_drag"], ".3g") if ok else "–",
+                     str(r["status"])])
+        if r["status"] in _STATUS_FILL:
+            for c in range(len(header)):
+                fill[(i, c)] = _STATUS_FILL[str(r["status"])]
+    used = _table(fig, y, header, rows, [0.45, 0.55, 0.55, 0.6, 0.65, 0.65, 0.75, 0.65, 0.75,
+                                        0.65, 0.7], row_in=0.19, fontsize=7.2, highlight=fill)
+    _text_block(fig, y + used + 0.12,
+                "Steady means over the plateau window (drag tare-corrected; a is the mean "
+                "constant acceleration where the run has one). C_D on the frontal area (hull) "
+                "or chord × span (fin), Re on the length or chord, at each run's water "
+                "temperature. Rejected runs (red) and void runs (grey) with their reasons: "
+                "Quality page and runs.csv.", fontsize=7.5)
 
 
 __all__ = [
