@@ -46,8 +46,19 @@ if TYPE_CHECKING:
 
     from towtank.pipeline import DayResult
 
-SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Scaling", "Quality",
-          "Provenance")
+SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
+          "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
+
+
+def sheet_names(day: DayResult) -> list[str]:
+    """The workbook's sheets, one table each: :data:`SHEETS` without the fin and scaling
+    detail sheets a day has no data for."""
+    fr, sr = day.fin_result, day.scaling_result
+    has = {"Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
+           "Fin control": _has_control(day),
+           "Scaling constants": sr is not None,
+           "Form factor": sr is not None and sr.form_factor is not None}
+    return [name for name in SHEETS if has.get(name, True)]
 DIFF_HIGHLIGHT_PCT = 10.0
 MAX_WIDTH = 60
 
@@ -437,16 +448,26 @@ def _fins(w: SheetWriter, day: DayResult) -> None:
         return
     w.table(fr.table)
     w.gap()
-    w.title("Per-speed curves")
-    w.table(fr.curves)
+    w.note(f"Effective aspect ratio {fr.aspect_ratio:.4g}, span efficiency e = "
+           f"{fr.oswald_e:.3g}; per-speed curves on the Fin curves sheet"
+           + (", control derivatives on the Fin control sheet." if _has_control(day) else "."))
+
+
+def _has_control(day: DayResult) -> bool:
+    fr = day.fin_result
+    return fr is not None and fr.control is not None and len(fr.control) > 0
+
+
+def _fin_curves(w: SheetWriter, day: DayResult) -> None:
+    w.table(day.fin_result.curves)
     w.gap()
-    w.title("Fin constants")
-    w.pairs([("effective aspect ratio", fr.aspect_ratio, "-"),
-             ("span efficiency e", fr.oswald_e, "-")])
-    if fr.control is not None and len(fr.control):
-        w.gap()
-        w.title("Control derivatives")
-        w.table(fr.control)
+    w.note("Lift slope over the linear range of each speed group with its 95 % interval, "
+           "beside the same fit through the 2-D Sandia section and the finite-span "
+           "expectation (lifting line); slopes in 1/rad, angles in degrees.")
+
+
+def _fin_control(w: SheetWriter, day: DayResult) -> None:
+    w.table(day.fin_result.control)
 
 
 def _scaling(w: SheetWriter, day: DayResult) -> None:
@@ -462,7 +483,13 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
         return
     w.table(sr.table)
     w.gap()
-    w.title("Resistance curve, form factor and water")
+    w.note("Resistance curve, form factor and water on the Scaling constants sheet"
+           + ("; the form factor per tested speed on the Form factor sheet."
+              if sr.form_factor is not None else "."))
+
+
+def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
+    sr = day.scaling_result
     k2, k1 = sr.resistance
     rows: list[tuple[str, Any, str]] = [
         ("scale λ", sr.scale, "-"),
@@ -492,19 +519,20 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
              ("prototype water density", sr.rho_p, "kg/m³"),
              ("prototype water kinematic viscosity", sr.nu_p, "m²/s")]
     w.pairs(rows)
-    if ff is not None:
-        w.gap()
-        w.title("Form factor per tested speed")
-        w.table(pd.DataFrame({"speed": ff.speeds, "runs": ff.speed_runs,
-                              "one_plus_k": ff.speed_values}),
-                units={"speed": "m/s", "runs": "-", "one_plus_k": "-"})
     w.gap()
     w.title("Similarity")
     c = text_cell(w.ws.cell(row=w.row, column=1), cell_value(sr.statement))
     c.alignment = w.st["wrap"]
-    w.ws.merge_cells(start_row=w.row, start_column=1, end_row=w.row, end_column=7)
-    w.ws.row_dimensions[w.row].height = 15 * (1 + len(sr.statement) // 110)
+    w.ws.merge_cells(start_row=w.row, start_column=1, end_row=w.row, end_column=3)
+    w.ws.row_dimensions[w.row].height = 15 * (1 + len(sr.statement) // 80)
     w.row += 1
+
+
+def _form_factor(w: SheetWriter, day: DayResult) -> None:
+    ff = day.scaling_result.form_factor
+    w.table(pd.DataFrame({"speed": ff.speeds, "runs": ff.speed_runs,
+                          "one_plus_k": ff.speed_values}),
+            units={"speed": "m/s", "runs": "-", "one_plus_k": "-"})
 
 
 def _quality(w: SheetWriter, day: DayResult) -> None:
@@ -639,7 +667,11 @@ WRITERS: dict[str, Callable[[SheetWriter, Any], None]] = {
     "Runs": _runs,
     "Tare": _tare,
     "Fins": _fins,
+    "Fin curves": _fin_curves,
+    "Fin control": _fin_control,
     "Scaling": _scaling,
+    "Scaling constants": _scaling_constants,
+    "Form factor": _form_factor,
     "Quality": _quality,
     "Provenance": _provenance,
 }
@@ -691,7 +723,7 @@ def write_workbook(day: DayResult, folder: str | Path) -> Path:
 
     wb = Workbook()
     wb.remove(wb.active)
-    for name in SHEETS:
+    for name in sheet_names(day):
         w = SheetWriter(wb.create_sheet(name))
         WRITERS[name](w, day)
         w.finish()
