@@ -935,7 +935,7 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
     for i, run in enumerate(run_ids):
         r = runs.loc[run]
         ok = r["status"] == "ok"
-        rows.append([str(run), str(r["config"]), str(r.get("test") or ""),
+        rows.append([str(run), figures.literal(r["config"]), figures.literal(r.get("test") or ""),
                      _v(r["angle_deg"], "g"),
                      _v(r["speed_mean"], ".3f") if ok else "–",
                      _v(r["accel_mean"], ".3f") if ok else "–",
@@ -943,7 +943,7 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
                      _v(r["cd"], ".4f") if ok else "–",
                      figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
                      _v(r["tare_drag"], ".3g") if ok else "–",
-                     str(r["status"])])
+                     figures.literal(r["status"])])
         if r["status"] in _STATUS_FILL:
             for c in range(len(header)):
                 fill[(i, c)] = _STATUS_FILL[str(r["status"])]

@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from towtank.report import style
-from towtank.report.figure_base import _layout, _new_figure, styled, t95
+from towtank.report.figure_base import _layout, _new_figure, literal, styled, t95
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -86,7 +86,7 @@ def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
             curve = fit(u, a)
             band = t95(fit.dof if math.isfinite(fit.dof) else 10**6) * fit.std_error(u, a)
             ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.2, lw=0)
-            name = f"group {group}" if len(tares) > 1 else "fitted tare"
+            name = literal(f"group {group}") if len(tares) > 1 else "fitted tare"
             ax.plot(u, curve, color=color, lw=1.2, label=f"{name}, a = 0")
             if column in pts:
                 ax.plot(pts["speed_mean"], pts[column], "o", color=color, ms=4, mec="black",
