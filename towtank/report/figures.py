@@ -346,8 +346,11 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
         return None
     fv = day.fin_result.force_vs_speed
     angles = sorted(fv["angle_deg"].unique())
-    cmap = mpl.colormaps["viridis"]
-    colors = {a: cmap(i / max(len(angles) - 1, 1) * 0.9) for i, a in enumerate(angles)}
+    # qualitative colours and a marker per angle: ten shades of one colour map cannot be told
+    # apart where the lines cross
+    cmap = mpl.colormaps["tab10" if len(angles) <= 10 else "tab20"]
+    colors = {a: cmap(i % cmap.N) for i, a in enumerate(angles)}
+    markers = {a: "osD^vP*Xh<>p"[i % 12] for i, a in enumerate(angles)}
     fig = _new_figure(page)
     gs = _layout(fig, 2, 1, page=page, hspace=0.32, right=0.84,
                  title="Fin forces against carriage speed at each angle of attack",
@@ -359,7 +362,8 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
     for col, ax, name in (("drag_mean", axes[0], "Drag"), ("lift_mean", axes[1], "Lift")):
         for a in angles:
             sel = fv[fv["angle_deg"] == a]
-            ax.plot(sel["speed_mean"], sel[col], "o-", color=colors[a], ms=4, lw=1.1)
+            ax.plot(sel["speed_mean"], sel[col], "-", marker=markers[a], color=colors[a], ms=4,
+                    lw=1.1)
         values = fv[col].to_numpy(dtype=float)
         positive = values[np.isfinite(values) & (values > 0)]
         if (col == "drag_mean" and positive.size == np.isfinite(values).sum() and positive.size
@@ -369,7 +373,7 @@ def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
         ax.set_ylabel(rf"{name} ${sym}$ [N]")
         ax.set_xlabel(r"Speed $U$ [m/s]")
         ax.set_title(f"{name} against speed (report Fig. {14 if sym == 'D' else 15})")
-    handles = [Line2D([], [], color=colors[a], marker="o", ms=4, label=f"{a:g}")
+    handles = [Line2D([], [], color=colors[a], marker=markers[a], ms=4, label=f"{a:g}")
                for a in angles]
     fig.legend(handles=handles, title=r"$\alpha$ [deg]", loc="center left",
                bbox_to_anchor=(0.855, 0.5), fontsize=7.5, title_fontsize=8)

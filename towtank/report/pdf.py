@@ -621,7 +621,8 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
             f"{str(r.get('unit', '')).replace('*', '·')}".strip()
             for r in recs)
         if "lift_slope" in recs[0]:
-            text += (f". They use the lift slope c_Lα = {_v(recs[0]['lift_slope'], '.4g')} /rad: "
+            slope = _v(recs[0]["lift_slope"], ".4g")
+            text += (f". They use the lift slope dC_L/dα = {slope} /rad: "
                      f"{recs[0].get('lift_slope_source', '')}.")
         used += _text_block(fig, y + used, text, width=125, fontsize=7)
     return used
