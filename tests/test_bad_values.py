@@ -472,3 +472,11 @@ def test_a_file_changed_after_it_was_read_is_not_cached_as_the_new_one(tmp_path,
     monkeypatch.setattr(pipeline, "reduce_record", original)
     assert main(["process", str(protocol), "--out", str(out), "--no-report", "-q"]) == 0
     assert abs(_runs(out).loc[run, "drag_mean"] / first - 1.0) > 0.05  # read again
+
+
+def test_scale_into_a_folder_that_does_not_exist_creates_nothing(tmp_path):
+    """Issue 16: `towtank scale --out /nonexistent` made the folder and a 620 kB .cache."""
+    protocol = _day(tmp_path)
+    target = tmp_path / "nowhere" / "out"
+    assert main(["scale", str(protocol), "--out", str(target)]) == 0
+    assert not (tmp_path / "nowhere").exists()

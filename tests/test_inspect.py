@@ -79,9 +79,18 @@ def test_never_writes_beside_the_raw_data(day, monkeypatch, capsys):
     assert rc == 0
     assert "not written" in capsys.readouterr().out
     assert not list((day / "data").glob("*.png"))
+    # asked for by name, a plot may go anywhere (issue 16) ...
+    target = day / "data" / "x.png"
     rc = main(["inspect", "run_016.csv.gz", "--protocol", str(day / "p.toml"), "--png",
-               str(day / "data" / "x.png")])
-    assert rc == 1
+               str(target)])
+    assert rc == 0 and target.read_bytes()[:8] == PNG
+    target.unlink()
+    # ... but never over a file that is not inspect's plot of this run: the run file itself
+    before = (day / "data" / "run_017.csv.gz").read_bytes()
+    rc = main(["inspect", "run_016.csv.gz", "--protocol", str(day / "p.toml"), "--png",
+               str(day / "data" / "run_017.csv.gz")])
+    assert rc == 1 and "not written" in capsys.readouterr().err
+    assert (day / "data" / "run_017.csv.gz").read_bytes() == before
     assert not list((day / "data").glob("*.png"))
 
 
@@ -115,3 +124,41 @@ def test_plot_name():
     assert plot_name("data/run_020.csv.gz") == "run_020.png"
     assert plot_name("run_7.tdms") == "run_7.png"
     assert plot_name("day3.run.12.csv") == "day3.run.12.png"
+
+
+def test_a_problem_run_is_plotted_with_its_reason_and_same_names_do_not_clash(
+        day, tmp_path, monkeypatch, capsys):
+    """Issue 16: a run that is read but cannot be reduced is drawn (its calibrated traces)
+    with its reason; a second day's run_015 does not overwrite the first day's plot."""
+    import pandas as pd
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["inspect", str(day / "data" / "run_015.csv.gz"), "--protocol",
+                 str(day / "p.toml")]) == 0
+    other = tmp_path / "other_day"
+    other.mkdir()
+    frame = pd.read_csv(day / "data" / "run_015.csv.gz")
+    frame[frame.columns[1]] *= -1  # the speed channel's sign slipped
+    frame.to_csv(other / "run_015.csv.gz", index=False)
+    first = (tmp_path / "run_015.png").read_bytes()
+    rc = main(["inspect", str(other / "run_015.csv.gz"), "--protocol", str(day / "p.toml")])
+    captured = capsys.readouterr()
+    assert rc == 1 and "speed is negative" in captured.err
+    assert "run_015-2.png" in captured.out
+    assert (tmp_path / "run_015-2.png").read_bytes()[:8] == PNG
+    assert (tmp_path / "run_015.png").read_bytes() == first
+
+
+def test_inspect_into_a_closed_pipe_ends_quietly(day, tmp_path):
+    """`towtank inspect … | head -1`: no 'internal error (BrokenPipeError)'."""
+    import subprocess
+    import sys
+
+    code = "from towtank.commands.cli import entry; entry()"
+    cmd = [sys.executable, "-c", code, "inspect", str(day / "data" / "run_015.csv.gz"),
+           "--protocol", str(day / "p.toml"), "--png", str(tmp_path / "p.png")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader is gone before towtank prints its first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 0
+    assert "internal error" not in err and "Traceback" not in err

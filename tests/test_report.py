@@ -195,6 +195,8 @@ def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
     n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
     n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
+    if day.fin_result is not None and not pdf.fin_runs_fit(day):
+        n_runs += math.ceil(len(day.fin_result.table) / pdf.RUNS_PER_PAGE)
     return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
 
 
@@ -220,8 +222,9 @@ def test_fin_pdf_has_no_hull_pages(days):
     day, out = days["fin"]
     reader = PdfReader(out / "report.pdf")
     assert len(reader.pages) == _expected_pages(day)
-    # title, summary, the fin post's tare, two fin pages, the runs' table, quality, thumbnails
-    assert len(reader.pages) == 2 + 1 + 2 + 1 + 1 + math.ceil(len(day.runs) / 12)
+    # title, summary, the fin post's tare, two fin pages, the fin runs, the runs' table,
+    # quality, thumbnails
+    assert len(reader.pages) == 2 + 1 + 2 + 1 + 1 + 1 + math.ceil(len(day.runs) / 12)
     text = " ".join(p.extract_text() for p in reader.pages)
     assert "Fins" in text and "Quality" in text
     assert "Added mass" not in text and "Damping" not in text

@@ -432,6 +432,8 @@ def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
     except KeyboardInterrupt:
         _err(INTERRUPTED)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        raise  # the output's reader went away (| head): entry() ends quietly
     except Exception as exc:  # noqa: BLE001 - one sentence, not a traceback, for users
         if interrupted:  # a library stopped by Ctrl-C (zlib mid-flush...): not a bug
             _err(INTERRUPTED)
@@ -490,8 +492,15 @@ def entry() -> None:
     objects that pandas, scipy and statsmodels create at import would otherwise take about
     0.2 s, a tenth of a day's processing, for memory the system frees anyway.
     """
-    code = main()
-    sys.stdout.flush()
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:  # `towtank inspect … | head`: the reader has all it wanted
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes at exit
+        code = EXIT_OK
     gc.freeze()
     sys.exit(code)
 

@@ -44,16 +44,23 @@ def _fmt(x: float, unit: str, digits: int = 4) -> str:
     return "–" if x != x else f"{x:+.{digits}f} {unit}".replace("+", " ", 1)
 
 
-def summary_lines(red: RunReduction, columns: tuple[str, ...] = ()) -> list[str]:
-    """The printed account of one reduced run (phases, means, acceleration, zero, drift)."""
+def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 0.0
+                  ) -> list[str]:
+    """The printed account of one reduced run (phases, means, acceleration, zero, drift).
+
+    The phases are given in seconds from the file's first sample; a file whose time channel
+    holds clock times (``t0`` [s], e.g. 1716280000.53, seconds since 1970) says so once."""
+    shift = t0 if abs(t0) > 1e5 else 0.0
     lines = [
         f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
         + (f"; columns: {', '.join(columns)}" if columns else ""),
-        "phases [s]:",
+        "phases [s]:" if not shift else
+        f"phases [s from the first sample; its time stamp is {t0:.3f} s]:",
     ]
     for key, label in PHASE_NAMES.items():
         w = red.windows.get(key)
-        text = f"{w[0]:7.2f} – {w[1]:7.2f}" if w is not None else "    not found"
+        text = (f"{w[0] - shift:7.2f} – {w[1] - shift:7.2f}" if w is not None
+                else "    not found")
         extra = f"   ({red.window_source})" if key == "steady" else ""
         lines.append(f"  {label:<14s}{text}{extra}")
     lines += [
@@ -102,13 +109,6 @@ def _describe(runfile: Path, read, out: TextIO) -> None:  # noqa: ANN001 - ReadO
     print(protocol_block(desc), file=out, end="")
 
 
-def _same_folder(a: Path, b: Path) -> bool:
-    try:
-        return a.resolve() == b.resolve()
-    except OSError:
-        return False
-
-
 def inspect_run(
     runfile: str | Path,
     protocol_path: str | Path | None = None,
@@ -128,15 +128,17 @@ def inspect_run(
         and default processing.
     png : path, optional
         Where to write the plot; default ``<run file name without extensions>.png`` in the
-        current folder. The plot is never written into the run file's own folder.
+        current folder (``-2``, ``-3`` … added when that name holds another run's plot). A
+        file that is not inspect's plot of this run is never overwritten.
     out, err : text streams, optional
         Where to print (default stdout and stderr).
 
     Returns
     -------
     int
-        0, or 1 when the run cannot be read or reduced (one sentence on ``err`` says why) or
-        the plot would land beside the raw data.
+        0, or 1 when the run cannot be read or reduced (one sentence on ``err`` says why, and
+        a run that was read is plotted as it is) or the plot would overwrite a file that is
+        not inspect's plot of this run.
     """
     out = out or sys.stdout
     err = err or sys.stderr
@@ -145,6 +147,7 @@ def inspect_run(
 
     runfile = Path(runfile)
     channels, p, read = _settings(protocol_path)
+    raw = None
     try:
         raw = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
@@ -159,26 +162,90 @@ def inspect_run(
                     "[channels] mapping names the lab's columns; what the file holds and a "
                     "block to start the protocol from are printed above.")
             _describe(runfile, read, out)
-        print(f"towtank: {head}{reason}.{hint}", file=err)
+        stop = "" if reason.endswith(("?", "!")) else "."
+        print(f"towtank: {head}{reason}{stop}{hint}", file=err)
+        if raw is not None:  # read but not reduced: exactly when a look at it helps
+            target = _target(runfile, png, err, out)
+            if target is not None:
+                _write_preview(raw, target, f"{head}{reason}{stop}", runfile)
+                print(f"plot: {target} (the calibrated traces, no zero, no phases)", file=out)
         return EXIT_RUN_ERROR
-    for line in summary_lines(red, raw.columns):
+    for line in summary_lines(red, raw.columns, t0=float(raw.time[0])):
         print(line, file=out)
-
-    target = Path(png) if png is not None else Path.cwd() / plot_name(runfile)
-    if _same_folder(target.parent, runfile.parent):
-        msg = (f"the plot is not written: {target} would lie beside the raw data; "
-               "give --png with a path in another folder.")
-        if png is not None:
-            print(f"towtank: {msg}", file=err)
-            return EXIT_RUN_ERROR
-        print(f"plot: {msg}", file=out)
-        return EXIT_OK
-    write_plot(red, target, protocol_path)
+    target = _target(runfile, png, err, out)
+    if target is None:  # refused to overwrite (an error), or not beside the raw data unasked
+        return EXIT_RUN_ERROR if png is not None else EXIT_OK
+    write_plot(red, target, protocol_path, runfile)
     print(f"plot: {target}", file=out)
     return EXIT_OK
 
 
-def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None) -> Path:
+#: The PNG text chunk that marks a plot as inspect's, with the run file it shows.
+PNG_KEY = "towtank inspect"
+
+
+def _png_source(path: Path) -> str | None:
+    """The run file an existing inspect plot shows, or None for any other file."""
+    try:
+        from PIL import Image
+
+        with Image.open(path) as im:
+            return im.text.get(PNG_KEY) if im.format == "PNG" else None  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001 - not an image, or unreadable: not ours
+        return None
+
+
+def _target(runfile: Path, png: str | Path | None, err: TextIO, out: TextIO
+            ) -> Path | None:
+    """Where the plot goes: ``--png`` (wherever the user chooses), else ``<run>.png`` in the
+    current folder (``<run>-2.png`` … when that name holds the plot of another run file), but
+    not unasked into the raw data's folder. A file that is not an inspect plot of this run
+    file is never overwritten (None, with a sentence on ``err``)."""
+    source = str(runfile.resolve())
+    if png is not None:
+        target = Path(png)
+        if target.exists() and _png_source(target) != source:
+            print(f"towtank: the plot is not written: {target} exists and is not towtank "
+                  "inspect's plot of this run file; give --png another name.", file=err)
+            return None
+        return target
+    if Path.cwd().resolve() == runfile.resolve().parent:
+        print(f"plot: not written: it would lie beside the raw data in {Path.cwd()}; give "
+              "--png with a path (anywhere you choose) or run inspect from another folder.",
+              file=out)
+        return None
+    stem = plot_name(runfile)[: -len(".png")]
+    for k in range(1, 1000):
+        target = Path.cwd() / (f"{stem}.png" if k == 1 else f"{stem}-{k}.png")
+        if not target.exists() or _png_source(target) == source:
+            return target
+    print("towtank: the plot is not written: too many plots of that name here; give --png.",
+          file=err)
+    return None
+
+
+def _save(fig, path: Path, runfile: str) -> None:  # noqa: ANN001 - a matplotlib Figure
+    import matplotlib as mpl
+
+    from towtank.report import style
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with mpl.rc_context(style.rc()):
+        fig.savefig(path, dpi=style.PNG_DPI, facecolor="white",
+                    metadata={"Software": None, PNG_KEY: runfile})
+
+
+def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa: ANN001
+    from towtank.reduce.run import run_preview
+    from towtank.report.figures import fig_preview
+
+    fig = fig_preview(run_preview(raw),
+                      f"{runfile.name}: calibrated traces (the run cannot be reduced)", reason)
+    _save(fig, path, str(runfile.resolve()))
+
+
+def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
+               runfile: str | Path | None = None) -> Path:
     """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
     from towtank.report.figures import fig_run
 
@@ -191,11 +258,5 @@ def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None =
             + (f";  settings of {Path(protocol_path).name}" if protocol_path else
                ";  canonical channels, default processing"))
     fig = fig_run(red, title, note)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    import matplotlib as mpl
-
-    from towtank.report import style
-
-    with mpl.rc_context(style.rc()):
-        fig.savefig(path, dpi=style.PNG_DPI, facecolor="white", metadata={"Software": None})
+    _save(fig, path, str(Path(runfile).resolve()) if runfile is not None else "")
     return path

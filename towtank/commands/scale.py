@@ -55,7 +55,11 @@ def scale_command(
         raise ProtocolError(f"{where} cannot be scaled: {exc}") from None
     protocol = replace(protocol, prototype=proto)
     out_dir = out if out is not None else protocol.campaign.output_dir
-    day = process_day(protocol_path, protocol=protocol, cache_dir=Path(out_dir) / ".cache")
+    # the cache of an earlier `process` into that folder is used; a folder that does not
+    # exist is not created (scale prints, it writes nothing)
+    cache = Path(out_dir) / ".cache"
+    day = process_day(protocol_path, protocol=protocol,
+                      cache_dir=cache if cache.is_dir() else None)
     if day.scaling_result is None:
         print("no scaling table: " + " ".join(day.warnings[-1:]))
         return 1

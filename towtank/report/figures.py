@@ -28,6 +28,7 @@ thumbnail_twin           the forces' axes of a thumbnail (made once, reused page
 from __future__ import annotations
 
 import math
+import textwrap
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -295,10 +296,13 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
                  zorder=3)
     ax_r.scatter(angles[flagged], runs["student"][flagged], color=style.OUTLIER_COLOR, s=16,
                  zorder=3)
-    for r in runs[flagged].itertuples():
-        ax_r.annotate(f"run {int(r.run)}", (r.angle_deg, r.student), xytext=(-5, 0),
-                      textcoords="offset points", fontsize=7, color=style.OUTLIER_COLOR,
-                      ha="right", va="center")
+    mid = 0.5 * (grid[0] + grid[-1])
+    for r in runs[flagged].itertuples():  # the label on the side away from the nearer axis
+        right = r.angle_deg < mid
+        ax_r.annotate(f"run {int(r.run)}", (r.angle_deg, r.student),
+                      xytext=(6 if right else -6, 0), textcoords="offset points", fontsize=7,
+                      color=style.OUTLIER_COLOR, ha="left" if right else "right",
+                      va="center", annotation_clip=False)
     lim = max(3.5, float(np.nanmax(np.abs(runs["student"]))) * 1.15)
     ax_r.set_ylim(-lim, lim)
     ax_r.set_xlim(grid[0], grid[-1])
@@ -773,6 +777,34 @@ def thumbnail_legend_handles(show_lift: bool = True) -> list[Any]:
 
 
 @styled
+def fig_preview(preview: dict[str, np.ndarray], title: str, note: str = "") -> Figure:
+    """A stand-alone figure of a run that was read but could not be reduced (for ``towtank
+    inspect``): its calibrated traces greyed (:func:`preview_thumbnail`), the reason below.
+
+    Parameters
+    ----------
+    preview : dict
+        :func:`towtank.reduce.run.run_preview` of the run.
+    title : str
+        Figure title.
+    note : str
+        Text under the plot (the reason the run cannot be reduced).
+    """
+    fig = Figure(figsize=(9.0, 4.8))
+    bottom = 0.21 if note else 0.14
+    ax = fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
+    twin = thumbnail_twin(ax)
+    preview_thumbnail(ax, preview, twin=twin, linewidth=1.3)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("speed U [m/s] (grey)")
+    twin.set_ylabel("drag D (blue), lift L (orange) [N]")
+    ax.set_title(literal(title), loc="left", fontsize=9.5)
+    if note:
+        fig.text(0.08, 0.035, literal(textwrap.fill(note, 120)), fontsize=7.5, va="bottom",
+                 color="#7a0000")
+    return fig
+
+
 def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
     """A stand-alone figure of one run (for ``towtank inspect``).
 

@@ -5,11 +5,14 @@ Pages (A4 portrait), in order:
 1. title page: campaign, model, fin, test date, program version, contents;
 2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
    tables where the day has them;
-3. figure pages, one section each where the day has data: "Added mass", "Damping", "Fins",
-   "Scaling" (:mod:`towtank.report.figures`);
-4. quality: rejected and void runs, warnings, fit diagnostics (continued over more pages when
-   long);
-5. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
+3. figure pages, one section each where the day has data: "Tare", "Added mass", "Damping",
+   "Fins", "Scaling" (:mod:`towtank.report.figures`);
+4. "Fin runs": the fin runs against the Sandia section and the finite span, when they do not
+   fit on the summary page;
+5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D, Re, tare, status);
+6. quality: rejected and void runs, warnings, fit diagnostics and the uncertainty budget
+   (:mod:`towtank.report.quality`; continued over more pages when long);
+7. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
 
 The pages are drawn by matplotlib's :class:`~matplotlib.backends.backend_pdf.PdfPages`, in
 groups on all the cores at once, and joined with pypdf (:func:`write_pdf`). The metadata's
@@ -21,7 +24,7 @@ from __future__ import annotations
 import math
 import re
 import textwrap
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -32,8 +35,9 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from towtank import __version__
-from towtank.analysis.daywide import group_rejections, own_reason
+from towtank.analysis.daywide import group_rejections
 from towtank.report import figures, style
+from towtank.report import quality as _quality
 from towtank.report.provenance import creation_date, report_date
 
 if TYPE_CHECKING:
@@ -59,202 +63,20 @@ class Page:
     number: str = ""  # section number: 1, 2, ... in order of appearance; "A" the appendix
 
 
-@dataclass
-class Flow:
-    """Text laid out top-down over as many pages as it needs (for the quality section)."""
-
-    items: list[tuple[str, str]] = field(default_factory=list)
-
-    def h(self, text: str) -> None:
-        self.items.append(("h", text))
-
-    def p(self, text: str) -> None:
-        self.items.append(("p", text))
-
-    def li(self, text: str) -> None:
-        self.items.append(("li", text))
-
-    def mono(self, text: str) -> None:
-        self.items.append(("mono", text))
-
-    def gap(self) -> None:
-        self.items.append(("gap", ""))
-
-
-LINE_IN = {"h": 0.30, "p": 0.165, "li": 0.165, "mono": 0.15, "gap": 0.1}
-WRAP = {"p": 112, "li": 108, "mono": 118}
-
-
-def _flow_groups(flow: Flow) -> list[list[tuple[str, str]]]:
-    """The flow's items as groups of single lines (wrapped; list items with a hanging indent).
-
-    A group (one paragraph, list item or table line; a heading with the group after it) is
-    kept on one page when it fits on one.
-    """
-    groups: list[list[tuple[str, str]]] = []
-    for kind, text in flow.items:
-        if kind == "p":
-            lines = [("p", line) for line in textwrap.wrap(text, WRAP["p"]) or [""]]
-        elif kind == "li":
-            wrapped = textwrap.wrap(text, WRAP["li"], initial_indent="•  ",
-                                    subsequent_indent="   ") or ["•"]
-            lines = [("li", line) for line in wrapped]
-        elif kind == "mono":
-            lines = [("mono", line[: WRAP["mono"]]) for line in text.split("\n")]
-        else:
-            lines = [(kind, text)]
-        if groups and groups[-1][-1][0] == "h":
-            groups[-1].extend(lines)  # a heading stays with what follows it
-        else:
-            groups.append(lines)
-    return groups
-
-
-def _height(lines: list[tuple[str, str]]) -> float:
-    return sum(LINE_IN[kind] for kind, _ in lines)
-
-
-def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
-    """Split the flow into pages of ``height_in``, keeping each group together if it fits."""
-    pages: list[list[tuple[str, str]]] = [[]]
-    used = 0.0
-    for group in _flow_groups(flow):
-        need = _height(group)
-        if used + need > height_in and pages[-1] and need <= height_in:
-            pages.append([])
-            used = 0.0
-        for line in group:  # a group taller than a page flows on line by line
-            if used + LINE_IN[line[0]] > height_in and pages[-1]:
-                pages.append([])
-                used = 0.0
-            if not pages[-1] and line[0] == "gap":
-                continue
-            pages[-1].append(line)
-            used += LINE_IN[line[0]]
-    return pages
-
-
-QUALITY_HEIGHT_IN = PAGE_H - figures.PAGE_HEADER_IN - figures.PAGE_FOOTER_IN - 0.6
-
-
-def quality_flow(day: DayResult) -> Flow:
-    """The quality section's content: run status, warnings, fit diagnostics, run notes."""
-    f = Flow()
-    runs = day.runs
-    counts = runs["status"].value_counts()
-    f.h("Run status")
-    f.p(f"{len(runs)} runs in the sheet: {int(counts.get('ok', 0))} ok, "
-        f"{int(counts.get('rejected', 0))} rejected by the program, "
-        f"{int(counts.get('void', 0))} voided by the operator.")
-    bad = runs[runs["status"] != "ok"]
-    if len(bad):
-        day_wide = [g for g in group_rejections(runs) if g.day_wide]
-        for g in day_wide:
-            f.li(f"rejected — {g.sentence}")
-        grouped = {r for g in day_wide for r in g.runs}
-        for r in bad.itertuples():
-            if int(r.run) in grouped:
-                continue
-            reason = short_reason(int(r.run), r.file, r.reason)
-            f.li(f"run {int(r.run)} ({r.config}, α = {_num(r.angle_deg)}°, {r.file}): "
-                 f"{r.status} — {reason}")
-    else:
-        f.p("Every run of the sheet was used.")
-    f.gap()
-    f.h("Warnings")
-    if day.warnings:
-        for w in day.warnings:
-            f.li(w)
-    else:
-        f.p("None.")
-    _diagnostics_flow(f, day)
-    notes = runs[runs["notes"].fillna("").astype(str).str.len() > 0]
-    f.gap()
-    f.h("Notes on individual runs")
-    if len(notes):
-        for r in notes.itertuples():
-            f.li(f"run {int(r.run)}: {r.notes}")
-    else:
-        f.p("No run needed a repair (gaps, spikes, dropped rows) or a cross-check note.")
-    return f
-
-
-def _diagnostics_flow(f: Flow, day: DayResult) -> None:
-    hf = day.hull.fit if day.hull is not None else None
-    if hf is None:
-        return
-    f.gap()
-    f.h("Fit diagnostics")
-    for sym, am in hf.added_mass.items():
-        est = am.estimate
-        resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
-        f.li(f"{sym}: joint regression {est.value:.5g} kg [{est.ci_low:.5g}, {est.ci_high:.5g}] "
-             f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
-             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
-             f"Mean residual of the joint regression by run [mN]: {resid}.")
-        levels = (am.curve_difference or {}).get("levels") or []
-        if levels:
-            f.mono(f"     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
-                   f"   {sym} [kg]")
-            for lv in levels:
-                lo, hi = lv["speed_range"]
-                speeds = f"{lo:.3f} – {hi:.3f}"
-                f.mono(f"     {lv['accel']:8.3f}   {speeds:>17s}   {lv['n']:7d}   "
-                       f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
-    dm = hf.damping
-    if dm is not None:
-        t = dm.runs
-        worst = t.iloc[int(np.argmax(np.abs(t["student"].to_numpy())))]
-        f.li(f"C_D(α) fit over {len(t)} runs ({dm.dof} residual d.o.f.): largest |studentized "
-             f"residual| {abs(worst['student']):.2f} (run {int(worst['run'])}), largest Cook's "
-             f"distance {t['cooks'].max():.2f} (run {int(t.loc[t['cooks'].idxmax(), 'run'])}); "
-             + (f"outliers: runs {', '.join(map(str, dm.outliers))}." if dm.outliers
-                else "no outliers."))
-    rep = hf.repeats
-    if rep is not None and len(rep):
-        f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats "
-             "(C_D on the frontal area, as in runs.csv, also at 90°).")
-        f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
-               "drag s.d. [mN]")
-        for r in rep.itertuples():
-            f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
-                   f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
-    if getattr(hf, "lift_slope", None):
-        s, lo, hi = hf.lift_slope
-        f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
-    _budget_flow(f, hf)
-
-
-def _budget_flow(f: Flow, hf: Any) -> None:
-    """The uncertainty budget behind each interval (coefficients.csv's u_* columns)."""
-    rows = [e for sym, e in hf.estimates.items()
-            if not e.method.startswith("same as") and math.isfinite(e.u_regression)]
-    if not rows:
-        return
-    f.li("Uncertainty budget: standard uncertainties of each coefficient's parts, in its own "
-         "unit; u_c² = u_fit² + u_tare² + u_mass², 95 % half-width = t(ν)·u_c (ν by "
-         "Welch–Satterthwaite).")
-    f.mono("     coefficient        u_fit      u_tare      u_mass         u_c       ν"
-           "   half-width")
-    for e in rows:
-        f.mono(f"     {e.symbol:<14s} {e.u_regression:10.3e}  {e.u_tare:10.3e}  "
-               f"{e.u_mass:10.3e}  {e.std_error:10.3e}  {_dof(e.dof):>6s}   "
-               f"{(e.ci_high - e.ci_low) / 2:10.3e}")
-
-
-def _dof(nu: float) -> str:
-    return "∞" if not math.isfinite(nu) or nu > 1e6 else f"{nu:.1f}"
-
-
-short_reason = own_reason  # a run's reason without the "run N: file:" prefix
-
-
-def _num(x: Any, digits: int = 4) -> str:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return str(x)
-    return "–" if not math.isfinite(v) else f"{v:.{digits}g}"
+# the quality section's flow (towtank.report.quality), also reached as pdf.<name>
+Flow = _quality.Flow
+LINE_IN = _quality.LINE_IN
+WRAP = _quality.WRAP
+_flow_groups = _quality._flow_groups
+_height = _quality._height
+_paginate = _quality._paginate
+QUALITY_HEIGHT_IN = _quality.QUALITY_HEIGHT_IN
+quality_flow = _quality.quality_flow
+_diagnostics_flow = _quality._diagnostics_flow
+_budget_flow = _quality._budget_flow
+_dof = _quality._dof
+short_reason = _quality.short_reason
+_num = _quality._num
 
 
 def thumbnail_runs(day: DayResult) -> list[int]:
@@ -273,6 +95,13 @@ def page_plan(day: DayResult) -> list[Page]:
     pages = [Page("title", "Title"), Page("summary", "Summary")]
     for name, section, func in figures.available_figures(day):
         pages.append(Page("figure", section, (name, func)))
+    fr = day.fin_result
+    if fr is not None and len(fr.table) and not fin_runs_fit(day):
+        fin_ids = [int(r) for r in fr.table["run"]]
+        for k in range(0, len(fin_ids), RUNS_PER_PAGE):
+            chunk = fin_ids[k:k + RUNS_PER_PAGE]
+            pages.append(Page("fin_runs", "Fin runs", chunk,
+                              subtitle=f"runs {chunk[0]}–{chunk[-1]}" if len(chunk) > 1 else ""))
     ids = [int(r) for r in day.runs["run"]]
     for k in range(0, len(ids), RUNS_PER_PAGE):
         chunk = ids[k:k + RUNS_PER_PAGE]
@@ -477,7 +306,10 @@ def _v(x: Any, fmt: str = ".4g", scale: float = 1.0) -> str:
         return "–"
     if not math.isfinite(v):
         return "–"
-    return format(v * scale, fmt).replace("-", "\u2212")
+    text = format(v * scale, fmt)
+    if text.startswith("-") and not any(c in "123456789" for c in text.split("e")[0]):
+        text = text[1:]  # −0.0000: a value that rounds to zero has no sign
+    return text.replace("-", "\u2212")
 
 
 def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[str],
@@ -489,7 +321,7 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
     """
     coef = day.hull.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
-              "diff %", "prototype", "method"]
+              "diff %", "prototype [unit]", "method"]
     methods: list[str] = []
     rows, hl = [], {}
     for i, r in enumerate(coef.to_dict("records")):
@@ -629,23 +461,48 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
 
 
 def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
-    """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer."""
+    """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer to the
+    Fin runs pages (:func:`_draw_fin_runs`)."""
     t = day.fin_result.table
     used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
-    row_in = 0.19
-    room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - (y + used)
-    if (len(t) + 1) * row_in > room:
-        return used + _text_block(fig, y + used, f"{len(t)} fin runs: see fins.csv or the "
-                                  "Fins sheet of report.xlsx.", fontsize=8)
+    if not fin_runs_fit(day):  # the page plan's rule: the Fin runs pages hold it otherwise
+        return used + _text_block(fig, y + used, f"{len(t)} fin runs: in the Fin runs "
+                                  "section, fins.csv and the Fins sheet of report.xlsx.",
+                                  fontsize=8)
+    return used + _fin_rows(fig, y + used, t.to_dict("records"))
+
+
+#: Where the summary page's fin-runs table starts [in from the top] and its row height [in].
+FIN_TABLE_TOP_IN = 6.0
+FIN_ROW_IN = 0.19
+
+
+def fin_runs_fit(day: DayResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
+    """Whether the fin runs' table fits on the summary page below ``top_in``."""
+    room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - top_in
+    return (len(day.fin_result.table) + 1) * FIN_ROW_IN <= room
+
+
+def _draw_fin_runs(fig: Figure, day: DayResult, runs: list[int]) -> None:
+    t = day.fin_result.table
+    recs = [r for r in t.to_dict("records") if int(r["run"]) in set(runs)]
+    y = figures.PAGE_HEADER_IN + 0.25
+    used = _fin_rows(fig, y, recs)
+    _text_block(fig, y + used + 0.12,
+                "Steady means of the fin runs (zero, drift and tare removed): C_L and C_D on "
+                "chord × span, beside the 2-D NACA 0015 section data (Sheldahl & Klimas) and "
+                "the finite-span expectation (lifting line) at each run's Re.", fontsize=7.5)
+
+
+def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
     header = ["run", "α [deg]", "U [m/s]", "Re", r"$C_L$", r"$C_D$", r"$C_L$ 2-D",
               r"$C_D$ 2-D", r"$C_L$ finite span", r"$C_D$ finite span"]
     rows = [[str(int(r["run"])), _v(r["angle_deg"], "g"), _v(r["speed_mean"], ".3f"),
              figures.sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
              _v(r["cl_sandia"], ".4f"), _v(r["cd_sandia"], ".4f"), _v(r.get("cl_3d"), ".4f"),
-             _v(r.get("cd_3d"), ".4f")] for r in t.to_dict("records")]
-    return used + _table(fig, y + used, header, rows,
-                         [0.45, 0.55, 0.6, 0.75, 0.65, 0.65, 0.7, 0.7, 1.0, 1.0],
-                         row_in=row_in, fontsize=7.2)
+             _v(r.get("cd_3d"), ".4f")] for r in recs]
+    return _table(fig, y, header, rows, [0.45, 0.55, 0.6, 0.75, 0.65, 0.65, 0.7, 0.7, 1.0, 1.0],
+                  row_in=FIN_ROW_IN, fontsize=7.2)
 
 
 def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
@@ -791,8 +648,8 @@ PDF_PARTS = 4
 
 #: Rough drawing time of a page by kind, relative (to split the pages evenly between cores);
 #: a thumbnail page costs in proportion to its runs.
-PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "runs": 0.4, "quality": 0.3,
-             "thumbs": 1.0}
+PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "runs": 0.4, "fin_runs": 0.4,
+             "quality": 0.3, "thumbs": 1.0}
 
 
 def _page_cost(page: Page) -> float:
@@ -916,6 +773,8 @@ def _render(
         _draw_quality(fig, page.payload)
     elif page.kind == "runs":
         _draw_runs(fig, day, page.payload)
+    elif page.kind == "fin_runs":
+        _draw_fin_runs(fig, day, page.payload)
     return fig
 
 

@@ -1,0 +1,219 @@
+"""The report's quality section as a text flow: rejected and void runs, warnings, fit
+diagnostics with the uncertainty budget, and notes on individual runs, laid out top-down over
+as many pages as it needs (:func:`quality_flow`, :func:`_paginate`; drawn by
+:mod:`towtank.report.pdf`)."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from towtank.analysis.daywide import group_rejections, own_reason
+from towtank.report import figures, style
+
+if TYPE_CHECKING:
+    from towtank.pipeline import DayResult
+
+PAGE_H = style.PAGE_SIZE[1]
+
+
+@dataclass
+class Flow:
+    """Text laid out top-down over as many pages as it needs (for the quality section)."""
+
+    items: list[tuple[str, str]] = field(default_factory=list)
+
+    def h(self, text: str) -> None:
+        self.items.append(("h", text))
+
+    def p(self, text: str) -> None:
+        self.items.append(("p", text))
+
+    def li(self, text: str) -> None:
+        self.items.append(("li", text))
+
+    def mono(self, text: str) -> None:
+        self.items.append(("mono", text))
+
+    def gap(self) -> None:
+        self.items.append(("gap", ""))
+
+
+LINE_IN = {"h": 0.30, "p": 0.165, "li": 0.165, "mono": 0.15, "gap": 0.1}
+WRAP = {"p": 112, "li": 108, "mono": 118}
+
+
+def _flow_groups(flow: Flow) -> list[list[tuple[str, str]]]:
+    """The flow's items as groups of single lines (wrapped; list items with a hanging indent).
+
+    A group (one paragraph, list item or table line; a heading with the group after it) is
+    kept on one page when it fits on one.
+    """
+    groups: list[list[tuple[str, str]]] = []
+    for kind, text in flow.items:
+        if kind == "p":
+            lines = [("p", line) for line in textwrap.wrap(text, WRAP["p"]) or [""]]
+        elif kind == "li":
+            wrapped = textwrap.wrap(text, WRAP["li"], initial_indent="•  ",
+                                    subsequent_indent="   ") or ["•"]
+            lines = [("li", line) for line in wrapped]
+        elif kind == "mono":
+            lines = [("mono", line[: WRAP["mono"]]) for line in text.split("\n")]
+        else:
+            lines = [(kind, text)]
+        if groups and groups[-1][-1][0] == "h":
+            groups[-1].extend(lines)  # a heading stays with what follows it
+        else:
+            groups.append(lines)
+    return groups
+
+
+def _height(lines: list[tuple[str, str]]) -> float:
+    return sum(LINE_IN[kind] for kind, _ in lines)
+
+
+def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
+    """Split the flow into pages of ``height_in``, keeping each group together if it fits."""
+    pages: list[list[tuple[str, str]]] = [[]]
+    used = 0.0
+    for group in _flow_groups(flow):
+        need = _height(group)
+        if used + need > height_in and pages[-1] and need <= height_in:
+            pages.append([])
+            used = 0.0
+        for line in group:  # a group taller than a page flows on line by line
+            if used + LINE_IN[line[0]] > height_in and pages[-1]:
+                pages.append([])
+                used = 0.0
+            if not pages[-1] and line[0] == "gap":
+                continue
+            pages[-1].append(line)
+            used += LINE_IN[line[0]]
+    return pages
+
+
+QUALITY_HEIGHT_IN = PAGE_H - figures.PAGE_HEADER_IN - figures.PAGE_FOOTER_IN - 0.6
+
+
+def quality_flow(day: DayResult) -> Flow:
+    """The quality section's content: run status, warnings, fit diagnostics, run notes."""
+    f = Flow()
+    runs = day.runs
+    counts = runs["status"].value_counts()
+    f.h("Run status")
+    f.p(f"{len(runs)} runs in the sheet: {int(counts.get('ok', 0))} ok, "
+        f"{int(counts.get('rejected', 0))} rejected by the program, "
+        f"{int(counts.get('void', 0))} voided by the operator.")
+    bad = runs[runs["status"] != "ok"]
+    if len(bad):
+        day_wide = [g for g in group_rejections(runs) if g.day_wide]
+        for g in day_wide:
+            f.li(f"rejected — {g.sentence}")
+        grouped = {r for g in day_wide for r in g.runs}
+        for r in bad.itertuples():
+            if int(r.run) in grouped:
+                continue
+            reason = short_reason(int(r.run), r.file, r.reason)
+            f.li(f"run {int(r.run)} ({r.config}, α = {_num(r.angle_deg)}°, {r.file}): "
+                 f"{r.status} — {reason}")
+    else:
+        f.p("Every run of the sheet was used.")
+    f.gap()
+    f.h("Warnings")
+    if day.warnings:
+        for w in day.warnings:
+            f.li(w)
+    else:
+        f.p("None.")
+    _diagnostics_flow(f, day)
+    notes = runs[runs["notes"].fillna("").astype(str).str.len() > 0]
+    f.gap()
+    f.h("Notes on individual runs")
+    if len(notes):
+        for r in notes.itertuples():
+            f.li(f"run {int(r.run)}: {r.notes}")
+    else:
+        f.p("No run needed a repair (gaps, spikes, dropped rows) or a cross-check note.")
+    return f
+
+
+def _diagnostics_flow(f: Flow, day: DayResult) -> None:
+    hf = day.hull.fit if day.hull is not None else None
+    if hf is None:
+        return
+    f.gap()
+    f.h("Fit diagnostics")
+    for sym, am in hf.added_mass.items():
+        est = am.estimate
+        resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
+        f.li(f"{sym}: joint regression {est.value:.5g} kg [{est.ci_low:.5g}, {est.ci_high:.5g}] "
+             f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
+             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
+             f"Mean residual of the joint regression by run [mN]: {resid}.")
+        levels = (am.curve_difference or {}).get("levels") or []
+        if levels:
+            f.mono(f"     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
+                   f"   {sym} [kg]")
+            for lv in levels:
+                lo, hi = lv["speed_range"]
+                speeds = f"{lo:.3f} – {hi:.3f}"
+                f.mono(f"     {lv['accel']:8.3f}   {speeds:>17s}   {lv['n']:7d}   "
+                       f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
+    dm = hf.damping
+    if dm is not None:
+        t = dm.runs
+        worst = t.iloc[int(np.argmax(np.abs(t["student"].to_numpy())))]
+        f.li(f"C_D(α) fit over {len(t)} runs ({dm.dof} residual d.o.f.): largest |studentized "
+             f"residual| {abs(worst['student']):.2f} (run {int(worst['run'])}), largest Cook's "
+             f"distance {t['cooks'].max():.2f} (run {int(t.loc[t['cooks'].idxmax(), 'run'])}); "
+             + (f"outliers: runs {', '.join(map(str, dm.outliers))}." if dm.outliers
+                else "no outliers."))
+    rep = hf.repeats
+    if rep is not None and len(rep):
+        f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats "
+             "(C_D on the frontal area, as in runs.csv, also at 90°).")
+        f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
+               "drag s.d. [mN]")
+        for r in rep.itertuples():
+            f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
+                   f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
+    if getattr(hf, "lift_slope", None):
+        s, lo, hi = hf.lift_slope
+        f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
+    _budget_flow(f, hf)
+
+
+def _budget_flow(f: Flow, hf: Any) -> None:
+    """The uncertainty budget behind each interval (coefficients.csv's u_* columns)."""
+    rows = [e for sym, e in hf.estimates.items()
+            if not e.method.startswith("same as") and math.isfinite(e.u_regression)]
+    if not rows:
+        return
+    f.li("Uncertainty budget: standard uncertainties of each coefficient's parts, in its own "
+         "unit; u_c² = u_fit² + u_tare² + u_mass², 95 % half-width = t(ν)·u_c (ν by "
+         "Welch–Satterthwaite).")
+    f.mono("     coefficient        u_fit      u_tare      u_mass         u_c       ν"
+           "   half-width")
+    for e in rows:
+        f.mono(f"     {e.symbol:<14s} {e.u_regression:10.3e}  {e.u_tare:10.3e}  "
+               f"{e.u_mass:10.3e}  {e.std_error:10.3e}  {_dof(e.dof):>6s}   "
+               f"{(e.ci_high - e.ci_low) / 2:10.3e}")
+
+
+def _dof(nu: float) -> str:
+    return "∞" if not math.isfinite(nu) or nu > 1e6 else f"{nu:.1f}"
+
+
+short_reason = own_reason  # a run's reason without the "run N: file:" prefix
+
+
+def _num(x: Any, digits: int = 4) -> str:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    return "–" if not math.isfinite(v) else f"{v:.{digits}g}"
