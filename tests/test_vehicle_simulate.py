@@ -196,3 +196,22 @@ def pd_read(path):
     import pandas as pd
 
     return pd.read_csv(path).set_index("metric")["value"]
+
+
+def test_a_turn_without_a_rudder_is_refused_in_one_sentence(tmp_path, capsys):
+    """The sample hull day's model.json has no fins: a turning run printed an infinite radius
+    and NaN metrics; it must say that the model has no rudder (exit 2, nothing written)."""
+    import json
+
+    from towtank.commands.cli import main
+
+    model = tmp_path / "model.json"
+    data = {"name": "bare hull", "rho_kg_m3": 1000.0, "mass_kg": 1.0, "weight_N": 9.81,
+            "buoyancy_N": 9.81, "cg_m": [0, 0, 0], "cb_m": [0, 0, 0],
+            "inertia_kg_m2": [0.01, 0.1, 0.1],
+            "coefficients": {"X_udot": -0.02, "Y_vdot": -0.7, "X_u|u|": -0.2}}
+    model.write_text(json.dumps(data), encoding="utf-8")
+    out = tmp_path / "sim"
+    assert main(["simulate", str(model), "--manoeuvre", "turning", "--out", str(out)]) == 2
+    assert "has no rudder" in capsys.readouterr().err
+    assert not out.exists()

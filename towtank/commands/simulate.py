@@ -11,6 +11,30 @@ DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, 
 DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0}
 
 
+#: The control derivatives each manoeuvre steers with (rudder, sternplanes).
+_CONTROLS = {"rudder": ("Y_uudr", "N_uudr"), "sternplane": ("Z_uuds", "M_uuds")}
+
+
+def _check_controls(model: dict, manoeuvre: str, rudder: float, stern: float,
+                    name: str) -> None:
+    """A manoeuvre that deflects a control surface the model does not have (its derivatives
+    0 or missing: no [[vehicle.fins]] of that plane) would sail straight on: refused."""
+    coef = model.get("coefficients", {}) or {}
+    needs = []
+    if manoeuvre in ("turning", "zigzag", "spiral") and rudder:
+        needs.append("rudder")
+    if manoeuvre == "dive" and stern:
+        needs.append("sternplane")
+    for plane in needs:
+        symbols = _CONTROLS[plane]
+        if not any(abs(float(coef.get(s) or 0.0)) > 0 for s in symbols):
+            raise ProtocolError(
+                f"{name}: the model has no {plane} ({' and '.join(symbols)} are 0 or missing), "
+                f"so a {manoeuvre} manoeuvre would run straight on; describe the {plane} "
+                f"fins in the protocol's [[vehicle.fins]] (plane = \"{plane}\") and run "
+                "predict or process again.")
+
+
 def simulate_command(
     model_path: Path, manoeuvre: str, *, rudder_deg: float | None = None,
     sternplane_deg: float | None = None, speed: float | None = None,
@@ -43,6 +67,7 @@ def simulate_command(
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     if samples < 0:
         raise ProtocolError(f"--samples must be >= 0, not {samples}.")
+    _check_controls(model, manoeuvre, rudder, stern, Path(model_path).name)
     kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s)
     try:
