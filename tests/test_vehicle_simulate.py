@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -215,3 +216,27 @@ def test_a_turn_without_a_rudder_is_refused_in_one_sentence(tmp_path, capsys):
     assert main(["simulate", str(model), "--manoeuvre", "turning", "--out", str(out)]) == 2
     assert "has no rudder" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_simulate_and_predict_never_replace_a_users_file(tmp_path, capsys):
+    """Issue 14's rule for the vehicle commands: a file of the user's named metrics.csv or
+    model.json stops them (exit 2) and is left as it was; their own files are replaced."""
+    from towtank.commands.cli import main
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "pred"
+    out.mkdir()
+    (out / "model.json").write_text("mine", encoding="utf-8")
+    protocol = root / "protocols" / "remus_vehicle.toml"
+    assert main(["predict", str(protocol), "--out", str(out)]) == 2
+    assert (out / "model.json").read_text(encoding="utf-8") == "mine"
+    (out / "model.json").unlink()
+    assert main(["predict", str(protocol), "--out", str(out)]) == 0
+    assert main(["predict", str(protocol), "--out", str(out)]) == 0  # its own: replaced
+    sim = tmp_path / "sim"
+    sim.mkdir()
+    (sim / "metrics.csv").write_text("mine", encoding="utf-8")
+    assert main(["simulate", str(out / "model.json"), "--manoeuvre", "turning",
+                 "--out", str(sim)]) == 2
+    assert (sim / "metrics.csv").read_text(encoding="utf-8") == "mine"
+    assert "did not write" in capsys.readouterr().err

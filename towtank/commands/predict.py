@@ -6,6 +6,9 @@ from pathlib import Path
 
 from towtank.errors import ProtocolError
 
+#: The files ``predict`` writes.
+PREDICT_OUTPUTS = frozenset({"predicted.csv", "model.json"})
+
 
 def predict_command(protocol_path: Path, out: Path | None = None) -> int:
     """Write predicted.csv and model.json for the protocol's [vehicle]; print the table.
@@ -26,10 +29,12 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
         result = predict_vehicle(protocol)
     except ValueError as exc:  # a bad hull table or hull description
         raise ProtocolError(f"{protocol.path.name}: {exc}") from None
+    from towtank.runtime.manifest import writing_outputs
+
     folder = Path(out) if out is not None else protocol.campaign.output_dir
-    folder.mkdir(parents=True, exist_ok=True)
-    result.predicted.to_csv(folder / "predicted.csv", index=False, float_format="%.6g")
-    vmodel.write_model(result.model, folder / "model.json")
+    with writing_outputs(folder, PREDICT_OUTPUTS) as tmp:  # never over a file of the user's
+        result.predicted.to_csv(tmp / "predicted.csv", index=False, float_format="%.6g")
+        vmodel.write_model(result.model, tmp / "model.json")
     with pd.option_context("display.max_rows", None, "display.width", 120,
                            "display.max_colwidth", 60):
         print(result.predicted[["symbol", "value", "unit", "prime"]].to_string(index=False))

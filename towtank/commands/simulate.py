@@ -11,6 +11,9 @@ DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, 
 DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0}
 
 
+#: The files ``simulate`` writes.
+SIMULATE_OUTPUTS = frozenset({"manoeuvre.csv", "metrics.csv", "manoeuvre.png", "glide_table.csv"})
+
 #: The control derivatives each manoeuvre steers with (rudder, sternplanes).
 _CONTROLS = {"rudder": ("Y_uudr", "N_uudr"), "sternplane": ("Z_uuds", "M_uuds")}
 
@@ -83,19 +86,21 @@ def simulate_command(
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
         raise ProtocolError(f"{Path(model_path).name}: {exc}") from None
-    folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
-    folder.mkdir(parents=True, exist_ok=True)
-    ts.to_csv(folder / "manoeuvre.csv", index=False, float_format="%.6g")
-    if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
-        from towtank.vehicle.glider import glide_table
+    from towtank.runtime.manifest import writing_outputs
 
-        sign = -1.0 if net_buoyancy_n <= 0 else 1.0
-        size = abs(net_buoyancy_n) or 1.0
-        table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
-                            [sign * p for p in range(5, 50, 5)])
-        table.to_csv(folder / "glide_table.csv", index=False, float_format="%.6g")
-    metrics.to_csv(folder / "metrics.csv", index=False, float_format="%.6g")
-    _figure(ts, metrics, manoeuvre, folder / "manoeuvre.png", model.get("name", "model"))
+    folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
+    with writing_outputs(folder, SIMULATE_OUTPUTS) as tmp:  # never over a file of the user's
+        ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
+        if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+            from towtank.vehicle.glider import glide_table
+
+            sign = -1.0 if net_buoyancy_n <= 0 else 1.0
+            size = abs(net_buoyancy_n) or 1.0
+            table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
+                                [sign * p for p in range(5, 50, 5)])
+            table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
+        metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
+        _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", model.get("name", "model"))
     with pd.option_context("display.width", 120):
         print(metrics.to_string(index=False))
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"

@@ -11,16 +11,18 @@ that a kill left half swapped is found and put back by the next run.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 __all__ = ["MANIFEST", "INCOMPLETE", "describe", "read_manifest", "write_manifest",
            "foreign_outputs", "refuse_foreign", "known", "recover_outputs",
-           "atomic_write_text", "folder_mode", "unwritable"]
+           "atomic_write_text", "folder_mode", "unwritable", "writing_outputs"]
 
 MANIFEST = ".towtank-outputs.json"
 INCOMPLETE = "OUTPUTS-INCOMPLETE.txt"
@@ -199,3 +201,31 @@ def unwritable(out_dir: Path) -> str | None:
     except OSError as exc:
         return exc.strerror or type(exc).__name__
     return None
+
+
+@contextlib.contextmanager
+def writing_outputs(folder: Path, names: set[str] | frozenset[str]) -> Iterator[Path]:
+    """Write some of towtank's own files (``names``) into ``folder`` without touching anyone
+    else's: refuse (ProtocolError, before anything is written) when ``folder`` holds an entry
+    of one of those names that towtank did not write; yield a temporary folder inside it to
+    write them into; then move each into place by a rename and list it in the folder's
+    manifest. For ``predict`` and ``simulate``, which write beside what the user keeps."""
+    import shutil
+    import tempfile
+
+    folder = Path(folder)
+    if folder.exists():
+        refuse_foreign(folder, names)
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".towtank-tmp-", dir=folder))
+    try:
+        yield tmp
+        written = sorted(p.name for p in tmp.iterdir() if p.name in names)
+        for name in written:
+            os.replace(tmp / name, folder / name)
+        data = read_manifest(folder)
+        files = dict(data["files"]) if data else {}
+        files.update(describe(folder, set(written)))
+        write_manifest(folder, files)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
