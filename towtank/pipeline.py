@@ -231,7 +231,7 @@ def run_table(
     reductions: dict[int, RunReduction],
     rejected: dict[int, str],
 ) -> pd.DataFrame:
-    """runs.csv: one row per run of the sheet (FORMATS §5), then extension columns."""
+    """runs.csv: one row per run of the sheet (docs/formats.md §5), then extension columns."""
     rows = []
     model, fin = protocol.model, protocol.fin
     for rec in sheet.to_dict("records"):

@@ -141,7 +141,7 @@ class HullFit:
     lift_slope: tuple[float, float, float] | None = None  # dCL/dα [1/rad], ci low, ci high
 
     def table(self) -> pd.DataFrame:
-        """The estimates in FORMATS order (without prime/reference columns)."""
+        """The estimates in the order of docs/formats.md (without prime/reference columns)."""
         rows = [vars(self.estimates[s]) for s in SYMBOLS if s in self.estimates]
         return pd.DataFrame(rows)
 
@@ -805,7 +805,7 @@ COEFFICIENT_COLUMNS = [
     "symbol", "value", "unit", "prime", "ci_low", "ci_high", "method", "reference_prime",
     "diff_pct", "prototype_value",
 ]
-#: Extension columns of coefficients.csv after the FORMATS §5 ones (docs/formats.md).
+#: Extension columns of coefficients.csv after the docs/formats.md §5 ones (docs/formats.md).
 COEFFICIENT_EXTRA_COLUMNS = [
     "std_error", "prime_ci_low", "prime_ci_high", "n_runs", "alt_value", "alt_method",
     "agreement", "u_regression", "u_tare", "u_mass", "dof",
@@ -815,7 +815,7 @@ COEFFICIENT_EXTRA_COLUMNS = [
 def coefficients_table(
     hull: HullFit, reference: dict[str, float], length_sd: float = 0.0
 ) -> pd.DataFrame:
-    """coefficients.csv (FORMATS §5) without prototype values, plus extension columns.
+    """coefficients.csv (docs/formats.md §5) without prototype values, plus extension columns.
 
     prime = value/(½ρL³) for added mass and value/(½ρL²) for damping (k = 3 or 2 below);
     diff_pct = (prime − reference)/|reference|·100, empty where the reference is zero or

@@ -655,7 +655,7 @@ def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMa
     return out
 
 
-#: Every entry towtank writes into an output folder (FORMATS §5; the cache aside).
+#: Every entry towtank writes into an output folder (docs/formats.md §5; the cache aside).
 OUTPUT_NAMES = frozenset({
     "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
     "scaling.csv", "tare.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",

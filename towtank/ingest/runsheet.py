@@ -269,7 +269,7 @@ def _norm(name: str) -> str:
 
 
 def known_columns(columns: list[str], src: str) -> list[str]:
-    """The sheet's column names with the FORMATS §2 ones spelt as the contract spells them.
+    """The sheet's column names with the docs/formats.md §2 ones spelt as the contract spells them.
 
     A known column written in another case or with spaces or hyphens for underscores
     (``Status``, ``Tare group``) is renamed to its contract name. A column that is not known

@@ -43,7 +43,7 @@ def math_symbol(symbol: str) -> str:
     Parameters
     ----------
     symbol : str
-        FORMATS.md symbol such as ``X_udot``, ``X_u|u|`` or ``Y_uv``.
+        docs/formats.md symbol such as ``X_udot``, ``X_u|u|`` or ``Y_uv``.
     """
     head, _, sub = symbol.partition("_")
     if not sub:

@@ -1,4 +1,4 @@
-"""Write the day's outputs atomically (FORMATS.md §5)."""
+"""Write the day's outputs atomically (docs/formats.md §5)."""
 
 from __future__ import annotations
 

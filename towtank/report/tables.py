@@ -1,4 +1,4 @@
-"""The day's CSV tables (FORMATS.md §5): runs.csv, coefficients.csv, fins.csv, scaling.csv."""
+"""The day's CSV tables (docs/formats.md §5): runs.csv, coefficients.csv, fins.csv, scaling.csv."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ def write_csv(df: pd.DataFrame, path: Path) -> None:
 
 
 def write_tables(day: DayResult, out: Path) -> None:
-    """Write the four FORMATS §5 tables, and the fin extensions the day has data for.
+    """Write the four docs/formats.md §5 tables, and the fin extensions the day has data for.
 
     runs.csv, coefficients.csv, fins.csv and scaling.csv are always written, with their header
     only when the day has no row for them (a hull day has no fin run, a fin day no hull

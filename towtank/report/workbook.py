@@ -1,4 +1,4 @@
-"""report.xlsx: the day's workbook (FORMATS.md §5), written with openpyxl.
+"""report.xlsx: the day's workbook (docs/formats.md §5), written with openpyxl.
 
 Sheets, always all of them (a sheet whose data the day lacks holds a one-line note saying why):
 

@@ -102,7 +102,7 @@ def pinned_xlsx(data: bytes) -> bytes:
 def write_run_sheet(
     rows: Iterable[Mapping[str, Any]], path: str | Path, columns: Sequence[str] = SHEET_COLUMNS
 ) -> Path:
-    """Write a run sheet (FORMATS §2) as ``.csv`` or ``.xlsx``, one row per run.
+    """Write a run sheet (docs/formats.md §2) as ``.csv`` or ``.xlsx``, one row per run.
 
     Parameters
     ----------
@@ -111,7 +111,7 @@ def write_run_sheet(
     path : str or pathlib.Path
         ``.csv`` or ``.xlsx``.
     columns : sequence of str
-        Column order; default the FORMATS §2 columns.
+        Column order; default the docs/formats.md §2 columns.
 
     Returns
     -------
@@ -540,9 +540,9 @@ def make_hull_day(
     tank_length_m : float, default 100.0
         Tank length [m].
     date : str or datetime.date, optional
-        Test date; if given, the run sheet gets a ``date`` column (ISO ``YYYY-MM-DD``, FORMATS
-        §2: other columns are kept), from which the report takes its test date. Default: no
-        such column.
+        Test date; if given, the run sheet gets a ``date`` column (ISO ``YYYY-MM-DD``,
+        docs/formats.md §2: other columns are kept), from which the report takes its test
+        date. Default: no such column.
 
     Returns
     -------
@@ -690,7 +690,7 @@ def write_protocol(
     inline_tables: Iterable[str] = ("channels",),
     **sections: Mapping[str, Any],
 ) -> Path:
-    """Write a protocol TOML (FORMATS §1) from nested dicts.
+    """Write a protocol TOML (docs/formats.md §1) from nested dicts.
 
     Values may be str, float, int, bool, lists of those, and dicts. A dict inside a section is
     written as a sub-table (``[prototype.water]``), except in the sections named by

@@ -118,7 +118,7 @@ class HullTruth:
         return self.m - self.X_udot * np.cos(al) ** 2 - self.Y_vdot * np.sin(al) ** 2
 
     def coefficients(self, rho: float) -> dict[str, float]:
-        """The twelve FORMATS coefficients, model-scale SI (kg, kg/m), at density ``rho``.
+        """The twelve coefficients of docs/formats.md, model-scale SI (kg, kg/m), at ``rho``.
 
         Parameters
         ----------
