@@ -321,7 +321,7 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
     """
     coef = day.hull.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
-              "diff %", "prototype [unit]", "method"]
+              "diff %", "prototype¹", "method"]
     methods: list[str] = []
     rows, hl = [], {}
     for i, r in enumerate(coef.to_dict("records")):
@@ -389,12 +389,13 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     if day.hull is not None and len(day.hull.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
         header, rows, methods, hl = coefficient_rows(day)
-        y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.75, 0.55, 0.75, 0.65],
+        y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
                     highlight=hl, align=["center"] + ["right"] * 7 + ["center"],
                     fontsize=7.8) + 0.1
         notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
         notes.append(f"Shaded: |diff %| > {DIFF_HIGHLIGHT_PCT:g} against the reference. "
-                     "Prototype: prime × ½ρ_p·L_p³ (added mass, kg) or × ½ρ_p·L_p² (kg/m).")
+                     "¹ Prototype, in the row's unit: prime × ½ρ_p·L_p³ (added mass, kg) or "
+                     "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
         for r in day.hull.coefficients.to_dict("records"):
