@@ -246,17 +246,22 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
     raise AssertionError(kind)
 
 
-def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
-    """Validate one table against SCHEMA[schema_name]; return the coerced values."""
+def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: str) -> None:
+    """``[label]`` must be a table whose keys are all among ``keys``: else a ProtocolError
+    naming the unknown key and the nearest valid one."""
     if not isinstance(data, dict):
         raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {data!r}.")
+    for key in data:
+        if key not in keys:
+            raise ProtocolError(f"{src}: unknown key '{key}' in [{label}]{_suggest(key, keys)}")
+
+
+def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
+    """Validate one table against SCHEMA[schema_name]; return the coerced values."""
     spec = SCHEMA[schema_name]
+    check_keys(data, list(spec), label, src)
     out: dict[str, Any] = {}
     for key, value in data.items():
-        if key not in spec:
-            raise ProtocolError(
-                f"{src}: unknown key '{key}' in [{label}]{_suggest(key, list(spec))}"
-            )
         kind, _ = spec[key]
         out[key] = _coerce(value, kind, f"'{key}' in [{label}]", src)
     for key, (_kind, required) in spec.items():

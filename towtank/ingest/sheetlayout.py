@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.schema import check_keys
 
 __all__ = ["SheetOptions", "parse_sheet_options", "header_names", "STATUS_WORDS", "TEST_WORDS",
            "CONTRACT_COLUMNS"]
@@ -115,15 +116,7 @@ def parse_sheet_options(data: Any, src: str) -> SheetOptions:
     """The ``[sheet]`` table checked (defaults when the protocol has none)."""
     if data is None:
         return SheetOptions()
-    if not isinstance(data, dict):
-        raise ProtocolError(f"{src}: [sheet] must be a table of keys, but it is {data!r}.")
-    keys = ("header_row", "columns", "delimiter", "decimal")
-    for key in data:
-        if key not in keys:
-            near = difflib.get_close_matches(key, keys, n=1, cutoff=0.5)
-            hint = (f"; did you mean '{near[0]}'?" if near
-                    else f"; valid keys are: {', '.join(keys)}")
-            raise ProtocolError(f"{src}: unknown key '{key}' in [sheet]{hint}")
+    check_keys(data, ("header_row", "columns", "delimiter", "decimal"), "sheet", src)
     row = data.get("header_row", 0)
     if isinstance(row, bool) or not isinstance(row, int) or not 0 <= row <= 1000:
         raise ProtocolError(f"{src}: 'header_row' in [sheet] must be a whole number 0–1000 "

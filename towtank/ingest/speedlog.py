@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import ProtocolError, RunError
+from towtank.ingest.schema import check_keys
 
 __all__ = ["SpeedLog", "parse_speed_log", "log_path", "read_speed_log", "speed_on_run_time",
            "STILL_FRACTION"]
@@ -93,16 +94,7 @@ def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
     """The ``[speed_log]`` table checked (None when the protocol has none)."""
     if data is None:
         return None
-    if not isinstance(data, dict):
-        raise ProtocolError(f"{src}: [speed_log] must be a table of keys, but it is {data!r}.")
-    for key in data:
-        if key not in _KEYS:
-            import difflib
-
-            near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.5)
-            hint = (f"; did you mean '{near[0]}'?" if near
-                    else f"; valid keys are: {', '.join(_KEYS)}")
-            raise ProtocolError(f"{src}: unknown key '{key}' in [speed_log]{hint}")
+    check_keys(data, _KEYS, "speed_log", src)
     pattern = data.get("file")
     if not isinstance(pattern, str) or not pattern.strip():
         raise ProtocolError(f"{src}: [speed_log] needs 'file', the log's name pattern (e.g. "

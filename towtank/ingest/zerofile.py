@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import ProtocolError, RunError
+from towtank.ingest.schema import check_keys
 
 __all__ = ["ZeroFile", "parse_zero_file", "zero_levels", "run_zero_levels",
            "with_zero_levels"]
@@ -38,12 +39,7 @@ def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
     """The ``[zeros]`` table checked (None when the protocol has none)."""
     if data is None:
         return None
-    if not isinstance(data, dict):
-        raise ProtocolError(f"{src}: [zeros] must be a table of keys, but it is {data!r}.")
-    extra = set(data) - {"file"}
-    if extra:
-        raise ProtocolError(f"{src}: unknown key '{sorted(extra)[0]}' in [zeros]; it takes "
-                            "only 'file'.")
+    check_keys(data, ("file",), "zeros", src)
     pattern = data.get("file")
     if not isinstance(pattern, str) or not pattern.strip():
         raise ProtocolError(f"{src}: [zeros] needs 'file', the zeros file's name pattern (e.g. "
