@@ -422,10 +422,10 @@ def reduce_runs(
             keys[run] = settings_key(protocol, {**rec, "side_files_sha": side} if side else rec,
                                      common)
             path = protocol.campaign.data_dir / str(rec["file"])
-            sha = cache.known_sha(path)
-            hit = cache.get(sha, keys[run]) if sha else None
-            if hit is not None:
-                reductions[run] = replace(hit, run=run, file_stamp=cache.known_stamp(path))
+            known = cache.known_file(path)
+            hit = cache.get(known[0], keys[run]) if known is not None else None
+            if hit is not None:  # its stamp: the file as the cached reduction read it
+                reductions[run] = replace(hit, run=run, file_stamp=known[1])
                 continue
         to_reduce.append(rec)
     done = len(todo) - len(to_reduce)

@@ -145,30 +145,27 @@ class RunCache:
             real = self._real_dirs[head] = os.path.realpath(head or ".")
         return os.path.join(real, tail), st
 
-    def known_sha(self, path: Path) -> str | None:
-        """The file's sha256 if its size, mtime, ctime and inode are those recorded with it.
+    def known_file(self, path: Path) -> tuple[str, tuple[int, int, int, int]] | None:
+        """The file's sha256 and its (size, mtime_ns, ctime_ns, inode) if those are the ones
+        recorded with it (the file as the reduction cached for it read it), else None.
 
         The ctime (set by the system on every write, not settable by ``touch``) and the inode
-        catch a file rewritten at the same size with its mtime put back.
+        catch a file rewritten at the same size with its mtime put back. One stat.
         """
         found = self._stat(path)
         if found is None:
             return None
         key, st = found
         rec = self._files.get(key)
-        if rec and len(rec) >= 5 and rec[:2] == [st.st_size, st.st_mtime_ns] \
-                and rec[3:5] == [st.st_ctime_ns, st.st_ino]:
-            return str(rec[2])
+        stamp = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+        if rec and len(rec) >= 5 and (rec[0], rec[1], rec[3], rec[4]) == stamp:
+            return str(rec[2]), stamp
         return None
 
-    def known_stamp(self, path: Path) -> tuple[int, int, int, int] | None:
-        """(size, mtime_ns, ctime_ns, inode) recorded with the file's sha256 when
-        :meth:`known_sha` knows it (the file as the reduction cached for it read it)."""
-        found = self._stat(path)
-        rec = self._files.get(found[0]) if found is not None else None
-        if self.known_sha(path) is None or not rec:
-            return None
-        return (int(rec[0]), int(rec[1]), int(rec[3]), int(rec[4]))
+    def known_sha(self, path: Path) -> str | None:
+        """The file's sha256 if :meth:`known_file` knows the file as it is."""
+        known = self.known_file(path)
+        return known[0] if known is not None else None
 
     def remember_sha(self, path: Path, sha: str,
                      stamp: tuple[int, int, int, int] | None | bool = True) -> None:
