@@ -325,7 +325,8 @@ def process_day(
                             f"table are read as notes, not runs: {shown}.")
     todo, rejected = runs_to_reduce(protocol, sheet)
     reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
-                                       progress=progress, debug=debug, cache_dir=cache_dir)
+                                       progress=progress, debug=debug, cache_dir=cache_dir,
+                                       warnings_out=day_warnings)
     tares = tare_models(protocol, sheet, reductions, day_warnings)
     apply_tares(protocol, sheet, reductions, tares, rejected)
     for red in reductions.values():
@@ -403,13 +404,20 @@ def reduce_runs(
     progress: Callable[[int, int], None] | None,
     debug: bool,
     cache_dir: str | Path | None,
+    warnings_out: list[str] | None = None,
 ) -> tuple[dict[int, RunReduction], dict[int, dict[str, np.ndarray]]]:
     """Every run of ``todo`` reduced (from the cache, or in worker processes), in sheet order,
-    and the previews of runs read but not reduced; rejections are added to ``rejected``."""
+    and the previews of runs read but not reduced; rejections are added to ``rejected``, a
+    cache that cannot be used to ``warnings_out``."""
     from towtank.runtime.parallel import map_runs
 
+    if warnings_out is None:
+        warnings_out = []
     reductions: dict[int, RunReduction] = {}
-    cache = RunCache(cache_dir) if cache_dir is not None else None
+    cache = RunCache(cache_dir, RunReduction, _sound_reduction) if cache_dir is not None \
+        else None
+    if cache is not None and cache.problem:
+        warnings_out.append(cache.problem)
     common = protocol_settings(protocol) if cache is not None else None
     sides = _side_files(protocol)
     keys: dict[int, str] = {}
@@ -424,6 +432,8 @@ def reduce_runs(
             path = protocol.campaign.data_dir / str(rec["file"])
             known = cache.known_file(path)
             hit = cache.get(known[0], keys[run]) if known is not None else None
+            if hit is not None and (hit.sha256 != known[0] or hit.file != str(rec["file"])):
+                hit = None  # an entry that is not this file's reduction: a miss
             if hit is not None:  # its stamp: the file as the cached reduction read it
                 reductions[run] = replace(hit, run=run, file_stamp=known[1])
                 continue
@@ -451,9 +461,22 @@ def reduce_runs(
             progress(done + i + 1, len(todo))
     if cache is not None:
         cache.flush()
+        if cache.problem and cache.problem not in warnings_out:
+            warnings_out.append(cache.problem)
     # keep the sheet's order whatever the order of cache hits and fresh reductions
     order = {int(r): k for k, r in enumerate(sheet["run"])}
     return dict(sorted(reductions.items(), key=lambda kv: order[kv[0]])), previews
+
+
+def _sound_reduction(red: RunReduction) -> bool:
+    """Whether a reduction read back from the cache is whole: its sample tables' columns of
+    one length, finite sample rate and sample count, known phase windows."""
+    from towtank.runtime.records import same_lengths
+
+    tables = [red.samples, red.thumb] + ([red.series] if red.series is not None else [])
+    return (all(same_lengths(t) for t in tables) and math.isfinite(red.fs) and red.fs > 0
+            and red.n_samples >= 0
+            and all(w is None or (len(w) == 2 and w[0] <= w[1]) for w in red.windows.values()))
 
 
 def apply_tares(

@@ -15,7 +15,7 @@ import os
 import pickle
 import signal
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -26,7 +26,7 @@ from scipy.signal import sosfiltfilt
 from towtank import __version__
 from towtank.ingest.protocol import ChannelMap, Processing
 from towtank.ingest.readers import ReadOptions
-from towtank.runtime import cache, parallel
+from towtank.runtime import cache, manifest, parallel
 from towtank.signal import conditioning
 
 
@@ -109,8 +109,15 @@ def _sha(i):
     return hashlib.sha256(str(i).encode()).hexdigest()
 
 
+@dataclass
+class _Red:
+    run: int
+    samples: dict[str, np.ndarray]
+    notes: list[str]
+
+
 def _red(i):
-    return {"run": i, "samples": {"U": np.linspace(0, 1, 30) * i}, "notes": [f"run {i}"]}
+    return _Red(i, {"U": np.linspace(0, 1, 30) * i}, [f"run {i}"])
 
 
 def test_cache_round_trip_and_index(tmp_path, monkeypatch):
@@ -123,18 +130,18 @@ def test_cache_round_trip_and_index(tmp_path, monkeypatch):
         f = data / f"run_{i:03d}.csv"
         f.write_text(f"t,u\n{i},1\n")
         files.append(f)
-    c = cache.RunCache(tmp_path / ".cache")
+    c = cache.RunCache(tmp_path / ".cache", _Red)
     for i, f in enumerate(files):
         assert c.known_sha(f) is None
         c.put(_sha(i), "k", _red(i))
         c.remember_sha(f, _sha(i))
-        assert c.get(_sha(i), "k")["run"] == i  # readable before the flush
+        assert c.get(_sha(i), "k").run == i  # readable before the flush
     c.flush()
-    c2 = cache.RunCache(tmp_path / ".cache")
+    c2 = cache.RunCache(tmp_path / ".cache", _Red)
     for i, f in enumerate(files):
         assert c2.known_sha(f) == _sha(i)
         got = c2.get(c2.known_sha(f), "k")
-        assert got["run"] == i and np.array_equal(got["samples"]["U"], _red(i)["samples"]["U"])
+        assert got.run == i and np.array_equal(got.samples["U"], _red(i).samples["U"])
     assert c2.get(_sha(3), "other-settings") is None
     # a file that changed (size or mtime) is unknown; the index holds real paths
     files[2].write_text("t,u\n2,1\n9,9\n")
@@ -146,7 +153,7 @@ def test_cache_round_trip_and_index(tmp_path, monkeypatch):
 
 
 def test_damaged_cache_is_a_miss(tmp_path):
-    c = cache.RunCache(tmp_path)
+    c = cache.RunCache(tmp_path, _Red)
     c.put("a" * 64, "k", _red(1))
     c.put("b" * 64, "k", _red(2))
     c.flush()
@@ -154,14 +161,16 @@ def test_damaged_cache_is_a_miss(tmp_path):
     raw = bytearray(pack.read_bytes())
     raw[5] ^= 0xFF
     pack.write_bytes(bytes(raw))
-    c2 = cache.RunCache(tmp_path)
+    c2 = cache.RunCache(tmp_path, _Red)
     assert c2.get("a" * 64, "k") is None
-    assert c2.get("b" * 64, "k")["run"] == 2
+    assert c2.get("b" * 64, "k").run == 2
     (tmp_path / "files.json").write_text("{ not json")
-    assert cache.RunCache(tmp_path).get("b" * 64, "k") is None
+    assert cache.RunCache(tmp_path, _Red).get("b" * 64, "k") is None
 
 
-def test_cache_reads_the_one_file_per_entry_layout(tmp_path):
+def test_cache_never_unpickles_the_one_file_per_entry_layout(tmp_path):
+    """Earlier versions kept pickles (runs/<entry>.pkl): never read now, whatever they hold;
+    an index of an earlier format (records without ctime and inode) is not trusted."""
     old = tmp_path / "runs" / f"{'c' * 32}-key.pkl"
     old.parent.mkdir(parents=True)
     old.write_bytes(pickle.dumps(_red(7)))
@@ -171,11 +180,9 @@ def test_cache_reads_the_one_file_per_entry_layout(tmp_path):
     (tmp_path / "files.json").write_text(json.dumps({str(f.resolve()): [st.st_size,
                                                                          st.st_mtime_ns,
                                                                          "c" * 64]}))
-    c = cache.RunCache(tmp_path)
-    # an index record without ctime and inode (older layout) is not trusted: the file is
-    # hashed again; the entry itself is still read
+    c = cache.RunCache(tmp_path, _Red)
     assert c.known_sha(f) is None
-    assert c.get("c" * 64, "key")["run"] == 7
+    assert c.get("c" * 64, "key") is None
     c.remember_sha(f, "c" * 64)
     assert c.known_sha(f) == "c" * 64
 
@@ -183,12 +190,12 @@ def test_cache_reads_the_one_file_per_entry_layout(tmp_path):
 def test_packs_are_merged(tmp_path, monkeypatch):
     monkeypatch.setattr(cache, "MAX_PACKS", 3)
     for i in range(6):  # six processes, one pack each
-        c = cache.RunCache(tmp_path)
+        c = cache.RunCache(tmp_path, _Red)
         c.put(_sha(i), "k", _red(i))
         c.flush()
     assert len(list((tmp_path / "runs").glob("pack-*.bin"))) <= 3
-    c = cache.RunCache(tmp_path)
-    assert [c.get(_sha(i), "k")["run"] for i in range(6)] == list(range(6))
+    c = cache.RunCache(tmp_path, _Red)
+    assert [c.get(_sha(i), "k").run for i in range(6)] == list(range(6))
 
 
 # ---------------------------------------------------------------------------------- parallel
@@ -286,6 +293,7 @@ def _day(tmp_path: Path) -> SimpleNamespace:
     out = tmp_path / "out"
     out.mkdir()
     (out / "runs.csv").write_text("run\n1\n")
+    manifest.write_manifest(out, manifest.describe(out, {"runs.csv"}))
     campaign = SimpleNamespace(run_sheet=tmp_path / "sheet.csv", data_dir=tmp_path / "data",
                                reference="remus")
     return SimpleNamespace(path=tmp_path / "protocol.toml", campaign=campaign)
@@ -304,6 +312,7 @@ def test_day_stamp_replays_only_an_unchanged_day(tmp_path):
     assert stamp(report=True).replay() is None  # other options
     (out / "runs.csv").write_text("run\n2\n")  # an output edited
     assert stamp().replay() is None
+    manifest.write_manifest(out, manifest.describe(out, {"runs.csv"}))
     stamp().record(0, "again\n")
     assert stamp().replay() == (0, "again\n")
     f = tmp_path / "data" / "run_1.csv"

@@ -9,10 +9,15 @@ from __future__ import annotations
 import argparse
 import errno
 import gc
+import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from towtank import __version__
+
+if TYPE_CHECKING:
+    from towtank.runtime.reads import Recorder
 
 EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
 
@@ -200,8 +205,6 @@ def _err(msg: str) -> None:
 
 
 def cmd_process(args: argparse.Namespace) -> int:
-    from towtank.errors import ProtocolError
-    from towtank.ingest.protocol import check_output_dir, load_protocol
 
     if args.out is not None:  # a set an interrupted run left aside is put back first
         from towtank.runtime.manifest import recover_outputs
@@ -209,6 +212,17 @@ def cmd_process(args: argparse.Namespace) -> int:
         recovered = recover_outputs(Path(args.out).resolve())
         if recovered:
             _err(recovered)
+    from towtank.runtime.reads import recording
+
+    # every file the day opens, whatever section names it, goes into the replay's record
+    with recording() as opened:
+        return _process_recorded(args, opened)
+
+
+def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
+    from towtank.errors import ProtocolError
+    from towtank.ingest.protocol import check_output_dir, load_protocol
+
     try:
         protocol = load_protocol(args.protocol)
     except ProtocolError as exc:
@@ -221,6 +235,10 @@ def cmd_process(args: argparse.Namespace) -> int:
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
+    from towtank.runtime.manifest import MANIFEST
+
+    # towtank's own bookkeeping in the output folder is not an input of the day
+    opened.skip.extend([Path(out).resolve() / ".cache", Path(out).resolve() / MANIFEST])
     stamp = None
     if not args.no_cache:
         from towtank.runtime.cache import DayStamp
@@ -247,12 +265,13 @@ def cmd_process(args: argparse.Namespace) -> int:
     # the workers load the reduction's libraries while this process loads pandas and the sheet
     parallel.prestart(args.jobs)
     try:
-        return _process(args, protocol, out, stamp)
+        return _process(args, protocol, out, stamp, opened)
     finally:
         parallel.discard_prestarted()  # when the day stopped before any run was reduced
 
 
-def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: ANN001
+def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
+             opened: Recorder) -> int:
     from towtank.errors import ProtocolError
     from towtank.ingest.protocol import check_output_dir
     from towtank.pipeline import process_day
@@ -287,6 +306,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     finally:
         if bar is not None:
             bar.close()
+        opened.stop()  # what the day read; the writing reads its own files
     if args.date:
         day.report_date = args.date
     try:  # the sheet may name run files anywhere: none of them may be an output's target
@@ -294,23 +314,46 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
+    from towtank.runtime.manifest import output_lock
+
+    code = EXIT_REJECTED if day.rejected else EXIT_OK
+    _add_opened(day, opened, Path(out))
     try:
-        write_outputs(day, out, report=not args.no_report, export=tuple(args.export or ()))
+        # the lock spans the write and its record: another writer can neither mix its files
+        # with these nor have its outputs recorded as this day's
+        with output_lock(Path(out).resolve()):
+            write_outputs(day, out, report=not args.no_report,
+                          export=tuple(args.export or ()))
+            text = _summary(day, Path(out))
+            if stamp is not None:
+                changed = stamp.record(code, text, {**opened.files, **_read_stamps(day)})
+                if changed:
+                    _err(f"warning: {changed}")
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
     except OSError as exc:
         if exc.errno not in _STORAGE_ERRNOS:
             raise
         _err(f"the outputs could not be written to {out} ({exc.strerror}); the folder is as "
              "it was before this run.")
         return EXIT_UNUSABLE
-    text = _summary(day, Path(out))
     if not args.quiet:
         print(text, end="")
-    code = EXIT_REJECTED if day.rejected else EXIT_OK
-    if stamp is not None:
-        changed = stamp.record(code, text, _read_stamps(day))
-        if changed:
-            _err(f"warning: {changed}")
     return code
+
+
+def _add_opened(day, opened: Recorder, out: Path) -> None:  # noqa: ANN001
+    """Every file the day opened (tare table, hull table, ...) among its inputs, with its
+    sha256, for provenance.json: the files in the output folder aside."""
+    from towtank.runtime.safefile import sha256_regular
+
+    root = str(out.resolve()) + os.sep
+    for path in opened.files:
+        if path not in day.inputs and not path.startswith(root):
+            sha = sha256_regular(path)
+            if sha is not None:
+                day.inputs[path] = sha
 
 
 def _read_stamps(day) -> dict[str, tuple[int, int, int, int] | None]:  # noqa: ANN001

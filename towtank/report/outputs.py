@@ -20,7 +20,12 @@ if TYPE_CHECKING:
 
 
 def _swap_into_place(tmp: Path, out_dir: Path) -> None:
-    """Replace ``out_dir`` by ``tmp`` with renames (atomic on one file system)."""
+    """Replace ``out_dir`` by ``tmp`` with renames (atomic on one file system).
+
+    The old folder is removed only if it holds nothing but towtank's outputs: an entry that
+    appeared in it after the check (the user saving a file at that moment) is moved into the
+    new folder, and if that cannot be done the old folder is left where it is, named.
+    """
     if out_dir.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
         old.rmdir()
@@ -30,7 +35,16 @@ def _swap_into_place(tmp: Path, out_dir: Path) -> None:
         except OSError:
             os.rename(old, out_dir)
             raise
-        shutil.rmtree(old, ignore_errors=True)
+        kept = []
+        for name in foreign_entries(old, keep=()):
+            try:
+                if os.path.lexists(out_dir / name):
+                    raise FileExistsError(name)
+                os.rename(old / name, out_dir / name)
+            except OSError:
+                kept.append(name)
+        if not kept:
+            shutil.rmtree(old, ignore_errors=True)
     else:
         os.rename(tmp, out_dir)
 
@@ -81,7 +95,10 @@ def _replace_entries(tmp: Path, out_dir: Path) -> None:
             shutil.rmtree(stale, ignore_errors=True)
         elif stale.is_file() and not stale.is_symlink():
             stale.unlink()
-    manifest.write_manifest(out_dir, new_files, complete=True)
+    others = {rel: entries for rel, entries in (old["files"] if old else {}).items()
+              if rel.split("/")[0] not in OUTPUT_NAMES and rel != manifest.INCOMPLETE
+              and manifest.known(out_dir / rel, entries)}  # e.g. simulate's files
+    manifest.write_manifest(out_dir, {**others, **new_files}, complete=True)
     (out_dir / manifest.INCOMPLETE).unlink(missing_ok=True)
     shutil.rmtree(tmp, ignore_errors=True)
 
@@ -109,14 +126,15 @@ def sweep_stale_temporaries(out_dir: Path, max_age_s: float = STALE_TEMPORARY_S)
 
 
 def foreign_entries(out_dir: Path, keep: tuple[str, ...] = (".cache",)) -> list[str]:
-    """Names in ``out_dir`` that towtank did not write (nor keeps, nor left as temporaries)."""
+    """Names in ``out_dir`` that are not towtank's outputs (nor kept, e.g. the cache): the
+    user's, and anything else, whatever its name (a leftover of a killed run too: it is left
+    alone rather than risk deleting a file of the user's that looks like one)."""
     if not out_dir.is_dir():
         return []
     return sorted(
         p.name for p in out_dir.iterdir()
         if p.name not in OUTPUT_NAMES and p.name not in keep
         and p.name not in (manifest.MANIFEST, manifest.INCOMPLETE)
-        and not p.name.startswith((f".{out_dir.name}.", ".figures.old-"))
     )
 
 
@@ -158,6 +176,14 @@ def write_outputs(
     """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
+    with manifest.output_lock(out_dir):  # two writers never mix their files
+        return _write_outputs(day, out_dir, report=report, writers=writers, keep=keep,
+                              export=export)
+
+
+def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
+                   writers: list[Writer] | None, keep: tuple[str, ...],
+                   export: tuple[str, ...] | list[str]) -> Path:
     manifest.recover_outputs(out_dir)
     refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)

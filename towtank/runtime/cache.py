@@ -9,25 +9,30 @@ the file is not even opened. Fits and outputs are always recomputed from the red
 Layout, built for campaigns of thousands of runs:
 
 * ``files.json`` -- the index: ``files`` maps a run file's real path to [size, mtime_ns,
-  sha256]; ``entries`` maps an entry name (sha256 prefix and settings key) to [pack, offset,
-  length, crc32] of its pickled reduction.
-* ``runs/pack-*.bin`` -- pickled reductions back to back. New entries are gathered in memory and
+  sha256, ctime_ns, inode]; ``entries`` maps an entry name (sha256 prefix and settings key) to
+  [pack, offset, length, crc32] of its reduction.
+* ``runs/pack-*.bin`` -- reductions back to back, each an uncompressed npz archive
+  (:mod:`towtank.runtime.records`): nothing read back from the cache is ever unpickled, so a
+  planted entry cannot run code, and every entry is checked field by field against the
+  reduction's type before it is used. New entries are gathered in memory and
   written as one pack (with the index) at :meth:`flush` and, while runs are being reduced, every
   :data:`PACK_SECONDS` seconds (at least :data:`PACK_ENTRIES` entries), instead of one file
   each; at most :data:`MAX_PACKS` packs are kept, beyond that they are merged into one.
-* ``runs/<entry>.pkl`` -- one entry per file, the layout of earlier versions; still read.
-
-Every file is written to a temporary name and renamed into place. A missing, truncated or
-damaged entry (or index) is simply a miss.
+Every file is written to a temporary name and renamed into place. A missing, truncated,
+damaged or unexpected entry (or index) is simply a miss; so is a cache folder that is a
+symbolic link or not a folder (then nothing is written into it either, and
+:attr:`RunCache.problem` says so). Only regular files are read (a FIFO or a device in the
+cache's place never blocks or fills the memory: :mod:`towtank.runtime.safefile`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
 import os
-import pickle
+import re
 import stat
 import sys
 import tempfile
@@ -38,13 +43,18 @@ from pathlib import Path
 from typing import Any
 
 from towtank import __version__
+from towtank.runtime import records
+from towtank.runtime.safefile import is_real_dir, read_regular, sha256_regular
 
-CACHE_FORMAT = 3  # of entries and settings keys (3: reductions carry their warnings)
-INDEX_FORMAT = 2  # of files.json
+CACHE_FORMAT = 4  # of entries and settings keys (4: npz records, never pickles)
+INDEX_FORMAT = 3  # of files.json
 PACK_ENTRIES = 64  # a pack is written while runs are being reduced once this many wait
 PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interrupt loses little)
 MAX_PACKS = 16  # more packs than this are merged into one at flush
 ORPHAN_AGE_S = 3600.0  # unindexed packs older than this are removed when packs are merged
+MAX_INDEX_BYTES = 256 << 20  # a larger files.json is not read (a campaign's is a few MB)
+MAX_PACK_BYTES = 2 << 30  # nor a larger pack
+_PACK_NAME = re.compile(r"pack-[0-9a-f]{1,32}-[0-9]{1,10}\.bin")
 
 def _num(x: Any) -> Any:
     return None if isinstance(x, float) and math.isnan(x) else x
@@ -102,29 +112,80 @@ def _atomic_write(path: Path, data: bytes) -> None:
         raise
 
 
-class RunCache:
-    """Per-run reductions on disk; a missing or damaged entry is simply a miss."""
+def _index_files(value: Any) -> dict[str, list[Any]]:
+    """The index's ``files`` map with every malformed record dropped."""
+    if not isinstance(value, dict):
+        return {}
+    out = {}
+    for key, rec in value.items():
+        if (isinstance(key, str) and isinstance(rec, list) and len(rec) == 5
+                and isinstance(rec[2], str)
+                and all(type(rec[i]) is int for i in (0, 1, 3, 4))):
+            out[key] = rec
+    return out
 
-    def __init__(self, directory: str | Path):
+
+def _index_entries(value: Any) -> dict[str, list[Any]]:
+    """The index's ``entries`` map with every malformed location dropped."""
+    if not isinstance(value, dict):
+        return {}
+    out = {}
+    for key, loc in value.items():
+        if (isinstance(key, str) and isinstance(loc, list) and len(loc) == 4
+                and isinstance(loc[0], str) and _PACK_NAME.fullmatch(loc[0])
+                and all(type(loc[i]) is int and loc[i] >= 0 for i in (1, 2, 3))):
+            out[key] = loc
+    return out
+
+
+class RunCache:
+    """Per-run reductions on disk; a missing, damaged or unexpected entry is simply a miss.
+
+    Parameters
+    ----------
+    directory : path
+        The cache folder (``.cache`` in the output folder).
+    kind : type
+        The dataclass of the entries (:class:`towtank.reduce.run.RunReduction`): every entry
+        read back is checked against its fields' types (:func:`towtank.runtime.records.
+        from_bytes`).
+    check : callable, optional
+        A further check of an entry read back (e.g. its arrays' lengths); False is a miss.
+    """
+
+    def __init__(self, directory: str | Path, kind: type, check: Any = None):
         self.dir = Path(directory)
+        self.kind = kind
+        self._check = check
         self._runs = self.dir / "runs"
         self._index_path = self.dir / "files.json"
         self._files: dict[str, list[Any]] = {}
         self._entries: dict[str, list[Any]] = {}
-        try:
-            data = json.loads(self._index_path.read_bytes())
+        #: why the cache is not used (a sentence), or None
+        self.problem: str | None = None
+        if os.path.lexists(self.dir) and not is_real_dir(self.dir):
+            self.problem = (f"{self.dir} is not a folder (or is a link to one): the per-run "
+                            "cache is not used; remove it to have one again.")
+        elif os.path.lexists(self._runs) and not is_real_dir(self._runs):
+            self.problem = (f"{self._runs} is not a folder (or is a link to one): the per-run "
+                            "cache is not used; remove it to have one again.")
+        else:
+            try:
+                data = json.loads(read_regular(self._index_path, MAX_INDEX_BYTES) or b"null")
+            except (ValueError, RecursionError, UnicodeDecodeError):
+                data = None
             if isinstance(data, dict) and data.get("format") == INDEX_FORMAT:
-                self._files = dict(data.get("files", {}))
-                self._entries = dict(data.get("entries", {}))
-            elif isinstance(data, dict):  # earlier layout: the files map alone
-                self._files = {k: v for k, v in data.items() if isinstance(v, list)}
-        except (OSError, ValueError, TypeError):
-            pass
+                self._files = _index_files(data.get("files"))
+                self._entries = _index_entries(data.get("entries"))
         self._pending: list[tuple[str, bytes]] = []
         self._packs: dict[str, bytes | None] = {}  # pack name -> its bytes, read on first use
         self._real_dirs: dict[str, str] = {}
         self._dirty = False
         self._last_write = time.monotonic()
+
+    @property
+    def usable(self) -> bool:
+        return self.problem is None
 
     # ----------------------------------------------------------------------------- files
     def _stat(self, path: Path) -> tuple[str, os.stat_result] | None:
@@ -137,7 +198,7 @@ class RunCache:
         if stat.S_ISLNK(st.st_mode):
             try:
                 return str(Path(name).resolve()), os.stat(name)
-            except OSError:
+            except (OSError, RuntimeError):
                 return None
         head, tail = os.path.split(name)
         real = self._real_dirs.get(head)
@@ -158,7 +219,7 @@ class RunCache:
         key, st = found
         rec = self._files.get(key)
         stamp = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
-        if rec and len(rec) >= 5 and (rec[0], rec[1], rec[3], rec[4]) == stamp:
+        if rec and (rec[0], rec[1], rec[3], rec[4]) == stamp:
             return str(rec[2]), stamp
         return None
 
@@ -192,57 +253,63 @@ class RunCache:
     def _name(sha: str, key: str) -> str:
         return f"{sha[:32]}-{key}"
 
-    def _entry(self, sha: str, key: str) -> Path:
-        """Where an entry of the earlier one-file-per-entry layout lives."""
-        return self._runs / f"{self._name(sha, key)}.pkl"
-
     def _pack_bytes(self, pack: str) -> bytes | None:
         if pack not in self._packs:
-            try:
-                self._packs[pack] = (self._runs / pack).read_bytes()
-            except OSError:
-                self._packs[pack] = None
+            self._packs[pack] = read_regular(self._runs / pack, MAX_PACK_BYTES)
         return self._packs[pack]
 
     def _blob(self, name: str) -> bytes | None:
         loc = self._entries.get(name)
         if loc is None:
             return None
-        try:
-            pack, offset, length, crc = loc
-            data = self._pack_bytes(str(pack))
-            if data is None or offset + length > len(data):
-                return None
-            blob = data[offset : offset + length]
-            return blob if zlib.crc32(blob) == crc else None
-        except (TypeError, ValueError):
+        pack, offset, length, crc = loc
+        data = self._pack_bytes(pack)
+        if data is None or offset + length > len(data):
             return None
+        blob = data[offset : offset + length]
+        return blob if zlib.crc32(blob) == crc else None
 
     def get(self, sha: str, key: str) -> Any | None:
-        name = self._name(sha, key)
-        try:
-            for pending, blob in self._pending:
-                if pending == name:
-                    return pickle.loads(blob)
-            blob = self._blob(name)
-            if blob is not None:
-                return pickle.loads(blob)
-            with open(self._entry(sha, key), "rb") as fh:
-                return pickle.load(fh)
-        except Exception:  # noqa: BLE001 - any damage is a miss
+        """The entry stored for (file sha256, settings key), checked; None for a miss."""
+        if not self.usable:
             return None
+        name = self._name(sha, key)
+        blob = next((b for n, b in self._pending if n == name), None)
+        if blob is None:
+            blob = self._blob(name)
+        if blob is None:
+            return None
+        try:
+            value = records.from_bytes(blob, self.kind)
+        except records.RecordError:
+            return None
+        if self._check is not None and not self._check(value):
+            return None
+        return value
 
     def put(self, sha: str, key: str, value: Any) -> None:
-        """Store a reduction (pickled now; written with the next pack)."""
-        blob = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
-        self._pending.append((self._name(sha, key), blob))
+        """Store a reduction (encoded now; written with the next pack)."""
+        if not self.usable:
+            return
+        self._pending.append((self._name(sha, key), records.to_bytes(value)))
         self._dirty = True
         if (len(self._pending) >= PACK_ENTRIES
                 and time.monotonic() - self._last_write >= PACK_SECONDS):
-            self._write_pack()
-            self._write_index()
+            self._guarded(lambda: (self._write_pack(), self._write_index()))
 
     # ----------------------------------------------------------------------------- disk
+    def _guarded(self, write: Any) -> None:
+        """Run a write of the cache; a failure (full disk, a folder in a file's place) turns
+        the cache off for the rest of the day with a sentence in :attr:`problem`: the cache
+        only saves time, it never stops a day."""
+        try:
+            write()
+        except OSError as exc:
+            self.problem = (f"the per-run cache in {self.dir} could not be written "
+                            f"({exc.strerror or type(exc).__name__}); the day was processed "
+                            "without it.")
+            self._pending.clear()
+
     def _write_pack(self) -> None:
         if not self._pending:
             return
@@ -279,8 +346,10 @@ class RunCache:
         now = time.time()
         for path in self._runs.glob("pack-*.bin"):
             try:
-                old = now - path.stat().st_mtime > ORPHAN_AGE_S
-                if path.name not in keep and (path.name in packs or old):
+                old = now - path.lstat().st_mtime > ORPHAN_AGE_S
+                if (path.name not in keep and (path.name in packs or old)
+                        and _PACK_NAME.fullmatch(path.name) and path.is_file()
+                        and not path.is_symlink()):
                     path.unlink()
                     self._packs.pop(path.name, None)
             except OSError:
@@ -288,15 +357,18 @@ class RunCache:
 
     def flush(self) -> None:
         """Write the pending entries and the index."""
-        if self._dirty:
-            self._write_pack()
-            self._write_index()
+        if self._dirty and self.usable:
+            def write() -> None:
+                self._write_pack()
+                self._write_index()
+                self._merge_packs()
+
+            self._guarded(write)
             self._dirty = False
-            self._merge_packs()
 
 
 # ================================================================================ the day
-DAY_FORMAT = 1
+DAY_FORMAT = 2  # 2: outputs by their stat, inputs as every file the day opened
 
 
 def _stamp(path: Path) -> tuple[int, int, int, int] | None:
@@ -309,10 +381,21 @@ def _stamp(path: Path) -> tuple[int, int, int, int] | None:
 
 
 def _sha_file(path: Path) -> str | None:
+    return sha256_regular(path)
+
+
+def _lstamp(path: Path) -> list[int] | None:
+    """[size, mtime_ns, ctime_ns, inode] of a regular file (not a link), else None."""
     try:
-        return hashlib.sha256(path.read_bytes()).hexdigest()
+        st = os.lstat(path)
     except OSError:
         return None
+    if not stat.S_ISREG(st.st_mode):
+        return None
+    return [st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino]
+
+
+MAX_DAY_BYTES = 64 << 20  # a larger day.json is not read
 
 
 def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int, int]]:
@@ -350,10 +433,13 @@ class DayStamp:
     version, the libraries' versions, the protocol and the run sheet (their bytes), a reference
     file named by the protocol, the data folder (every file's name, size and modification time,
     as the run cache's index does: nothing is read), the output folder and the options that
-    change the outputs. :meth:`replay` returns the exit code and the summary recorded by the
-    last complete run when its fingerprint is this one and every output it wrote is still there
-    with the same sha256; the caller can then stop. Anything else, including any error while
-    checking, is "not unchanged".
+    change the outputs. The record of a run adds every other file the day read, whatever
+    named it (tare table, hull table, zeros files, run files outside the data folder: all the
+    files opened, :mod:`towtank.runtime.reads`), with its stat. :meth:`replay` returns the
+    exit code and the summary recorded by the last complete run when its fingerprint is this
+    one, every file it read is as it was, and every output the manifest lists is still there
+    untouched (same size, mtime, ctime and inode); the caller can then stop. Anything else,
+    including any error while checking, is "not unchanged".
     """
 
     def __init__(self, cache_dir: str | Path, protocol: Any, out_dir: str | Path,
@@ -390,9 +476,15 @@ class DayStamp:
             self._key = hashlib.sha256(text.encode()).hexdigest()
         return self._key
 
-    def _outputs(self) -> dict[str, str | None]:
-        skip = (self.path.parent.name,)
-        return {rel: _sha_file(self.out_dir / rel) for rel, *_ in _tree(self.out_dir, skip)}
+    def _outputs(self) -> dict[str, list[int] | None]:
+        """(size, mtime_ns, ctime_ns, inode) of every file the output folder's manifest says
+        towtank wrote: stat only, nothing read (a FIFO or a 12 GB file the user put beside the
+        outputs is not towtank's, and not looked at); a link or a non-file is None."""
+        from towtank.runtime.manifest import read_manifest
+
+        data = read_manifest(self.out_dir)
+        files = sorted(data["files"]) if data else []
+        return {rel: _lstamp(self.out_dir / rel) for rel in files}
 
     def replay(self) -> tuple[int, str] | None:
         """(exit code, summary) of the last run if nothing changed since, else None.
@@ -402,16 +494,23 @@ class DayStamp:
         processed is never recorded as the one the outputs came from.
         """
         try:
-            key = self.key
-            rec = json.loads(self.path.read_bytes())
-            if rec.get("key") != key:
+            key = self.key  # first: the fingerprint of the inputs before the day is read
+            if not is_real_dir(self.path.parent):
                 return None
-            if rec.get("outputs") != self._outputs():
+            rec = json.loads(read_regular(self.path, MAX_DAY_BYTES) or b"null")
+            if not isinstance(rec, dict) or rec.get("key") != key:
                 return None
-            for path, stamp in (rec.get("inputs") or {}).items():
+            outputs, inputs = rec.get("outputs"), rec.get("inputs")
+            code, summary = rec.get("exit_code"), rec.get("summary")
+            if (not isinstance(outputs, dict) or not outputs or not isinstance(inputs, dict)
+                    or type(code) is not int or not isinstance(summary, str)):
+                return None
+            if outputs != self._outputs():
+                return None
+            for path, stamp in inputs.items():
                 if stamp is None or list(_stamp(Path(path)) or ()) != list(stamp):
-                    return None  # a run file (perhaps outside the data folder) has changed
-            return int(rec["exit_code"]), str(rec["summary"])
+                    return None  # a file the day read (run file, tare table, ...) changed
+            return code, summary
         except Exception:  # noqa: BLE001 - any doubt: process the day
             return None
 
@@ -435,8 +534,16 @@ class DayStamp:
         rec = {"key": self.key, "exit_code": int(exit_code), "summary": summary,
                "outputs": self._outputs(),
                "inputs": {p: list(st) for p, st in (inputs or {}).items() if st is not None}}
-        _atomic_write(self.path, json.dumps(rec, indent=1).encode())
+        if os.path.lexists(self.path.parent) and not is_real_dir(self.path.parent):
+            return None  # a link or a file in the cache's place: nothing is written through it
+        try:
+            _atomic_write(self.path, json.dumps(rec, indent=1).encode())
+        except OSError:  # a folder in day.json's place, a full disk: the next run re-processes
+            self.forget()
         return None
 
     def forget(self) -> None:
-        self.path.unlink(missing_ok=True)
+        """Drop the record (only if it is a file: a folder or link of that name is left)."""
+        with contextlib.suppress(OSError):
+            if stat.S_ISREG(os.lstat(self.path).st_mode):
+                self.path.unlink()

@@ -57,23 +57,66 @@ def describe(folder: Path, names: set[str] | frozenset[str]) -> dict[str, list[d
     return out
 
 
+#: A larger manifest is not read (one of a day with thousands of exported runs is < 10 MB).
+MAX_MANIFEST_BYTES = 64 << 20
+
+
+def _entries(value: Any) -> list[dict[str, Any]]:
+    """A manifest's list of versions of one file, with every malformed one dropped."""
+    if not isinstance(value, list):
+        return []
+    return [e for e in value if isinstance(e, dict) and type(e.get("size")) is int
+            and type(e.get("mtime_ns")) is int and isinstance(e.get("sha256"), str)]
+
+
 def read_manifest(folder: Path) -> dict[str, Any] | None:
-    """The manifest of ``folder``, or None when it has none (or one that is not towtank's)."""
+    """The manifest of ``folder``, or None when it has none (or one that is not towtank's).
+
+    Nothing in it is trusted: it is read only if it is a regular file (not a link, FIFO or
+    folder) of at most :data:`MAX_MANIFEST_BYTES`, and an entry that is not a list of
+    {size, mtime_ns, sha256} records is dropped (the file it names then counts as not
+    towtank's)."""
+    from towtank.runtime.safefile import read_regular
+
+    raw = read_regular(folder / MANIFEST, MAX_MANIFEST_BYTES)
+    if raw is None:
+        return None
     try:
-        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        data = json.loads(raw.decode("utf-8"))
+    except (ValueError, RecursionError):
         return None
     if not isinstance(data, dict) or data.get("kind") != _KIND or \
             not isinstance(data.get("files"), dict):
         return None
+    files = {k: _entries(v) for k, v in data["files"].items() if isinstance(k, str)}
+    data["files"] = {k: v for k, v in files.items() if v}
+    if not isinstance(data.get("written"), int | float) or isinstance(data["written"], bool):
+        data["written"] = 0.0
+    data["complete"] = data.get("complete") is True
     return data
 
 
 def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``path`` by a rename of a temporary file beside it."""
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    """Write ``path`` by a rename of a temporary file beside it (a name of its own: two
+    writers never share one)."""
+    import tempfile
+
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask()) if hasattr(os, "fchmod") else None
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _umask() -> int:
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return umask
 
 
 def write_manifest(folder: Path, files: dict[str, list[dict[str, Any]]], *,
@@ -84,14 +127,22 @@ def write_manifest(folder: Path, files: dict[str, list[dict[str, Any]]], *,
 
 
 def known(path: Path, entries: list[dict[str, Any]]) -> bool:
+    """Whether ``path`` is a regular file (not a link, FIFO or device) that is one of the
+    versions ``entries`` of the manifest describe."""
+    import stat
+
+    from towtank.runtime.safefile import sha256_regular
+
     try:
-        st = path.stat()
+        st = os.lstat(path)
     except OSError:
+        return False
+    if not stat.S_ISREG(st.st_mode):
         return False
     same = [e for e in entries if e.get("size") == st.st_size]
     if any(e.get("mtime_ns") == st.st_mtime_ns for e in same):
         return True  # as written (size and modification time): no need to read it
-    return bool(same) and _sha256(path) in {e.get("sha256") for e in same}
+    return bool(same) and sha256_regular(path) in {e.get("sha256") for e in same}
 
 
 def foreign_outputs(folder: Path, names: set[str] | frozenset[str]) -> list[str]:
@@ -213,19 +264,174 @@ def writing_outputs(folder: Path, names: set[str] | frozenset[str]) -> Iterator[
     import shutil
     import tempfile
 
-    folder = Path(folder)
-    if folder.exists():
-        refuse_foreign(folder, names)
-    folder.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".towtank-tmp-", dir=folder))
+    folder = Path(folder).absolute()
+    with output_lock(folder):  # one writer at a time, whatever the command
+        if folder.exists():
+            refuse_foreign(folder, names)
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".towtank-tmp-", dir=folder))
+        try:
+            yield tmp
+            refuse_foreign(folder, names)  # again: a file may have appeared meanwhile
+            written = sorted(p.name for p in tmp.iterdir() if p.name in names)
+            for name in written:
+                os.replace(tmp / name, folder / name)
+            data = read_manifest(folder)
+            files = dict(data["files"]) if data else {}
+            files.update(describe(folder, set(written)))
+            write_manifest(folder, files)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+# ------------------------------------------------------------------------------ the lock
+LOCK_TEXT = "towtank output lock: the process writing into the folder beside this file is "
+#: How long a second writer waits for the first to finish before it gives up [s].
+LOCK_WAIT_S = 60.0
+
+_held_lock = __import__("threading").Lock()
+_held: dict[str, list[Any]] = {}  # folder -> [thread ident, depth, fd]
+
+
+def lock_path(out_dir: Path) -> Path:
+    """The lock file of output folder ``out_dir``: ``.NAME.towtank-lock`` beside it (not in
+    it: the folder itself is replaced by a rename)."""
+    out_dir = Path(out_dir).absolute()
+    return out_dir.parent / f".{out_dir.name}.towtank-lock"
+
+
+def _lock_fd(fd: int, blocking: bool) -> bool:
     try:
-        yield tmp
-        written = sorted(p.name for p in tmp.iterdir() if p.name in names)
-        for name in written:
-            os.replace(tmp / name, folder / name)
-        data = read_manifest(folder)
-        files = dict(data["files"]) if data else {}
-        files.update(describe(folder, set(written)))
-        write_manifest(folder, files)
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+
+        try:
+            os.lseek(fd, 0, os.SEEK_SET)
+            msvcrt.locking(fd, msvcrt.LK_LOCK if blocking else msvcrt.LK_NBLCK, 1)
+            return True
+        except OSError:
+            return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+        return True
+    except BlockingIOError:
+        return False
+
+
+def _holder(fd: int) -> str:
+    try:
+        os.lseek(fd, 0, os.SEEK_SET)
+        text = os.read(fd, 4096).decode("utf-8", "replace")
+    except OSError:
+        return "another process"
+    pid = text[len(LOCK_TEXT):].split()[0] if text.startswith(LOCK_TEXT) else ""
+    return f"process {pid}" if pid.isdigit() else "another process"
+
+
+@contextlib.contextmanager
+def output_lock(out_dir: Path, wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
+    """Hold the exclusive lock of output folder ``out_dir`` while the block runs.
+
+    Every command that writes into an output folder (process, predict, simulate, scale) holds
+    it for the whole write, so two writers (two processes, or two threads of a notebook)
+    never mix their files: the second waits up to ``wait_s`` [s] for the first, then stops
+    (ProtocolError) with a sentence naming the holder's process id. The lock is an advisory
+    lock (``flock``) on ``.NAME.towtank-lock`` beside the folder, which holds the pid: the
+    system releases it when its holder ends, however it ends, so a lock left by a killed run
+    is no obstacle. Re-entrant within one thread.
+    """
+    import threading
+
+    from towtank.errors import ProtocolError
+
+    out_dir = Path(out_dir).absolute()
+    key = str(out_dir)
+    me = threading.get_ident()
+    with _held_lock:
+        held = _held.get(key)
+        if held is not None and held[0] == me:
+            held[1] += 1
+            mine = True
+        else:
+            mine = False
+    if mine:
+        try:
+            yield
+        finally:
+            with _held_lock:
+                _held[key][1] -= 1
+        return
+    path = lock_path(out_dir)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import time
+
+    deadline = time.monotonic() + wait_s
+    while True:
+        fd = _open_lock(path, out_dir)
+        try:
+            if _lock_fd(fd, blocking=False):
+                if _same_file(fd, path):
+                    break
+                # the holder removed the file as it let go: lock the one now at that name
+            elif time.monotonic() >= deadline:
+                raise ProtocolError(
+                    f"{_holder(fd)} is writing into {out_dir} (it holds {path.name}); wait "
+                    "for it to finish, or choose another folder with --out.")
+        except BaseException:
+            os.close(fd)
+            raise
+        os.close(fd)
+        time.sleep(0.05)
+    try:
+        os.ftruncate(fd, 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, f"{LOCK_TEXT}{os.getpid()}\n".encode())
+    except BaseException:
+        os.close(fd)
+        raise
+    with _held_lock:
+        _held[key] = [me, 1, fd]
+    try:
+        yield
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        with _held_lock:
+            del _held[key]
+        with contextlib.suppress(OSError):
+            if _same_file(fd, path):
+                os.unlink(path)  # still locked: a waiter finds it gone and opens a new one
+        os.close(fd)
+
+
+def _open_lock(path: Path, out_dir: Path) -> int:
+    """A descriptor of the lock file ``path`` (made if missing), checked to be towtank's."""
+    import stat
+
+    from towtank.errors import ProtocolError
+
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+    try:
+        fd = os.open(path, flags, 0o666)
+    except OSError as exc:
+        raise ProtocolError(f"the lock file {path} of the output folder cannot be opened "
+                            f"({exc.strerror}); remove whatever is in its place.") from None
+    try:
+        st = os.fstat(fd)
+        head = os.read(fd, len(LOCK_TEXT)).decode("utf-8", "replace") \
+            if stat.S_ISREG(st.st_mode) else ""
+    except OSError:
+        head, st = "?", None
+    if st is None or not stat.S_ISREG(st.st_mode) or not LOCK_TEXT.startswith(head):
+        os.close(fd)
+        raise ProtocolError(f"{path} is not towtank's lock file of {out_dir.name} (towtank "
+                            "never writes into a file it did not make): move it away.")
+    return fd
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether ``path`` still names the file open as ``fd``."""
+    try:
+        a, b = os.fstat(fd), os.lstat(path)
+    except OSError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
