@@ -112,14 +112,29 @@ def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
 
 
 def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
-    """The hull profile of a ``[vehicle]`` section (times its ``scale``)."""
+    """The hull profile of a ``[vehicle]`` section (times its ``scale``).
+
+    Raises
+    ------
+    ValueError
+        A hull table that cannot be used, or a hull whose length or fineness ratio no vehicle
+        has (:func:`towtank.vehicle.schema.check_hull`), in one sentence.
+    """
     if vehicle.hull == "myring":
         profile = hulls.myring_profile(**vehicle.myring)
     elif vehicle.hull == "suboff":
         profile = hulls.suboff_profile(vehicle.length_m or hulls.SUBOFF_LENGTH_M)
     else:
         profile = hulls.table_profile(vehicle.hull_table)
-    return profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
+    profile = profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
+    from towtank.vehicle.schema import check_hull, joined
+
+    with np.errstate(all="ignore"):
+        scale = f", scale = {vehicle.scale:g}" if vehicle.scale != 1.0 else ""
+        problems = check_hull(profile.x_m, profile.r_m, f"[vehicle] ({profile.name} hull{scale})")
+    if problems:  # e.g. scale = 1e300: no vehicle is that long
+        raise ValueError(joined(problems))
+    return profile
 
 
 def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dict[str, Any]:
