@@ -88,10 +88,9 @@ def simulate_command(
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
         raise ProtocolError(f"{name}: {exc}") from None
-    from towtank.runtime.manifest import writing_outputs
-
     folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
-    with writing_outputs(folder, SIMULATE_OUTPUTS) as tmp:  # never over a file of the user's
+
+    def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
         if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
             from towtank.vehicle.glider import glide_table
@@ -103,6 +102,10 @@ def simulate_command(
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
         metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
         _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", str(model.get("name", "model")))
+
+    from towtank.commands.storage import write_outputs_or_stop
+
+    write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
         print(metrics.to_string(index=False))
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"
