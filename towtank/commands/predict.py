@@ -29,12 +29,15 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
         result = predict_vehicle(protocol)
     except ValueError as exc:  # a bad hull table or hull description
         raise ProtocolError(f"{protocol.path.name}: {exc}") from None
-    from towtank.runtime.manifest import writing_outputs
+    from towtank.commands.storage import write_outputs_or_stop
 
     folder = Path(out) if out is not None else protocol.campaign.output_dir
-    with writing_outputs(folder, PREDICT_OUTPUTS) as tmp:  # never over a file of the user's
+
+    def write(tmp: Path) -> None:
         result.predicted.to_csv(tmp / "predicted.csv", index=False, float_format="%.6g")
         vmodel.write_model(result.model, tmp / "model.json")
+
+    write_outputs_or_stop(folder, PREDICT_OUTPUTS, write)
     with pd.option_context("display.max_rows", None, "display.width", 120,
                            "display.max_colwidth", 60):
         print(result.predicted[["symbol", "value", "unit", "prime"]].to_string(index=False))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from towtank.errors import ProtocolError
@@ -51,26 +50,29 @@ def simulate_command(
     """
     import pandas as pd
 
+    from towtank.vehicle import schema
     from towtank.vehicle.model import read_model
     from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate
 
+    name = Path(model_path).name
+    problems: list[str] = []
+    model = None
     try:
         model = read_model(model_path)
-    except ValueError as exc:
-        raise ProtocolError(str(exc)) from None
+    except schema.ModelError as exc:  # the options are checked too: every problem at once
+        problems += exc.problems
     rudder = DEFAULT_RUDDER[manoeuvre] if rudder_deg is None else rudder_deg
     stern = DEFAULT_STERN[manoeuvre] if sternplane_deg is None else sternplane_deg
-    u = speed if speed is not None else float(model.get("design_speed_m_s", 1.5))
-    for name, value in (("--rudder-deg", rudder), ("--sternplane-deg", stern)):
-        if not (math.isfinite(value) and abs(value) <= 45.0):
-            raise ProtocolError(f"{name} must lie within ±45 degrees, not {value}.")
-    if not (math.isfinite(u) and u > 0):
-        raise ProtocolError(f"--speed must be a speed > 0 m/s, not {u}.")
+    u = speed if speed is not None else (
+        float(model.get("design_speed_m_s", 1.5)) if model is not None else 1.5)
+    problems += schema.check_simulation(
+        model, manoeuvre, speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+        duration_s=duration_s, net_buoyancy_n=net_buoyancy_n, samples=samples, name=name)
+    if problems:
+        raise ProtocolError(schema.joined(problems))
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
-    if samples < 0:
-        raise ProtocolError(f"--samples must be >= 0, not {samples}.")
-    _check_controls(model, manoeuvre, rudder, stern, Path(model_path).name)
+    _check_controls(model, manoeuvre, rudder, stern, name)
     kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s)
     try:
@@ -85,11 +87,10 @@ def simulate_command(
             metrics["ci_low"] = metrics["metric"].map(lo)
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
-        raise ProtocolError(f"{Path(model_path).name}: {exc}") from None
-    from towtank.runtime.manifest import writing_outputs
-
+        raise ProtocolError(f"{name}: {exc}") from None
     folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
-    with writing_outputs(folder, SIMULATE_OUTPUTS) as tmp:  # never over a file of the user's
+
+    def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
         if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
             from towtank.vehicle.glider import glide_table
@@ -100,7 +101,11 @@ def simulate_command(
                                 [sign * p for p in range(5, 50, 5)])
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
         metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
-        _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", model.get("name", "model"))
+        _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", str(model.get("name", "model")))
+
+    from towtank.commands.storage import write_outputs_or_stop
+
+    write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
         print(metrics.to_string(index=False))
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"

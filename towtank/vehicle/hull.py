@@ -197,8 +197,9 @@ def table_profile(path: str | Path) -> HullProfile:
     Raises
     ------
     ValueError
-        A missing column, fewer than 3 stations, non-increasing stations or a negative radius,
-        with one sentence naming the file.
+        A missing column, fewer than 3 stations, non-increasing stations, a negative radius,
+        a length outside 0.01 to 1000 m or a fineness ratio L/D outside 0.5 to 500
+        (:func:`towtank.vehicle.schema.check_hull`), with one sentence naming the file.
     """
     path = Path(path)
     try:
@@ -217,4 +218,9 @@ def table_profile(path: str | Path) -> HullProfile:
         raise ValueError(f"{path.name}: x_m must increase strictly from nose to tail.")
     if np.any(r < 0) or r.max() <= 0:
         raise ValueError(f"{path.name}: r_m must be >= 0 m with at least one positive radius.")
+    from towtank.vehicle.schema import check_hull, joined
+
+    problems = check_hull(x, r, path.name)  # a length or fineness no vehicle has
+    if problems:
+        raise ValueError(joined(problems))
     return HullProfile(x - x[0], r, "table", f"radius table {path.name}")

@@ -112,14 +112,29 @@ def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
 
 
 def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
-    """The hull profile of a ``[vehicle]`` section (times its ``scale``)."""
+    """The hull profile of a ``[vehicle]`` section (times its ``scale``).
+
+    Raises
+    ------
+    ValueError
+        A hull table that cannot be used, or a hull whose length or fineness ratio no vehicle
+        has (:func:`towtank.vehicle.schema.check_hull`), in one sentence.
+    """
     if vehicle.hull == "myring":
         profile = hulls.myring_profile(**vehicle.myring)
     elif vehicle.hull == "suboff":
         profile = hulls.suboff_profile(vehicle.length_m or hulls.SUBOFF_LENGTH_M)
     else:
         profile = hulls.table_profile(vehicle.hull_table)
-    return profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
+    profile = profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
+    from towtank.vehicle.schema import check_hull, joined
+
+    with np.errstate(all="ignore"):
+        scale = f", scale = {vehicle.scale:g}" if vehicle.scale != 1.0 else ""
+        problems = check_hull(profile.x_m, profile.r_m, f"[vehicle] ({profile.name} hull{scale})")
+    if problems:  # e.g. scale = 1e300: no vehicle is that long
+        raise ValueError(joined(problems))
+    return profile
 
 
 def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dict[str, Any]:
@@ -219,28 +234,74 @@ REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m
                  "inertia_kg_m2", "coefficients")
 
 
-def read_model(path: str | Path) -> dict[str, Any]:
-    """Read and check a model.json; ValueError with one sentence when it is unusable."""
-    path = Path(path)
+def _read_bytes(path: Path, limit: int) -> bytes:
+    """The bytes of ``path`` if it is a regular file of at most ``limit`` bytes.
+
+    Opened without blocking (a named pipe or a device is refused, never waited on) and read
+    no further than ``limit + 1`` bytes.
+    """
+    import os
+    import stat
+
+    from towtank.vehicle.schema import ModelError
+
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     try:
-        model = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{path.name}: the model file cannot be read ({exc}).") from None
-    if not isinstance(model, dict):
-        raise ValueError(f"{path.name}: the model file is not a JSON object.")
-    for key in REQUIRED_KEYS:
-        if key not in model:
-            raise ValueError(f"{path.name}: the model lacks the key '{key}'.")
-    for key in ("cg_m", "cb_m", "inertia_kg_m2"):
-        if not (isinstance(model[key], list) and len(model[key]) == 3):
-            raise ValueError(f"{path.name}: '{key}' must be a list of three numbers.")
-    for sym, val in model["coefficients"].items():
-        if not (SYMBOL_RE.match(sym) or re.match(r"^[XYZKMN]_[uvwpqr]dot$", sym)):
-            raise ValueError(f"{path.name}: '{sym}' is not a coefficient symbol this model "
-                             "knows (e.g. Y_uv, N_r|r|, Y_vdot, N_uudr).")
-        if not isinstance(val, int | float) or not math.isfinite(val):
-            raise ValueError(f"{path.name}: the coefficient {sym} is not a finite number.")
+        fd = os.open(path, flags)
+    except OSError as exc:
+        raise ModelError([f"{path.name}: the model file cannot be read "
+                          f"({exc.strerror or exc})."]) from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)
+        raise ModelError([f"{path.name}: the model file cannot be read (it is not a regular "
+                          "file but a folder, device or pipe)."])
+    with os.fdopen(fd, "rb") as fh:
+        if st.st_size > limit:
+            raise ModelError([f"{path.name}: the model file is {st.st_size} bytes, more than "
+                              f"the {limit} a model.json may have."])
+        data = fh.read(limit + 1)
+    if len(data) > limit:
+        raise ModelError([f"{path.name}: the model file is more than the {limit} bytes a "
+                          "model.json may have."])
+    return data
+
+
+def read_model(path: str | Path) -> dict[str, Any]:
+    """Read and check a model.json (docs/formats.md §6, "Limits and checks").
+
+    The file must be a regular file of at most
+    :data:`~towtank.vehicle.schema.MAX_MODEL_BYTES`, UTF-8 JSON nested at most
+    :data:`~towtank.vehicle.schema.MAX_DEPTH` levels, and pass
+    :func:`towtank.vehicle.schema.check_model`.
+
+    Raises
+    ------
+    towtank.vehicle.schema.ModelError
+        A ValueError whose ``problems`` hold one sentence per problem (all of them).
+    """
+    from towtank.vehicle import schema
+
+    path = Path(path)
+    data = _read_bytes(path, schema.MAX_MODEL_BYTES)
+    try:
+        model = json.loads(data.decode("utf-8"))
+    except RecursionError:
+        raise schema.ModelError([f"{path.name}: the model file nests objects and arrays "
+                                 f"deeper than the {schema.MAX_DEPTH} levels a model.json may "
+                                 "have."]) from None
+    except ValueError as exc:  # not UTF-8, not JSON, an integer of 5000 digits
+        raise schema.ModelError([f"{path.name}: the model file cannot be read "
+                                 f"({exc}).".replace("\n", " ")]) from None
+    if schema.json_depth(model) > schema.MAX_DEPTH:
+        raise schema.ModelError([f"{path.name}: the model file nests objects and arrays "
+                                 f"deeper than the {schema.MAX_DEPTH} levels a model.json may "
+                                 "have."])
+    problems = schema.check_model(model, path.name)
+    if problems:
+        raise schema.ModelError(problems)
     model.setdefault("sources", {})
-    model.setdefault("covariance", {"symbols": [], "matrix": []})
+    if model.get("covariance") is None:
+        model["covariance"] = {"symbols": [], "matrix": []}
     model.setdefault("name", path.stem)
     return model

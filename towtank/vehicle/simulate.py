@@ -18,6 +18,10 @@ Manoeuvres (metrics.csv ``metric, value, unit``):
 - dive: stern-plane step; steady pitch and depth rate;
 - spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
 - glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
+
+One simulation takes at most :data:`towtank.vehicle.schema.MAX_STEPS` integration steps over
+all its legs, and stops at once when the state or the forces stop being finite: whatever the
+model, it ends (a ValueError with one sentence) instead of hanging.
 """
 
 from __future__ import annotations
@@ -32,8 +36,10 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
+from towtank.vehicle.schema import MAX_STEPS
 
-__all__ = ["MANOEUVRES", "Dynamics", "simulate", "manoeuvre_metrics", "sample_models"]
+__all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
+           "sample_models"]
 
 MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide")
 _DOF = "XYZKMN"
@@ -161,6 +167,7 @@ def simulate(
     net_buoyancy_n: float | None = None,
     duration_s: float | None = None,
     max_step_s: float | None = None,
+    max_steps: int | None = None,
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -180,6 +187,11 @@ def simulate(
         a glide 200 lengths)
     max_step_s : float, optional
         Largest integration step [s]; default duration/2000
+    max_steps : int, optional
+        Most integration steps [-]; default :data:`towtank.vehicle.schema.MAX_STEPS`. The
+        simulation stops (ValueError) when it has taken them, or as soon as it has taken a
+        tenth of them and, at its pace so far, would need more: a model too stiff for its
+        duration never hangs
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
@@ -188,20 +200,20 @@ def simulate(
         raise ValueError(f"the speed must be > 0 m/s, not {speed_m_s}.")
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
     dyn = Dynamics(model, weight)
-    length = float(model.get("length_m", 1.0))
     if duration_s is None:
-        duration_s = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
-        if manoeuvre in ("turning", "spiral", "zigzag"):
-            duration_s = max(duration_s, 120.0 * length / speed_m_s)
+        duration_s = default_duration(model, manoeuvre, speed_m_s)
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise ValueError(f"the simulated time must be > 0 s, not {duration_s}.")
     h = max_step_s if max_step_s is not None else duration_s / 2000.0
+    budget = _Budget(duration_s, MAX_STEPS if max_steps is None else max_steps)
     thrust = 0.0 if manoeuvre == "glide" else -dyn.x_uu * speed_m_s * abs(speed_m_s)
     dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag") else 0.0
     ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
     state0 = np.zeros(12)
     state0[6] = speed_m_s
     if manoeuvre != "zigzag":
-        sol = solve_ivp(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
-                        method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
+        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
+                           method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
         _check(sol)
         times, states = sol.t, sol.y.T
         rudder = np.full(len(times), dr)
@@ -218,9 +230,9 @@ def simulate(
                 return y[5] - target * check
             event.terminal = True
             event.direction = target
-            sol = solve_ivp(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
-                            (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
-                            max_step=h, events=event)
+            sol = budget.solve(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
+                               (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
+                               max_step=h, events=event)
             _check(sol)
             t_parts.append(sol.t)
             y_parts.append(sol.y.T)
@@ -245,12 +257,84 @@ def simulate(
     return out
 
 
+def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) -> float:
+    """The simulated time of a manoeuvre without ``duration_s`` [s]: 40 vehicle lengths of
+    travel at ``speed_m_s`` [m/s] (a glide 200; turning, spiral and zigzag at least 120),
+    the length the model's ``length_m`` [m], else 1 m."""
+    length = float(model.get("length_m", 1.0))
+    duration = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
+    if manoeuvre in ("turning", "spiral", "zigzag"):
+        duration = max(duration, 120.0 * length / speed_m_s)
+    return duration
+
+
+class _Stop(Exception):
+    """Raised inside the right-hand side to end an integration that cannot be finished."""
+
+
+class _Budget:
+    """The integration steps one simulation may take (``max_steps``) across its calls of
+    :func:`scipy.integrate.solve_ivp` (a zigzag makes one per rudder switch).
+
+    RK45 evaluates the right-hand side 6 times per step; the budget counts evaluations. It
+    stops the integration (one sentence, ValueError) when the steps are spent; when a tenth
+    of them is spent and, at the pace so far, the rest of the simulated time would need more;
+    and at once when the state or its derivative is not finite (a NaN in the model makes the
+    step size NaN, on which RK45 would retry for ever).
+    """
+
+    def __init__(self, duration_s: float, max_steps: int):
+        self.duration = float(duration_s)
+        self.max_steps = int(max_steps)
+        self.evaluations = 0
+
+    def solve(self, fun: Any, t_span: tuple[float, float], y0: np.ndarray,
+              **kwargs: Any) -> Any:
+        def guarded(t: float, y: np.ndarray) -> np.ndarray:
+            self.evaluations += 1
+            steps = self.evaluations // 6
+            if steps > self.max_steps:
+                raise _Stop(self._sentence(t, f"took the {self.max_steps} integration steps "
+                                              "a simulation may take"))
+            if steps >= self.max_steps // 10 and self.evaluations % 600 == 0 and t > 0:
+                pace = steps * self.duration / t
+                if pace > self.max_steps:
+                    raise _Stop(self._sentence(t, f"would need about {pace:.3g} integration "
+                                                  f"steps at its pace, more than the "
+                                                  f"{self.max_steps} a simulation may take"))
+            if not np.all(np.isfinite(y)):
+                raise _Stop(_diverged(t, "the state is no longer finite"))
+            out = fun(t, y)
+            if not np.all(np.isfinite(out)):
+                raise _Stop(_diverged(t, "the forces are no longer finite"))
+            return out
+
+        try:
+            with np.errstate(all="ignore"):
+                return solve_ivp(guarded, t_span, y0, **kwargs)
+        except _Stop as exc:
+            raise ValueError(str(exc)) from None
+        except (OverflowError, ZeroDivisionError) as exc:  # Python floats out of range
+            raise ValueError(_diverged(None, f"{type(exc).__name__}: {exc}")) from None
+
+    def _sentence(self, t: float, what: str) -> str:
+        return (f"the simulation stopped at t = {t:.3g} s of {self.duration:.6g} s: it {what}; "
+                "the model's motion is too fast for that time (stiff: forces out of proportion "
+                "to the masses), check the coefficients' magnitudes or give a shorter "
+                "--duration-s.")
+
+
+def _diverged(t: float | None, why: str) -> str:
+    at = "" if t is None else f" at t = {t:.3g} s"
+    return (f"the simulation stopped{at} ({why}): the model's motion diverges; check the "
+            "signs and magnitudes of its damping terms.")
+
+
 def _check(sol: Any) -> None:
     """A failed integration (a model whose motion diverges) is one sentence, not a crash."""
     if sol.status == -1 or not np.all(np.isfinite(sol.y)):
         t = float(sol.t[-1]) if len(sol.t) else 0.0
-        raise ValueError(f"the simulation stopped at t = {t:.3g} s ({sol.message}): the "
-                         "model's motion diverges; check the signs of its damping terms.")
+        raise ValueError(_diverged(t, sol.message))
 
 
 def _at_heading(ts: pd.DataFrame, change_deg: float) -> pd.Series | None:

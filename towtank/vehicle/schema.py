@@ -1,0 +1,531 @@
+"""Checks of the vehicle stage's inputs: model.json, the options of ``towtank simulate`` and
+the dimensions of a hull (docs/formats.md §6, "Limits and checks").
+
+Every function here is pure: it takes parsed values and returns the list of problems, one
+sentence each naming the key (or option) and the value, empty when all is well. The callers
+(:func:`towtank.vehicle.model.read_model`, ``towtank simulate``, the hull profiles) turn a
+non-empty list into one error listing every problem, so that a user fixes a file in one pass.
+
+The limits are module constants, stated in the sentences and in docs/formats.md:
+
+- a model.json is at most :data:`MAX_MODEL_BYTES`, nested at most :data:`MAX_DEPTH` levels and
+  holds at most :data:`MAX_COEFFICIENTS` coefficients of at most :data:`MAX_FACTORS` factors;
+- densities lie in :data:`RHO_RANGE_KG_M3`, speeds in (0, :data:`MAX_SPEED_M_S`], hull and
+  vehicle lengths in :data:`LENGTH_RANGE_M`;
+- a simulation covers at most :data:`MAX_DURATION_S` of simulated time in at most
+  :data:`MAX_STEPS` integration steps, and ``--samples`` is at most :data:`MAX_SAMPLES`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "MAX_MODEL_BYTES",
+    "MAX_DEPTH",
+    "MAX_COEFFICIENTS",
+    "MAX_FACTORS",
+    "MAX_PROBLEMS",
+    "RHO_RANGE_KG_M3",
+    "WEIGHT_TOLERANCE",
+    "MAX_NET_BUOYANCY_RATIO",
+    "MAX_SPEED_M_S",
+    "LENGTH_RANGE_M",
+    "FINENESS_RANGE",
+    "MAX_CONTROL_DEG",
+    "MAX_DURATION_S",
+    "MAX_STEPS",
+    "MAX_SAMPLES",
+    "COVARIANCE_TOLERANCE",
+    "MASS_MATRIX_TOLERANCE",
+    "ModelError",
+    "json_depth",
+    "check_model",
+    "check_covariance",
+    "check_simulation",
+    "check_hull",
+    "joined",
+]
+
+#: Largest model.json read [bytes] (a model with a full 100 x 100 covariance is about 250 kB).
+MAX_MODEL_BYTES = 4 * 1024 * 1024
+#: Deepest nesting of objects and arrays in model.json (the format itself needs 4: the
+#: file's object, covariance, matrix, row).
+MAX_DEPTH = 16
+#: Most coefficients in a model (towtank's own models have about 40).
+MAX_COEFFICIENTS = 1000
+#: Most factors in one coefficient's product (``Y_uudr`` has 3, ``N_r|r|`` 2).
+MAX_FACTORS = 6
+#: Most problems listed in one error; the rest are counted.
+MAX_PROBLEMS = 40
+#: Plausible water densities, hot fresh water to dense brine [kg/m^3].
+RHO_RANGE_KG_M3 = (900.0, 1300.0)
+#: Largest relative difference between weight_N and mass_kg * g [-].
+WEIGHT_TOLERANCE = 0.01
+#: Largest |buoyancy - weight| as a fraction of the weight [-] (the model's, and that which
+#: ``--net-buoyancy-N`` asks for).
+MAX_NET_BUOYANCY_RATIO = 1.0
+#: Fastest design or simulated speed [m/s].
+MAX_SPEED_M_S = 100.0
+#: Shortest and longest hull or vehicle length [m].
+LENGTH_RANGE_M = (0.01, 1000.0)
+#: Smallest and largest fineness ratio L/D of a hull [-].
+FINENESS_RANGE = (0.5, 500.0)
+#: Largest rudder or stern-plane angle [deg].
+MAX_CONTROL_DEG = 45.0
+#: Longest simulated time [s].
+MAX_DURATION_S = 3600.0
+#: Most integration steps of one simulation [-] (a REMUS zigzag over 3600 s takes 125 000).
+MAX_STEPS = 200_000
+#: Most draws of ``--samples`` [-] (each is a whole simulation).
+MAX_SAMPLES = 1000
+#: Relative tolerance of the covariance's symmetry and positive semi-definiteness [-].
+COVARIANCE_TOLERANCE = 1e-9
+#: Smallest eigenvalue of the mass matrix relative to its largest [-].
+MASS_MATRIX_TOLERANCE = 1e-10
+
+_G = 9.80665
+_FACTOR = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
+_ADDED_MASS = re.compile(r"^[XYZKMN]_[uvwpqr]dot$")
+
+
+class ModelError(ValueError):
+    """A model.json, or the options of a simulation, that cannot be used.
+
+    ``problems`` holds one sentence per problem; ``str()`` is :func:`joined` of them.
+    """
+
+    def __init__(self, problems: list[str]):
+        self.problems = list(problems)
+        super().__init__(joined(self.problems))
+
+
+def joined(problems: list[str]) -> str:
+    """The problems one per line, at most :data:`MAX_PROBLEMS` and a count of the others."""
+    shown = list(problems[:MAX_PROBLEMS])
+    if len(problems) > MAX_PROBLEMS:
+        shown.append(f"... and {len(problems) - MAX_PROBLEMS} more problems like these.")
+    return "\n".join(shown)
+
+
+def _show(value: Any, width: int = 60) -> str:
+    """A value as a sentence quotes it: as JSON writes it (null, NaN, "text"), shortened."""
+    import json
+
+    try:
+        text = json.dumps(value, ensure_ascii=False)
+    except (TypeError, ValueError, RecursionError):
+        text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _kind(value: Any) -> str:
+    return {dict: "an object", list: "a list", str: "text", bool: "true/false",
+            type(None): "null"}.get(type(value), "a number")
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a finite float, None for anything else (text, true/false, NaN, a 400-digit
+    integer...)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        out = float(value)
+    except OverflowError:
+        return None
+    return out if math.isfinite(out) else None
+
+
+def _times(weight: float) -> str:
+    """The largest net buoyancy in words: "the weight_N (298.9 N)" or "0.5 times ..."."""
+    limit = MAX_NET_BUOYANCY_RATIO * weight
+    factor = "" if MAX_NET_BUOYANCY_RATIO == 1.0 else f"{MAX_NET_BUOYANCY_RATIO:g} times "
+    return f"{factor}the model's weight_N ({limit:g} N)"
+
+
+def json_depth(value: Any, limit: int = MAX_DEPTH) -> int:
+    """Nesting depth of parsed JSON: a number 0, ``[1]`` and ``[]`` 1, ``{"a": [1]}`` 2.
+
+    Parameters
+    ----------
+    value : object
+        Parsed JSON (dict, list, str, number, bool, None)
+    limit : int
+        Depth beyond which counting stops [-]
+
+    Returns
+    -------
+    int
+        The depth, at most ``limit + 1``; counted level by level, without recursion.
+    """
+    depth = 0
+    level = [value]
+    while level and depth <= limit:
+        nxt = []
+        for item in level:
+            if isinstance(item, dict):
+                nxt.extend(item.values())
+            elif isinstance(item, list):
+                nxt.extend(item)
+        if not nxt and not any(isinstance(i, dict | list) for i in level):
+            break
+        depth += 1
+        level = nxt
+    return depth
+
+
+def _symbol_problem(sym: Any, name: str, where: str = "") -> str | None:
+    """The sentence for a symbol that is not a coefficient's (``where``: " in ..." when it is
+    not a key of 'coefficients'), else None."""
+    from towtank.vehicle.model import SYMBOL_RE
+
+    shown = f"'{sym}'" if isinstance(sym, str) and len(sym) <= 60 else _show(sym)
+    if not isinstance(sym, str) or not (SYMBOL_RE.match(sym) or _ADDED_MASS.match(sym)):
+        return (f"{name}: {shown}{where} is not a coefficient symbol this model knows "
+                "(e.g. Y_uv, N_r|r|, Y_vdot, N_uudr).")
+    if not _ADDED_MASS.match(sym) and len(_FACTOR.findall(sym.partition("_")[2])) > MAX_FACTORS:
+        return (f"{name}: the coefficient symbol {shown}{where} is a product of more than "
+                f"{MAX_FACTORS} factors.")
+    return None
+
+
+def check_model(model: Any, name: str = "model.json") -> list[str]:
+    """Problems of a parsed model.json (docs/formats.md §6), one sentence each.
+
+    Types: the required keys present; ``rho_kg_m3``, ``mass_kg``, ``weight_N``,
+    ``buoyancy_N`` finite numbers; ``cg_m``, ``cb_m``, ``inertia_kg_m2`` three finite numbers;
+    ``coefficients`` an object of at most :data:`MAX_COEFFICIENTS` known symbols with finite
+    numbers; ``name`` text, ``sources`` an object of text, ``notes`` an object,
+    ``design_speed_m_s`` and ``length_m`` finite numbers, ``covariance`` null or as
+    :func:`check_covariance` wants it. Physical ranges: density within
+    :data:`RHO_RANGE_KG_M3`; mass, weight, buoyancy and inertias > 0; weight = mass g within
+    :data:`WEIGHT_TOLERANCE`; |buoyancy - weight| at most :data:`MAX_NET_BUOYANCY_RATIO`
+    times the weight; design speed in (0, :data:`MAX_SPEED_M_S`]; length within
+    :data:`LENGTH_RANGE_M`; centres of gravity and buoyancy within one length of the
+    reference point. When all of that holds, the mass matrix M_RB + M_A must be positive
+    definite (its smallest eigenvalue above :data:`MASS_MATRIX_TOLERANCE` times its largest):
+    otherwise the vehicle would accelerate against the forces.
+
+    Parameters
+    ----------
+    model : object
+        The parsed JSON
+    name : str
+        The file's name, which starts every sentence
+
+    Returns
+    -------
+    list of str
+        The problems; empty for a usable model.
+    """
+    from towtank.vehicle.model import REQUIRED_KEYS
+
+    if not isinstance(model, dict):
+        return [f"{name}: the model file is not a JSON object but {_kind(model)}."]
+    problems = [f"{name}: the model lacks the key '{key}'." for key in REQUIRED_KEYS
+                if key not in model]
+
+    def scalar(key: str, low: float, high: float, unit: str, what: str,
+               low_open: bool = True) -> float | None:
+        if key not in model:
+            return None
+        value = _number(model[key])
+        inside = value is not None and (value > low if low_open else value >= low) \
+            and value <= high
+        if not inside:
+            problems.append(f"{name}: '{key}' must be {what} [{unit}], not "
+                            f"{_show(model[key])}.")
+            return None
+        return value
+
+    scalar("rho_kg_m3", RHO_RANGE_KG_M3[0], RHO_RANGE_KG_M3[1], "kg/m^3",
+           f"a water density from {RHO_RANGE_KG_M3[0]:g} to {RHO_RANGE_KG_M3[1]:g}",
+           low_open=False)
+    mass = scalar("mass_kg", 0.0, math.inf, "kg", "a finite number > 0")
+    weight = scalar("weight_N", 0.0, math.inf, "N", "a finite number > 0")
+    buoyancy = scalar("buoyancy_N", 0.0, math.inf, "N", "a finite number > 0")
+    length = scalar("length_m", LENGTH_RANGE_M[0], LENGTH_RANGE_M[1], "m",
+                    f"a length from {LENGTH_RANGE_M[0]:g} to {LENGTH_RANGE_M[1]:g}",
+                    low_open=False)
+    scalar("design_speed_m_s", 0.0, MAX_SPEED_M_S, "m/s",
+           f"a speed > 0 and at most {MAX_SPEED_M_S:g}")
+
+    triples: dict[str, list[float]] = {}
+    for key, positive, unit, labels in (("cg_m", False, "m", "x, y, z"),
+                                        ("cb_m", False, "m", "x, y, z"),
+                                        ("inertia_kg_m2", True, "kg m^2", "Ixx, Iyy, Izz")):
+        if key not in model:
+            continue
+        value = model[key]
+        nums = [_number(v) for v in value] if isinstance(value, list) else []
+        if len(nums) != 3 or any(n is None for n in nums):
+            problems.append(f"{name}: '{key}' must be a list of three numbers [{labels}], "
+                            f"finite [{unit}], not {_show(value)}.")
+        elif positive and min(nums) <= 0:
+            problems.append(f"{name}: '{key}' must be three moments of inertia > 0 "
+                            f"[{labels}] [{unit}], not {_show(value)}.")
+        elif not positive and length is not None and max(abs(n) for n in nums) > length:
+            problems.append(f"{name}: '{key}' must lie within the vehicle's length_m "
+                            f"({length:g} m) of the reference point [m], not {_show(value)}.")
+        else:
+            triples[key] = nums
+
+    coefficients = model.get("coefficients")
+    if "coefficients" in model:
+        if not isinstance(coefficients, dict):
+            problems.append(f"{name}: 'coefficients' must be an object {{symbol: value}}, not "
+                            f"{_show(coefficients)}.")
+        elif len(coefficients) > MAX_COEFFICIENTS:
+            problems.append(f"{name}: 'coefficients' holds {len(coefficients)} coefficients, "
+                            f"more than the {MAX_COEFFICIENTS} a model may have.")
+        else:
+            for sym, val in coefficients.items():
+                bad = _symbol_problem(sym, name)
+                if bad:
+                    problems.append(bad)
+                elif _number(val) is None:
+                    problems.append(f"{name}: the coefficient {sym} is not a finite number "
+                                    f"but {_show(val)}.")
+    for key, kind, test in (("name", "text", lambda v: isinstance(v, str)),
+                            ("sources", "an object {symbol: text}",
+                             lambda v: isinstance(v, dict)
+                             and all(isinstance(s, str) for s in v.values())),
+                            ("notes", "an object", lambda v: isinstance(v, dict))):
+        if key in model and not test(model[key]):
+            problems.append(f"{name}: '{key}' must be {kind}, not {_show(model[key])}.")
+    if model.get("covariance") is not None:
+        problems += check_covariance(model["covariance"], name)
+    if problems:  # the checks below need every value above
+        return problems
+
+    if abs(weight - mass * _G) > WEIGHT_TOLERANCE * mass * _G:
+        problems.append(f"{name}: 'weight_N' must be mass_kg x g ({mass * _G:.6g} N for "
+                        f"{mass:g} kg) within {WEIGHT_TOLERANCE:.0%}, not {weight:g}.")
+    if abs(buoyancy - weight) > MAX_NET_BUOYANCY_RATIO * weight:
+        problems.append(f"{name}: 'buoyancy_N' must differ from the weight by at most "
+                        f"{_times(weight)}, not {buoyancy:g} N.")
+    if problems:
+        return problems
+    return _check_mass_matrix(mass, triples["cg_m"], triples["inertia_kg_m2"], coefficients,
+                              name)
+
+
+def _check_mass_matrix(mass: float, cg: list[float], inertia: list[float],
+                       coefficients: dict[str, float], name: str) -> list[str]:
+    from towtank.vehicle.model import added_mass_matrix
+
+    m_rb = np.zeros((6, 6))
+    rg = np.asarray(cg, dtype=float)
+    skew = np.array([[0.0, -rg[2], rg[1]], [rg[2], 0.0, -rg[0]], [-rg[1], rg[0], 0.0]])
+    m_rb[:3, :3] = mass * np.eye(3)
+    m_rb[:3, 3:] = -mass * skew
+    m_rb[3:, :3] = mass * skew
+    m_rb[3:, 3:] = np.diag(inertia)
+    with np.errstate(all="ignore"):
+        total = m_rb + added_mass_matrix(coefficients)
+        eig = np.linalg.eigvalsh(total) if np.all(np.isfinite(total)) else None
+    if eig is None or not np.all(np.isfinite(eig)):
+        return [f"{name}: the mass matrix M_RB + M_A (mass_kg, cg_m, inertia_kg_m2 and the "
+                "..dot coefficients) overflows; check their magnitudes."]
+    if eig[0] <= MASS_MATRIX_TOLERANCE * eig[-1]:
+        return [f"{name}: the mass matrix M_RB + M_A (mass_kg, cg_m, inertia_kg_m2 and the "
+                f"..dot coefficients) must be positive definite, but its smallest eigenvalue "
+                f"is {eig[0]:.4g} against a largest of {eig[-1]:.4g}; check the signs of the "
+                "added masses (X_udot, Y_vdot... are negative) and the inertias."]
+    return []
+
+
+def check_covariance(covariance: Any, name: str = "model.json") -> list[str]:
+    """Problems of model.json's ``covariance`` {symbols, matrix}, one sentence each.
+
+    Parameters
+    ----------
+    covariance : object
+        The parsed ``covariance``: ``symbols`` a list of distinct coefficient symbols,
+        ``matrix`` a square list of lists of finite numbers of the same size [SI^2],
+        symmetric and positive semi-definite within :data:`COVARIANCE_TOLERANCE` times its
+        largest entry (no eigenvalue below minus that). An empty ``symbols`` with an empty
+        ``matrix`` is a model without measured covariance.
+    name : str
+        The file's name, which starts every sentence
+
+    Returns
+    -------
+    list of str
+        The problems; empty for a usable covariance.
+    """
+    where = f"{name}: 'covariance'"
+    if not isinstance(covariance, dict):
+        return [f"{where} must be an object {{symbols, matrix}}, not {_show(covariance)}."]
+    symbols, matrix = covariance.get("symbols", []), covariance.get("matrix", [])
+    if not isinstance(symbols, list):
+        return [f"{where} 'symbols' must be a list of coefficient symbols, not "
+                f"{_show(symbols)}."]
+    problems = [p for p in (_symbol_problem(s, name, " in 'covariance' 'symbols'")
+                            for s in symbols) if p]
+    if len(set(map(repr, symbols))) != len(symbols):
+        problems.append(f"{where} 'symbols' names a coefficient twice: {_show(symbols)}.")
+    n = len(symbols)
+    rows = matrix if isinstance(matrix, list) else None
+    if rows is None or len(rows) != n or any(not isinstance(r, list) or len(r) != n
+                                             for r in rows):
+        problems.append(f"{where} 'matrix' must be a {n} x {n} list of lists, one row per "
+                        f"symbol, not {_show(matrix)}.")
+        return problems
+    values = [[_number(v) for v in row] for row in rows]
+    if any(v is None for row in values for v in row):
+        bad = next(rows[i][j] for i, row in enumerate(values) for j, v in enumerate(row)
+                   if v is None)
+        problems.append(f"{where} 'matrix' must hold finite numbers [SI^2], not {_show(bad)}.")
+        return problems
+    if problems or n == 0:
+        return problems
+    a = np.array(values, dtype=float)
+    scale = float(np.max(np.abs(a)))
+    tol = COVARIANCE_TOLERANCE * scale
+    if not np.isfinite(scale):
+        return [f"{where} 'matrix' overflows; its largest entry is too large."]
+    asym = float(np.max(np.abs(a - a.T)))
+    if asym > tol:
+        return [f"{where} 'matrix' must be symmetric, but entries differ from their mirror "
+                f"by up to {asym:.4g}."]
+    with np.errstate(all="ignore"):
+        eig = np.linalg.eigvalsh(0.5 * (a + a.T))
+    if not np.all(np.isfinite(eig)) or eig[0] < -tol:
+        return [f"{where} 'matrix' must be positive semi-definite (a covariance), but it has "
+                f"the eigenvalue {eig[0]:.4g}; no 95 % band can be drawn from it."]
+    return []
+
+
+def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s: Any,
+                     rudder_deg: Any, sternplane_deg: Any, duration_s: Any = None,
+                     net_buoyancy_n: Any = None, samples: Any = 0,
+                     name: str = "model.json") -> list[str]:
+    """Problems of the options of one ``towtank simulate``, one sentence each.
+
+    Parameters
+    ----------
+    model : dict or None
+        The checked model (:func:`check_model` found nothing); None when it has problems of
+        its own, then only the checks that do not need it are made
+    manoeuvre : str
+        turning, zigzag, dive, spiral or glide
+    speed_m_s : float
+        Speed [m/s], in (0, :data:`MAX_SPEED_M_S`]
+    rudder_deg, sternplane_deg : float
+        Control angles [deg], within ± :data:`MAX_CONTROL_DEG`
+    duration_s : float, optional
+        Simulated time [s], in (0, :data:`MAX_DURATION_S`]; None for the manoeuvre's default
+        (:func:`towtank.vehicle.simulate.default_duration`), which must also lie there
+    net_buoyancy_n : float, optional
+        Buoyancy minus weight [N]: finite, at most :data:`MAX_NET_BUOYANCY_RATIO` times the
+        model's weight_N in size, and leaving the vehicle a weight > 0
+    samples : int
+        Draws of the measured coefficients, 0 to :data:`MAX_SAMPLES`; more than 0 needs a
+        model with a covariance of measured coefficients
+    name : str
+        The model file's name, for the sentences
+
+    Returns
+    -------
+    list of str
+        The problems; empty when the simulation may run.
+    """
+    problems = []
+    for opt, value in (("--rudder-deg", rudder_deg), ("--sternplane-deg", sternplane_deg)):
+        v = _number(value)
+        if v is None or abs(v) > MAX_CONTROL_DEG:
+            problems.append(f"{opt} must lie within ±{MAX_CONTROL_DEG:g} degrees, not "
+                            f"{_show(value)}.")
+    speed = _number(speed_m_s)
+    if speed is None or not 0.0 < speed <= MAX_SPEED_M_S:
+        problems.append(f"--speed must be a speed > 0 and at most {MAX_SPEED_M_S:g} m/s, not "
+                        f"{_show(speed_m_s)}.")
+        speed = None
+    if duration_s is not None:
+        d = _number(duration_s)
+        if d is None or not 0.0 < d <= MAX_DURATION_S:
+            problems.append(f"--duration-s must be a simulated time > 0 and at most "
+                            f"{MAX_DURATION_S:g} s (the longest towtank simulates), not "
+                            f"{_show(duration_s)}.")
+    elif model is not None and speed is not None:
+        from towtank.vehicle.simulate import default_duration
+
+        d = default_duration(model, manoeuvre, speed)
+        if d > MAX_DURATION_S:
+            problems.append(f"{name}: the default simulated time of a {manoeuvre} at "
+                            f"{speed:g} m/s is {d:.6g} s, more than the {MAX_DURATION_S:g} s "
+                            "towtank simulates; give a shorter --duration-s.")
+    n = samples if isinstance(samples, int) and not isinstance(samples, bool) else None
+    if n is None or not 0 <= n <= MAX_SAMPLES:
+        problems.append(f"--samples must be a whole number from 0 to {MAX_SAMPLES} (each draw "
+                        f"is a whole simulation), not {_show(samples)}.")
+    elif n and model is not None:
+        cov = model.get("covariance") or {}
+        if not cov.get("symbols"):
+            problems.append(f"{name}: the model has no covariance of measured coefficients; "
+                            "--samples needs a model written by 'towtank process' with "
+                            "measured values.")
+    if net_buoyancy_n is not None:
+        net = _number(net_buoyancy_n)
+        weight = None if model is None else _number(model.get("weight_N"))
+        buoyancy = None if model is None else _number(model.get("buoyancy_N"))
+        if net is None:
+            problems.append(f"--net-buoyancy-N must be a finite force [N], not "
+                            f"{_show(net_buoyancy_n)}.")
+        elif weight is not None and abs(net) > MAX_NET_BUOYANCY_RATIO * weight:
+            problems.append(f"--net-buoyancy-N must be at most {_times(weight)} in size, "
+                            f"not {net:g} N.")
+        elif buoyancy is not None and buoyancy - net <= 0:
+            problems.append(f"--net-buoyancy-N {net:g} would leave the vehicle no weight (its "
+                            f"buoyancy_N is {buoyancy:g} N); it must be less than that.")
+    return problems
+
+
+def check_hull(x_m: np.ndarray, r_m: np.ndarray, name: str) -> list[str]:
+    """Problems of a hull's dimensions, one sentence each.
+
+    Parameters
+    ----------
+    x_m : numpy.ndarray
+        Stations from the nose, increasing [m]
+    r_m : numpy.ndarray
+        Radius at each station [m]
+    name : str
+        Where the hull comes from (the table's file name, or the [vehicle] section)
+
+    Returns
+    -------
+    list of str
+        Empty when the stations are finite and increase strictly, the radii are finite and
+        >= 0, the length lies within :data:`LENGTH_RANGE_M` and the fineness ratio L/D within
+        :data:`FINENESS_RANGE`.
+    """
+    x = np.asarray(x_m, dtype=float)
+    r = np.asarray(r_m, dtype=float)
+    if len(x) < 3 or len(x) != len(r) or not (np.all(np.isfinite(x))
+                                              and np.all(np.isfinite(r))):
+        return [f"{name}: the hull needs at least 3 stations of finite numbers x_m, r_m."]
+    problems = []
+    if np.any(np.diff(x) <= 0):
+        problems.append(f"{name}: x_m must increase strictly from nose to tail.")
+    if np.any(r < 0) or r.max() <= 0:
+        problems.append(f"{name}: r_m must be >= 0 m with at least one positive radius, not "
+                        f"from {r.min():g} to {r.max():g} m.")
+    if problems:
+        return problems
+    length = float(x[-1] - x[0])
+    low, high = LENGTH_RANGE_M
+    if not (math.isfinite(length) and low <= length <= high):
+        return [f"{name}: the hull's length (x_m from {x[0]:g} to {x[-1]:g} m) must lie from "
+                f"{low:g} to {high:g} m, not {length:g} m."]
+    fineness = length / (2.0 * float(r.max()))
+    if not FINENESS_RANGE[0] <= fineness <= FINENESS_RANGE[1]:
+        problems.append(f"{name}: the hull's fineness ratio L/D must lie from "
+                        f"{FINENESS_RANGE[0]:g} to {FINENESS_RANGE[1]:g}, not {fineness:.4g} "
+                        f"(L = {length:g} m, largest r_m = {r.max():g} m).")
+    return problems
