@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.integrate import trapezoid
 
 from towtank.reference import geometry
 
@@ -74,13 +75,13 @@ class HullProfile:
     @property
     def volume(self) -> float:
         """Displaced volume ``integral of pi r^2 dx`` [m^3]."""
-        return float(np.trapezoid(np.pi * self.r_m**2, self.x_m))
+        return float(trapezoid(np.pi * self.r_m**2, self.x_m))
 
     @property
     def x_buoyancy(self) -> float:
         """Centre of buoyancy aft of the nose tip [m]."""
         area = np.pi * self.r_m**2
-        return float(np.trapezoid(area * self.x_m, self.x_m) / np.trapezoid(area, self.x_m))
+        return float(trapezoid(area * self.x_m, self.x_m) / trapezoid(area, self.x_m))
 
     @property
     def wetted_area(self) -> float:
@@ -91,7 +92,7 @@ class HullProfile:
     @property
     def lateral_area(self) -> float:
         """Projected side area ``integral of 2 r dx`` [m^2]."""
-        return float(np.trapezoid(2.0 * self.r_m, self.x_m))
+        return float(trapezoid(2.0 * self.r_m, self.x_m))
 
     def scaled(self, factor: float) -> HullProfile:
         """The geometrically similar hull ``factor`` times as long."""

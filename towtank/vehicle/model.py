@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.integrate import trapezoid
 
 from towtank.vehicle import hull as hulls
 
@@ -156,10 +157,10 @@ def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dic
         inertia = tuple(float(v) for v in vehicle.inertia_kg_m2)
     else:
         area = np.pi * profile.r_m**2
-        per_len = mass * area / np.trapezoid(area, profile.x_m)
+        per_len = mass * area / trapezoid(area, profile.x_m)
         xb = x_ref - profile.x_m
-        ixx = float(np.trapezoid(per_len * profile.r_m**2 / 2.0, profile.x_m))
-        iyy = float(np.trapezoid(per_len * (xb**2 + profile.r_m**2 / 4.0), profile.x_m))
+        ixx = float(trapezoid(per_len * profile.r_m**2 / 2.0, profile.x_m))
+        iyy = float(trapezoid(per_len * (xb**2 + profile.r_m**2 / 4.0), profile.x_m))
         inertia = (ixx, iyy, iyy)
         source = "estimated: uniform density filling the hull"
     return {"mass_kg": float(mass), "weight_N": float(mass * G),

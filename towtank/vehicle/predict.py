@@ -48,6 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.integrate import trapezoid
 
 from towtank.analysis import fins as fin_analysis
 from towtank.vehicle.hull import HullProfile
@@ -202,9 +203,9 @@ def _added_mass_strips(
 
 
 def _moments(xb, m, extra_x, extra_m, power: int) -> float:
-    total = float(np.trapezoid(m * xb**power, xb))
+    total = float(trapezoid(m * xb**power, xb))
     for xs, ms in zip(extra_x, extra_m, strict=True):
-        total += float(np.trapezoid(ms * xs**power, xs))
+        total += float(trapezoid(ms * xs**power, xs))
     return total
 
 
@@ -277,7 +278,7 @@ def predict_coefficients(
         stations[key] = max(stations.get(key, 0.0), pair.span_m)
     for (x_m, chord), span in stations.items():
         xs, r, a = _fin_strip(profile, FinPair("rudder", x_m, span, chord), x0)
-        k_pdot -= float(np.trapezoid(2.0 / math.pi * rho * a**4, xs))
+        k_pdot -= float(trapezoid(2.0 / math.pi * rho * a**4, xs))
     add("K_pdot", k_pdot,
         "fins only: -integral of (2/pi) rho a^4 dx over each fin station (a = r + span)",
         "Blevins (1979); Prestero (2001) eq. 3.25")
@@ -315,15 +316,15 @@ def predict_coefficients(
     for plane, (force, moment, vel, rate, s) in {
         "rudder": ("Y", "N", "v", "r", 1.0), "sternplane": ("Z", "M", "w", "q", -1.0)
     }.items():
-        add(f"{force}_{vel}|{vel}|", -hq * np.trapezoid(w, xb) - fin_cd(plane, lambda x: 1.0),
+        add(f"{force}_{vel}|{vel}|", -hq * trapezoid(w, xb) - fin_cd(plane, lambda x: 1.0),
             xflow, ref_xf)
         add(f"{force}_{rate}|{rate}|",
-            s * (-hq * np.trapezoid(w * xb * np.abs(xb), xb) - fin_cd(plane, lambda x: x * abs(x))),
+            s * (-hq * trapezoid(w * xb * np.abs(xb), xb) - fin_cd(plane, lambda x: x * abs(x))),
             xflow, ref_xf)
         add(f"{moment}_{vel}|{vel}|",
-            s * (-hq * np.trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)), xflow, ref_xf)
+            s * (-hq * trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)), xflow, ref_xf)
         add(f"{moment}_{rate}|{rate}|",
-            -hq * np.trapezoid(w * xb**2 * np.abs(xb), xb) - fin_cd(plane, lambda x: x**2 * abs(x)),
+            -hq * trapezoid(w * xb**2 * np.abs(xb), xb) - fin_cd(plane, lambda x: x**2 * abs(x)),
             xflow, ref_xf)
     k_pp = 0.0
     for pair in fins:
