@@ -7,12 +7,13 @@ Imports of the heavy libraries are deferred to the sub-command that needs them, 
 from __future__ import annotations
 
 import argparse
-import errno
 import gc
+import os
 import sys
 from pathlib import Path
 
 from towtank import __version__
+from towtank.runtime.storage import STORAGE_ERRNOS
 
 EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
 
@@ -299,8 +300,10 @@ def _process(args: argparse.Namespace, protocol, out, stamp) -> int:  # noqa: AN
     except OSError as exc:
         if exc.errno not in _STORAGE_ERRNOS:
             raise
-        _err(f"the outputs could not be written to {out} ({exc.strerror}); the folder is as "
-             "it was before this run.")
+        # the system's own words for the errno: a library's strerror may be a paragraph
+        # (h5py's names its driver, the time and the buffer's address)
+        _err(f"the outputs could not be written to {out} ({os.strerror(exc.errno)}); the "
+             "folder is as it was before this run.")
         return EXIT_UNUSABLE
     text = _summary(day, Path(out))
     if not args.quiet:
@@ -334,10 +337,8 @@ def _read_stamps(day) -> dict[str, tuple[int, int, int, int] | None]:  # noqa: A
 
 
 #: Errors of the storage, not of towtank: a full disk or quota, a read-only or failing file
-#: system, no permission.
-_STORAGE_ERRNOS = frozenset(
-    getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EACCES", "EPERM",
-                                      "EFBIG", "ENAMETOOLONG") if hasattr(errno, name))
+#: system, no permission (:data:`towtank.runtime.storage.STORAGE_ERRNOS`).
+_STORAGE_ERRNOS = STORAGE_ERRNOS
 
 
 def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazily

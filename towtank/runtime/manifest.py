@@ -72,8 +72,12 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
 def atomic_write_text(path: Path, text: str) -> None:
     """Write ``path`` by a rename of a temporary file beside it."""
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except BaseException:  # a full disk: no half-written temporary is left beside it
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def write_manifest(folder: Path, files: dict[str, list[dict[str, Any]]], *,
