@@ -77,9 +77,19 @@ def conditioned_runs(day: DayResult) -> Iterator[tuple[int, RunReduction | None,
         del tared  # before the next run is read
 
 
+#: What stands for a NUL character ("\x00") in exported text: U+2400 SYMBOL FOR NULL. HDF5
+#: strings cannot hold a NUL; the three formats carry the same text.
+NUL_SUBSTITUTE = "\u2400"
+
+
+def safe_text(text: str) -> str:
+    """``text`` with each NUL character replaced by :data:`NUL_SUBSTITUTE`."""
+    return text.replace("\x00", NUL_SUBSTITUTE)
+
+
 def _metas(day: DayResult) -> dict[int, dict[str, Any]]:
     """Each run's ``meta``: its runs.csv values (:data:`META_COLUMNS`), the campaign, units."""
-    campaign = str(day.protocol.name)
+    campaign = safe_text(str(day.protocol.name))
     units = ", ".join(f"{k} [{u}]" for k, u in UNITS.items())
     cols = [c for c in META_COLUMNS if c in day.runs.columns]
     out: dict[int, dict[str, Any]] = {}
@@ -91,6 +101,8 @@ def _metas(day: DayResult) -> dict[int, dict[str, Any]]:
                 v = v.item()
             if isinstance(v, float) and not math.isfinite(v):
                 v = float("nan")
+            if isinstance(v, str):
+                v = safe_text(v)
             meta[col] = "" if v is None else v
         meta["units"] = units
         out[int(rec["run"])] = meta
@@ -224,7 +236,7 @@ class _Hdf5Export:
         except BaseException:
             self.sink.close()
             raise
-        self.h5.attrs["campaign"] = campaign
+        self.h5.attrs["campaign"] = safe_text(campaign)
         self.h5.attrs["phase_names"] = ", ".join(PHASE_NAMES)
         self.h5.attrs["units"] = json.dumps(UNITS)
 
