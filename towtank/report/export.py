@@ -18,7 +18,13 @@ parquet   ``run_NNN.parquet``: columns ``t, U, a, drag, lift, phase, phase_name`
 Units: t [s] from the start of the file, U [m/s], a [m/s²], drag and lift [N] (zeroed,
 drift-corrected, low-pass filtered, tare subtracted; SNAME signs as in runs.csv). ``phase`` is
 0 still before, 1 acceleration, 2 steady (the window used), 3 deceleration, 4 still after,
-−1 between phases.
+−1 between phases. A NUL character in ``meta``'s text (the sheet's, the campaign's name) is
+written as U+2400 (␀): HDF5 strings cannot hold one.
+
+The runs are written one after another, each reduced again, written in every format and let
+go before the next is read: the process holds one run's series at a time, whatever the day's
+length. A storage failure (a full disk) in any format is an ``OSError`` with its errno, HDF5's
+included (:class:`_NeverFailingFile`).
 """
 
 from __future__ import annotations
