@@ -7,7 +7,6 @@ Imports of the heavy libraries are deferred to the sub-command that needs them, 
 from __future__ import annotations
 
 import argparse
-import errno
 import gc
 import os
 import sys
@@ -15,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from towtank import __version__
+from towtank.runtime.storage import STORAGE_ERRNOS
 
 if TYPE_CHECKING:
     from towtank.runtime.reads import Recorder
@@ -335,8 +335,10 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
     except OSError as exc:
         if exc.errno not in _STORAGE_ERRNOS:
             raise
-        _err(f"the outputs could not be written to {out} ({exc.strerror}); the folder is as "
-             "it was before this run.")
+        # the system's own words for the errno: a library's strerror may be a paragraph
+        # (h5py's names its driver, the time and the buffer's address)
+        _err(f"the outputs could not be written to {out} ({os.strerror(exc.errno)}); the "
+             "folder is as it was before this run.")
         return EXIT_UNUSABLE
     if not args.quiet:
         print(text, end="")
@@ -377,10 +379,8 @@ def _read_stamps(day) -> dict[str, tuple[int, int, int, int] | None]:  # noqa: A
 
 
 #: Errors of the storage, not of towtank: a full disk or quota, a read-only or failing file
-#: system, no permission.
-_STORAGE_ERRNOS = frozenset(
-    getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EACCES", "EPERM",
-                                      "EFBIG", "ENAMETOOLONG") if hasattr(errno, name))
+#: system, no permission (:data:`towtank.runtime.storage.STORAGE_ERRNOS`).
+_STORAGE_ERRNOS = STORAGE_ERRNOS
 
 
 def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazily

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.provenance import provenance
 from towtank.runtime import manifest
+from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -173,6 +174,13 @@ def write_outputs(
     export : sequence of str
         Also write every usable run's reduced time series in these formats ("mat", "hdf5",
         "parquet") into ``export/`` (:mod:`towtank.report.export`).
+
+    Raises
+    ------
+    OSError
+        When the storage fails (a full disk, a quota...), with its errno, whatever library met
+        it (:func:`towtank.runtime.storage.storage_error`); ``out_dir`` is then as it was and
+        the temporary folder is gone.
     """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -227,8 +235,13 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             for name in moved:
                 os.rename(tmp / name, out_dir / name)
             raise
-    except BaseException:
+    except BaseException as exc:
+        # a full disk is told while the partial outputs still fill it, and is an OSError
+        # whatever library met it (zlib.error from the PDF, a writer's forked process)
+        full = storage_error(exc, tmp)
         shutil.rmtree(tmp, ignore_errors=True)
+        if full is not None and full is not exc:
+            raise full from exc
         raise
     return out_dir
 

@@ -385,7 +385,10 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
     For tasks that share nothing and write their own files (the parts of the report). Where
     forking is not available or not safe (another thread is running) they run one after
     another. A task that fails here raises as it is; one that fails (or dies) in its process
-    makes a RuntimeError naming it, with its traceback as a note, once every task has ended.
+    makes a RuntimeError naming it, with its traceback as a note, once every task has ended;
+    or an ``OSError`` of the storage errno (``ENOSPC``...) when a task failed for the storage
+    (an ``OSError`` with that errno raised or in its chain), so that a full disk met in a forked
+    writer stays a full disk (:mod:`towtank.runtime.storage`).
     """
     if len(tasks) < 2 or "fork" not in mp.get_all_start_methods() or (
         threading.active_count() > 1
@@ -401,7 +404,7 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
         proc.start()
         send.close()
         children.append((name, proc, recv))
-    failures: list[tuple[str, str]] = []
+    failures: list[tuple[str, str, int | None]] = []
     try:
         tasks[0][1]()
     finally:
@@ -409,27 +412,33 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
             try:
                 outcome = recv.recv()
             except EOFError:
-                outcome = ("the process running it stopped abruptly", "")
+                outcome = ("the process running it stopped abruptly", "", None)
             proc.join()
             recv.close()
             if outcome is not None:
-                failures.append((f"{name}: {outcome[0]}", outcome[1]))
+                failures.append((f"{name}: {outcome[0]}", outcome[1], outcome[2]))
     if failures:
-        exc = RuntimeError("; ".join(f for f, _ in failures))
-        for _, trace in failures:
-            if trace:
-                exc.add_note(trace)
+        from towtank.runtime.storage import os_error
+
+        codes = [code for _, _, code in failures if code is not None]
+        exc: Exception = (os_error(codes[0]) if codes
+                          else RuntimeError("; ".join(f for f, _, _ in failures)))
+        for what, trace, _ in failures:
+            exc.add_note(trace or what)
         raise exc
 
 
 def _run_in_child(task: Callable[[], None], send: Any) -> None:
-    """In a forked process: one task; sends None, or (error, traceback)."""
+    """In a forked process: one task; sends None, or (error, traceback, storage errno or
+    None)."""
     import traceback
+
+    from towtank.runtime.storage import chained_errno
 
     try:
         task()
         outcome = None
     except BaseException as exc:  # noqa: BLE001 - reported to the parent, which raises
-        outcome = (f"{type(exc).__name__}: {exc}", traceback.format_exc())
+        outcome = (f"{type(exc).__name__}: {exc}", traceback.format_exc(), chained_errno(exc))
     send.send(outcome)
     send.close()
