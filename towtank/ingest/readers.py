@@ -158,6 +158,64 @@ def _numeric_line(line: bytes, delim: str, n: int | None = None) -> bool:
     return bool(values) and all(_is_number(f) for f in fields)
 
 
+def truncation_error(name: str, row: int, given: int, expected: int,
+                     cut: str | None = None) -> RunError:
+    """The one sentence of a text run file whose last line is cut short (docs/formats.md §3):
+    the same for every text layout (CSV, European text, whitespace text, LVM)."""
+    what = (f"row {row} ends in {cut!r}, a number cut short" if cut else
+            f"row {row} has {given} of {expected} values")
+    return RunError(f"{name} ends in the middle of a line ({what}; a truncated file): was it "
+                    "copied before the recording finished?")
+
+
+def _complete_number(field: bytes) -> bool:
+    text = field.strip()
+    return bool(text) and (bool(_NUMBER.match(text)) or
+                           text.lower().lstrip(b"+-") in (b"nan", b"inf", b"infinity"))
+
+
+def cut_last_line(last: bytes, delim: str, expected: int,
+                  above: bytes | None = None) -> tuple[int, str | None] | None:
+    """Whether the last line of a file that does not end in a line break is cut short.
+
+    The line is cut when it has fewer fields than ``expected`` (the header's, or the line
+    above's when that has fewer: a trailing separator the header lacks), or when its last
+    field is not a complete number (empty, ``1.2e``, ``-``) where the same field of the line
+    above (``above``, the last complete data line, if any) is one. A complete line without a
+    final line break is not cut (many programs write none); a number cut to a shorter number
+    (``0.12`` of ``0.125``) cannot be told from a complete one.
+
+    Returns None when the line is complete, else (fields given, the cut value or None).
+    """
+    fields = _split(last.rstrip(b"\r"), delim)
+    if above is not None:
+        width = len(_split(above.rstrip(b"\r"), delim))
+        if 1 < width < expected:
+            expected = width
+    if len(fields) < expected:
+        if fields and not fields[-1].strip() and delim != "whitespace":
+            return len(fields) - 1, None
+        return len(fields), None
+    if len(fields) > expected:
+        return None  # a malformed row: skipped and counted with the others
+    tail = fields[expected - 1]
+    if _complete_number(tail):
+        return None
+    if above is not None:
+        prev = _split(above.rstrip(b"\r"), delim)
+        if len(prev) < expected or not _complete_number(prev[expected - 1]):
+            return None  # the field above is not a number either: text, or always empty
+    if not tail.strip():
+        return expected - 1, None
+    return expected, tail.strip().decode("utf-8", "replace")
+
+
+def _unterminated(data: bytes) -> bool:
+    """The file's last line has text and no line break after it."""
+    end = data.rstrip(b" \t")
+    return bool(end) and not end.endswith((b"\n", b"\r"))
+
+
 def _guess_delimiter(lines: list[bytes]) -> str:
     """The separator under which the longest block of lines at the end of the file splits into
     the same number (> 1) of numeric fields; ``;`` before tab before ``,`` before blanks on a
@@ -186,7 +244,8 @@ def _guess_decimal(lines: list[bytes], delim: str) -> str:
     """',' when the numbers of the data lines use a decimal comma (never with ',' separators)."""
     if delim == ",":
         return "."
-    sample = b" ".join(lines[-20:])
+    numeric = [ln for ln in lines[-20:] if _numeric_line(ln, delim)]
+    sample = b" ".join(numeric or lines[-20:])  # a date in a short file's preamble aside
     commas = len(re.findall(rb"\d,\d", sample))
     points = len(re.findall(rb"\d\.\d", sample))
     return "," if commas > points else "."
@@ -263,8 +322,11 @@ def read_text_columns(
         lines.pop()
     if not lines:
         raise RunError(f"{name} is empty (0 data rows)")
+    # a last line with no line break may be cut short: the layout is found without it
+    last = lines.pop() if _unterminated(data) and len(lines) > 1 else None
     delim = DELIMITERS.get(opts.delimiter, opts.delimiter) or _guess_delimiter(lines)
-    decimal = opts.decimal if opts.decimal in (".", ",") else _guess_decimal(lines, delim)
+    decimal = opts.decimal if opts.decimal in (".", ",") else \
+        _guess_decimal(lines + [last] if last is not None else lines, delim)
     if delim == "," and decimal == ",":
         raise RunError(f"{name}: a decimal comma cannot be read in comma-separated columns")
     if opts.skip_rows:
@@ -275,6 +337,14 @@ def read_text_columns(
             first += 1
     else:
         head, first = _header_row(lines, delim)
+    if last is not None and first <= len(lines):
+        width = len(_split(lines[head].rstrip(b"\r"), delim)) if head >= 0 else \
+            len(_split(lines[min(first, len(lines) - 1)].rstrip(b"\r"), delim))
+        above = lines[-1] if first < len(lines) else None
+        cut = cut_last_line(last, delim, width, above)
+        if cut is not None:
+            raise truncation_error(name, len(lines) + 1, cut[0], width, cut[1])
+        lines.append(last)
     if first >= len(lines):
         raise RunError(f"{name}: no rows of numbers found under a header")
     header = (
@@ -388,6 +458,7 @@ def read_lvm_columns(
         elif key.strip() == "Decimal_Separator":
             dec = value.strip() or "."
     marks = [i for i, ln in enumerate(lines) if ln.strip().startswith("***End_of_Header***")]
+    cut_at_end = _unterminated(data if isinstance(data, bytes) else data.encode())
     if len(marks) < 2:
         raise RunError(f"{name} is not a LabVIEW measurement file (no segment header found)")
     segments: list[dict[str, np.ndarray]] = []
@@ -401,6 +472,8 @@ def read_lvm_columns(
             break
         names = [c.strip() for c in lines[i].split(sep)]
         i += 1
+        if k + 1 == len(marks) and cut_at_end and len(lines) - 1 >= i:
+            _lvm_cut_line(lines, i, names, sep, dec, name)
         end = marks[k + 1] if k + 1 < len(marks) else len(lines)
         while end > i and not _lvm_data_line(lines[end - 1], sep):
             end -= 1  # back over the next segment's header (a few lines)
@@ -447,6 +520,34 @@ def read_lvm_columns(
     cols[UNITS_KEY] = segments[0][UNITS_KEY]
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
+
+
+def _lvm_cut_line(lines: list[str], first: int, names: list[str], sep: str, dec: str,
+                  name: str) -> None:
+    """Raise the truncation sentence when the file's last line (it has no line break after
+    it), a data line of the last segment, is cut short (:func:`cut_last_line`). LabVIEW ends
+    each line with a comment column, usually empty: the last value checked is the one before
+    it; the line above sets the width when it has fewer fields than the column names (no
+    trailing separator)."""
+    last = lines[-1]
+    if not last.strip():
+        return  # the cut fell in the blank lines after the data: nothing is lost
+    above = next((ln for ln in reversed(lines[first:-1]) if ln.strip()), None)
+
+    def enc(text: str) -> bytes:
+        return (text.replace(",", ".") if dec == "," and sep != "," else text).encode()
+
+    comment = bool(names) and names[-1].lower() == "comment"
+    expected = len(names) - comment
+    fields = last.split(sep)
+    if comment and len(fields) == expected + 1:
+        fields = fields[:-1]  # the comment (any text) is not checked
+    prev = above.split(sep)[:expected] if above is not None else None
+    trimmed = sep.join(fields)
+    cut = cut_last_line(enc(trimmed), sep, expected,
+                        enc(sep.join(prev)) if prev is not None else None)
+    if cut is not None:
+        raise truncation_error(name, len(lines), cut[0], expected, cut[1])
 
 
 def _lvm_block(block: list[str], names: list[str], sep: str,
