@@ -14,8 +14,14 @@ pipeline (exit status, the sentence, the other runs still processed).
 
 from __future__ import annotations
 
+import os
 import re
+import struct
+import subprocess
+import sys
+import textwrap
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -449,3 +455,295 @@ def test_any_prefix_is_read_as_its_complete_rows_or_refused_with_the_sentence(
     files, full = long_files
     data = files[which]
     _check_prefix(which, data, full[which], int(round(where * len(data))))
+
+
+# ====================================================== item 6: declared sizes, before reading
+LIMIT_GIB = 2.0  # address space of the subprocesses below: a regression fails, never swaps
+
+_LIMITED = textwrap.dedent("""
+    import resource, sys
+    limit = int(float(sys.argv[1]) * 2**30)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    if sys.argv[2] == "read":
+        from pathlib import Path
+        from towtank.errors import RunError
+        from towtank.ingest.runfile import read_columns
+        try:
+            read_columns(Path(sys.argv[3]))
+        except RunError as exc:
+            print("RunError:", exc)
+            sys.exit(0)
+        print("read")
+        sys.exit(0)
+    from towtank.commands.cli import main
+    sys.exit(main(sys.argv[2:]))
+""")
+
+
+def _limited(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    """towtank (``process ...``) or one file read (``read PATH``) in a subprocess whose
+    address space is limited to LIMIT_GIB."""
+    env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1",
+               OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    return subprocess.run([sys.executable, "-c", _LIMITED, str(LIMIT_GIB), *args],
+                          capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def _process_limited(protocol: Path, timeout: float = 300) -> subprocess.CompletedProcess:
+    return _limited("process", str(protocol), "--out", str(protocol.parent / "out"),
+                    "--no-report", "-q", timeout=timeout)
+
+
+def _zlib_of_zeros(prefix: bytes, total: int, chunk: int = 1 << 24) -> bytes:
+    """A zlib stream of ``prefix`` followed by zeros, ``total`` bytes in all, built in a
+    fraction of a second: one compressed chunk of zeros repeated (after a full flush each
+    chunk compresses to the same bytes) and the Adler-32 of the whole worked out."""
+    assert total % chunk == 0 and len(prefix) < chunk
+    c = zlib.compressobj(9)
+    zeros = bytes(chunk)
+    first = c.compress(prefix + zeros[len(prefix):]) + c.flush(zlib.Z_FULL_FLUSH)
+    again = c.compress(zeros) + c.flush(zlib.Z_FULL_FLUSH)
+    assert again == c.compress(zeros) + c.flush(zlib.Z_FULL_FLUSH)
+    end = c.flush()[:-4]
+    a = zlib.adler32(prefix)
+    low, high = a & 0xFFFF, ((a >> 16) + (a & 0xFFFF) * (total - len(prefix))) % 65521
+    return first + again * (total // chunk - 1) + end + struct.pack(">I", (high << 16) | low)
+
+
+def _mat_bomb(name: bytes, chunks: int) -> bytes:
+    """A compressed MAT v5 variable: a column of 2²¹·chunks − 7 zeros (doubles), ~3 MB of file
+    for chunks = 192, 3 GiB once decompressed."""
+    n = (1 << 21) * chunks - 7
+    head = struct.pack("<II", 14, 48 + 8 * n)  # miMATRIX
+    head += struct.pack("<IIII", 6, 8, 6, 0)  # array flags: double
+    head += struct.pack("<IIii", 5, 8, n, 1)  # dimensions n × 1
+    head += struct.pack("<HH", 1, len(name)) + name.ljust(4, b"\0")  # small element: name
+    head += struct.pack("<II", 9, 8 * n)  # miDOUBLE
+    stream = _zlib_of_zeros(head, len(head) + 8 * n)
+    return struct.pack("<II", 15, len(stream)) + stream  # miCOMPRESSED
+
+
+def test_a_compressed_mat_variable_declaring_3_gib_is_refused_before_it_is_read(tmp_path):
+    """3 MB of .mat that decompresses to 3 GiB (a run file is capped at 1 GiB): rejected
+    from the size its header declares, in well under a second and without the memory; the
+    other runs of the day are processed."""
+    protocol = _day(tmp_path, file_format="mat")
+    path = tmp_path / "data" / "run_021.mat"
+    path.write_bytes(path.read_bytes() + _mat_bomb(b"big", 192))
+    assert path.stat().st_size < 4 << 20
+    done = _process_limited(protocol)
+    assert done.returncode == 1, done.stderr
+    reason = _only_rejected(protocol, 21)
+    assert "is too large for one run: its compressed MATLAB variable 'big' (402653177×1) " \
+           "declares 3.0 GiB of numbers" in reason, reason
+    assert "checked before reading" in reason
+    _one_sentence(done.stderr)
+
+
+def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(tmp_path):
+    """An uncompressed cell array inside a struct whose dimensions say 2³¹ elements (a
+    reader would allocate 16 GiB of object pointers before reading one): refused from the
+    dimensions, wherever the array is nested."""
+    import scipy.io
+
+    path = tmp_path / "run.mat"
+    scipy.io.savemat(path, {"t": np.arange(100.0), "drag": np.zeros(100),
+                            "s": {"cells": np.array([[1.0]], dtype=object)}}, format="5")
+    data = bytearray(path.read_bytes())
+    # the cell's dimensions: the last but one miINT32 [1, 1] pair in the file (the last is
+    # the double inside the cell), rewritten 2^31-1 × 1
+    dims = struct.pack("<IIii", 5, 8, 1, 1)
+    at = bytes(data).rfind(dims, 0, bytes(data).rfind(dims))
+    assert at > 0
+    data[at + 8 : at + 12] = struct.pack("<i", 2**31 - 1)
+    path.write_bytes(bytes(data))
+    done = _limited("read", str(path))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("RunError: run.mat is too large for one run: its MATLAB "
+                                  "variable 's.cells' (2147483647×1) declares 16.0 GiB"), \
+        done.stdout
+
+
+@pytest.mark.parametrize("layout, group", [("hdf5", "data"), ("mat73", "/")])
+def test_an_unwritten_dataset_of_2_31_values_is_refused_before_it_is_read(tmp_path, layout,
+                                                                          group):
+    """A 10 kB HDF5 file (or MATLAB v7.3) whose dataset of 2³¹ doubles was never written:
+    reading it would fill 16 GiB; its shape rejects the run first."""
+    import h5py
+
+    protocol = _day(tmp_path, file_format=layout)
+    path = tmp_path / "data" / f"run_021.{'h5' if layout == 'hdf5' else 'mat'}"
+    with h5py.File(path, "a") as fh:
+        fh[group].create_dataset("big", shape=(2**31,), dtype="f8", chunks=(1 << 20,))
+    assert path.stat().st_size < 1 << 20
+    done = _process_limited(protocol)
+    assert done.returncode == 1, done.stderr
+    reason = _only_rejected(protocol, 21)
+    assert "is too large for one run: its" in reason and "dataset '/big' (2147483648) " \
+        "declares 16.0 GiB of numbers" in reason.replace("/data/big", "/big"), reason
+    _one_sentence(done.stderr)
+
+
+def test_a_compressed_mat_file_reads_as_the_uncompressed_one(tmp_path):
+    """The inflation that checks the declared sizes gives scipy the same variables."""
+    import scipy.io
+
+    from towtank.ingest.readers import read_mat_columns
+
+    rng = np.random.default_rng(1)
+    run = {"t": np.arange(500) / 200.0, "U": rng.normal(size=500), "drag": rng.normal(size=500)}
+    plain, packed = tmp_path / "a.mat", tmp_path / "b.mat"
+    scipy.io.savemat(plain, {"run": run, "fs": 200.0, "note": "x"}, do_compression=False)
+    scipy.io.savemat(packed, {"run": run, "fs": 200.0, "note": "x"}, do_compression=True)
+    a, _ = read_mat_columns(plain.read_bytes(), "a.mat")
+    b, _ = read_mat_columns(packed.read_bytes(), "b.mat")
+    assert packed.stat().st_size < plain.stat().st_size
+    assert sorted(a) == sorted(b)
+    for key in ("t", "U", "drag", "__fs__"):
+        np.testing.assert_array_equal(a[key], b[key])
+
+
+@pytest.mark.parametrize("what", ["reference", "tare"])
+def test_a_huge_reference_csv_or_tare_table_stops_the_day_before_it_is_read(tmp_path, capsys,
+                                                                             what):
+    """A 100 MiB file (sparse here) where a table of a few lines is expected: exit 2 in one
+    sentence, nothing written."""
+    table = tmp_path / f"{what}.csv"
+    head = "symbol,prime\nX_udot,-0.01\n" if what == "reference" else \
+        "speed_m_s,drag_N\n0.5,0.1\n1.0,0.4\n"
+    table.write_text(head, encoding="utf-8")
+    with open(table, "r+b") as fh:
+        fh.truncate(100 << 20)
+    if what == "reference":
+        protocol = _day(tmp_path, campaign={"reference": f"{what}.csv"})
+    else:
+        protocol = _day(tmp_path, tare={"source": "table", "table": f"{what}.csv"})
+    assert _process(protocol) == 2
+    err = capsys.readouterr().err
+    name = "reference CSV" if what == "reference" else "tare table"
+    assert f"the {name} {what}.csv is 100 MiB, but towtank reads such tables up to 64 MiB" \
+        in err, err
+    _one_sentence(err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_fifo_as_tare_table_stops_the_day(tmp_path):
+    """Opened, a named pipe waits forever for a writer: refused before (in a subprocess, so
+    that a regression fails on the timeout rather than hanging the tests)."""
+    os.mkfifo(tmp_path / "tare.csv")
+    protocol = _day(tmp_path, tare={"source": "table", "table": "tare.csv"})
+    done = _process_limited(protocol, timeout=120)
+    assert done.returncode == 2
+    assert "the tare table tare.csv is not a regular file" in done.stderr
+
+
+# ============================================== item 11: HDF5 sample-rate attributes, links
+def _hdf5_timing_day(root: Path) -> Path:
+    """An HDF5 day whose time comes from the group's ``sample_rate`` attribute (the time
+    column left unmapped and renamed away)."""
+    import h5py
+
+    protocol = _day(root, file_format="hdf5")
+    text = protocol.read_text(encoding="utf-8")
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("time = "))
+    protocol.write_text(text + "\n", encoding="utf-8")
+    for path in (root / "data").glob("*.h5"):
+        with h5py.File(path, "a") as fh:
+            fh["data"].move("Time (s)", "clock (s)")
+    return protocol
+
+
+def _edit_h5(path: Path, edit) -> None:  # noqa: ANN001
+    import h5py
+
+    with h5py.File(path, "a") as fh:
+        edit(fh["data"])
+
+
+@pytest.mark.parametrize("value", ["200 Hz", "0.2 kHz", b"200", "200"])
+def test_a_sample_rate_written_as_text_with_its_unit_is_read(tmp_path, value):
+    protocol = _hdf5_timing_day(tmp_path)
+
+    def text_rate(group):  # noqa: ANN001, ANN202
+        group.attrs["sample_rate"] = value
+
+    _edit_h5(tmp_path / "data" / "run_021.h5", text_rate)
+    assert _process(protocol) == 0
+    assert _runs(protocol).loc[21, "fs_hz"] == pytest.approx(200.0)
+
+
+def _set(key: str, value):  # noqa: ANN001, ANN202
+    def edit(group):  # noqa: ANN001, ANN202
+        del group.attrs["sample_rate"]
+        group.attrs[key] = value
+    return edit
+
+
+def _soft_link_loop(group) -> None:  # noqa: ANN001
+    import h5py
+
+    group["a"] = h5py.SoftLink("/data/b")
+    group["b"] = h5py.SoftLink("/data/a")
+
+
+@pytest.mark.parametrize("edit, words", [
+    (_set("fs", "fast"), "has no time column, and its sample rate attribute fs = 'fast' is "
+                         "not a number, so the time cannot be built from it"),
+    (_set("fs", "200 parsecs"), "its sample rate attribute fs = '200 parsecs' is in a unit "
+                                "towtank does not know (it reads Hz, kHz"),
+    (_set("fs", ""), "its sample rate attribute fs is empty"),
+    (_set("fs", np.array([], dtype=float)), "its sample rate attribute fs is empty"),
+    (_set("dt", 0.0), "its sample interval attribute dt = 0 is not a positive number"),
+    (_set("dt", -0.005), "its sample interval attribute dt = -0.005 is not a positive number"),
+    (_set("fs", np.nan), "its sample rate attribute fs = nan is not a positive number"),
+    (_set("fs", np.array([200.0, 100.0])), "its sample rate attribute fs holds 2 different "
+                                           "values"),
+    (_soft_link_loop, "the link '/data/a' points back into itself (through '/data/b', a loop "
+                      "of soft links)"),
+], ids=["text", "unit", "empty-text", "empty-array", "dt-zero", "dt-negative", "nan",
+        "two-values", "link-loop"])
+def test_a_bad_sample_rate_attribute_or_a_link_loop_rejects_the_run_in_one_sentence(
+        tmp_path, capsys, edit, words):
+    protocol = _hdf5_timing_day(tmp_path)
+    _edit_h5(tmp_path / "data" / "run_021.h5", edit)
+    assert _process(protocol) == 1
+    reason = _only_rejected(protocol, 21)
+    assert words in reason, reason
+    assert reason.startswith("run 21: run_021.h5")
+    _one_sentence(reason)
+
+
+def test_a_bad_rate_attribute_is_only_a_note_when_the_file_has_its_time(tmp_path):
+    from towtank.ingest.runfile import load_run
+
+    protocol = _day(tmp_path, file_format="hdf5")
+    path = tmp_path / "data" / "run_021.h5"
+    _edit_h5(path, _set("fs", "fast"))
+    assert _process(protocol) == 0
+    from towtank.ingest.protocol import load_protocol
+
+    p = load_protocol(protocol)
+    raw = load_run(path, p.channels, options=p.read)
+    assert any("fs = 'fast' is not a number: ignored (the time column gives the time)" in n
+               for n in raw.notes), raw.notes
+
+
+def test_external_and_dangling_links_are_not_followed(tmp_path):
+    """A link to another file is never opened (it could name any file on the machine); a
+    soft link to nothing is left out."""
+    import h5py
+
+    from towtank.ingest.readers import read_hdf5_columns
+
+    other = tmp_path / "secret.h5"
+    with h5py.File(other, "w") as fh:
+        fh["x"] = np.arange(50.0)
+    path = tmp_path / "run.h5"
+    with h5py.File(path, "w") as fh:
+        fh["time"] = np.arange(50) / 100.0
+        fh["drag"] = np.zeros(50)
+        fh["stolen"] = h5py.ExternalLink(str(other), "/x")
+        fh["nothing"] = h5py.SoftLink("/nowhere")
+    cols, _ = read_hdf5_columns(path.read_bytes(), "run.h5")
+    assert "stolen" not in cols and "nothing" not in cols
+    assert {"time", "drag"} <= set(cols)
