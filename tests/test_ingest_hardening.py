@@ -588,7 +588,7 @@ def test_a_compressed_mat_file_reads_as_the_uncompressed_one(tmp_path):
     """The inflation that checks the declared sizes gives scipy the same variables."""
     import scipy.io
 
-    from towtank.ingest.readers import read_mat_columns
+    from towtank.ingest.arrayfiles import read_mat_columns
 
     rng = np.random.default_rng(1)
     run = {"t": np.arange(500) / 200.0, "U": rng.normal(size=500), "drag": rng.normal(size=500)}
@@ -733,7 +733,7 @@ def test_external_and_dangling_links_are_not_followed(tmp_path):
     soft link to nothing is left out."""
     import h5py
 
-    from towtank.ingest.readers import read_hdf5_columns
+    from towtank.ingest.arrayfiles import read_hdf5_columns
 
     other = tmp_path / "secret.h5"
     with h5py.File(other, "w") as fh:

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.arrayfiles import read_hdf5_columns, read_mat_columns
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns
@@ -39,9 +40,7 @@ from towtank.ingest.readers import (
     column_unit,
     file_format,
     plain_csv,
-    read_hdf5_columns,
     read_lvm_columns,
-    read_mat_columns,
     read_tdms_columns,
     read_text_columns,
     stated_units,
