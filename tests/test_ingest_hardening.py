@@ -747,3 +747,18 @@ def test_external_and_dangling_links_are_not_followed(tmp_path):
     cols, _ = read_hdf5_columns(path.read_bytes(), "run.h5")
     assert "stolen" not in cols and "nothing" not in cols
     assert {"time", "drag"} <= set(cols)
+
+
+def test_inspect_says_why_a_stated_rate_is_not_used(tmp_path):
+    import h5py
+
+    from towtank.ingest.describe import describe_file
+
+    path = tmp_path / "run.h5"
+    with h5py.File(path, "w") as fh:
+        fh["drag"] = np.zeros(50)
+        fh["speed"] = np.zeros(50)
+        fh.attrs["fs"] = "fast"
+    desc = describe_file(path)
+    assert desc.timing.startswith("none usable: its sample rate attribute fs = 'fast' is not a "
+                                  "number; give [read] sample_rate_hz")
