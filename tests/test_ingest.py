@@ -170,14 +170,17 @@ def test_truncated_mid_line(seed):
     cut = damage.truncate(GOOD, seed)
     assert not cut.endswith(b"\n")
     row = cut.count(b"\n") + 1
-    assert reason(cut) == f"{NAME} ends mid-line at row {row} (truncated file)"
+    assert reason(cut).startswith(f"{NAME} ends in the middle of a line (row {row} has ")
+    assert reason(cut).endswith("; a truncated file): was it copied before the recording "
+                                "finished?")
 
 
 @pytest.mark.parametrize("tail", [b",", b",-", b",0.1e", b",1.5e-"])
 def test_truncated_inside_the_last_value(tail):
     lines = GOOD.split(b"\n")
     cut = b"\n".join(lines[:1000]) + b"\n" + lines[1000][: lines[1000].rfind(b",")] + tail
-    assert reason(cut) == f"{NAME} ends mid-line at row 1001 (truncated file)"
+    assert reason(cut).startswith(f"{NAME} ends in the middle of a line (row 1001 ")
+    assert "a truncated file" in reason(cut)
 
 
 def test_complete_last_line_without_line_break_is_kept():

@@ -316,7 +316,8 @@ def process_day(
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
                            protocol.sheet)
-    day_warnings = list(protocol.warnings) + unlisted_warnings(protocol, sheet)
+    day_warnings = list(protocol.warnings) + list(sheet.attrs.get("warnings", [])) + \
+        unlisted_warnings(protocol, sheet)
     notes = sheet.attrs.get("notes", [])
     if notes:
         shown = "; ".join(repr(n if len(n) <= 80 else n[:77] + "...") for n in notes[:3])

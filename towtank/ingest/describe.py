@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from towtank.ingest.readers import (
+    FS_ERROR_KEY,
     FS_KEY,
     WF_TIME_KEY,
     ReadOptions,
@@ -89,6 +90,9 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
     elif FS_KEY in cols:
         desc.fs = float(cols[FS_KEY][0])
         desc.timing = f"sample rate stated in the file, {desc.fs:g} Hz; no time channel"
+    elif FS_ERROR_KEY in cols:
+        desc.timing = (f"none usable: {cols[FS_ERROR_KEY].item()}; give [read] sample_rate_hz "
+                       "or map a time column")
     else:
         desc.timing = "none found: give [read] sample_rate_hz or map a time column"
     for c in names:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.readers import cut_last_line, truncation_error
 
 ROWS_KEY = "__rows__"
 INVALID_KEY = "__invalid_rows__"
@@ -63,28 +64,36 @@ def _line_table(data: bytes, delim: str) -> tuple[np.ndarray, np.ndarray, np.nda
     return numbers, nfields, empty, header
 
 
-def _truncated_tail(data: bytes, delim: str, n_header: int) -> bool:
-    """True when the file does not end with a line break and its last line is cut short.
+def _truncated_tail(data: bytes, delim: str, n_header: int,
+                    name: str = "the file") -> RunError | None:
+    """The truncation sentence when the file does not end with a line break and its last line
+    is cut short (:func:`towtank.ingest.readers.cut_last_line`: fewer fields than the header,
+    or a last value that is empty or not a number, ``1.2e``, ``-``), else None.
 
-    A last line with fewer fields than the header is cut, and so is one whose last value is
-    empty or not a number (``1.2e``, ``-``). A complete last line without a final line break is
-    fine (many programs write no final line break); a number cut to a shorter number cannot be
-    told from a complete one, and is at worst one odd sample at the end of the still window.
+    A complete last line without a final line break is fine (many programs write no final
+    line break); a number cut to a shorter number cannot be told from a complete one, and is
+    at worst one odd sample at the end of the still window.
     """
     if data.endswith((b"\n", b"\r")):
-        return False
-    last = data[data.rfind(b"\n") + 1 :].rstrip(b"\r")
+        return None
+    start = data.rfind(b"\n") + 1
+    last = data[start:].rstrip(b"\r")
     if not last.strip():
-        return False
-    fields = last.split(delim.encode())
-    if len(fields) != n_header:
-        return len(fields) < n_header  # more fields: a malformed row, skipped and counted
-    tail = fields[-1].strip()
-    try:
-        float(tail)
-    except ValueError:
-        return True
-    return False
+        return None
+    above = None  # the last non-blank line above it, unless that is the header
+    end = start - 1
+    while end > 0:
+        begin = data.rfind(b"\n", 0, end) + 1
+        line = data[begin:end].rstrip(b"\r")
+        if line.strip():
+            header_line = not data[:begin].strip()
+            above = None if header_line else line
+            break
+        end = begin - 1
+    cut = cut_last_line(last, delim, n_header, above)
+    if cut is None:
+        return None
+    return truncation_error(name, data.count(b"\n") + 1, cut[0], n_header, cut[1])
 
 
 def _count_byte(data: bytes, byte: int) -> int:
@@ -137,7 +146,7 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
     notes. Two private entries come with them: ``__rows__``, the file row of every data row
     (header = row 1), and ``__invalid_rows__``, the rows skipped for a wrong number of fields.
     A UTF-8 byte-order mark, Windows line ends and blank lines are accepted. A last line cut
-    short is a RunError naming its row (truncated file).
+    short is a RunError naming its row (:func:`towtank.ingest.readers.truncation_error`).
     """
     import pyarrow as pa
 
@@ -155,9 +164,9 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
     header_line = data[first : end if end >= 0 else len(data)]
     delim = _sniff_delimiter(header_line)
     n_header = header_line.rstrip(b"\r").count(delim.encode()) + 1
-    if _truncated_tail(data, delim, n_header):
-        last_row = data.count(b"\n") + 1
-        raise RunError(f"{name} ends mid-line at row {last_row} (truncated file)")
+    cut = _truncated_tail(data, delim, n_header, name)
+    if cut is not None:
+        raise cut
 
     notes: list[str] = []
     n_invalid = [0]

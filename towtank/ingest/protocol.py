@@ -678,7 +678,10 @@ def read_reference_csv(path: str | Path) -> dict[str, float]:
     import csv
     import math
 
+    from towtank.ingest.schema import check_table_size
+
     path = Path(path)
+    check_table_size(path, "reference CSV", str(path))
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:

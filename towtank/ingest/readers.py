@@ -24,9 +24,12 @@ tdms       LabVIEW TDMS via npTDMS; waveform timing when there is no time channe
 lvm        LabVIEW Measurement text: header blocks ending in ``***End_of_Header***``, one or
            more segments
 mat        MATLAB v4/v5/v7 (scipy.io.loadmat) and v7.3 (HDF5, h5py): vectors, or the fields
-           of a struct
-hdf5       HDF5 datasets of one group (h5py)
+           of a struct (:mod:`towtank.ingest.arrayfiles`)
+hdf5       HDF5 datasets of one group (h5py; :mod:`towtank.ingest.arrayfiles`)
 =========  ==================================================================================
+
+``__fs_error__`` holds, instead of ``__fs__``, why a sample rate the file states is not one
+(``fs = "fast"``, ``dt = 0``): the run is rejected with it only if its time must come from it.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from towtank.errors import RunError
 UNITS_KEY = "__units__"
 WF_TIME_KEY = "__wf_time__"
 FS_KEY = "__fs__"
+FS_ERROR_KEY = "__fs_error__"
 LABEL_KEY = "__label__"
 
 #: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
@@ -158,6 +162,64 @@ def _numeric_line(line: bytes, delim: str, n: int | None = None) -> bool:
     return bool(values) and all(_is_number(f) for f in fields)
 
 
+def truncation_error(name: str, row: int, given: int, expected: int,
+                     cut: str | None = None) -> RunError:
+    """The one sentence of a text run file whose last line is cut short (docs/formats.md §3):
+    the same for every text layout (CSV, European text, whitespace text, LVM)."""
+    what = (f"row {row} ends in {cut!r}, a number cut short" if cut else
+            f"row {row} has {given} of {expected} values")
+    return RunError(f"{name} ends in the middle of a line ({what}; a truncated file): was it "
+                    "copied before the recording finished?")
+
+
+def _complete_number(field: bytes) -> bool:
+    text = field.strip()
+    return bool(text) and (bool(_NUMBER.match(text)) or
+                           text.lower().lstrip(b"+-") in (b"nan", b"inf", b"infinity"))
+
+
+def cut_last_line(last: bytes, delim: str, expected: int,
+                  above: bytes | None = None) -> tuple[int, str | None] | None:
+    """Whether the last line of a file that does not end in a line break is cut short.
+
+    The line is cut when it has fewer fields than ``expected`` (the header's, or the line
+    above's when that has fewer: a trailing separator the header lacks), or when its last
+    field is not a complete number (empty, ``1.2e``, ``-``) where the same field of the line
+    above (``above``, the last complete data line, if any) is one. A complete line without a
+    final line break is not cut (many programs write none); a number cut to a shorter number
+    (``0.12`` of ``0.125``) cannot be told from a complete one.
+
+    Returns None when the line is complete, else (fields given, the cut value or None).
+    """
+    fields = _split(last.rstrip(b"\r"), delim)
+    if above is not None:
+        width = len(_split(above.rstrip(b"\r"), delim))
+        if 1 < width < expected:
+            expected = width
+    if len(fields) < expected:
+        if fields and not fields[-1].strip() and delim != "whitespace":
+            return len(fields) - 1, None
+        return len(fields), None
+    if len(fields) > expected:
+        return None  # a malformed row: skipped and counted with the others
+    tail = fields[expected - 1]
+    if _complete_number(tail):
+        return None
+    if above is not None:
+        prev = _split(above.rstrip(b"\r"), delim)
+        if len(prev) < expected or not _complete_number(prev[expected - 1]):
+            return None  # the field above is not a number either: text, or always empty
+    if not tail.strip():
+        return expected - 1, None
+    return expected, tail.strip().decode("utf-8", "replace")
+
+
+def _unterminated(data: bytes) -> bool:
+    """The file's last line has text and no line break after it."""
+    end = data.rstrip(b" \t")
+    return bool(end) and not end.endswith((b"\n", b"\r"))
+
+
 def _guess_delimiter(lines: list[bytes]) -> str:
     """The separator under which the longest block of lines at the end of the file splits into
     the same number (> 1) of numeric fields; ``;`` before tab before ``,`` before blanks on a
@@ -186,7 +248,8 @@ def _guess_decimal(lines: list[bytes], delim: str) -> str:
     """',' when the numbers of the data lines use a decimal comma (never with ',' separators)."""
     if delim == ",":
         return "."
-    sample = b" ".join(lines[-20:])
+    numeric = [ln for ln in lines[-20:] if _numeric_line(ln, delim)]
+    sample = b" ".join(numeric or lines[-20:])  # a date in a short file's preamble aside
     commas = len(re.findall(rb"\d,\d", sample))
     points = len(re.findall(rb"\d\.\d", sample))
     return "," if commas > points else "."
@@ -263,8 +326,11 @@ def read_text_columns(
         lines.pop()
     if not lines:
         raise RunError(f"{name} is empty (0 data rows)")
+    # a last line with no line break may be cut short: the layout is found without it
+    last = lines.pop() if _unterminated(data) and len(lines) > 1 else None
     delim = DELIMITERS.get(opts.delimiter, opts.delimiter) or _guess_delimiter(lines)
-    decimal = opts.decimal if opts.decimal in (".", ",") else _guess_decimal(lines, delim)
+    decimal = opts.decimal if opts.decimal in (".", ",") else \
+        _guess_decimal(lines + [last] if last is not None else lines, delim)
     if delim == "," and decimal == ",":
         raise RunError(f"{name}: a decimal comma cannot be read in comma-separated columns")
     if opts.skip_rows:
@@ -275,6 +341,14 @@ def read_text_columns(
             first += 1
     else:
         head, first = _header_row(lines, delim)
+    if last is not None and first <= len(lines):
+        width = len(_split(lines[head].rstrip(b"\r"), delim)) if head >= 0 else \
+            len(_split(lines[min(first, len(lines) - 1)].rstrip(b"\r"), delim))
+        above = lines[-1] if first < len(lines) else None
+        cut = cut_last_line(last, delim, width, above)
+        if cut is not None:
+            raise truncation_error(name, len(lines) + 1, cut[0], width, cut[1])
+        lines.append(last)
     if first >= len(lines):
         raise RunError(f"{name}: no rows of numbers found under a header")
     header = (
@@ -388,6 +462,7 @@ def read_lvm_columns(
         elif key.strip() == "Decimal_Separator":
             dec = value.strip() or "."
     marks = [i for i, ln in enumerate(lines) if ln.strip().startswith("***End_of_Header***")]
+    cut_at_end = _unterminated(data if isinstance(data, bytes) else data.encode())
     if len(marks) < 2:
         raise RunError(f"{name} is not a LabVIEW measurement file (no segment header found)")
     segments: list[dict[str, np.ndarray]] = []
@@ -401,6 +476,8 @@ def read_lvm_columns(
             break
         names = [c.strip() for c in lines[i].split(sep)]
         i += 1
+        if k + 1 == len(marks) and cut_at_end and len(lines) - 1 >= i:
+            _lvm_cut_line(lines, i, names, sep, dec, name)
         end = marks[k + 1] if k + 1 < len(marks) else len(lines)
         while end > i and not _lvm_data_line(lines[end - 1], sep):
             end -= 1  # back over the next segment's header (a few lines)
@@ -447,6 +524,34 @@ def read_lvm_columns(
     cols[UNITS_KEY] = segments[0][UNITS_KEY]
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
+
+
+def _lvm_cut_line(lines: list[str], first: int, names: list[str], sep: str, dec: str,
+                  name: str) -> None:
+    """Raise the truncation sentence when the file's last line (it has no line break after
+    it), a data line of the last segment, is cut short (:func:`cut_last_line`). LabVIEW ends
+    each line with a comment column, usually empty: the last value checked is the one before
+    it; the line above sets the width when it has fewer fields than the column names (no
+    trailing separator)."""
+    last = lines[-1]
+    if not last.strip():
+        return  # the cut fell in the blank lines after the data: nothing is lost
+    above = next((ln for ln in reversed(lines[first:-1]) if ln.strip()), None)
+
+    def enc(text: str) -> bytes:
+        return (text.replace(",", ".") if dec == "," and sep != "," else text).encode()
+
+    comment = bool(names) and names[-1].lower() == "comment"
+    expected = len(names) - comment
+    fields = last.split(sep)
+    if comment and len(fields) == expected + 1:
+        fields = fields[:-1]  # the comment (any text) is not checked
+    prev = above.split(sep)[:expected] if above is not None else None
+    trimmed = sep.join(fields)
+    cut = cut_last_line(enc(trimmed), sep, expected,
+                        enc(sep.join(prev)) if prev is not None else None)
+    if cut is not None:
+        raise truncation_error(name, len(lines), cut[0], expected, cut[1])
 
 
 def _lvm_block(block: list[str], names: list[str], sep: str,
@@ -556,154 +661,6 @@ def read_tdms_columns(
         raise RunError(f"{name} holds no numeric channels")
     if wf is not None:
         cols[WF_TIME_KEY] = wf[0] + wf[1] * np.arange(wf[2], dtype=np.float64)
-    cols[UNITS_KEY] = _units_entry(units)
-    cols[LABEL_KEY] = np.array([], dtype=float)
-    return cols, []
-
-
-# ---------------------------------------------------------------------------- MATLAB / HDF5
-def _vector(value: Any) -> np.ndarray | None:
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "fiub" or arr.ndim > 2:
-        return None
-    if arr.ndim == 2 and min(arr.shape) != 1:
-        return None
-    with np.errstate(invalid="ignore", over="ignore"):
-        return arr.astype(np.float64).ravel()
-
-
-def _collect(items: dict[str, Any], cols: dict[str, np.ndarray], fs: list[float]) -> None:
-    """Vectors of a MATLAB/HDF5 namespace as columns; a sample rate or interval noted."""
-    for key, value in items.items():
-        vec = _vector(value)
-        if vec is None:
-            continue
-        low = key.lower()
-        if vec.size == 1:
-            if low in _FS_NAMES and vec[0] > 0:
-                fs.append(float(vec[0]))
-            elif low in _DT_NAMES and vec[0] > 0:
-                fs.append(1.0 / float(vec[0]))
-            continue
-        cols[key] = vec
-
-
-def read_mat_columns(
-    data: bytes, name: str, options: ReadOptions | None = None
-) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Vectors of a MATLAB .mat file (v4–v7 with scipy.io, v7.3 with h5py) as columns.
-
-    The channels are the file's vectors, or the fields of the struct ``[read] group`` (default:
-    the struct holding the most vectors when the top level holds none). A scalar ``fs``,
-    ``sample_rate`` or ``dt`` gives the sample rate of a file without a time vector.
-    """
-    if data[512:520] == _HDF5_SIGNATURE or data[:8] == _HDF5_SIGNATURE:
-        return read_hdf5_columns(data, name, options, matlab=True)
-    import scipy.io
-
-    opts = options or ReadOptions()
-    try:
-        mat = scipy.io.loadmat(io.BytesIO(data), squeeze_me=True, struct_as_record=False)
-    except NotImplementedError:  # v7.3 without the usual header offset
-        return read_hdf5_columns(data, name, options, matlab=True)
-    except Exception as exc:  # noqa: BLE001 - scipy raises many types for damaged files
-        raise RunError(f"{name} is not a readable MATLAB file ({type(exc).__name__}: {exc})") \
-            from None
-    top = {k: v for k, v in mat.items() if not k.startswith("__")}
-    structs = {k: v for k, v in top.items() if hasattr(v, "_fieldnames")}
-    cols: dict[str, np.ndarray] = {}
-    fs: list[float] = []
-    if opts.group:
-        if opts.group not in structs:
-            found = ", ".join(f"'{k}'" for k in structs) or "none"
-            raise RunError(f"{name} has no struct '{opts.group}' (structs: {found})")
-        chosen = [opts.group]
-    else:
-        _collect(top, cols, fs)
-        chosen = [] if len(cols) >= 2 else list(structs)
-    for key in chosen:
-        s = structs[key]
-        _collect({f: getattr(s, f) for f in s._fieldnames}, cols, fs)
-    if not cols:
-        raise RunError(f"{name} holds no numeric vectors (variables: "
-                       f"{', '.join(top) or 'none'})")
-    if fs:
-        cols[FS_KEY] = np.array([fs[0]])
-    cols[LABEL_KEY] = np.array([], dtype=float)
-    return cols, []
-
-
-def read_hdf5_columns(
-    data: bytes, name: str, options: ReadOptions | None = None, *, matlab: bool = False
-) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Datasets of an HDF5 file (or a MATLAB v7.3 file) as columns.
-
-    The channels are the 1-D datasets of ``[read] group`` or, by default, of the group (root
-    first) holding the most of them. Units come from a ``unit``/``units`` attribute; the sample
-    rate from an ``fs``/``sample_rate`` attribute or scalar dataset, or ``wf_increment``.
-    """
-    import h5py
-
-    opts = options or ReadOptions()
-    what = "MATLAB v7.3" if matlab else "HDF5"
-    try:  # the bytes as an in-memory file image (no Python call per read)
-        fh = h5py.File(h5py.h5f.open_file_image(data), "r")
-    except Exception as exc:  # noqa: BLE001 - h5py raises OSError and others for bad files
-        raise RunError(f"{name} is not a readable {what} file ({type(exc).__name__}: {exc})") \
-            from None
-    with fh:
-        groups: dict[str, Any] = {"/": fh}
-        members: dict[str, dict[str, Any]] = {}
-
-        def datasets(key: str) -> dict[str, Any]:
-            if key not in members:
-                members[key] = {k: v for k, v in groups[key].items()
-                                if isinstance(v, h5py.Dataset)}
-            return members[key]
-
-        def vectors(key: str) -> int:
-            return sum(1 for v in datasets(key).values()
-                       if len(v.shape) in (1, 2) and max(v.shape or (0,)) > 1)
-
-        if opts.group or vectors("/") < 2:
-            fh.visititems(lambda key, obj: groups.setdefault(key, obj)
-                          if isinstance(obj, h5py.Group) and not key.startswith("#") else None)
-        if opts.group:
-            group_key = opts.group.strip("/") or "/"
-            if group_key not in groups:
-                found = ", ".join(f"'{k}'" for k in groups) or "none"
-                raise RunError(f"{name} has no group '{opts.group}' (groups: {found})")
-        else:
-            counts = {k: vectors(k) for k in groups}
-            group_key = max(counts, key=lambda k: (counts[k], k == "/"))
-        chosen = groups[group_key]
-        cols: dict[str, np.ndarray] = {}
-        units: dict[str, str] = {}
-        fs: list[float] = []
-        items = {}
-        for key, obj in datasets(group_key).items():
-            if obj.dtype.kind in "fiub":
-                items[key] = obj[()]
-                attrs = obj.attrs
-                names = set(attrs.keys()) if len(attrs) else set()
-                unit = attrs["unit"] if "unit" in names else \
-                    attrs["units"] if "units" in names else None
-                if unit is not None:
-                    units[key] = unit.decode() if isinstance(unit, bytes) else str(unit)
-                inc = attrs["wf_increment"] if "wf_increment" in names else None
-                if inc is not None and float(np.ravel(inc)[0]) > 0:
-                    fs.append(1.0 / float(np.ravel(inc)[0]))
-        for attr_owner in (chosen, fh):
-            for key, value in attr_owner.attrs.items():
-                if key.lower() in _FS_NAMES:
-                    fs.append(float(np.ravel(value)[0]))
-                elif key.lower() in _DT_NAMES:
-                    fs.append(1.0 / float(np.ravel(value)[0]))
-        _collect(items, cols, fs)
-    if not cols:
-        raise RunError(f"{name} holds no numeric datasets")
-    if fs and fs[0] > 0:
-        cols[FS_KEY] = np.array([fs[0]])
     cols[UNITS_KEY] = _units_entry(units)
     cols[LABEL_KEY] = np.array([], dtype=float)
     return cols, []

@@ -27,20 +27,20 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.arrayfiles import read_hdf5_columns, read_mat_columns
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns
 from towtank.ingest.protocol import Balance, ChannelMap, channel_map
 from towtank.ingest.readers import (
+    FS_ERROR_KEY,
     FS_KEY,
     WF_TIME_KEY,
     ReadOptions,
     column_unit,
     file_format,
     plain_csv,
-    read_hdf5_columns,
     read_lvm_columns,
-    read_mat_columns,
     read_tdms_columns,
     read_text_columns,
     stated_units,
@@ -655,6 +655,12 @@ def map_channels(
                 else f"expected as the column '{canon}' (no [channels] mapping)"
             )
             listed = ", ".join(f"'{c}'" for c in found) or "none"
+            if canon == "time" and "time" not in mapping and FS_ERROR_KEY in cols:
+                raise RunError(
+                    f"{name} has no time column, and {cols[FS_ERROR_KEY].item()}, so the time "
+                    "cannot be built from it (write it as a number in Hz, fs = 200 or "
+                    "'200 Hz', or give [read] sample_rate_hz)"
+                )
             if canon == "time" and "time" not in mapping:
                 how += (", no LabVIEW waveform timing (wf_increment) and no [read] "
                         "sample_rate_hz")
@@ -787,6 +793,8 @@ def _load_run(
     chans = map_channels(cols, mapping, name, used=used, balance=balance, external=external,
                          fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
+    if FS_ERROR_KEY in cols and used.get("time") in cols:
+        notes.append(f"{cols[FS_ERROR_KEY].item()}: ignored (the time column gives the time)")
     if speed_log is not None:  # a placeholder until the time base is known
         chans["speed"] = np.zeros(np.asarray(chans["time"]).size)
         used["speed"] = "[speed_log]"

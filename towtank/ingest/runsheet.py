@@ -50,18 +50,22 @@ KNOWN = REQUIRED + (
 DEFAULT_TARE_GROUP = "default"
 
 
-def _read_table(path: Path, options: SheetOptions | None = None) -> tuple[
+def _read_table(path: Path, options: SheetOptions | None = None,
+                warnings: list[str] | None = None) -> tuple[
         pd.DataFrame, list[int], dict[str, tuple[float, float]], list[str]]:
     """The sheet's table: (rows with the contract's column names, each row's line in the
     sheet (1-based), unit conversions of eq. 1 of :mod:`towtank.ingest.sheetlayout`, notes
-    found below the table)."""
+    found below the table); warnings about the workbook are appended to ``warnings``."""
     opts = options or SheetOptions()
     suffix = path.suffix.lower()
     _check_size(path)
     try:
         if suffix == ".xlsx":
-            grid = _read_xlsx(path, opts)
+            grid = _read_xlsx(path, opts, warnings)
         elif suffix == ".csv":
+            if opts.name:
+                raise ProtocolError(f"{path.name}: [sheet] name = {opts.name!r} names a "
+                                    "worksheet, but the run sheet is a CSV file (it has none).")
             grid = _read_csv_grid(path, opts)
         else:
             raise ProtocolError(f"{path.name}: a run sheet must be .csv or .xlsx.")
@@ -317,61 +321,48 @@ def known_columns(columns: list[str], src: str) -> list[str]:
     return out
 
 
-def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
+def _read_xlsx(path: Path, opts: SheetOptions | None = None,
+               warnings: list[str] | None = None) -> list[list[Any]]:
     """The run-sheet worksheet's cells, as text or numbers.
 
-    The worksheet is the first one with a header row that names the required columns (a
-    notes tab may come first; title rows above the header are allowed). Formulas give the
-    values Excel saved with them. A merged range (a tare group or a temperature typed once
-    over several runs) gives its value to every cell it covers, as the reader of the sheet
-    sees it; a plain reader would leave all but the first cell empty.
+    The worksheet (docs/formats.md §2) is the one ``[sheet] name`` names (hidden or not);
+    else, among the *visible* worksheets whose header row (within the first 30 rows) names
+    the required columns, the workbook's active one, or failing that the first (a notes tab
+    may come first). A hidden or very hidden worksheet is never taken unless named: what
+    Excel does not show is not what the operator checked. When several visible worksheets
+    have the columns, a warning (appended to ``warnings``) names the one used.
+
+    Formulas give the values Excel saved with them; a formula whose saved value is an empty
+    string (``=IF(…,"",…)``) is an empty cell. A merged range (a tare group or a temperature
+    typed once over several runs) gives its value to every cell it covers, as the reader of
+    the sheet sees it; a plain reader would leave all but the first cell empty.
 
     Raises
     ------
     ProtocolError
-        No worksheet has the required columns; or a formula has no saved value (a workbook
-        written by a program and never saved by Excel), which would read as an empty cell.
+        The named worksheet does not exist; no visible worksheet has the required columns;
+        or a formula has no saved value at all (a workbook written by a program and never
+        saved by Excel), which would read as an empty cell.
     """
     import openpyxl
 
     opts = opts or SheetOptions()
     source = _bounded_xlsx(path)
     wb = openpyxl.load_workbook(_reopen(source), data_only=True)
-
-    def top(ws: Any) -> list[list[Any]]:
-        return [list(r) for r in ws.iter_rows(max_row=30, values_only=True)]
-
-    chosen = None
-    for ws in wb.worksheets:
-        grid = top(ws)
-        i = _header_index(grid, opts, path.name)
-        names, _ = header_names(grid[i] if grid else [], opts, path.name)
-        if {_norm(c) for c in REQUIRED} <= {_norm(str(n)) for n in names if n}:
-            chosen = ws
-            break
-    if chosen is None:
-        names = ", ".join(repr(ws.title) for ws in wb.worksheets)
-        first = top(wb.worksheets[0])
-        found = [str(h).strip() for h in (first[0] if first else []) if h is not None]
-        missing = [c for c in REQUIRED if _norm(c) not in {_norm(h) for h in found}]
+    try:
+        ws = _run_worksheet(wb, path.name, opts, warnings)
+        for rng in list(ws.merged_cells.ranges):
+            value = ws.cell(rng.min_row, rng.min_col).value
+            ws.unmerge_cells(str(rng))
+            for row in ws.iter_rows(min_row=rng.min_row, max_row=rng.max_row,
+                                    min_col=rng.min_col, max_col=rng.max_col):
+                for cell in row:
+                    cell.value = value
+        rows = [list(r) for r in ws.iter_rows(values_only=True)]
+        title = ws.title
+    finally:
         wb.close()
-        raise ProtocolError(
-            f"{path.name}: no worksheet has the required columns {', '.join(REQUIRED)} in a "
-            f"header row (within its first 30 rows); the first, {names.split(', ')[0]}, lacks "
-            f"{', '.join(missing)} (columns found: {', '.join(found) or 'none'}; worksheets: "
-            f"{names}; the lab's own column names can be mapped in [sheet] columns)."
-        )
-    ws = chosen
-    for rng in list(ws.merged_cells.ranges):
-        value = ws.cell(rng.min_row, rng.min_col).value
-        ws.unmerge_cells(str(rng))
-        for row in ws.iter_rows(min_row=rng.min_row, max_row=rng.max_row,
-                                min_col=rng.min_col, max_col=rng.max_col):
-            for cell in row:
-                cell.value = value
-    rows = [list(r) for r in ws.iter_rows(values_only=True)]
-    blanks = [r for r in _unsaved_formulas(_reopen(source), ws) if r[1] > 1]
-    wb.close()
+    blanks = [r for r in _unsaved_formulas(_reopen(source), title) if r[1] > 1]
     if blanks:
         cells = ", ".join(f"{col}{row}" for col, row in blanks[:5])
         more = f" and {len(blanks) - 5} more" if len(blanks) > 5 else ""
@@ -383,22 +374,122 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None) -> list[list[Any]]:
     return rows
 
 
+def _state(ws: Any) -> str:
+    """'visible', 'hidden' or 'very hidden' (Excel's words) of a worksheet."""
+    state = getattr(ws, "sheet_state", "visible") or "visible"
+    return "very hidden" if state == "veryHidden" else state
+
+
+def _run_worksheet(wb: Any, src: str, opts: SheetOptions, warnings: list[str] | None) -> Any:
+    """The worksheet holding the runs (see :func:`_read_xlsx`)."""
+    def top(ws: Any) -> list[list[Any]]:
+        return [list(r) for r in ws.iter_rows(max_row=30, values_only=True)]
+
+    def has_columns(ws: Any) -> bool:
+        grid = top(ws)
+        i = _header_index(grid, opts, src)
+        names, _ = header_names(grid[i] if grid else [], opts, src)
+        return {_norm(c) for c in REQUIRED} <= {_norm(str(n)) for n in names if n}
+
+    def listed(sheets: list[Any]) -> str:
+        return ", ".join(repr(ws.title) + ("" if _state(ws) == "visible" else
+                                           f" ({_state(ws)})") for ws in sheets)
+
+    sheets = list(wb.worksheets)
+    if opts.name:
+        named = [ws for ws in sheets if ws.title == opts.name] or \
+            [ws for ws in sheets if ws.title.strip().casefold() == opts.name.strip().casefold()]
+        if len(named) != 1:
+            raise ProtocolError(
+                f"{src}: [sheet] name = {opts.name!r}, but the workbook has no worksheet of that "
+                f"name (worksheets: {listed(sheets) or 'none'})."
+            )
+        return named[0]  # its columns are checked with the rest of the sheet
+    visible = [ws for ws in sheets if _state(ws) == "visible"]
+    candidates = [ws for ws in visible if has_columns(ws)]
+    if not candidates:
+        hidden = [ws for ws in sheets if _state(ws) != "visible" and has_columns(ws)]
+        if hidden:
+            raise ProtocolError(
+                f"{src}: no visible worksheet has the required columns {', '.join(REQUIRED)}; "
+                f"the {_state(hidden[0])} worksheet {hidden[0].title!r} has them, but a hidden "
+                "worksheet is read only when [sheet] name names it (worksheets: "
+                f"{listed(sheets)})."
+            )
+        first = top(visible[0] if visible else sheets[0])
+        found = [str(h).strip() for h in (first[0] if first else []) if h is not None]
+        missing = [c for c in REQUIRED if _norm(c) not in {_norm(h) for h in found}]
+        name = repr((visible or sheets)[0].title)
+        raise ProtocolError(
+            f"{src}: no worksheet has the required columns {', '.join(REQUIRED)} in a "
+            f"header row (within its first 30 rows); the first, {name}, lacks "
+            f"{', '.join(missing)} (columns found: {', '.join(found) or 'none'}; worksheets: "
+            f"{listed(sheets)}; the lab's own column names can be mapped in [sheet] columns)."
+        )
+    active = wb.active
+    chosen = next((ws for ws in candidates if ws is active), candidates[0])
+    if len(candidates) > 1 and warnings is not None:
+        why = "the active one" if chosen is active else "the first"
+        warnings.append(
+            f"the workbook {src} has {len(candidates)} visible worksheets with the run sheet's "
+            f"columns ({listed(candidates)}); {chosen.title!r} is used ({why}): name another "
+            "in [sheet] name if it is not the right one."
+        )
+    return chosen
+
+
 def _reopen(source: Path | io.BytesIO) -> Path | io.BytesIO:
     """A workbook source to open once more (a file again, or a fresh view of the bytes)."""
     return io.BytesIO(source.getvalue()) if isinstance(source, io.BytesIO) else source
 
 
-def _unsaved_formulas(path: Path | io.BytesIO, values: Any) -> list[tuple[str, int]]:
-    """(column letter, row) of the formula cells of ``values`` (a worksheet read with its
-    saved values) that have no saved value; the formulas are read from ``path``."""
-    import openpyxl
+_MAIN_NS = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
+_REL_NS = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}"
+_PKG_NS = "{http://schemas.openxmlformats.org/package/2006/relationships}"
 
-    wb = openpyxl.load_workbook(path, data_only=False)
-    formulas = wb[values.title]
-    out = [(cell.column_letter, cell.row)
-           for row in formulas.iter_rows() for cell in row
-           if cell.data_type == "f" and values[cell.coordinate].value is None]
-    wb.close()
+
+def _worksheet_part(zf: zipfile.ZipFile, title: str) -> str | None:
+    """The zip member holding worksheet ``title`` (``xl/worksheets/sheetN.xml``)."""
+    import posixpath
+    from xml.etree import ElementTree as ET  # noqa: N817 - the usual name
+
+    book = ET.fromstring(zf.read("xl/workbook.xml"))
+    rid = next((el.get(f"{_REL_NS}id") for el in book.iter(f"{_MAIN_NS}sheet")
+                if el.get("name") == title), None)
+    rels = ET.fromstring(zf.read("xl/_rels/workbook.xml.rels"))
+    target = next((el.get("Target") for el in rels.iter(f"{_PKG_NS}Relationship")
+                   if el.get("Id") == rid), None)
+    if rid is None or target is None:
+        return None
+    return target.lstrip("/") if target.startswith("/") else \
+        posixpath.normpath(posixpath.join("xl", target))
+
+
+def _unsaved_formulas(source: Path | io.BytesIO, title: str) -> list[tuple[str, int]]:
+    """(column letter, row) of the formula cells of worksheet ``title`` that have no saved
+    value: no ``<v>`` element, or an empty one that is not a text result (``t="str"``: Excel
+    saves the empty string a formula such as ``=IF(…,"",…)`` returns as ``<v></v>``, which
+    is a value, an empty cell). A program that writes formulas without computing them (as
+    openpyxl does) leaves ``<v/>`` with no type, or no ``<v>`` at all."""
+    from xml.etree import ElementTree as ET  # noqa: N817 - the usual name
+
+    with zipfile.ZipFile(source) as zf:
+        part = _worksheet_part(zf, title)
+        if part is None or part not in zf.namelist():
+            return []
+        out = []
+        with zf.open(part) as fh:
+            for _, el in ET.iterparse(fh):
+                if el.tag != f"{_MAIN_NS}c":
+                    continue
+                if el.find(f"{_MAIN_NS}f") is not None:
+                    v = el.find(f"{_MAIN_NS}v")
+                    saved = v is not None and (bool(v.text) or el.get("t") == "str")
+                    if not saved:
+                        m = re.match(r"([A-Z]+)(\d+)$", el.get("r") or "")
+                        if m:
+                            out.append((m.group(1), int(m.group(2))))
+                el.clear()
     return out
 
 
@@ -435,7 +526,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     Parameters
     ----------
     path : str or Path
-        The run sheet, .csv or .xlsx (the first worksheet with the required columns).
+        The run sheet, .csv or .xlsx (its worksheet chosen as in docs/formats.md §2).
     default_temperature_C : float
         Water temperature for rows without ``water_temp_C`` [°C].
     options : SheetOptions, optional
@@ -450,7 +541,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], sheet_row
         (1-based row in the sheet, header = row 1), sheet_error (one sentence, or "") and
         every extra column of the sheet, unchanged. ``.attrs["notes"]`` holds the lines of
-        text typed among or below the table (not runs).
+        text typed among or below the table (not runs), ``.attrs["warnings"]`` sentences
+        about the workbook for the day's warnings (several worksheets with the columns).
 
     Raises
     ------
@@ -459,7 +551,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     """
     path = Path(path)
     src = path.name
-    raw, lines, units, notes = _read_table(path, options)
+    warnings: list[str] = []
+    raw, lines, units, notes = _read_table(path, options, warnings)
     missing = [c for c in REQUIRED if c not in raw.columns]
     if missing:
         found = ", ".join(raw.columns) or "none"
@@ -549,6 +642,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         detail = "; ".join(f"run {r} on rows {', '.join(map(str, w))}" for r, w in where.items())
         raise ProtocolError(f"{src}: duplicated run numbers ({detail}).")
     df.attrs["notes"] = notes
+    df.attrs["warnings"] = warnings
     return df
 
 

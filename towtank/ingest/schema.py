@@ -246,6 +246,35 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
     raise AssertionError(kind)
 
 
+#: Largest table a protocol names and towtank reads whole (the reference CSV, the tare table):
+#: such a table has a few lines; a larger file is the wrong one (or damaged) and is refused in
+#: one sentence before it is read rather than read into all of the memory.
+MAX_TABLE_BYTES = 64 << 20
+
+
+def check_table_size(path: Any, what: str, src: str) -> None:
+    """Refuse (ProtocolError) a protocol table larger than :data:`MAX_TABLE_BYTES`, or one
+    that is a pipe or a device (reading it would wait forever); a file that cannot be
+    stat'ed is left to its reader, which says what is wrong with it."""
+    import os
+    import stat
+
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    if not stat.S_ISREG(st.st_mode) and not stat.S_ISDIR(st.st_mode):
+        raise ProtocolError(f"{src}: the {what} {os.path.basename(path)} is not a regular file "
+                            "(a pipe, socket or device).")
+    size = st.st_size
+    if size > MAX_TABLE_BYTES:
+        raise ProtocolError(
+            f"{src}: the {what} {os.path.basename(path)} is {size / 2**20:.0f} MiB, but towtank "
+            f"reads such tables up to {MAX_TABLE_BYTES >> 20} MiB (they hold a few lines): is "
+            "it the right file?"
+        )
+
+
 def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: str) -> None:
     """``[label]`` must be a table whose keys are all among ``keys``: else a ProtocolError
     naming the unknown key and the nearest valid one."""

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from towtank.errors import ProtocolError
 from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
-from towtank.ingest.schema import _section
+from towtank.ingest.schema import _section, check_table_size
 
 if TYPE_CHECKING:
     from towtank.ingest.protocol import ChannelMap, Model
@@ -72,6 +72,7 @@ def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSour
         return TareSource(source="table", table=str(path))
     import csv
 
+    check_table_size(path, "tare table", src)
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]

@@ -104,19 +104,24 @@ class SheetOptions:
         CSV sheets: ``auto``, ``","``, ``";"`` or ``"\\t"``.
     decimal : str
         CSV sheets: ``auto`` (a decimal comma in ``;`` or tab separated sheets), ``"."``, ``","``.
+    name : str
+        .xlsx sheets: the worksheet holding the runs ("" = chosen as docs/formats.md §2
+        says: the active worksheet if it is visible and has the columns, else the first
+        visible one that has them; never a hidden one unless named here).
     """
 
     header_row: int = 0
     columns: dict[str, str] = field(default_factory=dict)
     delimiter: str = "auto"
     decimal: str = "auto"
+    name: str = ""
 
 
 def parse_sheet_options(data: Any, src: str) -> SheetOptions:
     """The ``[sheet]`` table checked (defaults when the protocol has none)."""
     if data is None:
         return SheetOptions()
-    check_keys(data, ("header_row", "columns", "delimiter", "decimal"), "sheet", src)
+    check_keys(data, ("header_row", "columns", "delimiter", "decimal", "name"), "sheet", src)
     row = data.get("header_row", 0)
     if isinstance(row, bool) or not isinstance(row, int) or not 0 <= row <= 1000:
         raise ProtocolError(f"{src}: 'header_row' in [sheet] must be a whole number 0–1000 "
@@ -145,8 +150,13 @@ def parse_sheet_options(data: Any, src: str) -> SheetOptions:
     if decimal not in ("auto", ".", ","):
         raise ProtocolError(f"{src}: 'decimal' in [sheet] must be auto, \".\" or \",\", but "
                             f"it is {decimal!r}.")
+    name = data.get("name", "")
+    if not isinstance(name, str) or ("name" in data and not name.strip()):
+        raise ProtocolError(f"{src}: 'name' in [sheet] must name a worksheet of the workbook "
+                            f"(text), but it is {name!r}.")
     return SheetOptions(header_row=row, columns=dict(columns),
-                        delimiter="\t" if delimiter == "tab" else delimiter, decimal=decimal)
+                        delimiter="\t" if delimiter == "tab" else delimiter, decimal=decimal,
+                        name=name)
 
 
 def _norm(text: str) -> str:
