@@ -4,16 +4,15 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from towtank.reference.sets import design_tool_table1
 from towtank.vehicle.hull import myring_profile, suboff_profile, table_profile
 from towtank.vehicle.predict import FinPair, lamb_k_factors, predict_coefficients, prime_exponent
 
-REFERENCE = Path("/work/shared/reference/auv_design_tool_table1.csv")
 RHO = 1030.0  # Prestero's sea water
 
 
@@ -89,7 +88,7 @@ def test_remus_roll_added_inertia_within_10pct():
 
 
 def test_remus_table1_terms_no_worse_than_the_tool():
-    table = pd.read_csv(REFERENCE, comment="#").set_index("symbol")
+    table = design_tool_table1()
     pred = _remus()
     for sym in NO_WORSE:
         ref = table.loc[sym, "printed_exp"]

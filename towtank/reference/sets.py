@@ -6,6 +6,10 @@
   rho = 1030 kg/m^3 and L = 1.33 m (``data/remus_prestero2001.csv``). The added masses agree with
   "remus" (0.2 %, 1 %), the damping primes do not (X_u|u|' -0.00178 against -0.00344, Y_v|v|'
   -0.144 against -0.100): the SUT-2 table's REMUS damping is not Prestero's.
+
+Beside the sets, ``data/auv_design_tool_table1.csv`` (:func:`design_tool_table1`): a MATLAB AUV
+concept-design tool's Table 1, REMUS 100 coefficients predicted from geometry with the tool's
+error against Prestero's (2001) values, which its ``prestero2001`` column repeats (SI units).
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["BUILTIN_REFERENCES", "builtin_reference", "reference_table"]
+__all__ = ["BUILTIN_REFERENCES", "builtin_reference", "design_tool_table1", "reference_table"]
 
 #: Name -> (file in data/, column of the prime values, where it comes from).
 BUILTIN_REFERENCES: dict[str, tuple[str, str, str]] = {
@@ -42,3 +46,16 @@ def builtin_reference(name: str) -> dict[str, float]:
     _, column, _ = BUILTIN_REFERENCES[name]
     df = reference_table(name)
     return dict(zip(df["symbol"], df[column].astype(float), strict=True))
+
+
+def design_tool_table1() -> pd.DataFrame:
+    """The design tool's Table 1 (``data/auv_design_tool_table1.csv``), indexed by symbol.
+
+    Columns: printed_exp, printed_value (the two numbers as printed, SI), error_pct_printed (the
+    tool's error [%]) and prestero2001 (Prestero's 2001 value where the row has one, SI).
+    """
+    import pandas as pd
+
+    with resources.files("towtank.reference").joinpath(
+            "data", "auv_design_tool_table1.csv").open() as fh:
+        return pd.read_csv(fh, comment="#").set_index("symbol")
