@@ -56,6 +56,7 @@ from towtank.vehicle.hull import HullProfile
 __all__ = [
     "PREDICTED_COLUMNS",
     "FinPair",
+    "fin_rolling_drag",
     "lamb_k_factors",
     "ittc57_cf",
     "prime_exponent",
@@ -68,6 +69,12 @@ C_YDB = 1.2  # body lift coefficient (Hoerner; Prestero 2001)
 X_CP_FRACTION = 0.65  # body lift centre of pressure, fraction of L aft of the nose
 SECTION_EFFICIENCY = 0.9  # a0 = 0.9 * 2 pi (Prestero 2001, after Hoerner)
 PRESTERO = "Prestero (2001) ch. 3"
+#: Where the cross-flow integral departs from Prestero's printed table on purpose (docs/method.md,
+#: 'Against Prestero's table'): his printed values are not those of his integrals on his geometry.
+XFLOW_RATE_NOTE = ("; differs from Prestero's printed Y_r|r| = 0.632 (his eq. gives 3.1 on his "
+                   "own REMUS geometry: hull 1.5 + fins 1.6 kg*m/rad^2)")
+XFLOW_MOMENT_NOTE = ("; sign by SNAME N = x Y, M = -x Z with the fins aft, the sign of the fins' "
+                     "lift moment N_uvf > 0 (Prestero's printed N_v|v| = -3.18 has the opposite)")
 
 
 @dataclass(frozen=True)
@@ -182,6 +189,39 @@ def _fin_strip(profile: HullProfile, pair: FinPair, x_origin: float) -> tuple[np
     xb = np.linspace(x_te, x_le, 201)
     r = np.interp(x_origin - xb, profile.x_m, profile.r_m, left=0.0, right=0.0)
     return xb, r, r + pair.span_m
+
+
+def fin_rolling_drag(profile: HullProfile, pair: FinPair, x_origin: float, rho: float) -> float:
+    """Roll damping K_p|p| of one pair of fins by cross-flow drag [kg*m^2/rad^2].
+
+    A fin strip at radius s moves sideways at ``p s`` and carries the cross-flow drag
+    ``1/2 rho c_df c (p s)|p s|``; its moment arm is s, so per fin
+    ``K_p|p| = -1/2 rho c_df integral over the chord of (a^4 - r^4)/4 dx`` with r the hull
+    radius and a = r + span the tip radius at each station x. This is Prestero's (2001)
+    eq. 3.14, ``K_p|p| = Y_v|v|f r_mean^3``, with the mean of s^3 over the span instead of
+    the cube of the mean radius (which undercounts the tip by a factor of about 1.6 on REMUS).
+    ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner 1958).
+
+    Parameters
+    ----------
+    profile : HullProfile
+        The hull (its radius under the fin's root)
+    pair : FinPair
+        The fin pair (two fins)
+    x_origin : float
+        Reference point aft of the nose tip [m]
+    rho : float
+        Water density [kg/m^3]
+
+    Returns
+    -------
+    float
+        The pair's K_p|p| [kg*m^2/rad^2], negative
+    """
+    xs, r, a = _fin_strip(profile, pair, x_origin)
+    c_df = 0.1 + 0.7 * pair.taper
+    per_fin = 0.5 * rho * c_df * float(trapezoid((a**4 - r**4) / 4.0, xs))
+    return -2.0 * per_fin
 
 
 def _added_mass_strips(
@@ -320,19 +360,18 @@ def predict_coefficients(
             xflow, ref_xf)
         add(f"{force}_{rate}|{rate}|",
             s * (-hq * trapezoid(w * xb * np.abs(xb), xb) - fin_cd(plane, lambda x: x * abs(x))),
-            xflow, ref_xf)
+            xflow + XFLOW_RATE_NOTE, ref_xf)
         add(f"{moment}_{vel}|{vel}|",
-            s * (-hq * trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)), xflow, ref_xf)
+            s * (-hq * trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)),
+            xflow + XFLOW_MOMENT_NOTE, ref_xf)
         add(f"{moment}_{rate}|{rate}|",
             -hq * trapezoid(w * xb**2 * np.abs(xb), xb) - fin_cd(plane, lambda x: x**2 * abs(x)),
             xflow, ref_xf)
-    k_pp = 0.0
-    for pair in fins:
-        xs, r, a = _fin_strip(profile, pair, x0)
-        r_mean = float(np.mean(r + 0.5 * pair.span_m))
-        k_pp -= 0.5 * rho * (0.1 + 0.7 * pair.taper) * 2.0 * pair.area * r_mean**3
-    add("K_p|p|", k_pp, "fins' cross-flow drag at their mean radius, Y_v|v|f r_mean^3",
-        "Prestero (2001) eq. 3.14")
+    k_pp = sum(fin_rolling_drag(profile, pair, x0, rho) for pair in fins)
+    add("K_p|p|", k_pp,
+        "fins' cross-flow drag integrated over the span, -sum 1/2 rho c_df c (a^4 - r^4)/4 "
+        "per fin (Prestero's Y_v|v|f r_mean^3 with r^3 averaged over the span, not r_mean^3)",
+        "Prestero (2001) eq. 3.14; Whicker & Fehlner (1958)")
 
     # ---- body lift (no Munk moment here: C_A(v) of the model carries it)
     x_cp = x0 - X_CP_FRACTION * length
