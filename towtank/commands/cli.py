@@ -114,7 +114,10 @@ def _parser() -> argparse.ArgumentParser:
         "predict",
         help="predict the coefficients of the protocol's [vehicle] from its geometry",
         description="Write predicted.csv (symbol, value, unit, prime, method, reference) and "
-        "model.json for the hull and fins described in the protocol's [vehicle] section.",
+        "model.json for the hull and fins described in the protocol's [vehicle] section; with "
+        "[vehicle.propeller] also powering.csv (effective power, B-series propeller: rps, "
+        "torque, efficiency, delivered power over speeds), with [vehicle.pressure_hull] also "
+        "pressure_hull.csv (wall thickness for yield and von Mises buckling).",
     )
     pd_.add_argument("protocol", type=Path)
     pd_.add_argument("--out", type=Path, metavar="DIR",

@@ -6,8 +6,11 @@ from pathlib import Path
 
 from towtank.errors import ProtocolError
 
-#: The files ``predict`` writes.
+#: The files ``predict`` always writes.
 PREDICT_OUTPUTS = frozenset({"predicted.csv", "model.json"})
+#: The files it writes when the protocol has the section: powering.csv ([vehicle.propeller]),
+#: pressure_hull.csv ([vehicle.pressure_hull]).
+DESIGN_OUTPUTS = {"powering": "powering.csv", "pressure_hull": "pressure_hull.csv"}
 
 
 def predict_command(protocol_path: Path, out: Path | None = None) -> int:
@@ -33,16 +36,24 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
 
     folder = Path(out) if out is not None else protocol.campaign.output_dir
 
+    extra = {name: getattr(result, attr) for attr, name in DESIGN_OUTPUTS.items()
+             if getattr(result, attr) is not None}
+
     def write(tmp: Path) -> None:
         result.predicted.to_csv(tmp / "predicted.csv", index=False, float_format="%.6g")
         vmodel.write_model(result.model, tmp / "model.json")
+        for name, table in extra.items():
+            table.to_csv(tmp / name, index=False, float_format="%.6g")
 
-    write_outputs_or_stop(folder, PREDICT_OUTPUTS, write)
+    write_outputs_or_stop(folder, PREDICT_OUTPUTS | frozenset(extra), write)
     with pd.option_context("display.max_rows", None, "display.width", 120,
                            "display.max_colwidth", 60):
         print(result.predicted[["symbol", "value", "unit", "prime"]].to_string(index=False))
     p = result.profile
     print(f"\nhull {p.name}: L = {p.length:.4g} m, D = {p.max_diameter:.4g} m, "
           f"V = {p.volume:.4g} m^3, S_w = {p.wetted_area:.4g} m^2; rho = {result.rho:.2f} kg/m^3")
-    print(f"wrote {folder / 'predicted.csv'} and {folder / 'model.json'}")
+    for name, table in extra.items():
+        print(f"\n{name}:\n{table.to_string(index=False)}")
+    names = ["predicted.csv", "model.json", *extra]
+    print("wrote " + ", ".join(str(folder / n) for n in names))
     return 0

@@ -78,6 +78,8 @@ class Vehicle:
     speed_m_s: float = 1.5
     origin_m: float | None = None
     fins: tuple[VehicleFin, ...] = ()
+    propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.vehicle.design_inputs)
+    pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
 
 
 def _check(values: dict[str, Any], spec: dict[str, tuple[str, bool]], label: str,
@@ -131,6 +133,10 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         raise ProtocolError(f"{src}: [vehicle] must be a table of keys, but it is {data!r}.")
     data = dict(data)
     fins_raw = data.pop("fins", [])
+    from towtank.vehicle import design_inputs as _design  # powering and pressure hull (#21)
+
+    design = {k: getattr(_design, f"parse_{k}")(data.pop(k), src)
+              for k in ("propeller", "pressure_hull") if k in data}
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
     if v["hull"] not in HULLS:
         from towtank.ingest import protocol as _p
@@ -183,4 +189,4 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
                 raise ProtocolError(f"{src}: '{key}' in [{label}] must be positive, but it is "
                                     f"{fv[key]}.")
         fins.append(VehicleFin(**fv))
-    return Vehicle(**v, hull_table=table, myring=myring, fins=tuple(fins))
+    return Vehicle(**v, hull_table=table, myring=myring, fins=tuple(fins), **design)

@@ -56,6 +56,7 @@ from towtank.vehicle.hull import HullProfile
 __all__ = [
     "PREDICTED_COLUMNS",
     "FinPair",
+    "axial_drag",
     "fin_rolling_drag",
     "lamb_k_factors",
     "ittc57_cf",
@@ -180,6 +181,36 @@ def _units(symbol: str) -> str:
         return f"kg/(m*{rad})" if rad else "kg/m"
     base = "kg" if power == 0 else ("kg*m" if power == 1 else f"kg*m^{power}")
     return base + (f"/{rad}" if rad else "")
+
+
+def axial_drag(profile: HullProfile, fins: Sequence[FinPair], rho: float, nu: float,
+               speed_m_s: float) -> float:
+    """X_u|u| [kg/m]: friction-line axial drag of the hull and the fins at one speed.
+
+    ``X_u|u| = -1/2 rho [S_w C_F (1 + k) + sum 2 S_fin 2 C_F,fin (1 + 2 t/c + 60 (t/c)^4)]``
+    with the ITTC-57 line at ``Re = U L / nu`` (fins: ``U c / nu``) and Hoerner's form factor
+    of a body of revolution ``1 + k = 1 + 1.5 (D/L)^1.5 + 7 (D/L)^3`` (Hoerner 1965, ch. 6).
+
+    Parameters
+    ----------
+    profile : HullProfile
+    fins : sequence of FinPair
+    rho : float
+        Water density [kg/m^3]
+    nu : float
+        Kinematic viscosity [m^2/s]
+    speed_m_s : float
+        Speed U of the Reynolds numbers [m/s]
+    """
+    length, diameter = profile.length, profile.max_diameter
+    cf = ittc57_cf(speed_m_s * length / nu)
+    form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
+    drag_area = profile.wetted_area * cf * form
+    for pair in fins:
+        cf_fin = ittc57_cf(max(speed_m_s * pair.chord_m / nu, 1.0e3))
+        tc = pair.thickness_ratio
+        drag_area += 2.0 * pair.area * 2.0 * cf_fin * (1 + 2 * tc + 60 * tc**4)
+    return -0.5 * rho * drag_area
 
 
 def _fin_strip(profile: HullProfile, pair: FinPair, x_origin: float) -> tuple[np.ndarray, ...]:
@@ -327,17 +358,8 @@ def predict_coefficients(
     reynolds = speed_m_s * length / nu
     cf = ittc57_cf(reynolds)
     form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
-    drag_area = profile.wetted_area * cf * form
-    fin_text = ""
-    if fins:
-        fin_area = 0.0
-        for pair in fins:
-            cf_fin = ittc57_cf(max(speed_m_s * pair.chord_m / nu, 1.0e3))
-            tc = pair.thickness_ratio
-            fin_area += 2.0 * pair.area * 2.0 * cf_fin * (1 + 2 * tc + 60 * tc**4)
-        drag_area += fin_area
-        fin_text = "; fins 2 C_F (1 + 2t/c + 60(t/c)^4) S"
-    add("X_u|u|", -0.5 * rho * drag_area,
+    fin_text = "; fins 2 C_F (1 + 2t/c + 60(t/c)^4) S" if fins else ""
+    add("X_u|u|", axial_drag(profile, fins, rho, nu, speed_m_s),
         f"ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g} ({speed_m_s:g} m/s) x form factor "
         f"{form:.3f} on S_w = {profile.wetted_area:.4g} m^2{fin_text}",
         "ITTC (1957); Hoerner (1965) ch. 6")

@@ -24,6 +24,8 @@ class VehiclePrediction:
     rho: float
     nu: float
     model: dict[str, Any]
+    powering: pd.DataFrame | None = None  # powering.csv, with [vehicle.propeller]
+    pressure_hull: pd.DataFrame | None = None  # pressure_hull.csv, with [vehicle.pressure_hull]
 
 
 def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
@@ -47,4 +49,39 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
     model["length_m"] = float(profile.length)
-    return VehiclePrediction(profile, predicted, masses, rho, nu, model)
+    return VehiclePrediction(profile, predicted, masses, rho, nu, model,
+                             _powering(vehicle, profile, fins, rho, nu),
+                             _pressure_hull(vehicle, profile, rho))
+
+
+#: Speeds of powering.csv without ``speeds_m_s``: these fractions of the design speed.
+POWERING_SPEED_FRACTIONS = (0.5, 0.75, 1.0, 1.25, 1.5)
+
+
+def _powering(vehicle: Any, profile: HullProfile, fins: list[FinPair], rho: float,
+              nu: float) -> pd.DataFrame | None:
+    """powering.csv of ``[vehicle.propeller]``: R = -X_u|u| U^2 at each speed's Re."""
+    raw = getattr(vehicle, "propeller", None)
+    if raw is None:
+        return None
+    from towtank.vehicle.powering import Propeller, powering_table
+    from towtank.vehicle.predict import axial_drag
+
+    speeds = raw["speeds_m_s"] or [f * vehicle.speed_m_s for f in POWERING_SPEED_FRACTIONS]
+    resistance = [-axial_drag(profile, fins, rho, nu, u) * u * u for u in speeds]
+    prop = Propeller(raw["diameter_m"], raw["pitch_ratio"], raw["blade_area_ratio"],
+                     raw["blades"], raw["thrust_deduction"], raw["wake_fraction"])
+    return powering_table(speeds, resistance, prop, rho)
+
+
+def _pressure_hull(vehicle: Any, profile: HullProfile, rho: float) -> pd.DataFrame | None:
+    """pressure_hull.csv of ``[vehicle.pressure_hull]`` (design tool eqs. 5-7)."""
+    raw = getattr(vehicle, "pressure_hull", None)
+    if raw is None:
+        return None
+    from towtank.vehicle.pressure_hull import pressure_hull_table
+
+    radius = raw["radius_m"] or 0.5 * profile.max_diameter
+    spacing = raw["frame_spacing_m"] or profile.length
+    return pressure_hull_table(raw["depth_m"], radius, spacing, raw["yield_MPa"] * 1e6,
+                               raw["E_GPa"] * 1e9, raw["poisson"], raw["safety_factor"], rho)
