@@ -132,3 +132,38 @@ def test_method_column_says_where_towtank_differs_from_prestero():
     for symbol in DIFFERS:
         assert "Prestero's printed" in pred.loc[symbol, "method"], symbol
     assert math.isfinite(pred.loc["K_p|p|", "value"])
+
+
+@pytest.mark.parametrize("symbol", ["Y_vdot", "Z_wdot", "Y_rdot", "N_vdot", "Z_qdot", "M_wdot",
+                                    "M_qdot", "N_rdot"])
+def test_prestero_added_mass_option_reproduces_his_values_within_1pct(symbol):
+    # towtank multiplies the hull's strips by Lamb's k2 on purpose; added_mass = "prestero" is
+    # his plain strip theory (eqs. 3.18-3.24), and the method column of the default gives it too
+    hull, fins = _remus_geometry()
+    kw = dict(rho=RHO, nu=1.19e-6, x_origin_m=0.611)
+    pre = predict_coefficients(hull, fins, added_mass="prestero", **kw).set_index("symbol")
+    prestero = float(design_tool_table1().loc[symbol, "prestero2001"])
+    assert pre.loc[symbol, "value"] == pytest.approx(prestero, rel=0.01)
+    default = predict_coefficients(hull, fins, **kw).set_index("symbol")
+    assert f"Prestero's method: {pre.loc[symbol, 'value']:.4g}" in default.loc[symbol, "method"]
+    with pytest.raises(ValueError, match="added_mass"):
+        predict_coefficients(hull, fins, added_mass="lamb", **kw)
+
+
+def test_protocol_added_mass_key_reaches_predict(tmp_path, capsys):
+    from pathlib import Path
+
+    from towtank.commands.cli import main
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "protocols" / "remus_vehicle.toml").read_text()
+    text = text.replace('output_dir = "../reports/remus"', 'output_dir = "out"')
+    (tmp_path / "p.toml").write_text(text.replace('hull = "myring"',
+                                                  'hull = "myring"\nadded_mass = "prestero"'))
+    assert main(["predict", str(tmp_path / "p.toml")]) == 0
+    pred = pd.read_csv(tmp_path / "out" / "predicted.csv").set_index("symbol")
+    assert "plain strip theory" in pred.loc["Y_vdot", "method"]
+    (tmp_path / "q.toml").write_text(text.replace('hull = "myring"',
+                                                  'hull = "myring"\nadded_mass = "lamb"'))
+    assert main(["predict", str(tmp_path / "q.toml")]) == 2
+    assert "added_mass" in capsys.readouterr().err

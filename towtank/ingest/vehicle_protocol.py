@@ -31,6 +31,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "inertia_kg_m2": ("floats", False),
     "speed_m_s": ("float", False),
     "origin_m": ("float", False),
+    "added_mass": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
 }
 FIN_SCHEMA: dict[str, tuple[str, bool]] = {
     "plane": ("str", True),
@@ -78,6 +79,7 @@ class Vehicle:
     speed_m_s: float = 1.5
     origin_m: float | None = None
     fins: tuple[VehicleFin, ...] = ()
+    added_mass: str = "towtank"
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.vehicle.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
 

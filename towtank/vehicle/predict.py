@@ -287,6 +287,7 @@ def predict_coefficients(
     nu: float = 1.0e-6,
     speed_m_s: float = 1.5,
     x_origin_m: float | None = None,
+    added_mass: str = "towtank",
 ) -> pd.DataFrame:
     """The predicted coefficient set of a finned body of revolution (module docstring).
 
@@ -304,12 +305,18 @@ def predict_coefficients(
         Speed of the Reynolds number of the axial drag [m/s]
     x_origin_m : float, optional
         Reference point aft of the nose tip [m]; default the centre of buoyancy
+    added_mass : {"towtank", "prestero"}
+        "towtank": the hull's strips times Lamb's k2 of the equivalent spheroid (the method
+        column then also gives the uncorrected value); "prestero": plain strip theory as in
+        Prestero (2001) eqs. 3.18-3.24, which reproduces his printed added masses
 
     Returns
     -------
     pandas.DataFrame
         predicted.csv: symbol, value, unit, prime, method, reference
     """
+    if added_mass not in ("towtank", "prestero"):
+        raise ValueError(f"added_mass must be 'towtank' or 'prestero', not {added_mass!r}.")
     length = profile.length
     diameter = profile.max_diameter
     x0 = profile.x_buoyancy if x_origin_m is None else float(x_origin_m)
@@ -330,18 +337,22 @@ def predict_coefficients(
     _, k2_eq, _ = lamb_k_factors(max(l_eq, 1.0001 * diameter), diameter)
     corr = (f"strip theory, hull strips x Lamb k2 = {k2_eq:.4f} of the equivalent spheroid "
             f"(same volume and max diameter, L/D = {l_eq / diameter:.2f}); fins by Blevins")
+    if added_mass == "prestero":
+        corr = "plain strip theory as Prestero (2001): hull rho pi r^2, fins by Blevins"
     ref_am = "Lamb (1932); Blevins (1979); Prestero (2001) eqs. 3.18-3.24"
+    factor = k2_eq if added_mass == "towtank" else 1.0
     for plane, (force, moment, sgn) in {"rudder": ("Y", "N", -1.0),
                                          "sternplane": ("Z", "M", 1.0)}.items():
-        strips = _added_mass_strips(profile, fins, plane, x0, rho, k2_eq)
-        m0 = _moments(*strips, 0)
-        m1 = _moments(*strips, 1)
-        m2 = _moments(*strips, 2)
+        strips = _added_mass_strips(profile, fins, plane, x0, rho, factor)
+        plain = _added_mass_strips(profile, fins, plane, x0, rho, 1.0)
         vel, rate = ("v", "r") if plane == "rudder" else ("w", "q")
-        add(f"{force}_{vel}dot", -m0, corr, ref_am)
-        add(f"{force}_{rate}dot", sgn * m1, corr, ref_am)
-        add(f"{moment}_{vel}dot", sgn * m1, corr, ref_am)
-        add(f"{moment}_{rate}dot", -m2, corr, ref_am)
+        for sym, power, sign in ((f"{force}_{vel}dot", 0, -1.0), (f"{force}_{rate}dot", 1, sgn),
+                                 (f"{moment}_{vel}dot", 1, sgn), (f"{moment}_{rate}dot", 2, -1.0)):
+            text = corr
+            if added_mass == "towtank":
+                text += (f" (uncorrected, Prestero's method: "
+                         f"{sign * _moments(*plain, power):.4g})")
+            add(sym, sign * _moments(*strips, power), text, ref_am)
     k_pdot = 0.0
     stations: dict[tuple[float, float], float] = {}  # a cruciform station counts once
     for pair in fins:

@@ -44,7 +44,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     fins = [FinPair(f.plane, f.x_m, f.span_m, f.chord_m, f.section, f.taper)
             for f in vehicle.fins]
     predicted = predict_coefficients(profile, fins, rho=rho, nu=nu, speed_m_s=vehicle.speed_m_s,
-                                     x_origin_m=vehicle.origin_m)
+                                     x_origin_m=vehicle.origin_m,
+                                     added_mass=getattr(vehicle, "added_mass", "towtank"))
     masses = vmodel.mass_properties(vehicle, profile, rho)
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
