@@ -80,7 +80,7 @@ class Vehicle:
     origin_m: float | None = None
     fins: tuple[VehicleFin, ...] = ()
     added_mass: str = "towtank"
-    propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.vehicle.design_inputs)
+    propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
 
 
@@ -135,7 +135,7 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         raise ProtocolError(f"{src}: [vehicle] must be a table of keys, but it is {data!r}.")
     data = dict(data)
     fins_raw = data.pop("fins", [])
-    from towtank.vehicle import design_inputs as _design  # powering and pressure hull (#21)
+    from towtank.ingest import design_inputs as _design  # powering and pressure hull (#21)
 
     design = {k: getattr(_design, f"parse_{k}")(data.pop(k), src)
               for k in ("propeller", "pressure_hull") if k in data}
