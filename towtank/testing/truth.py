@@ -27,7 +27,7 @@ SUT2_TABLE4_PRIME: dict[str, float] = {
     "Z_uw": -0.00330,
 }
 """SUT-2 column of the SUT-2 report's Table 4 (prime values; added mass / (0.5 rho L^3),
-damping / (0.5 rho L^2)), as in shared/reference/sut2_table4.csv."""
+damping / (0.5 rho L^2)), as in towtank/reference/data/sut2_table4.csv."""
 
 COEFFICIENT_SYMBOLS = (
     "X_udot",
