@@ -73,6 +73,14 @@ def simulate_command(
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
+    if manoeuvre != "glide":  # a glide is out of trim on purpose
+        import sys
+
+        from towtank.vehicle.simulate import trim_warning
+
+        warning = trim_warning(model, u, net_buoyancy_n)
+        if warning:
+            print(f"warning: {warning}", file=sys.stderr)
     kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s)
     try:

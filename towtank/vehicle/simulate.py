@@ -39,7 +39,12 @@ from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
 from towtank.vehicle.schema import MAX_STEPS
 
 __all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
-           "sample_models"]
+           "sample_models", "trim_state", "trim_warning", "TRIM_PITCH_DEG", "TRIM_DEPTH_RATE_M_S"]
+
+#: Largest steady pitch with zero controls of a model in trim [deg] (docs/formats.md §6).
+TRIM_PITCH_DEG = 2.0
+#: Largest steady depth rate with zero controls of a model in trim [m/s].
+TRIM_DEPTH_RATE_M_S = 0.05
 
 MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide")
 _DOF = "XYZKMN"
@@ -255,6 +260,79 @@ def simulate(
     out.attrs["manoeuvre"] = manoeuvre
     out.attrs["check_deg"] = abs(rudder_deg)
     return out
+
+
+def trim_state(model: dict[str, Any], speed_m_s: float,
+               net_buoyancy_n: float | None = None) -> dict[str, float]:
+    """The steady straight run the model settles at with zero controls (docs/method.md,
+    "Trim check").
+
+    The thrust T = -X_u|u| U|U| of ``simulate`` at ``speed_m_s`` U [m/s]; roll, sway and the
+    angular rates zero; the surge, heave and pitch equations of motion at rest
+    (``u_dot = w_dot = q_dot = 0``: the static balance of thrust, hydrodynamic forces,
+    weight and buoyancy, Fossen 2011 eqs. 4.6 and 7.190) are solved for the speeds u, w
+    [m/s] and the pitch theta [rad], from u = U, w = 0, theta = 0. The depth rate is
+    ``z_dot = -u sin(theta) + w cos(theta)`` [m/s] (Fossen 2011 eq. 2.40, phi = 0).
+
+    Parameters
+    ----------
+    model : dict
+        model.json
+    speed_m_s : float
+        Commanded speed [m/s]
+    net_buoyancy_n : float, optional
+        Buoyancy minus weight [N], replacing the model's weight (as ``simulate``)
+
+    Returns
+    -------
+    dict
+        ``pitch_deg`` [deg], ``depth_rate_m_s`` [m/s, positive down], ``u_m_s``, ``w_m_s``
+        [m/s], ``converged`` (False: no steady straight run found; the others NaN)
+    """
+    from scipy.optimize import fsolve
+
+    weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
+    dyn = Dynamics(model, weight)
+    thrust = -dyn.x_uu * speed_m_s * abs(speed_m_s)
+
+    def balance(x: np.ndarray) -> np.ndarray:
+        state = np.zeros(12)
+        state[4], state[6], state[8] = x[2], x[0], x[1]
+        return dyn.rhs(state, 0.0, 0.0, thrust)[[6, 8, 10]]
+
+    with np.errstate(all="ignore"):
+        x, _, ier, _ = fsolve(balance, np.array([speed_m_s, 0.0, 0.0]), full_output=True,
+                              xtol=1e-12)
+        resid = np.abs(balance(x))
+    ok = (ier == 1 and bool(np.all(np.isfinite(x))) and float(resid.max()) < 1e-6
+          and abs(x[2]) < math.pi / 2)
+    if not ok:
+        nan = float("nan")
+        return {"pitch_deg": nan, "depth_rate_m_s": nan, "u_m_s": nan, "w_m_s": nan,
+                "converged": False}
+    u, w, theta = (float(v) for v in x)
+    return {"pitch_deg": math.degrees(theta),
+            "depth_rate_m_s": -u * math.sin(theta) + w * math.cos(theta),
+            "u_m_s": u, "w_m_s": w, "converged": True}
+
+
+def trim_warning(model: dict[str, Any], speed_m_s: float,
+                 net_buoyancy_n: float | None = None) -> str | None:
+    """One sentence when the model is out of trim (:func:`trim_state`: steady pitch beyond
+    :data:`TRIM_PITCH_DEG` [deg] or depth rate beyond :data:`TRIM_DEPTH_RATE_M_S` [m/s] with
+    zero controls at ``speed_m_s`` [m/s]), else None."""
+    st = trim_state(model, speed_m_s, net_buoyancy_n)
+    check = "check weight_N, buoyancy_N, cg_m and cb_m (or --net-buoyancy-N)"
+    if not st["converged"]:
+        return (f"the model has no steady straight run with zero controls at {speed_m_s:g} m/s "
+                f"(the balance of surge, heave and pitch has no solution); {check}.")
+    if abs(st["pitch_deg"]) > TRIM_PITCH_DEG or abs(st["depth_rate_m_s"]) > TRIM_DEPTH_RATE_M_S:
+        way = "down" if st["depth_rate_m_s"] > 0 else "up"
+        return (f"the model is out of trim: with zero controls at {speed_m_s:g} m/s it settles "
+                f"at a pitch of {st['pitch_deg']:+.1f} deg and goes {way} at "
+                f"{abs(st['depth_rate_m_s']):.3g} m/s (in trim: within +-{TRIM_PITCH_DEG:g} deg "
+                f"and +-{TRIM_DEPTH_RATE_M_S:g} m/s); {check}.")
+    return None
 
 
 def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) -> float:

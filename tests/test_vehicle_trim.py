@@ -1,0 +1,175 @@
+"""Issue 21: trim and mass properties as stated, steady metrics that mean what they say, dive
+to a commanded pitch angle (docs/formats.md §6, docs/method.md "Trim check")."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+REMUS = ROOT / "protocols" / "remus_vehicle.toml"
+
+
+@pytest.fixture(scope="module")
+def remus(tmp_path_factory):
+    """model.json of the shipped REMUS protocol (Prestero's W, B, CG and CB)."""
+    from towtank.commands.cli import main
+
+    out = tmp_path_factory.mktemp("remus")
+    assert main(["predict", str(REMUS), "--out", str(out)]) == 0
+    return json.loads((out / "model.json").read_text(encoding="utf-8"))
+
+
+def _predict(tmp_path, text):
+    from towtank.commands.cli import main
+
+    proto = tmp_path / "v.toml"
+    proto.write_text(text, encoding="utf-8")
+    code = main(["predict", str(proto), "--out", str(tmp_path / "p")])
+    model = (json.loads((tmp_path / "p" / "model.json").read_text(encoding="utf-8"))
+             if code == 0 else None)
+    return code, model
+
+
+# ---------------------------------------------------------------------------------------------
+# 1. trim and mass properties as the user states them
+
+
+def test_remus_protocol_carries_prestero_weight_buoyancy_and_centres(remus):
+    assert remus["weight_N"] == 299.0 and remus["buoyancy_N"] == 306.0
+    assert remus["cg_m"] == [0.0, 0.0, 0.0196] and remus["cb_m"] == [0.0, 0.0, 0.0]
+    assert remus["mass_kg"] == 30.48 and remus["inertia_kg_m2"] == [0.177, 3.45, 3.45]
+    for key in ("mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m", "inertia_kg_m2"):
+        assert remus["sources"][key] == "given"
+
+
+def test_a_given_zero_cb_is_used_and_computed_values_say_so(tmp_path):
+    """``cb_m = [0, 0, 0]`` used to be replaced by the hull's centre of buoyancy in silence;
+    what is computed from the hull says so in ``sources``."""
+    text = REMUS.read_text(encoding="utf-8")
+    text = text.replace("origin_m = 0.611", "origin_m = 0.6")  # the hull's CB: 0.6058 m
+    code, model = _predict(tmp_path, text)
+    assert code == 0
+    assert model["cb_m"] == [0.0, 0.0, 0.0] and model["sources"]["cb_m"] == "given"
+    bare = "\n".join(line for line in text.splitlines()
+                     if not line.startswith(("cb_m", "buoyancy_N", "weight_N", "cg_m")))
+    (tmp_path / "b").mkdir()
+    code, model = _predict(tmp_path / "b", bare)
+    assert code == 0
+    assert model["sources"]["cb_m"] == "hull centre of buoyancy"
+    assert model["cb_m"][0] == pytest.approx(0.6 - 0.6058, abs=0.0005)
+    assert model["sources"]["buoyancy_N"] == "hull volume"
+    assert model["sources"]["weight_N"] == "mass_kg x g"
+    assert model["sources"]["cg_m"] == "centre of buoyancy"
+    assert model["cg_m"] == model["cb_m"]
+
+
+def test_volume_gives_the_buoyancy_and_weight_gives_the_mass(tmp_path):
+    text = REMUS.read_text(encoding="utf-8").replace("buoyancy_N = 306.0", "volume_m3 = 0.03")
+    text = text.replace("mass_kg = 30.48\n", "")
+    code, model = _predict(tmp_path, text)
+    assert code == 0
+    assert model["buoyancy_N"] == pytest.approx(model["rho_kg_m3"] * 9.80665 * 0.03)
+    assert model["sources"]["buoyancy_N"] == "rho g volume_m3"
+    assert model["mass_kg"] == pytest.approx(299.0 / 9.80665)
+    assert model["sources"]["mass_kg"] == "weight_N / g"
+
+
+@pytest.mark.parametrize("old,new,words", [
+    ("buoyancy_N = 306.0", "buoyancy_N = 306.0\nvolume_m3 = 0.03", "both 'buoyancy_N'"),
+    ("weight_N = 299.0", "weight_N = 350.0", "'weight_N'"),
+    ("buoyancy_N = 306.0", "buoyancy_N = -306.0", "'buoyancy_N'"),
+])
+def test_contradictory_or_impossible_mass_properties_are_refused(tmp_path, capsys, old, new,
+                                                                 words):
+    code, _ = _predict(tmp_path, REMUS.read_text(encoding="utf-8").replace(old, new))
+    assert code == 2
+    assert words in capsys.readouterr().err
+
+
+def test_remus_without_net_buoyancy_holds_depth_and_pitch_with_zero_controls(remus):
+    """Zero controls and --net-buoyancy-N 0: the old model (CB replaced by the hull's, 5 mm
+    ahead of the CG) climbed at 14.7 deg of pitch; CG below CB holds depth and pitch."""
+    from towtank.vehicle.simulate import simulate
+
+    ts = simulate(remus, "dive", 1.5, sternplane_deg=0.0, net_buoyancy_n=0.0, duration_s=60.0)
+    assert ts["t_s"].iloc[-1] == pytest.approx(60.0)
+    assert np.abs(ts["z_m"]).max() < 0.1
+    assert np.abs(ts["theta_deg"]).max() < 0.5
+
+
+def test_remus_with_prestero_7N_buoyancy_settles_as_the_hand_calculation(remus):
+    """Prestero's REMUS is 7 N buoyant (B - W = 306 - 299 N). Hand calculation of the steady
+    straight run with zero controls (q = 0, constant u, w, theta; body axes, z down):
+
+    - surge: T + X_u|u| u^2 - (W - B) sin(theta) = 0, T = -X_u|u| U^2 (U = 1.5 m/s);
+    - heave: Z_uw u w + Z_w|w| w|w| + (W - B) cos(theta) = 0;
+    - pitch: (M_uw + M_uwa) u w + M_w|w| w|w| - z_g W sin(theta) = 0, with
+      M_uwa = -(Z_wdot - X_udot) the Munk moment that C_A(nu) gives (Fossen 2011 eq. 6.43);
+    - depth rate z_dot = -u sin(theta) + w cos(theta).
+
+    With the heave damping alone at theta = 0 and u = U (Z_uw U w + Z_w|w| w|w| = -7 N) the
+    vehicle would rise at w = -0.090 m/s; but M_uw + M_uwa = +13.8 kg > 0 (statically unstable
+    in pitch): the rise through the water (w < 0) pitches the nose down until the
+    metacentric moment z_g W sin(theta) balances it, at theta = -15.8 deg, and the thrust then
+    drives the vehicle down at +0.209 m/s (u = 1.137 m/s, w = -0.106 m/s). The simulation
+    must settle there, and the trim check must say so.
+    """
+    from scipy.optimize import brentq
+
+    from towtank.vehicle.simulate import simulate, trim_state, trim_warning
+
+    c = remus["coefficients"]
+    w_, b_ = remus["weight_N"], remus["buoyancy_N"]
+    zg = remus["cg_m"][2]
+    big_u = 1.5
+    # heave damping alone, theta = 0, u = U
+    w_heave = brentq(lambda w: c["Z_uw"] * big_u * w + c["Z_w|w|"] * w * abs(w) + (w_ - b_),
+                     -2.0, 2.0)
+    assert w_heave == pytest.approx(-0.090, abs=0.002)
+    m_uw = c["M_uw"] - (c["Z_wdot"] - c["X_udot"])
+    assert m_uw > 0
+
+    def speeds(theta):  # u from the surge balance, then w from the pitch balance
+        u = math.sqrt(big_u**2 - (w_ - b_) * math.sin(theta) / -c["X_u|u|"])
+        w = brentq(lambda w: m_uw * u * w + c["M_w|w|"] * w * abs(w)
+                   - zg * w_ * math.sin(theta), -1.0, 1.0)
+        return u, w
+
+    def heave(theta):
+        u, w = speeds(theta)
+        return c["Z_uw"] * u * w + c["Z_w|w|"] * w * abs(w) + (w_ - b_) * math.cos(theta)
+
+    theta = brentq(heave, math.radians(-30), math.radians(-0.1))
+    u, w = speeds(theta)
+    zdot = -u * math.sin(theta) + w * math.cos(theta)
+    ts = simulate(remus, "dive", big_u, sternplane_deg=0.0, duration_s=120.0)
+    end = ts["t_s"] >= 100.0
+    sim_zdot = np.polyfit(ts["t_s"][end], ts["z_m"][end], 1)[0]
+    assert math.degrees(theta) == pytest.approx(-15.85, abs=0.05)
+    assert ts["theta_deg"].iloc[-1] == pytest.approx(math.degrees(theta), abs=0.05)
+    assert sim_zdot == pytest.approx(zdot, rel=0.01)
+    assert ts["w_m_s"].iloc[-1] == pytest.approx(w, rel=0.01)
+    st = trim_state(remus, big_u)
+    assert st["pitch_deg"] == pytest.approx(math.degrees(theta), abs=0.01)
+    assert st["depth_rate_m_s"] == pytest.approx(zdot, rel=1e-3)
+    assert "out of trim" in trim_warning(remus, big_u)
+    assert trim_warning(remus, big_u, 0.0) is None
+
+
+def test_simulate_warns_in_one_sentence_when_out_of_trim(tmp_path, capsys, remus):
+    from towtank.commands.cli import main
+
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(remus), encoding="utf-8")
+    args = ["simulate", str(path), "--manoeuvre", "dive", "--sternplane-deg", "0",
+            "--duration-s", "20"]
+    assert main(args + ["--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "out of trim" in err and "-15.8 deg" in err and len(err.strip().splitlines()) == 1
+    assert main(args + ["--net-buoyancy-N", "0", "--out", str(tmp_path / "b")]) == 0
+    assert "out of trim" not in capsys.readouterr().err
