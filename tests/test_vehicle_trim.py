@@ -173,3 +173,111 @@ def test_simulate_warns_in_one_sentence_when_out_of_trim(tmp_path, capsys, remus
     assert "out of trim" in err and "-15.8 deg" in err and len(err.strip().splitlines()) == 1
     assert main(args + ["--net-buoyancy-N", "0", "--out", str(tmp_path / "b")]) == 0
     assert "out of trim" not in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# 2. steady metrics that mean what they say
+
+
+def _geometric_circle(x, y):
+    """Radius of the geometric least-squares circle (distances, not Kasa's algebra)."""
+    from scipy.optimize import least_squares
+
+    fit = least_squares(lambda p: np.hypot(x - p[0], y - p[1]) - p[2],
+                        [x.mean() + 0.1, y.mean(), np.ptp(x) / 2 + 0.1])
+    return fit.x[2]
+
+
+@pytest.mark.parametrize("manoeuvre,kwargs", [
+    ("turning", dict(rudder_deg=10.0)),  # level
+    ("spiral", dict(rudder_deg=20.0, sternplane_deg=15.0)),  # diving at 13 deg of pitch
+])
+def test_turn_radius_is_the_circle_of_the_plan_track(remus, manoeuvre, kwargs):
+    """The old V cos(theta)/|psi_dot| over the last quarter was 0.3 % (level) and 1.3 %
+    (diving spiral: V counts the heave and sway, theta is not the path angle) off the track."""
+    from towtank.vehicle.simulate import manoeuvre_metrics, simulate
+
+    ts = simulate(remus, manoeuvre, 1.5, net_buoyancy_n=0.0, **kwargs)
+    met = manoeuvre_metrics(ts).set_index("metric")
+    last = ts["t_s"] >= 0.8 * ts["t_s"].iloc[-1]
+    radius = _geometric_circle(ts["x_m"][last].to_numpy(), ts["y_m"][last].to_numpy())
+    assert met.loc["steady_turn_radius_m", "note"] == ""
+    assert met.loc["steady_turn_radius_m", "value"] == pytest.approx(radius, rel=1e-3)
+    t = ts["t_s"].to_numpy()
+    vh = np.hypot(np.gradient(ts["x_m"], t), np.gradient(ts["y_m"], t))[last]
+    psi_dot = np.radians(np.gradient(ts["psi_deg"], t))[last]
+    assert met.loc["steady_turn_radius_m", "value"] == pytest.approx(
+        np.mean(vh / np.abs(psi_dot)), rel=1e-3)
+
+
+def test_circle_fit_is_exact_on_an_arc():
+    from towtank.vehicle.steady import circle_fit
+
+    a = np.linspace(0.3, 1.9, 50)
+    xc, yc, r = circle_fit(3.0 + 2.5 * np.cos(a), -1.0 + 2.5 * np.sin(a))
+    assert (xc, yc, r) == pytest.approx((3.0, -1.0, 2.5), abs=1e-9)
+
+
+def test_a_looping_dive_reports_no_steady_pitch_and_says_why(tmp_path, remus):
+    """REMUS with -5 deg of stern plane pitches up over the vertical (theta from 0 past 360
+    deg) and used to report steady_pitch_deg = 384.4."""
+    import pandas as pd
+
+    from towtank.commands.cli import main
+
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(remus), encoding="utf-8")
+    assert main(["simulate", str(path), "--manoeuvre", "dive", "--sternplane-deg", "-5",
+                 "--out", str(tmp_path / "d")]) == 0
+    ts = pd.read_csv(tmp_path / "d" / "manoeuvre.csv")
+    assert ts["theta_deg"].max() > 360.0
+    met = pd.read_csv(tmp_path / "d" / "metrics.csv", keep_default_na=False,
+                      na_values=[""]).set_index("metric")
+    assert list(met.columns) == ["value", "unit", "note"]
+    for name in ("steady_pitch_deg", "depth_rate_m_s", "speed_m_s", "glide_angle_deg"):
+        assert math.isnan(met.loc[name, "value"])
+        assert met.loc[name, "note"].startswith("looping")
+
+
+def _series(theta_deg, manoeuvre="glide", t_end=200.0):
+    import pandas as pd
+
+    n = len(theta_deg)
+    t = np.linspace(0.0, t_end, n)
+    th = np.radians(theta_deg)
+    u = np.full(n, 0.5)
+    ts = pd.DataFrame({"t_s": t, "x_m": np.cumsum(u * np.cos(th)) * (t[1] - t[0]),
+                       "y_m": 0.0, "z_m": -np.cumsum(u * np.sin(th)) * (t[1] - t[0]),
+                       "phi_deg": 0.0, "theta_deg": theta_deg, "psi_deg": 0.0,
+                       "u_m_s": u, "v_m_s": 0.0, "w_m_s": 0.0, "p_deg_s": 0.0,
+                       "q_deg_s": np.gradient(theta_deg, t), "r_deg_s": 0.0,
+                       "rudder_deg": 0.0, "sternplane_deg": 0.0})
+    ts.attrs["manoeuvre"] = manoeuvre
+    return ts
+
+
+def test_an_oscillating_glider_gets_no_steady_pitch():
+    """A glider whose pitch swings between -33 and -6 deg: the old mean over the last fifth
+    (-19.5 deg) was reported as its steady pitch."""
+    from towtank.vehicle.simulate import manoeuvre_metrics
+
+    t = np.linspace(0.0, 200.0, 4001)
+    met = manoeuvre_metrics(_series(-19.5 + 13.5 * np.sin(2 * np.pi * t / 25.0)))
+    met = met.set_index("metric")
+    assert math.isnan(met.loc["steady_pitch_deg", "value"])
+    assert met.loc["steady_pitch_deg", "note"].startswith("pitch oscillating")
+
+
+def test_angles_are_wrapped_a_looped_pitch_is_looping_and_a_drifting_one_not_settled():
+    from towtank.vehicle.simulate import manoeuvre_metrics
+    from towtank.vehicle.steady import wrap_deg
+
+    assert wrap_deg(384.4) == pytest.approx(24.4) and wrap_deg(-190.0) == pytest.approx(170.0)
+    met = manoeuvre_metrics(_series(np.full(2001, 356.0), "dive")).set_index("metric")
+    assert math.isnan(met.loc["steady_pitch_deg", "value"])  # steady, but after a loop
+    assert met.loc["steady_pitch_deg", "note"].startswith("looping")
+    met = manoeuvre_metrics(_series(np.full(2001, -4.0), "dive")).set_index("metric")
+    assert met.loc["steady_pitch_deg", "value"] == pytest.approx(-4.0)
+    met = manoeuvre_metrics(_series(np.linspace(-5.0, -25.0, 2001), "dive")).set_index("metric")
+    assert math.isnan(met.loc["steady_pitch_deg", "value"])
+    assert met.loc["steady_pitch_deg", "note"].startswith("pitch not yet settled")

@@ -12,12 +12,16 @@ axial drag ``X_u|u|`` at the commanded speed on a straight course (none for a gl
 Manoeuvres (metrics.csv ``metric, value, unit``):
 
 - turning: rudder step at t = 0; advance and transfer at 90 deg of heading change, tactical
-  diameter at 180 deg, steady turn radius V/|psi_dot| over the last full turn;
+  diameter at 180 deg, steady turn radius: the least-squares circle of the plan track over the
+  last fifth of the run;
 - zigzag: rudder +-delta switched when the heading passes -+delta (the classic delta/delta test,
   the first execute to positive heading); first and second overshoot angles, period;
 - dive: stern-plane step; steady pitch and depth rate;
 - spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
 - glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
+
+Steady metrics only when the last fifth of the run is steady (:mod:`towtank.vehicle.steady`),
+else NaN and a note (metrics.csv ``note``).
 
 One simulation takes at most :data:`towtank.vehicle.schema.MAX_STEPS` integration steps over
 all its legs, and stops at once when the state or the forces stop being finite: whatever the
@@ -425,67 +429,107 @@ def _at_heading(ts: pd.DataFrame, change_deg: float) -> pd.Series | None:
     return ts.iloc[i - 1] + f * (ts.iloc[i] - ts.iloc[i - 1])
 
 
-def _steady(ts: pd.DataFrame, fraction: float = 0.2) -> pd.DataFrame:
-    return ts[ts["t_s"] >= ts["t_s"].iloc[-1] * (1.0 - fraction)]
+def _rates(ts: pd.DataFrame) -> dict[str, np.ndarray]:
+    """The quantities the steady metrics average, sample by sample."""
+    t = ts["t_s"].to_numpy()
+    grad = (lambda c: np.gradient(ts[c].to_numpy(), t)) if len(t) > 1 else (
+        lambda c: np.zeros(len(t)))
+    xr, yr, zr = grad("x_m"), grad("y_m"), grad("z_m")
+    return {
+        "t": t, "speed_m_s": np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2
+                                     + ts["w_m_s"] ** 2).to_numpy(),
+        "horizontal_speed_m_s": np.hypot(xr, yr), "xr": xr, "depth_rate_m_s": zr,
+        "yaw_rate_deg_s": grad("psi_deg"), "pitch_deg": ts["theta_deg"].to_numpy(),
+        "drift_deg": np.degrees(np.arctan2(ts["v_m_s"], ts["u_m_s"])).to_numpy(),
+        "angle_of_attack_deg": np.degrees(np.arctan2(ts["w_m_s"], ts["u_m_s"])).to_numpy(),
+    }
 
 
 def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
-    """metrics.csv of a simulated manoeuvre (module docstring): metric, value, unit."""
+    """metrics.csv of a simulated manoeuvre: metric, value, unit, note.
+
+    Steady metrics are means over the last fifth of the run, given only when that part is
+    steady (:mod:`towtank.vehicle.steady`; NaN and a note otherwise); angles wrapped to
+    +-180 deg. The turn radius is the least-squares circle through the plan track (x, y) of
+    that part (:func:`towtank.vehicle.steady.circle_fit`).
+    """
+    from towtank.vehicle import steady as sd
+
     kind = ts.attrs.get("manoeuvre", "turning")
-    rows: list[tuple[str, float, str]] = []
-    speed = np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2 + ts["w_m_s"] ** 2)
+    rows: list[tuple[str, float, str, str]] = []
+    nan = float("nan")
+    with np.errstate(all="ignore"):  # a zigzag repeats the switching times
+        q = _rates(ts)
+    last = sd.steady_mask(q["t"])
+    loop = sd.looped(q["pitch_deg"], ts["u_m_s"].to_numpy())
+
+    def check(*names: str) -> str:
+        if loop:
+            return loop
+        for name in names:
+            note = sd.steadiness(q[name][last], name)
+            if note:
+                return f"{sd.LABELS[name]} {note}"
+        return ""
+
+    def steady(metric: str, name: str, unit: str, *needs: str, angle: bool = False) -> None:
+        note = check(name, *needs)
+        value = float(np.mean(q[name][last])) if not note else nan
+        rows.append((metric, float(sd.wrap_deg(value)) if angle and not note else value, unit,
+                     note))
+
     if kind in ("turning", "spiral"):
-        psi_rate = np.gradient(np.radians(ts["psi_deg"].to_numpy()), ts["t_s"].to_numpy())
-        last = ts["t_s"] >= ts["t_s"].iloc[-1] * 0.75
-        radius = float(np.mean(speed[last] * np.cos(np.radians(ts["theta_deg"][last]))
-                               / np.abs(psi_rate[last])))
-        rows.append(("steady_turn_radius_m", radius, "m"))
+        needs = ("yaw_rate_deg_s", "speed_m_s") + (("depth_rate_m_s",) if kind == "spiral"
+                                                    else ())
+        note = check(*needs)
+        yaw = float(np.mean(q["yaw_rate_deg_s"][last]))
+        if not note and abs(yaw) < sd.MIN_YAW_RATE_DEG_S:
+            note = f"not turning: the yaw rate is below {sd.MIN_YAW_RATE_DEG_S:g} deg/s"
+        radius = nan if note else sd.circle_fit(ts["x_m"].to_numpy()[last],
+                                                ts["y_m"].to_numpy()[last])[2]
+        rows.append(("steady_turn_radius_m", radius, "m", note))
         at90, at180 = _at_heading(ts, 90.0), _at_heading(ts, 180.0)
-        nan = float("nan")
         rows.append(("advance_m", float(at90["x_m"] - ts["x_m"].iloc[0]) if at90 is not None
-                     else nan, "m"))
-        rows.append(("transfer_m", float(abs(at90["y_m"])) if at90 is not None else nan, "m"))
+                     else nan, "m", "" if at90 is not None else "no 90 deg of heading change"))
+        rows.append(("transfer_m", float(abs(at90["y_m"])) if at90 is not None else nan, "m",
+                     "" if at90 is not None else "no 90 deg of heading change"))
         rows.append(("tactical_diameter_m", float(abs(at180["y_m"])) if at180 is not None
-                     else nan, "m"))
-        rows.append(("steady_speed_m_s", float(np.mean(speed[last])), "m/s"))
-        rows.append(("steady_yaw_rate_deg_s", float(np.degrees(np.mean(psi_rate[last]))),
-                     "deg/s"))
-        drift = np.degrees(np.arctan2(ts["v_m_s"][last], ts["u_m_s"][last]))
-        rows.append(("steady_drift_angle_deg", float(np.mean(drift)), "deg"))
+                     else nan, "m", "" if at180 is not None else "no 180 deg of heading change"))
+        steady("steady_speed_m_s", "speed_m_s", "m/s")
+        steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
+        steady("steady_drift_angle_deg", "drift_deg", "deg", angle=True)
         if kind == "spiral":
-            zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())
-            rows.append(("steady_pitch_deg", float(ts["theta_deg"][last].mean()), "deg"))
-            rows.append(("depth_rate_m_s", float(np.mean(zr[last])), "m/s"))
-            rows.append(("depth_change_per_turn_m",
-                         float(np.mean(zr[last]) * 2 * math.pi / np.mean(np.abs(psi_rate[last]))),
-                         "m"))
+            steady("steady_pitch_deg", "pitch_deg", "deg", angle=True)
+            steady("depth_rate_m_s", "depth_rate_m_s", "m/s")
+            note = check("depth_rate_m_s", *needs)
+            per_turn = nan if note else float(np.mean(q["depth_rate_m_s"][last]) * 360.0
+                                              / abs(yaw))
+            rows.append(("depth_change_per_turn_m", per_turn, "m", note))
     elif kind == "zigzag":
-        check = float(ts.attrs.get("check_deg", 20.0))
+        check_deg = float(ts.attrs.get("check_deg", 20.0))
         switch = np.nonzero(np.diff(ts["rudder_deg"].to_numpy()) != 0)[0] + 1
         psi = ts["psi_deg"].to_numpy()
         t = ts["t_s"].to_numpy()
         for k in range(2):
             if len(switch) > k + 1:
                 seg = psi[switch[k]:switch[k + 1]]
-                over = (seg.max() - check) if k % 2 == 0 else (-seg.min() - check)
-                rows.append((f"overshoot_{k + 1}_deg", float(over), "deg"))
+                over = (seg.max() - check_deg) if k % 2 == 0 else (-seg.min() - check_deg)
+                rows.append((f"overshoot_{k + 1}_deg", float(over), "deg", ""))
         if len(switch) >= 3:
-            rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s"))
+            rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s", ""))
         if len(switch) >= 1:
-            rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s"))
+            rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s", ""))
     else:  # dive, glide
-        st = _steady(ts)
-        zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
-        xr = np.gradient(ts["x_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
-        rows.append(("steady_pitch_deg", float(st["theta_deg"].mean()), "deg"))
-        rows.append(("depth_rate_m_s", float(np.mean(zr)), "m/s"))
-        rows.append(("speed_m_s", float(np.mean(speed[st.index])), "m/s"))
-        rows.append(("glide_angle_deg", float(np.degrees(np.arctan2(np.mean(-zr), np.mean(xr)))),
-                     "deg"))
-        alpha = np.degrees(np.arctan2(st["w_m_s"], st["u_m_s"]))
-        rows.append(("angle_of_attack_deg", float(alpha.mean()), "deg"))
-        rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m"))
-    return pd.DataFrame(rows, columns=["metric", "value", "unit"])
+        steady("steady_pitch_deg", "pitch_deg", "deg", angle=True)
+        steady("depth_rate_m_s", "depth_rate_m_s", "m/s")
+        steady("speed_m_s", "speed_m_s", "m/s")
+        note = check("depth_rate_m_s", "speed_m_s")
+        glide = nan if note else float(np.degrees(np.arctan2(
+            np.mean(-q["depth_rate_m_s"][last]), np.mean(q["xr"][last]))))
+        rows.append(("glide_angle_deg", glide, "deg", note))
+        steady("angle_of_attack_deg", "angle_of_attack_deg", "deg", angle=True)
+        rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m", ""))
+    return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
 
 
 def sample_models(model: dict[str, Any], n: int, seed: int = 1) -> list[dict[str, Any]]:
