@@ -281,3 +281,61 @@ def test_angles_are_wrapped_a_looped_pitch_is_looping_and_a_drifting_one_not_set
     met = manoeuvre_metrics(_series(np.linspace(-5.0, -25.0, 2001), "dive")).set_index("metric")
     assert math.isnan(met.loc["steady_pitch_deg", "value"])
     assert met.loc["steady_pitch_deg", "note"].startswith("pitch not yet settled")
+
+
+# ---------------------------------------------------------------------------------------------
+# 7. dive to a commanded angle
+
+
+@pytest.mark.parametrize("net_buoyancy", ["0", None])
+def test_dive_to_30_deg_closes_the_loop_on_pitch(tmp_path, remus, net_buoyancy):
+    """--dive-angle-deg 30: the PD law delta_s = Kp (theta - theta_cmd) + Kd q (theta_cmd =
+    -30 deg, Kp = 10, Kd = 3 s, saturated at the model's fin_limit_deg = 20 deg; M_uuds < 0, so
+    a positive stern plane pitches the nose down). The trimmed REMUS (--net-buoyancy-N 0) holds
+    30 +- 1 deg; the 7 N buoyant one reaches it too (its PD steady error is larger). The
+    overshoot and time to angle of metrics.csv are those of the time series."""
+    import pandas as pd
+
+    from towtank.commands.cli import main
+    from towtank.vehicle.simulate import PITCH_KD, PITCH_KP
+
+    assert remus["coefficients"]["M_uuds"] < 0 and remus["fin_limit_deg"] == 20.0
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(remus), encoding="utf-8")
+    args = ["simulate", str(path), "--manoeuvre", "dive", "--dive-angle-deg", "30",
+            "--out", str(tmp_path / "d")]
+    assert main(args + (["--net-buoyancy-N", net_buoyancy] if net_buoyancy else [])) == 0
+    ts = pd.read_csv(tmp_path / "d" / "manoeuvre.csv")
+    met = pd.read_csv(tmp_path / "d" / "metrics.csv", keep_default_na=False,
+                      na_values=[""]).set_index("metric")
+    dive = -ts["theta_deg"].to_numpy()
+    assert dive.max() == pytest.approx(30.0, abs=1.0)
+    if net_buoyancy == "0":
+        assert -met.loc["steady_pitch_deg", "value"] == pytest.approx(30.0, abs=1.0)
+        assert abs(dive[-1] - 30.0) < 1.0
+    # the stern plane follows the stated law, saturated at 20 deg, nose down first
+    law = np.clip(PITCH_KP * (ts["theta_deg"] + 30.0) + PITCH_KD * ts["q_deg_s"], -20.0, 20.0)
+    assert ts["sternplane_deg"].to_numpy() == pytest.approx(law.to_numpy(), abs=1e-3)
+    assert ts["sternplane_deg"].iloc[0] == pytest.approx(20.0) and ts["theta_deg"].iloc[5] < 0
+    # metrics consistent with the time series
+    assert met.loc["dive_angle_deg", "value"] == 30.0
+    over = met.loc["dive_angle_overshoot_deg", "value"]
+    assert over == pytest.approx(max(0.0, dive.max() - 30.0), abs=1e-4)
+    t_reach = met.loc["time_to_dive_angle_s", "value"]
+    first = int(np.argmax(dive >= 27.0))
+    assert ts["t_s"][first - 1] <= t_reach <= ts["t_s"][first]
+    assert 0.0 < t_reach < 10.0
+
+
+def test_dive_angle_is_checked(tmp_path, capsys, remus):
+    from towtank.commands.cli import main
+
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(remus), encoding="utf-8")
+    for manoeuvre, angle, words in (("turning", "30", "is for --manoeuvre dive"),
+                                    ("dive", "95", "within +-80 deg"),
+                                    ("dive", "nan", "within +-80 deg")):
+        assert main(["simulate", str(path), "--manoeuvre", manoeuvre, "--dive-angle-deg", angle,
+                     "--out", str(tmp_path / "x")]) == 2
+        assert words in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()

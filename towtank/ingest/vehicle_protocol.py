@@ -34,6 +34,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "inertia_kg_m2": ("floats", False),
     "speed_m_s": ("float", False),
     "origin_m": ("float", False),
+    "fin_limit_deg": ("float", False),
 }
 FIN_SCHEMA: dict[str, tuple[str, bool]] = {
     "plane": ("str", True),
@@ -87,6 +88,7 @@ class Vehicle:
     inertia_kg_m2: tuple[float, float, float] | None = None
     speed_m_s: float = 1.5
     origin_m: float | None = None
+    fin_limit_deg: float | None = None
     fins: tuple[VehicleFin, ...] = ()
 
 
@@ -167,6 +169,9 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         if key in v and not v[key] > 0:
             raise ProtocolError(f"{src}: '{key}' in [vehicle] must be positive, but it is "
                                 f"{v[key]}.")
+    if "fin_limit_deg" in v and not 0 < v["fin_limit_deg"] <= 45:
+        raise ProtocolError(f"{src}: 'fin_limit_deg' in [vehicle] must be more than 0 and at "
+                            f"most 45 deg, but it is {v['fin_limit_deg']}.")
     if "buoyancy_N" in v and "volume_m3" in v:
         raise ProtocolError(f"{src}: [vehicle] gives both 'buoyancy_N' and 'volume_m3'; give "
                             "one of them (the buoyancy is rho g V).")

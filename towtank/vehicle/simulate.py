@@ -16,7 +16,8 @@ Manoeuvres (metrics.csv ``metric, value, unit``):
   last fifth of the run;
 - zigzag: rudder +-delta switched when the heading passes -+delta (the classic delta/delta test,
   the first execute to positive heading); first and second overshoot angles, period;
-- dive: stern-plane step; steady pitch and depth rate;
+- dive: stern-plane step; steady pitch and depth rate; with ``dive_angle_deg`` the stern plane
+  holds that pitch (nose down) by :func:`pitch_command`; time to the angle and overshoot;
 - spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
 - glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
 
@@ -43,7 +44,17 @@ from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
 from towtank.vehicle.schema import MAX_STEPS
 
 __all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
-           "sample_models", "trim_state", "trim_warning", "TRIM_PITCH_DEG", "TRIM_DEPTH_RATE_M_S"]
+           "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
+           "TRIM_DEPTH_RATE_M_S", "PITCH_KP", "PITCH_KD", "FIN_LIMIT_DEG"]
+
+#: Proportional gain of the dive's pitch law, stern plane per pitch error [rad/rad].
+PITCH_KP = 10.0
+#: Derivative gain of the dive's pitch law, stern plane per pitch rate [rad/(rad/s)] = [s].
+PITCH_KD = 3.0
+#: Stern-plane (and rudder) limit of a model without ``fin_limit_deg`` [deg].
+FIN_LIMIT_DEG = 20.0
+#: The band of the commanded angle the dive's time to angle is measured to [-].
+DIVE_ANGLE_BAND = 0.1
 
 #: Largest steady pitch with zero controls of a model in trim [deg] (docs/formats.md §6).
 TRIM_PITCH_DEG = 2.0
@@ -177,6 +188,7 @@ def simulate(
     duration_s: float | None = None,
     max_step_s: float | None = None,
     max_steps: int | None = None,
+    dive_angle_deg: float | None = None,
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -201,6 +213,9 @@ def simulate(
         simulation stops (ValueError) when it has taken them, or as soon as it has taken a
         tenth of them and, at its pace so far, would need more: a model too stiff for its
         duration never hangs
+    dive_angle_deg : float, optional
+        dive: the pitch to hold, nose down positive [deg]; the stern plane then follows
+        :func:`pitch_command` (``sternplane_deg`` unused)
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
@@ -220,9 +235,21 @@ def simulate(
     ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
     state0 = np.zeros(12)
     state0[6] = speed_m_s
+    closed = manoeuvre == "dive" and dive_angle_deg is not None
+    if closed:
+        limit = math.radians(float(model.get("fin_limit_deg", FIN_LIMIT_DEG)))
+        sigma = 1.0 if float(model["coefficients"].get("M_uuds", -1.0)) <= 0 else -1.0
+        theta_cmd = -math.radians(dive_angle_deg)
+
+        def stern(y: np.ndarray) -> float:
+            return pitch_command(y[4], y[10], theta_cmd, PITCH_KP, PITCH_KD, limit, sigma)
+    else:
+        def stern(y: np.ndarray) -> float:
+            return ds
     if manoeuvre != "zigzag":
-        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
-                           method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
+        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, stern(y), thrust), (0.0, duration_s),
+                           state0, method="RK45", rtol=1e-8, atol=1e-9, max_step=h,
+                           dense_output=False)
         _check(sol)
         times, states = sol.t, sol.y.T
         rudder = np.full(len(times), dr)
@@ -259,11 +286,44 @@ def simulate(
         "psi_deg": np.degrees(states[:, 5]), "u_m_s": states[:, 6], "v_m_s": states[:, 7],
         "w_m_s": states[:, 8], "p_deg_s": np.degrees(states[:, 9]),
         "q_deg_s": np.degrees(states[:, 10]), "r_deg_s": np.degrees(states[:, 11]),
-        "rudder_deg": np.degrees(rudder), "sternplane_deg": np.degrees(ds),
+        "rudder_deg": np.degrees(rudder),
+        "sternplane_deg": np.degrees([stern(y) for y in states]) if closed else np.degrees(ds),
     })
     out.attrs["manoeuvre"] = manoeuvre
+    if closed:
+        out.attrs["dive_angle_deg"] = float(dive_angle_deg)
     out.attrs["check_deg"] = abs(rudder_deg)
     return out
+
+
+def pitch_command(theta_rad: float, q_rad_s: float, theta_cmd_rad: float, kp: float,
+                  kd: float, limit_rad: float, sigma: float = 1.0) -> float:
+    """Stern-plane angle of the dive's pitch law [rad] (docs/method.md, "Dive to an angle").
+
+    ``delta_s = sigma (Kp (theta - theta_cmd) + Kd q)``, saturated at +-``limit_rad``: a PD
+    law on the pitch error (a PID pitch autopilot without its integral term, Fossen 2011,
+    ch. 12). SNAME/Prestero signs: theta positive nose up, M_uuds < 0 (a positive stern
+    plane pitches the nose down), sigma = +1; a model with M_uuds > 0 takes sigma = -1.
+
+    Parameters
+    ----------
+    theta_rad : float
+        Pitch [rad]
+    q_rad_s : float
+        Pitch rate [rad/s]
+    theta_cmd_rad : float
+        Commanded pitch [rad] (a dive of A deg: -A)
+    kp : float
+        Proportional gain [rad/rad]
+    kd : float
+        Derivative gain [s]
+    limit_rad : float
+        Stern-plane limit [rad]
+    sigma : float
+        +1 or -1, the sign above [-]
+    """
+    delta = sigma * (kp * (theta_rad - theta_cmd_rad) + kd * q_rad_s)
+    return float(min(max(delta, -limit_rad), limit_rad))
 
 
 def trim_state(model: dict[str, Any], speed_m_s: float,
@@ -529,7 +589,33 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         rows.append(("glide_angle_deg", glide, "deg", note))
         steady("angle_of_attack_deg", "angle_of_attack_deg", "deg", angle=True)
         rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m", ""))
+        if "dive_angle_deg" in ts.attrs:
+            rows += _dive_angle_rows(ts, float(ts.attrs["dive_angle_deg"]))
     return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
+
+
+def _dive_angle_rows(ts: pd.DataFrame, angle_deg: float) -> list[tuple[str, float, str, str]]:
+    """The dive to an angle: commanded angle, time to reach it within
+    :data:`DIVE_ANGLE_BAND` of it [s], overshoot beyond it [deg] (dive angle = -pitch)."""
+    dive = -ts["theta_deg"].to_numpy()
+    t = ts["t_s"].to_numpy()
+    sign = 1.0 if angle_deg >= 0 else -1.0
+    reached = np.nonzero(sign * dive >= (1.0 - DIVE_ANGLE_BAND) * abs(angle_deg))[0]
+    rows = [("dive_angle_deg", angle_deg, "deg", "commanded: pitch held at -this")]
+    if len(reached) == 0:
+        why = f"never within {DIVE_ANGLE_BAND:.0%} of the commanded angle"
+        return rows + [("time_to_dive_angle_s", float("nan"), "s", why),
+                       ("dive_angle_overshoot_deg", float("nan"), "deg", why)]
+    i = reached[0]
+    if i > 0:  # interpolated to the crossing
+        target = sign * (1.0 - DIVE_ANGLE_BAND) * abs(angle_deg)
+        f = (target - sign * dive[i - 1]) / (sign * dive[i] - sign * dive[i - 1])
+        t_reach = float(t[i - 1] + f * (t[i] - t[i - 1]))
+    else:
+        t_reach = float(t[0])
+    over = max(0.0, float(np.max(sign * dive)) - abs(angle_deg))
+    return rows + [("time_to_dive_angle_s", t_reach, "s", ""),
+                   ("dive_angle_overshoot_deg", over, "deg", "")]
 
 
 def sample_models(model: dict[str, Any], n: int, seed: int = 1) -> list[dict[str, Any]]:
