@@ -194,7 +194,9 @@ def test_predict_command_writes_predicted_csv_and_model_json(tmp_path, capsys):
     model = json.loads((tmp_path / "out" / "model.json").read_text())
     assert model["mass_kg"] == 30.48 and model["cg_m"] == [0.0, 0.0, 0.0196]
     assert model["coefficients"]["Y_vdot"] == pytest.approx(-35.5, rel=0.05)
-    assert set(model["sources"].values()) == {"predicted"}
+    assert {model["sources"][s] for s in model["coefficients"]} == {"predicted"}
+    assert model["sources"]["mass_kg"] == "given"  # issue 21: the mass properties say too
+    assert model["sources"]["buoyancy_N"] == "hull volume"
     assert model["buoyancy_N"] > model["weight_N"] > 0  # REMUS is a little buoyant
 
 

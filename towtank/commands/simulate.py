@@ -37,11 +37,30 @@ def _check_controls(model: dict, manoeuvre: str, rudder: float, stern: float,
                 "predict or process again.")
 
 
+def _check_dive_angle(model: dict | None, manoeuvre: str, angle: float | None) -> list[str]:
+    """--dive-angle-deg: a dive only, finite and within +-80 deg; the model's optional
+    ``fin_limit_deg`` more than 0 and at most 45 deg."""
+    import math
+
+    problems = []
+    if angle is not None:
+        if manoeuvre != "dive":
+            problems.append(f"--dive-angle-deg is for --manoeuvre dive, not {manoeuvre}.")
+        elif not (math.isfinite(angle) and abs(angle) <= 80.0):
+            problems.append(f"--dive-angle-deg must be within +-80 deg, not {angle:g}.")
+    limit = None if model is None else model.get("fin_limit_deg")
+    if limit is not None and not (isinstance(limit, (int, float)) and not isinstance(limit, bool)
+                                  and 0 < limit <= 45):
+        problems.append(f"model.json: 'fin_limit_deg' must be a number more than 0 and at "
+                        f"most 45 deg, not {limit!r}.")
+    return problems
+
+
 def simulate_command(
     model_path: Path, manoeuvre: str, *, rudder_deg: float | None = None,
     sternplane_deg: float | None = None, speed: float | None = None,
     net_buoyancy_n: float | None = None, out: Path | None = None, samples: int = 0,
-    duration_s: float | None = None, seed: int = 1,
+    duration_s: float | None = None, seed: int = 1, dive_angle_deg: float | None = None,
 ) -> int:
     """Simulate, write manoeuvre.csv, metrics.csv and manoeuvre.png; print the metrics.
 
@@ -68,13 +87,23 @@ def simulate_command(
     problems += schema.check_simulation(
         model, manoeuvre, speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
         duration_s=duration_s, net_buoyancy_n=net_buoyancy_n, samples=samples, name=name)
+    problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
     if problems:
         raise ProtocolError(schema.joined(problems))
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
+    if manoeuvre != "glide":  # a glide is out of trim on purpose
+        import sys
+
+        from towtank.vehicle.simulate import trim_warning
+
+        warning = trim_warning(model, u, net_buoyancy_n)
+        if warning:
+            print(f"warning: {warning}", file=sys.stderr)
     kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
-                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s)
+                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
+                  dive_angle_deg=dive_angle_deg)
     try:
         ts = simulate(model, manoeuvre, **kwargs)
         metrics = manoeuvre_metrics(ts)

@@ -26,12 +26,16 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "length_m": ("float", False),
     "scale": ("float", False),
     "mass_kg": ("float", False),
+    "weight_N": ("float", False),
+    "buoyancy_N": ("float", False),
+    "volume_m3": ("float", False),
     "cg_m": ("floats", False),
     "cb_m": ("floats", False),
     "inertia_kg_m2": ("floats", False),
     "speed_m_s": ("float", False),
     "origin_m": ("float", False),
     "added_mass": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
+    "fin_limit_deg": ("float", False),
 }
 FIN_SCHEMA: dict[str, tuple[str, bool]] = {
     "plane": ("str", True),
@@ -61,9 +65,13 @@ class Vehicle:
 
     ``myring`` holds the Myring parameters (a, b, c, n, theta_deg, d, a_offset, c_offset) of
     ``[vehicle.myring]``, else of ``[model.myring]``; ``scale`` multiplies every length of the
-    hull (a prototype described by its model's hull); ``mass_kg`` None means neutrally
-    buoyant; ``origin_m`` is the reference point aft of the nose tip, None for the centre of
-    buoyancy.
+    hull (a prototype described by its model's hull); ``origin_m`` is the reference point aft
+    of the nose tip, None for the centre of buoyancy. The mass properties are used as given;
+    None means not given (:func:`towtank.vehicle.model.mass_properties` then computes it from
+    the hull and says so in model.json ``sources``): ``mass_kg`` [kg] (else ``weight_N``/g,
+    else neutrally buoyant), ``weight_N`` [N] (else mass g), ``buoyancy_N`` [N] (else
+    rho g ``volume_m3``, else rho g times the hull's volume), ``cb_m`` [m] (else the hull's
+    centre of buoyancy), ``cg_m`` [m] (else the centre of buoyancy).
     """
 
     hull: str
@@ -73,11 +81,15 @@ class Vehicle:
     length_m: float | None = None
     scale: float = 1.0
     mass_kg: float | None = None
-    cg_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    cb_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    weight_N: float | None = None  # noqa: N815 (the key's name)
+    buoyancy_N: float | None = None  # noqa: N815
+    volume_m3: float | None = None
+    cg_m: tuple[float, float, float] | None = None
+    cb_m: tuple[float, float, float] | None = None
     inertia_kg_m2: tuple[float, float, float] | None = None
     speed_m_s: float = 1.5
     origin_m: float | None = None
+    fin_limit_deg: float | None = None
     fins: tuple[VehicleFin, ...] = ()
     added_mass: str = "towtank"
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
@@ -107,6 +119,21 @@ def _triple(values: dict[str, Any], key: str, src: str) -> None:
         raise ProtocolError(
             f"{src}: '{key}' in [vehicle] must be three numbers [x, y, z], not "
             f"{len(values[key])}.")
+
+
+#: Largest relative difference between a given ``weight_N`` and ``mass_kg`` g [-] (as in
+#: model.json, :data:`towtank.vehicle.schema.WEIGHT_TOLERANCE`).
+WEIGHT_TOLERANCE = 0.01
+_G = 9.80665
+
+
+def _check_weight(v: dict[str, Any], src: str) -> None:
+    """Both ``mass_kg`` [kg] and ``weight_N`` [N] given: W = m g within 1 %."""
+    if "mass_kg" in v and "weight_N" in v:
+        mg = v["mass_kg"] * _G
+        if math.isfinite(mg) and abs(v["weight_N"] - mg) > WEIGHT_TOLERANCE * mg:
+            raise ProtocolError(f"{src}: 'weight_N' = {v['weight_N']:g} N in [vehicle] must be "
+                                f"mass_kg x g ({mg:.6g} N) within 1 %; give one of them.")
 
 
 def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
@@ -145,10 +172,18 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
 
         raise ProtocolError(f"{src}: 'hull' in [vehicle] must be one of {', '.join(HULLS)}, "
                             f"but it is {v['hull']!r}{_p._suggest(v['hull'], HULLS)}")
-    for key in ("length_m", "scale", "mass_kg", "speed_m_s"):
-        if key in v and v[key] <= 0:
+    for key in ("length_m", "scale", "mass_kg", "speed_m_s", "weight_N", "buoyancy_N",
+                "volume_m3"):
+        if key in v and not v[key] > 0:
             raise ProtocolError(f"{src}: '{key}' in [vehicle] must be positive, but it is "
                                 f"{v[key]}.")
+    if "fin_limit_deg" in v and not 0 < v["fin_limit_deg"] <= 45:
+        raise ProtocolError(f"{src}: 'fin_limit_deg' in [vehicle] must be more than 0 and at "
+                            f"most 45 deg, but it is {v['fin_limit_deg']}.")
+    if "buoyancy_N" in v and "volume_m3" in v:
+        raise ProtocolError(f"{src}: [vehicle] gives both 'buoyancy_N' and 'volume_m3'; give "
+                            "one of them (the buoyancy is rho g V).")
+    _check_weight(v, src)
     for key in ("cg_m", "cb_m", "inertia_kg_m2"):
         _triple(v, key, src)
     if "inertia_kg_m2" in v and min(v["inertia_kg_m2"]) <= 0:

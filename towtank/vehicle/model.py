@@ -141,17 +141,54 @@ def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
 def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dict[str, Any]:
     """Mass, weight, buoyancy, centres and inertia of the vehicle about the reference point.
 
-    Missing values: mass = rho V (neutrally buoyant); centre of buoyancy = the hull's, in body
-    axes from the reference point; centre of gravity = the centre of buoyancy; inertia = that
-    of a body of uniform density filling the hull (Ixx = integral of m'(x) r^2/2 dx,
-    Iyy = Izz = integral of m'(x) ((x - x_ref)^2 + r^2/4) dx, m' the mass per length).
+    What ``[vehicle]`` gives is used as given (a ``cb_m = [0, 0, 0]`` is the reference point,
+    not "missing"); what is not given is computed, and ``sources`` says which is which
+    (``"given"`` or how it was computed; written to model.json ``sources``):
+
+    - buoyancy B = rho g V [N], V = ``volume_m3`` if given, else the hull's volume;
+    - mass = ``weight_N``/g if the weight is given, else B/g (neutrally buoyant) [kg];
+    - weight W = mass g [N] (Fossen 2011, eq. 4.3);
+    - centre of buoyancy = the hull's, in body axes from the reference point [m];
+    - centre of gravity = the centre of buoyancy [m];
+    - inertia = that of a body of uniform density filling the hull (Ixx = integral of
+      m'(x) r^2/2 dx, Iyy = Izz = integral of m'(x) ((x - x_ref)^2 + r^2/4) dx, m' the mass
+      per length) [kg m^2].
+
+    Parameters
+    ----------
+    vehicle : towtank.ingest.vehicle_protocol.Vehicle
+        The ``[vehicle]`` section
+    profile : towtank.vehicle.hull.HullProfile
+        Its hull
+    rho : float
+        Water density [kg/m^3]
     """
-    volume = profile.volume
+    given = "given"
+    volume = float(vehicle.volume_m3) if vehicle.volume_m3 is not None else profile.volume
+    if vehicle.buoyancy_N is not None:
+        buoyancy, b_src = float(vehicle.buoyancy_N), given
+    else:
+        buoyancy = rho * G * volume
+        b_src = "rho g volume_m3" if vehicle.volume_m3 is not None else "hull volume"
+    if vehicle.mass_kg is not None:
+        mass, m_src = float(vehicle.mass_kg), given
+    elif vehicle.weight_N is not None:
+        mass, m_src = float(vehicle.weight_N) / G, "weight_N / g"
+    else:
+        mass, m_src = buoyancy / G, "neutrally buoyant: buoyancy_N / g"
+    if vehicle.weight_N is not None:
+        weight, w_src = float(vehicle.weight_N), given
+    else:
+        weight, w_src = mass * G, "mass_kg x g"
     x_ref = profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
-    mass = vehicle.mass_kg if vehicle.mass_kg is not None else rho * volume
-    cb_default = (x_ref - profile.x_buoyancy, 0.0, 0.0)
-    cb = tuple(vehicle.cb_m) if vehicle.cb_m != (0.0, 0.0, 0.0) else cb_default
-    cg = tuple(vehicle.cg_m) if vehicle.cg_m != (0.0, 0.0, 0.0) else cb
+    if vehicle.cb_m is not None:
+        cb, cb_src = tuple(vehicle.cb_m), given
+    else:
+        cb, cb_src = (x_ref - profile.x_buoyancy, 0.0, 0.0), "hull centre of buoyancy"
+    if vehicle.cg_m is not None:
+        cg, cg_src = tuple(vehicle.cg_m), given
+    else:
+        cg, cg_src = cb, "centre of buoyancy"
     source = "given in [vehicle]"
     if vehicle.inertia_kg_m2 is not None:
         inertia = tuple(float(v) for v in vehicle.inertia_kg_m2)
@@ -163,10 +200,14 @@ def mass_properties(vehicle: Any, profile: hulls.HullProfile, rho: float) -> dic
         iyy = float(trapezoid(per_len * (xb**2 + profile.r_m**2 / 4.0), profile.x_m))
         inertia = (ixx, iyy, iyy)
         source = "estimated: uniform density filling the hull"
-    return {"mass_kg": float(mass), "weight_N": float(mass * G),
-            "buoyancy_N": float(rho * G * volume), "cg_m": [float(c) for c in cg],
+    sources = {"mass_kg": m_src, "weight_N": w_src, "buoyancy_N": b_src, "cg_m": cg_src,
+               "cb_m": cb_src,
+               "inertia_kg_m2": given if vehicle.inertia_kg_m2 is not None else
+               "uniform density filling the hull"}
+    return {"mass_kg": float(mass), "weight_N": float(weight),
+            "buoyancy_N": float(buoyancy), "cg_m": [float(c) for c in cg],
             "cb_m": [float(c) for c in cb], "inertia_kg_m2": [float(i) for i in inertia],
-            "inertia_source": source, "volume_m3": float(volume)}
+            "inertia_source": source, "volume_m3": float(volume), "sources": sources}
 
 
 def build_model(
@@ -211,7 +252,7 @@ def build_model(
         **{k: masses[k] for k in ("mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
                                   "inertia_kg_m2")},
         "coefficients": coefficients,
-        "sources": sources,
+        "sources": {**sources, **masses.get("sources", {})},
         "covariance": {"symbols": list(symbols),
                        "matrix": np.asarray(matrix, dtype=float).tolist()},
         "notes": {

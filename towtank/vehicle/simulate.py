@@ -12,12 +12,17 @@ axial drag ``X_u|u|`` at the commanded speed on a straight course (none for a gl
 Manoeuvres (metrics.csv ``metric, value, unit``):
 
 - turning: rudder step at t = 0; advance and transfer at 90 deg of heading change, tactical
-  diameter at 180 deg, steady turn radius V/|psi_dot| over the last full turn;
+  diameter at 180 deg, steady turn radius: the least-squares circle of the plan track over the
+  last fifth of the run;
 - zigzag: rudder +-delta switched when the heading passes -+delta (the classic delta/delta test,
   the first execute to positive heading); first and second overshoot angles, period;
-- dive: stern-plane step; steady pitch and depth rate;
+- dive: stern-plane step; steady pitch and depth rate; with ``dive_angle_deg`` the stern plane
+  holds that pitch (nose down) by :func:`pitch_command`; time to the angle and overshoot;
 - spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
 - glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
+
+Steady metrics only when the last fifth of the run is steady (:mod:`towtank.vehicle.steady`),
+else NaN and a note (metrics.csv ``note``).
 
 One simulation takes at most :data:`towtank.vehicle.schema.MAX_STEPS` integration steps over
 all its legs, and stops at once when the state or the forces stop being finite: whatever the
@@ -39,7 +44,22 @@ from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
 from towtank.vehicle.schema import MAX_STEPS
 
 __all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
-           "sample_models"]
+           "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
+           "TRIM_DEPTH_RATE_M_S", "PITCH_KP", "PITCH_KD", "FIN_LIMIT_DEG"]
+
+#: Proportional gain of the dive's pitch law, stern plane per pitch error [rad/rad].
+PITCH_KP = 10.0
+#: Derivative gain of the dive's pitch law, stern plane per pitch rate [rad/(rad/s)] = [s].
+PITCH_KD = 3.0
+#: Stern-plane (and rudder) limit of a model without ``fin_limit_deg`` [deg].
+FIN_LIMIT_DEG = 20.0
+#: The band of the commanded angle the dive's time to angle is measured to [-].
+DIVE_ANGLE_BAND = 0.1
+
+#: Largest steady pitch with zero controls of a model in trim [deg] (docs/formats.md §6).
+TRIM_PITCH_DEG = 2.0
+#: Largest steady depth rate with zero controls of a model in trim [m/s].
+TRIM_DEPTH_RATE_M_S = 0.05
 
 MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide")
 _DOF = "XYZKMN"
@@ -168,6 +188,7 @@ def simulate(
     duration_s: float | None = None,
     max_step_s: float | None = None,
     max_steps: int | None = None,
+    dive_angle_deg: float | None = None,
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -192,6 +213,9 @@ def simulate(
         simulation stops (ValueError) when it has taken them, or as soon as it has taken a
         tenth of them and, at its pace so far, would need more: a model too stiff for its
         duration never hangs
+    dive_angle_deg : float, optional
+        dive: the pitch to hold, nose down positive [deg]; the stern plane then follows
+        :func:`pitch_command` (``sternplane_deg`` unused)
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
@@ -211,9 +235,21 @@ def simulate(
     ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
     state0 = np.zeros(12)
     state0[6] = speed_m_s
+    closed = manoeuvre == "dive" and dive_angle_deg is not None
+    if closed:
+        limit = math.radians(float(model.get("fin_limit_deg", FIN_LIMIT_DEG)))
+        sigma = 1.0 if float(model["coefficients"].get("M_uuds", -1.0)) <= 0 else -1.0
+        theta_cmd = -math.radians(dive_angle_deg)
+
+        def stern(y: np.ndarray) -> float:
+            return pitch_command(y[4], y[10], theta_cmd, PITCH_KP, PITCH_KD, limit, sigma)
+    else:
+        def stern(y: np.ndarray) -> float:
+            return ds
     if manoeuvre != "zigzag":
-        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, ds, thrust), (0.0, duration_s), state0,
-                           method="RK45", rtol=1e-8, atol=1e-9, max_step=h, dense_output=False)
+        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, stern(y), thrust), (0.0, duration_s),
+                           state0, method="RK45", rtol=1e-8, atol=1e-9, max_step=h,
+                           dense_output=False)
         _check(sol)
         times, states = sol.t, sol.y.T
         rudder = np.full(len(times), dr)
@@ -250,11 +286,117 @@ def simulate(
         "psi_deg": np.degrees(states[:, 5]), "u_m_s": states[:, 6], "v_m_s": states[:, 7],
         "w_m_s": states[:, 8], "p_deg_s": np.degrees(states[:, 9]),
         "q_deg_s": np.degrees(states[:, 10]), "r_deg_s": np.degrees(states[:, 11]),
-        "rudder_deg": np.degrees(rudder), "sternplane_deg": np.degrees(ds),
+        "rudder_deg": np.degrees(rudder),
+        "sternplane_deg": np.degrees([stern(y) for y in states]) if closed else np.degrees(ds),
     })
     out.attrs["manoeuvre"] = manoeuvre
+    if closed:
+        out.attrs["dive_angle_deg"] = float(dive_angle_deg)
     out.attrs["check_deg"] = abs(rudder_deg)
     return out
+
+
+def pitch_command(theta_rad: float, q_rad_s: float, theta_cmd_rad: float, kp: float,
+                  kd: float, limit_rad: float, sigma: float = 1.0) -> float:
+    """Stern-plane angle of the dive's pitch law [rad] (docs/method.md, "Dive to an angle").
+
+    ``delta_s = sigma (Kp (theta - theta_cmd) + Kd q)``, saturated at +-``limit_rad``: a PD
+    law on the pitch error (a PID pitch autopilot without its integral term, Fossen 2011,
+    ch. 12). SNAME/Prestero signs: theta positive nose up, M_uuds < 0 (a positive stern
+    plane pitches the nose down), sigma = +1; a model with M_uuds > 0 takes sigma = -1.
+
+    Parameters
+    ----------
+    theta_rad : float
+        Pitch [rad]
+    q_rad_s : float
+        Pitch rate [rad/s]
+    theta_cmd_rad : float
+        Commanded pitch [rad] (a dive of A deg: -A)
+    kp : float
+        Proportional gain [rad/rad]
+    kd : float
+        Derivative gain [s]
+    limit_rad : float
+        Stern-plane limit [rad]
+    sigma : float
+        +1 or -1, the sign above [-]
+    """
+    delta = sigma * (kp * (theta_rad - theta_cmd_rad) + kd * q_rad_s)
+    return float(min(max(delta, -limit_rad), limit_rad))
+
+
+def trim_state(model: dict[str, Any], speed_m_s: float,
+               net_buoyancy_n: float | None = None) -> dict[str, float]:
+    """The steady straight run the model settles at with zero controls (docs/method.md,
+    "Trim check").
+
+    The thrust T = -X_u|u| U|U| of ``simulate`` at ``speed_m_s`` U [m/s]; roll, sway and the
+    angular rates zero; the surge, heave and pitch equations of motion at rest
+    (``u_dot = w_dot = q_dot = 0``: the static balance of thrust, hydrodynamic forces,
+    weight and buoyancy, Fossen 2011 eqs. 4.6 and 7.190) are solved for the speeds u, w
+    [m/s] and the pitch theta [rad], from u = U, w = 0, theta = 0. The depth rate is
+    ``z_dot = -u sin(theta) + w cos(theta)`` [m/s] (Fossen 2011 eq. 2.40, phi = 0).
+
+    Parameters
+    ----------
+    model : dict
+        model.json
+    speed_m_s : float
+        Commanded speed [m/s]
+    net_buoyancy_n : float, optional
+        Buoyancy minus weight [N], replacing the model's weight (as ``simulate``)
+
+    Returns
+    -------
+    dict
+        ``pitch_deg`` [deg], ``depth_rate_m_s`` [m/s, positive down], ``u_m_s``, ``w_m_s``
+        [m/s], ``converged`` (False: no steady straight run found; the others NaN)
+    """
+    from scipy.optimize import fsolve
+
+    weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
+    dyn = Dynamics(model, weight)
+    thrust = -dyn.x_uu * speed_m_s * abs(speed_m_s)
+
+    def balance(x: np.ndarray) -> np.ndarray:
+        state = np.zeros(12)
+        state[4], state[6], state[8] = x[2], x[0], x[1]
+        return dyn.rhs(state, 0.0, 0.0, thrust)[[6, 8, 10]]
+
+    with np.errstate(all="ignore"):
+        x, _, ier, _ = fsolve(balance, np.array([speed_m_s, 0.0, 0.0]), full_output=True,
+                              xtol=1e-12)
+        resid = np.abs(balance(x))
+    ok = (ier == 1 and bool(np.all(np.isfinite(x))) and float(resid.max()) < 1e-6
+          and abs(x[2]) < math.pi / 2)
+    if not ok:
+        nan = float("nan")
+        return {"pitch_deg": nan, "depth_rate_m_s": nan, "u_m_s": nan, "w_m_s": nan,
+                "converged": False}
+    u, w, theta = (float(v) for v in x)
+    return {"pitch_deg": math.degrees(theta),
+            "depth_rate_m_s": -u * math.sin(theta) + w * math.cos(theta),
+            "u_m_s": u, "w_m_s": w, "converged": True}
+
+
+def trim_warning(model: dict[str, Any], speed_m_s: float,
+                 net_buoyancy_n: float | None = None) -> str | None:
+    """One sentence when the model is out of trim (:func:`trim_state`: steady pitch beyond
+    :data:`TRIM_PITCH_DEG` [deg] or depth rate beyond :data:`TRIM_DEPTH_RATE_M_S` [m/s] with
+    zero controls at ``speed_m_s`` [m/s]), else None."""
+    st = trim_state(model, speed_m_s, net_buoyancy_n)
+    check = "check weight_N, buoyancy_N, cg_m and cb_m (or --net-buoyancy-N)"
+    if not st["converged"]:
+        return (f"the model has no steady straight run with zero controls at {speed_m_s:g} m/s "
+                f"(the balance of surge, heave and pitch has no solution); {check}.")
+    if abs(st["pitch_deg"]) > TRIM_PITCH_DEG or abs(st["depth_rate_m_s"]) > TRIM_DEPTH_RATE_M_S:
+        way = "down" if st["depth_rate_m_s"] > 0 else "up"
+        return (f"the model is out of trim: with zero controls at {speed_m_s:g} m/s it settles "
+                f"at a pitch of {st['pitch_deg']:+.1f} deg and goes {way} at "
+                f"{abs(st['depth_rate_m_s']):.3g} m/s (in trim: within +-{TRIM_PITCH_DEG:g} deg "
+                f"and +-{TRIM_DEPTH_RATE_M_S:g} m/s); {check}.")
+    return None
 
 
 def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) -> float:
@@ -347,67 +489,133 @@ def _at_heading(ts: pd.DataFrame, change_deg: float) -> pd.Series | None:
     return ts.iloc[i - 1] + f * (ts.iloc[i] - ts.iloc[i - 1])
 
 
-def _steady(ts: pd.DataFrame, fraction: float = 0.2) -> pd.DataFrame:
-    return ts[ts["t_s"] >= ts["t_s"].iloc[-1] * (1.0 - fraction)]
+def _rates(ts: pd.DataFrame) -> dict[str, np.ndarray]:
+    """The quantities the steady metrics average, sample by sample."""
+    t = ts["t_s"].to_numpy()
+    grad = (lambda c: np.gradient(ts[c].to_numpy(), t)) if len(t) > 1 else (
+        lambda c: np.zeros(len(t)))
+    xr, yr, zr = grad("x_m"), grad("y_m"), grad("z_m")
+    return {
+        "t": t, "speed_m_s": np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2
+                                     + ts["w_m_s"] ** 2).to_numpy(),
+        "horizontal_speed_m_s": np.hypot(xr, yr), "xr": xr, "depth_rate_m_s": zr,
+        "yaw_rate_deg_s": grad("psi_deg"), "pitch_deg": ts["theta_deg"].to_numpy(),
+        "drift_deg": np.degrees(np.arctan2(ts["v_m_s"], ts["u_m_s"])).to_numpy(),
+        "angle_of_attack_deg": np.degrees(np.arctan2(ts["w_m_s"], ts["u_m_s"])).to_numpy(),
+    }
 
 
 def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
-    """metrics.csv of a simulated manoeuvre (module docstring): metric, value, unit."""
+    """metrics.csv of a simulated manoeuvre: metric, value, unit, note.
+
+    Steady metrics are means over the last fifth of the run, given only when that part is
+    steady (:mod:`towtank.vehicle.steady`; NaN and a note otherwise); angles wrapped to
+    +-180 deg. The turn radius is the least-squares circle through the plan track (x, y) of
+    that part (:func:`towtank.vehicle.steady.circle_fit`).
+    """
+    from towtank.vehicle import steady as sd
+
     kind = ts.attrs.get("manoeuvre", "turning")
-    rows: list[tuple[str, float, str]] = []
-    speed = np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2 + ts["w_m_s"] ** 2)
+    rows: list[tuple[str, float, str, str]] = []
+    nan = float("nan")
+    with np.errstate(all="ignore"):  # a zigzag repeats the switching times
+        q = _rates(ts)
+    last = sd.steady_mask(q["t"])
+    loop = sd.looped(q["pitch_deg"], ts["u_m_s"].to_numpy())
+
+    def check(*names: str) -> str:
+        if loop:
+            return loop
+        for name in names:
+            note = sd.steadiness(q[name][last], name)
+            if note:
+                return f"{sd.LABELS[name]} {note}"
+        return ""
+
+    def steady(metric: str, name: str, unit: str, *needs: str, angle: bool = False) -> None:
+        note = check(name, *needs)
+        value = float(np.mean(q[name][last])) if not note else nan
+        rows.append((metric, float(sd.wrap_deg(value)) if angle and not note else value, unit,
+                     note))
+
     if kind in ("turning", "spiral"):
-        psi_rate = np.gradient(np.radians(ts["psi_deg"].to_numpy()), ts["t_s"].to_numpy())
-        last = ts["t_s"] >= ts["t_s"].iloc[-1] * 0.75
-        radius = float(np.mean(speed[last] * np.cos(np.radians(ts["theta_deg"][last]))
-                               / np.abs(psi_rate[last])))
-        rows.append(("steady_turn_radius_m", radius, "m"))
+        needs = ("yaw_rate_deg_s", "speed_m_s") + (("depth_rate_m_s",) if kind == "spiral"
+                                                    else ())
+        note = check(*needs)
+        yaw = float(np.mean(q["yaw_rate_deg_s"][last]))
+        if not note and abs(yaw) < sd.MIN_YAW_RATE_DEG_S:
+            note = f"not turning: the yaw rate is below {sd.MIN_YAW_RATE_DEG_S:g} deg/s"
+        radius = nan if note else sd.circle_fit(ts["x_m"].to_numpy()[last],
+                                                ts["y_m"].to_numpy()[last])[2]
+        rows.append(("steady_turn_radius_m", radius, "m", note))
         at90, at180 = _at_heading(ts, 90.0), _at_heading(ts, 180.0)
-        nan = float("nan")
         rows.append(("advance_m", float(at90["x_m"] - ts["x_m"].iloc[0]) if at90 is not None
-                     else nan, "m"))
-        rows.append(("transfer_m", float(abs(at90["y_m"])) if at90 is not None else nan, "m"))
+                     else nan, "m", "" if at90 is not None else "no 90 deg of heading change"))
+        rows.append(("transfer_m", float(abs(at90["y_m"])) if at90 is not None else nan, "m",
+                     "" if at90 is not None else "no 90 deg of heading change"))
         rows.append(("tactical_diameter_m", float(abs(at180["y_m"])) if at180 is not None
-                     else nan, "m"))
-        rows.append(("steady_speed_m_s", float(np.mean(speed[last])), "m/s"))
-        rows.append(("steady_yaw_rate_deg_s", float(np.degrees(np.mean(psi_rate[last]))),
-                     "deg/s"))
-        drift = np.degrees(np.arctan2(ts["v_m_s"][last], ts["u_m_s"][last]))
-        rows.append(("steady_drift_angle_deg", float(np.mean(drift)), "deg"))
+                     else nan, "m", "" if at180 is not None else "no 180 deg of heading change"))
+        steady("steady_speed_m_s", "speed_m_s", "m/s")
+        steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
+        steady("steady_drift_angle_deg", "drift_deg", "deg", angle=True)
         if kind == "spiral":
-            zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())
-            rows.append(("steady_pitch_deg", float(ts["theta_deg"][last].mean()), "deg"))
-            rows.append(("depth_rate_m_s", float(np.mean(zr[last])), "m/s"))
-            rows.append(("depth_change_per_turn_m",
-                         float(np.mean(zr[last]) * 2 * math.pi / np.mean(np.abs(psi_rate[last]))),
-                         "m"))
+            steady("steady_pitch_deg", "pitch_deg", "deg", angle=True)
+            steady("depth_rate_m_s", "depth_rate_m_s", "m/s")
+            note = check("depth_rate_m_s", *needs)
+            per_turn = nan if note else float(np.mean(q["depth_rate_m_s"][last]) * 360.0
+                                              / abs(yaw))
+            rows.append(("depth_change_per_turn_m", per_turn, "m", note))
     elif kind == "zigzag":
-        check = float(ts.attrs.get("check_deg", 20.0))
+        check_deg = float(ts.attrs.get("check_deg", 20.0))
         switch = np.nonzero(np.diff(ts["rudder_deg"].to_numpy()) != 0)[0] + 1
         psi = ts["psi_deg"].to_numpy()
         t = ts["t_s"].to_numpy()
         for k in range(2):
             if len(switch) > k + 1:
                 seg = psi[switch[k]:switch[k + 1]]
-                over = (seg.max() - check) if k % 2 == 0 else (-seg.min() - check)
-                rows.append((f"overshoot_{k + 1}_deg", float(over), "deg"))
+                over = (seg.max() - check_deg) if k % 2 == 0 else (-seg.min() - check_deg)
+                rows.append((f"overshoot_{k + 1}_deg", float(over), "deg", ""))
         if len(switch) >= 3:
-            rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s"))
+            rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s", ""))
         if len(switch) >= 1:
-            rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s"))
+            rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s", ""))
     else:  # dive, glide
-        st = _steady(ts)
-        zr = np.gradient(ts["z_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
-        xr = np.gradient(ts["x_m"].to_numpy(), ts["t_s"].to_numpy())[st.index]
-        rows.append(("steady_pitch_deg", float(st["theta_deg"].mean()), "deg"))
-        rows.append(("depth_rate_m_s", float(np.mean(zr)), "m/s"))
-        rows.append(("speed_m_s", float(np.mean(speed[st.index])), "m/s"))
-        rows.append(("glide_angle_deg", float(np.degrees(np.arctan2(np.mean(-zr), np.mean(xr)))),
-                     "deg"))
-        alpha = np.degrees(np.arctan2(st["w_m_s"], st["u_m_s"]))
-        rows.append(("angle_of_attack_deg", float(alpha.mean()), "deg"))
-        rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m"))
-    return pd.DataFrame(rows, columns=["metric", "value", "unit"])
+        steady("steady_pitch_deg", "pitch_deg", "deg", angle=True)
+        steady("depth_rate_m_s", "depth_rate_m_s", "m/s")
+        steady("speed_m_s", "speed_m_s", "m/s")
+        note = check("depth_rate_m_s", "speed_m_s")
+        glide = nan if note else float(np.degrees(np.arctan2(
+            np.mean(-q["depth_rate_m_s"][last]), np.mean(q["xr"][last]))))
+        rows.append(("glide_angle_deg", glide, "deg", note))
+        steady("angle_of_attack_deg", "angle_of_attack_deg", "deg", angle=True)
+        rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m", ""))
+        if "dive_angle_deg" in ts.attrs:
+            rows += _dive_angle_rows(ts, float(ts.attrs["dive_angle_deg"]))
+    return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
+
+
+def _dive_angle_rows(ts: pd.DataFrame, angle_deg: float) -> list[tuple[str, float, str, str]]:
+    """The dive to an angle: commanded angle, time to reach it within
+    :data:`DIVE_ANGLE_BAND` of it [s], overshoot beyond it [deg] (dive angle = -pitch)."""
+    dive = -ts["theta_deg"].to_numpy()
+    t = ts["t_s"].to_numpy()
+    sign = 1.0 if angle_deg >= 0 else -1.0
+    reached = np.nonzero(sign * dive >= (1.0 - DIVE_ANGLE_BAND) * abs(angle_deg))[0]
+    rows = [("dive_angle_deg", angle_deg, "deg", "commanded: pitch held at -this")]
+    if len(reached) == 0:
+        why = f"never within {DIVE_ANGLE_BAND:.0%} of the commanded angle"
+        return rows + [("time_to_dive_angle_s", float("nan"), "s", why),
+                       ("dive_angle_overshoot_deg", float("nan"), "deg", why)]
+    i = reached[0]
+    if i > 0:  # interpolated to the crossing
+        target = sign * (1.0 - DIVE_ANGLE_BAND) * abs(angle_deg)
+        f = (target - sign * dive[i - 1]) / (sign * dive[i] - sign * dive[i - 1])
+        t_reach = float(t[i - 1] + f * (t[i] - t[i - 1]))
+    else:
+        t_reach = float(t[0])
+    over = max(0.0, float(np.max(sign * dive)) - abs(angle_deg))
+    return rows + [("time_to_dive_angle_s", t_reach, "s", ""),
+                   ("dive_angle_overshoot_deg", over, "deg", "")]
 
 
 def sample_models(model: dict[str, Any], n: int, seed: int = 1) -> list[dict[str, Any]]:

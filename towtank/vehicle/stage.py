@@ -50,6 +50,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
     model["length_m"] = float(profile.length)
+    if vehicle.fin_limit_deg is not None:
+        model["fin_limit_deg"] = float(vehicle.fin_limit_deg)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
                              _powering(vehicle, profile, fins, rho, nu),
                              _pressure_hull(vehicle, profile, rho))
