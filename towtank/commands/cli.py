@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from towtank import __version__
+from towtank.runtime.pause import pause_at
 
 EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
 
@@ -247,6 +248,7 @@ def cmd_process(args: argparse.Namespace) -> int:
     # the workers load the reduction's libraries while this process loads pandas and the sheet
     parallel.prestart(args.jobs)
     try:
+        pause_at("preload")
         return _process(args, protocol, out, stamp)
     finally:
         parallel.discard_prestarted()  # when the day stopped before any run was reduced
@@ -415,6 +417,7 @@ def main(argv: list[str] | None = None) -> int:
     before = signal.getsignal(signal.SIGINT)
     interrupted = _watch_interrupt()
     try:
+        pause_at("start")
         return _run(args, interrupted)
     finally:
         if before is not None and signal.getsignal(signal.SIGINT) is not before:
