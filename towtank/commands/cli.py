@@ -250,6 +250,9 @@ def cmd_process(args: argparse.Namespace) -> int:
     try:
         pause_at("preload")
         return _process(args, protocol, out, stamp)
+    except KeyboardInterrupt:
+        parallel.discard_prestarted(kill=True)  # its workers ignore Ctrl-C: ended here
+        raise
     finally:
         parallel.discard_prestarted()  # when the day stopped before any run was reduced
 
