@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from towtank import __version__
+from towtank.runtime.interrupt import watching
 from towtank.runtime.pause import pause_at
 
 EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
@@ -407,24 +408,21 @@ COMMANDS = {
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = _parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help()
-        return EXIT_UNUSABLE
-    import signal
-    import warnings
+    with watching() as interrupted:  # first: a Ctrl-C from here on is one line, exit 130
+        try:
+            pause_at("start")
+            parser = _parser()
+            args = parser.parse_args(argv)
+        except KeyboardInterrupt:
+            return _interrupted()
+        if args.command is None:
+            parser.print_help()
+            return EXIT_UNUSABLE
+        import warnings
 
-    if not getattr(args, "debug", False):
-        warnings.showwarning = _warning_line
-    before = signal.getsignal(signal.SIGINT)
-    interrupted = _watch_interrupt()
-    try:
-        pause_at("start")
+        if not getattr(args, "debug", False):
+            warnings.showwarning = _warning_line
         return _run(args, interrupted)
-    finally:
-        if before is not None and signal.getsignal(signal.SIGINT) is not before:
-            signal.signal(signal.SIGINT, before)  # only ever changed in the main thread
 
 
 def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
@@ -436,14 +434,12 @@ def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
         _err(str(exc))
         return EXIT_UNUSABLE
     except KeyboardInterrupt:
-        _err(INTERRUPTED)
-        return EXIT_INTERRUPTED
+        return _interrupted()
     except BrokenPipeError:
         raise  # the output's reader went away (| head): entry() ends quietly
     except Exception as exc:  # noqa: BLE001 - one sentence, not a traceback, for users
         if interrupted:  # a library stopped by Ctrl-C (zlib mid-flush...): not a bug
-            _err(INTERRUPTED)
-            return EXIT_INTERRUPTED
+            return _interrupted()
         if getattr(args, "debug", False):
             raise
         _err(
@@ -469,25 +465,13 @@ INTERRUPTED = ("interrupted; the output folder holds the outputs of the last com
                "(or none), never a part of this one.")
 
 
-def _watch_interrupt() -> list[bool]:
-    """Record a Ctrl-C (SIGINT) in the returned list as well as raising KeyboardInterrupt,
-    so that an exception a library raises because it was interrupted maps to exit 130."""
-    import signal
-    import threading
+def _interrupted() -> int:
+    """Ctrl-C: its one sentence; further Ctrl-C are ignored while the process ends."""
+    from towtank.runtime.interrupt import handled
 
-    seen: list[bool] = []
-    if threading.current_thread() is not threading.main_thread():
-        return seen
-    previous = signal.getsignal(signal.SIGINT)
-    if previous is not signal.default_int_handler:
-        return seen  # someone else (a notebook, a test harness) handles Ctrl-C
-
-    def handler(signum: int, frame: object) -> None:
-        seen.append(True)
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGINT, handler)
-    return seen
+    handled()
+    _err(INTERRUPTED)
+    return EXIT_INTERRUPTED
 
 
 def entry() -> None:
@@ -501,6 +485,10 @@ def entry() -> None:
     try:
         code = main()
         sys.stdout.flush()
+        if code == EXIT_INTERRUPTED:  # said so: another Ctrl-C must not stop the exit midway
+            import signal
+
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
     except BrokenPipeError:  # `towtank inspect … | head`: the reader has all it wanted
         import os
 
