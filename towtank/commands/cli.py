@@ -251,8 +251,9 @@ def cmd_process(args: argparse.Namespace) -> int:
     try:
         pause_at("preload")
         return _process(args, protocol, out, stamp)
-    except KeyboardInterrupt:
-        parallel.discard_prestarted(kill=True)  # its workers ignore Ctrl-C: ended here
+    except KeyboardInterrupt:  # the workers and the fork server ignore Ctrl-C: ended here
+        parallel.discard_prestarted(interrupted=True)
+        parallel.end_forkserver()
         raise
     finally:
         parallel.discard_prestarted()  # when the day stopped before any run was reduced

@@ -23,8 +23,9 @@ How the work is spread (campaign scale, hundreds of runs):
   in this process: see :func:`main_is_importable`.
 * Ctrl-C (SIGINT, which a terminal sends to the whole process group) is the main process's to
   handle: the fork server, the workers and :func:`run_beside`'s processes ignore it from birth
-  (each is started with SIGINT blocked, and ignores it before unblocking it), and the main
-  process, once interrupted, ends them itself (:meth:`_Pool.close` with ``kill``).
+  (each is started with SIGINT blocked, and ignores it before unblocking it). Once interrupted,
+  the main process ends them: the writers and a fork server still loading are killed, the
+  workers finish their current chunk and stop (:meth:`_Pool.close`).
 """
 
 from __future__ import annotations
@@ -249,15 +250,17 @@ def _start_forkserver() -> None:
         forkserver.ensure_running()
 
 
-def _end_forkserver() -> None:
-    """Kill the fork server (it may be loading its libraries, for seconds); the next pool
-    starts another."""
+def end_forkserver() -> None:
+    """Kill this process's fork server, if it has one: one still loading its libraries (for
+    seconds), or an idle one after Ctrl-C (its interpreter takes a while to wind down); the
+    next pool starts another. Not while a pool's workers run: they would be orphaned."""
     from multiprocessing import forkserver
 
-    server = forkserver._forkserver  # noqa: SLF001 - the standard library has no public way
-    with server._lock:  # noqa: SLF001
-        pid = server._forkserver_pid  # noqa: SLF001
-        if pid is None:
+    # the standard library has no public way: its private names, each looked up with care
+    server = getattr(forkserver, "_forkserver", None)
+    with getattr(server, "_lock", None) or contextlib.nullcontext():
+        pid = getattr(server, "_forkserver_pid", None)
+        if not isinstance(pid, int):
             return
         try:
             os.kill(pid, signal.SIGKILL)
@@ -267,14 +270,6 @@ def _end_forkserver() -> None:
         if stop is not None:
             with contextlib.suppress(OSError):
                 stop()  # reaps it and forgets it
-
-
-def _kill_workers(executor: Executor) -> None:
-    """Kill the worker processes of ``executor`` (they ignore Ctrl-C)."""
-    processes = getattr(executor, "_processes", None) or {}
-    for proc in list(processes.values()):
-        with contextlib.suppress(Exception):
-            proc.kill()
 
 
 class _Pool:
@@ -298,7 +293,7 @@ class _Pool:
         except OSError:
             pass  # no fork server: the workers cannot start, map_runs reduces here
         except BaseException:  # Ctrl-C while it started (delivered as the block ended)
-            _end_forkserver()
+            end_forkserver()
             self.executor.shutdown(wait=False, cancel_futures=True)
             raise
         self._starter = threading.Thread(target=self._start, name="towtank-pool", daemon=True)
@@ -314,18 +309,25 @@ class _Pool:
         except Exception:  # noqa: BLE001 - a pool that cannot start fails again in map()
             pass
 
-    def close(self, *, kill: bool = False) -> None:
-        """Wait for the workers to finish their tasks and end; with ``kill`` (Ctrl-C, the
-        caller stopped), kill them and the fork server at once instead."""
-        if kill:
+    def close(self, *, interrupted: bool = False) -> None:
+        """Wait for the workers to finish their tasks and end.
+
+        ``interrupted`` (Ctrl-C, or the caller stopped): no more workers are started, the
+        tasks not begun are dropped, and the fork server is killed: at once if it is still
+        loading its libraries (no worker born yet; this also frees the thread waiting for it),
+        else once the workers have ended. A worker is never killed: one killed while it sends
+        a result would leave the pool's result pipe half written and its thread waiting for
+        the rest for ever; each ends after its current task (a chunk: :data:`MAX_CHUNK`
+        records at most), ignoring Ctrl-C meanwhile.
+        """
+        if interrupted:
             self._stopping.set()
-            _kill_workers(self.executor)
-            _end_forkserver()  # also unblocks a start waiting for it
+            if not getattr(self.executor, "_processes", None):
+                end_forkserver()
         self._starter.join()
-        if kill:  # those the starting thread started meanwhile
-            _kill_workers(self.executor)
-            _end_forkserver()
         self.executor.shutdown(wait=True, cancel_futures=True)
+        if interrupted:
+            end_forkserver()  # idle now
 
 
 def prestart(jobs: int | None = None) -> bool:
@@ -344,13 +346,13 @@ def prestart(jobs: int | None = None) -> bool:
     return True
 
 
-def discard_prestarted(*, kill: bool = False) -> None:
-    """Stop a pool that :func:`prestart` started and no :func:`map_runs` call took (``kill``:
-    at once, see :meth:`_Pool.close`)."""
+def discard_prestarted(*, interrupted: bool = False) -> None:
+    """Stop a pool that :func:`prestart` started and no :func:`map_runs` call took
+    (``interrupted``: see :meth:`_Pool.close`)."""
     with _lock:
         pool = _prestarted.pop("pool", None)
     if pool is not None:
-        pool.close(kill=kill)
+        pool.close(interrupted=interrupted)
 
 
 def load_in_background(modules: Sequence[str]) -> threading.Thread:
@@ -445,7 +447,7 @@ def map_runs(
         stopped = not isinstance(exc, Exception)
         raise
     finally:
-        pool.close(kill=stopped)
+        pool.close(interrupted=stopped)
         if loading is not None:
             loading.join()  # nothing is imported here while the thread imports
     if broken is None:
@@ -467,9 +469,8 @@ def _alone(
     on_crash: Callable[[dict[str, Any]], T] | None,
 ) -> T:
     """One record in a worker of its own; ``on_crash(rec)`` if that worker dies."""
-    one = ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_worker_init,
-                              initargs=(os.getpid(),))
-    try:
+    with ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_worker_init,
+                             initargs=(os.getpid(),)) as one:
         with _sigint_blocked():  # a fork server started again here is born without Ctrl-C
             future = one.submit(func, protocol, rec, debug=debug)
         try:
@@ -478,12 +479,6 @@ def _alone(
             if on_crash is None:
                 raise
             return on_crash(rec)
-    except BaseException as exc:
-        if not isinstance(exc, Exception):  # Ctrl-C: the worker's record is not wanted
-            _kill_workers(one)
-        raise
-    finally:
-        one.shutdown(wait=True, cancel_futures=True)
 
 
 def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool]) -> list[Any]:
