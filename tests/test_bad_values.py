@@ -306,10 +306,11 @@ def test_library_warnings_do_not_reach_the_terminal(capsys):
 
 
 # ------------------------------------------------------------ 12, 13: Ctrl-C and kills
-def _towtank(*args: str) -> subprocess.Popen:
+def _towtank(*args: str, env: dict[str, str] | None = None) -> subprocess.Popen:
     code = "from towtank.commands.cli import entry; entry()"
     return subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            env=None if env is None else {**os.environ, **env})
 
 
 def _descendants(pid: int) -> set[int]:
@@ -348,14 +349,33 @@ def _wait_for_workers(proc: subprocess.Popen, n: int, timeout: float = 60.0) -> 
     raise AssertionError("the workers never started")
 
 
+def _wait_for_pause(proc: subprocess.Popen, marker: Path, stage: str,
+                    timeout: float = 120.0) -> None:
+    """Until ``proc`` holds at ``stage`` (TOWTANK_TEST_PAUSE_AT, towtank.runtime.pause)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if marker.exists() and marker.read_text().startswith(f"{stage} "):
+            return
+        if proc.poll() is not None:
+            raise AssertionError(f"ended before {stage!r}: {proc.communicate()[1]}")
+        time.sleep(0.02)
+    raise AssertionError(f"never reached {stage!r}")
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_ctrl_c_is_exit_130_in_one_line_and_the_old_outputs_stay(tmp_path):
+    """Issue 22: the signal used to be sent once the process had three descendants; on a
+    loaded machine the day could end before it was sent (Popen.send_signal then does nothing:
+    exit 0). The process now holds in the middle of the reduction until the signal comes."""
     protocol = _day(tmp_path)
     out = tmp_path / "out"
     assert main(["process", str(protocol), "--out", str(out), "-q", "--no-report"]) == 0
     before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    proc = _towtank("process", str(protocol), "--out", str(out), "--no-cache", "--jobs", "2")
-    _wait_for_workers(proc, 3)  # the fork server and its workers: reducing
+    marker = tmp_path / "paused"
+    proc = _towtank("process", str(protocol), "--out", str(out), "--no-cache", "--jobs", "2",
+                    env={"TOWTANK_TEST_PAUSE_AT": "reduce",
+                         "TOWTANK_TEST_PAUSE_FILE": str(marker)})
+    _wait_for_pause(proc, marker, "reduce")  # runs come back from the workers: reducing
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err

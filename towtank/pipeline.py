@@ -30,6 +30,7 @@ from towtank.reduce.run import (
 from towtank.reduce.tare import TareModel, fit_tare_group
 from towtank.reference.sets import BUILTIN_REFERENCES
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
+from towtank.runtime.pause import pause_at
 
 G = 9.80665
 
@@ -460,6 +461,8 @@ def reduce_runs(
                 previews[run] = preview
         if progress is not None:
             progress(done + i + 1, len(todo))
+        if i == 0:
+            pause_at("reduce")  # a test hook (towtank.runtime.pause); returns at once otherwise
     if cache is not None:
         cache.flush()
         if cache.problem and cache.problem not in warnings_out:
@@ -543,6 +546,7 @@ def _analyse(day: DayResult) -> None:
     """The fitting stages: hull coefficients, fins, similarity (each on the reduced runs)."""
     from towtank.errors import TowtankError
 
+    pause_at("fits")  # a test hook (towtank.runtime.pause); returns at once otherwise
     for stage in (_hull_stage, _fin_stage, _scaling_stage, _vehicle_stage):
         try:
             stage(day)

@@ -14,6 +14,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from towtank import __version__
+from towtank.runtime.interrupt import watching
+from towtank.runtime.pause import pause_at
 from towtank.runtime.storage import STORAGE_ERRNOS
 
 if TYPE_CHECKING:
@@ -270,7 +272,12 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
     # the workers load the reduction's libraries while this process loads pandas and the sheet
     parallel.prestart(args.jobs)
     try:
+        pause_at("preload")
         return _process(args, protocol, out, stamp, opened)
+    except KeyboardInterrupt:  # the workers and the fork server ignore Ctrl-C: ended here
+        parallel.discard_prestarted(interrupted=True)
+        parallel.end_forkserver()
+        raise
     finally:
         parallel.discard_prestarted()  # when the day stopped before any run was reduced
 
@@ -450,23 +457,21 @@ COMMANDS = {
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = _parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help()
-        return EXIT_UNUSABLE
-    import signal
-    import warnings
+    with watching() as interrupted:  # first: a Ctrl-C from here on is one line, exit 130
+        try:
+            pause_at("start")
+            parser = _parser()
+            args = parser.parse_args(argv)
+        except KeyboardInterrupt:
+            return _interrupted()
+        if args.command is None:
+            parser.print_help()
+            return EXIT_UNUSABLE
+        import warnings
 
-    if not getattr(args, "debug", False):
-        warnings.showwarning = _warning_line
-    before = signal.getsignal(signal.SIGINT)
-    interrupted = _watch_interrupt()
-    try:
+        if not getattr(args, "debug", False):
+            warnings.showwarning = _warning_line
         return _run(args, interrupted)
-    finally:
-        if before is not None and signal.getsignal(signal.SIGINT) is not before:
-            signal.signal(signal.SIGINT, before)  # only ever changed in the main thread
 
 
 def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
@@ -478,14 +483,12 @@ def _run(args: argparse.Namespace, interrupted: list[bool]) -> int:
         _err(str(exc))
         return EXIT_UNUSABLE
     except KeyboardInterrupt:
-        _err(INTERRUPTED)
-        return EXIT_INTERRUPTED
+        return _interrupted()
     except BrokenPipeError:
         raise  # the output's reader went away (| head): entry() ends quietly
     except Exception as exc:  # noqa: BLE001 - one sentence, not a traceback, for users
         if interrupted:  # a library stopped by Ctrl-C (zlib mid-flush...): not a bug
-            _err(INTERRUPTED)
-            return EXIT_INTERRUPTED
+            return _interrupted()
         if getattr(args, "debug", False):
             raise
         _err(
@@ -511,25 +514,13 @@ INTERRUPTED = ("interrupted; the output folder holds the outputs of the last com
                "(or none), never a part of this one.")
 
 
-def _watch_interrupt() -> list[bool]:
-    """Record a Ctrl-C (SIGINT) in the returned list as well as raising KeyboardInterrupt,
-    so that an exception a library raises because it was interrupted maps to exit 130."""
-    import signal
-    import threading
+def _interrupted() -> int:
+    """Ctrl-C: its one sentence; further Ctrl-C are ignored while the process ends."""
+    from towtank.runtime.interrupt import handled
 
-    seen: list[bool] = []
-    if threading.current_thread() is not threading.main_thread():
-        return seen
-    previous = signal.getsignal(signal.SIGINT)
-    if previous is not signal.default_int_handler:
-        return seen  # someone else (a notebook, a test harness) handles Ctrl-C
-
-    def handler(signum: int, frame: object) -> None:
-        seen.append(True)
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGINT, handler)
-    return seen
+    handled()
+    _err(INTERRUPTED)
+    return EXIT_INTERRUPTED
 
 
 def entry() -> None:
@@ -543,6 +534,10 @@ def entry() -> None:
     try:
         code = main()
         sys.stdout.flush()
+        if code == EXIT_INTERRUPTED:  # said so: another Ctrl-C must not stop the exit midway
+            import signal
+
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
     except BrokenPipeError:  # `towtank inspect … | head`: the reader has all it wanted
         import os
 

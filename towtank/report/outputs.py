@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.provenance import provenance
-from towtank.runtime import manifest
+from towtank.runtime import interrupt, manifest
 from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
@@ -217,6 +217,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             encoding="utf-8",
         )
         manifest.write_manifest(tmp, manifest.describe(tmp, OUTPUT_NAMES))  # marks it complete
+        interrupt.check()  # a Ctrl-C that a library dropped still stops the day here
         refuse_foreign_outputs(out_dir)  # again: a file may have appeared while we worked
         if foreign_entries(out_dir, keep):
             # a folder with the user's own files in it: replace our entries one by one and

@@ -21,13 +21,20 @@ How the work is spread (campaign scale, hundreds of runs):
   by a worker (a script that calls towtank at its top level, without
   ``if __name__ == "__main__":``; a program read from standard input), the records are reduced
   in this process: see :func:`main_is_importable`.
+* Ctrl-C (SIGINT, which a terminal sends to the whole process group) is the main process's to
+  handle: the fork server, the workers and :func:`run_beside`'s processes ignore it from birth
+  (each is started with SIGINT blocked, and ignores it before unblocking it). Once interrupted,
+  the main process ends them: the writers and a fork server still loading are killed, the
+  workers finish their current chunk and stop (:meth:`_Pool.close`).
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import multiprocessing as mp
 import os
+import signal
 import sys
 import threading
 import time
@@ -38,6 +45,8 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any, TypeVar
 
+from towtank.runtime.pause import pause_at
+
 T = TypeVar("T")
 
 #: Records per task sent to a worker (at most); small enough to balance the tail.
@@ -47,8 +56,10 @@ MAX_CHUNK = 8
 #: records are reduced in this process (starting the fork server costs about one library load).
 MIN_RECORDS_FOR_POOL = 16
 
-#: Modules the fork server imports once, before it forks any worker.
-PRELOAD = ("numpy", "pyarrow", "pyarrow.csv", "scipy.signal", "scipy.ndimage", "towtank.reduce.run")
+#: Modules the fork server imports once, before it forks any worker; the first makes it (and
+#: so every worker) ignore Ctrl-C.
+PRELOAD = ("towtank.runtime._ignore_sigint", "numpy", "pyarrow", "pyarrow.csv", "scipy.signal",
+           "scipy.ndimage", "towtank.reduce.run")
 
 _lock = threading.Lock()
 _prestarted: dict[str, Any] = {}  # "pool": _Pool started by prestart(), until map_runs takes it
@@ -182,13 +193,35 @@ def _die_with(parent_pid: int) -> None:
     threading.Thread(target=watch, name="towtank-parent-watch", daemon=True).start()
 
 
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in the calling thread meanwhile: a process forked or spawned from it is
+    born with SIGINT blocked (the mask is inherited, through exec too) and so cannot be stopped
+    by a Ctrl-C before it has set itself to ignore it. A Ctrl-C that comes meanwhile is
+    delivered when the block ends (in the main thread: KeyboardInterrupt there)."""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _ignore_sigint() -> None:
+    """In a child process: Ctrl-C is the main process's to handle. SIGINT is ignored, then
+    unblocked (a Ctrl-C that came while it was blocked is dropped)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _worker_init(parent_pid: int | None = None) -> None:
     """In each worker: Ctrl-C is the main process's to handle (no traceback from every
     worker), the worker dies with the main process, and pyarrow parses on this worker's core
     only (the others have workers)."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _ignore_sigint()  # already ignored since its fork (PRELOAD); this in case that failed
     # a library's warning (numpy, npTDMS...) is not for the terminal: what matters reaches
     # the run's notes and reasons
     warnings.simplefilter("ignore")
@@ -206,11 +239,45 @@ def _ready() -> int:
     return os.getpid()
 
 
+def _start_forkserver() -> None:
+    """Start the fork server now, from this thread, with SIGINT blocked: it is born unable to
+    be stopped by Ctrl-C, and ignores it from the first module it preloads."""
+    from multiprocessing import forkserver, resource_tracker
+
+    # the resource tracker unblocks SIGINT in the calling thread after starting itself: first
+    resource_tracker.ensure_running()
+    with _sigint_blocked():
+        forkserver.ensure_running()
+
+
+def end_forkserver() -> None:
+    """Kill this process's fork server, if it has one: one still loading its libraries (for
+    seconds), or an idle one after Ctrl-C (its interpreter takes a while to wind down); the
+    next pool starts another. Not while a pool's workers run: they would be orphaned."""
+    from multiprocessing import forkserver
+
+    # the standard library has no public way: its private names, each looked up with care
+    server = getattr(forkserver, "_forkserver", None)
+    with getattr(server, "_lock", None) or contextlib.nullcontext():
+        pid = getattr(server, "_forkserver_pid", None)
+        if not isinstance(pid, int):
+            return
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+        stop = getattr(server, "_stop_unlocked", None)
+        if stop is not None:
+            with contextlib.suppress(OSError):
+                stop()  # reaps it and forgets it
+
+
 class _Pool:
     """A process pool whose workers are started in a background thread.
 
     Starting a fork-server worker waits until the server has loaded :data:`PRELOAD`; the thread
-    lets this process go on meanwhile.
+    lets this process go on meanwhile. The fork server itself is started here, by the calling
+    thread, so that it runs from now on.
     """
 
     def __init__(self, jobs: int, ctx: Any) -> None:
@@ -220,19 +287,47 @@ class _Pool:
             max_workers=jobs, mp_context=ctx, initializer=_worker_init,
             initargs=(os.getpid(),),
         )
+        self._stopping = threading.Event()
+        try:
+            _start_forkserver()
+        except OSError:
+            pass  # no fork server: the workers cannot start, map_runs reduces here
+        except BaseException:  # Ctrl-C while it started (delivered as the block ended)
+            end_forkserver()
+            self.executor.shutdown(wait=False, cancel_futures=True)
+            raise
         self._starter = threading.Thread(target=self._start, name="towtank-pool", daemon=True)
         self._starter.start()
 
     def _start(self) -> None:
         try:
-            for _ in range(self.jobs):
-                self.executor.submit(_ready)
+            with _sigint_blocked():  # a fork server this thread (re)starts is born without it
+                for _ in range(self.jobs):
+                    if self._stopping.is_set():
+                        return
+                    self.executor.submit(_ready)
         except Exception:  # noqa: BLE001 - a pool that cannot start fails again in map()
             pass
 
-    def close(self) -> None:
+    def close(self, *, interrupted: bool = False) -> None:
+        """Wait for the workers to finish their tasks and end.
+
+        ``interrupted`` (Ctrl-C, or the caller stopped): no more workers are started, the
+        tasks not begun are dropped, and the fork server is killed: at once if it is still
+        loading its libraries (no worker born yet; this also frees the thread waiting for it),
+        else once the workers have ended. A worker is never killed: one killed while it sends
+        a result would leave the pool's result pipe half written and its thread waiting for
+        the rest for ever; each ends after its current task (a chunk: :data:`MAX_CHUNK`
+        records at most), ignoring Ctrl-C meanwhile.
+        """
+        if interrupted:
+            self._stopping.set()
+            if not getattr(self.executor, "_processes", None):
+                end_forkserver()
         self._starter.join()
         self.executor.shutdown(wait=True, cancel_futures=True)
+        if interrupted:
+            end_forkserver()  # idle now
 
 
 def prestart(jobs: int | None = None) -> bool:
@@ -251,12 +346,13 @@ def prestart(jobs: int | None = None) -> bool:
     return True
 
 
-def discard_prestarted() -> None:
-    """Stop a pool that :func:`prestart` started and no :func:`map_runs` call took."""
+def discard_prestarted(*, interrupted: bool = False) -> None:
+    """Stop a pool that :func:`prestart` started and no :func:`map_runs` call took
+    (``interrupted``: see :meth:`_Pool.close`)."""
     with _lock:
         pool = _prestarted.pop("pool", None)
     if pool is not None:
-        pool.close()
+        pool.close(interrupted=interrupted)
 
 
 def load_in_background(modules: Sequence[str]) -> threading.Thread:
@@ -324,6 +420,7 @@ def map_runs(
         return
     done = 0
     broken: BaseException | None = None
+    stopped = False
     loading = load_in_background(preload) if preload else None
     try:
         chunk = chunk_size(len(records), pool.jobs)
@@ -332,7 +429,11 @@ def map_runs(
             for i in range(0, len(records), chunk)
         ]
         try:
-            for results in pool.executor.map(_run_chunk, tasks):
+            # not executor.map: on Ctrl-C it cancels the queued tasks, and Python 3.11's pool,
+            # seeing its workers killed, then fails on them with a traceback of its own
+            futures = [pool.executor.submit(_run_chunk, task) for task in tasks]
+            for future in futures:
+                results = future.result()
                 yield from results
                 done += len(results)
         except BrokenProcessPool as exc:
@@ -341,8 +442,12 @@ def map_runs(
             if done:
                 raise
             broken = exc
+    except BaseException as exc:
+        # Ctrl-C, or the caller stopped iterating (GeneratorExit): the rest is not wanted
+        stopped = not isinstance(exc, Exception)
+        raise
     finally:
-        pool.close()
+        pool.close(interrupted=stopped)
         if loading is not None:
             loading.join()  # nothing is imported here while the thread imports
     if broken is None:
@@ -364,9 +469,12 @@ def _alone(
     on_crash: Callable[[dict[str, Any]], T] | None,
 ) -> T:
     """One record in a worker of its own; ``on_crash(rec)`` if that worker dies."""
-    with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as one:
+    with ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_worker_init,
+                             initargs=(os.getpid(),)) as one:
+        with _sigint_blocked():  # a fork server started again here is born without Ctrl-C
+            future = one.submit(func, protocol, rec, debug=debug)
         try:
-            return one.submit(func, protocol, rec, debug=debug).result()
+            return future.result()
         except BrokenProcessPool:
             if on_crash is None:
                 raise
@@ -389,6 +497,8 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
     or an ``OSError`` of the storage errno (``ENOSPC``...) when a task failed for the storage
     (an ``OSError`` with that errno raised or in its chain), so that a full disk met in a forked
     writer stays a full disk (:mod:`towtank.runtime.storage`).
+    The forked processes ignore Ctrl-C: when this process is interrupted (KeyboardInterrupt
+    here), it kills them before the exception goes on.
     """
     if len(tasks) < 2 or "fork" not in mp.get_all_start_methods() or (
         threading.active_count() > 1
@@ -397,26 +507,26 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
             task()
         return
     ctx = mp.get_context("fork")
-    children = []
-    for name, task in tasks[1:]:
-        recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_run_in_child, args=(task, send), daemon=True)
-        proc.start()
-        send.close()
-        children.append((name, proc, recv))
-    failures: list[tuple[str, str, int | None]] = []
+    children: list[tuple[str, Any, Any]] = []
     try:
-        tasks[0][1]()
-    finally:
-        for name, proc, recv in children:
-            try:
-                outcome = recv.recv()
-            except EOFError:
-                outcome = ("the process running it stopped abruptly", "", None)
-            proc.join()
-            recv.close()
-            if outcome is not None:
-                failures.append((f"{name}: {outcome[0]}", outcome[1], outcome[2]))
+        with _sigint_blocked():  # born blocking Ctrl-C, until they ignore it
+            for name, task in tasks[1:]:
+                recv, send = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_run_in_child, args=(task, send), daemon=True)
+                proc.start()
+                send.close()
+                children.append((name, proc, recv))
+        pause_at("writing")
+        try:
+            tasks[0][1]()
+        except Exception:
+            _outcomes(children)  # the others end first; then this task's own error
+            raise
+        failures = _outcomes(children)
+    except BaseException as exc:
+        if not isinstance(exc, Exception):  # Ctrl-C: the others' work is not wanted
+            _kill_children(children)
+        raise
     if failures:
         from towtank.runtime.storage import os_error
 
@@ -428,6 +538,33 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
         raise exc
 
 
+def _outcomes(children: list[tuple[str, Any, Any]]) -> list[tuple[str, str, int | None]]:
+    """Wait for each forked task; the failures as (what failed, traceback, storage errno or
+    None)."""
+    failures: list[tuple[str, str, int | None]] = []
+    for name, proc, recv in children:
+        try:
+            outcome = recv.recv()
+        except EOFError:
+            outcome = ("the process running it stopped abruptly", "", None)
+        proc.join()
+        recv.close()
+        if outcome is not None:
+            failures.append((f"{name}: {outcome[0]}", outcome[1], outcome[2]))
+    return failures
+
+
+def _kill_children(children: list[tuple[str, Any, Any]]) -> None:
+    """Kill the forked tasks and reap them."""
+    for _, proc, _ in children:
+        with contextlib.suppress(Exception):
+            proc.kill()
+    for _, proc, recv in children:
+        with contextlib.suppress(Exception):
+            proc.join()
+            recv.close()
+
+
 def _run_in_child(task: Callable[[], None], send: Any) -> None:
     """In a forked process: one task; sends None, or (error, traceback, storage errno or
     None)."""
@@ -435,6 +572,7 @@ def _run_in_child(task: Callable[[], None], send: Any) -> None:
 
     from towtank.runtime.storage import chained_errno
 
+    _ignore_sigint()  # born blocking it: a Ctrl-C is the parent's, which then ends this one
     try:
         task()
         outcome = None
