@@ -44,7 +44,9 @@ examples:
   towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
-in runs.csv); 2 the protocol or run sheet is unusable (nothing written); 3 internal error.
+in runs.csv); 2 the protocol or run sheet is unusable, or the output folder cannot be written
+(nothing written, previous outputs untouched); 3 internal error; 130 interrupted (Ctrl-C).
+The other commands: 0 done, 2 unusable input or output folder, 3 internal error, 130.
 """
 
 
@@ -62,7 +64,11 @@ def _parser() -> argparse.ArgumentParser:
         "process",
         help="reduce a test day and write its tables and reports",
         description="Reduce every run of the protocol's run sheet and write coefficients.csv, "
-        "runs.csv, fins.csv, scaling.csv, report.xlsx, report.pdf and provenance.json.",
+        "runs.csv, fins.csv, fin_curves.csv and fin_control.csv (fin days), scaling.csv, "
+        "tare.csv, report.xlsx, report.pdf, figures/ and provenance.json; with a [vehicle] "
+        "section also predicted.csv and model.json; with --export, export/. The per-run "
+        "cache is kept in .cache/ and the manifest of what towtank wrote in "
+        ".towtank-outputs.json.",
     )
     pr.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
     pr.add_argument("--out", type=Path, metavar="DIR",
@@ -92,7 +98,9 @@ def _parser() -> argparse.ArgumentParser:
         "(zero and drift removed, no tare); write a PNG of speed and forces with the phases "
         "shaded.",
     )
-    ins.add_argument("runfile", type=Path, help="a run file (.csv, .csv.gz or .tdms)")
+    ins.add_argument("runfile", type=Path,
+                     help="a run file in any format process reads (.csv, .csv.gz, .txt, "
+                     ".tdms, .lvm, .mat, .h5/.hdf5)")
     ins.add_argument("--protocol", type=Path,
                      help="protocol whose [channels] and [processing] apply")
     ins.add_argument("--png", type=Path,
@@ -130,7 +138,8 @@ def _parser() -> argparse.ArgumentParser:
         "simulate",
         help="simulate a manoeuvre of a model.json (turning, zigzag, dive, spiral, glide)",
         description="6-DOF simulation of the Fossen-form model written by 'predict' or "
-        "'process': manoeuvre.csv (time series), metrics.csv and manoeuvre.png.",
+        "'process': manoeuvre.csv (time series), metrics.csv and manoeuvre.png; a glide also "
+        "glide_table.csv (the steady glides around it).",
     )
     si.add_argument("model", type=Path, help="model.json")
     si.add_argument("--manoeuvre", required=True,
@@ -156,10 +165,13 @@ def _parser() -> argparse.ArgumentParser:
         help="generate a synthetic test day (for training, testing and benchmarks)",
         description="Write a synthetic day: run files, run sheet, protocol and truth.json.",
     )
-    sy.add_argument("outdir", type=Path)
+    sy.add_argument("outdir", type=Path,
+                    help="folder to write into (created; must be empty unless --force)")
     sy.add_argument("--day", choices=("hull", "fin", "samples"), default="hull",
                     help="hull day, fin day, or regenerate both shipped sample days")
-    sy.add_argument("--seed", type=int, default=1)
+    sy.add_argument("--seed", type=int, default=1,
+                    help="seed of the random noise: the same seed gives the same files "
+                    "(default 1)")
     sy.add_argument("--format", choices=("csv", "csv.gz", "tdms", "tdms-waveform", "lvm",
                                          "txt-eu", "mat", "mat73", "hdf5", "two-cell",
                                          "matrix", "speed-log", "position-log", "zero-file"),
