@@ -344,3 +344,19 @@ def test_measured_values_carry_to_a_prototype_through_their_primes():
     table, warnings = with_predicted(coef, pred)
     assert table["predicted_diff_pct"].iloc[0] == pytest.approx(-100.0)
     assert len(warnings) == 1 and "Y_vdot" in warnings[0] and "predicted" in warnings[0]
+
+
+def test_a_term_zero_by_symmetry_is_written_as_zero(tmp_path):
+    """Y_rdot of the sample hull came out as -1.39e-17 kg m (round-off of the quadratures
+    beside Y_vdot ~ 0.6 kg): written as the exact 0 it is (issue 22)."""
+    from pathlib import Path
+
+    from towtank.commands.cli import main
+
+    repo = Path(__file__).resolve().parents[1]
+    assert main(["predict", str(repo / "protocols" / "sut2_hull.toml"),
+                 "--out", str(tmp_path)]) == 0
+    pred = pd.read_csv(tmp_path / "predicted.csv").set_index("symbol")["value"]
+    for sym in ("Y_rdot", "N_vdot", "Z_qdot", "M_wdot"):
+        assert pred[sym] == 0.0, sym
+    assert pred["Y_vdot"] < 0

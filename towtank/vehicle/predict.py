@@ -280,6 +280,11 @@ def _moments(xb, m, extra_x, extra_m, power: int) -> float:
     return total
 
 
+#: A predicted value smaller than this fraction of the table's largest is round-off of a
+#: term that vanishes by symmetry (e.g. Y_rdot of a fore-aft symmetric hull), written as 0.
+ROUND_OFF = 1e-12
+
+
 def predict_coefficients(
     profile: HullProfile,
     fins: Sequence[FinPair] = (),
@@ -445,6 +450,10 @@ def predict_coefficients(
         add("M_uuds", fsum(fins_z, lambda x: x), ctrl, ref_ctrl)
 
     out = pd.DataFrame(rows, columns=["symbol", "value", "method", "reference"])
+    # a term that is zero by symmetry comes out of the quadratures as round-off (1e-17 kg m
+    # beside 35 kg): written as the 0 it is
+    scale = float(np.nanmax(np.abs(out["value"]))) if len(out) else 0.0
+    out.loc[np.abs(out["value"]) <= ROUND_OFF * scale, "value"] = 0.0
     out["unit"] = [_units(s) for s in out["symbol"]]
     out["prime"] = [v / (0.5 * rho * length ** prime_exponent(s))
                     for s, v in zip(out["symbol"], out["value"], strict=True)]
