@@ -79,7 +79,8 @@ UNITS: dict[str, str] = {
     # coefficients.csv
     "value": "SI", "ci_low": "SI", "ci_high": "SI", "prime": "-", "reference_prime": "-",
     "diff_pct": "%", "prototype_value": "SI", "std_error": "SI", "prime_ci_low": "-",
-    "prime_ci_high": "-", "alt_value": "SI",
+    "prime_ci_high": "-", "alt_value": "SI", "n_runs": "-", "u_regression": "SI",
+    "u_tare": "SI", "u_mass": "SI", "dof": "-", "predicted": "-", "predicted_diff_pct": "%",
     # fins.csv and curves
     "cl_sandia": "-", "cd_sandia": "-", "cl_3d": "-", "cd_3d": "-", "speed_group": "m/s",
     "re_mean": "-", "lift_slope": "1/rad", "lift_slope_ci_low": "1/rad",
