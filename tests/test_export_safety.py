@@ -100,6 +100,22 @@ def written(tmp_path_factory):
 
 
 # ------------------------------------------------------------------ item 6: run by run
+
+def _disk_fills_after(monkeypatch, nbytes: int) -> None:
+    """runs.h5's writes fail with ENOSPC once ``nbytes`` have been written (HDF5 meets a
+    full disk for real, through export's file object)."""
+    left = [nbytes]
+    real_pwrite = os.pwrite
+
+    def pwrite(fd, data, offset):
+        if left[0] <= 0:
+            raise _enospc()
+        n = real_pwrite(fd, bytes(data[:left[0]]), offset)
+        left[0] -= n
+        return n
+
+    monkeypatch.setattr(export._NeverFailingFile, "_pwrite", staticmethod(pwrite))
+
 def test_the_export_holds_one_run_at_a_time(written, tmp_path):
     """The Python and numpy memory live at once while the day is exported (all three
     formats) stays within a few runs' series, far below the day's: the old export reduced
@@ -240,17 +256,7 @@ def _inject(monkeypatch, where: str) -> None:
         real = getattr(export, f"_write_{where}")
         monkeypatch.setattr(export, f"_write_{where}", third_run_fails)
     elif where == "hdf5":  # the disk fills after 300 kB of runs.h5: HDF5 meets it for real
-        left = [300_000]
-        real_pwrite = os.pwrite
-
-        def pwrite(fd, data, offset):
-            if left[0] <= 0:
-                raise _enospc()
-            n = real_pwrite(fd, bytes(data[:left[0]]), offset)
-            left[0] -= n
-            return n
-
-        monkeypatch.setattr(export._NeverFailingFile, "_pwrite", staticmethod(pwrite))
+        _disk_fills_after(monkeypatch, 300_000)
     else:  # pragma: no cover
         raise AssertionError(where)
 
@@ -315,17 +321,7 @@ def test_hdf5_closes_its_file_cleanly_after_a_failed_write(tmp_path, monkeypatch
     export_runs raises the OSError (ENOSPC) itself."""
     import h5py
 
-    left = [50_000]
-    real_pwrite = os.pwrite
-
-    def pwrite(fd, data, offset):
-        if left[0] <= 0:
-            raise _enospc()
-        n = real_pwrite(fd, bytes(data[:left[0]]), offset)
-        left[0] -= n
-        return n
-
-    monkeypatch.setattr(export._NeverFailingFile, "_pwrite", staticmethod(pwrite))
+    _disk_fills_after(monkeypatch, 50_000)
     open_before = h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_ALL)
     h5 = export._Hdf5Export(tmp_path / "runs.h5", "c")
     rng = np.random.default_rng(0)
