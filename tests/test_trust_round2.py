@@ -408,3 +408,19 @@ def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path
     listed = read_manifest(out)["files"]
     assert "manoeuvre.csv" in listed and "runs.csv" in listed
     assert (out / "notes.txt").read_text() == "mine"
+
+
+# ------------------------------- issue 23 item 5: every readable format is warned when unlisted
+@pytest.mark.parametrize("name", ["forgotten.lvm", "forgotten.mat", "forgotten.h5",
+                                  "forgotten.hdf5", "forgotten.h5m", "forgotten.txt",
+                                  "sub/forgotten.dat.gz", "forgotten.tdms"])
+def test_a_forgotten_run_file_of_any_format_is_named(tmp_path, name):
+    from towtank.ingest.runsheet import unlisted_files
+
+    data = tmp_path / "data"
+    (data / "sub").mkdir(parents=True)
+    (data / "run_001.csv").write_text("t\n")
+    (data / name).write_bytes(b"x")
+    (data / "photo.jpg").write_bytes(b"x")  # not a run file: not named
+    sheet = pd.DataFrame({"file": ["run_001.csv"]})
+    assert unlisted_files(sheet, data) == [name]

@@ -54,7 +54,7 @@ LABEL_KEY = "__label__"
 EXTENSIONS = {
     ".csv": "csv", ".txt": "text", ".dat": "text", ".asc": "text", ".tsv": "text",
     ".tdms": "tdms", ".lvm": "lvm", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
-    ".hdf": "hdf5", ".he5": "hdf5",
+    ".hdf": "hdf5", ".he5": "hdf5", ".h5m": "hdf5",
 }
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
 DELIMITERS = {"auto": None, ",": ",", ";": ";", "\t": "\t", "tab": "\t",

@@ -652,13 +652,19 @@ def _converted(value: float, unit: tuple[float, float] | None) -> float:
 
 
 def unlisted_files(sheet: pd.DataFrame, data_dir: Path) -> list[str]:
-    """Data files in ``data_dir`` that no row of the sheet names (the lab may have forgotten)."""
+    """Data files in ``data_dir`` that no row of the sheet names (the lab may have forgotten):
+    every file with an extension towtank reads as a run file
+    (:data:`towtank.ingest.readers.EXTENSIONS`, and those of text formats gzipped)."""
+    from towtank.ingest.readers import EXTENSIONS
+
+    suffixes = tuple(EXTENSIONS) + tuple(f"{e}.gz" for e, kind in EXTENSIONS.items()
+                                         if kind in ("csv", "text"))
     named = {Path(f).as_posix() for f in sheet["file"]}
     out = []
     for p in sorted(data_dir.rglob("*")):
         if not p.is_file() or p.name.startswith("."):
             continue
-        if not p.name.lower().endswith((".csv", ".csv.gz", ".tdms")):
+        if not p.name.lower().endswith(suffixes):
             continue
         rel = p.relative_to(data_dir).as_posix()
         if rel not in named:
