@@ -281,36 +281,38 @@ def test_a_full_disk_in_any_writer_is_exit_2_and_the_folder_stays(written, monke
     assert_full_disk_reported(rc, err, out, before)
 
 
+def _pdf_part_fails(monkeypatch) -> None:
+    """The PDF's writer fails as matplotlib's does on a full disk: zlib.error, with no
+    OSError behind it."""
+    from towtank.report import pdf
+
+    def broken(day, plan, pages, path):
+        raise zlib.error("Error -2 while flushing: inconsistent stream state")
+
+    monkeypatch.setattr(pdf, "_write_part", broken)
+
+
 def test_a_library_error_on_a_full_disk_is_the_full_disk(written, monkeypatch):
     """A writer's own error without the OSError behind it (as h5py's or a C library's can be)
     while the file system has no space left: exit 2, not 3."""
-    from towtank.report import pdf
     from towtank.runtime import storage
 
     protocol, out, day = written
     before = fingerprint(out)
     monkeypatch.setattr("towtank.pipeline.process_day", lambda *a, **k: _fresh(day))
 
-    def broken(day, plan, pages, path):
-        raise zlib.error("Error -2 while flushing: inconsistent stream state")
-
-    monkeypatch.setattr(pdf, "_write_part", broken)
+    _pdf_part_fails(monkeypatch)
     monkeypatch.setattr(storage, "free_bytes", lambda path: 4096)
     rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "1", "--no-cache")
     assert_full_disk_reported(rc, err, out, before)
 
 
 def test_the_same_library_error_with_space_left_is_still_a_bug(written, monkeypatch):
-    from towtank.report import pdf
-
     protocol, out, day = written
     before = fingerprint(out)
     monkeypatch.setattr("towtank.pipeline.process_day", lambda *a, **k: _fresh(day))
 
-    def broken(day, plan, pages, path):
-        raise zlib.error("Error -2 while flushing: inconsistent stream state")
-
-    monkeypatch.setattr(pdf, "_write_part", broken)
+    _pdf_part_fails(monkeypatch)
     rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "1", "--no-cache")
     assert rc == 3 and "internal error (error: Error -2" in err
     assert fingerprint(out) == before and leftovers(out) == []

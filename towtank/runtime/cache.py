@@ -112,30 +112,25 @@ def _atomic_write(path: Path, data: bytes) -> None:
         raise
 
 
-def _index_files(value: Any) -> dict[str, list[Any]]:
-    """The index's ``files`` map with every malformed record dropped."""
+def _valid_records(value: Any, ok: Any) -> dict[str, list[Any]]:
+    """The index map ``value`` with every record that ``ok`` refuses (or that is not a list
+    under a text key) dropped."""
     if not isinstance(value, dict):
         return {}
-    out = {}
-    for key, rec in value.items():
-        if (isinstance(key, str) and isinstance(rec, list) and len(rec) == 5
-                and isinstance(rec[2], str)
-                and all(type(rec[i]) is int for i in (0, 1, 3, 4))):
-            out[key] = rec
-    return out
+    return {k: v for k, v in value.items()
+            if isinstance(k, str) and isinstance(v, list) and ok(v)}
 
 
-def _index_entries(value: Any) -> dict[str, list[Any]]:
-    """The index's ``entries`` map with every malformed location dropped."""
-    if not isinstance(value, dict):
-        return {}
-    out = {}
-    for key, loc in value.items():
-        if (isinstance(key, str) and isinstance(loc, list) and len(loc) == 4
-                and isinstance(loc[0], str) and _PACK_NAME.fullmatch(loc[0])
-                and all(type(loc[i]) is int and loc[i] >= 0 for i in (1, 2, 3))):
-            out[key] = loc
-    return out
+def _file_record(rec: list[Any]) -> bool:
+    """[size, mtime_ns, sha256, ctime_ns, inode] of ``files``."""
+    return (len(rec) == 5 and isinstance(rec[2], str)
+            and all(type(rec[i]) is int for i in (0, 1, 3, 4)))
+
+
+def _entry_location(loc: list[Any]) -> bool:
+    """[pack, offset, length, crc32] of ``entries``, the pack a name towtank gives."""
+    return (len(loc) == 4 and isinstance(loc[0], str) and bool(_PACK_NAME.fullmatch(loc[0]))
+            and all(type(loc[i]) is int and loc[i] >= 0 for i in (1, 2, 3)))
 
 
 class RunCache:
@@ -175,8 +170,8 @@ class RunCache:
             except (ValueError, RecursionError, UnicodeDecodeError):
                 data = None
             if isinstance(data, dict) and data.get("format") == INDEX_FORMAT:
-                self._files = _index_files(data.get("files"))
-                self._entries = _index_entries(data.get("entries"))
+                self._files = _valid_records(data.get("files"), _file_record)
+                self._entries = _valid_records(data.get("entries"), _entry_location)
         self._pending: list[tuple[str, bytes]] = []
         self._packs: dict[str, bytes | None] = {}  # pack name -> its bytes, read on first use
         self._real_dirs: dict[str, str] = {}

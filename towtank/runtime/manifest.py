@@ -12,7 +12,6 @@ that a kill left half swapped is found and put back by the next run.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import time
@@ -29,17 +28,11 @@ INCOMPLETE = "OUTPUTS-INCOMPLETE.txt"
 _KIND = "towtank output manifest"
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def _entry(path: Path) -> dict[str, Any]:
     st = path.stat()
-    return {"size": st.st_size, "mtime_ns": st.st_mtime_ns, "sha256": _sha256(path)}
+    from towtank.runtime.safefile import sha256_regular
+
+    return {"size": st.st_size, "mtime_ns": st.st_mtime_ns, "sha256": sha256_regular(path)}
 
 
 def describe(folder: Path, names: set[str] | frozenset[str]) -> dict[str, list[dict[str, Any]]]:
