@@ -16,7 +16,9 @@ point (``x_origin_m`` aft of the nose); SNAME symbols. Every term is the one of 
   revolution ``1 + 1.5 (D/L)^1.5 + 7 (D/L)^3`` [4]_, plus the fins' section drag
   ``2 C_F (1 + 2 t/c + 60 (t/c)^4)`` on their planform area;
 - cross-flow drag: ``-1/2 rho c_dc integral of 2 r x^k |x|^m dx`` with c_dc = 1.1 (circular
-  cylinder, Hoerner) and the fins' ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner [5]_);
+  cylinder, Hoerner) and the fins' ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner [5]_) at their
+  ``x_drag_m``; ``damping = "prestero"`` gives instead the reading of Prestero's equations that
+  reproduces his printed REMUS table (:func:`prestero_cross_flow`, hull-alone axial drag);
 - body lift ``-1/2 rho D^2 c_ydb`` with c_ydb = 1.2 at 0.65 L aft of the nose (Hoerner [4]_,
   Prestero [1]_); the Munk moment and the other added-mass Coriolis terms are NOT folded into
   Y_uv, N_uv, Y_ur, N_ur (the Fossen-form model computes them from the added masses, see
