@@ -491,7 +491,7 @@ def predict_coefficients(
                  f"(ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g}, {speed_m_s:g} m/s, form factor "
                  f"{form:.3f}) on A_f = {a_f:.4g} m^2")
     if damping == "prestero":
-        add("X_u|u|", x_uu_hull, hull_text + " (Prestero's eq. 3.8; his -1.62 is c_d = 0.110)",
+        add("X_u|u|", x_uu_hull, hull_text + " (Prestero's eq. 3.8)",
             "Prestero (2001) eq. 3.8; ITTC (1957); Hoerner (1965) ch. 6")
     else:
         add("X_u|u|", axial_drag(profile, fins, rho, nu, speed_m_s),
