@@ -35,6 +35,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "speed_m_s": ("float", False),
     "origin_m": ("float", False),
     "added_mass": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
+    "damping": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
     "fin_limit_deg": ("float", False),
 }
 FIN_SCHEMA: dict[str, tuple[str, bool]] = {
@@ -44,6 +45,7 @@ FIN_SCHEMA: dict[str, tuple[str, bool]] = {
     "chord_m": ("float", True),
     "section": ("str", False),
     "taper": ("float", False),
+    "x_drag_m": ("float", False),
 }
 
 
@@ -57,6 +59,7 @@ class VehicleFin:
     chord_m: float
     section: str = "NACA0012"
     taper: float = 1.0
+    x_drag_m: float | None = None  # centre of the fins' cross-flow drag, default x_m
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,7 @@ class Vehicle:
     fin_limit_deg: float | None = None
     fins: tuple[VehicleFin, ...] = ()
     added_mass: str = "towtank"
+    damping: str = "towtank"
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
 

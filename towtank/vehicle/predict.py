@@ -16,7 +16,9 @@ point (``x_origin_m`` aft of the nose); SNAME symbols. Every term is the one of 
   revolution ``1 + 1.5 (D/L)^1.5 + 7 (D/L)^3`` [4]_, plus the fins' section drag
   ``2 C_F (1 + 2 t/c + 60 (t/c)^4)`` on their planform area;
 - cross-flow drag: ``-1/2 rho c_dc integral of 2 r x^k |x|^m dx`` with c_dc = 1.1 (circular
-  cylinder, Hoerner) and the fins' ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner [5]_);
+  cylinder, Hoerner) and the fins' ``c_df = 0.1 + 0.7 taper`` (Whicker & Fehlner [5]_) at their
+  ``x_drag_m``; ``damping = "prestero"`` gives instead the reading of Prestero's equations that
+  reproduces his printed REMUS table (:func:`prestero_cross_flow`, hull-alone axial drag);
 - body lift ``-1/2 rho D^2 c_ydb`` with c_ydb = 1.2 at 0.65 L aft of the nose (Hoerner [4]_,
   Prestero [1]_); the Munk moment and the other added-mass Coriolis terms are NOT folded into
   Y_uv, N_uv, Y_ur, N_ur (the Fossen-form model computes them from the added masses, see
@@ -58,10 +60,12 @@ __all__ = [
     "FinPair",
     "axial_drag",
     "fin_rolling_drag",
+    "hull_axial_drag_coefficient",
     "lamb_k_factors",
     "ittc57_cf",
     "prime_exponent",
     "predict_coefficients",
+    "prestero_cross_flow",
 ]
 
 PREDICTED_COLUMNS = ("symbol", "value", "unit", "prime", "method", "reference")
@@ -70,12 +74,6 @@ C_YDB = 1.2  # body lift coefficient (Hoerner; Prestero 2001)
 X_CP_FRACTION = 0.65  # body lift centre of pressure, fraction of L aft of the nose
 SECTION_EFFICIENCY = 0.9  # a0 = 0.9 * 2 pi (Prestero 2001, after Hoerner)
 PRESTERO = "Prestero (2001) ch. 3"
-#: Where the cross-flow integral departs from Prestero's printed table on purpose (docs/method.md,
-#: 'Against Prestero's table'): his printed values are not those of his integrals on his geometry.
-XFLOW_RATE_NOTE = ("; differs from Prestero's printed Y_r|r| = 0.632 (his eq. gives 3.1 on his "
-                   "own REMUS geometry: hull 1.5 + fins 1.6 kg*m/rad^2)")
-XFLOW_MOMENT_NOTE = ("; sign by SNAME N = x Y, M = -x Z with the fins aft, the sign of the fins' "
-                     "lift moment N_uvf > 0 (Prestero's printed N_v|v| = -3.18 has the opposite)")
 
 
 @dataclass(frozen=True)
@@ -96,6 +94,9 @@ class FinPair:
         NACA 4-digit section (its thickness ratio is used for the section drag)
     taper : float
         Tip chord / root chord [-]
+    x_drag_m : float, optional
+        Position of the centre of the fin's cross-flow drag from the reference point, negative
+        aft [m] (Prestero's x_fin of his cross-flow terms); default the quarter chord ``x_m``
     """
 
     plane: str
@@ -104,6 +105,17 @@ class FinPair:
     chord_m: float
     section: str = "NACA0012"
     taper: float = 1.0
+    x_drag_m: float | None = None
+
+    @property
+    def x_drag(self) -> float:
+        """Moment arm of the fin's cross-flow drag [m]: ``x_drag_m``, else ``x_m``."""
+        return self.x_m if self.x_drag_m is None else float(self.x_drag_m)
+
+    @property
+    def c_df(self) -> float:
+        """Fin cross-flow drag coefficient ``0.1 + 0.7 taper`` (Whicker & Fehlner 1958) [-]."""
+        return 0.1 + 0.7 * self.taper
 
     @property
     def area(self) -> float:
@@ -213,6 +225,94 @@ def axial_drag(profile: HullProfile, fins: Sequence[FinPair], rho: float, nu: fl
     return -0.5 * rho * drag_area
 
 
+def hull_axial_drag_coefficient(profile: HullProfile, nu: float, speed_m_s: float) -> float:
+    """The bare hull's axial drag coefficient on its frontal area, c_d [-].
+
+    ``c_d = S_w C_F (1 + k) / A_f`` with the ITTC-57 line at ``Re = U L / nu``, Hoerner's form
+    factor ``1 + k = 1 + 1.5 (D/L)^1.5 + 7 (D/L)^3`` (Hoerner 1965, ch. 6) and
+    ``A_f = pi D^2 / 4``: the c_d of Prestero's (2001) eq. 3.8, ``X_u|u| = -1/2 rho c_d A_f``,
+    for the hull alone (no fins).
+
+    Parameters
+    ----------
+    profile : HullProfile
+    nu : float
+        Kinematic viscosity [m^2/s]
+    speed_m_s : float
+        Speed U of the Reynolds number [m/s]
+    """
+    length, diameter = profile.length, profile.max_diameter
+    cf = ittc57_cf(speed_m_s * length / nu)
+    form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
+    return profile.wetted_area * cf * form / (math.pi * diameter**2 / 4.0)
+
+
+def prestero_cross_flow(profile: HullProfile, fins: Sequence[FinPair], x_origin: float,
+                        rho: float) -> dict[str, float]:
+    """Prestero's (2001) cross-flow damping terms as his printed REMUS table has them.
+
+    With the hull's cross-flow integrals ``I_k = integral from x_t to x_b of 2R(x) g_k(x) dx``
+    (x from the tail end x_t to the nose x_b, origin at the reference point), c_dc = 1.1, and
+    for each fin pair its fins' cross-flow ``F = 1/2 rho S_fin c_df`` counted once (S_fin the
+    area of one fin, c_df = 0.1 + 0.7 taper) at ``x_f`` (``FinPair.x_drag``)::
+
+        Y_v|v| = Z_w|w| = -1/2 rho c_dc I(1)        - sum F                  (eq. 3.9)
+        M_w|w| = -N_v|v| = -1/2 rho c_dc I(x)       - sum F x_f              (eq. 3.10)
+        Y_r|r| = -Z_q|q| = -1/2 rho c_dc I(x|x|)    + sum F x_f|x_f|         (eq. 3.11)
+        M_q|q| = N_r|r|  = -1/2 rho c_dc I(x^2|x|)  - sum F |x_f|^3          (eq. 3.12)
+        K_p|p|           = sum over the pairs of -F r_mean^3                 (eq. 3.14)
+
+    (r_mean = D/2 + span/2, the mean height of the fin above the axis of the hull's maximum
+    diameter D; the Y and N terms use the rudders, the Z and M terms the stern planes).
+
+    This is the reading of his eqs. 3.9-3.14 that reproduces his printed REMUS values on his
+    geometry (x_f = -0.6827 m, c_df = 0.558): the fins counted once per pair; his M_w|w| and
+    N_v|v| with the signs of +x Z and -x Y (SNAME's cross-flow moment is N = x Y, M = -x Z,
+    which gives N_v|v| > 0 with the fins aft); in his Y_r|r| the fins' term with the sign
+    opposite to the hull's. towtank's default keeps the SNAME signs and both fins of a pair
+    (:func:`predict_coefficients`).
+
+    Parameters
+    ----------
+    profile : HullProfile
+        The hull
+    fins : sequence of FinPair
+        The fin pairs
+    x_origin : float
+        Reference point aft of the nose tip [m]
+    rho : float
+        Water density [kg/m^3]
+
+    Returns
+    -------
+    dict
+        symbol -> value [SI] for Y_v|v|, Z_w|w|, M_w|w|, N_v|v|, Y_r|r|, Z_q|q|, M_q|q|,
+        N_r|r|, K_p|p|
+    """
+    xb = x_origin - profile.x_m[::-1]
+    w = 2.0 * profile.r_m[::-1]
+    hq = 0.5 * rho * C_DC
+
+    def fsum(plane: str, fx) -> float:
+        return sum(0.5 * rho * p.c_df * p.area * fx(p.x_drag) for p in fins if p.plane == plane)
+
+    out: dict[str, float] = {}
+    for plane, (force, moment, vel, rate, s) in {
+        "rudder": ("Y", "N", "v", "r", 1.0), "sternplane": ("Z", "M", "w", "q", -1.0)
+    }.items():
+        out[f"{force}_{vel}|{vel}|"] = -hq * float(trapezoid(w, xb)) - fsum(plane, lambda x: 1.0)
+        m_ww = -hq * float(trapezoid(w * xb, xb)) - fsum(plane, lambda x: x)
+        out[f"{moment}_{vel}|{vel}|"] = -s * m_ww
+        y_rr = -hq * float(trapezoid(w * xb * np.abs(xb), xb)) + fsum(plane, lambda x: x * abs(x))
+        out[f"{force}_{rate}|{rate}|"] = s * y_rr
+        out[f"{moment}_{rate}|{rate}|"] = (-hq * float(trapezoid(w * xb**2 * np.abs(xb), xb))
+                                           - fsum(plane, lambda x: abs(x) ** 3))
+    r_hull = 0.5 * profile.max_diameter
+    out["K_p|p|"] = -sum(0.5 * rho * p.c_df * p.area * (r_hull + 0.5 * p.span_m) ** 3
+                         for p in fins)
+    return out
+
+
 def _fin_strip(profile: HullProfile, pair: FinPair, x_origin: float) -> tuple[np.ndarray, ...]:
     """Stations (body x) over the fin's chord, hull radius there and the fin-tip radius."""
     x_le = pair.x_m + 0.25 * pair.chord_m
@@ -250,7 +350,7 @@ def fin_rolling_drag(profile: HullProfile, pair: FinPair, x_origin: float, rho: 
         The pair's K_p|p| [kg*m^2/rad^2], negative
     """
     xs, r, a = _fin_strip(profile, pair, x_origin)
-    c_df = 0.1 + 0.7 * pair.taper
+    c_df = pair.c_df
     per_fin = 0.5 * rho * c_df * float(trapezoid((a**4 - r**4) / 4.0, xs))
     return -2.0 * per_fin
 
@@ -293,6 +393,7 @@ def predict_coefficients(
     speed_m_s: float = 1.5,
     x_origin_m: float | None = None,
     added_mass: str = "towtank",
+    damping: str = "towtank",
 ) -> pd.DataFrame:
     """The predicted coefficient set of a finned body of revolution (module docstring).
 
@@ -314,6 +415,12 @@ def predict_coefficients(
         "towtank": the hull's strips times Lamb's k2 of the equivalent spheroid (the method
         column then also gives the uncorrected value); "prestero": plain strip theory as in
         Prestero (2001) eqs. 3.18-3.24, which reproduces his printed added masses
+    damping : {"towtank", "prestero"}
+        "towtank": SNAME-signed cross-flow drag of the hull and of both fins of each pair, and
+        the friction-line axial drag of hull and fins (the method column also gives Prestero's
+        value where it differs); "prestero": the hull's axial drag alone,
+        ``-1/2 rho c_d A_f`` (:func:`hull_axial_drag_coefficient`), and the cross-flow terms of
+        :func:`prestero_cross_flow`, which reproduce his printed REMUS table
 
     Returns
     -------
@@ -322,6 +429,8 @@ def predict_coefficients(
     """
     if added_mass not in ("towtank", "prestero"):
         raise ValueError(f"added_mass must be 'towtank' or 'prestero', not {added_mass!r}.")
+    if damping not in ("towtank", "prestero"):
+        raise ValueError(f"damping must be 'towtank' or 'prestero', not {damping!r}.")
     length = profile.length
     diameter = profile.max_diameter
     x0 = profile.x_buoyancy if x_origin_m is None else float(x_origin_m)
@@ -375,10 +484,21 @@ def predict_coefficients(
     cf = ittc57_cf(reynolds)
     form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
     fin_text = "; fins 2 C_F (1 + 2t/c + 60(t/c)^4) S" if fins else ""
-    add("X_u|u|", axial_drag(profile, fins, rho, nu, speed_m_s),
-        f"ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g} ({speed_m_s:g} m/s) x form factor "
-        f"{form:.3f} on S_w = {profile.wetted_area:.4g} m^2{fin_text}",
-        "ITTC (1957); Hoerner (1965) ch. 6")
+    c_d = hull_axial_drag_coefficient(profile, nu, speed_m_s)
+    a_f = math.pi * diameter**2 / 4.0
+    x_uu_hull = -0.5 * rho * c_d * a_f
+    hull_text = (f"-1/2 rho c_d A_f of the hull alone, c_d = S_w C_F (1 + k)/A_f = {c_d:.4f} "
+                 f"(ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g}, {speed_m_s:g} m/s, form factor "
+                 f"{form:.3f}) on A_f = {a_f:.4g} m^2")
+    if damping == "prestero":
+        add("X_u|u|", x_uu_hull, hull_text + " (Prestero's eq. 3.8)",
+            "Prestero (2001) eq. 3.8; ITTC (1957); Hoerner (1965) ch. 6")
+    else:
+        add("X_u|u|", axial_drag(profile, fins, rho, nu, speed_m_s),
+            f"ITTC-57 C_F = {cf:.5f} at Re = {reynolds:.3g} ({speed_m_s:g} m/s) x form factor "
+            f"{form:.3f} on S_w = {profile.wetted_area:.4g} m^2{fin_text} (Prestero's method, "
+            f"hull alone: {x_uu_hull:.4g})",
+            "ITTC (1957); Hoerner (1965) ch. 6")
 
     # ---- cross-flow drag
     xb = x0 - profile.x_m[::-1]
@@ -386,30 +506,52 @@ def predict_coefficients(
     hq = 0.5 * rho * C_DC
 
     def fin_cd(plane: str, fx) -> float:
-        return sum(0.5 * rho * (0.1 + 0.7 * p.taper) * 2.0 * p.area * fx(p.x_m)
+        return sum(0.5 * rho * p.c_df * 2.0 * p.area * fx(p.x_drag)
                    for p in fins if p.plane == plane)
 
-    xflow = f"cross-flow drag, hull c_dc = {C_DC} (Hoerner), fins c_df = 0.1 + 0.7 taper"
+    pre = prestero_cross_flow(profile, fins, x0, rho)
     ref_xf = "Hoerner (1965); Whicker & Fehlner (1958); Prestero (2001) eqs. 3.9-3.13"
-    for plane, (force, moment, vel, rate, s) in {
-        "rudder": ("Y", "N", "v", "r", 1.0), "sternplane": ("Z", "M", "w", "q", -1.0)
-    }.items():
-        add(f"{force}_{vel}|{vel}|", -hq * trapezoid(w, xb) - fin_cd(plane, lambda x: 1.0),
-            xflow, ref_xf)
-        add(f"{force}_{rate}|{rate}|",
-            s * (-hq * trapezoid(w * xb * np.abs(xb), xb) - fin_cd(plane, lambda x: x * abs(x))),
-            xflow + XFLOW_RATE_NOTE, ref_xf)
-        add(f"{moment}_{vel}|{vel}|",
-            s * (-hq * trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)),
-            xflow + XFLOW_MOMENT_NOTE, ref_xf)
-        add(f"{moment}_{rate}|{rate}|",
-            -hq * trapezoid(w * xb**2 * np.abs(xb), xb) - fin_cd(plane, lambda x: x**2 * abs(x)),
-            xflow, ref_xf)
-    k_pp = sum(fin_rolling_drag(profile, pair, x0, rho) for pair in fins)
-    add("K_p|p|", k_pp,
-        "fins' cross-flow drag integrated over the span, -sum 1/2 rho c_df c (a^4 - r^4)/4 "
-        "per fin (Prestero's Y_v|v|f r_mean^3 with r^3 averaged over the span, not r_mean^3)",
-        "Prestero (2001) eq. 3.14; Whicker & Fehlner (1958)")
+    if damping == "prestero":
+        xflow = (f"Prestero's cross-flow terms as printed: hull c_dc = {C_DC}, one fin's "
+                 "1/2 rho S_fin c_df per pair at x_drag, his signs (prestero_cross_flow)")
+        for sym in ("Y_v|v|", "Y_r|r|", "N_v|v|", "N_r|r|", "Z_w|w|", "Z_q|q|", "M_w|w|",
+                    "M_q|q|"):
+            add(sym, pre[sym], xflow, ref_xf)
+        add("K_p|p|", pre["K_p|p|"],
+            "Prestero's Y_v|v|f r_mean^3 per fin pair, r_mean = D/2 + span/2",
+            "Prestero (2001) eq. 3.14; Whicker & Fehlner (1958)")
+    else:
+        xflow = f"cross-flow drag, hull c_dc = {C_DC} (Hoerner), fins c_df = 0.1 + 0.7 taper"
+
+        def differs(sym: str, why: str) -> str:
+            if not any(p.plane == ("rudder" if sym[0] in "YN" else "sternplane") for p in fins):
+                return ""
+            return (f"; differs on purpose from Prestero's printed value, which his method "
+                    f"(damping = prestero) gives as {pre[sym]:.4g} ({why})")
+
+        rate_why = "one fin per pair, the fins' term with the sign opposite to the hull's"
+        moment_why = "one fin per pair, signs of +x Z and -x Y; SNAME N = x Y, M = -x Z here"
+        for plane, (force, moment, vel, rate, s) in {
+            "rudder": ("Y", "N", "v", "r", 1.0), "sternplane": ("Z", "M", "w", "q", -1.0)
+        }.items():
+            add(f"{force}_{vel}|{vel}|", -hq * trapezoid(w, xb) - fin_cd(plane, lambda x: 1.0),
+                xflow, ref_xf)
+            add(f"{force}_{rate}|{rate}|",
+                s * (-hq * trapezoid(w * xb * np.abs(xb), xb)
+                     - fin_cd(plane, lambda x: x * abs(x))),
+                xflow + differs(f"{force}_{rate}|{rate}|", rate_why), ref_xf)
+            add(f"{moment}_{vel}|{vel}|",
+                s * (-hq * trapezoid(w * xb, xb) - fin_cd(plane, lambda x: x)),
+                xflow + differs(f"{moment}_{vel}|{vel}|", moment_why), ref_xf)
+            add(f"{moment}_{rate}|{rate}|",
+                -hq * trapezoid(w * xb**2 * np.abs(xb), xb)
+                - fin_cd(plane, lambda x: x**2 * abs(x)),
+                xflow, ref_xf)
+        k_pp = sum(fin_rolling_drag(profile, pair, x0, rho) for pair in fins)
+        add("K_p|p|", k_pp,
+            "fins' cross-flow drag integrated over the span, -sum 1/2 rho c_df c (a^4 - r^4)/4 "
+            "per fin (Prestero's Y_v|v|f r_mean^3 with r^3 averaged over the span, not "
+            "r_mean^3)", "Prestero (2001) eq. 3.14; Whicker & Fehlner (1958)")
 
     # ---- body lift (no Munk moment here: C_A(v) of the model carries it)
     x_cp = x0 - X_CP_FRACTION * length

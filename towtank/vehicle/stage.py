@@ -41,11 +41,12 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     rho = float(water_props.density(w.temperature_C, w.type, w.salinity_g_kg))
     nu = float(water_props.kinematic_viscosity(w.temperature_C, w.type, w.salinity_g_kg))
     profile = vmodel.vehicle_profile(vehicle)
-    fins = [FinPair(f.plane, f.x_m, f.span_m, f.chord_m, f.section, f.taper)
-            for f in vehicle.fins]
+    fins = [FinPair(f.plane, f.x_m, f.span_m, f.chord_m, f.section, f.taper,
+                    getattr(f, "x_drag_m", None)) for f in vehicle.fins]
     predicted = predict_coefficients(profile, fins, rho=rho, nu=nu, speed_m_s=vehicle.speed_m_s,
                                      x_origin_m=vehicle.origin_m,
-                                     added_mass=getattr(vehicle, "added_mass", "towtank"))
+                                     added_mass=getattr(vehicle, "added_mass", "towtank"),
+                                     damping=getattr(vehicle, "damping", "towtank"))
     masses = vmodel.mass_properties(vehicle, profile, rho)
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
