@@ -76,11 +76,12 @@ class Vehicle:
 
     ``myring`` holds the Myring parameters (a, b, c, n, theta_deg, d, a_offset, c_offset) of
     ``[vehicle.myring]``, else of ``[model.myring]``; ``series58`` the length, diameter and
-    Gertler parameters of ``[vehicle.series58]`` (the defaults filled in); ``scale`` multiplies every length of the
-    hull (a prototype described by its model's hull); ``origin_m`` is the reference point aft
-    of the nose tip, None for the centre of buoyancy. The mass properties are used as given;
-    None means not given (:func:`towtank.vehicle.model.mass_properties` then computes it from
-    the hull and says so in model.json ``sources``): ``mass_kg`` [kg] (else ``weight_N``/g,
+    Gertler parameters of ``[vehicle.series58]`` (the defaults filled in); ``scale``
+    multiplies every length of the hull (a prototype described by its model's hull);
+    ``origin_m`` is the reference point aft of the nose tip, None for the centre of buoyancy.
+    The mass properties are used as given; None means not given
+    (:func:`towtank.vehicle.model.mass_properties` then computes it from the hull and says so
+    in model.json ``sources``): ``mass_kg`` [kg] (else ``weight_N``/g,
     else neutrally buoyant), ``weight_N`` [N] (else mass g), ``buoyancy_N`` [N] (else
     rho g ``volume_m3``, else rho g times the hull's volume), ``cb_m`` [m] (else the hull's
     centre of buoyancy), ``cg_m`` [m] (else the centre of buoyancy).

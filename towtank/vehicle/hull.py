@@ -2,8 +2,9 @@
 
 Four sources: Myring's parametric hull (:mod:`towtank.reference.geometry`), the DARPA SUBOFF
 bare hull (AFF-1) of Groves, Huang & Chang (1989), Gertler's (1950) Series 58 polynomial
-bodies, and a radius table (``x_m, r_m``, nose to tail) for any other hull. Every profile is sampled on a dense grid; the integrals the
-prediction needs (volume, wetted area, centre of buoyancy) are trapezoidal sums on that grid.
+bodies, and a radius table (``x_m, r_m``, nose to tail) for any other hull. Every profile is
+sampled on a dense grid; the integrals the prediction needs (volume, wetted area, centre of
+buoyancy) are trapezoidal sums on that grid.
 
 References
 ----------
