@@ -237,7 +237,7 @@ def test_table6_turning_comparison():
     are those documented in docs/method.md within 3 % (they move if the hull terms or the
     damping change, and the table there must then be redone). The table's order (SUBOFF
     56 % wider than Myring) is *not* reproduced: towtank turns all three within 18 % of each
-    other and 2.6 to 4.7 times tighter (docs/method.md says why).
+    other and 2.7 to 4.7 times tighter (docs/method.md says why).
     """
     from towtank.vehicle.hull_families import turning_comparison
 

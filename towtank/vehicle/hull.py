@@ -189,11 +189,12 @@ def suboff_profile(length_m: float = SUBOFF_LENGTH_M) -> HullProfile:
                                                     if abs(scale - 1) > 1e-9 else ""))
 
 
-#: The Series 58 form of the design tool's [D] Table 6 [-]: position of the largest section
+#: The default Series 58 parameters [-] (Gertler 1950 [3]_): position of the largest section
 #: m = x_m/L = 0.4, nose radius r0 = R0 L/D^2 = 0.5, tail radius r1 = R1 L/D^2 = 0.1, prismatic
-#: coefficient Cp = 0.65 (Gertler 1950 [3]_). The design tool's Series 58 vehicle of 150 kg is
-#: 2.41 m long and 0.344 m in diameter (L/D = 7.0): at Cp = 0.65 it displaces 149.2 kg of
-#: seawater, its printed 150 kg within 0.6 %.
+#: coefficient Cp = 0.65. Cp is the design tool's: its Table 6 Series 58 vehicle of 150 kg is
+#: 2.41 m long and 0.344 m in diameter (L/D = 7.0), and at Cp = 0.65 it displaces 149.4 kg of
+#: sea water (1025.85 kg/m^3), its printed 150 kg within 0.5 %. m, r0 and r1 are towtank's
+#: choice of a member of the series, not checked against Gertler's table.
 SERIES58_PARENT = {"m": 0.4, "r0": 0.5, "r1": 0.1, "cp": 0.65}
 
 
