@@ -248,3 +248,48 @@ def test_table6_turning_comparison():
                row["steady_radius_L"])
         assert got == pytest.approx(TOWTANK_TABLE6[hull], rel=0.03), hull
         assert row["tactical_diameter_L"] < row["table6_tactical_diameter_L"] / 2.5, hull
+
+
+def test_series58_section_never_crashes_the_loader_or_predict(tmp_path_factory):
+    """Any [vehicle.series58] either loads and predicts, or is one ProtocolError sentence."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from towtank.errors import ProtocolError
+    from towtank.ingest.protocol import load_protocol
+    from towtank.vehicle.model import vehicle_profile
+
+    values = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(-1, 3),
+                       st.integers(-3, 10), st.text(max_size=5), st.booleans())
+    keys = st.sampled_from(["length_m", "diameter_m", "m", "r0", "r1", "cp", "l"])
+    folder = tmp_path_factory.mktemp("fuzz58")
+
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, float):
+            return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) \
+                else repr(v)
+        return json.dumps(v) if isinstance(v, str) else str(v)
+
+    @settings(max_examples=80, deadline=None)
+    @given(st.dictionaries(keys, values, max_size=6))
+    def check(section):
+        lines = ["[campaign]", 'name = "x"', "[water]", "temperature_C = 15.0", "[vehicle]",
+                 'hull = "series58"', "[vehicle.series58]"]
+        lines += [f"{k} = {val(v)}" for k, v in section.items()]
+        path = folder / "p.toml"
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        try:
+            protocol = load_protocol(path, check_paths=False, require_runs=False)
+        except ProtocolError as exc:
+            assert str(exc).count("\n") == 0
+            return
+        try:
+            hull = vehicle_profile(protocol.vehicle)
+        except ValueError as exc:  # a length or fineness no vehicle has (schema.check_hull)
+            assert str(exc).count("\n") == 0
+            return
+        assert np.all(np.isfinite(hull.r_m)) and hull.volume > 0
+
+    check()
