@@ -293,3 +293,15 @@ def test_series58_section_never_crashes_the_loader_or_predict(tmp_path_factory):
         assert np.all(np.isfinite(hull.r_m)) and hull.volume > 0
 
     check()
+
+
+def test_a_drdc_hull_is_refused_naming_the_hulls_towtank_has(tmp_path, capsys):
+    """No DRDC hull (its equations were not available): exit 2, the hulls that exist named."""
+    from towtank.commands.cli import main
+
+    proto = tmp_path / "d.toml"
+    proto.write_text('[campaign]\nname = "d"\n[water]\ntemperature_C = 15.0\n'
+                     '[vehicle]\nhull = "drdc"\n', encoding="utf-8")
+    assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "'drdc'" in err and "series58" in err and "table" in err
