@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -167,11 +168,14 @@ chord_m = 0.12
 """
 
 
+SHIPPED = Path(__file__).resolve().parents[1] / "protocols" / "series58_vehicle.toml"
+
+
 def test_predict_and_turn_a_series58_vehicle(tmp_path):
+    """protocols/series58_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s."""
     from towtank.commands.cli import main
 
-    proto = tmp_path / "s58.toml"
-    proto.write_text(PROTOCOL.format(extra="", series58="cp = 0.65"), encoding="utf-8")
+    proto = SHIPPED
     out = tmp_path / "pred"
     assert main(["predict", str(proto), "--out", str(out)]) == 0
     model = json.loads((out / "model.json").read_text())
