@@ -39,7 +39,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "fin_limit_deg": ("float", False),
 }
 #: ``[vehicle.series58]``: length and largest diameter [m], Gertler's (1950) parameters [-]
-#: (default: :data:`towtank.vehicle.hull.SERIES58_PARENT`).
+#: (default: :data:`towtank.reference.series58.SERIES58_PARENT`).
 SERIES58_SCHEMA: dict[str, tuple[str, bool]] = {
     "length_m": ("float", True),
     "diameter_m": ("float", True),
@@ -252,7 +252,7 @@ def _series58(raw: Any, hull: str, src: str) -> dict[str, float] | None:
     ------
     ProtocolError
         hull = "series58" without the section, an unknown or missing key, or parameters
-        that give no body of revolution (:func:`towtank.vehicle.hull.series58_profile`).
+        that give no body of revolution (:func:`towtank.reference.series58.check_series58`).
     """
     if raw is None:
         if hull == "series58":
@@ -260,11 +260,11 @@ def _series58(raw: Any, hull: str, src: str) -> dict[str, float] | None:
                                 "section with length_m and diameter_m (and optionally m, r0, r1, "
                                 "cp).")
         return None
-    from towtank.vehicle.hull import SERIES58_PARENT, series58_profile
+    from towtank.reference.series58 import SERIES58_PARENT, check_series58
 
     values = {**SERIES58_PARENT, **_check(raw, SERIES58_SCHEMA, "vehicle.series58", src)}
     try:
-        series58_profile(**values)
+        check_series58(**values)
     except ValueError as exc:
         raise ProtocolError(f"{src}: [vehicle.series58]: {exc}") from None
     return {k: float(val) for k, val in values.items()}

@@ -31,6 +31,12 @@ import pandas as pd
 from scipy.integrate import trapezoid
 
 from towtank.reference import geometry
+from towtank.reference.series58 import (
+    SERIES58_PARENT,
+    check_series58,
+    series58_coefficients,
+    series58_radius,
+)
 
 __all__ = [
     "HullProfile",
@@ -189,73 +195,6 @@ def suboff_profile(length_m: float = SUBOFF_LENGTH_M) -> HullProfile:
                                                     if abs(scale - 1) > 1e-9 else ""))
 
 
-#: The default Series 58 parameters [-] (Gertler 1950 [3]_): position of the largest section
-#: m = x_m/L = 0.4, nose radius r0 = R0 L/D^2 = 0.5, tail radius r1 = R1 L/D^2 = 0.1, prismatic
-#: coefficient Cp = 0.65. Cp is the design tool's: its Table 6 Series 58 vehicle of 150 kg is
-#: 2.41 m long and 0.344 m in diameter (L/D = 7.0), and at Cp = 0.65 it displaces 149.4 kg of
-#: sea water (1025.85 kg/m^3), its printed 150 kg within 0.5 %. m, r0 and r1 are towtank's
-#: choice of a member of the series, not checked against Gertler's table.
-SERIES58_PARENT = {"m": 0.4, "r0": 0.5, "r1": 0.1, "cp": 0.65}
-
-
-def series58_coefficients(m: float, r0: float, r1: float, cp: float) -> np.ndarray:
-    """Gertler's (1950) sixth-degree polynomial of a Series 58 body ([3]_).
-
-    ``(r/D)^2 = a1 xi + a2 xi^2 + ... + a6 xi^6`` with ``xi = x/L`` from the nose. The six
-    coefficients solve the six conditions of Landweber & Gertler (1950):
-
-    - nose radius of curvature R0: ``(r/D)^2 -> 2 r0 xi`` at the nose, so ``a1 = 2 r0``;
-    - closed tail: ``sum a_i = 0``;
-    - tail radius of curvature R1: ``d(r/D)^2/dxi = -2 r1`` at ``xi = 1``,
-      ``sum i a_i = -2 r1``;
-    - largest section at ``xi = m``: ``sum a_i m^i = 1/4`` and ``sum i a_i m^(i-1) = 0``;
-    - prismatic coefficient: ``integral of (r/D)^2 dxi = Cp/4``, ``sum a_i/(i+1) = Cp/4``.
-
-    Parameters
-    ----------
-    m : float
-        Position of the largest section over the length, x_m/L [-], 0 < m < 1
-    r0 : float
-        Nose radius of curvature R0 made non-dimensional, R0 L/D^2 [-], >= 0
-    r1 : float
-        Tail radius of curvature R1 made non-dimensional, R1 L/D^2 [-], >= 0
-    cp : float
-        Prismatic coefficient V/((pi/4) D^2 L) [-], 0 < Cp < 1
-
-    Returns
-    -------
-    numpy.ndarray
-        a1 ... a6 [-]
-
-    Raises
-    ------
-    ValueError
-        Parameters outside those ranges, in one sentence.
-    """
-    for name, value, ok, rng in (("m", m, 0.0 < m < 1.0, "more than 0 and less than 1"),
-                                 ("r0", r0, r0 >= 0.0, "at least 0"),
-                                 ("r1", r1, r1 >= 0.0, "at least 0"),
-                                 ("cp", cp, 0.0 < cp < 1.0, "more than 0 and less than 1")):
-        if not (math.isfinite(value) and ok):
-            raise ValueError(f"The Series 58 parameter {name} must be finite and {rng}, "
-                             f"not {value}.")
-    i = np.arange(1, 7, dtype=float)
-    lhs = np.array([[1.0, 0, 0, 0, 0, 0], np.ones(6), i, m**i, i * m ** (i - 1), 1.0 / (i + 1)])
-    rhs = np.array([2.0 * r0, 0.0, -2.0 * r1, 0.25, 0.0, cp / 4.0])
-    return np.linalg.solve(lhs, rhs)
-
-
-def series58_radius(xi: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
-    """``r/D`` of a Series 58 body at ``xi = x/L`` (0 nose, 1 tail) [-] ([3]_).
-
-    ``r/D = sqrt(sum a_i xi^i)``, the polynomial of :func:`series58_coefficients`; where round-off
-    makes the square slightly negative at the ends the radius is 0.
-    """
-    xi = np.asarray(xi, dtype=float)
-    square = np.polyval(np.r_[np.asarray(coefficients, float)[::-1], 0.0], xi)
-    return np.sqrt(np.maximum(square, 0.0))
-
-
 def series58_profile(length_m: float, diameter_m: float, m: float = SERIES58_PARENT["m"],
                      r0: float = SERIES58_PARENT["r0"], r1: float = SERIES58_PARENT["r1"],
                      cp: float = SERIES58_PARENT["cp"]) -> HullProfile:
@@ -263,31 +202,20 @@ def series58_profile(length_m: float, diameter_m: float, m: float = SERIES58_PAR
     ``diameter_m`` [m].
 
     ``r(x) = D sqrt(sum a_i (x/L)^i)`` with the coefficients of
-    :func:`series58_coefficients`. Its volume is ``Cp (pi/4) D^2 L`` and its centre of
-    buoyancy ``L sum(a_i/(i+2)) / sum(a_i/(i+1))`` aft of the nose (both exact integrals of
-    the polynomial); the wetted area is the integral of ``2 pi r ds`` on the grid.
+    :func:`towtank.reference.series58.series58_coefficients` (Gertler's six conditions on m,
+    r0, r1, Cp). Its volume is ``Cp (pi/4) D^2 L`` and its centre of buoyancy
+    ``L sum(a_i/(i+2)) / sum(a_i/(i+1))`` aft of the nose (both exact integrals of the
+    polynomial); the wetted area is the integral of ``2 pi r ds`` on the grid.
 
     Raises
     ------
     ValueError
         A length or diameter that is not a positive number, parameters outside their ranges,
-        or parameters whose polynomial is no body (``(r/D)^2`` negative somewhere, or larger
-        than 1/4 away from ``m``, so that the body is fatter than D), in one sentence.
+        or parameters whose polynomial is no body
+        (:func:`towtank.reference.series58.check_series58`), in one sentence.
     """
-    for name, value in (("length_m", length_m), ("diameter_m", diameter_m)):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"The Series 58 {name} must be a positive number [m], not {value}.")
-    a = series58_coefficients(m, r0, r1, cp)
+    a = check_series58(length_m, diameter_m, m, r0, r1, cp)
     xi = _grid(1.0)
-    square = np.polyval(np.r_[a[::-1], 0.0], xi)
-    tol = 1e-9
-    if square.min() < -tol or square.max() > 0.25 + tol:
-        bad = xi[np.argmin(square)] if square.min() < -tol else xi[np.argmax(square)]
-        what = "negative" if square.min() < -tol else "above (D/2)^2"
-        raise ValueError(
-            f"The Series 58 parameters m = {m:g}, r0 = {r0:g}, r1 = {r1:g}, cp = {cp:g} give "
-            f"no body of revolution: the radius squared of Gertler's polynomial is {what} at "
-            f"x/L = {bad:.3f}.")
     x = xi * length_m
     r = diameter_m * series58_radius(xi, a)
     return HullProfile(x, r, "series58",
