@@ -23,7 +23,8 @@ import pandas as pd
 from towtank.ingest.vehicle_protocol import Vehicle, VehicleFin
 
 __all__ = ["TABLE6", "BG_M", "FIN_SPAN_M", "FIN_CHORD_M", "FIN_STATION", "MASS_KG",
-           "SPEED_M_S", "RUDDER_DEG", "MYRING_TABLE6", "table6_vehicles", "turning_comparison"]
+           "SPEED_M_S", "RUDDER_DEG", "MYRING_TABLE6", "table6_vehicles", "turning_comparison",
+           "with_fins"]
 
 #: [D] Table 6: hull, diameter [m], length [m], tactical diameter, advance, transfer [L].
 TABLE6 = pd.DataFrame(
