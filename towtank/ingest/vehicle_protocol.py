@@ -1,7 +1,7 @@
 """The protocol's ``[vehicle]`` section and its ``[[vehicle.fins]]`` (docs/formats.md).
 
-The body a prediction and a manoeuvring model are for: its hull (Myring, DARPA SUBOFF or a
-radius table), mass properties and fin pairs. Validated like the rest of the protocol: an
+The body a prediction and a manoeuvring model are for: its hull (Myring, DARPA SUBOFF, Series 58
+or a radius table), mass properties and fin pairs. Validated like the rest of the protocol: an
 unknown key, a wrong type or an impossible value is a :class:`~towtank.errors.ProtocolError`
 with one sentence naming the key.
 """
@@ -15,7 +15,7 @@ from typing import Any
 
 from towtank.errors import ProtocolError
 
-HULLS = ("myring", "suboff", "table")
+HULLS = ("myring", "suboff", "series58", "table")
 FIN_PLANES = ("rudder", "sternplane")
 
 VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
@@ -23,6 +23,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "hull": ("str", True),
     "hull_table": ("path", False),
     "myring": ("table", False),
+    "series58": ("table", False),
     "length_m": ("float", False),
     "scale": ("float", False),
     "mass_kg": ("float", False),
@@ -37,6 +38,16 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "added_mass": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
     "damping": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
     "fin_limit_deg": ("float", False),
+}
+#: ``[vehicle.series58]``: length and largest diameter [m], Gertler's (1950) parameters [-]
+#: (default: :data:`towtank.reference.series58.SERIES58_PARENT`).
+SERIES58_SCHEMA: dict[str, tuple[str, bool]] = {
+    "length_m": ("float", True),
+    "diameter_m": ("float", True),
+    "m": ("float", False),
+    "r0": ("float", False),
+    "r1": ("float", False),
+    "cp": ("float", False),
 }
 FIN_SCHEMA: dict[str, tuple[str, bool]] = {
     "plane": ("str", True),
@@ -67,11 +78,13 @@ class Vehicle:
     """The validated ``[vehicle]`` section.
 
     ``myring`` holds the Myring parameters (a, b, c, n, theta_deg, d, a_offset, c_offset) of
-    ``[vehicle.myring]``, else of ``[model.myring]``; ``scale`` multiplies every length of the
-    hull (a prototype described by its model's hull); ``origin_m`` is the reference point aft
-    of the nose tip, None for the centre of buoyancy. The mass properties are used as given;
-    None means not given (:func:`towtank.vehicle.model.mass_properties` then computes it from
-    the hull and says so in model.json ``sources``): ``mass_kg`` [kg] (else ``weight_N``/g,
+    ``[vehicle.myring]``, else of ``[model.myring]``; ``series58`` the length, diameter and
+    Gertler parameters of ``[vehicle.series58]`` (the defaults filled in); ``scale``
+    multiplies every length of the hull (a prototype described by its model's hull);
+    ``origin_m`` is the reference point aft of the nose tip, None for the centre of buoyancy.
+    The mass properties are used as given; None means not given
+    (:func:`towtank.vehicle.model.mass_properties` then computes it from the hull and says so
+    in model.json ``sources``): ``mass_kg`` [kg] (else ``weight_N``/g,
     else neutrally buoyant), ``weight_N`` [N] (else mass g), ``buoyancy_N`` [N] (else
     rho g ``volume_m3``, else rho g times the hull's volume), ``cb_m`` [m] (else the hull's
     centre of buoyancy), ``cg_m`` [m] (else the centre of buoyancy).
@@ -81,6 +94,7 @@ class Vehicle:
     name: str = "vehicle"
     hull_table: Path | None = None
     myring: dict[str, float] | None = None
+    series58: dict[str, float] | None = None
     length_m: float | None = None
     scale: float = 1.0
     mass_kg: float | None = None
@@ -205,6 +219,7 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
     if v["hull"] == "myring" and myring is None:
         raise ProtocolError(f"{src}: [vehicle] hull = \"myring\" needs a [vehicle.myring] or "
                             "[model.myring] description.")
+    series58 = _series58(v.pop("series58", None), v["hull"], src)
     table = None
     if v["hull"] == "table":
         if "hull_table" not in v:
@@ -230,4 +245,30 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
                 raise ProtocolError(f"{src}: '{key}' in [{label}] must be positive, but it is "
                                     f"{fv[key]}.")
         fins.append(VehicleFin(**fv))
-    return Vehicle(**v, hull_table=table, myring=myring, fins=tuple(fins), **design)
+    return Vehicle(**v, hull_table=table, myring=myring, series58=series58, fins=tuple(fins),
+                   **design)
+
+
+def _series58(raw: Any, hull: str, src: str) -> dict[str, float] | None:
+    """``[vehicle.series58]`` checked: the keys, and a polynomial that is a body.
+
+    Raises
+    ------
+    ProtocolError
+        hull = "series58" without the section, an unknown or missing key, or parameters
+        that give no body of revolution (:func:`towtank.reference.series58.check_series58`).
+    """
+    if raw is None:
+        if hull == "series58":
+            raise ProtocolError(f"{src}: [vehicle] hull = \"series58\" needs a [vehicle.series58] "
+                                "section with length_m and diameter_m (and optionally m, r0, r1, "
+                                "cp).")
+        return None
+    from towtank.reference.series58 import SERIES58_PARENT, check_series58
+
+    values = {**SERIES58_PARENT, **_check(raw, SERIES58_SCHEMA, "vehicle.series58", src)}
+    try:
+        check_series58(**values)
+    except ValueError as exc:
+        raise ProtocolError(f"{src}: [vehicle.series58]: {exc}") from None
+    return {k: float(val) for k, val in values.items()}

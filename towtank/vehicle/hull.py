@@ -1,9 +1,10 @@
 """Hull libraries for prediction: a body of revolution as a radius profile ``r(x)``.
 
-Three sources: Myring's parametric hull (:mod:`towtank.reference.geometry`), the DARPA SUBOFF
-bare hull (AFF-1) of Groves, Huang & Chang (1989), and a radius table (``x_m, r_m``, nose to
-tail) for any other hull. Every profile is sampled on a dense grid; the integrals the
-prediction needs (volume, wetted area, centre of buoyancy) are trapezoidal sums on that grid.
+Four sources: Myring's parametric hull (:mod:`towtank.reference.geometry`), the DARPA SUBOFF
+bare hull (AFF-1) of Groves, Huang & Chang (1989), Gertler's (1950) Series 58 polynomial
+bodies, and a radius table (``x_m, r_m``, nose to tail) for any other hull. Every profile is
+sampled on a dense grid; the integrals the prediction needs (volume, wetted area, centre of
+buoyancy) are trapezoidal sums on that grid.
 
 References
 ----------
@@ -13,6 +14,10 @@ References
    R_max = 0.8333 ft).
 .. [2] Myring, D. F. (1976), Aeronautical Quarterly 27(3), 186-194; Prestero, T. (2001), MIT/WHOI
    thesis, chapter 2.
+.. [3] Gertler, M. (1950), Resistance experiments on a systematic series of streamlined bodies
+   of revolution - for application to the design of high-speed submarines, DTMB Report C-297
+   (Report 789), David Taylor Model Basin; the polynomial form of Landweber, L. and Gertler, M.
+   (1950), Mathematical formulation of bodies of revolution, DTMB Report 719.
 """
 
 from __future__ import annotations
@@ -26,11 +31,21 @@ import pandas as pd
 from scipy.integrate import trapezoid
 
 from towtank.reference import geometry
+from towtank.reference.series58 import (
+    SERIES58_PARENT,
+    check_series58,
+    series58_coefficients,
+    series58_radius,
+)
 
 __all__ = [
     "HullProfile",
     "SUBOFF_LENGTH_M",
+    "SERIES58_PARENT",
     "myring_profile",
+    "series58_coefficients",
+    "series58_profile",
+    "series58_radius",
     "suboff_profile",
     "table_profile",
     "spheroid_profile",
@@ -52,7 +67,7 @@ class HullProfile:
     r_m : numpy.ndarray
         Radius at each station [m]
     name : str
-        Which hull ("myring", "suboff", "table", "spheroid")
+        Which hull ("myring", "suboff", "series58", "table", "spheroid")
     source : str
         Where the profile comes from (equation and reference, or the table's file)
     """
@@ -178,6 +193,34 @@ def suboff_profile(length_m: float = SUBOFF_LENGTH_M) -> HullProfile:
     return HullProfile(x, r, "suboff", "DARPA SUBOFF AFF-1 bare hull, Groves, Huang & Chang "
                        "(1989) DTRC/SHD-1298-01" + (f", scaled to L = {length_m:g} m"
                                                     if abs(scale - 1) > 1e-9 else ""))
+
+
+def series58_profile(length_m: float, diameter_m: float, m: float = SERIES58_PARENT["m"],
+                     r0: float = SERIES58_PARENT["r0"], r1: float = SERIES58_PARENT["r1"],
+                     cp: float = SERIES58_PARENT["cp"]) -> HullProfile:
+    """A Series 58 body (Gertler 1950 [3]_) of length ``length_m`` [m] and largest diameter
+    ``diameter_m`` [m].
+
+    ``r(x) = D sqrt(sum a_i (x/L)^i)`` with the coefficients of
+    :func:`towtank.reference.series58.series58_coefficients` (Gertler's six conditions on m,
+    r0, r1, Cp). Its volume is ``Cp (pi/4) D^2 L`` and its centre of buoyancy
+    ``L sum(a_i/(i+2)) / sum(a_i/(i+1))`` aft of the nose (both exact integrals of the
+    polynomial); the wetted area is the integral of ``2 pi r ds`` on the grid.
+
+    Raises
+    ------
+    ValueError
+        A length or diameter that is not a positive number, parameters outside their ranges,
+        or parameters whose polynomial is no body
+        (:func:`towtank.reference.series58.check_series58`), in one sentence.
+    """
+    a = check_series58(length_m, diameter_m, m, r0, r1, cp)
+    xi = _grid(1.0)
+    x = xi * length_m
+    r = diameter_m * series58_radius(xi, a)
+    return HullProfile(x, r, "series58",
+                       f"Series 58 (Gertler 1950, DTMB Report 789) m = {m:g}, r0 = {r0:g}, "
+                       f"r1 = {r1:g}, Cp = {cp:g}, L = {length_m:g} m, D = {diameter_m:g} m")
 
 
 def spheroid_profile(length_m: float, diameter_m: float, n: int = _N_GRID) -> HullProfile:

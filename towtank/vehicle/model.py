@@ -125,6 +125,8 @@ def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
         profile = hulls.myring_profile(**vehicle.myring)
     elif vehicle.hull == "suboff":
         profile = hulls.suboff_profile(vehicle.length_m or hulls.SUBOFF_LENGTH_M)
+    elif vehicle.hull == "series58":
+        profile = hulls.series58_profile(**vehicle.series58)
     else:
         profile = hulls.table_profile(vehicle.hull_table)
     profile = profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile

@@ -51,6 +51,12 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
     model["length_m"] = float(profile.length)
+    model["sources"]["hull"] = profile.source
+    model["hull"] = {"name": profile.name, "length_m": float(profile.length),
+                     "diameter_m": float(profile.max_diameter),
+                     "volume_m3": float(profile.volume),
+                     "wetted_area_m2": float(profile.wetted_area),
+                     "x_buoyancy_m": float(profile.x_buoyancy)}
     if vehicle.fin_limit_deg is not None:
         model["fin_limit_deg"] = float(vehicle.fin_limit_deg)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
