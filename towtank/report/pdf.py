@@ -6,7 +6,8 @@ Pages (A4 portrait), in order:
 2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
    tables where the day has them;
 3. figure pages, one section each where the day has data: "Tare", "Added mass", "Damping",
-   "Fins", "Scaling" (:mod:`towtank.report.figures`);
+   "Fins", "Scaling" (:mod:`towtank.report.figures`), and "Vehicle" (measured beside
+   predicted, :func:`towtank.report.vehicle.fig_predicted`) when the day has a [vehicle];
 4. "Fin runs": the fin runs against the Sandia section and the finite span, when they do not
    fit on the summary page;
 5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D, Re, tare, status);
