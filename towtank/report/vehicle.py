@@ -100,8 +100,8 @@ def _draw_predicted(ax: Any, rows: Any, *, symbol: Any = str, numbers: bool = Fa
     if numbers:
         for x, head in ((1.03, "measured\nprime·10³"), (1.25, "predicted\nprime·10³"),
                         (1.47, "diff")):
-            ax.text(x, -0.8, head, transform=right, va="bottom", ha="left", fontsize=7.5,
-                    fontweight="bold")
+            ax.text(x, 1.0, head, transform=ax.transAxes, va="bottom", ha="left",
+                    fontsize=7.5, fontweight="bold")
     ax.set_yticks(range(len(rows)), [symbol(s) for s in rows["symbol"]])
     if numbers:  # the report page: room for larger symbols
         ax.tick_params(axis="y", labelsize=9.5)
