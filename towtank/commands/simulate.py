@@ -143,28 +143,7 @@ def simulate_command(
 
 
 def _figure(ts, metrics, manoeuvre: str, path: Path, name: str) -> None:  # noqa: ANN001
-    import matplotlib
+    """manoeuvre.png: the track and the time histories (towtank.report.manoeuvre_figure)."""
+    from towtank.report.manoeuvre_figure import save_manoeuvre_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2), layout="constrained")
-    if manoeuvre in ("dive", "glide"):
-        ax1.plot(ts["x_m"], ts["z_m"])
-        ax1.invert_yaxis()
-        ax1.set(xlabel="x [m]", ylabel="depth z [m]")
-        ax2.plot(ts["t_s"], ts["theta_deg"], label="pitch θ")
-        ax2.set(ylabel="[deg]")
-    else:
-        ax1.plot(ts["y_m"], ts["x_m"])
-        ax1.set(xlabel="y (starboard) [m]", ylabel="x (north) [m]", aspect="equal")
-        ax2.plot(ts["t_s"], ts["psi_deg"], label="heading ψ")
-        ax2.plot(ts["t_s"], ts["rudder_deg"], label="rudder δr")
-        ax2.set(ylabel="[deg]")
-    ax2.set(xlabel="t [s]")
-    ax2.legend()
-    ax1.set_title(f"{name}: {manoeuvre}", loc="left")
-    for a in (ax1, ax2):
-        a.grid(True, alpha=0.3)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_manoeuvre_figure(ts, manoeuvre, path, name)

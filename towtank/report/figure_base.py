@@ -156,3 +156,118 @@ def _fmt(x: float, digits: int = 4) -> str:
     if x is None or not math.isfinite(float(x)):
         return "–"
     return f"{float(x):.{digits}g}".replace("-", "\u2212")
+
+
+# ------------------------------------------------------------------------- legends and axes
+def _renderer(fig: Figure) -> Any:
+    """A renderer of ``fig`` to measure text and legend boxes (an Agg canvas if it has none)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    return canvas.get_renderer()
+
+
+def data_under_legend(ax: Any, legend: Any = None, renderer: Any = None) -> int:
+    """How many data artists of ``ax`` its legend covers, counted as matplotlib's ``loc="best"``
+    counts them: a line whose segments cross the legend's box, a marker or scatter point inside
+    it, a filled band (``fill_between``) under it. Shaded spans (``axvspan``) are background
+    and not counted.
+
+    Parameters
+    ----------
+    ax : Axes
+        The axes.
+    legend : Legend, optional
+        The legend to test (default: the axes' own).
+    renderer : optional
+        A renderer of the axes' figure (made when not given).
+    """
+    from matplotlib.collections import PathCollection
+
+    leg = legend if legend is not None else ax.get_legend()
+    if leg is None:
+        return 0
+    renderer = renderer if renderer is not None else _renderer(ax.figure)
+    box = leg.get_window_extent(renderer).padded(2.0)  # [display px]: a marker's half width
+    n = 0
+    for line in ax.lines:
+        if not line.get_visible() or len(line.get_xdata()) == 0:
+            continue
+        path = line.get_transform().transform_path(line.get_path())
+        if line.get_linestyle() in ("None", "", " "):  # markers only
+            n += int(box.count_contains(path.vertices))
+        else:
+            n += int(path.intersects_bbox(box, filled=False))
+    for coll in ax.collections:
+        if not coll.get_visible():
+            continue
+        if isinstance(coll, PathCollection):  # scatter points
+            offsets = coll.get_offset_transform().transform(coll.get_offsets())
+            n += int(box.count_contains(offsets))
+        else:  # bands
+            trans = coll.get_transform()
+            n += sum(int(trans.transform_path(p).intersects_bbox(box, filled=True))
+                     for p in coll.get_paths())
+    return n
+
+
+def place_legend(ax: Any, handles: list[Any] | None = None,
+                 headroom: tuple[float, ...] = (0.0, 0.12, 0.25, 0.4, 0.6),
+                 **kw: Any) -> Any:
+    """A legend of ``ax`` that covers none of its data (:func:`data_under_legend`).
+
+    matplotlib's ``loc="best"`` is tried first; while the legend still covers data, the
+    y axis is grown above the data (by the fractions ``headroom`` of its span, in the axis'
+    own scale) so that a clear place opens above the curves. Call it after everything is
+    drawn: it fixes the y limits.
+
+    Parameters
+    ----------
+    ax : Axes
+        The axes.
+    handles : list, optional
+        Legend entries (default: the labelled artists).
+    headroom : tuple of float
+        Growths of the y span tried in turn [-].
+    **kw
+        Passed on to :meth:`~matplotlib.axes.Axes.legend` (``loc`` defaults to "best").
+    """
+    kw.setdefault("loc", "best")
+    renderer = _renderer(ax.figure)
+    y0, y1 = ax.get_ylim()
+    ax.set_xlim(ax.get_xlim())  # no autoscale after this: the data's place is known
+    scale = ax.yaxis.get_transform()
+    s0, s1 = scale.transform([y0, y1])
+    best: tuple[int, float] | None = None
+    for extra in headroom:
+        top = float(scale.inverted().transform([s1 + extra * (s1 - s0)])[0])
+        ax.set_ylim(y0, top)
+        leg = ax.legend(handles=handles, **kw) if handles is not None else ax.legend(**kw)
+        n = data_under_legend(ax, leg, renderer)
+        if n == 0:
+            return leg
+        if best is None or n < best[0]:
+            best = (n, extra)
+    assert best is not None
+    top = float(scale.inverted().transform([s1 + best[1] * (s1 - s0)])[0])
+    ax.set_ylim(y0, top)
+    return ax.legend(handles=handles, **kw) if handles is not None else ax.legend(**kw)
+
+
+def zero_fraction(ax: Any) -> float:
+    """Where y = 0 lies on ``ax``: 0 at the bottom, 1 at the top [-]."""
+    y0, y1 = ax.get_ylim()
+    return -y0 / (y1 - y0)
+
+
+def align_zero(ax: Any, twin: Any) -> None:
+    """Lower the bottom of one of two linear y axes (both holding 0) so that y = 0 lies at the
+    same height on both: a twin axis' zero line is then the other's."""
+    (a0, a1), (b0, b1) = ax.get_ylim(), twin.get_ylim()
+    if not (a0 <= 0 < a1 and b0 <= 0 < b1):
+        return
+    fa, fb = zero_fraction(ax), zero_fraction(twin)
+    if fa < fb < 1:
+        ax.set_ylim(-fb * a1 / (1 - fb), a1)
+    elif fb < fa < 1:
+        twin.set_ylim(-fa * b1 / (1 - fa), b1)

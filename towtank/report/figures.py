@@ -71,6 +71,9 @@ styled = _base.styled
 t95 = _base.t95
 true_minus = _base.true_minus
 wrap_caption = _base.wrap_caption
+place_legend = _base.place_legend
+data_under_legend = _base.data_under_legend
+align_zero = _base.align_zero
 
 
 def _hull_fit(day: DayResult) -> Any:
@@ -169,13 +172,14 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"Drag $D$ [N]")
     ax.set_xlim(left=0)
-    ax.legend(handles=handles, loc="lower right", fontsize=6.8)  # upper left: the a = 1 curve
+    ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+    place_legend(ax, handles, fontsize=6.8)
 
     ax_d.set_title(r"Difference $\Delta D = D_a(U) - D_s(U)$", fontsize=8.8)
     ax_d.set_xlabel(r"Speed $U$ [m/s]")
     ax_d.set_ylabel(r"$\Delta D$ [N]")
     ax_d.set_xlim(ax.get_xlim())
-    ax_d.set_ylim(0, dmax * 1.55 if dmax > 0 else 1.0)
+    ax_d.set_ylim(0, dmax * 1.15 if dmax > 0 else 1.0)
     alt = est.alt_value if math.isfinite(est.alt_value) else math.nan
     title = "\n".join([
         f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
@@ -183,11 +187,10 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
             f" ({est.agreement.split(':')[0]})" if est.agreement else ""),
         math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
     ])
-    ax_d.legend(handles=[Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
-                         Line2D([], [], color="#555555", ls=":",
-                                label=math_text(f"(m − {am.symbol})·a, joint"))],
-                loc="upper left", fontsize=6.8, title=title, title_fontsize=6.8,
-                alignment="left", ncol=2)
+    place_legend(ax_d, [Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
+                        Line2D([], [], color="#555555", ls=":",
+                               label=math_text(f"(m − {am.symbol})·a, joint"))],
+                 fontsize=6.8, title=title, title_fontsize=6.8, alignment="left", ncol=2)
 
 
 # -------------------------------------------------------------------------- (b) damping
@@ -227,8 +230,9 @@ def damping_caption(day: DayResult) -> str:
         "band its 95 % confidence interval from the fit's covariance. X_u|u| = −½ρA·c, "
         "X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2), Y_uv = −½ρA·c. Runs circled in red are "
         "flagged as outliers (|studentized residual| > 3 or large Cook's distance). Bottom "
-        "right: C_D,90 on the lateral area from the transverse tows (band: ±1.96 standard "
-        "errors), which gives Y_v|v| = −½ρA_lat·C_D,90."
+        "right: C_D,90 on the lateral area from the transverse tows (band and dashed lines: its "
+        "95 % interval, Student's t at the fit's degrees of freedom times its standard error "
+        "with the tare's), which gives Y_v|v| = −½ρA_lat·C_D,90."
     )
 
 
@@ -285,7 +289,7 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
     cb.set_label(r"Speed $U$ [m/s]")
     ax.set_xlabel(r"Angle of attack $\alpha$ [deg]")
     ax.set_ylabel(r"Drag coefficient $C_D$ [-] (frontal area)")
-    ax.legend(loc="best", fontsize=7)
+    place_legend(ax, fontsize=7)
     ax.set_title(r"$C_D(\alpha)$ of the steady hull runs (report eqs. 13–15)")
 
     ax_r = fig.add_subplot(gs[1, 0] if has_90 else gs[1, :])
@@ -311,27 +315,56 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_r.set_title("Fit residuals (shaded: within ±3)", fontsize=8.8)
 
     if has_90:
-        _transverse_panel(fig.add_subplot(gs[1, 1]), dm)
+        _transverse_panel(fig.add_subplot(gs[1, 1]), dm, hf.estimates.get("Y_v|v|"))
     return fig
 
 
-def _transverse_panel(ax: Axes, dm: Any) -> None:
+def cd90_interval(dm: Any, estimate: Any = None) -> tuple[float, float]:
+    """Half-width of the 95 % interval of C_D,90 and its degrees of freedom.
+
+    The interval is the transverse fit's own (the one of Y_v|v| = −½ρA_lat·C_D,90, so the
+    same relative width): Student's t at the estimate's Welch–Satterthwaite degrees of freedom
+    times the combined standard error of C_D,90 (regression and tare); the normal quantile
+    when the degrees of freedom are not known.
+
+    Parameters
+    ----------
+    dm : DampingFit
+        The damping fit with ``cd90`` [-] and ``cd90_se`` [-].
+    estimate : Estimate, optional
+        The Y_v|v| estimate of the same fit (its ``dof``).
+    """
+    se = float(dm.cd90_se)
+    dof = float(getattr(estimate, "dof", math.nan))
+    if not math.isfinite(se) or se <= 0:
+        return 0.0, dof
+    q = t95(dof) if math.isfinite(dof) and dof > 0 else Z95
+    return q * se, dof
+
+
+def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
     tr = dm.transverse_runs
-    cd90, cd90_se = float(dm.cd90), float(dm.cd90_se)
-    half = Z95 * cd90_se if math.isfinite(cd90_se) else 0.0
-    if half > 0:
-        ax.axhspan(cd90 - half, cd90 + half, color=style.BAND_COLOR, alpha=0.6, lw=0)
-    ax.axhline(cd90, color=style.FIT_COLOR, lw=1.4,
-               label=rf"$C_{{D,90}}$ = {_fmt(cd90)} ± {_fmt(half, 2)}")
-    ax.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5,
+    cd90 = float(dm.cd90)
+    half, dof = cd90_interval(dm, estimate)
+    xmax = float(tr["speed"].max()) * 1.1
+    ax.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5, zorder=4,
             label="transverse runs")
-    ax.set_xlim(0, float(tr["speed"].max()) * 1.1)
+    ax.axhline(cd90, color=style.FIT_COLOR, lw=1.0, zorder=3,
+               label=rf"$C_{{D,90}}$ = {_fmt(cd90)} (OLS of $R$ on $U|U|$)")
+    if half > 0:
+        nu = f", ν = {dof:.3g}" if math.isfinite(dof) else ""
+        ax.fill_between([0.0, xmax], cd90 - half, cd90 + half, color=style.BAND_COLOR,
+                        alpha=0.8, lw=0, zorder=1,
+                        label=f"95 % interval ± {_fmt(half, 2)} (Student's t{nu})")
+        for edge in (cd90 - half, cd90 + half):
+            ax.axhline(edge, color=style.FIT_COLOR, lw=0.6, ls="--", zorder=2)
+    ax.set_xlim(0, xmax)
     spread = max(float(np.ptp(tr["cd90"])), 2 * half, 0.005 * abs(cd90))
-    ax.set_ylim(cd90 - 1.6 * spread, cd90 + 2.2 * spread)
+    ax.set_ylim(cd90 - 1.3 * spread, cd90 + 1.3 * spread)
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"$C_{D,90}$ [-] (lateral area)")
     ax.set_title(r"Transverse tow, $\alpha$ = 90°", fontsize=8.8)
-    ax.legend(loc="upper right", fontsize=6.8)
+    place_legend(ax, fontsize=6.8)
 
 
 # ----------------------------------------------------------------------------- (c,d) fins
@@ -572,7 +605,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_m.set_xlabel(r"Model speed $U_m$ [m/s]")
     ax_m.set_ylabel(r"Model resistance $R_m$ [N]")
     ax_m.set_title("Model (tank water)")
-    ax_m.legend(loc="upper left", fontsize=6.8)
+    place_legend(ax_m, fontsize=6.8)
 
     ax_p = fig.add_subplot(gs[0, 1])
     up = tab["speed_prototype"].to_numpy(float)
@@ -592,7 +625,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_ylabel(r"Prototype resistance $R_p$ [N]")
     proto = day.protocol.prototype
     ax_p.set_title(f"Prototype ({proto.water.type} water)" if proto is not None else "Prototype")
-    ax_p.legend(loc="upper left", fontsize=6.8)
+    place_legend(ax_p, fontsize=6.8)
 
     _reynolds_panel(fig.add_subplot(gs[1, :]), day, ok_hull)
     return fig
@@ -628,6 +661,14 @@ def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
 
 
 # ------------------------------------------------------------------------------ (g) a run
+#: Axis labels of a run thumbnail: the speed (left) and the forces (right), with units.
+SPEED_LABEL = r"speed $U$ [m/s]"
+FORCE_LABEL = r"drag $D$, lift $L$ [N]"
+#: The same, short, for the report's appendix (its legend names U, D and L).
+SPEED_LABEL_SHORT = r"$U$ [m/s]"
+FORCE_LABEL_SHORT = r"$D$, $L$ [N]"
+
+
 def thumbnail_twin(ax: Axes) -> Axes:
     """The twin axes of a thumbnail for the forces, under the transparent speed axes."""
     twin = ax.twinx()
@@ -689,8 +730,8 @@ def run_thumbnail(
     _traces(ax, ax2, th, lift=lift, linewidth=linewidth)
     if labels:
         ax.set_xlabel(r"$t$ [s]")
-        ax.set_ylabel(r"$U$ [m/s]")
-        ax2.set_ylabel(r"$F$ [N]")
+        ax.set_ylabel(SPEED_LABEL)
+        ax2.set_ylabel(FORCE_LABEL)
     if title:
         ax.set_title(title)
     return ax2
@@ -745,6 +786,7 @@ def _traces(ax: Axes, ax2: Axes, th: dict[str, np.ndarray], *, lift: bool, linew
     # the forces keep to the lower two thirds, so that a force that grows like U² is not
     # drawn on top of the speed it follows
     ax2.set_ylim(*thumbnail_ylim(np.concatenate(forces), above=0.55, below=0.08))
+    align_zero(ax, ax2)  # one zero line for speed and forces
 
 
 def thumbnail_ylim(values: np.ndarray, *, above: float, below: float) -> tuple[float, float]:

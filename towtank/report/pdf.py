@@ -6,7 +6,8 @@ Pages (A4 portrait), in order:
 2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
    tables where the day has them;
 3. figure pages, one section each where the day has data: "Tare", "Added mass", "Damping",
-   "Fins", "Scaling" (:mod:`towtank.report.figures`);
+   "Fins", "Scaling" (:mod:`towtank.report.figures`), and "Vehicle" (measured beside
+   predicted, :func:`towtank.report.vehicle.fig_predicted`) when the day has a [vehicle];
 4. "Fin runs": the fin runs against the Sandia section and the finite span, when they do not
    fit on the summary page;
 5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D, Re, tare, status);
@@ -90,11 +91,24 @@ def thumbnail_runs(day: DayResult) -> list[int]:
     return runs
 
 
+def vehicle_pages(day: DayResult) -> list[Page]:
+    """The "Vehicle" page of a day with a [vehicle]: its measured coefficients beside those
+    predicted from the geometry (:func:`towtank.report.vehicle.fig_predicted`); none without
+    a prediction."""
+    from towtank.report.vehicle import _predicted_rows, fig_predicted
+
+    rows = _predicted_rows(getattr(day, "coefficients", None))
+    if rows is None or rows.empty:
+        return []
+    return [Page("figure", "Vehicle", ("predicted_vs_measured", fig_predicted))]
+
+
 def page_plan(day: DayResult) -> list[Page]:
     """Every page of the report, in order (known before anything is drawn)."""
     pages = [Page("title", "Title"), Page("summary", "Summary")]
     for name, section, func in figures.available_figures(day):
         pages.append(Page("figure", section, (name, func)))
+    pages += vehicle_pages(day)
     fr = day.fin_result
     if fr is not None and len(fr.table) and not fin_runs_fit(day):
         fin_ids = [int(r) for r in fr.table["run"]]
@@ -571,8 +585,8 @@ class ThumbGrid:
         self.fig = _page()
         top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
         bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
-        gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.08, right=0.905, top=1 - top,
-                                   bottom=bottom, hspace=0.5, wspace=0.55)
+        gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.085, right=0.91, top=1 - top,
+                                   bottom=bottom, hspace=0.5, wspace=0.72)
         self.cells = []
         for k in range(THUMBS_PER_PAGE):
             ax = self.fig.add_subplot(gs[k // THUMB_COLS, k % THUMB_COLS])
@@ -580,6 +594,8 @@ class ThumbGrid:
             for a in (ax, twin):
                 a.tick_params(labelsize=6, length=2, pad=1.5)
                 a.yaxis.set_major_locator(MaxNLocator(4))
+            ax.set_ylabel(figures.SPEED_LABEL_SHORT, fontsize=6.5, labelpad=1)
+            twin.set_ylabel(figures.FORCE_LABEL_SHORT, fontsize=6.5, labelpad=1)
             ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
             self.cells.append((ax, twin))
 

@@ -10,26 +10,58 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from towtank.report import style
-from towtank.report.figure_base import _layout, _new_figure, literal, styled, t95
+from towtank.report.figure_base import (
+    _layout,
+    _new_figure,
+    literal,
+    place_legend,
+    styled,
+    t95,
+)
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
 
 
+#: Units of the tare coefficients t2, t1, m_t of T = t2·U|U| + t1·U + m_t·a.
+TARE_UNITS = ("N s²/m²", "N s/m", "kg")
+
+
+def _interval(fit: object) -> np.ndarray:
+    """Half-widths of the 95 % intervals of (t2, t1, m_t): Student's t at the fit's dof."""
+    se = np.sqrt(np.maximum(np.diag(np.asarray(fit.cov, dtype=float)), 0.0))
+    return t95(fit.dof) * se
+
+
+def tare_terms(fit: object) -> str:
+    """The fitted coefficients of one channel with their 95 % intervals, e.g.
+    ``t2 = 0.08001 ± 0.0012 N s²/m², t1 = …, m_t = … kg``."""
+    half = _interval(fit)
+    return ", ".join(
+        f"{name} = {float(v):.4g} ± {float(h):.2g} {unit}" if math.isfinite(h) and h > 0
+        else f"{name} = {float(v):.4g} {unit}"
+        for name, v, h, unit in zip(("t2", "t1", "m_t"), fit.coef, half, TARE_UNITS,
+                                    strict=True))
+
+
 def tare_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_tare`."""
+    """Caption of :func:`fig_tare`: the model and, per tare group and channel, its fitted
+    coefficients with their 95 % intervals."""
     parts = []
-    for group in sorted(day.tares):
-        d = day.tares[group].drag
-        t2, t1, m_t = (float(v) for v in d.coef)
-        parts.append(f"group {group} (runs {_run_list(day.tares[group].runs)}): "
-                     f"t2 = {t2:.4g} N s²/m², t1 = {t1:.4g} N s/m, m_t = {m_t:.4g} kg")
+    for channel in ("drag", "lift"):
+        for group in sorted(day.tares):
+            fit = getattr(day.tares[group], channel)
+            if fit is None:
+                continue
+            parts.append(f"{channel.capitalize()}, group {group} (runs "
+                         f"{_run_list(day.tares[group].runs)}): {tare_terms(fit)}.")
     return ("The sting alone, towed like the model: the steady means of the sting runs (points) "
-            "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line, with its 95 % "
-            "band), per tare group; the tare is subtracted sample by sample from the group's "
-            "model runs (with m_t·a while accelerating) and its uncertainty is part of every "
-            "coefficient's interval. Drag: " + "; ".join(parts) + ". tare.csv and the "
-            "workbook's Tare sheet give every term with its interval.")
+            "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line) with its 95 % "
+            "confidence band (shaded), per tare group; the tare is subtracted sample by sample "
+            "from the group's model runs (with m_t·a while accelerating) and its uncertainty is "
+            "part of every coefficient's interval. Coefficients with their 95 % intervals "
+            "(Student's t): " + " ".join(parts) + " tare.csv and the workbook's Tare sheet "
+            "give every term with its interval.")
 
 
 def _run_list(runs: tuple[int, ...]) -> str:
@@ -84,9 +116,10 @@ def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
             u = np.linspace(0.0, hi * 1.05, 120)
             a = np.zeros_like(u)
             curve = fit(u, a)
-            band = t95(fit.dof if math.isfinite(fit.dof) else 10**6) * fit.std_error(u, a)
-            ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.2, lw=0)
+            band = t95(fit.dof) * fit.std_error(u, a)
             name = literal(f"group {group}") if len(tares) > 1 else "fitted tare"
+            ax.fill_between(u, curve - band, curve + band, color=color, alpha=0.25, lw=0,
+                            label=f"{name}: 95 % confidence band")
             ax.plot(u, curve, color=color, lw=1.2, label=f"{name}, a = 0")
             if column in pts:
                 ax.plot(pts["speed_mean"], pts[column], "o", color=color, ms=4, mec="black",
@@ -95,5 +128,5 @@ def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
         ax.set_xlabel(r"Carriage speed $U$ [m/s]")
         ax.set_ylabel(label)
         ax.set_title(channel.capitalize())
-        ax.legend(loc="upper left", fontsize=6.8)
+        place_legend(ax, fontsize=6.8)
     return fig

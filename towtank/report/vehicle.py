@@ -25,35 +25,153 @@ def write_vehicle(day: Any, folder: Path, figure: bool = True) -> None:
                         facecolor="white", metadata={"Software": None})
 
 
+PREDICTED_TITLE = "Measured beside predicted coefficients"
+
+
+def predicted_caption() -> str:
+    """Caption of the predicted-vs-measured figure (:func:`fig_predicted`)."""
+    return (
+        "Each coefficient the [vehicle] geometry predicts, as a prime (added mass over ½ρL³, "
+        "damping over ½ρL²), divided by the size of its prediction |predicted prime|: the "
+        "prediction lies at −1 or +1 (hollow diamond), the measurement (filled circle) with its "
+        "95 % interval (including the length uncertainty) where it falls. The prediction is "
+        "semi-empirical (towtank's documentation, method chapter, \"Prediction from "
+        "geometry\"): Lamb's k1 for the axial added mass, strip theory with Lamb's k2 for the "
+        "transverse ones, ITTC-57 friction with Hoerner's form factor for the axial drag, "
+        "cross-flow drag (c_dc = 1.1, Prestero 2001) for Y_v|v| and Hoerner's body lift "
+        "(c_ydβ = 1.2) for Y_uv. Right: the numbers, "
+        "and diff = (measured − predicted)/|predicted|; a difference beyond ±50 % is also a "
+        "warning on the quality page. Y_uv and Z_uw differ by design on a hull day: the SUT-2 "
+        "method measures only the drag's side component (Y_uv = X_u|u|), while the prediction "
+        "includes the hull's lift."
+    )
+
+
+def _predicted_rows(coefficients: Any) -> Any:
+    """The rows of ``coefficients`` with a finite, non-zero prediction."""
+    if coefficients is None or "predicted" not in coefficients:
+        return coefficients.iloc[0:0] if coefficients is not None else None
+    keep = []
+    for p in coefficients["predicted"]:
+        try:
+            keep.append(math.isfinite(float(p)) and float(p) != 0)
+        except (TypeError, ValueError):
+            keep.append(False)
+    return coefficients[keep]
+
+
+def _draw_predicted(ax: Any, rows: Any, *, symbol: Any = str, numbers: bool = False) -> None:
+    """Measured (95 %) and predicted primes of ``rows`` over |predicted| on ``ax``, one row
+    per coefficient; with ``numbers`` their values to the right of the axes."""
+    from matplotlib.lines import Line2D
+    from matplotlib.transforms import blended_transform_factory
+
+    from towtank.report import style
+    from towtank.report.figure_base import _fmt, place_legend
+
+    meas_color, pred_color = style.PALETTE[0], style.PALETTE[1]
+    right = blended_transform_factory(ax.transAxes, ax.transData)
+    lows, highs = [0.0], [0.0]
+    for i, (_, r) in enumerate(rows.iterrows()):
+        pred = float(r["predicted"])
+        scale = abs(pred)
+        meas = float(r["prime"]) / scale
+        lo = float(r.get("prime_ci_low", math.nan)) / scale
+        hi = float(r.get("prime_ci_high", math.nan)) / scale
+        if math.isfinite(lo) and math.isfinite(hi):
+            ax.errorbar(meas, i, xerr=[[max(meas - lo, 0.0)], [max(hi - meas, 0.0)]], fmt="o",
+                        color=meas_color, ms=5, capsize=3, zorder=3)
+            lows.append(lo)
+            highs.append(hi)
+        else:
+            ax.plot(meas, i, "o", color=meas_color, ms=5, zorder=3)
+        lows += [meas, pred / scale]
+        highs += [meas, pred / scale]
+        ax.plot(pred / scale, i, "D", mfc="white", mec=pred_color, mew=1.3, ms=6, zorder=4)
+        if numbers:
+            diff = (float(r["prime"]) - pred) / scale * 100
+            ax.text(1.03, i, f"{_fmt(float(r['prime']) * 1e3)}", transform=right,
+                    va="center", ha="left", fontsize=7.5)
+            ax.text(1.25, i, f"{_fmt(pred * 1e3)}", transform=right, va="center", ha="left",
+                    fontsize=7.5)
+            ax.text(1.47, i, f"{diff:+.0f} %".replace("-", "\u2212"), transform=right,
+                    va="center", ha="left", fontsize=7.5,
+                    color=style.OUTLIER_COLOR if abs(diff) > 50 else "black")
+    if numbers:
+        for x, head in ((1.03, "measured\nprime·10³"), (1.25, "predicted\nprime·10³"),
+                        (1.47, "diff")):
+            ax.text(x, 1.0, head, transform=ax.transAxes, va="bottom", ha="left",
+                    fontsize=7.5, fontweight="bold")
+    ax.set_yticks(range(len(rows)), [symbol(s) for s in rows["symbol"]])
+    if numbers:  # the report page: room for larger symbols
+        ax.tick_params(axis="y", labelsize=9.5)
+    ax.set_ylim(len(rows) - 0.5, -0.8 if numbers else -0.5)
+    lo, hi = min(lows), max(highs)
+    pad = 0.08 * (hi - lo)
+    ax.set_xlim(lo - pad, hi + pad)
+    ax.axvline(0.0, color="0.5", lw=0.8)
+    ax.grid(False, axis="y")
+    ax.set_xlabel("prime / |predicted prime| [-]")
+    place_legend(ax, [
+        Line2D([], [], ls="", marker="o", color=meas_color, label="measured, 95 % interval"),
+        Line2D([], [], ls="", marker="D", mfc="white", mec=pred_color, mew=1.3,
+               label="predicted from the geometry (±1)"),
+    ], fontsize=7)
+
+
 def predicted_figure(coefficients: Any) -> Any:
     """Measured primes with their 95 % intervals beside the predicted ones, each divided by
-    |predicted| (the prediction at ±1); None when no coefficient has a prediction."""
+    |predicted| (the prediction at ±1); None when no coefficient has a prediction.
+
+    Parameters
+    ----------
+    coefficients : DataFrame
+        coefficients.csv's table with its ``predicted`` column (docs/formats.md).
+    """
+    import matplotlib as mpl
     from matplotlib.figure import Figure
 
-    rows = coefficients[[math.isfinite(float(p)) and float(p) != 0
-                         for p in coefficients["predicted"]]]
-    if rows.empty:
+    from towtank.report import style
+
+    rows = _predicted_rows(coefficients)
+    if rows is None or rows.empty:
         return None
-    fig = Figure(figsize=(6.5, 0.45 * len(rows) + 1.4), layout="constrained")
-    ax = fig.add_subplot()
-    for i, (_, r) in enumerate(rows.iterrows()):
-        scale = abs(float(r["predicted"]))
-        lo = float(r.get("prime_ci_low", float("nan")))
-        hi = float(r.get("prime_ci_high", float("nan")))
-        meas = float(r["prime"]) / scale
-        if math.isfinite(lo) and math.isfinite(hi):
-            ax.errorbar(meas, i, xerr=[[meas - lo / scale], [hi / scale - meas]], fmt="o",
-                        color="C0", capsize=3, label="measured (95 %)" if i == 0 else None)
-        else:
-            ax.plot(meas, i, "o", color="C0", label="measured" if i == 0 else None)
-        ax.plot(float(r["predicted"]) / scale, i, "D", mfc="none", color="C3",
-                label="predicted" if i == 0 else None)
-    ax.set_yticks(range(len(rows)), list(rows["symbol"]))
-    ax.invert_yaxis()
-    ax.axvline(0.0, color="0.6", lw=0.8)
-    ax.set_xlabel("prime / |predicted prime|")
-    ax.set_title("Measured beside predicted (docs/method.md, Prediction from geometry)",
-                 loc="left", fontsize=9)
-    ax.grid(True, axis="x", alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    with mpl.rc_context(style.rc()):
+        fig = Figure(figsize=(6.5, 0.45 * len(rows) + 1.4), layout="constrained")
+        ax = fig.add_subplot()
+        ax.set_title(PREDICTED_TITLE, loc="left", fontsize=9)
+        _draw_predicted(ax, rows)
+    return fig
+
+
+def fig_predicted(day: Any, *, page: bool = False) -> Any:
+    """The predicted-vs-measured figure of a day with a [vehicle], as a report page: the
+    primes over |predicted| (:func:`predicted_figure`) with their numbers and a caption;
+    None when the day has no prediction.
+
+    Parameters
+    ----------
+    day : DayResult
+        The processed day.
+    page : bool
+        Lay the figure out as an A4 report page.
+    """
+    import matplotlib as mpl
+
+    from towtank.report import style
+    from towtank.report.figure_base import _layout, _new_figure, math_symbol
+
+    rows = _predicted_rows(getattr(day, "coefficients", None))
+    if rows is None or rows.empty:
+        return None
+    with mpl.rc_context(style.rc()):
+        fig = _new_figure(page)
+        height = fig.get_size_inches()[1]
+        # the axes keep ~0.85 in per coefficient (the whole height from 9 on)
+        used = 0.85 * len(rows) + 0.6
+        free = max(height - used - 4.0, 0.0)
+        gs = _layout(fig, 2, 1, page=page, right=0.6, left=0.14, hspace=0.0,
+                     height_ratios=[used, max(free, 1e-3)], title=PREDICTED_TITLE,
+                     text=predicted_caption())
+        _draw_predicted(fig.add_subplot(gs[0, 0]), rows, symbol=math_symbol, numbers=True)
     return fig
