@@ -95,9 +95,9 @@ class DayResult:
         """scaling.csv of the day: one row per prototype speed (empty when not scaled)."""
         if self.scaling_result is not None:
             return self.scaling_result.table
-        from towtank.analysis.similarity import SCALING_COLUMNS
+        from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 
-        return pd.DataFrame(columns=list(SCALING_COLUMNS))
+        return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
 
 
 def fit_tares(
@@ -586,6 +586,11 @@ class ScalingResult:
     length_prototype: float = math.nan  # [m]
     wetted_area_prototype: float | None = None  # λ²·S_m [m²], None when S_m is not known
     delta_cf: float = 0.0
+    #: towtank.analysis.similarity.ResistanceRecommendation: which column is R_p, and why
+    recommendation: Any = None
+    #: towtank.analysis.similarity.FormFactorTrend of 1 + k against Re (None without 1 + k)
+    form_factor_trend: Any = None
+    form_factor_trend_text: str = ""
 
 
 def _hull_stage(day: DayResult) -> None:
@@ -780,7 +785,19 @@ def _scaling_stage(day: DayResult) -> None:
         re_model, re_proto, depth, model.diameter_m if depth is not None else None,
         turbulent_re=p.processing.laminar_re,
     )
+    deep_ratio = depth / model.diameter_m if depth is not None and model.diameter_m else None
+    recommendation = similarity.recommend_resistance(
+        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()))
+    table["drag_recommended"] = (table[recommendation.column] if recommendation.column in table
+                                 else math.nan)
+    table["recommended"] = recommendation.column
+    trend, trend_text = None, ""
+    if ff is not None:
+        trend = similarity.form_factor_trend(ff.speed_reynolds, ff.speed_values)
+        trend_text = similarity.form_factor_trend_statement(trend, ff.one_plus_k)
     day.scaling_result = ScalingResult(
+        recommendation=recommendation, form_factor_trend=trend,
+        form_factor_trend_text=trend_text,
         table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
         form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
         scale=scale, length_prototype=proto.length_m,

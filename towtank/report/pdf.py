@@ -401,7 +401,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         for r in day.hull.coefficients.to_dict("records"):
             method = str(r.get("method", ""))
             # the method footnote states the second estimate already (fit.fit_added_mass)
-            if (r.get("agreement") and not method.startswith("=")
+            if (r.get("agreement") and not method.startswith(("=", "same as"))
                     and "second estimate" not in method):
                 y += _text_block(fig, y, (
                     f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
@@ -507,29 +507,46 @@ def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
 
 
 def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
+    """The prototype resistance table: the recommended estimate named in its header and
+    shaded, the Froude-scaled model resistance beside it for comparison; then the rule behind
+    the recommendation, the form factor with its trend over Re, and what was used."""
     sr = day.scaling_result
+    rec = getattr(sr, "recommendation", None)
+    recommended = rec.column if rec is not None else "none"
+    ittc_head = r"$R_p$ ITTC-57 [N]" + (", recommended" if recommended == "drag_ittc57" else "")
+    froude_head = (r"$R_p$ Froude [N], comparison" if recommended == "drag_ittc57"
+                   else r"$R_p$ Froude [N]")
     header = [r"$U_p$ [m/s]", r"$Re_p$", r"$Fn_p$", r"$U_m$ Froude [m/s]",
-              r"$U_m$ Reynolds [m/s]", r"$R_p$ Froude [N]", r"$R_p$ ITTC-57 [N]"]
-    rows = []
-    for r in sr.table.to_dict("records"):
+              r"$U_m$ Reynolds [m/s]", ittc_head, froude_head]
+    rows, hl = [], {}
+    for i, r in enumerate(sr.table.to_dict("records")):
         froude = _v(r["drag_froude"], ".4g")
         if not r.get("froude_in_tested_range", True):
             froude += " *"
         rows.append([_v(r["speed_prototype"], ".3g"), figures.sci(r["re_prototype"], 3),
                      _v(r["fn_prototype"], ".3f"), _v(r["speed_model_froude"], ".3f"),
-                     _v(r["speed_model_reynolds"], ".3f"), froude,
-                     _v(r["drag_ittc57"], ".4g")])
-    used = _table(fig, y, header, rows, [0.8, 0.8, 0.6, 1.0, 1.1, 1.0, 1.0])
+                     _v(r["speed_model_reynolds"], ".3f"), _v(r["drag_ittc57"], ".4g"), froude])
+        if recommended == "drag_ittc57":
+            hl[(i, 5)] = "#d9ead3"
+    used = _table(fig, y, header, rows, [0.5, 0.65, 0.4, 0.9, 1.05, 1.75, 1.55], highlight=hl,
+                  fontsize=7.0)
     ff = sr.form_factor
     area = (f"on the prototype's wetted area S_p = λ²·S_m = {_num(sr.wetted_area_prototype)} m²"
             if sr.wetted_area_prototype is not None else "not computed: no wetted area known")
     dcf = f" + ΔC_F = {sr.delta_cf:g}" if sr.delta_cf else ""
-    note = ("* extrapolated beyond the tested model speeds. "
-            f"ITTC-57: (1 + k)·C_F{dcf}, {area}. "
+    lo, hi = sr.tested_speed_range
+    star = (f"* U_m Froude outside the tested {lo:.2f}–{hi:.2f} m/s: the model's resistance "
+            "curve extrapolated. " if not sr.table["froude_in_tested_range"].all() else "")
+    rule = rec.rule if rec is not None else ""
+    trend = getattr(sr, "form_factor_trend_text", "")
+    note = (rule + " " + star + f"ITTC-57: (1 + k)·C_F{dcf}, {area}. "
             + (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f}: mean and s.d. over "
                f"{ff.n} tested speeds ({ff.n_runs} runs, repeats averaged per speed). "
-               if ff is not None else "") + sr.statement)
-    return used + 0.08 + _text_block(fig, y + used + 0.08, note, width=125, fontsize=7)
+               if ff is not None else "") + trend)
+    note += (" Similarity (Reynolds ranges, depth): the Scaling section."
+             if day.protocol.model is not None else "")
+    return used + 0.08 + _text_block(fig, y + used + 0.08, note.strip(), width=125,
+                                     fontsize=7)
 
 
 def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
