@@ -394,3 +394,51 @@ def test_the_runs_table_lists_every_run_with_its_status(days):
     for r in day.runs.itertuples():
         assert str(int(r.run)) in text
     assert "rejected" in text and "status" in text
+
+
+def test_runs_table_gives_each_run_its_test_area_coefficient(days):
+    """Issue 22: one C_D per run on the area its test uses. The transverse tows (α = 90°) show
+    C_D on the lateral area, the C_D,90 of the damping page (not ~6 on the frontal area), and
+    runs.csv names the area of cd_ref."""
+    day, out = days["hull"]
+    runs = pd.read_csv(out / "runs.csv")
+    hull = runs[(runs.config == "hull") & (runs.status == "ok")]
+    side = hull[hull.angle_deg == 90]
+    front = hull[hull.angle_deg != 90]
+    assert len(side) >= 2 and len(front) >= 2
+    assert (side.ref_area == "lateral").all() and (front.ref_area == "frontal").all()
+    np.testing.assert_array_equal(side.cd_ref, side.cd_lateral)
+    np.testing.assert_array_equal(front.cd_ref, front.cd)
+    assert np.allclose(side.ref_area_m2, day.protocol.model.lateral_area)
+    cd90 = day.hull.fit.damping.cd90
+    assert np.allclose(side.cd_ref, cd90, rtol=0.01)
+    assert (side.cd > 3 * cd90).all()  # the frontal-area value the table no longer shows
+    assert runs.loc[runs.config == "sting", "cd_ref"].isna().all()
+    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
+                if "tare [N]" in p.extract_text())
+    for v in side.cd_ref:
+        assert f"{v:.4f}" in text
+    for v in side.cd:
+        assert f"{v:.4f}" not in text
+    assert "lateral area" in text
+
+
+def test_runs_table_says_why_an_acceleration_is_blank(days):
+    """Issue 22: the usable runs without a mean acceleration (a ramp too short at low speed)
+    are marked and explained under the table, in the PDF and the workbook."""
+    from towtank.report.tables import missing_accel_note
+
+    day, out = days["hull"]
+    ok = day.runs[day.runs.status == "ok"]
+    expected = [int(r) for r in ok.loc[ok.accel_mean.isna(), "run"]]
+    assert expected, "the synthetic day has slow runs whose ramp is too short"
+    blank, note = missing_accel_note(day, [int(r) for r in day.runs.run])
+    assert blank == expected
+    assert "no constant-acceleration stretch" in note and "U/a" in note
+    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
+                if "tare [N]" in p.extract_text())
+    assert "no constant-acceleration stretch" in text
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Runs"]
+    notes = [str(c.value) for row in ws.iter_rows() for c in row
+             if isinstance(c.value, str) and c.value.startswith("accel_mean empty")]
+    assert notes and "no constant-acceleration stretch" in notes[0]

@@ -39,6 +39,7 @@ from towtank.analysis.daywide import group_rejections
 from towtank.report import figures, style
 from towtank.report import quality as _quality
 from towtank.report.provenance import creation_date, report_date
+from towtank.report.tables import missing_accel_note
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -802,37 +803,53 @@ RUNS_PER_PAGE = 46
 _STATUS_FILL = {"rejected": "#f4cccc", "void": "#e6e6e6"}
 
 
+#: How the runs table names each run's reference area (runs.csv ``ref_area``).
+REF_AREA_LABEL = {"frontal": "A", "lateral": "A_lat", "fin": "c·s"}
+
+
 def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
     """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
-    tare-corrected steady drag and its coefficients; rejected and void runs shaded."""
+    tare-corrected steady drag and its coefficient on the area its test uses (named in its own
+    column); rejected and void runs shaded; a blank acceleration explained below."""
     runs = day.runs.set_index("run", drop=False)
     y = figures.PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
-              r"$C_D$", "Re", "tare [N]", "status"]
+              r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
+    blank, accel_note = missing_accel_note(day, run_ids)
     rows, fill = [], {}
     for i, run in enumerate(run_ids):
         r = runs.loc[run]
         ok = r["status"] == "ok"
+        cd = r.get("cd_ref", r["cd"])
+        area = str(r.get("ref_area") or "")
         rows.append([str(run), figures.literal(r["config"]), figures.literal(r.get("test") or ""),
                      _v(r["angle_deg"], "g"),
                      _v(r["speed_mean"], ".3f") if ok else "–",
-                     _v(r["accel_mean"], ".3f") if ok else "–",
+                     ("– ¹" if run in blank else _v(r["accel_mean"], ".3f")) if ok else "–",
                      _v(r["drag_mean"], ".4g") if ok else "–",
-                     _v(r["cd"], ".4f") if ok else "–",
+                     _v(cd, ".4f") if ok else "–",
+                     figures.math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
                      figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
                      _v(r["tare_drag"], ".3g") if ok else "–",
                      figures.literal(r["status"])])
         if r["status"] in _STATUS_FILL:
             for c in range(len(header)):
                 fill[(i, c)] = _STATUS_FILL[str(r["status"])]
-    used = _table(fig, y, header, rows, [0.45, 0.55, 0.55, 0.6, 0.65, 0.65, 0.75, 0.65, 0.75,
-                                        0.65, 0.7], row_in=0.19, fontsize=7.2, highlight=fill)
-    _text_block(fig, y + used + 0.12,
-                "Steady means over the plateau window (drag tare-corrected; a is the mean "
-                "constant acceleration where the run has one). C_D on the frontal area (hull) "
-                "or chord × span (fin), Re on the length or chord, at each run's water "
-                "temperature. Rejected runs (red) and void runs (grey) with their reasons: "
-                "Quality page and runs.csv.", fontsize=7.5)
+    used = _table(fig, y, header, rows, [0.45, 0.55, 0.55, 0.6, 0.65, 0.65, 0.75, 0.65, 0.6,
+                                        0.75, 0.65, 0.7], row_in=0.19, fontsize=7.2,
+                  highlight=fill)
+    used += 0.12 + _text_block(fig, y + used + 0.12,
+                               "Steady means over the plateau window (drag tare-corrected; a is "
+                               "the mean constant acceleration where the run has one). C_D on "
+                               "the area its test uses, named in the next column (runs.csv "
+                               "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
+                               "lateral area (transverse tows at α = 90°, the C_D,90 of "
+                               "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
+                               "each run's water temperature. Rejected runs (red) and void runs "
+                               "(grey) with their reasons: Quality page and runs.csv.",
+                               fontsize=7.5)
+    if accel_note:
+        _text_block(fig, y + used, accel_note, fontsize=7.5)
 
 
 __all__ = [

@@ -175,7 +175,8 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
     rep = hf.repeats
     if rep is not None and len(rep):
         f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats "
-             "(C_D on the frontal area, as in runs.csv, also at 90°).")
+             "(C_D on the area of the run's test, as in the Runs table and runs.csv's cd_ref: "
+             "frontal, lateral at α = 90°).")
         f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
                "drag s.d. [mN]")
         for r in rep.itertuples():
