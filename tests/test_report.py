@@ -442,3 +442,42 @@ def test_runs_table_says_why_an_acceleration_is_blank(days):
     notes = [str(c.value) for row in ws.iter_rows() for c in row
              if isinstance(c.value, str) and c.value.startswith("accel_mean empty")]
     assert notes and "no constant-acceleration stretch" in notes[0]
+
+
+def test_the_hull_lift_slope_says_it_is_a_check_and_what_it_would_give(days):
+    """Issue 22: the measured hull lift slope is shown as a check, used in no coefficient, with
+    the Y_uv it would give with the hull's lift, −½ρA·(∂C_L/∂α + c)."""
+    from towtank.report.quality import lift_slope_text
+
+    day, _ = days["hull"]
+    hf = day.hull.fit
+    text = lift_slope_text(hf, day.hull.coefficients)
+    assert "used in no coefficient" in text and "drag's side component" in text
+    dm = hf.damping
+    expected = -0.5 * dm.rho * dm.area * (hf.lift_slope[0] + dm.params[2])
+    assert f"{expected:.4g} kg/m" in text
+    # with lift it is several times the measured Y_uv (the drag's side component alone)
+    y_uv = float(day.hull.coefficients.set_index("symbol").loc["Y_uv", "value"])
+    assert expected / y_uv > 5
+    lines = " ".join(t for _, t in pdf.quality_flow(day).items)
+    assert text in lines
+
+
+def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
+    """Issue 22: the reader sees "REMUS 100 (SUT-2 report, Table 4)", not the protocol key
+    'remus', in the PDF, the workbook and provenance.json."""
+    import json
+
+    from towtank.reference.sets import reference_name
+
+    day, out = days["hull"]
+    assert day.protocol.campaign.reference == "remus"
+    name = "REMUS 100 (SUT-2 report, Table 4)"
+    assert reference_name("remus") == name
+    assert reference_name("/lab/my_ref.csv") == "my_ref.csv (user reference CSV)"
+    summary = PdfReader(out / "report.pdf").pages[1].extract_text()
+    assert name in summary and "'remus'" not in summary
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Summary"]
+    assert name in [c.value for row in ws.iter_rows() for c in row]
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    assert prov["settings"]["reference_name"] == name

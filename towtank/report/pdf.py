@@ -36,6 +36,7 @@ from matplotlib.ticker import MaxNLocator
 
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
+from towtank.reference.sets import reference_name
 from towtank.report import figures, style
 from towtank.report import quality as _quality
 from towtank.report.provenance import creation_date, report_date
@@ -370,7 +371,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
              ("Fin", _fin_text(day)), ("Water", _water_text(day)),
              ("Test date", date or "not given"), ("Runs", _counts(day)),
-             ("Reference", f"prime values of '{day.protocol.campaign.reference}'"
+             ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
     for label, value in facts:
         if value is None:

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from towtank import __version__
+from towtank.reference.sets import reference_name
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -48,6 +49,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "water": asdict(p.water),
         "channels": {k: asdict(v) for k, v in p.channels.items()},
         "reference": p.campaign.reference,
+        "reference_name": reference_name(p.campaign.reference),
     }
     if p.model is not None:  # stated standard uncertainties [kg], [m] (fit, coefficients_table)
         settings["model_uncertainty"] = {

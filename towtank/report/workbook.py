@@ -354,6 +354,11 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     if p.fin is not None:
         rows += [("fin section", p.fin.section, ""), ("fin chord", p.fin.chord_m, "m"),
                  ("fin span", p.fin.span_m, "m")]
+    if day.hull is not None:
+        from towtank.reference.sets import reference_name
+
+        rows.append(("reference set (reference_prime)", reference_name(p.campaign.reference),
+                     ""))
     rows += [
         ("runs in the sheet", int(len(day.runs)), ""),
         ("runs ok", int(counts.get("ok", 0)), ""),
