@@ -481,3 +481,21 @@ def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
     assert name in [c.value for row in ws.iter_rows() for c in row]
     prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
     assert prov["settings"]["reference_name"] == name
+
+
+def test_report_equations_are_written_out_with_their_source(days):
+    """Issue 22: a PDF that cites "report eqs. 7–8" writes those equations out and names the
+    report with its title, as README and docs/method.md do."""
+    _, out = days["hull"]
+    pages = [p.extract_text() for p in PdfReader(out / "report.pdf").pages]
+    assert any("report eq" in t for t in pages[1:])
+    title = " ".join(pages[0].split())
+    name = "Identification of Underwater Vehicle Hydrodynamic Coefficients Using Model Tests"
+    assert name in title
+    for eq in ("Eqs. 7–8", "Eq. 13", "Eq. 14", "Eq. 15"):
+        assert eq in title
+    assert "page 1" in pages[1]  # the summary's footnotes point there
+    root = Path(__file__).resolve().parents[1]
+    for doc in ("README.md", "docs/method.md"):
+        text = " ".join((root / doc).read_text(encoding="utf-8").split())
+        assert name in text.replace("*", ""), doc

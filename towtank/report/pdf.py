@@ -260,12 +260,29 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
         y += 0.27
     if day.hull is None:
         return
-    fig.text(x0, _y(PAGE_H - 1.0), textwrap.fill(
-        "Model-scale values are SI with SNAME signs (added mass and damping negative); prime "
-        "values divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %. Method: "
-        "the SUT-2 model test report, as set out in the method chapter of towtank's documentation "
-        "(docs/method.md of its source).", 100),
-        fontsize=7.5, color="#555555", va="bottom")
+    text = "\n".join(textwrap.fill(p, 128) for p in METHOD_NOTE)
+    fig.text(x0, _y(PAGE_H - 0.85), figures.math_text(text), fontsize=7.2, color="#444444",
+             va="bottom", linespacing=1.35)
+
+
+#: The title page's note: conventions, the equations the report cites as "report eq. N" (as
+#: towtank applies them, docs/method.md) and the report they come from.
+SUT2_REPORT = ("B. Sadeghzadeh Parapari, M. S. Seif, H. Mahdigholi, \"Identification of Underwater "
+               "Vehicle Hydrodynamic Coefficients Using Model Tests\", Marine Engineering "
+               "Research Center, Sharif University of Technology (in Persian)")
+METHOD_NOTE = (
+    "Model-scale values are SI with SNAME signs (added mass and damping negative); prime values "
+    "divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %.",
+    "Equations: \"report eq. N\" is equation N of the SUT-2 model-test report [S], as towtank "
+    "applies it (the method chapter of towtank's documentation, docs/method.md of its source, "
+    "sets it out in full). Eqs. 7–8, added mass from accelerated and steady tows at the same "
+    "speed U: X_udot = m − (D_a − D_s)/a at α = 0 and Y_vdot likewise at α = 90°, D_a the drag "
+    "at the constant acceleration a, D_s the steady drag, m the model's mass. Eq. 13: C_D = "
+    "D/(½ρAU²), A the frontal area. Eq. 14: C_D(α) = aα² + bα + c, α in rad. Eq. 15: "
+    "X_u|u| = Y_uv = −½ρA·c, X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2); and Y_v|v| = "
+    "−½ρA_lat·C_D,90 from the transverse tows (α = 90°), A_lat the lateral area.",
+    f"[S] {SUT2_REPORT}.",
+)
 
 
 def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
@@ -396,6 +413,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                     fontsize=7.8) + 0.1
         notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
         notes.append(f"Shaded: |diff %| > {DIFF_HIGHLIGHT_PCT:g} against the reference. "
+                     "\"report eq. N\": equation N of the SUT-2 report [S], written out on "
+                     "page 1. "
                      "¹ Prototype, in the row's unit: prime × ½ρ_p·L_p³ (added mass, kg) or "
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
