@@ -358,6 +358,9 @@ def test_scaling_csv_names_the_recommended_prototype_resistance(outputs):
     assert (sc["recommended"] == "drag_ittc57").all()
     np.testing.assert_array_equal(sc["drag_recommended"], sc["drag_ittc57"])
     assert not np.allclose(sc["drag_recommended"], sc["drag_froude"])
+    prov = json.loads((outputs / "provenance.json").read_text(encoding="utf-8"))["scaling"]
+    assert prov["recommended"]["column"] == "drag_ittc57"
+    assert prov["form_factor"]["trend"]["significant"] is True
 
 
 def test_form_factor_trend_of_the_sample_day_is_named(outputs):

@@ -105,8 +105,19 @@ def _scaling_provenance(day: DayResult) -> dict[str, Any]:
             "speeds_m_s": [float(v) for v in ff.speeds],
             "one_plus_k_per_speed": [float(v) for v in ff.speed_values],
             "re_range": list(ff.re_range),
+            "trend": _trend(sr.form_factor_trend),
         },
+        "recommended": None if sr.recommendation is None else {
+            "column": sr.recommendation.column, "rule": sr.recommendation.rule},
     }
+
+
+def _trend(trend: Any) -> dict[str, Any] | None:
+    """The form factor's slope against Re (similarity.FormFactorTrend); null when untested."""
+    if trend is None or not math.isfinite(trend.slope):
+        return None
+    return {"slope_per_re": trend.slope, "ci_low": trend.ci_low, "ci_high": trend.ci_high,
+            "dof": trend.dof, "p_value": trend.p_value, "significant": trend.significant}
 
 
 # ------------------------------------------------------------------------------ test date
