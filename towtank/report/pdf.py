@@ -2,14 +2,16 @@
 
 Pages (A4 portrait), in order:
 
-1. title page: campaign, model, fin, test date, program version, contents;
+1. title page: campaign, model, fin, test date, program version, contents, and for a hull day
+   the equations cited as "report eq. N" with the SUT-2 report's reference;
 2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
    tables where the day has them;
 3. figure pages, one section each where the day has data: "Tare", "Added mass", "Damping",
    "Fins", "Scaling" (:mod:`towtank.report.figures`);
 4. "Fin runs": the fin runs against the Sandia section and the finite span, when they do not
    fit on the summary page;
-5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D, Re, tare, status);
+5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D on the area its test
+   uses and that area, Re, tare, status), a blank acceleration explained below the table;
 6. quality: rejected and void runs, warnings, fit diagnostics and the uncertainty budget
    (:mod:`towtank.report.quality`; continued over more pages when long);
 7. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
