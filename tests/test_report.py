@@ -395,3 +395,108 @@ def test_the_runs_table_lists_every_run_with_its_status(days):
     for r in day.runs.itertuples():
         assert str(int(r.run)) in text
     assert "rejected" in text and "status" in text
+
+
+def test_runs_table_gives_each_run_its_test_area_coefficient(days):
+    """Issue 22: one C_D per run on the area its test uses. The transverse tows (α = 90°) show
+    C_D on the lateral area, the C_D,90 of the damping page (not ~6 on the frontal area), and
+    runs.csv names the area of cd_ref."""
+    day, out = days["hull"]
+    runs = pd.read_csv(out / "runs.csv")
+    hull = runs[(runs.config == "hull") & (runs.status == "ok")]
+    side = hull[hull.angle_deg == 90]
+    front = hull[hull.angle_deg != 90]
+    assert len(side) >= 2 and len(front) >= 2
+    assert (side.ref_area == "lateral").all() and (front.ref_area == "frontal").all()
+    np.testing.assert_array_equal(side.cd_ref, side.cd_lateral)
+    np.testing.assert_array_equal(front.cd_ref, front.cd)
+    assert np.allclose(side.ref_area_m2, day.protocol.model.lateral_area)
+    cd90 = day.hull.fit.damping.cd90
+    assert np.allclose(side.cd_ref, cd90, rtol=0.01)
+    assert (side.cd > 3 * cd90).all()  # the frontal-area value the table no longer shows
+    assert runs.loc[runs.config == "sting", "cd_ref"].isna().all()
+    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
+                if "tare [N]" in p.extract_text())
+    for v in side.cd_ref:
+        assert f"{v:.4f}" in text
+    for v in side.cd:
+        assert f"{v:.4f}" not in text
+    assert "lateral area" in text
+
+
+def test_runs_table_says_why_an_acceleration_is_blank(days):
+    """Issue 22: the usable runs without a mean acceleration (a ramp too short at low speed)
+    are marked and explained under the table, in the PDF and the workbook."""
+    from towtank.report.tables import missing_accel_note
+
+    day, out = days["hull"]
+    ok = day.runs[day.runs.status == "ok"]
+    expected = [int(r) for r in ok.loc[ok.accel_mean.isna(), "run"]]
+    assert expected, "the synthetic day has slow runs whose ramp is too short"
+    blank, note = missing_accel_note(day, [int(r) for r in day.runs.run])
+    assert blank == expected
+    assert "no constant-acceleration stretch" in note and "U/a" in note
+    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
+                if "tare [N]" in p.extract_text())
+    assert "no constant-acceleration stretch" in text
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Runs"]
+    notes = [str(c.value) for row in ws.iter_rows() for c in row
+             if isinstance(c.value, str) and c.value.startswith("accel_mean empty")]
+    assert notes and "no constant-acceleration stretch" in notes[0]
+
+
+def test_the_hull_lift_slope_says_it_is_a_check_and_what_it_would_give(days):
+    """Issue 22: the measured hull lift slope is shown as a check, used in no coefficient, with
+    the Y_uv it would give with the hull's lift, −½ρA·(∂C_L/∂α + c)."""
+    from towtank.report.quality import lift_slope_text
+
+    day, _ = days["hull"]
+    hf = day.hull.fit
+    text = lift_slope_text(hf, day.hull.coefficients)
+    assert "used in no coefficient" in text and "drag's side component" in text
+    dm = hf.damping
+    expected = -0.5 * dm.rho * dm.area * (hf.lift_slope[0] + dm.params[2])
+    assert f"{expected:.4g} kg/m" in text
+    # with lift it is several times the measured Y_uv (the drag's side component alone)
+    y_uv = float(day.hull.coefficients.set_index("symbol").loc["Y_uv", "value"])
+    assert expected / y_uv > 5
+    lines = " ".join(t for _, t in pdf.quality_flow(day).items)
+    assert text in lines
+
+
+def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
+    """Issue 22: the reader sees "REMUS 100 (SUT-2 report, Table 4)", not the protocol key
+    'remus', in the PDF, the workbook and provenance.json."""
+    import json
+
+    from towtank.reference.sets import reference_name
+
+    day, out = days["hull"]
+    assert day.protocol.campaign.reference == "remus"
+    name = "REMUS 100 (SUT-2 report, Table 4)"
+    assert reference_name("remus") == name
+    assert reference_name("/lab/my_ref.csv") == "my_ref.csv (user reference CSV)"
+    summary = PdfReader(out / "report.pdf").pages[1].extract_text()
+    assert name in summary and "'remus'" not in summary
+    ws = openpyxl.load_workbook(out / "report.xlsx")["Summary"]
+    assert name in [c.value for row in ws.iter_rows() for c in row]
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    assert prov["settings"]["reference_name"] == name
+
+
+def test_report_equations_are_written_out_with_their_source(days):
+    """Issue 22: a PDF that cites "report eqs. 7–8" writes those equations out and names the
+    report with its title, as README and docs/method.md do."""
+    _, out = days["hull"]
+    pages = [p.extract_text() for p in PdfReader(out / "report.pdf").pages]
+    assert any("report eq" in t for t in pages[1:])
+    title = " ".join(pages[0].split())
+    name = "Identification of Underwater Vehicle Hydrodynamic Coefficients Using Model Tests"
+    assert name in title
+    for eq in ("Eqs. 7–8", "Eq. 13", "Eq. 14", "Eq. 15"):
+        assert eq in title
+    assert "page 1" in pages[1]  # the summary's footnotes point there
+    root = Path(__file__).resolve().parents[1]
+    for doc in ("README.md", "docs/method.md"):
+        text = " ".join((root / doc).read_text(encoding="utf-8").split())
+        assert name in text.replace("*", ""), doc

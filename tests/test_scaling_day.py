@@ -231,8 +231,11 @@ def test_missing_wetted_area_leaves_only_ittc57_empty(outputs, tmp_path, cache, 
     sc = pd.read_csv(out / "scaling.csv")
     assert sc["drag_ittc57"].isna().all()
     ref = pd.read_csv(outputs / "scaling.csv")
-    rest = [c for c in ref.columns if c != "drag_ittc57"]
+    rest = [c for c in ref.columns
+            if c not in ("drag_ittc57", "drag_recommended", "recommended")]
     pd.testing.assert_frame_equal(sc[rest], ref[rest])
+    # no ITTC-57 estimate: none is recommended (Froude scaling is not one for this hull)
+    assert (sc["recommended"] == "none").all() and sc["drag_recommended"].isna().all()
     prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
     assert prov["scaling"]["form_factor"] is None
     assert prov["scaling"]["wetted_area_prototype_m2"] is None
@@ -346,3 +349,28 @@ def test_myring_geometry_feeds_the_model():
     assert p.model.volume_m3 == pytest.approx(math.pi * 0.05**2 / 4 * 0.353, rel=0.5)
     assert "Myring" in p.model.geometry_source
     assert p.model.frontal_area == pytest.approx(math.pi * 0.05**2 / 4, rel=1e-12)
+
+
+def test_scaling_csv_names_the_recommended_prototype_resistance(outputs):
+    """Issue 22: the deeply submerged sample hull (5 D) makes no waves, so the recommended
+    prototype resistance is the ITTC-57 one, in its own column; Froude scaling is comparison."""
+    sc = pd.read_csv(outputs / "scaling.csv")
+    assert (sc["recommended"] == "drag_ittc57").all()
+    np.testing.assert_array_equal(sc["drag_recommended"], sc["drag_ittc57"])
+    assert not np.allclose(sc["drag_recommended"], sc["drag_froude"])
+    prov = json.loads((outputs / "provenance.json").read_text(encoding="utf-8"))["scaling"]
+    assert prov["recommended"]["column"] == "drag_ittc57"
+    assert prov["form_factor"]["trend"]["significant"] is True
+
+
+def test_form_factor_trend_of_the_sample_day_is_named(outputs):
+    """The sample day's 1 + k rises from 1.37 at 0.8 m/s to 1.70 at 2 m/s: a significant trend
+    with Re, which the scaling result states with what was used."""
+    day = process_day(PROTOCOL, jobs=1, cache_dir=outputs / ".cache")
+    sr = day.scaling_result
+    trend = sr.form_factor_trend
+    assert trend.significant and trend.slope > 0
+    assert trend.first[1] == pytest.approx(1.365, abs=0.005)
+    assert trend.last[1] == pytest.approx(1.701, abs=0.005)
+    assert sr.form_factor_trend_text.startswith("1 + k rises with Re from 1.365")
+    assert f"the mean {sr.form_factor.one_plus_k:.3f}" in sr.form_factor_trend_text

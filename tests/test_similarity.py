@@ -380,3 +380,50 @@ def test_similarity_statement_without_depth_and_bad_arguments():
         similarity_statement((2.0e5, 6.0e5), (1.0e6, 5.0e6), depth_m=0.25)
     with pytest.raises(ValueError, match="re_model_range"):
         similarity_statement((0.0, 6.0e5), (1.0e6, 5.0e6))
+
+
+# ------------------------------------------------------------ issue 22: trend and recommendation
+def test_form_factor_trend_finds_a_rise_with_reynolds_number():
+    """A form factor rising by 0.08 per 10^5 of Re with little scatter is a significant trend,
+    named with its ends; the same mean with the points shuffled flat is not."""
+    from towtank.analysis.similarity import form_factor_trend, form_factor_trend_statement
+
+    re = np.array([2.68e5, 4.02e5, 5.36e5, 6.70e5])
+    k = np.array([1.365, 1.509, 1.616, 1.701])
+    t = form_factor_trend(re, k)
+    assert t.dof == 2 and t.significant
+    assert t.slope == pytest.approx(np.polyfit(re, k, 1)[0], rel=1e-12)
+    assert 0 < t.ci_low < t.slope < t.ci_high
+    assert t.p_value < 0.05
+    assert t.first == (2.68e5, 1.365) and t.last == (6.70e5, 1.701)
+    text = form_factor_trend_statement(t, float(k.mean()))
+    assert text.startswith("1 + k rises with Re from 1.365")
+    assert "Reynolds dependence" in text and "laminar" in text and "average" in text
+    assert f"Used: the mean {k.mean():.3f}" in text
+    flat = form_factor_trend(re, np.array([1.55, 1.50, 1.60, 1.54]))
+    assert not flat.significant and flat.ci_low < 0 < flat.ci_high
+    assert "no significant trend" in form_factor_trend_statement(flat, 1.548)
+    two = form_factor_trend(re[:2], k[:2])
+    assert math.isnan(two.slope) and not two.significant
+    assert form_factor_trend_statement(two, 1.4) == ""
+
+
+def test_form_factor_keeps_the_reynolds_number_of_each_tested_speed():
+    u = np.array([1.0, 2.0, 2.0])
+    re = u * 0.353 / 1.05e-6
+    ff = form_factor(np.array([0.3, 1.1, 1.1]), u, 0.0472, 998.6, 1.05e-6, 0.353)
+    np.testing.assert_allclose(ff.speed_reynolds, [re[0], re[1]])
+
+
+def test_recommendation_is_ittc57_for_a_deep_body_and_none_near_the_surface():
+    from towtank.analysis.similarity import recommend_resistance
+
+    deep = recommend_resistance(5.0, True)
+    assert deep.column == "drag_ittc57"
+    assert "no waves" in deep.rule and "Reynolds number" in deep.rule
+    assert "not a prototype resistance" in deep.rule
+    assert recommend_resistance(None, True).column == "drag_ittc57"
+    assert "depth_m not given" in recommend_resistance(None, True).rule
+    assert recommend_resistance(2.0, True).column == "none"
+    assert "wave-making" in recommend_resistance(2.0, True).rule
+    assert recommend_resistance(5.0, False).column == "none"

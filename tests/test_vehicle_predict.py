@@ -346,6 +346,27 @@ def test_measured_values_carry_to_a_prototype_through_their_primes():
     assert len(warnings) == 1 and "Y_vdot" in warnings[0] and "predicted" in warnings[0]
 
 
+def test_y_uv_measured_as_the_drag_side_component_is_explained_not_doubted():
+    """Issue 22: Y_uv and Z_uw measured as the SUT-2 report does (= X_u|u|, the drag's side
+    component) differ from a geometry prediction that includes the hull's lift: one warning
+    saying why, not "check the measurement"; a Y_uv measured otherwise keeps that advice."""
+    from towtank.vehicle.compare import drag_side_only, with_predicted
+
+    coef = pd.DataFrame({"symbol": ["X_u|u|", "Y_uv", "Z_uw"], "value": [-0.2, -0.2, -0.2],
+                         "prime": [-0.0033, -0.0033, -0.0033]})
+    pred = pd.DataFrame({"symbol": ["Y_uv", "Z_uw"], "prime": [-0.024, -0.024]})
+    assert drag_side_only(coef) == {"Y_uv", "Z_uw"}
+    _, warnings = with_predicted(coef, pred)
+    assert len(warnings) == 1
+    w = warnings[0]
+    assert w.startswith("Y_uv and Z_uw:") and "as expected" in w
+    assert "drag's side component" in w and "lift" in w and "check the measurement" not in w
+    other = coef.assign(prime=[-0.0033, -0.02, -0.02])  # Y_uv measured with its lift
+    assert drag_side_only(other) == set()
+    _, warnings = with_predicted(other, pred.assign(prime=[-0.005, -0.005]))
+    assert len(warnings) == 2 and all("check the measurement" in w for w in warnings)
+
+
 def test_a_term_zero_by_symmetry_is_written_as_zero(tmp_path):
     """Y_rdot of the sample hull came out as -1.39e-17 kg m (round-off of the quadratures
     beside Y_vdot ~ 0.6 kg): written as the exact 0 it is (issue 22)."""

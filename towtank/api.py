@@ -218,8 +218,9 @@ def reduce_run(
     -------
     RunReduction
         ``.speed_mean`` [m/s], ``.drag_mean_raw`` [N] (steady mean, zero and drift removed,
-        tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still, accel, steady, decel as
-        (start, end) in seconds), ``.notes``, ``.warnings`` and the decimated samples.
+        tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still_pre, accel, steady, decel,
+        still_post as (start, end) in seconds), ``.notes``, ``.warnings`` and the decimated
+        samples.
 
     Raises
     ------

@@ -95,9 +95,9 @@ class DayResult:
         """scaling.csv of the day: one row per prototype speed (empty when not scaled)."""
         if self.scaling_result is not None:
             return self.scaling_result.table
-        from towtank.analysis.similarity import SCALING_COLUMNS
+        from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 
-        return pd.DataFrame(columns=list(SCALING_COLUMNS))
+        return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
 
 
 def fit_tares(
@@ -213,13 +213,18 @@ def check_prototype_speeds(protocol: Protocol) -> None:
         ) from None
 
 
+#: A hull run within this of α = 90° is a transverse tow [deg] (the hull fit's angle tolerance):
+#: its drag coefficient is on the lateral area, as C_D,90 of Y_v|v|.
+TRANSVERSE_TOL_DEG = 0.5
+
 RUN_COLUMNS = [
     "run", "file", "config", "angle_deg", "status", "reason", "speed_mean", "accel_mean",
     "drag_mean", "lift_mean", "tare_drag", "cd", "cl", "re", "fn",
 ]
 EXTRA_COLUMNS = [
     "test", "tare_group", "speed_nominal", "accel_nominal", "water_temp_C", "rho", "nu",
-    "speed_std", "drag_std", "lift_tare", "cd_lateral", "zero_drag", "drift_drag", "zero_lift",
+    "speed_std", "drag_std", "lift_tare", "cd_lateral", "cd_ref", "ref_area", "ref_area_m2",
+    "zero_drag", "drift_drag", "zero_lift",
     "drift_lift", "still_pre_start_s", "still_pre_end_s", "accel_start_s", "accel_end_s",
     "steady_start_s", "steady_end_s", "decel_start_s", "decel_end_s", "window_source",
     "fs_hz", "n_samples", "sha256", "notes", "remarks",
@@ -247,7 +252,7 @@ def run_table(
             status=status, reason=reason, test=rec["test"], tare_group=rec["tare_group"],
             speed_nominal=rec["speed_nominal"], accel_nominal=rec["accel_nominal"],
             water_temp_C=rec["water_temp_C"], remarks=rec["remarks"], notes="",
-            window_source="", sha256="",
+            window_source="", sha256="", ref_area="",
         )
         red = reductions.get(run)
         if red is not None and status == "ok":
@@ -272,10 +277,16 @@ def run_table(
                 row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
                 row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
                 row["cd_lateral"] = force_coefficient(red.drag_mean, rho, model.lateral_area, u)
+                if abs(float(rec["angle_deg"]) - 90.0) <= TRANSVERSE_TOL_DEG:  # a transverse tow
+                    row.update(cd_ref=row["cd_lateral"], ref_area="lateral",
+                               ref_area_m2=model.lateral_area)
+                else:
+                    row.update(cd_ref=row["cd"], ref_area="frontal", ref_area_m2=area)
             elif rec["config"] == "fin" and fin is not None:
                 area, ref_len = fin.area, fin.chord_m
                 row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
                 row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
+                row.update(cd_ref=row["cd"], ref_area="fin", ref_area_m2=area)
             elif model is not None:
                 ref_len = model.length_m
             elif fin is not None:
@@ -586,6 +597,11 @@ class ScalingResult:
     length_prototype: float = math.nan  # [m]
     wetted_area_prototype: float | None = None  # λ²·S_m [m²], None when S_m is not known
     delta_cf: float = 0.0
+    #: towtank.analysis.similarity.ResistanceRecommendation: which column is R_p, and why
+    recommendation: Any = None
+    #: towtank.analysis.similarity.FormFactorTrend of 1 + k against Re (None without 1 + k)
+    form_factor_trend: Any = None
+    form_factor_trend_text: str = ""
 
 
 def _hull_stage(day: DayResult) -> None:
@@ -780,7 +796,19 @@ def _scaling_stage(day: DayResult) -> None:
         re_model, re_proto, depth, model.diameter_m if depth is not None else None,
         turbulent_re=p.processing.laminar_re,
     )
+    deep_ratio = depth / model.diameter_m if depth is not None and model.diameter_m else None
+    recommendation = similarity.recommend_resistance(
+        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()))
+    table["drag_recommended"] = (table[recommendation.column] if recommendation.column in table
+                                 else math.nan)
+    table["recommended"] = recommendation.column
+    trend, trend_text = None, ""
+    if ff is not None:
+        trend = similarity.form_factor_trend(ff.speed_reynolds, ff.speed_values)
+        trend_text = similarity.form_factor_trend_statement(trend, ff.one_plus_k)
     day.scaling_result = ScalingResult(
+        recommendation=recommendation, form_factor_trend=trend,
+        form_factor_trend_text=trend_text,
         table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
         form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
         scale=scale, length_prototype=proto.length_m,

@@ -652,8 +652,14 @@ def fit_transverse(
 
 
 def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:
-    """Spread of C_D between repeats: runs at the same angle and speed (within 3 %)."""
+    """Spread of C_D between repeats: runs at the same angle and speed (within 3 %).
+
+    C_D is each run's coefficient on the area its test uses (runs.csv ``cd_ref``: the lateral
+    area at α = 90°, else the frontal area); ``cd`` when the table has no ``cd_ref``.
+    """
     hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")].copy()
+    if "cd_ref" in hull:
+        hull["cd"] = hull["cd_ref"].where(hull["cd_ref"].notna(), hull["cd"])
     rows = []
     cols = ["run", "speed_mean", "cd", "drag_mean"]
     for angle, grp in hull.groupby(np.round(hull["angle_deg"], 1)):

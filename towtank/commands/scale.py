@@ -65,19 +65,20 @@ def scale_command(
         return 1
     sc = day.scaling_result
     table = sc.table
+    rec = sc.recommendation.column if sc.recommendation is not None else "none"
+    ittc = "R_p ITTC-57 [N]" + (", recommended" if rec == "drag_ittc57" else "")
+    froude = "R_p Froude [N]" + (", comparison" if rec == "drag_ittc57" else "")
     show = pd.DataFrame({
         "U_p [m/s]": table["speed_prototype"],
         "Re_p": table["re_prototype"].map(lambda v: f"{v:.3g}"),
         "Fn_p": table["fn_prototype"].map(lambda v: f"{v:.3f}"),
         "U_m Froude [m/s]": table["speed_model_froude"].map(lambda v: f"{v:.3f}"),
         "U_m Reynolds [m/s]": table["speed_model_reynolds"].map(lambda v: f"{v:.3f}"),
-        "R_p Froude [N]": [
+        ittc: table["drag_ittc57"].map(lambda v: f"{v:.2f}" if math.isfinite(v) else "–"),
+        froude: [
             f"{v:.2f}" + ("" if ok else " *")
             for v, ok in zip(table["drag_froude"], table["froude_in_tested_range"], strict=True)
         ],
-        "R_p ITTC-57 [N]": table["drag_ittc57"].map(
-            lambda v: f"{v:.2f}" if math.isfinite(v) else "–"
-        ),
     })
     print(f"{protocol.name}: model L = {protocol.model.length_m:g} m, prototype "
           f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.type} water "
@@ -90,11 +91,15 @@ def scale_command(
         ff = sc.form_factor
         print(f"form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (s.d. over {ff.n} "
               f"tested speeds, {ff.n_runs} runs; ITTC-57)")
+        if sc.form_factor_trend_text:
+            print(sc.form_factor_trend_text)
     else:
         print("no form factor: R_p ITTC-57 needs the model's wetted area and runs above "
               "the laminar range")
     for w in day.warnings:
         if w.startswith("prototype speeds") and "indicative only" in w:
             print(f"warning: {w}")
+    if sc.recommendation is not None:
+        print(sc.recommendation.rule)
     print(sc.statement)
     return 0

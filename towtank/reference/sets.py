@@ -20,7 +20,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["BUILTIN_REFERENCES", "builtin_reference", "design_tool_table1", "reference_table"]
+__all__ = ["BUILTIN_REFERENCES", "REFERENCE_NAMES", "builtin_reference", "design_tool_table1",
+           "reference_name", "reference_table"]
 
 #: Name -> (file in data/, column of the prime values, where it comes from).
 BUILTIN_REFERENCES: dict[str, tuple[str, str, str]] = {
@@ -30,6 +31,23 @@ BUILTIN_REFERENCES: dict[str, tuple[str, str, str]] = {
                            "Prestero (2001) REMUS coefficients, primes with rho = 1030 kg/m^3, "
                            "L = 1.33 m"),
 }
+
+
+#: What a reader is shown for each built-in set (the key is what the protocol names).
+REFERENCE_NAMES: dict[str, str] = {
+    "remus": "REMUS 100 (SUT-2 report, Table 4)",
+    "remus-prestero2001": "REMUS 100 (Prestero 2001)",
+}
+
+
+def reference_name(reference: str) -> str:
+    """The name a reader sees for ``[campaign] reference``: the built-in set's display name
+    ("REMUS 100 (SUT-2 report, Table 4)" for ``remus``), else the user CSV's file name."""
+    if reference in REFERENCE_NAMES:
+        return REFERENCE_NAMES[reference]
+    from pathlib import Path
+
+    return f"{Path(str(reference)).name} (user reference CSV)"
 
 
 def reference_table(name: str) -> pd.DataFrame:

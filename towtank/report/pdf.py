@@ -2,7 +2,8 @@
 
 Pages (A4 portrait), in order:
 
-1. title page: campaign, model, fin, test date, program version, contents;
+1. title page: campaign, model, fin, test date, program version, contents, and for a hull day
+   the equations cited as "report eq. N" with the SUT-2 report's reference;
 2. summary: the day's facts, the coefficient table (SUT-2 Table 4 style), fin and scaling
    tables where the day has them;
 3. figure pages, one section each where the day has data: "Tare", "Added mass", "Damping",
@@ -10,7 +11,8 @@ Pages (A4 portrait), in order:
    predicted, :func:`towtank.report.vehicle.fig_predicted`) when the day has a [vehicle];
 4. "Fin runs": the fin runs against the Sandia section and the finite span, when they do not
    fit on the summary page;
-5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D, Re, tare, status);
+5. "Runs": one row per run of the sheet (config, test, α, U, a, drag, C_D on the area its test
+   uses and that area, Re, tare, status), a blank acceleration explained below the table;
 6. quality: rejected and void runs, warnings, fit diagnostics and the uncertainty budget
    (:mod:`towtank.report.quality`; continued over more pages when long);
 7. appendix: every run of the sheet as a thumbnail, 3 × 4 per page, phases shaded.
@@ -37,9 +39,11 @@ from matplotlib.ticker import MaxNLocator
 
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
+from towtank.reference.sets import reference_name
 from towtank.report import figures, style
 from towtank.report import quality as _quality
 from towtank.report.provenance import creation_date, report_date
+from towtank.report.tables import missing_accel_note
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -272,12 +276,29 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
         y += 0.27
     if day.hull is None:
         return
-    fig.text(x0, _y(PAGE_H - 1.0), textwrap.fill(
-        "Model-scale values are SI with SNAME signs (added mass and damping negative); prime "
-        "values divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %. Method: "
-        "the SUT-2 model test report, as set out in the method chapter of towtank's documentation "
-        "(docs/method.md of its source).", 100),
-        fontsize=7.5, color="#555555", va="bottom")
+    text = "\n".join(textwrap.fill(p, 128) for p in METHOD_NOTE)
+    fig.text(x0, _y(PAGE_H - 0.85), figures.math_text(text), fontsize=7.2, color="#444444",
+             va="bottom", linespacing=1.35)
+
+
+#: The title page's note: conventions, the equations the report cites as "report eq. N" (as
+#: towtank applies them, docs/method.md) and the report they come from.
+SUT2_REPORT = ("B. Sadeghzadeh Parapari, M. S. Seif, H. Mahdigholi, \"Identification of Underwater "
+               "Vehicle Hydrodynamic Coefficients Using Model Tests\", Marine Engineering "
+               "Research Center, Sharif University of Technology (in Persian)")
+METHOD_NOTE = (
+    "Model-scale values are SI with SNAME signs (added mass and damping negative); prime values "
+    "divide by ½ρL³ (added mass) or ½ρL² (damping). Intervals are 95 %.",
+    "Equations: \"report eq. N\" is equation N of the SUT-2 model-test report [S], as towtank "
+    "applies it (the method chapter of towtank's documentation, docs/method.md of its source, "
+    "sets it out in full). Eqs. 7–8, added mass from accelerated and steady tows at the same "
+    "speed U: X_udot = m − (D_a − D_s)/a at α = 0 and Y_vdot likewise at α = 90°, D_a the drag "
+    "at the constant acceleration a, D_s the steady drag, m the model's mass. Eq. 13: C_D = "
+    "D/(½ρAU²), A the frontal area. Eq. 14: C_D(α) = aα² + bα + c, α in rad. Eq. 15: "
+    "X_u|u| = Y_uv = −½ρA·c, X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2); and Y_v|v| = "
+    "−½ρA_lat·C_D,90 from the transverse tows (α = 90°), A_lat the lateral area.",
+    f"[S] {SUT2_REPORT}.",
+)
 
 
 def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
@@ -383,7 +404,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
              ("Fin", _fin_text(day)), ("Water", _water_text(day)),
              ("Test date", date or "not given"), ("Runs", _counts(day)),
-             ("Reference", f"prime values of '{day.protocol.campaign.reference}'"
+             ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
     for label, value in facts:
         if value is None:
@@ -408,6 +429,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                     fontsize=7.8) + 0.1
         notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
         notes.append(f"Shaded: |diff %| > {DIFF_HIGHLIGHT_PCT:g} against the reference. "
+                     "\"report eq. N\": equation N of the SUT-2 report [S], written out on "
+                     "page 1. "
                      "¹ Prototype, in the row's unit: prime × ½ρ_p·L_p³ (added mass, kg) or "
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
@@ -415,7 +438,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         for r in day.hull.coefficients.to_dict("records"):
             method = str(r.get("method", ""))
             # the method footnote states the second estimate already (fit.fit_added_mass)
-            if (r.get("agreement") and not method.startswith("=")
+            if (r.get("agreement") and not method.startswith(("=", "same as"))
                     and "second estimate" not in method):
                 y += _text_block(fig, y, (
                     f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
@@ -521,29 +544,46 @@ def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
 
 
 def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
+    """The prototype resistance table: the recommended estimate named in its header and
+    shaded, the Froude-scaled model resistance beside it for comparison; then the rule behind
+    the recommendation, the form factor with its trend over Re, and what was used."""
     sr = day.scaling_result
+    rec = getattr(sr, "recommendation", None)
+    recommended = rec.column if rec is not None else "none"
+    ittc_head = r"$R_p$ ITTC-57 [N]" + (", recommended" if recommended == "drag_ittc57" else "")
+    froude_head = (r"$R_p$ Froude [N], comparison" if recommended == "drag_ittc57"
+                   else r"$R_p$ Froude [N]")
     header = [r"$U_p$ [m/s]", r"$Re_p$", r"$Fn_p$", r"$U_m$ Froude [m/s]",
-              r"$U_m$ Reynolds [m/s]", r"$R_p$ Froude [N]", r"$R_p$ ITTC-57 [N]"]
-    rows = []
-    for r in sr.table.to_dict("records"):
+              r"$U_m$ Reynolds [m/s]", ittc_head, froude_head]
+    rows, hl = [], {}
+    for i, r in enumerate(sr.table.to_dict("records")):
         froude = _v(r["drag_froude"], ".4g")
         if not r.get("froude_in_tested_range", True):
             froude += " *"
         rows.append([_v(r["speed_prototype"], ".3g"), figures.sci(r["re_prototype"], 3),
                      _v(r["fn_prototype"], ".3f"), _v(r["speed_model_froude"], ".3f"),
-                     _v(r["speed_model_reynolds"], ".3f"), froude,
-                     _v(r["drag_ittc57"], ".4g")])
-    used = _table(fig, y, header, rows, [0.8, 0.8, 0.6, 1.0, 1.1, 1.0, 1.0])
+                     _v(r["speed_model_reynolds"], ".3f"), _v(r["drag_ittc57"], ".4g"), froude])
+        if recommended == "drag_ittc57":
+            hl[(i, 5)] = "#d9ead3"
+    used = _table(fig, y, header, rows, [0.5, 0.65, 0.4, 0.9, 1.05, 1.75, 1.55], highlight=hl,
+                  fontsize=7.0)
     ff = sr.form_factor
     area = (f"on the prototype's wetted area S_p = λ²·S_m = {_num(sr.wetted_area_prototype)} m²"
             if sr.wetted_area_prototype is not None else "not computed: no wetted area known")
     dcf = f" + ΔC_F = {sr.delta_cf:g}" if sr.delta_cf else ""
-    note = ("* extrapolated beyond the tested model speeds. "
-            f"ITTC-57: (1 + k)·C_F{dcf}, {area}. "
+    lo, hi = sr.tested_speed_range
+    star = (f"* U_m Froude outside the tested {lo:.2f}–{hi:.2f} m/s: the model's resistance "
+            "curve extrapolated. " if not sr.table["froude_in_tested_range"].all() else "")
+    rule = rec.rule if rec is not None else ""
+    trend = getattr(sr, "form_factor_trend_text", "")
+    note = (rule + " " + star + f"ITTC-57: (1 + k)·C_F{dcf}, {area}. "
             + (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f}: mean and s.d. over "
                f"{ff.n} tested speeds ({ff.n_runs} runs, repeats averaged per speed). "
-               if ff is not None else "") + sr.statement)
-    return used + 0.08 + _text_block(fig, y + used + 0.08, note, width=125, fontsize=7)
+               if ff is not None else "") + trend)
+    note += (" Similarity (Reynolds ranges, depth): the Scaling section."
+             if day.protocol.model is not None else "")
+    return used + 0.08 + _text_block(fig, y + used + 0.08, note.strip(), width=125,
+                                     fontsize=7)
 
 
 def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
@@ -801,37 +841,53 @@ RUNS_PER_PAGE = 46
 _STATUS_FILL = {"rejected": "#f4cccc", "void": "#e6e6e6"}
 
 
+#: How the runs table names each run's reference area (runs.csv ``ref_area``).
+REF_AREA_LABEL = {"frontal": "A", "lateral": "A_lat", "fin": "c·s"}
+
+
 def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
     """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
-    tare-corrected steady drag and its coefficients; rejected and void runs shaded."""
+    tare-corrected steady drag and its coefficient on the area its test uses (named in its own
+    column); rejected and void runs shaded; a blank acceleration explained below."""
     runs = day.runs.set_index("run", drop=False)
     y = figures.PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
-              r"$C_D$", "Re", "tare [N]", "status"]
+              r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
+    blank, accel_note = missing_accel_note(day, run_ids)
     rows, fill = [], {}
     for i, run in enumerate(run_ids):
         r = runs.loc[run]
         ok = r["status"] == "ok"
+        cd = r.get("cd_ref", r["cd"])
+        area = str(r.get("ref_area") or "")
         rows.append([str(run), figures.literal(r["config"]), figures.literal(r.get("test") or ""),
                      _v(r["angle_deg"], "g"),
                      _v(r["speed_mean"], ".3f") if ok else "–",
-                     _v(r["accel_mean"], ".3f") if ok else "–",
+                     ("– ¹" if run in blank else _v(r["accel_mean"], ".3f")) if ok else "–",
                      _v(r["drag_mean"], ".4g") if ok else "–",
-                     _v(r["cd"], ".4f") if ok else "–",
+                     _v(cd, ".4f") if ok else "–",
+                     figures.math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
                      figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
                      _v(r["tare_drag"], ".3g") if ok else "–",
                      figures.literal(r["status"])])
         if r["status"] in _STATUS_FILL:
             for c in range(len(header)):
                 fill[(i, c)] = _STATUS_FILL[str(r["status"])]
-    used = _table(fig, y, header, rows, [0.45, 0.55, 0.55, 0.6, 0.65, 0.65, 0.75, 0.65, 0.75,
-                                        0.65, 0.7], row_in=0.19, fontsize=7.2, highlight=fill)
-    _text_block(fig, y + used + 0.12,
-                "Steady means over the plateau window (drag tare-corrected; a is the mean "
-                "constant acceleration where the run has one). C_D on the frontal area (hull) "
-                "or chord × span (fin), Re on the length or chord, at each run's water "
-                "temperature. Rejected runs (red) and void runs (grey) with their reasons: "
-                "Quality page and runs.csv.", fontsize=7.5)
+    used = _table(fig, y, header, rows, [0.45, 0.55, 0.55, 0.6, 0.65, 0.65, 0.75, 0.65, 0.6,
+                                        0.75, 0.65, 0.7], row_in=0.19, fontsize=7.2,
+                  highlight=fill)
+    used += 0.12 + _text_block(fig, y + used + 0.12,
+                               "Steady means over the plateau window (drag tare-corrected; a is "
+                               "the mean constant acceleration where the run has one). C_D on "
+                               "the area its test uses, named in the next column (runs.csv "
+                               "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
+                               "lateral area (transverse tows at α = 90°, the C_D,90 of "
+                               "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
+                               "each run's water temperature. Rejected runs (red) and void runs "
+                               "(grey) with their reasons: Quality page and runs.csv.",
+                               fontsize=7.5)
+    if accel_note:
+        _text_block(fig, y + used, accel_note, fontsize=7.5)
 
 
 __all__ = [

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from towtank import __version__
+from towtank.reference.sets import reference_name
 
 if TYPE_CHECKING:
     from towtank.pipeline import DayResult
@@ -48,6 +49,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "water": asdict(p.water),
         "channels": {k: asdict(v) for k, v in p.channels.items()},
         "reference": p.campaign.reference,
+        "reference_name": reference_name(p.campaign.reference),
     }
     if p.model is not None:  # stated standard uncertainties [kg], [m] (fit, coefficients_table)
         settings["model_uncertainty"] = {
@@ -103,8 +105,19 @@ def _scaling_provenance(day: DayResult) -> dict[str, Any]:
             "speeds_m_s": [float(v) for v in ff.speeds],
             "one_plus_k_per_speed": [float(v) for v in ff.speed_values],
             "re_range": list(ff.re_range),
+            "trend": _trend(sr.form_factor_trend),
         },
+        "recommended": None if sr.recommendation is None else {
+            "column": sr.recommendation.column, "rule": sr.recommendation.rule},
     }
+
+
+def _trend(trend: Any) -> dict[str, Any] | None:
+    """The form factor's slope against Re (similarity.FormFactorTrend); null when untested."""
+    if trend is None or not math.isfinite(trend.slope):
+        return None
+    return {"slope_per_re": trend.slope, "ci_low": trend.ci_low, "ci_high": trend.ci_high,
+            "dof": trend.dof, "p_value": trend.p_value, "significant": trend.significant}
 
 
 # ------------------------------------------------------------------------------ test date

@@ -175,16 +175,47 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
     rep = hf.repeats
     if rep is not None and len(rep):
         f.li("Repeat runs (same angle and speed within 3 %): spread of C_D between repeats "
-             "(C_D on the frontal area, as in runs.csv, also at 90°).")
+             "(C_D on the area of the run's test, as in the Runs table and runs.csv's cd_ref: "
+             "frontal, lateral at α = 90°).")
         f.mono("     α [deg]   U [m/s]   n   runs              C_D mean     C_D s.d.   "
                "drag s.d. [mN]")
         for r in rep.itertuples():
             f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
                    f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
     if getattr(hf, "lift_slope", None):
-        s, lo, hi = hf.lift_slope
-        f.li(f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %).")
+        f.li(lift_slope_text(hf, day.hull.coefficients))
     _budget_flow(f, hf)
+
+
+def lift_slope_text(hf: Any, coefficients: Any = None) -> str:
+    """The hull's measured lift slope and what it is for: a check, used in no coefficient.
+
+    The SUT-2 method (report eq. 15) takes Y_uv = −½ρA·c from the drag's side component
+    alone; with the hull's lift the cross-flow force for small α is ½ρA·U²·(∂C_L/∂α + c)·α, so
+    Y_uv would be −½ρA·(∂C_L/∂α + c), the quantity a geometry prediction gives.
+    """
+    s, lo, hi = hf.lift_slope
+    text = (f"Hull lift-curve slope ∂C_L/∂α = {s:.4f} /rad [{lo:.4f}, {hi:.4f}] (95 %, C_L on "
+            "the frontal area), shown as a check and used in no coefficient: the SUT-2 method "
+            "takes Y_uv = −½ρA·c from the drag's side component alone (report eq. 15).")
+    dm = hf.damping
+    if dm is None:
+        return text
+    c = float(dm.params[2])
+    with_lift = -0.5 * dm.rho * dm.area * (s + c)
+    prime = with_lift / (0.5 * dm.rho * hf.length**2)
+    text += (f" With the hull's lift, Y_uv = −½ρA·(∂C_L/∂α + c) = {with_lift:.4g} kg/m (prime "
+             f"{prime:.4g})")
+    pred = math.nan
+    if coefficients is not None and "predicted" in coefficients:
+        rows = coefficients[coefficients["symbol"] == "Y_uv"]
+        if len(rows):
+            pred = float(rows["predicted"].iloc[0])
+    if math.isfinite(pred):
+        text += f", against the prime {pred:.4g} predicted from the [vehicle] geometry."
+    else:
+        text += "."
+    return text
 
 
 def _budget_flow(f: Flow, hf: Any) -> None:

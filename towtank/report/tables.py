@@ -1,9 +1,13 @@
-"""The day's CSV tables (docs/formats.md §5): runs.csv, coefficients.csv, fins.csv, scaling.csv."""
+"""The day's CSV tables (docs/formats.md §5): runs.csv, coefficients.csv, fins.csv, scaling.csv;
+and the runs table's note on runs without a mean acceleration."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -43,3 +47,44 @@ def write_tables(day: DayResult, out: Path) -> None:
     from towtank.reduce.tare import tare_table
 
     write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")
+
+
+def missing_accel_note(day: DayResult, run_ids: list[int]) -> tuple[list[int], str]:
+    """The usable runs of ``run_ids`` with no acceleration in the table, and why (a footnote).
+
+    A run has no mean acceleration when no constant-acceleration stretch of at least
+    [processing] min_accel_s remains once the trim is cut from each end: at a low speed the
+    ramp to U at the set acceleration lasts only U/a. Such a run is used for its plateau only.
+    """
+    runs = day.runs.set_index("run", drop=False)
+    blank = [int(r) for r in run_ids if runs.loc[r, "status"] == "ok"
+             and not math.isfinite(float(runs.loc[r, "accel_mean"]))]
+    if not blank:
+        return [], ""
+    p = day.protocol.processing
+    sel = runs.loc[blank]
+    ramp = (sel["speed_nominal"] / sel["accel_nominal"]).to_numpy(float)
+    ramp = ramp[np.isfinite(ramp) & (ramp > 0)]
+    lasted = ""
+    if ramp.size:
+        lo, hi = float(ramp.min()), float(ramp.max())
+        span = f"{lo:.2g} s" if math.isclose(lo, hi, rel_tol=0.05) else f"{lo:.2g}–{hi:.2g} s"
+        lasted = f"; the ramp to U at the set a lasted only U/a = {span}"
+    which = "Run" if len(blank) == 1 else "Runs"
+    text = (f"¹ {which} {_run_list(blank)}, no a: no constant-acceleration stretch of at least "
+            f"{p.min_accel_s:g} s once {p.trim:.3g} s is trimmed from each end{lasted}, "
+            + ("so it gives its plateau samples only." if len(blank) == 1
+               else "so they give their plateau samples only."))
+    return blank, text
+
+
+def _run_list(runs: list[int]) -> str:
+    """1, 36–38: consecutive runs as ranges."""
+    parts, start = [], None
+    for k, r in enumerate(runs):
+        if start is None:
+            start = r
+        if k + 1 == len(runs) or runs[k + 1] != r + 1:
+            parts.append(str(start) if start == r else f"{start}–{r}")
+            start = None
+    return ", ".join(parts)

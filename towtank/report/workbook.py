@@ -89,7 +89,8 @@ UNITS: dict[str, str] = {
     # scaling.csv
     "speed_prototype": "m/s", "re_prototype": "-", "fn_prototype": "-",
     "speed_model_froude": "m/s", "speed_model_reynolds": "m/s", "drag_froude": "N",
-    "drag_ittc57": "N", "re_model_froude": "-",
+    "drag_ittc57": "N", "re_model_froude": "-", "drag_recommended": "N",
+    "cd_ref": "-", "ref_area_m2": "m²",
     # diagnostics
     "alpha_rad": "rad", "speed": "m/s", "fitted": "-", "resid": "-", "student": "-",
     "cooks": "-", "drag": "N", "cd90": "-", "cd_mean": "-", "cd_std": "-",
@@ -353,6 +354,11 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     if p.fin is not None:
         rows += [("fin section", p.fin.section, ""), ("fin chord", p.fin.chord_m, "m"),
                  ("fin span", p.fin.span_m, "m")]
+    if day.hull is not None:
+        from towtank.reference.sets import reference_name
+
+        rows.append(("reference set (reference_prime)", reference_name(p.campaign.reference),
+                     ""))
     rows += [
         ("runs in the sheet", int(len(day.runs)), ""),
         ("runs ok", int(counts.get("ok", 0)), ""),
@@ -386,8 +392,12 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     if day.scaling_result is not None:
         w.gap()
         w.title("Prototype resistance")
-        cols = ["speed_prototype", "drag_froude", "drag_ittc57"]
-        w.table(day.scaling_result.table, columns=cols)
+        sr = day.scaling_result
+        cols = [c for c in ("speed_prototype", "drag_recommended", "recommended",
+                            "drag_ittc57", "drag_froude") if c in sr.table]
+        w.table(sr.table, columns=cols)
+        if sr.recommendation is not None:
+            w.note(sr.recommendation.rule)
 
 
 def _why_no_hull(day: DayResult) -> str:
@@ -421,6 +431,20 @@ def _runs(w: SheetWriter, day: DayResult) -> None:
     w.gap()
     w.note("Rejected runs are filled red, runs voided in the sheet grey; phase windows "
            "*_start_s/*_end_s in seconds from the start of the file.")
+    w.note("cd_ref: each run's C_D on the area its test uses, named in ref_area (frontal: "
+           "hull runs; lateral: transverse tows at α = 90°, the C_D,90 of Y_v|v|; fin: chord × "
+           "span); cd keeps the frontal area for every hull run.")
+    blank, why = _missing_accel(day)
+    if blank:
+        w.note(why)
+
+
+def _missing_accel(day: DayResult) -> tuple[list[int], str]:
+    """The usable runs without accel_mean and why (as the PDF's runs table says)."""
+    from towtank.report.tables import missing_accel_note
+
+    blank, text = missing_accel_note(day, [int(r) for r in day.runs["run"]])
+    return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
 def _tare(w: SheetWriter, day: DayResult) -> None:
@@ -484,6 +508,10 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
         return
     w.table(sr.table)
     w.gap()
+    if sr.recommendation is not None:
+        w.note(sr.recommendation.rule)
+    if sr.form_factor_trend_text:
+        w.note(sr.form_factor_trend_text)
     w.note("Resistance curve, form factor and water on the Scaling constants sheet"
            + ("; the form factor per tested speed on the Form factor sheet."
               if sr.form_factor is not None else "."))
@@ -531,9 +559,20 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
 
 def _form_factor(w: SheetWriter, day: DayResult) -> None:
     ff = day.scaling_result.form_factor
-    w.table(pd.DataFrame({"speed": ff.speeds, "runs": ff.speed_runs,
-                          "one_plus_k": ff.speed_values}),
-            units={"speed": "m/s", "runs": "-", "one_plus_k": "-"})
+    data = {"speed": ff.speeds, "runs": ff.speed_runs, "one_plus_k": ff.speed_values}
+    units = {"speed": "m/s", "runs": "-", "one_plus_k": "-"}
+    if len(ff.speed_reynolds) == len(ff.speeds):
+        data["re"], units["re"] = ff.speed_reynolds, "-"
+    w.table(pd.DataFrame(data), units=units)
+    trend = day.scaling_result.form_factor_trend
+    if trend is not None and math.isfinite(trend.slope):
+        w.gap()
+        w.pairs([("slope d(1 + k)/dRe", trend.slope, "-"),
+                 ("slope, 95 % interval low", trend.ci_low, "-"),
+                 ("slope, 95 % interval high", trend.ci_high, "-"),
+                 ("slope p-value", trend.p_value, "-"),
+                 ("trend with Re significant", "yes" if trend.significant else "no", "")])
+        w.note(day.scaling_result.form_factor_trend_text)
 
 
 def _quality(w: SheetWriter, day: DayResult) -> None:
