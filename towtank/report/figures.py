@@ -611,14 +611,16 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     up = tab["speed_prototype"].to_numpy(float)
     dfr = tab["drag_froude"].to_numpy(float)
     ax_p.plot(up, dfr, "-", color=style.PALETTE[1], lw=1.1)
+    rec = (str(tab["recommended"].iloc[0]) if "recommended" in tab and len(tab) else "none")
     ax_p.plot(up[inside], dfr[inside], "D", color=style.PALETTE[1], ms=5,
-              label="Froude-scaled model resistance")
+              label="Froude-scaled model resistance (comparison only)")
     if (~inside).any():
         ax_p.plot(up[~inside], dfr[~inside], "D", mfc="white", mec=style.PALETTE[1], ms=5,
                   label="… extrapolated")
     if tab["drag_ittc57"].notna().any():
         ax_p.plot(up, tab["drag_ittc57"], "s-", color=style.PALETTE[2], ms=4.5, lw=1.1,
-                  label=r"ITTC-57, $(1+k)\,C_F$")
+                  label=r"ITTC-57, $(1+k)\,C_F$"
+                  + (" (recommended)" if rec == "drag_ittc57" else ""))
     ax_p.set_xlim(0, float(up.max()) * 1.08)
     ax_p.set_ylim(bottom=0)
     ax_p.set_xlabel(r"Prototype speed $U_p$ [m/s]")
