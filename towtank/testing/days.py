@@ -537,6 +537,9 @@ def make_hull_day(
         Run temperatures rise across the day from ``temperature_C + lo`` to ``+ hi`` [degC]
         (rounded to 0.1 degC); None keeps every run at ``temperature_C``.
     water_type : str, default "fresh"
+        The medium: ``"fresh"``, ``"sea"`` or ``"air"`` (a rig in air at 101325 Pa and 50 %
+        relative humidity: forces and truth coefficients at the air's density, the protocol
+        ``[water] type = "air"``).
     tank_length_m : float, default 100.0
         Tank length [m].
     date : str or datetime.date, optional
@@ -734,6 +737,7 @@ def hull_protocol_sections(
     channel_style: ChannelStyle = "lab",
     channels: LabChannels | None = None,
     temperature_C: float = 18.0,
+    water_type: str = "fresh",
 ) -> dict[str, dict[str, Any]]:
     """The sections of the SUT-2 hull day's protocol (paths relative to the protocol file).
 
@@ -747,6 +751,8 @@ def hull_protocol_sections(
     channels : LabChannels, optional
     temperature_C : float, default 18.0
         Tank water temperature [degC].
+    water_type : str, default "fresh"
+        ``[water] type``: ``"fresh"``, ``"sea"`` or ``"air"``.
     """
     sections: dict[str, dict[str, Any]] = {
         "campaign": {
@@ -756,7 +762,7 @@ def hull_protocol_sections(
             "output_dir": output_dir,
             "reference": "remus",
         },
-        "water": {"type": "fresh", "temperature_C": float(temperature_C)},
+        "water": {"type": water_type, "temperature_C": float(temperature_C)},
         "model": {
             "name": "SUT-2 1/4 model",
             "length_m": 0.353,
