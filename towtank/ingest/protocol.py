@@ -264,9 +264,10 @@ def _air(values: dict[str, Any], label: str, src: str) -> Water:
     if not (math.isfinite(pressure) and lo <= pressure <= hi):
         hint = ""
         if math.isfinite(pressure) and 0 < pressure < lo:
-            hint = next((f" (was it in {u}: {pressure * k:g} Pa?)" for u, k in
-                         (("hPa or mbar", 100.0), ("kPa", 1000.0), ("bar", 1.0e5))
-                         if lo <= pressure * k <= hi), "")
+            # the unit that puts it nearest the standard atmosphere
+            u, k = min((("hPa or mbar", 100.0), ("kPa", 1000.0), ("bar", 1.0e5)),
+                       key=lambda uk: abs(math.log(pressure * uk[1] / STANDARD_PRESSURE_PA)))
+            hint = f" (was it in {u}: {pressure * k:g} Pa?)"
         raise ProtocolError(
             f"{src}: 'pressure_Pa' in [{label}] is the absolute air pressure in Pa, "
             f"{lo:g}–{hi:g}, but it is {pressure:g}{hint}."
@@ -291,16 +292,10 @@ AIR_NOTE = (
 )
 
 
-def _air_notes(water: Water, model: Model | None, vehicle: Any, prototype_water_given: bool,
-               src: str) -> list[str]:
-    """The day's notes for a rig in air (none in water); [vehicle] needs water."""
+def _air_notes(water: Water, model: Model | None, prototype_water_given: bool) -> list[str]:
+    """The day's notes for a rig in air (none in water)."""
     if not water.is_air:
         return []
-    if vehicle is not None:
-        raise ProtocolError(
-            f"{src}: [vehicle] predicts an underwater vehicle, but [water] type is \"air\"; "
-            "remove [vehicle] or set [water] type to fresh or sea."
-        )
     out = [AIR_NOTE]
     if model is not None and model.depth_m is not None:
         out.append("[model] depth_m is ignored in air: there is no free surface to be deep "
@@ -437,6 +432,11 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     fin = _fin(data["fin"], src) if "fin" in data else None
 
     vehicle = None
+    if "vehicle" in data and water.is_air:
+        raise ProtocolError(
+            f"{src}: [vehicle] predicts an underwater vehicle, but [water] type is \"air\"; "
+            "remove [vehicle] or set [water] type to fresh or sea."
+        )
     if "vehicle" in data:
         from towtank.ingest.vehicle_protocol import parse_vehicle
 
@@ -454,7 +454,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
 
     warnings = _unit_warnings(model, fin, water, prototype) + _air_notes(
-        water, model, vehicle, "water" in data.get("prototype", {}) if prototype else True, src)
+        water, model, "water" in data.get("prototype", {}) if prototype else True)
     return Protocol(
         path=path.resolve(),
         campaign=campaign,

@@ -191,7 +191,8 @@ def _water_text(day: DayResult) -> str:
     if w.is_air:
         out += f", {w.pressure_Pa:.6g} Pa, {w.relative_humidity_pct:g} % relative humidity"
     if len(rho):
-        out += (f"; ρ = {rho.mean():.2f} kg/m³, ν = {figures.sci(nu.mean(), 4)} m²/s "
+        out += (f"; ρ = {rho.mean():.{4 if w.is_air else 2}f} kg/m³, "
+                f"ν = {figures.sci(nu.mean(), 4)} m²/s "
                 "(mean of the runs)")
     return out
 
@@ -248,7 +249,8 @@ def _counts(day: DayResult) -> str:
 def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     date, source = report_date(day)
     x0 = MARGIN_IN / PAGE_W + 0.03
-    fig.text(x0, _y(1.6), "Towing-tank test report", fontsize=24, fontweight="bold")
+    title = "Test report, model in air" if day.protocol.water.is_air else "Towing-tank test report"
+    fig.text(x0, _y(1.6), title, fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
     fig.text(x0, _y(2.4), figures.literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
