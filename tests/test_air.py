@@ -304,3 +304,38 @@ def test_air_day_report_text(air_day):
     assert pdf._medium_label(day) == "Air"
     assert AIR_NOTE in day.warnings
     assert not any("displaced mass" in w and "X_udot" in w for w in day.warnings)
+
+
+# ------------------------------------------------------------------ the real kite (air)
+KITE = Path(__file__).resolve().parents[1] / ".." / "shared" / "real" / "tudelft_kite_lvm"
+
+
+@pytest.mark.skipif(not (KITE / "normal_aoa_16_vw_20.lvm").is_file(),
+                    reason="../shared/real/tudelft_kite_lvm is not present")
+def test_kite_in_air_is_not_stopped_by_the_mass_check(tmp_path, capsys):
+    """The TU Delft kite (6-component balance, open jet at 19.8 m/s; vw_00 its wind-off zeros):
+    a 1 kg model with the kite's span as its 'diameter' is 0.0025 times the water it would
+    displace, so in water the day stops (exit 2) before anything is read; in air it goes on to
+    the runs (the files are read in place, never copied)."""
+    (tmp_path / "sheet.csv").write_text(
+        "run,file,config,angle_deg,speed_nominal,water_temp_C\n"
+        "1,normal_aoa_16_vw_20.lvm,hull,16,19.8,20\n")
+
+    def write(kind: str) -> Path:
+        return syn.write_protocol(
+            tmp_path / f"kite_{kind}.toml",
+            campaign={"name": "TU Delft V3 kite", "run_sheet": "sheet.csv",
+                      "data_dir": str(KITE.resolve()), "output_dir": f"out_{kind}"},
+            water={"type": kind, "temperature_C": 20.0},
+            model={"length_m": 0.4, "diameter_m": 1.3, "mass_kg": 1.0},
+            channels={"drag": {"column": "Untitled"}, "lift": {"column": "Untitled 2"}},
+            zeros={"file": "normal_aoa_16_vw_00.lvm"},
+        )
+
+    water = write("fresh")
+    assert cli.main(["process", str(water), "--quiet", "--no-report"]) == 2
+    assert "mass_kg" in capsys.readouterr().err
+    air = write("air")
+    assert load_protocol(air).water.is_air
+    code = cli.main(["process", str(air), "--quiet", "--no-report"])
+    assert code != 2 and "mass_kg" not in capsys.readouterr().err

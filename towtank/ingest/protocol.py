@@ -354,6 +354,7 @@ def _unit_warnings(
     if prototype is not None:
         pw = prototype.water
         check(pw.temperature_C, 0.0, 40.0, "[prototype.water] temperature_C",
+              "was it given in K or °F?" if pw.is_air else
               "there the ITTC water properties, and so the prototype's Re and drag, are "
               "extrapolated (was it given in K or °F?)")
         if pw.type == "sea":
