@@ -9,7 +9,6 @@ the medium.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -32,8 +31,6 @@ from towtank.reference.air import (
     saturation_vapour_pressure,
 )
 from towtank.testing import synthetic as syn
-
-RHO_WATER_20C = 998.2  # [kg/m³], to scale the generator's water tare to air
 
 
 # ----------------------------------------------------------------------------- properties
@@ -208,31 +205,15 @@ def test_no_free_surface_in_air():
 
 
 # ------------------------------------------------------------------------- an air day
-K = 20.0  # wind-tunnel speeds: the generator's hull plan at 20 times its speeds (16-40 m/s)
-
-
 @pytest.fixture(scope="module")
 def air_day(tmp_path_factory) -> dict[str, Any]:
-    """The SUT-2 hull plan in air at 20 °C, forces at the air's density, a 1 kg model."""
+    """The SUT-2 hull plan in air at 20 °C (20 times the speeds: 2-40 m/s), forces at the air's
+    density, a 1 kg model, lab channels in volts; the prototype in air."""
     d = tmp_path_factory.mktemp("air_day")
-    plan = [dataclasses.replace(s, speed=s.speed * K, accel=s.accel * K)
-            for s in syn.hull_day_plan()]
+    truth = syn.make_air_hull_day(d, file_format="csv", sheet_format="csv")
+    protocol = syn.write_protocol(d / "p.toml",
+                                  **syn.air_protocol_sections(".", "out", sheet_format="csv"))
     rho = air_density(20.0)
-    r = rho / RHO_WATER_20C
-    tare = syn.TareTruth(t2=0.08 * r, t1=0.01 * r * K, m_t=0.08, lift_t2=0.005 * r,
-                         lift_t1=-0.002 * r * K, lift_m_t=0.004)
-    truth = syn.make_hull_day(
-        d, water_type="air", runs=plan, hull=syn.sut2_hull_truth(rho, mass=1.0),
-        tares={"A": tare}, fs=200.0, file_format="csv", channel_style="canonical",
-        sheet_format="csv", tank_length_m=1000.0, temperature_C=20.0)
-    sections = syn.hull_protocol_sections(".", "out", sheet_format="csv",
-                                          channel_style="canonical", temperature_C=20.0,
-                                          water_type="air")
-    sections["model"]["mass_kg"] = 1.0
-    del sections["model"]["depth_m"]
-    sections["prototype"] = {"length_m": 1.412, "speeds_m_s": [10.0, 20.0, 30.0],
-                             "water": {"type": "air", "temperature_C": 15.0}}
-    protocol = syn.write_protocol(d / "p.toml", **sections)
     out = d / "out"
     code = cli.main(["process", str(protocol), "--quiet", "--jobs", "1", "--out", str(out)])
     return {"dir": d, "truth": truth, "code": code, "out": out, "rho": rho}
@@ -339,3 +320,16 @@ def test_kite_in_air_is_not_stopped_by_the_mass_check(tmp_path, capsys):
     assert load_protocol(air).water.is_air
     code = cli.main(["process", str(air), "--quiet", "--no-report"])
     assert code != 2 and "mass_kg" not in capsys.readouterr().err
+
+
+def test_synth_air_day_processes(tmp_path):
+    """``towtank synth --day air``: a day a lab can try; it processes with exit 0 (every run
+    usable), the protocol in air."""
+    day = tmp_path / "air"
+    assert cli.main(["synth", str(day), "--day", "air", "--sheet", "csv",
+                     "--format", "csv"]) == 0
+    protocol = day / "protocol.toml"
+    assert load_protocol(protocol).water.is_air
+    assert cli.main(["process", str(protocol), "--quiet", "--no-report", "--jobs", "1"]) == 0
+    runs = pd.read_csv(day / "out" / "runs.csv")
+    assert runs.loc[runs["status"] == "ok", "rho"].between(1.18, 1.21).all()
