@@ -109,6 +109,14 @@ def test_one_kg_model_in_air_is_no_longer_stopped(tmp_path):
     assert p.prototype is not None and p.prototype.water.type == "sea"
 
 
+def test_air_section_built_in_code_has_its_defaults():
+    from towtank.ingest.protocol import Water
+
+    w = Water(type="air", temperature_C=20.0)
+    assert (w.pressure_Pa, w.relative_humidity_pct) == (101325.0, 50.0)
+    assert Water().pressure_Pa is None
+
+
 def test_water_keeps_its_keys_and_default(tmp_path):
     """Every existing [water] key works as before; water has no pressure or humidity."""
     p = load_protocol(_protocol(tmp_path, {"type": "sea", "temperature_C": 15.0,

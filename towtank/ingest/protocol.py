@@ -106,6 +106,14 @@ class Water:
     pressure_Pa: float | None = None
     relative_humidity_pct: float | None = None
 
+    def __post_init__(self) -> None:
+        if self.type == "air":  # air always has its state: the defaults where not given
+            if self.pressure_Pa is None:
+                object.__setattr__(self, "pressure_Pa", STANDARD_PRESSURE_PA)
+            if self.relative_humidity_pct is None:
+                object.__setattr__(self, "relative_humidity_pct",
+                                   DEFAULT_RELATIVE_HUMIDITY_PCT)
+
     @property
     def is_air(self) -> bool:
         """True for a gas (air): no free surface, no buoyancy worth a check."""
