@@ -35,9 +35,9 @@ from towtank.testing import synthetic as syn
 
 # ----------------------------------------------------------------------------- properties
 def test_cipm2007_density_at_20c_50pct_matches_published_value():
-    """20 °C, 101325 Pa, 50 % RH: 1.1992 kg/m³, the tabulated density of moist air (NPL, Kay &
-    Laby, *Tables of Physical and Chemical Constants*, §2.1.4, air of 50 % RH and 0.04 % CO2;
-    CIPM-2007, Picard et al. 2008, Metrologia 45, 149), within 0.05 %."""
+    """20 °C, 101325 Pa, 50 % RH: 1.1992 kg/m³, the published density of moist air of 0.04 %
+    CO2 (the CIPM-2007 equation, Picard et al. 2008, Metrologia 45, 149; as tabulated for 50 %
+    RH in NPL's Kay & Laby *Tables of Physical and Chemical Constants*), within 0.05 %."""
     assert air_density(20.0, 101325.0, 50.0) == pytest.approx(1.1992, rel=5e-4)
 
 

@@ -6,8 +6,8 @@
   (the formula's reference value). It is the ideal-gas law for a mixture of dry air and water
   vapour, ``rho = p M_a / (Z R T) [1 - x_v (1 - M_v / M_a)]``, with the compressibility factor
   ``Z`` and the enhancement factor ``f`` of the vapour; its stated range is 600-1100 hPa and
-  15-27 °C (outside it the equation is extrapolated, still the ideal-gas law to well under 1 %
-  over -40-60 °C at atmospheric pressure). Check values: 20 °C, 101325 Pa and 50 % relative
+  15-27 °C (outside it the equation is extrapolated; the protocol warns of a pressure outside
+  60-110 kPa). Check values: 20 °C, 101325 Pa and 50 % relative
   humidity give 1.1993 kg/m³ (tabulated 1.1992 kg/m³); dry air at 15 °C and 101325 Pa gives
   1.2255 kg/m³ (the ISO 2533 standard atmosphere: 1.2250 kg/m³).
 - Dynamic viscosity: Sutherland's law, ``mu = mu_0 (T/T_0)^(3/2) (T_0 + S)/(T + S)``, with
