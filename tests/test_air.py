@@ -341,3 +341,18 @@ def test_synth_air_day_processes(tmp_path):
     assert cli.main(["process", str(protocol), "--quiet", "--no-report", "--jobs", "1"]) == 0
     runs = pd.read_csv(day / "out" / "runs.csv")
     assert runs.loc[runs["status"] == "ok", "rho"].between(1.18, 1.21).all()
+
+
+def test_run_sheet_temperature_in_air(tmp_path):
+    """In air a run at -10 °C is a cold wind tunnel, not an error (water would be ice); 293 °C
+    is still a temperature in kelvin, rejecting that run with the slip named."""
+    from towtank.ingest.runsheet import read_run_sheet
+
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_text("run,file,config,angle_deg,water_temp_C\n1,a.csv,hull,0,-10\n"
+                     "2,b.csv,hull,0,293.15\n")
+    water = read_run_sheet(sheet, 20.0).set_index("run")["sheet_error"]
+    air = read_run_sheet(sheet, 20.0, air=True).set_index("run")
+    assert "water_temp_C" in water[1]
+    assert air.loc[1, "sheet_error"] == "" and air.loc[1, "water_temp_C"] == -10.0
+    assert "kelvin" in air.loc[2, "sheet_error"]
