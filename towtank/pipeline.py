@@ -44,6 +44,7 @@ ANALYSIS_MODULES = (
     "towtank.analysis.fins",
     "towtank.analysis.similarity",
     "towtank.reference.water",
+    "towtank.reference.air",
 )
 
 
@@ -152,20 +153,50 @@ def tare_models(
     return fit_tares(sheet, reductions)
 
 
-def water_at(temperature_C: float, water_type: str, salinity: float | None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of the tank or the prototype's water.
+def water_at(temperature_C: float, water_type: str, salinity: float | None,
+             pressure_Pa: float | None = None,
+             relative_humidity_pct: float | None = None) -> tuple[float, float]:
+    """(rho [kg/m³], nu [m²/s]) of the tank's or the prototype's medium.
+
+    Water (``fresh``, ``sea``): ITTC 7.5-02-01-03 (:mod:`towtank.reference.water`). Air:
+    CIPM-2007 density at ``pressure_Pa`` [Pa] (default 101325) and ``relative_humidity_pct``
+    [%] (default 50), Sutherland viscosity (:mod:`towtank.reference.air`).
 
     Out-of-range warnings (WaterPropertyWarning) are silenced here: the protocol's unit checks
     already put a temperature or salinity outside the ITTC range of [water] and
     [prototype.water] into the day's warnings, and each run's temperature is checked in
     :func:`process_day`.
     """
+    if water_type == "air":
+        from towtank.reference.air import (
+            DEFAULT_RELATIVE_HUMIDITY_PCT,
+            STANDARD_PRESSURE_PA,
+            air_properties,
+        )
+
+        a = air_properties(
+            temperature_C,
+            STANDARD_PRESSURE_PA if pressure_Pa is None else pressure_Pa,
+            DEFAULT_RELATIVE_HUMIDITY_PCT if relative_humidity_pct is None
+            else relative_humidity_pct)
+        return float(a.rho), float(a.nu)
     from towtank.reference.water import water_properties
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         w = water_properties(temperature_C, water_type, salinity)
     return float(w.rho), float(w.nu)
+
+
+def medium_at(water: Any, temperature_C: float | None = None) -> tuple[float, float]:
+    """(rho [kg/m³], nu [m²/s]) of a protocol's [water] or [prototype.water] medium.
+
+    ``water`` is a :class:`towtank.ingest.protocol.Water`; ``temperature_C`` [°C] a run's
+    temperature, default the section's own (see :func:`water_at`).
+    """
+    t = water.temperature_C if temperature_C is None else temperature_C
+    return water_at(t, water.type, water.salinity_g_kg, water.pressure_Pa,
+                    water.relative_humidity_pct)
 
 
 def model_scale(protocol: Protocol) -> float | None:
@@ -204,7 +235,7 @@ def check_prototype_speeds(protocol: Protocol) -> None:
     proto = protocol.prototype
     if protocol.model is None or proto is None:
         return
-    _, nu_p = water_at(proto.water.temperature_C, proto.water.type, proto.water.salinity_g_kg)
+    _, nu_p = medium_at(proto.water)
     try:
         similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
     except ValueError as exc:
@@ -256,8 +287,7 @@ def run_table(
         )
         red = reductions.get(run)
         if red is not None and status == "ok":
-            rho, nu = water_at(rec["water_temp_C"], protocol.water.type,
-                               protocol.water.salinity_g_kg)
+            rho, nu = medium_at(protocol.water, rec["water_temp_C"])
             u = red.speed_mean
             row.update(
                 speed_mean=u, accel_mean=red.accel_mean, drag_mean=red.drag_mean,
@@ -327,7 +357,7 @@ def process_day(
     if jobs is None:
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
-                           protocol.sheet)
+                           protocol.sheet, air=protocol.water.is_air)
     day_warnings = list(protocol.warnings) + list(sheet.attrs.get("warnings", [])) + \
         unlisted_warnings(protocol, sheet)
     notes = sheet.attrs.get("notes", [])
@@ -348,6 +378,8 @@ def process_day(
         temp = rec["water_temp_C"]
         if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
             day_warnings.append(
+                f"run {rec['run']}: air temperature {temp:g} °C is outside 0–40 °C, the usual "
+                "range of a test rig in air (a unit mistake?)." if protocol.water.is_air else
                 f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
                 "ITTC water properties are extrapolated (a unit mistake?)."
             )
@@ -621,8 +653,7 @@ def _hull_stage(day: DayResult) -> None:
         lateral_area=model.lateral_area,
         alpha_max_deg=day.protocol.processing.damping_alpha_max_deg,
         tares=day.tares,
-        rho=water_at(day.protocol.water.temperature_C, day.protocol.water.type,
-                     day.protocol.water.salinity_g_kg)[0],
+        rho=medium_at(day.protocol.water)[0],
     )
     ref = fit.load_reference(day.protocol.campaign.reference)
     table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
@@ -634,6 +665,7 @@ def _hull_stage(day: DayResult) -> None:
         table, rho=hf.rho,
         volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
         frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
+        added_mass=not day.protocol.water.is_air,
     ))
     for sym, am in hf.added_mass.items():
         if am.estimate.agreement.startswith("DISAGREE"):
@@ -733,9 +765,8 @@ def _scaling_stage(day: DayResult) -> None:
         return
     scale = model_scale(p)
     assert scale is not None
-    rho_p, nu_p = water_at(proto.water.temperature_C, proto.water.type,
-                           proto.water.salinity_g_kg)
-    rho_m, nu_m = water_at(p.water.temperature_C, p.water.type, p.water.salinity_g_kg)
+    rho_p, nu_p = medium_at(proto.water)
+    rho_m, nu_m = medium_at(p.water)
     if day.hull is not None:
         coef = day.hull.coefficients
         kinds = coef["symbol"].map(lambda s: "added_mass" if s.endswith("dot") else "damping")
@@ -791,14 +822,15 @@ def _scaling_stage(day: DayResult) -> None:
         re_ok = np.abs(zero["re"])[np.isfinite(zero["re"]) & (zero["re"] != 0)]
     re_model = (float(re_ok.min()), float(re_ok.max()))
     re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
-    depth = model.depth_m if model.diameter_m is not None else None
+    air = p.water.is_air  # no free surface: no waves, no depth, no Froude similarity
+    depth = model.depth_m if model.diameter_m is not None and not air else None
     statement = similarity.similarity_statement(
         re_model, re_proto, depth, model.diameter_m if depth is not None else None,
-        turbulent_re=p.processing.laminar_re,
+        turbulent_re=p.processing.laminar_re, free_surface=not air,
     )
     deep_ratio = depth / model.diameter_m if depth is not None and model.diameter_m else None
     recommendation = similarity.recommend_resistance(
-        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()))
+        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()), free_surface=not air)
     table["drag_recommended"] = (table[recommendation.column] if recommendation.column in table
                                  else math.nan)
     table["recommended"] = recommendation.column
@@ -817,8 +849,8 @@ def _scaling_stage(day: DayResult) -> None:
         delta_cf=proto.delta_cf,
     )
     outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
-    deep = (depth is not None and model.diameter_m is not None
-            and depth / model.diameter_m > similarity.DEEP_SUBMERGENCE_DEPTH_RATIO)
+    deep = air or (depth is not None and model.diameter_m is not None
+                   and depth / model.diameter_m > similarity.DEEP_SUBMERGENCE_DEPTH_RATIO)
     if outside and not deep:  # deeply submerged, Froude scaling is not what counts
         day.warnings.append(
             "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "

@@ -55,6 +55,7 @@ def plausibility_warnings(
     volume_m3: float | None,
     frontal_area_m2: float,
     lateral_area_m2: float,
+    added_mass: bool = True,
 ) -> list[str]:
     """Sentences for the hull coefficients that no body of this geometry can have.
 
@@ -68,6 +69,10 @@ def plausibility_warnings(
         Displaced volume [m³] (:func:`displaced_volume`); the added-mass checks need it.
     frontal_area_m2, lateral_area_m2 : float
         Reference areas of C_D at α = 0 and of the transverse C_D,90 [m²].
+    added_mass : bool, default True
+        Check X_udot and Y_vdot (sign and size against ρV). False in air, where the added
+        mass (about ρ_air·V, a thousandth of the water's) is below the uncertainty of the
+        weighed mass, so that its sign and size are noise (the day's note says so).
 
     Returns
     -------
@@ -75,6 +80,8 @@ def plausibility_warnings(
     """
     out: list[str] = []
     for sym in NEGATIVE:
+        if not added_mass and sym.endswith("dot"):
+            continue
         v = _value(table, sym)
         if math.isfinite(v) and v > 0:
             out.append(
@@ -82,7 +89,7 @@ def plausibility_warnings(
                 "positive, drag opposes the motion): is a force channel's sign reversed (the "
                 "sign of its gain), or [model] mass_kg far off?"
             )
-    if volume_m3 is not None and rho > 0:
+    if added_mass and volume_m3 is not None and rho > 0:
         disp = rho * volume_m3
         for sym, (lo, hi), what in (("X_udot", AXIAL_RANGE, "axial"),
                                     ("Y_vdot", TRANSVERSE_RANGE, "transverse")):

@@ -455,7 +455,7 @@ class ResistanceRecommendation:
 
 
 def recommend_resistance(
-    depth_ratio: float | None, ittc57_available: bool
+    depth_ratio: float | None, ittc57_available: bool, free_surface: bool = True
 ) -> ResistanceRecommendation:
     """The prototype resistance to use: ITTC-57 with the form factor for a body without waves.
 
@@ -475,6 +475,9 @@ def recommend_resistance(
         Submergence of the model's axis over its diameter, depth/D [-]; None when not known
     ittc57_available : bool
         Whether ``drag_ittc57`` was computed (wetted area and form factor known)
+    free_surface : bool, default True
+        False for a model tested in air (a wind tunnel): there is no free surface, so no
+        waves whatever ``depth_ratio`` says, and the rule says so.
 
     Returns
     -------
@@ -487,6 +490,15 @@ def recommend_resistance(
     formula = ("R_p ITTC-57 = ½ρ_p·S_p·U_p²·[(1 + k)·C_F + ΔC_F], C_F at the prototype's "
                "Reynolds number")
     deep = DEEP_SUBMERGENCE_DEPTH_RATIO
+    if not free_surface:
+        if not ittc57_available:
+            return ResistanceRecommendation("none", (
+                "No prototype resistance is recommended: R_p ITTC-57 needs the model's wetted "
+                "area and a form factor, which the day does not give. " + froude))
+        return ResistanceRecommendation("drag_ittc57", (
+            f"Recommended: {formula}. Rule: the model was tested in air, with no free surface, "
+            "so it made no waves: its resistance is viscous and scales with Reynolds number "
+            "(1978 ITTC method without wave resistance). " + froude))
     if depth_ratio is not None and not depth_ratio > deep:
         return ResistanceRecommendation("none", (
             f"No prototype resistance is recommended: the model ran at {depth_ratio:.3g} D, not "
@@ -782,6 +794,7 @@ def similarity_statement(
     depth_m: float | None = None,
     diameter_m: float | None = None,
     turbulent_re: float = TURBULENT_RE_MODEL,
+    free_surface: bool = True,
 ) -> str:
     """Plain-English account of which similarity the model tests met.
 
@@ -804,6 +817,9 @@ def similarity_statement(
         Maximum diameter of the model [m]
     turbulent_re : float, default 2e5
         Model Reynolds number below which the boundary layer may be laminar [-]
+    free_surface : bool, default True
+        False for tests in air: no free surface, so Froude similarity does not apply (said in
+        place of the depth sentence; ``depth_m`` is then not used).
 
     Returns
     -------
@@ -851,7 +867,11 @@ def similarity_statement(
         )
     if (depth_m is None) != (diameter_m is None):
         raise ValueError("Give both depth_m and diameter_m, or neither.")
-    if depth_m is not None and diameter_m is not None:
+    if not free_surface:
+        sentences.append("The model was tested in air, with no free surface: it made no waves, "
+                         "Froude similarity does not apply and its resistance scales with "
+                         "Reynolds number.")
+    elif depth_m is not None and diameter_m is not None:
         ratio = _positive(depth_m, "depth_m") / _positive(diameter_m, "diameter_m")
         if ratio > DEEP_SUBMERGENCE_DEPTH_RATIO:
             sentences.append(

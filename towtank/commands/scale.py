@@ -25,7 +25,7 @@ def scale_command(
 
     from towtank.analysis import similarity
     from towtank.ingest.protocol import Prototype, Water, load_protocol
-    from towtank.pipeline import process_day, water_at
+    from towtank.pipeline import medium_at, process_day
 
     protocol = load_protocol(protocol_path)
     if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
@@ -47,7 +47,7 @@ def scale_command(
         )
     elif speeds:
         proto = replace(proto, speeds_m_s=tuple(float(s) for s in speeds))
-    _, nu_p = water_at(proto.water.temperature_C, proto.water.type, proto.water.salinity_g_kg)
+    _, nu_p = medium_at(proto.water)
     try:
         similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
     except ValueError as exc:
@@ -81,7 +81,7 @@ def scale_command(
         ],
     })
     print(f"{protocol.name}: model L = {protocol.model.length_m:g} m, prototype "
-          f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.type} water "
+          f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.medium} "
           f"{proto.water.temperature_C:g} °C")
     print(show.to_string(index=False))
     if not table["froude_in_tested_range"].all():

@@ -88,7 +88,15 @@ def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
     formats = {k: v for k, v in (("file_format", args.file_format),
                                  ("sheet_format", plain)) if v is not None}
     sheet = {"sheet_format": plain} if plain else {}
-    if args.day == "hull":
+    if args.day == "air":  # the hull day in air: its layouts as the hull day's
+        synthetic.make_air_hull_day(tmp, seed=args.seed, **formats)
+        from towtank.testing.layouts import layout_channels, protocol_sections
+
+        layout = args.file_format or ""
+        channels = layout_channels(layout, synthetic.LabChannels())
+        sections = synthetic.air_protocol_sections(".", "out", channels=channels, **sheet)
+        sections = protocol_sections(layout, sections)
+    elif args.day == "hull":
         synthetic.make_hull_day(tmp, seed=args.seed, **formats)
         from towtank.testing.layouts import layout_channels, protocol_sections
 

@@ -45,6 +45,12 @@ from towtank.ingest.sections import (  # noqa: F401
 from towtank.ingest.sheetlayout import SheetOptions, parse_sheet_options
 from towtank.ingest.speedlog import SpeedLog, parse_speed_log
 from towtank.ingest.zerofile import ZeroFile, parse_zero_file
+from towtank.reference.air import (
+    AIR_PRESSURE_RANGE_PA,
+    AIR_TEMPERATURE_RANGE_C,
+    DEFAULT_RELATIVE_HUMIDITY_PCT,
+    STANDARD_PRESSURE_PA,
+)
 from towtank.reference.sets import BUILTIN_REFERENCES
 from towtank.reference.water import temperature_problem
 
@@ -57,7 +63,11 @@ MAX_PROTOTYPE_SPEED = 100.0
 
 #: Largest mismatch between [prototype] length_m and [model] length_m × scale [-].
 LENGTH_SCALE_TOLERANCE = 0.01
-WATER_TYPES = ("fresh", "sea")
+#: The media of [water] type: fresh or sea water (ITTC 7.5-02-01-03), or air (a wind tunnel or
+#: any rig in air; CIPM-2007 density, Sutherland viscosity: towtank.reference.air).
+WATER_TYPES = ("fresh", "sea", "air")
+#: Keys of [water] that only air takes.
+AIR_KEYS = ("pressure_Pa", "relative_humidity_pct")
 FIN_MOUNTINGS = ("free", "wall")
 
 
@@ -84,9 +94,35 @@ class Campaign:
 
 @dataclass(frozen=True)
 class Water:
+    """The medium of the tests ([water]) or of the prototype ([prototype.water]).
+
+    ``type`` is ``"fresh"``, ``"sea"`` or ``"air"``; temperature [°C]; salinity [g/kg] (sea
+    water); absolute pressure [Pa] and relative humidity [%] (air only: None for water).
+    """
+
     type: str = "fresh"
     temperature_C: float = 15.0
     salinity_g_kg: float | None = None
+    pressure_Pa: float | None = None
+    relative_humidity_pct: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.type == "air":  # air always has its state: the defaults where not given
+            if self.pressure_Pa is None:
+                object.__setattr__(self, "pressure_Pa", STANDARD_PRESSURE_PA)
+            if self.relative_humidity_pct is None:
+                object.__setattr__(self, "relative_humidity_pct",
+                                   DEFAULT_RELATIVE_HUMIDITY_PCT)
+
+    @property
+    def is_air(self) -> bool:
+        """True for a gas (air): no free surface, no buoyancy worth a check."""
+        return self.type == "air"
+
+    @property
+    def medium(self) -> str:
+        """The medium in words: "fresh water", "sea water" or "air"."""
+        return "air" if self.is_air else f"{self.type} water"
 
 
 @dataclass(frozen=True)
@@ -197,6 +233,14 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
             f"{src}: 'type' in [{label}] must be one of {', '.join(WATER_TYPES)}, "
             f"but it is {wtype!r}{_suggest(wtype, WATER_TYPES)}"
         )
+    if wtype == "air":
+        return _air(values, label, src)
+    for key in AIR_KEYS:
+        if key in values:
+            raise ProtocolError(
+                f"{src}: [{label}] gives {key} for {wtype} water, but only air takes it "
+                "(set type = \"air\" for a rig in air, or remove the key)."
+            )
     salinity = values.get("salinity_g_kg")
     if salinity is not None and wtype == "fresh" and salinity != 0:
         raise ProtocolError(
@@ -211,6 +255,64 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
     if problem is not None:
         raise ProtocolError(f"{src}: 'temperature_C' in [{label}]: {problem}.")
     return Water(type=wtype, temperature_C=values["temperature_C"], salinity_g_kg=salinity)
+
+
+def _air(values: dict[str, Any], label: str, src: str) -> Water:
+    """``[water] type = "air"``: temperature, absolute pressure and relative humidity checked."""
+    if "salinity_g_kg" in values:
+        raise ProtocolError(
+            f"{src}: [{label}] gives salinity_g_kg for air; remove it (air has none)."
+        )
+    t = values["temperature_C"]
+    problem = temperature_problem(t, AIR_TEMPERATURE_RANGE_C, "of air in a test rig")
+    if problem is not None:
+        raise ProtocolError(f"{src}: 'temperature_C' in [{label}]: {problem}.")
+    pressure = values.get("pressure_Pa", STANDARD_PRESSURE_PA)
+    lo, hi = AIR_PRESSURE_RANGE_PA
+    if not (math.isfinite(pressure) and lo <= pressure <= hi):
+        hint = ""
+        if math.isfinite(pressure) and 0 < pressure < lo:
+            # the unit that puts it nearest the standard atmosphere
+            u, k = min((("hPa or mbar", 100.0), ("kPa", 1000.0), ("bar", 1.0e5)),
+                       key=lambda uk: abs(math.log(pressure * uk[1] / STANDARD_PRESSURE_PA)))
+            hint = f" (was it in {u}: {pressure * k:g} Pa?)"
+        raise ProtocolError(
+            f"{src}: 'pressure_Pa' in [{label}] is the absolute air pressure in Pa, "
+            f"{lo:g}–{hi:g}, but it is {pressure:g}{hint}."
+        )
+    rh = values.get("relative_humidity_pct", DEFAULT_RELATIVE_HUMIDITY_PCT)
+    if not (math.isfinite(rh) and 0.0 <= rh <= 100.0):
+        raise ProtocolError(
+            f"{src}: 'relative_humidity_pct' in [{label}] is a relative humidity in per cent, "
+            f"0–100, but it is {rh:g}."
+        )
+    return Water(type="air", temperature_C=t, pressure_Pa=float(pressure),
+                 relative_humidity_pct=float(rh))
+
+
+#: The note of a day in air: which of towtank's water-only checks are skipped and why.
+AIR_NOTE = (
+    "[water] type = \"air\": the forces are normalised with the air's density (CIPM-2007) and "
+    "viscosity (Sutherland); the water-only checks are skipped: [model] mass_kg against the "
+    "displaced mass (a model in air is not ballasted near neutral buoyancy), the added mass "
+    "against ρV (in air it is below the weighing's uncertainty) and Froude similarity and "
+    "depth (no free surface)."
+)
+
+
+def _air_notes(water: Water, model: Model | None, prototype_water_given: bool) -> list[str]:
+    """The day's notes for a rig in air (none in water)."""
+    if not water.is_air:
+        return []
+    out = [AIR_NOTE]
+    if model is not None and model.depth_m is not None:
+        out.append("[model] depth_m is ignored in air: there is no free surface to be deep "
+                   "below.")
+    if not prototype_water_given:
+        out.append("[prototype.water] is not given: the prototype is taken in sea water at "
+                   "15 °C (the default); give [prototype.water] type = \"air\" for a "
+                   "prototype in air.")
+    return out
 
 
 def slugify(text: str) -> str:
@@ -247,9 +349,20 @@ def _unit_warnings(
         check(fin.chord_m, 0.005, 5.0, "[fin] chord_m", "was it given in mm or cm?")
         check(fin.span_m, 0.005, 10.0, "[fin] span_m", "was it given in mm or cm?")
     check(water.temperature_C, 0.0, 40.0, "[water] temperature_C", "was it given in K or °F?")
+    for label, w in (("water", water), ("prototype.water", prototype.water if prototype else None)):
+        if w is None or not w.is_air:
+            continue
+        rh = w.relative_humidity_pct
+        if rh is not None and 0.0 < rh <= 1.0:
+            out.append(f"[{label}] relative_humidity_pct = {rh:g} is in per cent: was it given "
+                       f"as a fraction ({rh * 100:g} %)?")
+        check(w.pressure_Pa, 60.0e3, 110.0e3, f"[{label}] pressure_Pa",
+              "there the CIPM-2007 air density is extrapolated (was it the absolute pressure "
+              "in Pa?)")
     if prototype is not None:
         pw = prototype.water
         check(pw.temperature_C, 0.0, 40.0, "[prototype.water] temperature_C",
+              "was it given in K or °F?" if pw.is_air else
               "there the ITTC water properties, and so the prototype's Re and drag, are "
               "extrapolated (was it given in K or °F?)")
         if pw.type == "sea":
@@ -324,10 +437,15 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     campaign = _campaign(data["campaign"], base, src, check_paths)
     water = _water(_section(data["water"], "water", "water", src), "water", src)
 
-    model = _model(data["model"], src) if "model" in data else None
+    model = _model(data["model"], src, water) if "model" in data else None
     fin = _fin(data["fin"], src) if "fin" in data else None
 
     vehicle = None
+    if "vehicle" in data and water.is_air:
+        raise ProtocolError(
+            f"{src}: [vehicle] predicts an underwater vehicle, but [water] type is \"air\"; "
+            "remove [vehicle] or set [water] type to fresh or sea."
+        )
     if "vehicle" in data:
         from towtank.ingest.vehicle_protocol import parse_vehicle
 
@@ -344,7 +462,8 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
     read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
 
-    warnings = _unit_warnings(model, fin, water, prototype)
+    warnings = _unit_warnings(model, fin, water, prototype) + _air_notes(
+        water, model, "water" in data.get("prototype", {}) if prototype else True)
     return Protocol(
         path=path.resolve(),
         campaign=campaign,
@@ -416,7 +535,7 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     return campaign
 
 
-def _model(data: Any, src: str) -> Model:
+def _model(data: Any, src: str, water: Water | None = None) -> Model:
     """``[model]`` checked, its Myring geometry filled in and its mass checked."""
     m = _section(data, "model", "model", src)
     _positive(
@@ -437,7 +556,8 @@ def _model(data: Any, src: str) -> Model:
     model = Model(**m, myring=myring)
     if myring is not None:
         model = _with_myring_geometry(model, src)
-    _check_mass(model, src)
+    if water is None or not water.is_air:  # in air the displaced mass bounds nothing
+        _check_mass(model, src)
     return model
 
 

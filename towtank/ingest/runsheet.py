@@ -26,6 +26,7 @@ from towtank.ingest.sheetlayout import (
     header_names,
     words,
 )
+from towtank.reference.air import AIR_TEMPERATURE_RANGE_C
 from towtank.reference.water import temperature_problem
 
 REQUIRED = ("run", "file", "config", "angle_deg")
@@ -520,7 +521,7 @@ def _as_text(v: object) -> str:
 
 
 def read_run_sheet(path: str | Path, default_temperature_C: float,
-                   options: SheetOptions | None = None) -> pd.DataFrame:
+                   options: SheetOptions | None = None, *, air: bool = False) -> pd.DataFrame:
     """Read and validate a run sheet.
 
     Parameters
@@ -532,6 +533,9 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     options : SheetOptions, optional
         The protocol's ``[sheet]``: header row, the lab's column names, CSV separator and
         decimal mark (:mod:`towtank.ingest.sheetlayout`).
+    air : bool, default False
+        The medium is air ([water] type = "air"): ``water_temp_C`` is the air temperature,
+        checked against -60–150 °C instead of the liquid range of water.
 
     Returns
     -------
@@ -608,7 +612,9 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         if math.isnan(out["water_temp_C"]):  # type: ignore[arg-type]
             out["water_temp_C"] = float(default_temperature_C)
         else:
-            problem = temperature_problem(out["water_temp_C"])  # type: ignore
+            problem = (temperature_problem(out["water_temp_C"],  # type: ignore[arg-type]
+                                           AIR_TEMPERATURE_RANGE_C, "of air in a test rig")
+                       if air else temperature_problem(out["water_temp_C"]))  # type: ignore
             if problem is not None:
                 errors.append(f"water_temp_C: {problem}")
                 out["water_temp_C"] = float(default_temperature_C)

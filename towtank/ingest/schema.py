@@ -67,6 +67,8 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "type": ("str", False),
         "temperature_C": (_NUM, True),
         "salinity_g_kg": (_NUM, False),
+        "pressure_Pa": (_NUM, False),
+        "relative_humidity_pct": (_NUM, False),
     },
     "model": {
         "name": ("str", False),
@@ -113,6 +115,8 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "type": ("str", False),
         "temperature_C": (_NUM, True),
         "salinity_g_kg": (_NUM, False),
+        "pressure_Pa": (_NUM, False),
+        "relative_humidity_pct": (_NUM, False),
     },
     "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
     "channel": {

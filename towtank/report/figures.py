@@ -604,7 +604,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_m.set_ylim(bottom=0)
     ax_m.set_xlabel(r"Model speed $U_m$ [m/s]")
     ax_m.set_ylabel(r"Model resistance $R_m$ [N]")
-    ax_m.set_title("Model (tank water)")
+    ax_m.set_title("Model (air)" if day.protocol.water.is_air else "Model (tank water)")
     place_legend(ax_m, fontsize=6.8)
 
     ax_p = fig.add_subplot(gs[0, 1])
@@ -626,7 +626,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_xlabel(r"Prototype speed $U_p$ [m/s]")
     ax_p.set_ylabel(r"Prototype resistance $R_p$ [N]")
     proto = day.protocol.prototype
-    ax_p.set_title(f"Prototype ({proto.water.type} water)" if proto is not None else "Prototype")
+    ax_p.set_title(f"Prototype ({proto.water.medium})" if proto is not None else "Prototype")
     place_legend(ax_p, fontsize=6.8)
 
     _reynolds_panel(fig.add_subplot(gs[1, :]), day, ok_hull)

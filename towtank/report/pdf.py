@@ -169,6 +169,16 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
              fontsize=7, color="#555555", ha="right")
 
 
+def _medium_word(day: DayResult) -> str:
+    """"air" or "water": the tests' medium in one word."""
+    return "air" if day.protocol.water.is_air else "water"
+
+
+def _medium_label(day: DayResult) -> str:
+    """The title page's label of the medium's line: "Water" or "Air"."""
+    return _medium_word(day).capitalize()
+
+
 def _water_text(day: DayResult) -> str:
     w = day.protocol.water
     ok = day.runs[day.runs["status"] == "ok"]
@@ -177,9 +187,12 @@ def _water_text(day: DayResult) -> str:
     temps = day.runs["water_temp_C"].dropna()
     t = (f"{temps.min():.1f}–{temps.max():.1f} °C" if len(temps) and temps.min() != temps.max()
          else f"{w.temperature_C:g} °C")
-    out = f"{w.type} water, {t}"
+    out = f"{w.medium}, {t}"
+    if w.is_air:
+        out += f", {w.pressure_Pa:.6g} Pa, {w.relative_humidity_pct:g} % relative humidity"
     if len(rho):
-        out += (f"; ρ = {rho.mean():.2f} kg/m³, ν = {figures.sci(nu.mean(), 4)} m²/s "
+        out += (f"; ρ = {rho.mean():.{4 if w.is_air else 2}f} kg/m³, "
+                f"ν = {figures.sci(nu.mean(), 4)} m²/s "
                 "(mean of the runs)")
     return out
 
@@ -236,14 +249,15 @@ def _counts(day: DayResult) -> str:
 def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     date, source = report_date(day)
     x0 = MARGIN_IN / PAGE_W + 0.03
-    fig.text(x0, _y(1.6), "Towing-tank test report", fontsize=24, fontweight="bold")
+    title = "Test report, model in air" if day.protocol.water.is_air else "Towing-tank test report"
+    fig.text(x0, _y(1.6), title, fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
     fig.text(x0, _y(2.4), figures.literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
     rows = [
         ("Model", _model_text(day) if day.protocol.model is not None else None),
         ("Fin", _fin_text(day)),
-        ("Water", _water_text(day)),
+        (_medium_label(day), _water_text(day)),
         ("Test date", date or "not given"),
         ("Runs", _counts(day)),
         ("Protocol", str(day.protocol.path.name)),
@@ -402,7 +416,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     y = 0.95
     has_model = day.protocol.model is not None
     facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
-             ("Fin", _fin_text(day)), ("Water", _water_text(day)),
+             ("Fin", _fin_text(day)), (_medium_label(day), _water_text(day)),
              ("Test date", date or "not given"), ("Runs", _counts(day)),
              ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
@@ -883,8 +897,9 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
                                "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
                                "lateral area (transverse tows at α = 90°, the C_D,90 of "
                                "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
-                               "each run's water temperature. Rejected runs (red) and void runs "
-                               "(grey) with their reasons: Quality page and runs.csv.",
+                               f"each run's {_medium_word(day)} temperature. Rejected runs "
+                               "(red) and void runs (grey) with their reasons: Quality page "
+                               "and runs.csv.",
                                fontsize=7.5)
     if accel_note:
         _text_block(fig, y + used, accel_note, fontsize=7.5)

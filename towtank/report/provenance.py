@@ -46,7 +46,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
-        "water": asdict(p.water),
+        "water": medium_settings(p.water),
         "channels": {k: asdict(v) for k, v in p.channels.items()},
         "reference": p.campaign.reference,
         "reference_name": reference_name(p.campaign.reference),
@@ -75,6 +75,21 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     }
 
 
+def medium_settings(water: Any) -> dict[str, Any]:
+    """A [water] or [prototype.water] section as provenance.json gives it: water as before
+    (type, temperature_C, salinity_g_kg); air with its pressure [Pa], relative humidity [%] and
+    the formulations of its properties."""
+    out = asdict(water)
+    if not water.is_air:
+        for key in ("pressure_Pa", "relative_humidity_pct"):
+            out.pop(key, None)
+        return out
+    out.pop("salinity_g_kg", None)
+    out["properties"] = ("density: CIPM-2007 (Picard et al. 2008, Metrologia 45, 149); "
+                         "viscosity: Sutherland's law (White, Viscous Fluid Flow, 2006)")
+    return out
+
+
 def _tare_provenance(day: DayResult) -> list[dict[str, Any]]:
     """The sting tare fits (tare.csv's rows): coefficients, intervals, runs and ranges."""
     from towtank.reduce.tare import tare_table
@@ -92,7 +107,7 @@ def _scaling_provenance(day: DayResult) -> dict[str, Any]:
     return {
         "scale": sr.scale,
         "length_prototype_m": sr.length_prototype,
-        "prototype_water": asdict(proto.water) if proto is not None else None,
+        "prototype_water": medium_settings(proto.water) if proto is not None else None,
         "rho_prototype": sr.rho_p,
         "nu_prototype": sr.nu_p,
         "wetted_area_prototype_m2": sr.wetted_area_prototype,

@@ -339,9 +339,14 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         ("water", p.water.type, ""),
         ("water temperature", p.water.temperature_C, "°C"),
     ]
+    fluid = "air" if p.water.is_air else "water"
+    if p.water.is_air:  # the medium named: air, its temperature, pressure and humidity
+        rows[-2:] = [("medium", "air", ""), ("air temperature", p.water.temperature_C, "°C"),
+                     ("air pressure", p.water.pressure_Pa, "Pa"),
+                     ("relative humidity", p.water.relative_humidity_pct, "%")]
     ok = day.runs[day.runs["status"] == "ok"]
     if ok["rho"].notna().any():
-        rows += [("water density (mean of runs)", float(ok["rho"].mean()), "kg/m³"),
+        rows += [(f"{fluid} density (mean of runs)", float(ok["rho"].mean()), "kg/m³"),
                  ("kinematic viscosity (mean of runs)", float(ok["nu"].mean()), "m²/s")]
     m = p.model
     if m is not None:
@@ -420,7 +425,8 @@ def _coefficients(w: SheetWriter, day: DayResult) -> None:
            f"Rows with |diff_pct| > {DIFF_HIGHLIGHT_PCT:g} are highlighted.")
     hf = day.hull.fit
     w.note(f"prime = value/(½ρL³) (added mass) or value/(½ρL²) (damping) with ρ = "
-           f"{hf.rho:.3f} kg/m³, the mean of the hull runs' water densities, and L = "
+           f"{hf.rho:.3f} kg/m³, the mean of the hull runs' "
+           f"{'air' if day.protocol.water.is_air else 'water'} densities, and L = "
            f"{hf.length:g} m. diff_pct = (prime − reference_prime)/|reference_prime|·100, signed: "
            "negative where the prime is more negative than the reference (e.g. a larger added "
            "mass); empty where the reference is 0.")
@@ -541,12 +547,15 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
              ("prototype wetted area S_p = λ²·S_m", sr.wetted_area_prototype, "m²"),
              ("roughness allowance ΔC_F", sr.delta_cf, "-")]
     t_m = day.protocol.water.temperature_C
-    rows += [(f"model water density at the protocol's {t_m:g} °C (Froude force ratio)",
+    fm = "air" if day.protocol.water.is_air else "water"
+    proto = day.protocol.prototype
+    fp = "air" if proto is not None and proto.water.is_air else "water"
+    rows += [(f"model {fm} density at the protocol's {t_m:g} °C (Froude force ratio)",
               sr.rho_m, "kg/m³"),
-             (f"model water kinematic viscosity at {t_m:g} °C (Reynolds speed ratio)", sr.nu_m,
+             (f"model {fm} kinematic viscosity at {t_m:g} °C (Reynolds speed ratio)", sr.nu_m,
               "m²/s"),
-             ("prototype water density", sr.rho_p, "kg/m³"),
-             ("prototype water kinematic viscosity", sr.nu_p, "m²/s")]
+             (f"prototype {fp} density", sr.rho_p, "kg/m³"),
+             (f"prototype {fp} kinematic viscosity", sr.nu_p, "m²/s")]
     w.pairs(rows)
     w.gap()
     w.title("Similarity")

@@ -97,6 +97,12 @@ def _as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
 
 
 def _water(temperature_C: float, water_type: str) -> Any:
+    """The medium's properties: ITTC water, or air (``"air"``: CIPM-2007 at 101325 Pa and
+    50 % relative humidity, Sutherland viscosity; the protocol's defaults)."""
+    if water_type == "air":
+        from towtank.reference.air import air_properties
+
+        return air_properties(temperature_C)
     from towtank.reference.water import water_properties
 
     return water_properties(temperature_C, water_type)
@@ -162,7 +168,8 @@ def simulate_run(
     temperature_C : float, default 18.0
         Water temperature [degC], used only when ``water`` is not given.
     water_type : str, default "fresh"
-        ``fresh`` or ``sea``, used only when ``water`` is not given.
+        ``fresh``, ``sea`` or ``air`` (at 101325 Pa and 50 % relative humidity), used only
+        when ``water`` is not given.
 
     Returns
     -------
