@@ -29,6 +29,7 @@ gathers their public names.
 """
 
 # ruff: noqa: F405 - __all__ names the re-exported public names
+from towtank.testing.air_day import *  # noqa: F403
 from towtank.testing.days import *  # noqa: F403
 from towtank.testing.instruments import *  # noqa: F403
 from towtank.testing.profiles import *  # noqa: F403
