@@ -95,18 +95,34 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
     return protocol.channels, protocol.processing, protocol.read
 
 
-def _describe(runfile: Path, read, out: TextIO) -> None:  # noqa: ANN001 - ReadOptions | None
-    """What the file holds and a ``[read]``/``[channels]`` block to paste into a protocol."""
+def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadOptions | None
+    """Print what the file holds and a ``[read]``/``[channels]`` block to paste into a
+    protocol; return the block parsed as a protocol parses it (ReadOptions, channels), or None
+    when the file cannot be described or the block names no channel."""
+    import tomllib
+
+    from towtank.errors import ProtocolError
     from towtank.ingest.describe import describe_file, protocol_block
+    from towtank.ingest.protocol import read_and_channels
 
     try:
         desc = describe_file(runfile, read)
     except RunError:
-        return
+        return None
     for line in desc.lines():
         print(line, file=out)
     print("a start for the protocol (check each line):", file=out)
-    print(protocol_block(desc), file=out, end="")
+    block = protocol_block(desc)
+    print(block, file=out, end="")
+    try:
+        parsed = read_and_channels(tomllib.loads(block), "the proposed block")
+    except (tomllib.TOMLDecodeError, ProtocolError):  # pragma: no cover - a bug of the block
+        return None
+    return parsed if parsed[1] else None
+
+
+def _missing_channel(reason: str) -> bool:
+    return "missing" in reason and "columns found" in reason
 
 
 def inspect_run(
@@ -122,10 +138,13 @@ def inspect_run(
     Parameters
     ----------
     runfile : path
-        The run file (.csv, .csv.gz or .tdms).
+        The run file, in any format the readers accept (docs/formats.md §3.1: .csv, .csv.gz,
+        .txt/.dat/.asc/.tsv text, .tdms, .lvm, .mat, .h5/.hdf5).
     protocol_path : path, optional
-        A protocol whose [channels] and [processing] apply; default canonical channel names
-        and default processing.
+        A protocol whose [read], [channels] and [processing] apply; default canonical channel
+        names and default processing. Without it, a file whose channels have other names is
+        described, a ``[read]``/``[channels]`` block is proposed, and the run is reduced with
+        that block (provisionally: a force in volts at gain 1.0 stays in volts).
     png : path, optional
         Where to write the plot; default ``<run file name without extensions>.png`` in the
         current folder (``-2``, ``-3`` … added when that name holds another run's plot). A
@@ -148,21 +167,37 @@ def inspect_run(
     runfile = Path(runfile)
     channels, p, read = _settings(protocol_path)
     raw = None
+    proposed = False
+
+    def load():  # noqa: ANN202 - RawRun
+        return load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
+                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                        options=read)
+
     try:
-        raw = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
-                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read)
+        try:
+            raw = load()
+        except RunError as exc:
+            if protocol_path is not None or not _missing_channel(exc.reason):
+                raise
+            proposal = _describe(runfile, read, out)
+            proposed = True
+            if proposal is None:
+                raise
+            read, channels = proposal
+            raw = load()
         red = reduce_run(raw, p, run=0, file=runfile.name)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "
         hint = ""
-        if "missing" in reason and "columns found" in reason:
+        if proposed:
+            hint = (" (read with the block proposed above). Complete the block, paste it into "
+                    "the campaign's protocol and give it with --protocol PROTOCOL.toml.")
+        elif _missing_channel(reason):
             hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
-                    "[channels] mapping names the lab's columns; what the file holds and a "
-                    "block to start the protocol from are printed above.")
-            _describe(runfile, read, out)
-        stop = "" if reason.endswith(("?", "!")) else "."
+                    "[channels] mapping names the lab's columns.")
+        stop = "" if reason.endswith(("?", "!")) or hint.startswith(" (") else "."
         print(f"towtank: {head}{reason}{stop}{hint}", file=err)
         if raw is not None:  # read but not reduced: exactly when a look at it helps
             target = _target(runfile, png, err, out)
@@ -170,12 +205,16 @@ def inspect_run(
                 _write_preview(raw, target, f"{head}{reason}{stop}", runfile)
                 print(f"plot: {target} (the calibrated traces, no zero, no phases)", file=out)
         return EXIT_RUN_ERROR
+    if proposed:
+        print("reduced with the block above and default processing (provisional: check each "
+              "line; a force at gain = 1.0 from volts is in volts, not newtons):", file=out)
     for line in summary_lines(red, raw.columns, t0=float(raw.time[0])):
         print(line, file=out)
     target = _target(runfile, png, err, out)
     if target is None:  # refused to overwrite (an error), or not beside the raw data unasked
         return EXIT_RUN_ERROR if png is not None else EXIT_OK
-    write_plot(red, target, protocol_path, runfile)
+    write_plot(red, target, protocol_path, runfile,
+               settings="the proposed [channels], default processing" if proposed else None)
     print(f"plot: {target}", file=out)
     return EXIT_OK
 
@@ -245,7 +284,7 @@ def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa
 
 
 def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
-               runfile: str | Path | None = None) -> Path:
+               runfile: str | Path | None = None, settings: str | None = None) -> Path:
     """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
     from towtank.report.figures import fig_run
 
@@ -256,7 +295,7 @@ def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None =
                else "")
             + f";  {red.fs:g} Hz"
             + (f";  settings of {Path(protocol_path).name}" if protocol_path else
-               ";  canonical channels, default processing"))
+               f";  {settings or 'canonical channels, default processing'}"))
     fig = fig_run(red, title, note)
     _save(fig, path, str(Path(runfile).resolve()) if runfile is not None else "")
     return path

@@ -716,6 +716,11 @@ def column_unit(column: str, stated: dict[str, str]) -> str | None:
     return m.group(1).strip() if m else None
 
 
+def is_volts(unit: str | None) -> bool:
+    """True for a unit of voltage (V, mV, µV): a raw bridge or amplifier signal."""
+    return bool(unit) and unit.strip().lower() in _VOLTS  # type: ignore[union-attr]
+
+
 def unit_factor(canon: str, unit: str | None, column: str, name: str) -> float:
     """Factor that brings a column's values in ``unit`` to the SI unit of channel ``canon``.
 

@@ -39,6 +39,7 @@ from towtank.ingest.readers import (
     ReadOptions,
     column_unit,
     file_format,
+    is_volts,
     plain_csv,
     read_lvm_columns,
     read_tdms_columns,
@@ -690,7 +691,12 @@ def calibrate(
         else:
             column = used.get(canon, cm.column)
             unit = column_unit(column, units)
-            factor = unit_factor(canon, unit, column, name)
+            if cm.calibrated and is_volts(unit):  # a stated gain of 1 N per V (or V per V)
+                notes.append(f"{canon} taken from {unit} with the stated gain 1.0 "
+                             f"(1 SI unit per {unit})")
+                factor = 1.0
+            else:
+                factor = unit_factor(canon, unit, column, name)
             if factor != 1.0:
                 arr = arr * factor
                 notes.append(f"{canon} converted from {unit} to SI (×{factor:g})")

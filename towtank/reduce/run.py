@@ -676,6 +676,9 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             keep_series=keep_series,
         )
+        for w in unmapped_force_warnings(protocol, raw.columns, file):
+            red.notes.append(w)
+            red.warnings.append(w)
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
@@ -693,6 +696,31 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         if debug:
             raise
         return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}", None
+
+
+def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: str
+                            ) -> list[str]:
+    """One sentence per channel of the run file that looks like a force, or a load cell of
+    one, and that no [channels] (or [balance]) entry uses: ``DragR`` beside a mapped ``DragL``
+    is half the drag left out (:func:`towtank.ingest.describe.unmapped_forces`)."""
+    from towtank.ingest.describe import force_parts, unmapped_forces
+    from towtank.ingest.protocol import channel_map
+
+    used: set[str] = set()
+    for cm in channel_map(protocol.channels).values():
+        used.update(cm.columns or (cm.column,))
+    if protocol.balance is not None:
+        used.update(protocol.balance.inputs)
+    out = []
+    parts = force_parts([c for c in columns if not c.startswith("__")])
+    for c in unmapped_forces(columns, used):
+        cells = next((v for v in parts.values() if c in v), None)
+        hint = (f"if the force is the sum of its load cells, map it as columns = "
+                f"[{', '.join(chr(34) + x + chr(34) for x in cells)}]" if cells else
+                "map it in [channels] if it is part of a force")
+        out.append(f"{file}: the channel '{c}' looks like a force or a load cell of one, but "
+                   f"no [channels] entry uses it, so it is in no force ({hint})")
+    return out
 
 
 def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:
