@@ -208,7 +208,8 @@ def reduce_run(
     fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
     filt, speed_f, accel_f = filter_channels(raw, p)
-    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None)
+    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None,
+                     still_required=not raw.zero_levels and p.zero_at == "before_motion")
     windows = ph.windows_s(t)
     steady, window_source, manual_warnings = choose_steady_window(
         t, speed_f, ph, windows, window_s, p, notes
@@ -308,9 +309,11 @@ def filter_channels(
 
 def find_phases(
     t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, fs: float, p: Processing,
-    *, steady_required: bool,
+    *, steady_required: bool, still_required: bool = True,
 ) -> phases.Phases:
-    """The run's phases from the filtered speed, with the protocol's settings."""
+    """The run's phases from the filtered speed, with the protocol's settings; a run may start
+    in motion (``still_required`` False) when its zero comes from a zeros file or from
+    ``zero_at = "file_start"``."""
     return phases.detect_phases(
         t,
         speed_f,
@@ -324,6 +327,7 @@ def find_phases(
         steady_required=steady_required,
         zero_at=p.zero_at,
         drift_settle_s=p.drift_settle_s,
+        still_required=still_required,
     )
 
 
@@ -375,8 +379,25 @@ def zero_forces(
     windows, after :func:`towtank.signal.drift.drift_verdict` has judged the drift: a run whose
     balance had not settled after the stop is rejected, a large drift is a warning.
     ``levels`` (drag, lift [N] of a zeros file, ``[zeros]``) replace the pre-run window's means.
+    A run that starts in motion (``ph.still_pre`` None) takes a force's zero from ``levels``
+    (held from the file's start, drift to the post-run window as usual), else from the still
+    window after the stop, held constant (``zero_at = "file_start"``; no drift correction);
+    with neither it is rejected.
     """
     levels = levels or {}
+    pre = ph.still_pre
+    cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
+    after = [name for _, name in cols if pre is None and name not in levels]
+    if after:
+        if ph.still_post is None:
+            raise RunError(
+                "the file starts in motion and does not end at rest: there is no still window "
+                "for the zero (give the balance zero in a zeros file, [zeros])")
+        w = ph.still_post
+        notes.append(
+            f"the file starts in motion: the {' and '.join(after)} zero is the still window "
+            f"after the stop ({t[w[0]]:.2f}–{t[w[1] - 1]:.2f} s), held constant (no drift "
+            "correction)")
     post = ph.still_post if p.drift == "linear" else None
     if p.drift == "linear" and ph.still_post is None:
         notes.append("the file does not end at rest: zero held constant (no drift correction)")
@@ -385,15 +406,24 @@ def zero_forces(
     out: list[np.ndarray] = []
     zeros: list[float] = []
     warnings: list[str] = []
-    cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
-    pre = ph.still_pre
+
+    def base(k: int, name: str) -> float:
+        if name in levels:
+            return float(levels[name])
+        w = pre if pre is not None else ph.still_post
+        assert w is not None
+        return float(np.mean(filt[w[0] : w[1], k]))
+
     steady_force = max(
-        abs(float(np.mean(filt[steady[0] : steady[1], k])
-                  - levels.get(name, np.mean(filt[pre[0] : pre[1], k]))))
-        for k, name in cols
+        abs(float(np.mean(filt[steady[0] : steady[1], k])) - base(k, name)) for k, name in cols
     )
     for k, name in cols:
         force = filt[:, k]
+        if name in after:  # the zero after the stop, constant
+            z = base(k, name)
+            out.append(force - z)
+            zeros += [z, 0.0]
+            continue
         if post is not None and post[1] - post[0] >= 2:
             verdict = drift_verdict(t, force, pre, post, steady_force, name,
                                     level=levels.get(name))

@@ -25,9 +25,10 @@ PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
 
 @dataclass(frozen=True)
 class Phases:
-    """Index windows [i0, i1) of a run's phases; ``None`` where a phase is absent."""
+    """Index windows [i0, i1) of a run's phases; ``None`` where a phase is absent (``still_pre``
+    only when the zero does not need it: a run that starts in motion)."""
 
-    still_pre: tuple[int, int]
+    still_pre: tuple[int, int] | None
     accel: tuple[int, int] | None
     steady: tuple[int, int] | None  # None only when detected with steady_required=False
     decel: tuple[int, int] | None
@@ -67,6 +68,7 @@ def detect_phases(
     steady_required: bool = True,
     zero_at: str = "before_motion",
     drift_settle_s: float = 0.0,
+    still_required: bool = True,
 ) -> Phases:
     """Split a run into its phases from the filtered speed.
 
@@ -101,6 +103,11 @@ def detect_phases(
         False when the steady window is set by hand in the run sheet: a run whose plateau is
         not found (too short, too unsteady) then still gets its still, acceleration and
         deceleration windows, with ``steady`` None, split at the peak speed.
+    still_required : bool, default True
+        False when the zero does not come from the still window before the carriage moves (a
+        zeros file, or ``zero_at = "file_start"``): a run that starts in motion, or with a still
+        stretch shorter than ``min_still_s``, then gets ``still_pre`` None and its phases start
+        with the acceleration or the steady speed.
 
     Returns
     -------
@@ -109,8 +116,9 @@ def detect_phases(
     Raises
     ------
     RunError
-        The carriage never moves, there is no still window before it moves, or (with
-        ``steady_required``) the speed never settles on a plateau.
+        The carriage never moves, there is no still window before it moves (with
+        ``still_required``), or (with ``steady_required``) the speed never settles on a
+        plateau.
     """
     n = speed.size
     # peaks held for a stated time, not percentiles of the file: independent of the run's length
@@ -130,12 +138,17 @@ def detect_phases(
     assert motion is not None
     margin = int(round((trim_s + 0.1) * fs))
     pre_end = motion[0] - margin
+    pre: tuple[int, int] | None
     if pre_end < int(min_still_s * fs):
-        raise RunError(
-            f"there is no still window before the carriage moves (motion starts at "
-            f"t = {t[motion[0]]:.2f} s): the zero cannot be found"
-        )
-    if zero_at == "file_start":
+        if still_required:
+            raise RunError(
+                f"there is no still window before the carriage moves (motion starts at "
+                f"t = {t[motion[0]]:.2f} s): the zero cannot be found (a run that starts in "
+                "motion needs its zero from a zeros file, [zeros], or zero_at = "
+                "\"file_start\" with the still window after the stop)"
+            )
+        pre = None
+    elif zero_at == "file_start":
         pre = (0, min(pre_end, max(int(zero_window_s * fs), 2)))
     else:
         pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
