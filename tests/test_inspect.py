@@ -220,3 +220,17 @@ def test_inspect_into_a_closed_pipe_ends_quietly(day, tmp_path):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 0
     assert "internal error" not in err and "Traceback" not in err
+
+
+def test_inspect_help_names_every_format_the_readers_accept(capsys):
+    """Issue 22: `inspect --help` named .csv, .csv.gz and .tdms where every reader works."""
+    from towtank.ingest.readers import EXTENSIONS, file_format
+
+    with pytest.raises(SystemExit):
+        main(["inspect", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for ext in EXTENSIONS:
+        assert ext in text, ext
+    for ext in (".csv.gz", ".txt.gz", ".lvm.gz"):
+        assert ext in text
+        assert file_format(Path("run" + ext), b"\x1f\x8b", None)[1]  # read gzipped indeed

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from towtank import __version__
+from towtank.ingest.extensions import extensions_text
 from towtank.runtime.interrupt import watching
 from towtank.runtime.pause import pause_at
 from towtank.runtime.storage import STORAGE_ERRNOS
@@ -96,13 +97,17 @@ def _parser() -> argparse.ArgumentParser:
         help="quick look at one run file: phases, means and a plot",
         description="Read one run file, find its phases and print them with the steady means "
         "(zero and drift removed, no tare); write a PNG of speed and forces with the phases "
-        "shaded.",
+        "shaded. Without --protocol, a file whose channels are not named time, speed, drag, "
+        "lift is described (format, timing, channels, units) and a [read]/[channels] block "
+        "for the protocol is proposed (load cells of one force summed with columns = [...], "
+        "a volt channel at a provisional gain = 1.0); the run is then reduced with that "
+        "block.",
     )
     ins.add_argument("runfile", type=Path,
-                     help="a run file in any format process reads (.csv, .csv.gz, .txt, "
-                     ".tdms, .lvm, .mat, .h5/.hdf5)")
+                     help="a run file in any format process reads: "
+                     f"{extensions_text()}; or any name with [read] format in the protocol")
     ins.add_argument("--protocol", type=Path,
-                     help="protocol whose [channels] and [processing] apply")
+                     help="protocol whose [read], [channels] and [processing] apply")
     ins.add_argument("--png", type=Path,
                      help="where to write the plot (default: <run file name>.png in the "
                      "current folder)")

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TextIO
 
 from towtank.errors import RunError
+from towtank.ingest.extensions import EXTENSIONS
 from towtank.reduce.run import RunReduction
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
@@ -24,7 +25,7 @@ PHASE_NAMES = {
     "decel": "deceleration",
     "still_post": "still after",
 }
-RUN_EXTENSIONS = (".gz", ".csv", ".tdms", ".txt", ".dat", ".lvm", ".mat", ".h5", ".hdf5")
+RUN_EXTENSIONS = (".gz", *EXTENSIONS)
 
 
 def plot_name(runfile: str | Path) -> str:

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.extensions import EXTENSIONS  # noqa: F401 - public here too
 
 UNITS_KEY = "__units__"
 WF_TIME_KEY = "__wf_time__"
@@ -51,11 +52,6 @@ FS_ERROR_KEY = "__fs_error__"
 LABEL_KEY = "__label__"
 
 #: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
-EXTENSIONS = {
-    ".csv": "csv", ".txt": "text", ".dat": "text", ".asc": "text", ".tsv": "text",
-    ".tdms": "tdms", ".lvm": "lvm", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
-    ".hdf": "hdf5", ".he5": "hdf5", ".h5m": "hdf5",
-}
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
 DELIMITERS = {"auto": None, ",": ",", ";": ";", "\t": "\t", "tab": "\t",
               "whitespace": "whitespace", " ": "whitespace"}
