@@ -128,3 +128,23 @@ def test_the_phases_of_a_run_in_motion_start_with_the_acceleration_or_the_platea
         assert min(starts, key=starts.get) == first
         if first == "steady":
             assert ph.accel is None
+
+
+def test_a_run_in_motion_at_both_ends_without_a_zeros_file_is_rejected():
+    from towtank.ingest.protocol import Processing
+    from towtank.ingest.runfile import RawRun
+    from towtank.reduce.run import reduce_run
+
+    frame, truth = syn.simulate_run("hull", 0.0, 1.2, 0.5, fs=200.0, rng=4)
+    part = frame[(frame["time"] >= truth["t_accel_start"])
+                 & (frame["time"] <= truth["t_decel_start"] + 0.5)]
+    raw = RawRun(time=part["time"].to_numpy(), speed=part["speed"].to_numpy(),
+                 drag=part["drag"].to_numpy(), lift=part["lift"].to_numpy(), fs=200.0)
+    with pytest.raises(RunError, match="the file starts in motion and does not end at rest"):
+        reduce_run(raw, Processing(zero_at="file_start"), run=1, file="run_001.csv")
+    # with a zeros file it is reduced: the zero held, no drift to remove
+    still = frame[frame["time"] < truth["t_accel_start"] - 0.1]
+    raw.zero_levels = {"drag": float(still["drag"].mean()), "lift": float(still["lift"].mean())}
+    red = reduce_run(raw, Processing(), run=1, file="run_001.csv")
+    assert red.windows["still_pre"] is None and red.windows["still_post"] is None
+    assert red.drag_mean_raw == pytest.approx(truth["drag_model"], abs=3e-3)
