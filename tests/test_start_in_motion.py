@@ -148,3 +148,24 @@ def test_a_run_in_motion_at_both_ends_without_a_zeros_file_is_rejected():
     red = reduce_run(raw, Processing(), run=1, file="run_001.csv")
     assert red.windows["still_pre"] is None and red.windows["still_post"] is None
     assert red.drag_mean_raw == pytest.approx(truth["drag_model"], abs=3e-3)
+
+
+def test_inspect_applies_the_zeros_file_as_process_does(cut_day, tmp_path):
+    """inspect with a protocol that has [zeros] reads the run's zeros file ({stem}, and {run}
+    from the number in the file's name), so a run that starts in motion is reduced there too."""
+    import io
+
+    from towtank.commands.inspect import inspect_run
+
+    root, _ = cut_day
+    out, err = io.StringIO(), io.StringIO()
+    rc = inspect_run(root / "data" / "run_004.csv", _protocol(root, "z.toml", zeros=True),
+                     png=tmp_path / "x.png", out=out, err=err)
+    assert rc == 0, err.getvalue()
+    text = out.getvalue()
+    assert "zeros from the zeros file run_004_zero.csv" in text
+    assert "zero (still)      not found" in text
+    # without the zeros file, the same run cannot be zeroed before its motion
+    rc = inspect_run(root / "data" / "run_004.csv", _protocol(root, "n.toml", zeros=False),
+                     png=tmp_path / "y.png", out=io.StringIO(), err=err)
+    assert rc == 1 and "no still window before the carriage moves" in err.getvalue()

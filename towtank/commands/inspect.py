@@ -91,9 +91,18 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
     from towtank.ingest.protocol import Processing, load_protocol
 
     if protocol_path is None:
-        return {}, Processing(), None
+        return {}, Processing(), None, None
     protocol = load_protocol(protocol_path, check_paths=False)
-    return protocol.channels, protocol.processing, protocol.read
+    return protocol.channels, protocol.processing, protocol.read, protocol
+
+
+def _run_number(runfile: Path) -> int:
+    """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
+    ``{run}`` of a ``[zeros]`` pattern."""
+    import re
+
+    found = re.findall(r"\d+", plot_name(runfile))
+    return int(found[-1]) if found else 0
 
 
 def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadOptions | None
@@ -166,14 +175,22 @@ def inspect_run(
     from towtank.reduce.run import reduce_run
 
     runfile = Path(runfile)
-    channels, p, read = _settings(protocol_path)
+    channels, p, read, protocol = _settings(protocol_path)
     raw = None
     proposed = False
 
     def load():  # noqa: ANN202 - RawRun
-        return load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
-                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                        options=read)
+        from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+
+        balance = protocol.balance if protocol is not None else None
+        zeros = None
+        if protocol is not None and protocol.zeros is not None:  # as process: [zeros] file
+            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name,
+                                    _run_number(runfile), channels, read, balance)
+        run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
+                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                       options=read, balance=balance)
+        return run if zeros is None else with_zero_levels(run, *zeros)
 
     try:
         try:
