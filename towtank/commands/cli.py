@@ -107,7 +107,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="a run file in any format process reads: "
                      f"{extensions_text()}; or any name with [read] format in the protocol")
     ins.add_argument("--protocol", type=Path,
-                     help="protocol whose [read], [channels] and [processing] apply")
+                     help="protocol whose [read], [channels], [balance], [speed_log], [zeros] "
+                     "and [processing] apply, as in process")
     ins.add_argument("--png", type=Path,
                      help="where to write the plot (default: <run file name>.png in the "
                      "current folder)")

@@ -151,10 +151,12 @@ def inspect_run(
         The run file, in any format the readers accept (docs/formats.md §3.1: .csv, .csv.gz,
         .txt/.dat/.asc/.tsv text, .tdms, .lvm, .mat, .h5/.hdf5).
     protocol_path : path, optional
-        A protocol whose [read], [channels] and [processing] apply; default canonical channel
-        names and default processing. Without it, a file whose channels have other names is
-        described, a ``[read]``/``[channels]`` block is proposed, and the run is reduced with
-        that block (provisionally: a force in volts at gain 1.0 stays in volts).
+        A protocol whose [read], [channels], [balance], [speed_log], [zeros] and [processing]
+        apply as in ``process`` (``{run}`` in a file pattern: the last number of the run file's
+        name); default canonical channel names and default processing. Without it, a file
+        whose channels have other names is described, a ``[read]``/``[channels]`` block is
+        proposed, and the run is reduced with that block (provisionally: a force in volts at
+        gain 1.0 stays in volts).
     png : path, optional
         Where to write the plot; default ``<run file name without extensions>.png`` in the
         current folder (``-2``, ``-3`` … added when that name holds another run's plot). A
@@ -180,16 +182,19 @@ def inspect_run(
     proposed = False
 
     def load():  # noqa: ANN202 - RawRun
+        from towtank.ingest.speedlog import run_speed_log
         from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 
         balance = protocol.balance if protocol is not None else None
-        zeros = None
-        if protocol is not None and protocol.zeros is not None:  # as process: [zeros] file
-            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name,
-                                    _run_number(runfile), channels, read, balance)
+        zeros = log = None
+        if protocol is not None:  # as process: the run's zeros file and speed log
+            number = _run_number(runfile)
+            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
+                                    channels, read, balance)
+            log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
         run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read, balance=balance)
+                       options=read, balance=balance, speed_log=log)
         return run if zeros is None else with_zero_levels(run, *zeros)
 
     try:
