@@ -204,9 +204,9 @@ def inspect_run(
             if protocol_path is not None or not _missing_channel(exc.reason):
                 raise
             proposal = _describe(runfile, read, out)
-            proposed = True
-            if proposal is None:
+            if proposal is None:  # nothing recognised: the protocol must name the channels
                 raise
+            proposed = True
             read, channels = proposal
             raw = load()
         red = reduce_run(raw, p, run=0, file=runfile.name)
