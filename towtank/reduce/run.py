@@ -89,6 +89,11 @@ class RunReduction:
     series: dict[str, np.ndarray] | None = None
     drag_mean: float = math.nan
     lift_mean: float = math.nan
+    #: "measured" (a speed channel or log), or "nominal": the run sheet's set speed of a run
+    #: without a measured speed ([processing] speed_source = "nominal")
+    speed_source: str = "measured"
+    #: standard uncertainty of a set speed [m/s]: speed_tolerance·U/√3 (NaN when measured)
+    speed_u: float = math.nan
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -205,6 +210,9 @@ def reduce_run(
     keep_series : bool
         Keep the whole conditioned run in ``series`` (for the export; never cached).
     """
+    if math.isfinite(raw.speed_nominal):
+        return reduce_nominal(raw, processing, run=run, file=file, window_s=window_s,
+                              keep_series=keep_series)
     fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
     filt, speed_f, accel_f = filter_channels(raw, p)
@@ -265,6 +273,88 @@ def reduce_run(
         warnings=warn,
         series=(series_of(t, speed_f, accel_f, drag_f, lift_f, ph, steady)
                 if keep_series else None),
+    )
+
+
+def reduce_nominal(
+    raw: RawRun,
+    p: Processing,
+    *,
+    run: int,
+    file: str,
+    window_s: tuple[float, float] | None = None,
+    keep_series: bool = False,
+) -> RunReduction:
+    """Reduce a run without a measured speed (``[processing] speed_source = "nominal"``).
+
+    The speed is the run sheet's set speed U (``raw.speed_nominal``) over the steady window,
+    with the standard uncertainty of a rectangular tolerance, u(U) = speed_tolerance·U/√3
+    (GUM, JCGM 100:2008, §4.3.7). The steady window is the sheet's (``window_s``), else the
+    force's plateau (:func:`towtank.signal.phases.force_plateau`). The zero is the zeros file's
+    (``[zeros]``), else the filtered force's mean over the file's first ``zero_window_s`` (no
+    speed tells when the carriage moves), held constant: without a speed there is no post-run
+    window to find, so no drift is removed. No acceleration is known: such a run gives no
+    sample to an added-mass fit (its steady samples have U = the set speed and a = 0).
+    """
+    fs, t = raw.fs, raw.time
+    u_set = float(raw.speed_nominal)
+    notes = list(raw.notes)
+    if not u_set > 0:
+        raise RunError("speed_source = \"nominal\" needs the run's set speed, speed_nominal, "
+                       "in the run sheet")
+    if p.cutoff_hz >= 0.5 * fs:
+        raise RunError(
+            f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
+            f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered")
+    has_lift = raw.lift is not None
+    forces = [raw.drag] + ([raw.lift] if has_lift else [])
+    filt = conditioning.lowpass(np.column_stack(forces), fs, p.cutoff_hz, p.filter_order)
+    levels = raw.zero_levels or {}
+    n = t.size
+    pre = (0, min(n, max(int(p.zero_window_s * fs), 2)))
+    names = ["drag"] + (["lift"] if has_lift else [])
+    zeros = [float(levels[k]) if k in levels else float(np.mean(filt[pre[0]:pre[1], i]))
+             for i, k in enumerate(names)]
+    from_start = [k for k in names if k not in levels]
+    if from_start:
+        notes.append(f"no measured speed: the {' and '.join(from_start)} zero is the mean of "
+                     f"the file's first {t[pre[1] - 1] - t[0]:.2f} s, held constant (no drift "
+                     "correction)")
+    drag_f = filt[:, 0] - zeros[0]
+    lift_f = filt[:, 1] - zeros[1] if has_lift else np.full(n, np.nan)
+    if window_s is not None:
+        steady = phases.manual_window(t, *window_s)
+        window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s (set speed, no speed channel)"
+    else:
+        steady = phases.force_plateau(filt[:, 0], fs, zero=zeros[0], trim_s=p.trim,
+                                      min_steady_s=p.min_steady_s)
+        window_source = "from the force (set speed, no speed channel)"
+    s0, s1 = steady
+    u_u = p.speed_tolerance * u_set / math.sqrt(3.0)
+    notes.append(f"speed: the set speed {u_set:g} m/s of the run sheet (no speed channel; "
+                 f"u = {u_u:.2g} m/s from speed_tolerance = {p.speed_tolerance:g}); no "
+                 "acceleration, so the run is not used for the added masses")
+    speed = np.zeros(n)
+    speed[s0:s1] = u_set  # the set speed over the steady window, for the fits and the plots
+    accel = np.zeros(n)
+    ph = phases.Phases(still_pre=None if not from_start else pre, accel=None, steady=steady,
+                       decel=None, still_post=None, motion=steady, speed_level=u_set,
+                       accel_level=None)
+    windows = ph.windows_s(t)
+    return RunReduction(
+        run=run, file=file, sha256=raw.sha256, fs=fs, n_samples=raw.n,
+        duration_s=float(t[-1] - t[0]), windows=windows, window_source=window_source,
+        speed_level=u_set, speed_mean=u_set, speed_std=math.nan, accel_mean=math.nan,
+        zero_drag=zeros[0], drift_drag=0.0,
+        zero_lift=zeros[1] if has_lift else math.nan, drift_lift=0.0 if has_lift else math.nan,
+        drag_mean_raw=float(np.mean(drag_f[s0:s1])), drag_std=float(np.std(drag_f[s0:s1])),
+        lift_mean_raw=float(np.mean(lift_f[s0:s1])) if has_lift else math.nan,
+        steady_regressors=(u_set * u_set, u_set, 0.0),
+        samples=fit_samples(t, speed, accel, drag_f, lift_f, steady, ph, math.nan, fs, p),
+        thumb=thumbnail(t, speed, accel, drag_f, lift_f, fs),
+        has_lift=has_lift, notes=notes, warnings=[],
+        series=series_of(t, speed, accel, drag_f, lift_f, ph, steady) if keep_series else None,
+        speed_source="nominal", speed_u=u_u,
     )
 
 
@@ -677,7 +767,14 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
     try:
         p = protocol.processing
         data, stamp = file_bytes_stamped(path)
-        log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
+        nominal = None
+        if p.speed_source == "nominal":  # no measured speed: the sheet's set speed
+            nominal = float(row.get("speed_nominal", math.nan))
+            if not (math.isfinite(nominal) and nominal > 0):
+                raise RunError("[processing] speed_source = \"nominal\" takes the speed from "
+                               "the run sheet, and the run has no speed_nominal there")
+        log = (run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
+               if nominal is None else None)
         zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
                                 protocol.channels, protocol.read, protocol.balance)
         raw = load_run(
@@ -690,6 +787,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             options=protocol.read,
             balance=protocol.balance,
             speed_log=log,
+            speed_nominal=nominal,
         )
         if zeros is not None:
             raw = with_zero_levels(raw, *zeros)

@@ -310,3 +310,71 @@ def manual_window(t: np.ndarray, start_s: float, end_s: float) -> tuple[int, int
             f"(the file spans {t[0]:.2f}–{t[-1]:.2f} s)"
         )
     return i0, i1
+
+
+#: Half-width of the force plateau's band as a fraction of its level [-] (a force is noisier,
+#: relative to its level, than a carriage speed; the band is widened to 3 noise s.d. besides).
+FORCE_PLATEAU_TOLERANCE = 0.05
+
+
+def force_plateau(
+    force: np.ndarray,
+    fs: float,
+    *,
+    zero: float,
+    trim_s: float = 0.375,
+    min_steady_s: float = 0.5,
+    tolerance: float = FORCE_PLATEAU_TOLERANCE,
+) -> tuple[int, int]:
+    """The steady window of a run without a measured speed, from its filtered force.
+
+    The force with its zero removed, x = F − F₀, rises from 0 to its plateau while the carriage
+    tows at constant speed (the inertia of the acceleration and deceleration only adds short
+    excursions). The level is the median of the samples above half the sustained peak of |x|;
+    the plateau is the longest stretch within max(``tolerance``·|level|, 3σ) of it (σ the robust
+    spread of the samples near the level; at most half the level), trimmed by ``trim_s`` at
+    each end.
+
+    Parameters
+    ----------
+    force : ndarray
+        Low-pass filtered force, zero not removed [N].
+    fs : float
+        Sample rate [Hz].
+    zero : float
+        The force's zero [N].
+    trim_s, min_steady_s : float
+        Cut from each end of the plateau, and the shortest usable window after it [s].
+    tolerance : float
+        Half-width of the band as a fraction of the plateau level [-].
+
+    Returns
+    -------
+    tuple of int
+        The steady window [i0, i1).
+
+    Raises
+    ------
+    RunError
+        The force shows no plateau long enough (give the window in the run sheet).
+    """
+    x = np.abs(force - zero)
+    k = max(3, int(0.5 * min_steady_s * fs))
+    peak = sustained_peak(x, k)
+    if not peak > 0.0:
+        raise RunError("the force never leaves its zero, so no steady window can be found from "
+                       "it: give window_start_s and window_end_s in the run sheet")
+    level = quantile(x[x > 0.5 * peak], 0.5)
+    near = x[np.abs(x - level) <= 2.0 * tolerance * level]
+    noise = 1.4826 * float(np.median(np.abs(near - np.median(near)))) if near.size > 5 else 0.0
+    half = min(max(tolerance * level, 3.0 * noise), 0.5 * level)
+    band = close_gaps(np.abs(x - level) <= half, int(0.1 * fs))
+    plateau = longest_run(band)
+    n_trim = int(round(trim_s * fs))
+    steady = _trim(plateau, n_trim, int(min_steady_s * fs))
+    if steady is None:
+        raise RunError(
+            f"the force never settles on a plateau long enough to measure (level "
+            f"{level:.4g} N, {min_steady_s:g} s needed after trimming {trim_s:g} s at each "
+            "end): give window_start_s and window_end_s in the run sheet")
+    return steady
