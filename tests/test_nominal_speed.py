@@ -151,3 +151,19 @@ def test_unh_rvat_with_its_nominal_speed_gives_the_labs_drag(tmp_path):
     assert reason is None, reason
     assert red.speed_source == "nominal" and red.speed_mean == 1.0
     assert red.drag_mean_raw == pytest.approx(601.4, rel=1e-3)  # measured: 601.46 N
+
+
+def test_a_measured_speed_and_the_nominal_one_together_are_refused(tmp_path):
+    from towtank.errors import ProtocolError
+    from towtank.ingest.protocol import load_protocol
+
+    protocol, _ = _day(tmp_path, windows=True)
+    text = protocol.read_text()
+    (tmp_path / "both.toml").write_text(text.replace(
+        "[channels]\n", '[channels]\nspeed = { column = "Carriage speed (m/s)" }\n'))
+    with pytest.raises(ProtocolError, match="keep one of the two"):
+        load_protocol(tmp_path / "both.toml")
+    (tmp_path / "bad.toml").write_text(text.replace('speed_source = "nominal"',
+                                                    'speed_source = "set"'))
+    with pytest.raises(ProtocolError, match="speed_source"):
+        load_protocol(tmp_path / "bad.toml")

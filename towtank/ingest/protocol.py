@@ -348,6 +348,11 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     processing = _processing(data.get("processing", {}), src)
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
     read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+    if processing.speed_source == "nominal" and ("speed_log" in data or "speed" in channels):
+        given = "[speed_log]" if "speed_log" in data else "[channels] speed"
+        raise ProtocolError(
+            f"{src}: [processing] speed_source = \"nominal\" takes each run's speed from the "
+            f"run sheet, but {given} gives a measured one: keep one of the two.")
 
     warnings = _unit_warnings(model, fin, water, prototype)
     return Protocol(
