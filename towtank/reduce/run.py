@@ -276,6 +276,33 @@ def reduce_run(
     )
 
 
+#: A run without a measured speed has its drift taken to the file's last still window only
+#: when the force there is within this fraction of the plateau force of its zero, and flat
+#: within it too (the carriage back at rest, not a file that ends while towing or braking).
+NOMINAL_REST_FRACTION = 0.25
+NOMINAL_REST_FLAT = 0.1
+
+
+def rest_at_end(t: np.ndarray, drag_f: np.ndarray, steady: tuple[int, int], fs: float,
+                p: Processing) -> tuple[int, int] | None:
+    """The file's last ``zero_window_s`` (clear of the end by ``trim_s``) as a post-run still
+    window of a run without a measured speed, when the force shows the carriage at rest there:
+    at least ``max(drift_settle_s, 1 s)`` after the steady window, within
+    :data:`NOMINAL_REST_FRACTION` of the plateau force of its zero and flat within
+    :data:`NOMINAL_REST_FLAT` of it (``drag_f`` [N] zeroed at the file's start); else None."""
+    n = t.size
+    end = n - int(round(p.trim * fs))
+    start = end - max(int(p.zero_window_s * fs), 2)
+    if start < steady[1] + int(max(p.drift_settle_s, 1.0) * fs) or start < 0:
+        return None
+    level = abs(float(np.mean(drag_f[steady[0]:steady[1]])))
+    x = drag_f[start:end]
+    if abs(float(np.mean(x))) > NOMINAL_REST_FRACTION * level or \
+            float(np.ptp(x)) > NOMINAL_REST_FLAT * level:
+        return None
+    return start, end
+
+
 def reduce_nominal(
     raw: RawRun,
     p: Processing,
@@ -292,9 +319,11 @@ def reduce_nominal(
     (GUM, JCGM 100:2008, §4.3.7). The steady window is the sheet's (``window_s``), else the
     force's plateau (:func:`towtank.signal.phases.force_plateau`). The zero is the zeros file's
     (``[zeros]``), else the filtered force's mean over the file's first ``zero_window_s`` (no
-    speed tells when the carriage moves), held constant: without a speed there is no post-run
-    window to find, so no drift is removed. No acceleration is known: such a run gives no
-    sample to an added-mass fit (its steady samples have U = the set speed and a = 0).
+    speed tells when the carriage moves). With ``drift = "linear"`` and the file ending at rest
+    by its force (:func:`rest_at_end`), the drift to that last window is removed as for any run
+    (with the same check, :func:`towtank.signal.drift.drift_verdict`); else the zero is held.
+    No acceleration is known: such a run gives no sample to an added-mass fit (its steady
+    samples have U = the set speed and a = 0).
     """
     fs, t = raw.fs, raw.time
     u_set = float(raw.speed_nominal)
@@ -316,12 +345,6 @@ def reduce_nominal(
     zeros = [float(levels[k]) if k in levels else float(np.mean(filt[pre[0]:pre[1], i]))
              for i, k in enumerate(names)]
     from_start = [k for k in names if k not in levels]
-    if from_start:
-        notes.append(f"no measured speed: the {' and '.join(from_start)} zero is the mean of "
-                     f"the file's first {t[pre[1] - 1] - t[0]:.2f} s, held constant (no drift "
-                     "correction)")
-    drag_f = filt[:, 0] - zeros[0]
-    lift_f = filt[:, 1] - zeros[1] if has_lift else np.full(n, np.nan)
     if window_s is not None:
         steady = phases.manual_window(t, *window_s)
         window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s (set speed, no speed channel)"
@@ -330,6 +353,32 @@ def reduce_nominal(
                                       min_steady_s=p.min_steady_s)
         window_source = "from the force (set speed, no speed channel)"
     s0, s1 = steady
+    post = rest_at_end(t, filt[:, 0] - zeros[0], steady, fs, p) if p.drift == "linear" else None
+    steady_force = max(abs(float(np.mean(filt[s0:s1, i])) - zeros[i]) for i in range(len(names)))
+    zeroed, drifts, warnings = [], [], []
+    for i, name in enumerate(names):
+        w = None if name in levels else pre
+        if post is not None:
+            verdict = drift_verdict(t, filt[:, i], w, post, steady_force, name,
+                                    level=levels.get(name))
+            if verdict.reject is not None:
+                raise RunError(verdict.reject)
+            if verdict.warning is not None:
+                notes.append(verdict.warning)
+                warnings.append(verdict.warning)
+        line, _, drift = conditioning.zero_line(t, filt[:, i], w, post, level=levels.get(name))
+        zeroed.append(filt[:, i] - line)
+        drifts.append(drift)
+    if from_start:
+        notes.append(f"no measured speed: the {' and '.join(from_start)} zero is the mean of "
+                     f"the file's first {t[pre[1] - 1] - t[0]:.2f} s")
+    notes.append(f"no measured speed: the drift is taken to the file's last "
+                 f"{t[post[1] - 1] - t[post[0]]:.2f} s, where the force is back at rest"
+                 if post is not None else
+                 "no measured speed: the zero is held constant (no drift correction: the file "
+                 "does not end at rest by its force, or drift = \"none\")")
+    drag_f = zeroed[0]
+    lift_f = zeroed[1] if has_lift else np.full(n, np.nan)
     u_u = p.speed_tolerance * u_set / math.sqrt(3.0)
     notes.append(f"speed: the set speed {u_set:g} m/s of the run sheet (no speed channel; "
                  f"u = {u_u:.2g} m/s from speed_tolerance = {p.speed_tolerance:g}); no "
@@ -338,21 +387,22 @@ def reduce_nominal(
     speed[s0:s1] = u_set  # the set speed over the steady window, for the fits and the plots
     accel = np.zeros(n)
     ph = phases.Phases(still_pre=None if not from_start else pre, accel=None, steady=steady,
-                       decel=None, still_post=None, motion=steady, speed_level=u_set,
+                       decel=None, still_post=post, motion=steady, speed_level=u_set,
                        accel_level=None)
     windows = ph.windows_s(t)
     return RunReduction(
         run=run, file=file, sha256=raw.sha256, fs=fs, n_samples=raw.n,
         duration_s=float(t[-1] - t[0]), windows=windows, window_source=window_source,
         speed_level=u_set, speed_mean=u_set, speed_std=math.nan, accel_mean=math.nan,
-        zero_drag=zeros[0], drift_drag=0.0,
-        zero_lift=zeros[1] if has_lift else math.nan, drift_lift=0.0 if has_lift else math.nan,
+        zero_drag=zeros[0], drift_drag=drifts[0],
+        zero_lift=zeros[1] if has_lift else math.nan,
+        drift_lift=drifts[1] if has_lift else math.nan,
         drag_mean_raw=float(np.mean(drag_f[s0:s1])), drag_std=float(np.std(drag_f[s0:s1])),
         lift_mean_raw=float(np.mean(lift_f[s0:s1])) if has_lift else math.nan,
         steady_regressors=(u_set * u_set, u_set, 0.0),
         samples=fit_samples(t, speed, accel, drag_f, lift_f, steady, ph, math.nan, fs, p),
         thumb=thumbnail(t, speed, accel, drag_f, lift_f, fs),
-        has_lift=has_lift, notes=notes, warnings=[],
+        has_lift=has_lift, notes=notes, warnings=warnings,
         series=series_of(t, speed, accel, drag_f, lift_f, ph, steady) if keep_series else None,
         speed_source="nominal", speed_u=u_u,
     )

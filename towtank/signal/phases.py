@@ -313,7 +313,7 @@ def manual_window(t: np.ndarray, start_s: float, end_s: float) -> tuple[int, int
 
 
 #: Half-width of the force plateau's band as a fraction of its level [-] (a force is noisier,
-#: relative to its level, than a carriage speed; the band is widened to 3 noise s.d. besides).
+#: relative to its level, than a carriage speed).
 FORCE_PLATEAU_TOLERANCE = 0.05
 
 
@@ -328,12 +328,13 @@ def force_plateau(
 ) -> tuple[int, int]:
     """The steady window of a run without a measured speed, from its filtered force.
 
-    The force with its zero removed, x = F − F₀, rises from 0 to its plateau while the carriage
-    tows at constant speed (the inertia of the acceleration and deceleration only adds short
-    excursions). The level is the median of the samples above half the sustained peak of |x|;
-    the plateau is the longest stretch within max(``tolerance``·|level|, 3σ) of it (σ the robust
-    spread of the samples near the level; at most half the level), trimmed by ``trim_s`` at
-    each end.
+    With the zero removed, x = F − F₀, the plateau is where x is flat and away from zero: the
+    spread (max − min) of x over a sliding ``min_steady_s`` is within max(``tolerance``·|x̄|,
+    2 s₀) of its centre x̄ (s₀ the spread of the calmest tenth of the run: the noise), and |x̄|
+    exceeds max(3 s₀, 2 % of the sustained peak of |x|). The longest such stretch, trimmed by
+    ``trim_s`` at each end, is the steady window. The ramps are not flat (the drag grows with
+    the speed under the constant inertia force), and a flat stretch inside them is shorter
+    than the plateau, which is the longest stretch of constant force in a tow.
 
     Parameters
     ----------
@@ -358,23 +359,26 @@ def force_plateau(
     RunError
         The force shows no plateau long enough (give the window in the run sheet).
     """
-    x = np.abs(force - zero)
-    k = max(3, int(0.5 * min_steady_s * fs))
-    peak = sustained_peak(x, k)
-    if not peak > 0.0:
-        raise RunError("the force never leaves its zero, so no steady window can be found from "
-                       "it: give window_start_s and window_end_s in the run sheet")
-    level = quantile(x[x > 0.5 * peak], 0.5)
-    near = x[np.abs(x - level) <= 2.0 * tolerance * level]
-    noise = 1.4826 * float(np.median(np.abs(near - np.median(near)))) if near.size > 5 else 0.0
-    half = min(max(tolerance * level, 3.0 * noise), 0.5 * level)
-    band = close_gaps(np.abs(x - level) <= half, int(0.1 * fs))
-    plateau = longest_run(band)
-    n_trim = int(round(trim_s * fs))
-    steady = _trim(plateau, n_trim, int(min_steady_s * fs))
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    x = np.asarray(force, dtype=float) - zero
+    w = max(3, int(min_steady_s * fs))
+    hi, lo = maximum_filter1d(x, w, mode="nearest"), minimum_filter1d(x, w, mode="nearest")
+    spread, mid = hi - lo, 0.5 * (hi + lo)
+    s0 = quantile(spread, 0.1)
+    peak = sustained_peak(np.abs(x), max(3, w // 2))
+    moving = np.abs(mid) > max(3.0 * s0, 0.02 * peak)
+    flat = spread <= np.maximum(tolerance * np.abs(mid), 2.0 * s0)
+    plateau = longest_run(close_gaps(flat & moving, int(0.1 * fs)))
+    if plateau is None:
+        raise RunError("the force never leaves its zero on a plateau, so no steady window can "
+                       "be found from it: give window_start_s and window_end_s in the run sheet")
+    steady = _trim(plateau, int(round(trim_s * fs)), int(min_steady_s * fs))
     if steady is None:
+        level = float(np.median(x[plateau[0]:plateau[1]]))
         raise RunError(
-            f"the force never settles on a plateau long enough to measure (level "
-            f"{level:.4g} N, {min_steady_s:g} s needed after trimming {trim_s:g} s at each "
-            "end): give window_start_s and window_end_s in the run sheet")
+            f"the force never settles on a plateau long enough to measure (longest flat "
+            f"stretch {(plateau[1] - plateau[0]) / fs:.2f} s at {level:.4g} N, {min_steady_s:g} "
+            f"s needed after trimming {trim_s:g} s at each end): give window_start_s and "
+            "window_end_s in the run sheet")
     return steady
