@@ -207,3 +207,20 @@ def test_the_drift_is_removed_only_when_the_file_ends_at_rest():
     braking = reduce(frame[frame["time"] <= truth["t_decel_start"] + 1.0])
     assert braking.drift_drag == 0.0
     assert any("held constant" in n for n in braking.notes)
+
+
+def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path):
+    import io
+
+    from towtank.commands.inspect import inspect_run
+
+    protocol, truth = _day(tmp_path, windows=True)
+    out, err = io.StringIO(), io.StringIO()
+    rc = inspect_run(tmp_path / "data" / "run_016.csv.gz", protocol, png=tmp_path / "x.png",
+                     out=out, err=err)
+    assert rc == 0, err.getvalue()
+    text = out.getvalue()
+    assert "speed: the set speed 2 m/s of the run sheet" in text
+    assert "manual" in text and "set speed, no speed channel" in text
+    speed = float(text.split("  speed ")[1].split("m/s")[0])
+    assert speed == pytest.approx(truth["runs"]["16"]["speed_nominal"])

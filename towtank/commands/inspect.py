@@ -8,6 +8,7 @@ the sample rate and any notes, and writes a PNG of speed and forces with the pha
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import TextIO
@@ -96,6 +97,29 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
     return protocol.channels, protocol.processing, protocol.read, protocol
 
 
+def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
+    """The run sheet's row of ``runfile`` (matched by path under the data folder, else by
+    name), for a protocol whose speed comes from the sheet (``speed_source = "nominal"``)."""
+    from towtank.errors import ProtocolError
+    from towtank.ingest.runsheet import read_run_sheet
+
+    try:
+        sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
+                               protocol.sheet)
+    except (ProtocolError, OSError) as exc:
+        raise RunError(f"speed_source = \"nominal\" takes the speed from the run sheet, which "
+                       f"cannot be read ({exc})") from None
+    here = runfile.resolve()
+    rows = sheet.to_dict("records")
+    for match in (lambda r: (protocol.campaign.data_dir / str(r["file"])).resolve() == here,
+                  lambda r: Path(str(r["file"])).name == runfile.name):
+        found = [r for r in rows if match(r)]
+        if found:
+            return found[0]
+    raise RunError(f"{runfile.name} is not in the run sheet {protocol.campaign.run_sheet.name}, "
+                   "and speed_source = \"nominal\" takes the run's speed from there")
+
+
 def _run_number(runfile: Path) -> int:
     """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
     ``{run}`` of a ``[zeros]`` pattern."""
@@ -180,21 +204,33 @@ def inspect_run(
     channels, p, read, protocol = _settings(protocol_path)
     raw = None
     proposed = False
+    window: tuple[float, float] | None = None
 
     def load():  # noqa: ANN202 - RawRun
         from towtank.ingest.speedlog import run_speed_log
         from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 
+        nonlocal window
         balance = protocol.balance if protocol is not None else None
-        zeros = log = None
+        zeros = log = nominal = None
         if protocol is not None:  # as process: the run's zeros file and speed log
             number = _run_number(runfile)
+            if p.speed_source == "nominal":  # the speed (and window) of the sheet's row
+                row = _sheet_row(protocol, runfile)
+                number = int(row["run"])
+                nominal = float(row.get("speed_nominal", math.nan))
+                if not (math.isfinite(nominal) and nominal > 0):
+                    raise RunError(f"the run sheet gives {runfile.name} no speed_nominal, and "
+                                   "speed_source = \"nominal\" takes the speed from there")
+                ws, we = row.get("window_start_s", math.nan), row.get("window_end_s", math.nan)
+                if math.isfinite(ws) and math.isfinite(we):
+                    window = (float(ws), float(we))
             zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
                                     channels, read, balance)
             log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
         run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read, balance=balance, speed_log=log)
+                       options=read, balance=balance, speed_log=log, speed_nominal=nominal)
         return run if zeros is None else with_zero_levels(run, *zeros)
 
     try:
@@ -209,7 +245,7 @@ def inspect_run(
             proposed = True
             read, channels = proposal
             raw = load()
-        red = reduce_run(raw, p, run=0, file=runfile.name)
+        red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "
