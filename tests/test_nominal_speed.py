@@ -224,3 +224,17 @@ def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path):
     assert "manual" in text and "set speed, no speed channel" in text
     speed = float(text.split("  speed ")[1].split("m/s")[0])
     assert speed == pytest.approx(truth["runs"]["16"]["speed_nominal"])
+
+
+def test_the_api_reads_a_run_at_its_set_speed(tmp_path):
+    protocol, truth = _day(tmp_path, windows=True)
+    path = tmp_path / "data" / "run_016.csv.gz"
+    with pytest.raises(RunError, match="speed_nominal=U"):
+        towtank.read_run(path, protocol)
+    raw = towtank.read_run(path, protocol, speed_nominal=2.0)
+    run = truth["runs"]["16"]
+    red = towtank.reduce_run(raw, protocol, run=16, file=path.name,
+                             window_s=(run["t_plateau_start"] + 0.6, run["t_plateau_end"] - 0.6))
+    assert red.speed_source == "nominal" and red.speed_mean == 2.0
+    assert red.speed_u == pytest.approx(0.005 * 2.0 / math.sqrt(3))
+    assert red.drag_mean_raw == pytest.approx(run["drag_model"] + run["tare_drag"], abs=3e-3)
