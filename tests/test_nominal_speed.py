@@ -238,3 +238,44 @@ def test_the_api_reads_a_run_at_its_set_speed(tmp_path):
     assert red.speed_source == "nominal" and red.speed_mean == 2.0
     assert red.speed_u == pytest.approx(0.005 * 2.0 / math.sqrt(3))
     assert red.drag_mean_raw == pytest.approx(run["drag_model"] + run["tare_drag"], abs=3e-3)
+
+
+KITE = Path("/work/shared/real/tudelft_kite_lvm")
+
+
+@pytest.mark.skipif(not (KITE / "normal_aoa_16_vw_20.lvm").exists(),
+                    reason="../shared/real/tudelft_kite_lvm is not present (real recordings are "
+                    "not kept in the repository)")
+def test_kite_balance_with_its_wind_off_zeros_file(tmp_path):
+    """TU Delft kite load balance (LabVIEW LVM, 2 kHz, no speed channel, unnamed channels):
+    vw_20 at its lab-book 19.8 m/s with vw_00 as its zeros file gives F_X (column 'Untitled')
+    over 1–9 s within 0.1 % of the mean computed directly from the two files (measured:
+    74.258 N against 74.280 N)."""
+    from towtank.ingest.protocol import load_protocol
+    from towtank.reduce.run import reduce_record
+
+    (tmp_path / "sheet.csv").write_text(
+        "run,file,config,angle_deg,speed_nominal\n1,normal_aoa_16_vw_20.lvm,hull,0,19.8\n")
+    (tmp_path / "p.toml").write_text(
+        f'[campaign]\nname = "kite"\nrun_sheet = "sheet.csv"\ndata_dir = "{KITE}"\n'
+        'output_dir = "out"\n\n[water]\ntemperature_C = 15.0\n\n'
+        '[model]\nlength_m = 1.0\ndiameter_m = 0.2\nmass_kg = 20.0\n\n'
+        '[channels]\ndrag = { column = "Untitled" }\n\n'
+        '[zeros]\nfile = "normal_aoa_16_vw_00.lvm"\n\n'
+        '[processing]\nspeed_source = "nominal"\n\n[tare]\nsource = "none"\n')
+    protocol = load_protocol(tmp_path / "p.toml")
+    row = {"run": 1, "file": "normal_aoa_16_vw_20.lvm", "speed_nominal": 19.8,
+           "window_start_s": 1.0, "window_end_s": 9.0}
+    _, red, reason, _ = reduce_record(protocol, row)
+    assert reason is None, reason
+
+    def column(name: str) -> pd.DataFrame:
+        lines = (KITE / name).read_text().splitlines()
+        head = next(k for k, line in enumerate(lines) if line.startswith("X_Value"))
+        return pd.read_csv(KITE / name, sep="\t", skiprows=head)
+
+    run, zero = column("normal_aoa_16_vw_20.lvm"), column("normal_aoa_16_vw_00.lvm")
+    inside = (run["X_Value"] >= 1.0) & (run["X_Value"] <= 9.0)
+    direct = run["Untitled"][inside].mean() - zero["Untitled"].mean()
+    assert red.drag_mean_raw == pytest.approx(direct, rel=1e-3)
+    assert red.speed_mean == 19.8 and red.speed_source == "nominal"
