@@ -383,8 +383,8 @@ def reduce_nominal(
     notes.append(f"speed: the set speed {u_set:g} m/s of the run sheet (no speed channel; "
                  f"u = {u_u:.2g} m/s from speed_tolerance = {p.speed_tolerance:g}); no "
                  "acceleration, so the run is not used for the added masses")
-    speed = np.zeros(n)
-    speed[s0:s1] = u_set  # the set speed over the steady window, for the fits and the plots
+    speed = np.full(n, np.nan)
+    speed[s0:s1] = u_set  # the set speed over the steady window; unknown elsewhere
     accel = np.zeros(n)
     ph = phases.Phases(still_pre=None if not from_start else pre, accel=None, steady=steady,
                        decel=None, still_post=post, motion=steady, speed_level=u_set,
@@ -717,15 +717,16 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
     s = dict(red.samples)
     s["drag"] = s["drag"] - tare.drag(s["U"], s["a"])
     th = dict(red.thumb)
-    th["drag"] = th["drag"] - tare.drag(th["U"], th["a"])
     series = dict(red.series) if red.series is not None else None
-    if series is not None:
-        series["drag"] = series["drag"] - tare.drag(series["U"], series["a"])
+    # the whole-run curves need the speed at every sample: a run without a measured speed
+    # keeps its tare in them (its set speed is known over the steady window only)
+    curves = [c for c in (th, series) if c is not None and red.speed_source == "measured"]
+    for c in curves:
+        c["drag"] = c["drag"] - tare.drag(c["U"], c["a"])
     if tare.lift is not None and red.has_lift:
         s["lift"] = s["lift"] - tare.lift(s["U"], s["a"])
-        th["lift"] = th["lift"] - tare.lift(th["U"], th["a"])
-        if series is not None:
-            series["lift"] = series["lift"] - tare.lift(series["U"], series["a"])
+        for c in curves:
+            c["lift"] = c["lift"] - tare.lift(c["U"], c["a"])
     notes = list(red.notes)
     warn = list(red.warnings)
     if not tare.covers(red.speed_mean):
