@@ -180,14 +180,16 @@ def _parser() -> argparse.ArgumentParser:
                     "(default 1)")
     sy.add_argument("--format", choices=("csv", "csv.gz", "tdms", "tdms-waveform", "lvm",
                                          "txt-eu", "mat", "mat73", "hdf5", "two-cell",
-                                         "matrix", "speed-log", "position-log", "zero-file"),
+                                         "matrix", "speed-log", "position-log", "zero-file",
+                                         "no-speed"),
                     default=None, dest="file_format",
                     help="run-file format (default: csv.gz for the hull day, tdms for the fin "
                     "day); tdms-waveform (LabVIEW timing, no time channel), lvm, txt-eu "
                     "(';' and decimal commas, preamble, units row), mat (v5), mat73, hdf5, "
                     "two-cell (DragL + DragR), matrix (a 2x2 interaction matrix), speed-log and "
                     "position-log (carriage speed or position in its own file per run, 100 Hz, "
-                    "another clock), zero-file (a zeros file per run) are other labs' layouts")
+                    "another clock), zero-file (a zeros file per run), no-speed (no speed "
+                    "channel: the sheet's set speed and steady windows) are other labs' layouts")
     sy.add_argument("--sheet", choices=("csv", "xlsx", "hand-xlsx", "hand-csv"), default=None,
                     dest="sheet_format",
                     help="run-sheet format (default: xlsx for the hull day, csv for the fin "
