@@ -251,8 +251,9 @@ def inspect_run(
         head = "" if runfile.name in reason else f"{runfile.name}: "
         hint = ""
         if proposed:
-            hint = (" (read with the block proposed above). Complete the block, paste it into "
-                    "the campaign's protocol and give it with --protocol PROTOCOL.toml.")
+            hint = " (read with the block proposed above)." + (
+                " Complete the block, paste it into the campaign's protocol and give it with "
+                "--protocol PROTOCOL.toml." if _missing_channel(reason) else "")
         elif _missing_channel(reason):
             hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
                     "[channels] mapping names the lab's columns.")
@@ -272,8 +273,10 @@ def inspect_run(
     target = _target(runfile, png, err, out)
     if target is None:  # refused to overwrite (an error), or not beside the raw data unasked
         return EXIT_RUN_ERROR if png is not None else EXIT_OK
+    volts = any("with the stated gain 1.0" in n for n in red.notes)
     write_plot(red, target, protocol_path, runfile,
-               settings="the proposed [channels], default processing" if proposed else None)
+               settings=("proposed [channels]" + ("; forces in V" if volts else ""))
+               if proposed else None)
     print(f"plot: {target}", file=out)
     return EXIT_OK
 
