@@ -189,7 +189,10 @@ def reduce_run(
     low-pass for every channel), :func:`find_phases`, :func:`choose_steady_window` (detected
     or set by hand), :func:`zero_forces` (zero and drift from the filtered forces, with the
     drift check), :func:`check_force_signal` (a dead channel), :func:`nominal_checks`,
-    :func:`fit_samples` and :func:`thumbnail`.
+    :func:`fit_samples` and :func:`thumbnail`. A run without a measured speed
+    (``raw.speed_nominal`` set: ``speed_source = "nominal"``) goes to :func:`reduce_nominal`;
+    a run whose zero does not come from the still window before the carriage moves (a zeros
+    file, ``zero_at = "file_start"``) may start in motion.
 
     Parameters
     ----------
