@@ -54,14 +54,67 @@ def test_inspect_without_protocol_uses_canonical_channels(day, tmp_path, capsys)
     assert png.exists()
 
 
-def test_lab_columns_without_protocol_suggest_the_protocol(day, tmp_path, capsys):
-    err = io.StringIO()
-    rc = inspect_run(day / "data" / "run_014.csv.gz", png=tmp_path / "x.png", err=err)
-    assert rc == 1
-    text = err.getvalue()
-    assert "columns found" in text and "--protocol" in text
-    assert text.count("\n") == 1  # one sentence pair on one line
-    assert not (tmp_path / "x.png").exists()
+def _paste(protocol_text: str, block: str) -> str:
+    """The protocol with its [channels] table replaced by inspect's proposed block."""
+    head, rest = protocol_text.split("[channels]\n", 1)
+    tail = rest[rest.index("\n["):]
+    return head + block + tail
+
+
+def test_lab_columns_without_protocol_are_reduced_with_the_proposed_block(day, tmp_path):
+    """Issue 22: a run in the lab's column names (load cells in volts), no --protocol: inspect
+    names the time column, proposes [read]/[channels], reduces the run with that block (forces
+    in V at the provisional gain 1.0, exit 0, nothing on stderr), and the block pasted into the
+    day's protocol processes the day: its drag coefficients are the calibrated day's divided by
+    the drag gain (20 N/V; Y_v|v| from the transverse tows' drag), since every step of the
+    reduction is linear in force (the added masses are not: the model's mass is subtracted)."""
+    import tomllib
+
+    import towtank
+
+    out, err = io.StringIO(), io.StringIO()
+    rc = inspect_run(day / "data" / "run_014.csv.gz", png=tmp_path / "x.png", out=out, err=err)
+    text = out.getvalue()
+    assert rc == 0, err.getvalue()
+    assert err.getvalue() == ""
+    assert "timing: time column 'Time (s)'" in text and "the time channel is missing" not in text
+    assert "reduced with the block above" in text and "steady means" in text
+    assert (tmp_path / "x.png").read_bytes()[:8] == PNG
+    block = text[text.index("[read]"):text.index("reduced with the block above")]
+    parsed = tomllib.loads(block)
+    assert parsed["channels"]["drag"] == {"column": "Fx load cell (V)", "gain": 1.0,
+                                          "offset": 0.0}
+    # the steady drag inspect prints is in volts: the calibrated one over 20 N/V
+    volts = float(text.split("  drag ")[1].split("N")[0])
+    ref = io.StringIO()
+    assert inspect_run(day / "data" / "run_014.csv.gz", day / "p.toml",
+                       png=tmp_path / "y.png", out=ref) == 0
+    newtons = float(ref.getvalue().split("  drag ")[1].split("N")[0])
+    assert volts == pytest.approx(newtons / 20.0, abs=2e-4)
+    # pasted as printed, the block processes the day
+    pasted = tmp_path / "pasted.toml"
+    pasted.write_text(_paste((day / "p.toml").read_text(), block).replace(
+        'data_dir = "./data"', f'data_dir = "{day / "data"}"').replace(
+        'run_sheet = "./run_sheet.xlsx"', f'run_sheet = "{day / "run_sheet.xlsx"}"'))
+    got = towtank.process_day(pasted, jobs=1, report=False)
+    base = towtank.process_day(day / "p.toml", jobs=1, report=False)
+    assert not got.rejected and not base.rejected
+    g = got.coefficients.set_index("symbol")["value"]
+    b = base.coefficients.set_index("symbol")["value"]
+    for sym, gain in (("X_u|u|", 20.0), ("X_v|v|", 20.0), ("Y_v|v|", 20.0)):
+        assert g[sym] == pytest.approx(b[sym] / gain, rel=1e-6), sym
+
+
+def test_a_file_whose_channels_cannot_be_guessed_says_so(tmp_path):
+    """No --protocol and no channel named like time, speed or a force: the file is described,
+    the block names no channel, and one sentence asks for the protocol (exit 1)."""
+    path = tmp_path / "raw" / "run_001.csv"
+    path.parent.mkdir()
+    path.write_text("ch0,ch1,ch2\n" + "".join(f"{k},0,0\n" for k in range(50)))
+    out, err = io.StringIO(), io.StringIO()
+    assert inspect_run(path, png=tmp_path / "x.png", out=out, err=err) == 1
+    assert "# not recognised: 'ch0', 'ch1', 'ch2'" in out.getvalue()
+    assert "--protocol" in err.getvalue() and err.getvalue().count("\n") == 1
 
 
 def test_default_png_goes_to_the_current_folder(day, tmp_path, monkeypatch, capsys):
@@ -113,11 +166,16 @@ def test_damaged_file_gives_one_sentence_and_exit_1(day, tmp_path, capsys, conte
 
 
 def test_wrong_channels_name_the_missing_column(day, tmp_path):
+    """With --protocol, a mapping that names a column the file lacks is one sentence naming it
+    (no guessing: the protocol is the user's word)."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text((day / "p.toml").read_text().replace(
+        '"Carriage speed (m/s)"', '"Speed (m/s)"').replace('"./', f'"{day}/'))
     err = io.StringIO()
-    rc = inspect_run(day / "data" / "run_013.csv.gz", png=tmp_path / "x.png",
+    rc = inspect_run(day / "data" / "run_013.csv.gz", bad, png=tmp_path / "x.png",
                      out=io.StringIO(), err=err)
     assert rc == 1
-    assert "missing" in err.getvalue() and "Time (s)" in err.getvalue()
+    assert "missing" in err.getvalue() and "Speed (m/s)" in err.getvalue()
 
 
 def test_plot_name():
@@ -162,3 +220,17 @@ def test_inspect_into_a_closed_pipe_ends_quietly(day, tmp_path):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 0
     assert "internal error" not in err and "Traceback" not in err
+
+
+def test_inspect_help_names_every_format_the_readers_accept(capsys):
+    """Issue 22: `inspect --help` named .csv, .csv.gz and .tdms where every reader works."""
+    from towtank.ingest.readers import EXTENSIONS, file_format
+
+    with pytest.raises(SystemExit):
+        main(["inspect", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for ext in EXTENSIONS:
+        assert ext in text, ext
+    for ext in (".csv.gz", ".txt.gz", ".lvm.gz"):
+        assert ext in text
+        assert file_format(Path("run" + ext), b"\x1f\x8b", None)[1]  # read gzipped indeed

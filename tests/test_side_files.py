@@ -189,3 +189,21 @@ def test_bad_zeros_sections(tmp_path, section, match):
     protocol.write_text(head + "[zeros]\n" + body + rest)
     with pytest.raises(ProtocolError, match=match):
         towtank.load_protocol(protocol)
+
+
+def test_inspect_reads_the_speed_log_as_process_does(tmp_path):
+    """`towtank inspect RUN --protocol` on a run whose speed is in its carriage log: the log is
+    read (named in the notes) and the plateau speed is the day's."""
+    import io
+
+    from towtank.commands.inspect import inspect_run
+
+    protocol = _day(tmp_path)
+    out, err = io.StringIO(), io.StringIO()
+    rc = inspect_run(tmp_path / "data" / "run_005.csv", protocol, png=tmp_path / "x.png",
+                     out=out, err=err)
+    assert rc == 0, err.getvalue()
+    assert "carriage speed from the speed log run_005_carriage.csv" in out.getvalue()
+    day = towtank.process_day(protocol, jobs=1, report=False)
+    speed = float(out.getvalue().split("  speed ")[1].split("m/s")[0])
+    assert speed == pytest.approx(day.reductions[5].speed_mean, abs=1e-4)

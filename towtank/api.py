@@ -132,7 +132,8 @@ def process_day(
     return day
 
 
-def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) -> RawRun:
+def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
+             speed_nominal: float | None = None) -> RawRun:
     """Read one run file as the day would: calibrated channels in SI units, checked.
 
     Parameters
@@ -142,6 +143,9 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
     protocol : str, Path or Protocol, optional
         Whose ``[channels]`` map the lab's columns and ``[processing]`` set the checks; default
         the canonical channel names (time, speed, drag[, lift, accel]) in SI units.
+    speed_nominal : float, optional
+        The run's set speed [m/s], required when the protocol's ``[processing] speed_source``
+        is ``"nominal"`` (no measured speed; ``.speed_nominal`` of the result, ``.speed`` 0).
 
     Returns
     -------
@@ -170,10 +174,16 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None) ->
 
         digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
         log = run_speed_log(loaded.speed_log, path.parent, path.name, int(digits or 0))
+    if p.speed_source == "nominal" and not (speed_nominal is not None and speed_nominal > 0):
+        from towtank.errors import RunError
+
+        raise RunError(f"{path.name}: the protocol's speed_source = \"nominal\" takes the speed "
+                       "from the run sheet: give read_run(..., speed_nominal=U) [m/s]")
     raw = load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
                    max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                    data=file_bytes(path), options=read,
-                   balance=None if protocol is None else loaded.balance, speed_log=log)
+                   balance=None if protocol is None else loaded.balance, speed_log=log,
+                   speed_nominal=speed_nominal if p.speed_source == "nominal" else None)
     if protocol is not None and loaded.zeros is not None:
         from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 

@@ -254,8 +254,8 @@ RUN_COLUMNS = [
 ]
 EXTRA_COLUMNS = [
     "test", "tare_group", "speed_nominal", "accel_nominal", "water_temp_C", "rho", "nu",
-    "speed_std", "drag_std", "lift_tare", "cd_lateral", "cd_ref", "ref_area", "ref_area_m2",
-    "zero_drag", "drift_drag", "zero_lift",
+    "speed_std", "speed_source", "speed_u", "drag_std", "lift_tare", "cd_lateral", "cd_ref",
+    "ref_area", "ref_area_m2", "zero_drag", "drift_drag", "zero_lift",
     "drift_lift", "still_pre_start_s", "still_pre_end_s", "accel_start_s", "accel_end_s",
     "steady_start_s", "steady_end_s", "decel_start_s", "decel_end_s", "window_source",
     "fs_hz", "n_samples", "sha256", "notes", "remarks",
@@ -292,7 +292,8 @@ def run_table(
             row.update(
                 speed_mean=u, accel_mean=red.accel_mean, drag_mean=red.drag_mean,
                 lift_mean=red.lift_mean, tare_drag=red.tare_drag, lift_tare=red.tare_lift,
-                rho=rho, nu=nu, speed_std=red.speed_std, drag_std=red.drag_std,
+                rho=rho, nu=nu, speed_std=red.speed_std, speed_source=red.speed_source,
+                speed_u=red.speed_u, drag_std=red.drag_std,
                 zero_drag=red.zero_drag, drift_drag=red.drift_drag, zero_lift=red.zero_lift,
                 drift_lift=red.drift_lift, window_source=red.window_source, fs_hz=red.fs,
                 n_samples=red.n_samples, sha256=red.sha256, notes="; ".join(red.notes),

@@ -743,7 +743,9 @@ def fit_hull(
     added: dict[str, AddedMassFit] = {}
     for symbol, angle in (("X_udot", 0.0), ("Y_vdot", 90.0)):
         sel = select_runs(runs, angle)
-        ids = [int(r) for r in sel["run"] if int(r) in reductions]
+        # a run without a measured speed (speed_source = "nominal") has no acceleration
+        ids = [int(r) for r in sel["run"] if int(r) in reductions
+               and reductions[int(r)].speed_source == "measured"]
         levels = accel_levels(reductions, ids)
         if len(levels) < 2:
             found = ", ".join(f"{lv:.2f}" for lv in levels) or "none"

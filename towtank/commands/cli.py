@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from towtank import __version__
+from towtank.ingest.extensions import extensions_text
 from towtank.runtime.interrupt import watching
 from towtank.runtime.pause import pause_at
 from towtank.runtime.storage import STORAGE_ERRNOS
@@ -96,13 +97,18 @@ def _parser() -> argparse.ArgumentParser:
         help="quick look at one run file: phases, means and a plot",
         description="Read one run file, find its phases and print them with the steady means "
         "(zero and drift removed, no tare); write a PNG of speed and forces with the phases "
-        "shaded.",
+        "shaded. Without --protocol, a file whose channels are not named time, speed, drag, "
+        "lift is described (format, timing, channels, units) and a [read]/[channels] block "
+        "for the protocol is proposed (load cells of one force summed with columns = [...], "
+        "a volt channel at a provisional gain = 1.0); the run is then reduced with that "
+        "block.",
     )
     ins.add_argument("runfile", type=Path,
-                     help="a run file in any format process reads (.csv, .csv.gz, .txt, "
-                     ".tdms, .lvm, .mat, .h5/.hdf5)")
+                     help="a run file in any format process reads: "
+                     f"{extensions_text()}; or any name with [read] format in the protocol")
     ins.add_argument("--protocol", type=Path,
-                     help="protocol whose [channels] and [processing] apply")
+                     help="protocol whose [read], [channels], [balance], [speed_log], [zeros] "
+                     "and [processing] apply, as in process")
     ins.add_argument("--png", type=Path,
                      help="where to write the plot (default: <run file name>.png in the "
                      "current folder)")
@@ -176,14 +182,16 @@ def _parser() -> argparse.ArgumentParser:
                     "(default 1)")
     sy.add_argument("--format", choices=("csv", "csv.gz", "tdms", "tdms-waveform", "lvm",
                                          "txt-eu", "mat", "mat73", "hdf5", "two-cell",
-                                         "matrix", "speed-log", "position-log", "zero-file"),
+                                         "matrix", "speed-log", "position-log", "zero-file",
+                                         "no-speed"),
                     default=None, dest="file_format",
                     help="run-file format (default: csv.gz for the hull day, tdms for the fin "
                     "day); tdms-waveform (LabVIEW timing, no time channel), lvm, txt-eu "
                     "(';' and decimal commas, preamble, units row), mat (v5), mat73, hdf5, "
                     "two-cell (DragL + DragR), matrix (a 2x2 interaction matrix), speed-log and "
                     "position-log (carriage speed or position in its own file per run, 100 Hz, "
-                    "another clock), zero-file (a zeros file per run) are other labs' layouts")
+                    "another clock), zero-file (a zeros file per run), no-speed (no speed "
+                    "channel: the sheet's set speed and steady windows) are other labs' layouts")
     sy.add_argument("--sheet", choices=("csv", "xlsx", "hand-xlsx", "hand-csv"), default=None,
                     dest="sheet_format",
                     help="run-sheet format (default: xlsx for the hull day, csv for the fin "

@@ -8,11 +8,13 @@ the sample rate and any notes, and writes a PNG of speed and forces with the pha
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import TextIO
 
 from towtank.errors import RunError
+from towtank.ingest.extensions import EXTENSIONS
 from towtank.reduce.run import RunReduction
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
@@ -24,7 +26,7 @@ PHASE_NAMES = {
     "decel": "deceleration",
     "still_post": "still after",
 }
-RUN_EXTENSIONS = (".gz", ".csv", ".tdms", ".txt", ".dat", ".lvm", ".mat", ".h5", ".hdf5")
+RUN_EXTENSIONS = (".gz", *EXTENSIONS)
 
 
 def plot_name(runfile: str | Path) -> str:
@@ -90,23 +92,71 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
     from towtank.ingest.protocol import Processing, load_protocol
 
     if protocol_path is None:
-        return {}, Processing(), None
+        return {}, Processing(), None, None
     protocol = load_protocol(protocol_path, check_paths=False)
-    return protocol.channels, protocol.processing, protocol.read
+    return protocol.channels, protocol.processing, protocol.read, protocol
 
 
-def _describe(runfile: Path, read, out: TextIO) -> None:  # noqa: ANN001 - ReadOptions | None
-    """What the file holds and a ``[read]``/``[channels]`` block to paste into a protocol."""
+def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
+    """The run sheet's row of ``runfile`` (matched by path under the data folder, else by
+    name), for a protocol whose speed comes from the sheet (``speed_source = "nominal"``)."""
+    from towtank.errors import ProtocolError
+    from towtank.ingest.runsheet import read_run_sheet
+
+    try:
+        sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
+                               protocol.sheet)
+    except (ProtocolError, OSError) as exc:
+        raise RunError(f"speed_source = \"nominal\" takes the speed from the run sheet, which "
+                       f"cannot be read ({exc})") from None
+    here = runfile.resolve()
+    rows = sheet.to_dict("records")
+    for match in (lambda r: (protocol.campaign.data_dir / str(r["file"])).resolve() == here,
+                  lambda r: Path(str(r["file"])).name == runfile.name):
+        found = [r for r in rows if match(r)]
+        if found:
+            return found[0]
+    raise RunError(f"{runfile.name} is not in the run sheet {protocol.campaign.run_sheet.name}, "
+                   "and speed_source = \"nominal\" takes the run's speed from there")
+
+
+def _run_number(runfile: Path) -> int:
+    """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
+    ``{run}`` of a ``[zeros]`` pattern."""
+    import re
+
+    found = re.findall(r"\d+", plot_name(runfile))
+    return int(found[-1]) if found else 0
+
+
+def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadOptions | None
+    """Print what the file holds and a ``[read]``/``[channels]`` block to paste into a
+    protocol; return the block parsed as a protocol parses it (ReadOptions, channels), or None
+    when the file cannot be described or the block names no channel."""
+    import tomllib
+
+    from towtank.errors import ProtocolError
     from towtank.ingest.describe import describe_file, protocol_block
+    from towtank.ingest.protocol import read_and_channels
 
     try:
         desc = describe_file(runfile, read)
     except RunError:
-        return
+        return None
     for line in desc.lines():
         print(line, file=out)
     print("a start for the protocol (check each line):", file=out)
-    print(protocol_block(desc), file=out, end="")
+    block = protocol_block(desc)
+    print(block, file=out, end="")
+    try:
+        parsed = read_and_channels(tomllib.loads(block), "the proposed block")
+    except (tomllib.TOMLDecodeError, ProtocolError):  # pragma: no cover - a bug of the block
+        return None
+    return parsed if parsed[1] else None
+
+
+def _missing_channel(reason: str) -> bool:
+    return "missing" in reason and "columns found" in reason
 
 
 def inspect_run(
@@ -122,10 +172,15 @@ def inspect_run(
     Parameters
     ----------
     runfile : path
-        The run file (.csv, .csv.gz or .tdms).
+        The run file, in any format the readers accept (docs/formats.md §3.1: .csv, .csv.gz,
+        .txt/.dat/.asc/.tsv text, .tdms, .lvm, .mat, .h5/.hdf5).
     protocol_path : path, optional
-        A protocol whose [channels] and [processing] apply; default canonical channel names
-        and default processing.
+        A protocol whose [read], [channels], [balance], [speed_log], [zeros] and [processing]
+        apply as in ``process`` (``{run}`` in a file pattern: the last number of the run file's
+        name); default canonical channel names and default processing. Without it, a file
+        whose channels have other names is described, a ``[read]``/``[channels]`` block is
+        proposed, and the run is reduced with that block (provisionally: a force in volts at
+        gain 1.0 stays in volts).
     png : path, optional
         Where to write the plot; default ``<run file name without extensions>.png`` in the
         current folder (``-2``, ``-3`` … added when that name holds another run's plot). A
@@ -146,23 +201,63 @@ def inspect_run(
     from towtank.reduce.run import reduce_run
 
     runfile = Path(runfile)
-    channels, p, read = _settings(protocol_path)
+    channels, p, read, protocol = _settings(protocol_path)
     raw = None
-    try:
-        raw = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
+    proposed = False
+    window: tuple[float, float] | None = None
+
+    def load():  # noqa: ANN202 - RawRun
+        from towtank.ingest.speedlog import run_speed_log
+        from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+
+        nonlocal window
+        balance = protocol.balance if protocol is not None else None
+        zeros = log = nominal = None
+        if protocol is not None:  # as process: the run's zeros file and speed log
+            number = _run_number(runfile)
+            if p.speed_source == "nominal":  # the speed (and window) of the sheet's row
+                row = _sheet_row(protocol, runfile)
+                number = int(row["run"])
+                nominal = float(row.get("speed_nominal", math.nan))
+                if not (math.isfinite(nominal) and nominal > 0):
+                    raise RunError(f"the run sheet gives {runfile.name} no speed_nominal, and "
+                                   "speed_source = \"nominal\" takes the speed from there")
+                ws, we = row.get("window_start_s", math.nan), row.get("window_end_s", math.nan)
+                if math.isfinite(ws) and math.isfinite(we):
+                    window = (float(ws), float(we))
+            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
+                                    channels, read, balance)
+            log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
+        run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read)
-        red = reduce_run(raw, p, run=0, file=runfile.name)
+                       options=read, balance=balance, speed_log=log, speed_nominal=nominal)
+        return run if zeros is None else with_zero_levels(run, *zeros)
+
+    try:
+        try:
+            raw = load()
+        except RunError as exc:
+            if protocol_path is not None or not _missing_channel(exc.reason):
+                raise
+            proposal = _describe(runfile, read, out)
+            if proposal is None:  # nothing recognised: the protocol must name the channels
+                raise
+            proposed = True
+            read, channels = proposal
+            raw = load()
+        red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "
         hint = ""
-        if "missing" in reason and "columns found" in reason:
+        if proposed:
+            hint = " (read with the block proposed above)." + (
+                " Complete the block, paste it into the campaign's protocol and give it with "
+                "--protocol PROTOCOL.toml." if _missing_channel(reason) else "")
+        elif _missing_channel(reason):
             hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
-                    "[channels] mapping names the lab's columns; what the file holds and a "
-                    "block to start the protocol from are printed above.")
-            _describe(runfile, read, out)
-        stop = "" if reason.endswith(("?", "!")) else "."
+                    "[channels] mapping names the lab's columns.")
+        stop = "" if reason.endswith(("?", "!")) or hint.startswith(" (") else "."
         print(f"towtank: {head}{reason}{stop}{hint}", file=err)
         if raw is not None:  # read but not reduced: exactly when a look at it helps
             target = _target(runfile, png, err, out)
@@ -170,12 +265,18 @@ def inspect_run(
                 _write_preview(raw, target, f"{head}{reason}{stop}", runfile)
                 print(f"plot: {target} (the calibrated traces, no zero, no phases)", file=out)
         return EXIT_RUN_ERROR
+    if proposed:
+        print("reduced with the block above and default processing (provisional: check each "
+              "line; a force at gain = 1.0 from volts is in volts, not newtons):", file=out)
     for line in summary_lines(red, raw.columns, t0=float(raw.time[0])):
         print(line, file=out)
     target = _target(runfile, png, err, out)
     if target is None:  # refused to overwrite (an error), or not beside the raw data unasked
         return EXIT_RUN_ERROR if png is not None else EXIT_OK
-    write_plot(red, target, protocol_path, runfile)
+    volts = any("with the stated gain 1.0" in n for n in red.notes)
+    write_plot(red, target, protocol_path, runfile,
+               settings=("proposed [channels]" + ("; forces in V" if volts else ""))
+               if proposed else None)
     print(f"plot: {target}", file=out)
     return EXIT_OK
 
@@ -245,7 +346,7 @@ def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa
 
 
 def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
-               runfile: str | Path | None = None) -> Path:
+               runfile: str | Path | None = None, settings: str | None = None) -> Path:
     """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
     from towtank.report.figures import fig_run
 
@@ -256,7 +357,7 @@ def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None =
                else "")
             + f";  {red.fs:g} Hz"
             + (f";  settings of {Path(protocol_path).name}" if protocol_path else
-               ";  canonical channels, default processing"))
+               f";  {settings or 'canonical channels, default processing'}"))
     fig = fig_run(red, title, note)
     _save(fig, path, str(Path(runfile).resolve()) if runfile is not None else "")
     return path

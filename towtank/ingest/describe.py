@@ -46,6 +46,8 @@ class FileDescription:
     fs: float = float("nan")
     layout: dict[str, str] | None = None
     guesses: dict[str, str] = field(default_factory=dict)
+    #: forces whose load cells are summed (``drag`` → ``["DragL", "DragR"]``)
+    parts: dict[str, list[str]] = field(default_factory=dict)
 
     def lines(self) -> list[str]:
         """The account printed by ``towtank inspect``."""
@@ -95,11 +97,102 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
                        "or map a time column")
     else:
         desc.timing = "none found: give [read] sample_rate_hz or map a time column"
+    desc.parts = force_parts(names)
+    in_parts = {c for cells in desc.parts.values() for c in cells}
     for c in names:
-        canon = _guess(c)
+        canon = next((k for k, cells in desc.parts.items() if c in cells), None)
+        if canon is None and c not in in_parts:
+            canon = _guess(c)
         if canon and canon not in desc.guesses:
             desc.guesses[canon] = c
     return desc
+
+
+#: Words that mark one load cell of several carrying one force: a pair (left/right, port/
+#: starboard, fore/aft, a/b) or numbered cells (Fx1, Fx2 ...). Families [lower case].
+_SIDE_FAMILIES = (
+    ("l", "r"), ("left", "right"), ("lh", "rh"), ("port", "stbd", "starboard"), ("ps", "sb"),
+    ("fwd", "aft", "fore"), ("front", "rear", "back"), ("a", "b"), ("upper", "lower"),
+)
+_SIDE_WORDS = sorted({w for fam in _SIDE_FAMILIES for w in fam}, key=len, reverse=True)
+_SIDE_TOKEN = re.compile(r"(?i)(" + "|".join(_SIDE_WORDS) + r"|\d+)")
+
+
+def _side_tokens(name: str) -> list[tuple[str, str]]:
+    """(base with the token taken out, token) for each place in ``name`` where a word marking
+    one cell of several stands (``DragL`` → (``drag\0``, ``l``)); the unit in brackets is
+    left out of the base. A token stands alone: between separators, at a change from lower to
+    upper case (``DragL``, ``LeftDrag``), or, for a number, after letters (``Fx1``)."""
+    core = re.sub(r"[\(\[][^\)\]]*[\)\]]\s*$", "", name).rstrip()
+    out = []
+    for m in _SIDE_TOKEN.finditer(core):
+        i, j, tok = m.start(), m.end(), m.group()
+        before = core[i - 1] if i > 0 else ""
+        after = core[j] if j < len(core) else ""
+        if tok.isdigit():
+            ok_before = before == "" or not before.isdigit()
+            ok_after = after == "" or not after.isalnum()
+        else:
+            ok_before = before == "" or not before.isalnum() or (
+                before.islower() and tok[0].isupper())
+            ok_after = after == "" or not after.isalnum() or (
+                len(tok) > 1 and after.isupper())
+        if ok_before and ok_after:
+            out.append(((core[:i] + "\0" + core[j:]).lower(), tok.lower()))
+    return out
+
+
+def _one_family(tokens: set[str]) -> bool:
+    if all(t.isdigit() for t in tokens):
+        return True
+    return any(tokens <= set(fam) for fam in _SIDE_FAMILIES)
+
+
+def force_parts(names: list[str]) -> dict[str, list[str]]:
+    """Channels that look like the load cells of one force, by force: ``{"drag": ["DragL",
+    "DragR"]}`` for a file holding ``DragL`` and ``DragR`` (or ``Fx1``/``Fx2``, ``Fx port``/
+    ``Fx stbd``, ``Drag_a``/``Drag_b`` ...). Names that differ only in one such word of one
+    family, and whose common part names a force (drag or lift by :func:`guess`), are one
+    force's parts, in the file's order; the first group found per force is kept."""
+    groups: dict[str, list[tuple[str, str]]] = {}
+    for name in names:
+        for base, tok in _side_tokens(name):
+            groups.setdefault(base, []).append((name, tok))
+    out: dict[str, list[str]] = {}
+    for base, members in groups.items():
+        cells = list(dict.fromkeys(n for n, _ in members))
+        tokens = {t for _, t in members}
+        if len(cells) < 2 or len(tokens) != len(cells) or not _one_family(tokens):
+            continue
+        canon = guess(base.replace("\0", " "))
+        if canon in ("drag", "lift") and canon not in out and \
+                not any(c in v for v in out.values() for c in cells):
+            out[canon] = sorted(cells, key=names.index)
+    return out
+
+
+def unmapped_forces(columns: list[str] | tuple[str, ...], used: set[str]) -> list[str]:
+    """Channels of a file that look like a force, or a part of one, and are mapped to nothing:
+    a cell of a split force (:func:`force_parts`) beside a mapped one, and any channel named as
+    a drag (``DragR`` when only ``DragL`` is mapped). ``used`` holds the mapped column names
+    (each cell of a ``columns`` sum); TDMS ``group/channel`` aliases are left out."""
+    names = [c for c in columns if not c.startswith("__")
+             and not ("/" in c and c.split("/", 1)[1] in columns)]
+    used_s = {u.strip() for u in used}
+    free = [c for c in names if c.strip() not in used_s]
+    parts = force_parts(names)
+    out = []
+    for c in free:
+        sibling = any(c in cells and any(x.strip() in used_s for x in cells)
+                      for cells in parts.values())
+        if sibling or guess(c) == "drag":
+            out.append(c)
+    return out
+
+
+def guess(column: str) -> str | None:
+    """The canonical channel a column's name suggests (:data:`_GUESSES`), or None."""
+    return _guess(column)
 
 
 def _guess(column: str) -> str | None:
@@ -117,8 +210,10 @@ def _toml_string(text: str) -> str:
 def protocol_block(desc: FileDescription) -> str:
     """``[read]`` and ``[channels]`` tables for a protocol, from what the file holds.
 
-    Channels in volts get a ``gain`` placeholder to fill in (N per V); channels not recognised
-    by name are listed as comments.
+    Channels in volts get a ``gain = 1.0`` placeholder to fill in (N per V: as it stands the
+    block reads the run with forces in volts); the load cells of one force (``DragL``,
+    ``DragR``) are summed with ``columns = [...]``; channels not recognised by name are listed
+    as comments. Pasted into a protocol, the block reads the file as it is.
     """
     lines = ["[read]", f"format = {_toml_string(desc.format.split(' ')[0])}"]
     if desc.layout:
@@ -133,13 +228,23 @@ def protocol_block(desc: FileDescription) -> str:
         col = desc.guesses.get(canon)
         if col is None:
             continue
-        entry = f"column = {_toml_string(col)}"
-        if re.fullmatch(r"m?V", units.get(col, "")):
-            entry += ", gain = 1.0, offset = 0.0   # <- N per V from the calibration"
-            lines.append(f"{canon} = {{ {entry.split('   #')[0]} }}   #{entry.split('   #')[1]}")
-            continue
-        lines.append(f"{canon} = {{ {entry} }}")
-    rest = [n for n, _, _ in desc.channels if n not in desc.guesses.values()]
+        cells = desc.parts.get(canon)
+        if cells:
+            entry = "columns = [" + ", ".join(_toml_string(c) for c in cells) + "]"
+        else:
+            entry = f"column = {_toml_string(col)}"
+        volts = [u for u in (units.get(c, "") for c in (cells or [col]))
+                 if re.fullmatch(r"[mµu]?V", u)]
+        comment = f"   # the sum of {len(cells)} load cells" if cells else ""
+        if volts:
+            entry += ", gain = 1.0, offset = 0.0"
+            comment = (f"   # <- N per {volts[0]} from the calibration (1.0: forces in "
+                       f"{volts[0]})" + (f"; the sum of {len(cells)} load cells" if cells
+                                         else ""))
+        lines.append(f"{canon} = {{ {entry} }}{comment}")
+    mapped = {c for canon in desc.guesses for c in desc.parts.get(canon, [])} | set(
+        desc.guesses.values())
+    rest = [n for n, _, _ in desc.channels if n not in mapped]
     if rest:
         lines.append("# not recognised: " + ", ".join(repr(n) for n in rest))
     return "\n".join(lines) + "\n"

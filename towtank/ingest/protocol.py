@@ -32,6 +32,7 @@ from towtank.ingest.schema import (  # noqa: F401  (SCHEMA, TOP_LEVEL: public na
     _positive,
     _section,
     _suggest,
+    check_keys,
 )
 from towtank.ingest.sections import (  # noqa: F401
     MASS_RATIO_RANGE,
@@ -80,6 +81,10 @@ class ChannelMap:
     gain: float = 1.0
     offset: float = 0.0
     columns: tuple[str, ...] = ()
+    #: True when [channels] states a gain or an offset (even ``gain = 1.0``): a column in volts
+    #: is then taken as calibrated (N per V as given), not refused. Set by the parser from the
+    #: keys present; not a protocol key (the [channels] schema does not accept it).
+    calibrated: bool = False
 
 
 @dataclass(frozen=True)
@@ -461,6 +466,11 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     processing = _processing(data.get("processing", {}), src)
     report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
     read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+    if processing.speed_source == "nominal" and ("speed_log" in data or "speed" in channels):
+        given = "[speed_log]" if "speed_log" in data else "[channels] speed"
+        raise ProtocolError(
+            f"{src}: [processing] speed_source = \"nominal\" takes each run's speed from the "
+            f"run sheet, but {given} gives a measured one: keep one of the two.")
 
     warnings = _unit_warnings(model, fin, water, prototype) + _air_notes(
         water, model, "water" in data.get("prototype", {}) if prototype else True)
@@ -633,6 +643,17 @@ def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
     )
 
 
+def read_and_channels(data: dict[str, Any], src: str
+                      ) -> tuple[ReadOptions, dict[str, ChannelMap]]:
+    """The ``[read]`` and ``[channels]`` of a protocol fragment (a parsed TOML table, such as
+    the block ``towtank inspect`` proposes), checked exactly as :func:`load_protocol` checks
+    them (ProtocolError otherwise)."""
+    check_keys(data, ["read", "channels"], "fragment", src)
+    channels = _channels(data["channels"], src) if "channels" in data else {}
+    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+    return read, channels
+
+
 def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
     """``[channels]``: each channel's column (or summed load cells), gain and offset."""
     channels: dict[str, ChannelMap] = {}
@@ -648,6 +669,7 @@ def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
             )
         if "columns" in c:
             c["column"] = " + ".join(c["columns"])
+        c["calibrated"] = "gain" in c or "offset" in c
         channels[name] = ChannelMap(**c)
     return channels
 

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest.extensions import EXTENSIONS  # noqa: F401 - public here too
 
 UNITS_KEY = "__units__"
 WF_TIME_KEY = "__wf_time__"
@@ -51,11 +52,6 @@ FS_ERROR_KEY = "__fs_error__"
 LABEL_KEY = "__label__"
 
 #: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
-EXTENSIONS = {
-    ".csv": "csv", ".txt": "text", ".dat": "text", ".asc": "text", ".tsv": "text",
-    ".tdms": "tdms", ".lvm": "lvm", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
-    ".hdf": "hdf5", ".he5": "hdf5", ".h5m": "hdf5",
-}
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
 DELIMITERS = {"auto": None, ",": ",", ";": ";", "\t": "\t", "tab": "\t",
               "whitespace": "whitespace", " ": "whitespace"}
@@ -714,6 +710,11 @@ def column_unit(column: str, stated: dict[str, str]) -> str | None:
         return stated[column].strip()
     m = _UNIT_IN_NAME.search(column)
     return m.group(1).strip() if m else None
+
+
+def is_volts(unit: str | None) -> bool:
+    """True for a unit of voltage (V, mV, µV): a raw bridge or amplifier signal."""
+    return bool(unit) and unit.strip().lower() in _VOLTS  # type: ignore[union-attr]
 
 
 def unit_factor(canon: str, unit: str | None, column: str, name: str) -> float:

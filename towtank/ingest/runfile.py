@@ -19,6 +19,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import io
+import math
 import os
 import zlib
 from dataclasses import dataclass, field
@@ -39,6 +40,7 @@ from towtank.ingest.readers import (
     ReadOptions,
     column_unit,
     file_format,
+    is_volts,
     plain_csv,
     read_lvm_columns,
     read_tdms_columns,
@@ -81,6 +83,9 @@ class RawRun:
     notes: list[str] = field(default_factory=list)
     #: drag and lift zeros [N] from the run's zeros file (``[zeros]``), else None
     zero_levels: dict[str, float] | None = None
+    #: the run sheet's set speed [m/s] of a run without a measured speed (``speed_source =
+    #: "nominal"``; ``speed`` then holds 0), else NaN
+    speed_nominal: float = math.nan
 
     @property
     def n(self) -> int:
@@ -690,7 +695,12 @@ def calibrate(
         else:
             column = used.get(canon, cm.column)
             unit = column_unit(column, units)
-            factor = unit_factor(canon, unit, column, name)
+            if cm.calibrated and is_volts(unit):  # a stated gain of 1 N per V (or V per V)
+                notes.append(f"{canon} taken from {unit} with the stated gain 1.0 "
+                             f"(1 SI unit per {unit})")
+                factor = 1.0
+            else:
+                factor = unit_factor(canon, unit, column, name)
             if factor != 1.0:
                 arr = arr * factor
                 notes.append(f"{canon} converted from {unit} to SI (×{factor:g})")
@@ -730,6 +740,7 @@ def load_run(
     options: ReadOptions | None = None,
     balance: Balance | None = None,
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
+    speed_nominal: float | None = None,
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -756,6 +767,10 @@ def load_run(
     speed_log : tuple, optional
         (time on the run's clock [s], carriage speed [m/s], file name) of the run's speed log
         (:mod:`towtank.ingest.speedlog`): the speed comes from it, not from the run file.
+    speed_nominal : float, optional
+        The run sheet's set speed [m/s] for a run without a measured speed (``[processing]
+        speed_source = "nominal"``): no speed channel is read; ``RawRun.speed`` holds 0 and
+        ``RawRun.speed_nominal`` this value.
 
     Raises
     ------
@@ -766,7 +781,7 @@ def load_run(
         data = file_bytes(path)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
-                         options or ReadOptions(), balance, speed_log)
+                         options or ReadOptions(), balance, speed_log, speed_nominal)
 
 
 def _load_run(
@@ -779,6 +794,7 @@ def _load_run(
     options: ReadOptions,
     balance: Balance | None = None,
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
+    speed_nominal: float | None = None,
 ) -> RawRun:
     """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
     (:func:`calibrate`) -> time base -> gaps, clipping, spikes, ranges."""
@@ -789,15 +805,16 @@ def _load_run(
     rows = cols.pop(_ROWS_KEY, None)
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
     used: dict[str, str] = {}
-    external = ("speed",) if speed_log is not None else ()
+    nominal = speed_nominal is not None
+    external = ("speed",) if speed_log is not None or nominal else ()
     chans = map_channels(cols, mapping, name, used=used, balance=balance, external=external,
                          fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
     if FS_ERROR_KEY in cols and used.get("time") in cols:
         notes.append(f"{cols[FS_ERROR_KEY].item()}: ignored (the time column gives the time)")
-    if speed_log is not None:  # a placeholder until the time base is known
+    if speed_log is not None or nominal:  # a placeholder until the time base is known
         chans["speed"] = np.zeros(np.asarray(chans["time"]).size)
-        used["speed"] = "[speed_log]"
+        used["speed"] = "[speed_log]" if speed_log is not None else "[nominal]"
 
     sizes = {k: int(np.asarray(v).size) for k, v in chans.items()}
     if len(set(sizes.values())) > 1:
@@ -851,6 +868,7 @@ def _load_run(
         sha256=digest,
         columns=tuple(c for c in cols if not c.startswith("__")),
         notes=notes,
+        speed_nominal=float(speed_nominal) if nominal else math.nan,  # type: ignore[arg-type]
     )
 
 

@@ -37,6 +37,8 @@ class Processing:
     zero_at: str = "before_motion"
     drift: str = "linear"
     drift_settle_s: float = 1.0
+    speed_source: str = "measured"
+    speed_tolerance: float = 0.005
 
     @property
     def trim(self) -> float:
@@ -320,10 +322,12 @@ _PROCESSING_RANGES = {
     "nominal_tolerance": (0.0, 1.0),
     "damping_alpha_max_deg": (0.0, 90.0),
     "drift_settle_s": (0.0, 60.0),
+    "speed_tolerance": (0.0, 0.5),
 }
 #: [processing] keys that take one of a few words.
 _PROCESSING_CHOICES = {
     "zero_at": ("before_motion", "file_start"),
+    "speed_source": ("measured", "nominal"),
     "drift": ("linear", "none"),
 }
 

@@ -89,6 +89,11 @@ class RunReduction:
     series: dict[str, np.ndarray] | None = None
     drag_mean: float = math.nan
     lift_mean: float = math.nan
+    #: "measured" (a speed channel or log), or "nominal": the run sheet's set speed of a run
+    #: without a measured speed ([processing] speed_source = "nominal")
+    speed_source: str = "measured"
+    #: standard uncertainty of a set speed [m/s]: speed_tolerance·U/√3 (NaN when measured)
+    speed_u: float = math.nan
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -184,7 +189,10 @@ def reduce_run(
     low-pass for every channel), :func:`find_phases`, :func:`choose_steady_window` (detected
     or set by hand), :func:`zero_forces` (zero and drift from the filtered forces, with the
     drift check), :func:`check_force_signal` (a dead channel), :func:`nominal_checks`,
-    :func:`fit_samples` and :func:`thumbnail`.
+    :func:`fit_samples` and :func:`thumbnail`. A run without a measured speed
+    (``raw.speed_nominal`` set: ``speed_source = "nominal"``) goes to :func:`reduce_nominal`;
+    a run whose zero does not come from the still window before the carriage moves (a zeros
+    file, ``zero_at = "file_start"``) may start in motion.
 
     Parameters
     ----------
@@ -205,10 +213,14 @@ def reduce_run(
     keep_series : bool
         Keep the whole conditioned run in ``series`` (for the export; never cached).
     """
+    if math.isfinite(raw.speed_nominal):
+        return reduce_nominal(raw, processing, run=run, file=file, window_s=window_s,
+                              keep_series=keep_series)
     fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
     filt, speed_f, accel_f = filter_channels(raw, p)
-    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None)
+    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None,
+                     still_required=not raw.zero_levels and p.zero_at == "before_motion")
     windows = ph.windows_s(t)
     steady, window_source, manual_warnings = choose_steady_window(
         t, speed_f, ph, windows, window_s, p, notes
@@ -267,6 +279,138 @@ def reduce_run(
     )
 
 
+#: A run without a measured speed has its drift taken to the file's last still window only
+#: when the force there is within this fraction of the plateau force of its zero, and flat
+#: within it too (the carriage back at rest, not a file that ends while towing or braking).
+NOMINAL_REST_FRACTION = 0.25
+NOMINAL_REST_FLAT = 0.1
+
+
+def rest_at_end(t: np.ndarray, drag_f: np.ndarray, steady: tuple[int, int], fs: float,
+                p: Processing) -> tuple[int, int] | None:
+    """The file's last ``zero_window_s`` (clear of the end by ``trim_s``) as a post-run still
+    window of a run without a measured speed, when the force shows the carriage at rest there:
+    at least ``max(drift_settle_s, 1 s)`` after the steady window, within
+    :data:`NOMINAL_REST_FRACTION` of the plateau force of its zero and flat within
+    :data:`NOMINAL_REST_FLAT` of it (``drag_f`` [N] zeroed at the file's start); else None."""
+    n = t.size
+    end = n - int(round(p.trim * fs))
+    start = end - max(int(p.zero_window_s * fs), 2)
+    if start < steady[1] + int(max(p.drift_settle_s, 1.0) * fs) or start < 0:
+        return None
+    level = abs(float(np.mean(drag_f[steady[0]:steady[1]])))
+    x = drag_f[start:end]
+    if abs(float(np.mean(x))) > NOMINAL_REST_FRACTION * level or \
+            float(np.ptp(x)) > NOMINAL_REST_FLAT * level:
+        return None
+    return start, end
+
+
+def reduce_nominal(
+    raw: RawRun,
+    p: Processing,
+    *,
+    run: int,
+    file: str,
+    window_s: tuple[float, float] | None = None,
+    keep_series: bool = False,
+) -> RunReduction:
+    """Reduce a run without a measured speed (``[processing] speed_source = "nominal"``).
+
+    The speed is the run sheet's set speed U (``raw.speed_nominal``) over the steady window,
+    with the standard uncertainty of a rectangular tolerance, u(U) = speed_tolerance·U/√3
+    (GUM, JCGM 100:2008, §4.3.7). The steady window is the sheet's (``window_s``), else the
+    force's plateau (:func:`towtank.signal.phases.force_plateau`). The zero is the zeros file's
+    (``[zeros]``), else the filtered force's mean over the file's first ``zero_window_s`` (no
+    speed tells when the carriage moves). With ``drift = "linear"`` and the file ending at rest
+    by its force (:func:`rest_at_end`), the drift to that last window is removed as for any run
+    (with the same check, :func:`towtank.signal.drift.drift_verdict`); else the zero is held.
+    No acceleration is known: such a run gives no sample to an added-mass fit (its steady
+    samples have U = the set speed and a = 0).
+    """
+    fs, t = raw.fs, raw.time
+    u_set = float(raw.speed_nominal)
+    notes = list(raw.notes)
+    if not u_set > 0:
+        raise RunError("speed_source = \"nominal\" needs the run's set speed, speed_nominal, "
+                       "in the run sheet")
+    if p.cutoff_hz >= 0.5 * fs:
+        raise RunError(
+            f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
+            f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered")
+    has_lift = raw.lift is not None
+    forces = [raw.drag] + ([raw.lift] if has_lift else [])
+    filt = conditioning.lowpass(np.column_stack(forces), fs, p.cutoff_hz, p.filter_order)
+    levels = raw.zero_levels or {}
+    n = t.size
+    pre = (0, min(n, max(int(p.zero_window_s * fs), 2)))
+    names = ["drag"] + (["lift"] if has_lift else [])
+    zeros = [float(levels[k]) if k in levels else float(np.mean(filt[pre[0]:pre[1], i]))
+             for i, k in enumerate(names)]
+    from_start = [k for k in names if k not in levels]
+    if window_s is not None:
+        steady = phases.manual_window(t, *window_s)
+        window_source = f"manual {window_s[0]:g}–{window_s[1]:g} s (set speed, no speed channel)"
+    else:
+        steady = phases.force_plateau(filt[:, 0], fs, zero=zeros[0], trim_s=p.trim,
+                                      min_steady_s=p.min_steady_s)
+        window_source = "from the force (set speed, no speed channel)"
+    s0, s1 = steady
+    post = rest_at_end(t, filt[:, 0] - zeros[0], steady, fs, p) if p.drift == "linear" else None
+    steady_force = max(abs(float(np.mean(filt[s0:s1, i])) - zeros[i]) for i in range(len(names)))
+    zeroed, drifts, warnings = [], [], []
+    for i, name in enumerate(names):
+        w = None if name in levels else pre
+        if post is not None:
+            verdict = drift_verdict(t, filt[:, i], w, post, steady_force, name,
+                                    level=levels.get(name))
+            if verdict.reject is not None:
+                raise RunError(verdict.reject)
+            if verdict.warning is not None:
+                notes.append(verdict.warning)
+                warnings.append(verdict.warning)
+        line, _, drift = conditioning.zero_line(t, filt[:, i], w, post, level=levels.get(name))
+        zeroed.append(filt[:, i] - line)
+        drifts.append(drift)
+    if from_start:
+        notes.append(f"no measured speed: the {' and '.join(from_start)} zero is the mean of "
+                     f"the file's first {t[pre[1] - 1] - t[0]:.2f} s")
+    notes.append(f"no measured speed: the drift is taken to the file's last "
+                 f"{t[post[1] - 1] - t[post[0]]:.2f} s, where the force is back at rest"
+                 if post is not None else
+                 "no measured speed: the zero is held constant (no drift correction: the file "
+                 "does not end at rest by its force, or drift = \"none\")")
+    drag_f = zeroed[0]
+    lift_f = zeroed[1] if has_lift else np.full(n, np.nan)
+    u_u = p.speed_tolerance * u_set / math.sqrt(3.0)
+    notes.append(f"speed: the set speed {u_set:g} m/s of the run sheet (no speed channel; "
+                 f"u = {u_u:.2g} m/s from speed_tolerance = {p.speed_tolerance:g}); no "
+                 "acceleration, so the run is not used for the added masses")
+    speed = np.full(n, np.nan)
+    speed[s0:s1] = u_set  # the set speed over the steady window; unknown elsewhere
+    accel = np.zeros(n)
+    ph = phases.Phases(still_pre=None if not from_start else pre, accel=None, steady=steady,
+                       decel=None, still_post=post, motion=steady, speed_level=u_set,
+                       accel_level=None)
+    windows = ph.windows_s(t)
+    return RunReduction(
+        run=run, file=file, sha256=raw.sha256, fs=fs, n_samples=raw.n,
+        duration_s=float(t[-1] - t[0]), windows=windows, window_source=window_source,
+        speed_level=u_set, speed_mean=u_set, speed_std=math.nan, accel_mean=math.nan,
+        zero_drag=zeros[0], drift_drag=drifts[0],
+        zero_lift=zeros[1] if has_lift else math.nan,
+        drift_lift=drifts[1] if has_lift else math.nan,
+        drag_mean_raw=float(np.mean(drag_f[s0:s1])), drag_std=float(np.std(drag_f[s0:s1])),
+        lift_mean_raw=float(np.mean(lift_f[s0:s1])) if has_lift else math.nan,
+        steady_regressors=(u_set * u_set, u_set, 0.0),
+        samples=fit_samples(t, speed, accel, drag_f, lift_f, steady, ph, math.nan, fs, p),
+        thumb=thumbnail(t, speed, accel, drag_f, lift_f, fs),
+        has_lift=has_lift, notes=notes, warnings=warnings,
+        series=series_of(t, speed, accel, drag_f, lift_f, ph, steady) if keep_series else None,
+        speed_source="nominal", speed_u=u_u,
+    )
+
+
 def series_of(
     t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, drag_f: np.ndarray,
     lift_f: np.ndarray, ph: phases.Phases, steady: tuple[int, int],
@@ -308,9 +452,11 @@ def filter_channels(
 
 def find_phases(
     t: np.ndarray, speed_f: np.ndarray, accel_f: np.ndarray, fs: float, p: Processing,
-    *, steady_required: bool,
+    *, steady_required: bool, still_required: bool = True,
 ) -> phases.Phases:
-    """The run's phases from the filtered speed, with the protocol's settings."""
+    """The run's phases from the filtered speed, with the protocol's settings; a run may start
+    in motion (``still_required`` False) when its zero comes from a zeros file or from
+    ``zero_at = "file_start"``."""
     return phases.detect_phases(
         t,
         speed_f,
@@ -324,6 +470,7 @@ def find_phases(
         steady_required=steady_required,
         zero_at=p.zero_at,
         drift_settle_s=p.drift_settle_s,
+        still_required=still_required,
     )
 
 
@@ -375,8 +522,25 @@ def zero_forces(
     windows, after :func:`towtank.signal.drift.drift_verdict` has judged the drift: a run whose
     balance had not settled after the stop is rejected, a large drift is a warning.
     ``levels`` (drag, lift [N] of a zeros file, ``[zeros]``) replace the pre-run window's means.
+    A run that starts in motion (``ph.still_pre`` None) takes a force's zero from ``levels``
+    (held from the file's start, drift to the post-run window as usual), else from the still
+    window after the stop, held constant (``zero_at = "file_start"``; no drift correction);
+    with neither it is rejected.
     """
     levels = levels or {}
+    pre = ph.still_pre
+    cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
+    after = [name for _, name in cols if pre is None and name not in levels]
+    if after:
+        if ph.still_post is None:
+            raise RunError(
+                "the file starts in motion and does not end at rest: there is no still window "
+                "for the zero (give the balance zero in a zeros file, [zeros])")
+        w = ph.still_post
+        notes.append(
+            f"the file starts in motion: the {' and '.join(after)} zero is the still window "
+            f"after the stop ({t[w[0]]:.2f}–{t[w[1] - 1]:.2f} s), held constant (no drift "
+            "correction)")
     post = ph.still_post if p.drift == "linear" else None
     if p.drift == "linear" and ph.still_post is None:
         notes.append("the file does not end at rest: zero held constant (no drift correction)")
@@ -385,15 +549,24 @@ def zero_forces(
     out: list[np.ndarray] = []
     zeros: list[float] = []
     warnings: list[str] = []
-    cols = [(1, "drag")] + ([(2, "lift")] if has_lift else [])
-    pre = ph.still_pre
+
+    def base(k: int, name: str) -> float:
+        if name in levels:
+            return float(levels[name])
+        w = pre if pre is not None else ph.still_post
+        assert w is not None
+        return float(np.mean(filt[w[0] : w[1], k]))
+
     steady_force = max(
-        abs(float(np.mean(filt[steady[0] : steady[1], k])
-                  - levels.get(name, np.mean(filt[pre[0] : pre[1], k]))))
-        for k, name in cols
+        abs(float(np.mean(filt[steady[0] : steady[1], k])) - base(k, name)) for k, name in cols
     )
     for k, name in cols:
         force = filt[:, k]
+        if name in after:  # the zero after the stop, constant
+            z = base(k, name)
+            out.append(force - z)
+            zeros += [z, 0.0]
+            continue
         if post is not None and post[1] - post[0] >= 2:
             verdict = drift_verdict(t, force, pre, post, steady_force, name,
                                     level=levels.get(name))
@@ -547,15 +720,16 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
     s = dict(red.samples)
     s["drag"] = s["drag"] - tare.drag(s["U"], s["a"])
     th = dict(red.thumb)
-    th["drag"] = th["drag"] - tare.drag(th["U"], th["a"])
     series = dict(red.series) if red.series is not None else None
-    if series is not None:
-        series["drag"] = series["drag"] - tare.drag(series["U"], series["a"])
+    # the whole-run curves need the speed at every sample: a run without a measured speed
+    # keeps its tare in them (its set speed is known over the steady window only)
+    curves = [c for c in (th, series) if c is not None and red.speed_source == "measured"]
+    for c in curves:
+        c["drag"] = c["drag"] - tare.drag(c["U"], c["a"])
     if tare.lift is not None and red.has_lift:
         s["lift"] = s["lift"] - tare.lift(s["U"], s["a"])
-        th["lift"] = th["lift"] - tare.lift(th["U"], th["a"])
-        if series is not None:
-            series["lift"] = series["lift"] - tare.lift(series["U"], series["a"])
+        for c in curves:
+            c["lift"] = c["lift"] - tare.lift(c["U"], c["a"])
     notes = list(red.notes)
     warn = list(red.warnings)
     if not tare.covers(red.speed_mean):
@@ -647,7 +821,14 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
     try:
         p = protocol.processing
         data, stamp = file_bytes_stamped(path)
-        log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
+        nominal = None
+        if p.speed_source == "nominal":  # no measured speed: the sheet's set speed
+            nominal = float(row.get("speed_nominal", math.nan))
+            if not (math.isfinite(nominal) and nominal > 0):
+                raise RunError("[processing] speed_source = \"nominal\" takes the speed from "
+                               "the run sheet, and the run has no speed_nominal there")
+        log = (run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
+               if nominal is None else None)
         zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
                                 protocol.channels, protocol.read, protocol.balance)
         raw = load_run(
@@ -660,6 +841,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             options=protocol.read,
             balance=protocol.balance,
             speed_log=log,
+            speed_nominal=nominal,
         )
         if zeros is not None:
             raw = with_zero_levels(raw, *zeros)
@@ -676,6 +858,9 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             keep_series=keep_series,
         )
+        for w in unmapped_force_warnings(protocol, raw.columns, file):
+            red.notes.append(w)
+            red.warnings.append(w)
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
@@ -693,6 +878,31 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         if debug:
             raise
         return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}", None
+
+
+def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: str
+                            ) -> list[str]:
+    """One sentence per channel of the run file that looks like a force, or a load cell of
+    one, and that no [channels] (or [balance]) entry uses: ``DragR`` beside a mapped ``DragL``
+    is half the drag left out (:func:`towtank.ingest.describe.unmapped_forces`)."""
+    from towtank.ingest.describe import force_parts, unmapped_forces
+    from towtank.ingest.protocol import channel_map
+
+    used: set[str] = set()
+    for cm in channel_map(protocol.channels).values():
+        used.update(cm.columns or (cm.column,))
+    if protocol.balance is not None:
+        used.update(protocol.balance.inputs)
+    out = []
+    parts = force_parts([c for c in columns if not c.startswith("__")])
+    for c in unmapped_forces(columns, used):
+        cells = next((v for v in parts.values() if c in v), None)
+        hint = (f"if the force is the sum of its load cells, map it as columns = "
+                f"[{', '.join(chr(34) + x + chr(34) for x in cells)}]" if cells else
+                "map it in [channels] if it is part of a force")
+        out.append(f"{file}: the channel '{c}' looks like a force or a load cell of one, but "
+                   f"no [channels] entry uses it, so it is in no force ({hint})")
+    return out
 
 
 def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:

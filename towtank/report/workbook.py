@@ -68,7 +68,8 @@ UNITS: dict[str, str] = {
     "angle_deg": "deg", "speed_mean": "m/s", "accel_mean": "m/s²", "drag_mean": "N",
     "lift_mean": "N", "tare_drag": "N", "cd": "-", "cl": "-", "re": "-", "fn": "-",
     "speed_nominal": "m/s", "accel_nominal": "m/s²", "water_temp_C": "°C", "rho": "kg/m³",
-    "nu": "m²/s", "speed_std": "m/s", "drag_std": "N", "lift_tare": "N", "cd_lateral": "-",
+    "nu": "m²/s", "speed_std": "m/s", "speed_u": "m/s", "drag_std": "N", "lift_tare": "N",
+    "cd_lateral": "-",
     "zero_drag": "N", "drift_drag": "N", "zero_lift": "N", "drift_lift": "N", "fs_hz": "Hz",
     "n_samples": "-", "window_start_s": "s", "window_end_s": "s",
     # tare.csv

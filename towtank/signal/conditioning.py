@@ -89,7 +89,7 @@ def derivative(x: np.ndarray, fs: float) -> np.ndarray:
 def zero_line(
     t: np.ndarray,
     force: np.ndarray,
-    pre: tuple[int, int],
+    pre: tuple[int, int] | None,
     post: tuple[int, int] | None,
     level: float | None = None,
 ) -> tuple[np.ndarray, float, float]:
@@ -101,8 +101,9 @@ def zero_line(
         Time [s].
     force : ndarray
         Raw force channel [N].
-    pre : tuple of int
-        Index range [i0, i1) of the still window before the carriage moves.
+    pre : tuple of int or None
+        Index range [i0, i1) of the still window before the carriage moves; None for a run
+        that starts in motion (then ``level`` is required and holds at the file's start).
     post : tuple of int or None
         Index range of the still window after the carriage stops, if the file ends at rest.
     level : float, optional
@@ -118,11 +119,13 @@ def zero_line(
     drift : float
         Post-run minus pre-run zero [N] (0 without a post window).
     """
-    z0 = float(np.mean(force[pre[0] : pre[1]])) if level is None else float(level)
+    if pre is None and level is None:
+        raise ValueError("zero_line needs the pre-run window or a level")
+    z0 = float(np.mean(force[pre[0] : pre[1]])) if level is None else float(level)  # type: ignore[index]
     if post is None or post[1] - post[0] < 2:
         return np.full(t.shape, z0), z0, 0.0
     z1 = float(np.mean(force[post[0] : post[1]]))
-    t0 = float(np.mean(t[pre[0] : pre[1]]))
+    t0 = float(t[0]) if pre is None else float(np.mean(t[pre[0] : pre[1]]))
     t1 = float(np.mean(t[post[0] : post[1]]))
     slope = (z1 - z0) / (t1 - t0) if t1 > t0 else 0.0
     return z0 + slope * (t - t0), z0, z1 - z0

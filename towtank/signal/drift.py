@@ -62,7 +62,7 @@ def _trend_residual_std(x: np.ndarray) -> float:
 def drift_verdict(
     t: np.ndarray,
     force_f: np.ndarray,
-    pre: tuple[int, int],
+    pre: tuple[int, int] | None,
     post: tuple[int, int],
     steady_force: float,
     channel: str = "drag",
@@ -77,7 +77,9 @@ def drift_verdict(
     force_f : ndarray
         Low-pass filtered force, zero not removed [N].
     pre, post : tuple of int
-        Index windows [i0, i1) of the still windows before and after the run.
+        Index windows [i0, i1) of the still windows before and after the run; ``pre`` None for
+        a run that starts in motion with ``level`` given (its zero then holds at the file's
+        start, and the noise is measured on the post window).
     steady_force : float
         The run's steady force with the pre-run zero removed, the larger of its drag and lift
         [N].
@@ -90,11 +92,15 @@ def drift_verdict(
     -------
     DriftVerdict
     """
-    a, b = force_f[pre[0] : pre[1]], force_f[post[0] : post[1]]
+    b = force_f[post[0] : post[1]]
+    a = b if pre is None else force_f[pre[0] : pre[1]]
+    if pre is None and level is None:
+        raise ValueError("drift_verdict needs the pre-run window or a level")
     z0 = float(np.mean(a)) if level is None else float(level)
     z1 = float(np.mean(b))
     drift = z1 - z0
-    t0, t1 = float(np.mean(t[pre[0] : pre[1]])), float(np.mean(t[post[0] : post[1]]))
+    t0 = float(t[0]) if pre is None else float(np.mean(t[pre[0] : pre[1]]))
+    t1 = float(np.mean(t[post[0] : post[1]]))
     rate = drift / (t1 - t0) if t1 > t0 else 0.0
     half = b.size // 2
     tb = t[post[0] : post[1]]

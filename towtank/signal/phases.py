@@ -25,9 +25,10 @@ PHASE_NAMES = ("still_pre", "accel", "steady", "decel", "still_post")
 
 @dataclass(frozen=True)
 class Phases:
-    """Index windows [i0, i1) of a run's phases; ``None`` where a phase is absent."""
+    """Index windows [i0, i1) of a run's phases; ``None`` where a phase is absent (``still_pre``
+    only when the zero does not need it: a run that starts in motion)."""
 
-    still_pre: tuple[int, int]
+    still_pre: tuple[int, int] | None
     accel: tuple[int, int] | None
     steady: tuple[int, int] | None  # None only when detected with steady_required=False
     decel: tuple[int, int] | None
@@ -67,6 +68,7 @@ def detect_phases(
     steady_required: bool = True,
     zero_at: str = "before_motion",
     drift_settle_s: float = 0.0,
+    still_required: bool = True,
 ) -> Phases:
     """Split a run into its phases from the filtered speed.
 
@@ -101,6 +103,11 @@ def detect_phases(
         False when the steady window is set by hand in the run sheet: a run whose plateau is
         not found (too short, too unsteady) then still gets its still, acceleration and
         deceleration windows, with ``steady`` None, split at the peak speed.
+    still_required : bool, default True
+        False when the zero does not come from the still window before the carriage moves (a
+        zeros file, or ``zero_at = "file_start"``): a run that starts in motion, or with a still
+        stretch shorter than ``min_still_s``, then gets ``still_pre`` None and its phases start
+        with the acceleration or the steady speed.
 
     Returns
     -------
@@ -109,8 +116,9 @@ def detect_phases(
     Raises
     ------
     RunError
-        The carriage never moves, there is no still window before it moves, or (with
-        ``steady_required``) the speed never settles on a plateau.
+        The carriage never moves, there is no still window before it moves (with
+        ``still_required``), or (with ``steady_required``) the speed never settles on a
+        plateau.
     """
     n = speed.size
     # peaks held for a stated time, not percentiles of the file: independent of the run's length
@@ -130,12 +138,17 @@ def detect_phases(
     assert motion is not None
     margin = int(round((trim_s + 0.1) * fs))
     pre_end = motion[0] - margin
+    pre: tuple[int, int] | None
     if pre_end < int(min_still_s * fs):
-        raise RunError(
-            f"there is no still window before the carriage moves (motion starts at "
-            f"t = {t[motion[0]]:.2f} s): the zero cannot be found"
-        )
-    if zero_at == "file_start":
+        if still_required:
+            raise RunError(
+                f"there is no still window before the carriage moves (motion starts at "
+                f"t = {t[motion[0]]:.2f} s): the zero cannot be found (a run that starts in "
+                "motion needs its zero from a zeros file, [zeros], or zero_at = "
+                "\"file_start\" with the still window after the stop)"
+            )
+        pre = None
+    elif zero_at == "file_start":
         pre = (0, min(pre_end, max(int(zero_window_s * fs), 2)))
     else:
         pre = (max(0, pre_end - int(zero_window_s * fs)), pre_end)
@@ -297,3 +310,75 @@ def manual_window(t: np.ndarray, start_s: float, end_s: float) -> tuple[int, int
             f"(the file spans {t[0]:.2f}–{t[-1]:.2f} s)"
         )
     return i0, i1
+
+
+#: Half-width of the force plateau's band as a fraction of its level [-] (a force is noisier,
+#: relative to its level, than a carriage speed).
+FORCE_PLATEAU_TOLERANCE = 0.05
+
+
+def force_plateau(
+    force: np.ndarray,
+    fs: float,
+    *,
+    zero: float,
+    trim_s: float = 0.375,
+    min_steady_s: float = 0.5,
+    tolerance: float = FORCE_PLATEAU_TOLERANCE,
+) -> tuple[int, int]:
+    """The steady window of a run without a measured speed, from its filtered force.
+
+    With the zero removed, x = F − F₀, the plateau is where x is flat and away from zero: the
+    spread (max − min) of x over a sliding ``min_steady_s`` is within max(``tolerance``·|x̄|,
+    2 s₀) of its centre x̄ (s₀ the spread of the calmest tenth of the run: the noise), and |x̄|
+    exceeds max(3 s₀, 2 % of the sustained peak of |x|). The longest such stretch, trimmed by
+    ``trim_s`` at each end, is the steady window. The ramps are not flat (the drag grows with
+    the speed under the constant inertia force), and a flat stretch inside them is shorter
+    than the plateau, which is the longest stretch of constant force in a tow.
+
+    Parameters
+    ----------
+    force : ndarray
+        Low-pass filtered force, zero not removed [N].
+    fs : float
+        Sample rate [Hz].
+    zero : float
+        The force's zero [N].
+    trim_s, min_steady_s : float
+        Cut from each end of the plateau, and the shortest usable window after it [s].
+    tolerance : float
+        Half-width of the band as a fraction of the plateau level [-].
+
+    Returns
+    -------
+    tuple of int
+        The steady window [i0, i1).
+
+    Raises
+    ------
+    RunError
+        The force shows no plateau long enough (give the window in the run sheet).
+    """
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    x = np.asarray(force, dtype=float) - zero
+    w = max(3, int(min_steady_s * fs))
+    hi, lo = maximum_filter1d(x, w, mode="nearest"), minimum_filter1d(x, w, mode="nearest")
+    spread, mid = hi - lo, 0.5 * (hi + lo)
+    s0 = quantile(spread, 0.1)
+    peak = sustained_peak(np.abs(x), max(3, w // 2))
+    moving = np.abs(mid) > max(3.0 * s0, 0.02 * peak)
+    flat = spread <= np.maximum(tolerance * np.abs(mid), 2.0 * s0)
+    plateau = longest_run(close_gaps(flat & moving, int(0.1 * fs)))
+    if plateau is None:
+        raise RunError("the force never leaves its zero on a plateau, so no steady window can "
+                       "be found from it: give window_start_s and window_end_s in the run sheet")
+    steady = _trim(plateau, int(round(trim_s * fs)), int(min_steady_s * fs))
+    if steady is None:
+        level = float(np.median(x[plateau[0]:plateau[1]]))
+        raise RunError(
+            f"the force never settles on a plateau long enough to measure (longest flat "
+            f"stretch {(plateau[1] - plateau[0]) / fs:.2f} s at {level:.4g} N, {min_steady_s:g} "
+            f"s needed after trimming {trim_s:g} s at each end): give window_start_s and "
+            "window_end_s in the run sheet")
+    return steady

@@ -462,6 +462,13 @@ def _make_day(
         truth.runs[int(number)] = {**row, "water_temp_C": temp, **run_truth}
 
     columns: tuple[str, ...] = SHEET_COLUMNS
+    if file_format == "no-speed":  # the lab's steady windows: the set speed has no trace
+        from towtank.testing.layouts import NO_SPEED_WINDOW_MARGIN_S as m
+
+        columns += ("window_start_s", "window_end_s")
+        rows = [{**row, "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
+                 "window_end_s": round(truth.runs[row["run"]]["t_plateau_end"] - m, 3)}
+                for row in rows]
     if test_date is not None:  # the sheet only: truth.json is the same with or without it
         columns += ("date",)
         rows = [{**row, "date": test_date} for row in rows]

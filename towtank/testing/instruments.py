@@ -496,6 +496,8 @@ def write_run_file(
 
             write_zero_file(out, path, time_col,
                             "speed" if channel_style == "canonical" else lab.speed)
+        if layout == "no-speed":
+            out = out.drop(columns=["speed" if channel_style == "canonical" else lab.speed])
         if layout in ("speed-log", "position-log"):
             from towtank.testing.layouts import write_carriage_log
 

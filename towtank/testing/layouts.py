@@ -25,6 +25,9 @@ speed-log         .csv         no speed column; the carriage speed in ``run_NNN_
 position-log      .csv         as speed-log, but the log holds the encoder's position ``x (mm)``
 zero-file         .csv         the plain run file, and the balance at rest before the run in
                                ``run_NNN_zero.csv`` (the lab's zeros file, 1.5 s)
+no-speed          .csv         no speed channel at all (a speed log not kept): the run sheet
+                               gives the set speed and each run's steady window
+                               (``window_start_s``, ``window_end_s``)
 ================  ===========  ===================================================================
 
 Names that are not MATLAB identifiers (``Time (s)``) are written as identifiers (``Time_s``)
@@ -59,7 +62,12 @@ LAYOUTS = {
     "speed-log": "csv",
     "position-log": "csv",
     "zero-file": "csv",
+    "no-speed": "csv",
 }
+
+#: The steady window the "no-speed" layout's run sheet gives: the generated plateau, this far
+#: in from each of its ends [s].
+NO_SPEED_WINDOW_MARGIN_S = 0.6
 
 #: The carriage logs of the "speed-log" and "position-log" layouts: their rate [Hz], the
 #: motion controller's clock (log time + offset = run-file time) [s], and the encoder's
@@ -120,7 +128,7 @@ def write_layout(
     writer = {
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
         "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
-        "speed-log": _csv, "position-log": _csv, "zero-file": _csv,
+        "speed-log": _csv, "position-log": _csv, "zero-file": _csv, "no-speed": _csv,
     }[layout]
     writer(frame, path, time_col, units)
     return path
@@ -220,6 +228,9 @@ def protocol_sections(layout: str, sections: dict[str, dict]) -> dict[str, dict]
                                "matrix": [list(r) for r in BALANCE_MATRIX]}
     elif layout == "zero-file":
         sections["zeros"] = {"file": "{stem}_zero.csv"}
+    elif layout == "no-speed":
+        ch = {k: v for k, v in ch.items() if k != "speed"}
+        sections["processing"] = {**sections.get("processing", {}), "speed_source": "nominal"}
     elif layout in ("speed-log", "position-log"):
         ch = {k: v for k, v in ch.items() if k != "speed"}
         how = ({"speed": {"column": "v (m/s)"}} if layout == "speed-log"
