@@ -64,31 +64,32 @@ def test_the_generator_puts_hum_on_the_speed_without_changing_the_draws():
 # --------------------------------------------------------------------------- zeros file
 @pytest.mark.parametrize("fs", [200.0, 1000.0])
 def test_the_zero_of_a_zeros_file_ignores_hum(tmp_path, fs):
-    """A zeros file of 1.5 s (plus 0–7 samples: not a whole number of hum periods) holding
-    0.3 N and 0.05 N of 50 Hz hum at any phase: its zero is 0.3 N within 0.005 mN, where
-    the plain mean of the file is off by up to 0.2 mN."""
+    """A zeros file of 1.5 s (plus 0–7 samples: not a whole number of hum periods) or 0.5 s
+    holding 0.3 N and 0.05 N of 50 Hz hum at any phase: its zero is 0.3 N within 0.005 mN,
+    where the plain mean of the file is off by up to 0.2 mN (0.5 mN over 0.5 s)."""
     plain, errors = [], []
     path = tmp_path / "zero.csv"
-    for extra in (0, 1, 2, 7):
-        t = np.arange(int(1.5 * fs) + extra) / fs
+    for n in [int(1.5 * fs) + extra for extra in (0, 1, 2, 7)] + [int(0.5 * fs) + 3]:
+        t = np.arange(n) / fs
         for phase in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
             hum = HUM_N * np.sin(2.0 * np.pi * 50.0 * t + phase)
             frame = pd.DataFrame({"drag": 0.3 + hum, "lift": -0.1 - hum})
             data = frame.to_csv(index=False).encode()
             path.write_bytes(data)
-            levels = zero_levels(path, data, {}, fs=fs, processing=Processing())
+            levels = zero_levels(path, data, {})
             errors += [levels["drag"] - 0.3, levels["lift"] + 0.1]
             plain.append(float(np.mean(frame["drag"])) - 0.3)
     assert np.max(np.abs(plain)) > 1e-4  # what the zero was: over 0.1 mN
     assert np.max(np.abs(errors)) < BOUND_N
 
 
-def test_still_level_is_the_mean_of_a_constant_and_of_a_short_record():
+def test_still_level_is_the_mean_of_a_constant_and_of_a_straight_drift():
     x = np.full(40, 0.25)
-    assert still_level(x, 200.0, 4.0) == pytest.approx(0.25, abs=1e-12)
+    assert still_level(x) == pytest.approx(0.25, abs=1e-12)
     x[5] = np.nan  # a missing sample is interpolated, not a NaN zero
-    assert still_level(x, 200.0, 4.0) == pytest.approx(0.25, abs=1e-12)
-    assert still_level(np.array([1.0, 2.0, 3.0]), 200.0, 4.0) == pytest.approx(2.0)
+    assert still_level(x) == pytest.approx(0.25, abs=1e-12)
+    drift = 0.1 + 0.003 * np.arange(301) / 300
+    assert still_level(drift) == pytest.approx(float(np.mean(drift)), abs=1e-12)
 
 
 # ----------------------------------------------------------------- still window at the start

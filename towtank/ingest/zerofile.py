@@ -3,18 +3,18 @@
 Some tanks record the balance at rest, in still water, into a separate file before each run,
 and take the zero of every force from it instead of from a still window of the run file. The
 zeros file is read like the run file (same ``[read]``, ``[channels]`` and ``[balance]``); the
-zero of each force is the mean of its calibrated samples after the run's own low-pass, clear of
-the file's ends (:func:`towtank.signal.conditioning.still_level`):
+zero of each force is the mean of its calibrated samples F_k, k = 0 … n−1, weighted by a Hann
+window (:func:`towtank.signal.conditioning.still_level`):
 
-    F_zero = mean(lowpass(gain·(raw − offset))[m : n − m]),   m = trim·fs             (1)
+    F_zero = Σ w_k·F_k / Σ w_k,   w_k = sin²(π·(k + 1)/(n + 1))                      (1)
 
-as the run's still windows are taken on the filtered force (docs/method.md "A run"): the
-plain mean of a file that is not a whole number of mains periods long keeps part of a period of
-hum (up to 0.2 mN from 0.05 N of 50 Hz hum over 1.5 s), and a zeros file shared by the day's
-runs would shift every run's force by that same amount. The file is taken at the run file's
-sample rate (one acquisition). F_zero replaces the pre-run still window's mean as the zero of
-the run (docs/formats.md §3.4); the drift to the post-run window is then taken from the file's
-start (docs/method.md).
+The plain mean of a file that is not a whole number of mains periods long keeps part of a period
+of hum (up to 0.2 mN from 0.05 N of 50 Hz hum over 1.5 s), and a zeros file shared by the day's
+runs shifts every run's force by that same amount; the Hann weights taper the file's ends, so
+that hum and any other disturbance well above 2/T (T the file's duration) is rejected (below
+0.0001 mN over 1.5 s). F_zero replaces the pre-run still window's mean as the zero of the run
+(docs/formats.md §3.4); the drift to the post-run window is then taken from the file's start
+(docs/method.md).
 """
 
 from __future__ import annotations
@@ -60,19 +60,9 @@ def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
 
 
 def zero_levels(path: Path, data: bytes, mapping: dict[str, Any], options: Any = None,
-                balance: Any = None, *, fs: float | None = None,
-                processing: Any = None) -> dict[str, float]:
-    """Zero of drag and lift [N] from a zeros file (eq. 1); lift only where mapped or found.
-    The file needs no time or speed channel.
-
-    Parameters
-    ----------
-    fs : float, optional
-        Sample rate of the zeros file [Hz]: the run file's.
-    processing : Processing, optional
-        The run's filter (``cutoff_hz``, ``filter_order``, ``trim``). Without it (or without
-        ``fs``) the zero is the plain mean of the file.
-    """
+                balance: Any = None) -> dict[str, float]:
+    """Zero of drag and lift [N] of a zeros file: the Hann-weighted mean of each calibrated
+    force (eq. 1); lift only where mapped or found. The file needs no time or speed channel."""
     from towtank.ingest.readers import stated_units
     from towtank.ingest.runfile import calibrate, channel_map, map_channels, read_columns
 
@@ -94,11 +84,7 @@ def zero_levels(path: Path, data: bytes, mapping: dict[str, Any], options: Any =
         ok = arr[np.isfinite(arr)]
         if ok.size < 10:
             raise RunError(f"the zeros file {name} holds fewer than 10 numbers of {canon}")
-        if fs is None or processing is None:
-            out[canon] = float(np.mean(ok))
-        else:
-            out[canon] = still_level(arr, float(fs), float(processing.cutoff_hz),
-                                     int(processing.filter_order), float(processing.trim))
+        out[canon] = still_level(arr)
     return out
 
 
@@ -111,10 +97,8 @@ def _number(v: Any) -> float:
 
 def run_zero_levels(spec: ZeroFile | None, data_dir: Path, file: str, run: int,
                     mapping: dict[str, Any], options: Any = None,
-                    balance: Any = None, *, fs: float | None = None,
-                    processing: Any = None) -> tuple[dict[str, float], str] | None:
-    """The zeros of one run (levels, file name), None without ``[zeros]``; ``fs`` (the run
-    file's rate [Hz]) and ``processing`` as in :func:`zero_levels`."""
+                    balance: Any = None) -> tuple[dict[str, float], str] | None:
+    """The zeros of one run (levels, file name), None without ``[zeros]``."""
     if spec is None:
         return None
     from towtank.ingest.runfile import file_bytes
@@ -125,8 +109,7 @@ def run_zero_levels(spec: ZeroFile | None, data_dir: Path, file: str, run: int,
         data = file_bytes(path)
     except RunError as exc:
         raise RunError(f"its zeros file ([zeros] file = {spec.file!r}): {exc.reason}") from None
-    return zero_levels(path, data, mapping, options, balance, fs=fs,
-                       processing=processing), path.name
+    return zero_levels(path, data, mapping, options, balance), path.name
 
 
 def with_zero_levels(raw: Any, levels: dict[str, float], name: str) -> Any:
