@@ -30,8 +30,7 @@ from towtank.testing.layouts import protocol_sections
 HUM_N = 0.05  # [N] on drag and lift
 SPEED_HUM = 0.005  # [m/s]
 #: Largest change of a zero or a steady force that hum may make [N]: 0.005 mN, against up to
-#: 0.2 mN before (issue 23 item 10), and a twentieth of a typical 95 % interval of Y_v|v|'s
-#: transverse drags.
+#: 0.2 mN before (issue 23 item 10).
 BOUND_N = 5e-6
 
 
@@ -76,7 +75,7 @@ def test_the_zero_of_a_zeros_file_ignores_hum(tmp_path, fs):
             frame = pd.DataFrame({"drag": 0.3 + hum, "lift": -0.1 - hum})
             data = frame.to_csv(index=False).encode()
             path.write_bytes(data)
-            levels = zero_levels(path, data, {})
+            levels = zero_levels(path, data, {}, fs=fs, taper_s=Processing().trim)
             errors += [levels["drag"] - 0.3, levels["lift"] + 0.1]
             plain.append(float(np.mean(frame["drag"])) - 0.3)
     assert np.max(np.abs(plain)) > 1e-4  # what the zero was: over 0.1 mN
@@ -87,9 +86,11 @@ def test_still_level_is_the_mean_of_a_constant_and_of_a_straight_drift():
     x = np.full(40, 0.25)
     assert still_level(x) == pytest.approx(0.25, abs=1e-12)
     x[5] = np.nan  # a missing sample is interpolated, not a NaN zero
-    assert still_level(x) == pytest.approx(0.25, abs=1e-12)
+    assert still_level(x, 200.0, 0.05) == pytest.approx(0.25, abs=1e-12)
     drift = 0.1 + 0.003 * np.arange(301) / 300
-    assert still_level(drift) == pytest.approx(float(np.mean(drift)), abs=1e-12)
+    for taper_s in (None, 0.0, 0.375, 10.0):
+        assert still_level(drift, 200.0, taper_s) == pytest.approx(float(np.mean(drift)),
+                                                                  abs=1e-12)
 
 
 # ----------------------------------------------------------------- still window at the start

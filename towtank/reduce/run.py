@@ -648,8 +648,6 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         p = protocol.processing
         data, stamp = file_bytes_stamped(path)
         log = run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
-        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
-                                protocol.channels, protocol.read, protocol.balance)
         raw = load_run(
             path,
             protocol.channels,
@@ -661,6 +659,10 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             balance=protocol.balance,
             speed_log=log,
         )
+        # the zeros file at the run file's rate (one acquisition), tapered over the run's trim
+        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
+                                protocol.channels, protocol.read, protocol.balance,
+                                fs=raw.fs, taper_s=p.trim)
         if zeros is not None:
             raw = with_zero_levels(raw, *zeros)
         ws = row.get("window_start_s", math.nan)
