@@ -189,7 +189,7 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
 
         digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
         zeros = run_zero_levels(loaded.zeros, path.parent, path.name, int(digits or 0),
-                                channels, read, loaded.balance)
+                                channels, read, loaded.balance, fs=raw.fs, taper_s=p.trim)
         assert zeros is not None
         raw = with_zero_levels(raw, *zeros)
     return raw

@@ -225,12 +225,13 @@ def inspect_run(
                 ws, we = row.get("window_start_s", math.nan), row.get("window_end_s", math.nan)
                 if math.isfinite(ws) and math.isfinite(we):
                     window = (float(ws), float(we))
-            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
-                                    channels, read, balance)
             log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
         run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                        options=read, balance=balance, speed_log=log, speed_nominal=nominal)
+        if protocol is not None:  # the zeros file at the run's rate, tapered as process does
+            zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
+                                    channels, read, balance, fs=run.fs, taper_s=p.trim)
         return run if zeros is None else with_zero_levels(run, *zeros)
 
     try:

@@ -829,8 +829,6 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
                                "the run sheet, and the run has no speed_nominal there")
         log = (run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
                if nominal is None else None)
-        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
-                                protocol.channels, protocol.read, protocol.balance)
         raw = load_run(
             path,
             protocol.channels,
@@ -843,6 +841,10 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             speed_log=log,
             speed_nominal=nominal,
         )
+        # the zeros file at the run file's rate (one acquisition), tapered over the run's trim
+        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
+                                protocol.channels, protocol.read, protocol.balance,
+                                fs=raw.fs, taper_s=p.trim)
         if zeros is not None:
             raw = with_zero_levels(raw, *zeros)
         ws = row.get("window_start_s", math.nan)

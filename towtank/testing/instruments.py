@@ -47,6 +47,9 @@ class Noise:
         Mains hum amplitude [N].
     hum_hz : float, default 50.0
         Mains frequency [Hz].
+    speed_hum_amplitude : float, default 0.0
+        Mains hum on the recorded speed [m/s], at ``hum_hz``; its phase is the sum of the two
+        force channels' hum phases (uniform, and no new draw: a seed gives the same run).
     speed_sigma : float, default 0.001
         White noise of the recorded speed at 1 kHz [m/s].
     speed_quantum : float, default 1e-4
@@ -67,6 +70,7 @@ class Noise:
     vibration_hz: tuple[float, float] = (8.0, 15.0)
     hum_amplitude: float = 0.002
     hum_hz: float = 50.0
+    speed_hum_amplitude: float = 0.0
     speed_sigma: float = 0.001
     speed_quantum: float = 1e-4
     accel_sigma: float = 0.02
@@ -270,6 +274,8 @@ def _recorded_channels(
         )
 
     speed_rec = u + noise.speed_sigma * scale * white[2]
+    if noise.speed_hum_amplitude:
+        speed_rec = speed_rec + noise.speed_hum_amplitude * np.sin(w_hum + phases[2] + phases[3])
     if noise.speed_quantum > 0.0:
         speed_rec = np.round(speed_rec / noise.speed_quantum) * noise.speed_quantum
     columns: dict[str, np.ndarray] = {"time": t, "speed": speed_rec}

@@ -176,6 +176,10 @@ def write_zero_file(frame: pd.DataFrame, run_path: Path, time_col: str,
     with the run file's columns."""
     t = _time_column(frame, time_col)
     u = frame[speed_col].to_numpy(np.float64)
+    # the start of motion on the speed averaged over 0.1 s (5 or 6 mains periods), so that hum
+    # or noise on the recorded speed is not taken for motion
+    k = max(1, int(round(0.1 / float(np.median(np.diff(t))))))
+    u = np.convolve(u, np.ones(k) / k, mode="same")
     start = t[int(np.argmax(u > 0.03 * np.max(u)))] - 0.5
     zero = frame[(t >= start - ZERO_FILE_S) & (t < start)]
     path = Path(run_path).with_name(f"{Path(run_path).name.split('.', 1)[0]}_zero.csv")
