@@ -103,6 +103,19 @@ MANUAL_SPREAD_REJECT = 5.0
 MANUAL_MIN_SPEED_FRACTION = 0.2
 
 
+def _check_drift(t: np.ndarray, force: np.ndarray, pre: tuple[int, int] | None,
+                 post: tuple[int, int], steady_force: float, name: str, level: float | None,
+                 notes: list[str], warnings: list[str]) -> None:
+    """The drift check of one force channel (:func:`drift_verdict`): a reject raises RunError,
+    a warning is added to the run's ``notes`` and ``warnings``."""
+    verdict = drift_verdict(t, force, pre, post, steady_force, name, level=level)
+    if verdict.reject is not None:
+        raise RunError(verdict.reject)
+    if verdict.warning is not None:
+        notes.append(verdict.warning)
+        warnings.append(verdict.warning)
+
+
 def manual_window_checks(
     t: np.ndarray,
     speed: np.ndarray,
@@ -362,13 +375,8 @@ def reduce_nominal(
     for i, name in enumerate(names):
         w = None if name in levels else pre
         if post is not None:
-            verdict = drift_verdict(t, filt[:, i], w, post, steady_force, name,
-                                    level=levels.get(name))
-            if verdict.reject is not None:
-                raise RunError(verdict.reject)
-            if verdict.warning is not None:
-                notes.append(verdict.warning)
-                warnings.append(verdict.warning)
+            _check_drift(t, filt[:, i], w, post, steady_force, name, levels.get(name), notes,
+                         warnings)
         line, _, drift = conditioning.zero_line(t, filt[:, i], w, post, level=levels.get(name))
         zeroed.append(filt[:, i] - line)
         drifts.append(drift)
@@ -568,13 +576,8 @@ def zero_forces(
             zeros += [z, 0.0]
             continue
         if post is not None and post[1] - post[0] >= 2:
-            verdict = drift_verdict(t, force, pre, post, steady_force, name,
-                                    level=levels.get(name))
-            if verdict.reject is not None:
-                raise RunError(verdict.reject)
-            if verdict.warning is not None:
-                notes.append(verdict.warning)
-                warnings.append(verdict.warning)
+            _check_drift(t, force, pre, post, steady_force, name, levels.get(name), notes,
+                         warnings)
         zero, z, drift = conditioning.zero_line(t, force, pre, post, level=levels.get(name))
         out.append(force - zero)
         zeros += [z, drift]

@@ -214,10 +214,8 @@ def axial_drag(profile: HullProfile, fins: Sequence[FinPair], rho: float, nu: fl
     speed_m_s : float
         Speed U of the Reynolds numbers [m/s]
     """
-    length, diameter = profile.length, profile.max_diameter
-    cf = ittc57_cf(speed_m_s * length / nu)
-    form = 1.0 + 1.5 * (diameter / length) ** 1.5 + 7.0 * (diameter / length) ** 3
-    drag_area = profile.wetted_area * cf * form
+    frontal = math.pi * profile.max_diameter**2 / 4.0
+    drag_area = hull_axial_drag_coefficient(profile, nu, speed_m_s) * frontal
     for pair in fins:
         cf_fin = ittc57_cf(max(speed_m_s * pair.chord_m / nu, 1.0e3))
         tc = pair.thickness_ratio
