@@ -59,7 +59,7 @@ class DayResult:
     tares: dict[str, TareModel]
     runs: pd.DataFrame
     warnings: list[str] = field(default_factory=list)
-    hull: Any = None  # towtank.analysis.hull.HullFit
+    hull: Any = None  # HullResult: .fit (towtank.analysis.hull.HullFit), .coefficients
     fin_result: Any = None  # FinResult: table, curves, control, aspect ratio
     scaling_result: Any = None  # ScalingResult: table, scale, prototype water, form factor
     inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
