@@ -53,16 +53,29 @@ def human_duration(seconds: float) -> str:
 
 @dataclass(frozen=True)
 class Segment:
-    """One acquisition of a file: rows ``start`` to ``stop`` (sample indices, stop excluded)
-    and how its first row follows the previous segment (``""`` for the first)."""
+    """One acquisition of a file: rows ``start`` to ``stop`` (sample indices, stop excluded),
+    how its first row follows the previous segment (``kind``: ``"restart"``, ``"jump"``, or
+    ``""`` for the first) and the time of the previous segment's last row (``t_before`` [s])."""
 
     start: int
     stop: int
-    how: str = ""
+    kind: str = ""
+    t_before: float = math.nan
 
     @property
     def n(self) -> int:
         return self.stop - self.start
+
+    def how(self, t: np.ndarray, where: str) -> str:
+        """'the time restarts at row 2292, t = 0.0000 s after 11.4450 s' ('' for the first
+        segment); ``where`` names the segment's first row."""
+        t_next = float(t[self.start])
+        if self.kind == "jump":
+            return (f"the time jumps by {human_duration(t_next - self.t_before)} at {where}, "
+                    f"from t = {self.t_before:.4f} s to {t_next:.4f} s")
+        if self.kind == "restart":
+            return f"the time restarts at {where}, t = {t_next:.4f} s after {self.t_before:.4f} s"
+        return ""
 
 
 def _typical_step(t: np.ndarray) -> float:
@@ -118,25 +131,17 @@ def find_segments(
         header_break = at_header & ((dt <= 0) | (dt > max(max_gap_s, 1.5 * med)))
     candidates = np.flatnonzero(jump | back | header_break)
     segments: list[Segment] = []
-    start, how = 0, ""
+    start, kind, before = 0, "", math.nan
     for i in candidates.tolist():
         b = i + 1  # first row of the new segment
-        if b <= start:
-            continue
         t_prev, t_next = float(t[i]), float(t[b])
-        if header_break[i] or jump[i]:
-            what = (f"the time jumps by {human_duration(t_next - t_prev)}" if t_next > t_prev
-                    else f"the time restarts (t = {t_next:.4f} s after {t_prev:.4f} s)")
-        else:  # time goes back: a restart only to (or before) the segment's own start
-            t0 = float(t[start])
-            if not t_next <= t0 + 2.0 * med:
+        if not (header_break[i] or jump[i]):  # time goes back: a restart only to (or before)
+            t0 = float(t[start])               # the segment's own start, with new data
+            if not t_next <= t0 + 2.0 * med or _repeats_start(t, values, start, b):
                 continue
-            if _repeats_start(t, values, start, b):
-                continue
-            what = f"the time restarts (t = {t_next:.4f} s after {t_prev:.4f} s)"
-        segments.append(Segment(start, b, how))
-        start, how = b, what
-    segments.append(Segment(start, n, how))
+        segments.append(Segment(start, b, kind, before))
+        start, kind, before = b, ("jump" if t_next > t_prev else "restart"), t_prev
+    segments.append(Segment(start, n, kind, before))
     return segments
 
 
@@ -156,15 +161,17 @@ def _repeats_start(t: np.ndarray, values: np.ndarray | None, start: int, b: int)
 
 def describe_segments(t: np.ndarray, segments: list[Segment], rows: np.ndarray | None = None,
                       label: str = "row") -> list[str]:
-    """One line per segment: its rows, samples, duration and times."""
+    """One line per segment: its rows, samples, duration (samples × the file's typical time
+    step) and times."""
     out = []
+    step = _typical_step(np.asarray(t, dtype=np.float64))
     for k, s in enumerate(segments, start=1):
         r0, r1 = (int(rows[s.start]), int(rows[s.stop - 1])) if rows is not None else \
             (s.start + 1, s.stop)
         t0, t1 = float(t[s.start]), float(t[s.stop - 1])
         span = f"{label}s {r0}–{r1}" if r1 != r0 else f"{label} {r0}"
-        out.append(f"segment {k}: {span}, {s.n} samples, {human_duration(t1 - t0)} "
-                   f"(t = {t0:.3f}–{t1:.3f} s)")
+        out.append(f"segment {k}: {span}, {s.n} samples, {human_duration(s.n * step)} "
+                   f"(t = {t0:.4f}–{t1:.4f} s)")
     return out
 
 
@@ -174,13 +181,16 @@ def segment_error(name: str, t: np.ndarray, segments: list[Segment],
     """The one sentence of a file with several acquisitions and no (or no such) choice."""
     lines = describe_segments(t, segments, rows, label)
     listed = "; ".join(lines[:MAX_LISTED]) + ("; …" if len(lines) > MAX_LISTED else "")
-    first = segments[1].how if len(segments) > 1 else ""
-    r = int(rows[segments[1].start]) if rows is not None and len(segments) > 1 else \
-        (segments[1].start + 1 if len(segments) > 1 else 0)
-    where = f" ({first} at {label} {r})" if first else ""
-    head = (f"{name}: segment {chosen} is chosen, but the file holds {len(segments)} "
-            f"acquisition{'s' if len(segments) > 1 else ''}" if chosen is not None else
-            f"{name} holds {len(segments)} acquisitions one after another{where}")
+    n = len(segments)
+    if chosen is not None:
+        head = f"{name}: segment {chosen} is chosen, but the file holds {n} segment" + \
+            ("s" if n > 1 else "")
+    else:
+        second = segments[1]
+        r = int(rows[second.start]) if rows is not None else second.start + 1
+        more = f", and {n - 2} more time{'s' if n > 3 else ''}" if n > 2 else ""
+        head = (f"{name} holds {n} segments ({second.how(t, f'{label} {r}')}{more}: a clock "
+                "reset, or acquisitions appended to one file)")
     return RunError(
         f"{head}: {listed}; say which one is the run in the run sheet's 'segment' column "
         "(1 = the first) or with [read] segment = N"
