@@ -317,3 +317,16 @@ def test_the_kite_balance_file_with_two_acquisitions(tmp_path):
         np.testing.assert_allclose(raw.time, table["X_Value"].to_numpy()[rows])
         assert raw.drag.mean() == pytest.approx(table["Untitled"].to_numpy()[rows].mean(),
                                                 rel=1e-9)
+
+
+def test_inspect_reads_the_segment_the_run_sheet_gives(day, tmp_path):
+    from towtank.commands.inspect import inspect_run
+
+    root, _, truth, row = day
+    out, err = io.StringIO(), io.StringIO()
+    code = inspect_run(root / "data" / row["file"], root / "protocol.toml",
+                       png=tmp_path / "r.png", out=out, err=err)
+    assert code == 0, err.getvalue()
+    n = truth["runs"][str(row["run"])]["n_samples"]
+    assert f"{row['file']}: {n} samples at 200 Hz" in out.getvalue()
+    assert "segment 2 of 2 read" in out.getvalue()
