@@ -330,3 +330,54 @@ def test_inspect_reads_the_segment_the_run_sheet_gives(day, tmp_path):
     n = truth["runs"][str(row["run"])]["n_samples"]
     assert f"{row['file']}: {n} samples at 200 Hz" in out.getvalue()
     assert "segment 2 of 2 read" in out.getvalue()
+
+
+def _european(frame: pd.DataFrame) -> bytes:
+    body = "\n".join(";".join(f"{v:.9g}".replace(".", ",") for v in row)
+                     for row in frame.to_numpy())
+    return ("Versuch 12;;\nDatum: 21.05.2024;;\ntime;speed;drag\n" + body + "\n").encode()
+
+
+def _tdms(frame: pd.DataFrame, path: Path) -> bytes:
+    from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
+
+    with TdmsWriter(str(path)) as writer:
+        writer.write_segment([RootObject(), GroupObject("data")] + [
+            ChannelObject("data", c, frame[c].to_numpy(np.float64)) for c in frame.columns])
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("layout", ["european text", "tdms"])
+def test_every_reader_path_splits_appended_acquisitions(layout, tmp_path):
+    a, b = _frame(900, seed=21), _frame(700, t0=40.0, seed=22)  # the second 35.5 s later
+    both = pd.concat([a, b], ignore_index=True)
+    name, data = (("run.txt", _european(both)) if layout == "european text" else
+                  ("run.tdms", _tdms(both, tmp_path / "run.tdms")))
+    first, label = (904, "row") if layout == "european text" else (901, "sample")
+    with pytest.raises(RunError, match=rf"^{name.replace('.', '[.]')} holds 2 segments \(the "
+                                       rf"time jumps by 35\.5 s at {label} {first}, from "
+                                       r"t = 4\.4950 s to 40\.0000 s"):
+        load_run(Path(name), {}, data=data)
+    raw = load_run(Path(name), {}, data=data, segment=2)
+    np.testing.assert_allclose(raw.drag, b["drag"].to_numpy())
+    assert raw.time[0] == 40.0 and raw.n == 700
+
+
+def test_lvm_read_line_by_line_keeps_the_segments_and_the_files_rows(tmp_path):
+    """A text cell sends an LVM file to the line-by-line reader (not pyarrow): the same
+    segments, rows counted as the file's lines."""
+    frame = _frame(1200, seed=31)
+    path = tmp_path / "run.lvm"
+    write_layout("lvm-appended", frame, path, "time", {"time": "s", "speed": "m/s", "drag": "N"})
+    lines = path.read_text().splitlines()
+    n1 = int(round(APPENDED_FIRST_S * 200.0))
+    cells = lines[23 + n1 + 99].split("\t")  # the 100th row of the run
+    cells[2] = "overload"
+    lines[23 + n1 + 99] = "\t".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunError, match=rf"jumps by 77 s at row {24 + n1}, .*segment 2: rows "
+                                       rf"{24 + n1}–{23 + n1 + 1200}, 1199 samples"):
+        load_run(path, {})
+    raw = load_run(path, {}, segment=2)
+    assert raw.n == 1200  # the dropped row's sample put back
+    assert f"1 non-numeric row(s) dropped (row {24 + n1 + 99})" in raw.notes
