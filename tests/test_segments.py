@@ -127,10 +127,10 @@ def test_the_sheets_segment_is_checked_and_keys_the_cache(day, tmp_path):
     read = read_run_sheet(tmp_path / "sheet.csv", 18.0)
     assert "segment 'two' is not a whole number from 1" in read.loc[0, "sheet_error"]
     assert "segment '0' is not a whole number from 1" in read.loc[1, "sheet_error"]
-    assert read.loc[2, "sheet_error"] == "" and math.isnan(read.loc[2, "segment"])
+    assert read.loc[2, "sheet_error"] == "" and pd.isna(read.loc[2, "segment"])
     assert read.loc[3, "segment"] == 2
-    keys = {settings_key(protocol, {**row, "segment": k}) for k in (1, 2, math.nan)}
-    assert len(keys) == 3
+    keys = {settings_key(protocol, {**row, "segment": k}) for k in (1, 2, math.nan, pd.NA)}
+    assert len(keys) == 3  # none given: NaN and <NA> alike
 
 
 # ------------------------------------------------------------------ segments in general

@@ -651,6 +651,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         }
         detail = "; ".join(f"run {r} on rows {', '.join(map(str, w))}" for r, w in where.items())
         raise ProtocolError(f"{src}: duplicated run numbers ({detail}).")
+    if "segment" in df.columns:  # whole numbers (runs.csv carries them as written)
+        df["segment"] = df["segment"].astype("Int64")
     df.attrs["notes"] = notes
     df.attrs["warnings"] = warnings
     return df

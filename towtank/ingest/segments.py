@@ -81,8 +81,8 @@ class Segment:
 def _typical_step(t: np.ndarray) -> float:
     with np.errstate(invalid="ignore", over="ignore"):
         dt = np.diff(t)
-    pos = dt[np.isfinite(dt) & (dt > 0)]
-    return float(np.median(pos)) if pos.size else 0.0
+        pos = dt[np.isfinite(dt) & (dt > 0)]
+        return float(np.median(pos)) if pos.size else 0.0
 
 
 def find_segments(

@@ -95,9 +95,12 @@ def settings_key(
         "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
         "test": str(row.get("test", "")).strip().lower(),
     })
-    segment = _num(row.get("segment"))
-    if segment is not None:  # the run's acquisition in a file holding several
-        payload["segment"] = segment
+    try:  # the run's acquisition in a file holding several (NaN or <NA>: none given)
+        segment = float(row.get("segment"))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        segment = math.nan
+    if math.isfinite(segment):
+        payload["segment"] = int(segment)
     if row.get("side_files_sha"):  # its carriage log and zeros file are read with the run
         payload["side_files"] = row["side_files_sha"]
     text = json.dumps(payload, sort_keys=True, default=str)
