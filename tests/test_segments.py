@@ -381,3 +381,27 @@ def test_lvm_read_line_by_line_keeps_the_segments_and_the_files_rows(tmp_path):
     raw = load_run(path, {}, segment=2)
     assert raw.n == 1200  # the dropped row's sample put back
     assert f"1 non-numeric row(s) dropped (row {24 + n1 + 99})" in raw.notes
+
+
+@pytest.mark.skipif(not VW10.exists(), reason="../shared/real/tudelft_kite_lvm is not present "
+                    "(real recordings are not kept in the repository)")
+def test_the_kite_file_through_the_sheet_and_the_runs_note(tmp_path):
+    """vw_10 as a run of a day: the sheet's segment = 2 picks the second acquisition, and the
+    run's note says which rows were read."""
+    (tmp_path / "sheet.csv").write_text(
+        "run,file,config,angle_deg,speed_nominal,segment\n"
+        "1,normal_aoa_16_vw_10.lvm,hull,0,10.0,2\n")
+    (tmp_path / "p.toml").write_text(
+        f'[campaign]\nname = "kite"\nrun_sheet = "sheet.csv"\ndata_dir = "{KITE}"\n'
+        'output_dir = "out"\n\n[water]\ntemperature_C = 15.0\n\n'
+        '[model]\nlength_m = 1.0\ndiameter_m = 0.2\nmass_kg = 20.0\n\n'
+        '[channels]\ndrag = { column = "Untitled" }\n\n'
+        '[processing]\nspeed_source = "nominal"\n\n[tare]\nsource = "none"\n')
+    protocol = load_protocol(tmp_path / "p.toml")
+    row = read_run_sheet(tmp_path / "sheet.csv", 15.0).to_dict("records")[0]
+    row.update(window_start_s=88.0, window_end_s=96.0)
+    _, red, reason, _ = reduce_record(protocol, row)
+    assert reason is None, reason
+    assert ("segment 2 of 2 read (rows 19823–39622, t = 86.9000–96.7995 s; the file holds 2 "
+            "acquisitions)") in red.notes
+    assert red.n_samples == 19800

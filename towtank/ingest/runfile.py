@@ -970,8 +970,8 @@ def _run_segment(numeric: dict[str, np.ndarray], t: np.ndarray, where: _Where, n
     for canon in list(numeric):
         numeric[canon] = numeric[canon][keep]
     span = where.span(seg.start, seg.stop - 1)
-    notes.append(f"segment {chosen} of {len(segs)} read ({span}, t = {t[seg.start]:.3f}–"
-                 f"{t[seg.stop - 1]:.3f} s; the file holds {len(segs)} acquisitions)")
+    notes.append(f"segment {chosen} of {len(segs)} read ({span}, t = {t[seg.start]:.4f}–"
+                 f"{t[seg.stop - 1]:.4f} s; the file holds {len(segs)} acquisitions)")
     return t[keep], where.subset(keep)
 
 
