@@ -4,7 +4,9 @@ Run files (docs/formats.md §3) are CSV, CSV.gz or LabVIEW TDMS. The file is rea
 same bytes give its sha256 for the cache and the provenance), parsed with pyarrow (CSV) or npTDMS
 (TDMS) into float64 arrays, mapped to the canonical channels with value = gain·(raw − offset),
 and checked: truncated last line, non-numeric or malformed rows, missing and infinite values,
-time not increasing (duplicated blocks, clock resets), an implausible or irregular sample rate,
+several acquisitions appended in one file (:mod:`towtank.ingest.segments`: the run's is read
+when the sheet's ``segment`` or ``[read] segment`` names it), time not increasing (duplicated
+blocks, glitches), an implausible or irregular sample rate,
 lost samples, channels clipped flat at a rail, spikes. Repairs that are safe (a few bad rows
 dropped, a few lost samples and short gaps interpolated, isolated spikes replaced) are made and
 counted in ``notes``; anything else raises :class:`~towtank.errors.RunError` with one sentence
