@@ -352,10 +352,23 @@ def test_clock_reset():
     data = damage.time_reset(GOOD, seed=5)
     t = damage.read_frame(data)["time"].to_numpy()
     i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+    from towtank.ingest.segments import human_duration
+
+    n = t.size
+    dt = float(np.median(np.diff(t)[np.diff(t) > 0]))  # the duration: samples × the step
     assert reason(data) == (
-        f"{NAME}: time restarts at row {i + 3} (t = 0.0000 s after {t[i]:.4f} s): a clock "
-        "reset in the middle of the run"
+        f"{NAME} holds 2 segments (the time restarts at row {i + 3}, t = 0.0000 s after "
+        f"{t[i]:.4f} s: a clock reset, or acquisitions appended to one file): segment 1: rows "
+        f"2–{i + 2}, {i + 1} samples, {human_duration((i + 1) * dt)} (t = 0.0000–{t[i]:.4f} "
+        f"s); segment 2: rows {i + 3}–{n + 1}, {n - i - 1} samples, "
+        f"{human_duration((n - i - 1) * dt)} (t = 0.0000–{t[-1]:.4f} s); say which one is the "
+        "run in the run sheet's 'segment' column (1 = the first) or with [read] segment = N"
     )
+    # the second acquisition chosen: read from its first row, time from 0
+    raw = load(data, segment=2)
+    assert raw.n == n - i - 1 and raw.time[0] == 0.0
+    assert raw.notes == [f"segment 2 of 2 read (rows {i + 3}–{n + 1}, t = 0.0000–"
+                         f"{t[-1]:.4f} s; the file holds 2 acquisitions)"]
 
 
 def test_time_going_backwards():

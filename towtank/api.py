@@ -133,7 +133,7 @@ def process_day(
 
 
 def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
-             speed_nominal: float | None = None) -> RawRun:
+             speed_nominal: float | None = None, segment: int | None = None) -> RawRun:
     """Read one run file as the day would: calibrated channels in SI units, checked.
 
     Parameters
@@ -146,6 +146,9 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
     speed_nominal : float, optional
         The run's set speed [m/s], required when the protocol's ``[processing] speed_source``
         is ``"nominal"`` (no measured speed; ``.speed_nominal`` of the result, ``.speed`` 0).
+    segment : int, optional
+        Which acquisition of a file holding several one after another is the run, counted
+        from 1 (the run sheet's ``segment``); default the protocol's ``[read] segment``.
 
     Returns
     -------
@@ -183,7 +186,8 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
                    max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                    data=file_bytes(path), options=read,
                    balance=None if protocol is None else loaded.balance, speed_log=log,
-                   speed_nominal=speed_nominal if p.speed_source == "nominal" else None)
+                   speed_nominal=speed_nominal if p.speed_source == "nominal" else None,
+                   segment=segment)
     if protocol is not None and loaded.zeros is not None:
         from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 

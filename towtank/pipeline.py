@@ -333,6 +333,8 @@ def run_table(
                                                                            "window_end_s")]
     for c in extra:
         df[c] = sheet[c].to_numpy()
+    if "segment" in df.columns:  # whole numbers from 1 (a run's acquisition), empty for none
+        df["segment"] = pd.to_numeric(df["segment"], errors="coerce").round().astype("Int64")
     for c in ("window_start_s", "window_end_s"):
         if sheet[c].notna().any():
             df[c] = sheet[c].to_numpy()

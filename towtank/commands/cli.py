@@ -183,7 +183,7 @@ def _parser() -> argparse.ArgumentParser:
     sy.add_argument("--format", choices=("csv", "csv.gz", "tdms", "tdms-waveform", "lvm",
                                          "txt-eu", "mat", "mat73", "hdf5", "two-cell",
                                          "matrix", "speed-log", "position-log", "zero-file",
-                                         "no-speed"),
+                                         "no-speed", "lvm-appended"),
                     default=None, dest="file_format",
                     help="run-file format (default: csv.gz for the hull day, tdms for the fin "
                     "day); tdms-waveform (LabVIEW timing, no time channel), lvm, txt-eu "
@@ -191,7 +191,9 @@ def _parser() -> argparse.ArgumentParser:
                     "two-cell (DragL + DragR), matrix (a 2x2 interaction matrix), speed-log and "
                     "position-log (carriage speed or position in its own file per run, 100 Hz, "
                     "another clock), zero-file (a zeros file per run), no-speed (no speed "
-                    "channel: the sheet's set speed and steady windows) are other labs' layouts")
+                    "channel: the sheet's set speed and steady windows), lvm-appended (two "
+                    "acquisitions under one LVM header, the run the second: the sheet's "
+                    "segment column) are other labs' layouts")
     sy.add_argument("--sheet", choices=("csv", "xlsx", "hand-xlsx", "hand-csv"), default=None,
                     dest="sheet_format",
                     help="run-sheet format (default: xlsx for the hull day, csv for the fin "

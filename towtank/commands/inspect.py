@@ -120,6 +120,18 @@ def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
                    "and speed_source = \"nominal\" takes the run's speed from there")
 
 
+def _sheet_segment(protocol, runfile: Path) -> int | None:  # noqa: ANN001 - a Protocol
+    """The run sheet's ``segment`` of ``runfile`` (the run's acquisition in a file holding
+    several), None when the sheet gives none, lists no such file or cannot be read (then
+    ``[read] segment`` applies, and a file with several segments says so)."""
+    from towtank.reduce.run import sheet_segment
+
+    try:
+        return sheet_segment(_sheet_row(protocol, runfile))
+    except RunError:
+        return None
+
+
 def _run_number(runfile: Path) -> int:
     """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
     ``{run}`` of a ``[zeros]`` pattern."""
@@ -212,9 +224,10 @@ def inspect_run(
 
         nonlocal window
         balance = protocol.balance if protocol is not None else None
-        zeros = log = nominal = None
+        zeros = log = nominal = segment = None
         if protocol is not None:  # as process: the run's zeros file and speed log
             number = _run_number(runfile)
+            segment = _sheet_segment(protocol, runfile)
             if p.speed_source == "nominal":  # the speed (and window) of the sheet's row
                 row = _sheet_row(protocol, runfile)
                 number = int(row["run"])
@@ -228,7 +241,8 @@ def inspect_run(
             log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
         run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read, balance=balance, speed_log=log, speed_nominal=nominal)
+                       options=read, balance=balance, speed_log=log, speed_nominal=nominal,
+                       segment=segment)
         if protocol is not None:  # the zeros file at the run's rate, tapered as process does
             zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
                                     channels, read, balance, fs=run.fs, taper_s=p.trim)

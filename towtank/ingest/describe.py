@@ -48,6 +48,9 @@ class FileDescription:
     guesses: dict[str, str] = field(default_factory=dict)
     #: forces whose load cells are summed (``drag`` → ``["DragL", "DragR"]``)
     parts: dict[str, list[str]] = field(default_factory=dict)
+    #: the acquisitions of a file holding several one after another, one line each
+    #: (:func:`towtank.ingest.segments.describe_segments`); empty for a file recorded in one go
+    segments: list[str] = field(default_factory=list)
 
     def lines(self) -> list[str]:
         """The account printed by ``towtank inspect``."""
@@ -58,6 +61,11 @@ class FileDescription:
                        f"header on line {lay['header_line']}"
                        + (", units row under it" if lay["units_row"] == "True" else ""))
         out.append(f"  timing: {self.timing}")
+        if self.segments:
+            out.append(f"  segments: {len(self.segments)} acquisitions one after another "
+                       "(the run sheet's 'segment' column, or [read] segment, says which is "
+                       "the run):")
+            out += [f"    {line}" for line in self.segments]
         out.append("  channels:")
         for name, unit, n in self.channels:
             out.append(f"    {name!r:<40s} {unit or '(no unit)':<10s} {n} samples")
@@ -85,6 +93,7 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
         dt = np.diff(t[np.isfinite(t)])
         desc.fs = 1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0 else float("nan")
         desc.timing = f"time column '{time_col}' ({desc.fs:g} Hz)"
+        desc.segments = _segments(cols, t)
     elif WF_TIME_KEY in cols:
         t = cols[WF_TIME_KEY]
         desc.fs = 1.0 / float(t[1] - t[0]) if t.size > 1 else float("nan")
@@ -106,6 +115,20 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
         if canon and canon not in desc.guesses:
             desc.guesses[canon] = c
     return desc
+
+
+def _segments(cols: dict[str, np.ndarray], t: np.ndarray) -> list[str]:
+    """One line per acquisition of a file holding several (none for one)."""
+    from towtank.ingest.readers import LVM_HEADERS_KEY, ROWS_KEY
+    from towtank.ingest.segments import describe_segments, find_segments
+
+    segs = find_segments(t, headers=cols.get(LVM_HEADERS_KEY))
+    if len(segs) < 2:
+        return []
+    rows = cols.get(ROWS_KEY)
+    rows = np.asarray(rows) if rows is not None and np.asarray(rows).size == t.size else \
+        np.arange(t.size) + 2
+    return describe_segments(t, segs, rows)
 
 
 #: Words that mark one load cell of several carrying one force: a pair (left/right, port/
@@ -222,6 +245,9 @@ def protocol_block(desc: FileDescription) -> str:
         lines.append(f"decimal = {_toml_string(desc.layout['decimal'])}")
     if "time" not in desc.guesses and desc.timing.startswith("none"):
         lines.append("sample_rate_hz = 1000.0   # <- the rate the file was recorded at")
+    if desc.segments:
+        lines.append(f"segment = 1   # <- which of the file's {len(desc.segments)} "
+                     "acquisitions is the run (per run: the run sheet's 'segment' column)")
     lines += ["", "[channels]"]
     units = {name: unit for name, unit, _ in desc.channels}
     for canon in ("time", "speed", "accel", "drag", "lift"):

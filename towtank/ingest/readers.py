@@ -50,6 +50,9 @@ WF_TIME_KEY = "__wf_time__"
 FS_KEY = "__fs__"
 FS_ERROR_KEY = "__fs_error__"
 LABEL_KEY = "__label__"
+ROWS_KEY = "__rows__"  # the file's line of each row (header = row 1), as plaincsv's
+#: Sample indices where an LVM segment header starts new rows (:mod:`towtank.ingest.segments`).
+LVM_HEADERS_KEY = "__lvm_headers__"
 
 #: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
@@ -84,6 +87,10 @@ class ReadOptions:
         them).
     sample_rate_hz : float
         Sample rate [Hz] for files with neither a time channel nor waveform timing (0 = none).
+    segment : int
+        Which acquisition, counted from 1, of a file holding several one after another is the
+        run (0 = none chosen; the run sheet's ``segment`` column overrides it per run;
+        :mod:`towtank.ingest.segments`).
     """
 
     format: str = "auto"
@@ -92,6 +99,7 @@ class ReadOptions:
     skip_rows: int = 0
     group: str = ""
     sample_rate_hz: float = 0.0
+    segment: int = 0
 
 
 def file_format(path: Path, data: bytes, options: ReadOptions | None = None) -> tuple[str, bool]:
@@ -482,13 +490,18 @@ def read_lvm_columns(
         seg: dict[str, np.ndarray] = {}
         if fast is not None:
             seg, n_rows = fast
+            line_no = np.arange(i, end) + 1
+            if line_no.size != n_rows:  # blank lines among the data (pyarrow skips them)
+                line_no = np.array([j + 1 for j in range(i, end) if lines[j].strip()])
             i = end
         else:
             table = []
+            first_line = i + 1
             while i < len(lines) and _lvm_data_line(lines[i], sep):
                 table.append(lines[i].split(sep))
                 i += 1
             n_rows = len(table)
+            line_no = np.arange(n_rows) + first_line
             for j, col in enumerate(names):
                 if not col or col.lower() == "comment":
                     continue
@@ -509,15 +522,21 @@ def read_lvm_columns(
                 seg["X_Value"] = x0 + dx * np.arange(n_rows)
         seg[UNITS_KEY] = _units_entry(units)
         if n_rows:
+            if line_no.size == n_rows:
+                seg[ROWS_KEY] = line_no.astype(np.int64)
             segments.append(seg)
     if not segments:
         raise RunError(f"{name} holds no data rows")
-    names = [c for c in segments[0] if c != UNITS_KEY]
+    names = [c for c in segments[0] if c not in (UNITS_KEY, ROWS_KEY)]
     cols = {c: np.concatenate([np.asarray(s.get(c, np.full(_seg_len(s), np.nan)))
                                for s in segments]) for c in names}
     if "X_Value" in cols and "time" not in {c.lower() for c in cols}:
         cols["time"] = cols["X_Value"]  # LabVIEW's name for the time of the first channel
     cols[UNITS_KEY] = segments[0][UNITS_KEY]
+    if all(ROWS_KEY in s for s in segments):  # the file's line of each row (messages)
+        cols[ROWS_KEY] = np.concatenate([s[ROWS_KEY] for s in segments])
+    if len(segments) > 1:  # where each LVM segment header starts new rows (sample indices)
+        cols[LVM_HEADERS_KEY] = np.cumsum([_seg_len(s) for s in segments[:-1]]).astype(np.int64)
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
 
@@ -591,7 +610,7 @@ def _lvm_data_line(line: str, sep: str) -> bool:
 
 
 def _seg_len(seg: dict[str, np.ndarray]) -> int:
-    return max((v.size for k, v in seg.items() if k != UNITS_KEY), default=0)
+    return max((v.size for k, v in seg.items() if k not in (UNITS_KEY, ROWS_KEY)), default=0)
 
 
 def _first_float(values: list[str] | None) -> float | None:

@@ -4,7 +4,9 @@ Run files (docs/formats.md §3) are CSV, CSV.gz or LabVIEW TDMS. The file is rea
 same bytes give its sha256 for the cache and the provenance), parsed with pyarrow (CSV) or npTDMS
 (TDMS) into float64 arrays, mapped to the canonical channels with value = gain·(raw − offset),
 and checked: truncated last line, non-numeric or malformed rows, missing and infinite values,
-time not increasing (duplicated blocks, clock resets), an implausible or irregular sample rate,
+several acquisitions appended in one file (:mod:`towtank.ingest.segments`: the run's is read
+when the sheet's ``segment`` or ``[read] segment`` names it), time not increasing (duplicated
+blocks, glitches), an implausible or irregular sample rate,
 lost samples, channels clipped flat at a rail, spikes. Repairs that are safe (a few bad rows
 dropped, a few lost samples and short gaps interpolated, isolated spikes replaced) are made and
 counted in ``notes``; anything else raises :class:`~towtank.errors.RunError` with one sentence
@@ -36,6 +38,7 @@ from towtank.ingest.protocol import Balance, ChannelMap, channel_map
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
+    LVM_HEADERS_KEY,
     WF_TIME_KEY,
     ReadOptions,
     column_unit,
@@ -48,6 +51,7 @@ from towtank.ingest.readers import (
     stated_units,
     unit_factor,
 )
+from towtank.ingest.segments import find_segments, human_duration, segment_error
 from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
@@ -427,7 +431,7 @@ def time_base(
         worst = int(np.argmax(np.where(off, np.abs(dt - np.maximum(k, 1) * med), -1.0)))
         n_off = int(off.sum())
         raise RunError(
-            f"{file}: the sample rate is irregular: a step of {dt[worst] * 1e3:.3g} ms at "
+            f"{file}: the sample rate is irregular: a step of {human_duration(dt[worst])} at "
             f"{where(worst + 1)} (t = {t[worst + 1]:.3f} s) where the rate is {fs_med:.1f} Hz "
             f"({n_off} of {dt.size} steps off by more than {100 * tol / med:.0f} %)"
         )
@@ -439,7 +443,7 @@ def time_base(
             n_gaps = int(np.count_nonzero(lost))
             raise RunError(
                 f"{file}: {int(lost[i])} samples are missing after {where(i)} (t = "
-                f"{t[i]:.3f}–{t[i + 1]:.3f} s, a step of {dt[i] * 1e3:.3g} ms where the rate is "
+                f"{t[i]:.3f}–{t[i + 1]:.3f} s, a step of {human_duration(dt[i])} where the rate is "
                 f"{fs_med:.1f} Hz; {total} lost in {n_gaps} place(s), more than can be "
                 "interpolated)"
             )
@@ -741,6 +745,7 @@ def load_run(
     balance: Balance | None = None,
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
     speed_nominal: float | None = None,
+    segment: int | None = None,
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -771,6 +776,10 @@ def load_run(
         The run sheet's set speed [m/s] for a run without a measured speed (``[processing]
         speed_source = "nominal"``): no speed channel is read; ``RawRun.speed`` holds 0 and
         ``RawRun.speed_nominal`` this value.
+    segment : int, optional
+        Which acquisition of a file holding several one after another is the run, counted
+        from 1 (the run sheet's ``segment``; default ``[read] segment``, see
+        :mod:`towtank.ingest.segments`). A file with several and no choice is a RunError.
 
     Raises
     ------
@@ -781,7 +790,8 @@ def load_run(
         data = file_bytes(path)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
-                         options or ReadOptions(), balance, speed_log, speed_nominal)
+                         options or ReadOptions(), balance, speed_log, speed_nominal,
+                         segment)
 
 
 def _load_run(
@@ -795,12 +805,15 @@ def _load_run(
     balance: Balance | None = None,
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
     speed_nominal: float | None = None,
+    segment: int | None = None,
 ) -> RawRun:
     """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
-    (:func:`calibrate`) -> time base -> gaps, clipping, spikes, ranges."""
+    (:func:`calibrate`) -> the run's segment -> time base -> gaps, clipping, spikes,
+    ranges."""
     name = path.name
     digest = sha256_bytes(data)
     cols, notes = read_columns(path, data, options)
+    headers = cols.pop(LVM_HEADERS_KEY, None)
     invalid = cols.pop(_INVALID_KEY, np.array([], dtype=int))
     rows = cols.pop(_ROWS_KEY, None)
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
@@ -827,6 +840,7 @@ def _load_run(
     if rows is None or rows.size != n_rows:
         rows = np.arange(n_rows) + (2 if label == "row" else 1)
     where = _Where(rows, label)
+    header_rows = rows[headers[headers < n_rows]] if headers is not None else None
 
     numeric, where = _drop_bad_rows(chans, rows, invalid, where, name, max_bad_row_fraction,
                                     notes)
@@ -834,6 +848,8 @@ def _load_run(
     numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
 
     t = _fill_missing_times(numeric, where, name, max_nan_gap_s, notes)
+    chosen = segment if segment is not None else (options.segment or None)
+    t, where = _run_segment(numeric, t, where, name, chosen, header_rows, max_nan_gap_s, notes)
 
     n = t.size
     if n < MIN_SAMPLES:
@@ -935,6 +951,30 @@ def _fill_missing_times(numeric: dict[str, np.ndarray], where: _Where, name: str
     numeric["time"] = t
     notes.append(f"{int(no_t.sum())} missing time value(s) interpolated")
     return t
+
+
+def _run_segment(numeric: dict[str, np.ndarray], t: np.ndarray, where: _Where, name: str,
+                 chosen: int | None, header_rows: np.ndarray | None, max_gap_s: float,
+                 notes: list[str]) -> tuple[np.ndarray, _Where]:
+    """The rows of the run's acquisition (``chosen``, from 1) of a file holding several one
+    after another (:func:`towtank.ingest.segments.find_segments`; ``numeric`` is cut to
+    them); a file with several and no choice, or fewer than chosen, is a RunError."""
+    headers = (np.searchsorted(where.rows, header_rows) if header_rows is not None
+               and header_rows.size else None)
+    segs = find_segments(t, headers=headers, values=numeric.get("drag"), max_gap_s=max_gap_s)
+    if len(segs) <= 1 and chosen in (None, 1):
+        return t, where
+    if chosen is None or not 1 <= chosen <= len(segs):
+        raise segment_error(name, t, segs, where.rows, where.label, chosen)
+    seg = segs[chosen - 1]
+    keep = np.zeros(t.size, dtype=bool)
+    keep[seg.start:seg.stop] = True
+    for canon in list(numeric):
+        numeric[canon] = numeric[canon][keep]
+    span = where.span(seg.start, seg.stop - 1)
+    notes.append(f"segment {chosen} of {len(segs)} read ({span}, t = {t[seg.start]:.4f}–"
+                 f"{t[seg.stop - 1]:.4f} s; the file holds {len(segs)} acquisitions)")
+    return t[keep], where.subset(keep)
 
 
 def _put_back_lost(numeric: dict[str, np.ndarray], tb: TimeBase, where: _Where,

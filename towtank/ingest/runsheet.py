@@ -47,6 +47,7 @@ KNOWN = REQUIRED + (
     "remarks",
     "window_start_s",
     "window_end_s",
+    "segment",
 )
 DEFAULT_TARE_GROUP = "default"
 
@@ -542,7 +543,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     pandas.DataFrame
         One row per run in sheet order with typed columns: run (int), file, config, test,
         angle_deg [deg], speed_nominal [m/s], accel_nominal [m/s²], tare_group,
-        water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], sheet_row
+        water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], segment (the
+        run's acquisition in a file holding several, from 1; NaN = none given), sheet_row
         (1-based row in the sheet, header = row 1), sheet_error (one sentence, or "") and
         every extra column of the sheet, unchanged. ``.attrs["notes"]`` holds the lines of
         text typed among or below the table (not runs), ``.attrs["warnings"]`` sentences
@@ -625,6 +627,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         out["status"] = status
         out["tare_group"] = _as_text(rec.get("tare_group", "")) or DEFAULT_TARE_GROUP
         out["remarks"] = _as_text(rec.get("remarks", ""))
+        if "segment" in raw.columns:
+            out["segment"] = _segment(rec.get("segment"), errors)
         ws, we = out["window_start_s"], out["window_end_s"]
         if math.isnan(ws) != math.isnan(we):  # type: ignore[arg-type]
             errors.append("window_start_s and window_end_s must be given together")
@@ -647,9 +651,28 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         }
         detail = "; ".join(f"run {r} on rows {', '.join(map(str, w))}" for r, w in where.items())
         raise ProtocolError(f"{src}: duplicated run numbers ({detail}).")
+    if "segment" in df.columns:  # whole numbers (runs.csv carries them as written)
+        df["segment"] = df["segment"].astype("Int64")
     df.attrs["notes"] = notes
     df.attrs["warnings"] = warnings
     return df
+
+
+def _segment(value: Any, errors: list[str]) -> float:
+    """The run's acquisition in a file holding several (``segment``, counted from 1), NaN when
+    the sheet gives none; anything but a whole number from 1 is a row error."""
+    text = _as_text(value)
+    if not text:
+        return math.nan
+    try:
+        k = float(text)
+    except ValueError:
+        k = math.nan
+    if not (math.isfinite(k) and k.is_integer() and 1 <= k <= 1_000_000):
+        errors.append(f"segment {text!r} is not a whole number from 1 (the file's first "
+                      "acquisition is 1)")
+        return math.nan
+    return float(k)
 
 
 def _converted(value: float, unit: tuple[float, float] | None) -> float:

@@ -153,6 +153,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "skip_rows": ("int", False),
         "group": ("str", False),
         "sample_rate_hz": (_NUM, False),
+        "segment": ("int", False),
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",

@@ -136,6 +136,9 @@ def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
             )
     if values.get("skip_rows", 0) < 0:
         raise ProtocolError(f"{src}: 'skip_rows' in [read] must be 0 or more.")
+    if values.get("segment", 1) < 1:
+        raise ProtocolError(f"{src}: 'segment' in [read] counts a file's acquisitions from 1; "
+                            f"it cannot be {values['segment']}.")
     rate = values.get("sample_rate_hz")
     if rate is not None and not 1.0 <= rate <= 1.0e6:
         raise ProtocolError(

@@ -807,6 +807,17 @@ def run_preview(raw: RawRun) -> dict[str, np.ndarray]:
 Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | None]
 
 
+def sheet_segment(row: dict[str, Any]) -> int | None:
+    """The run sheet's ``segment`` of a row (the run's acquisition in a file holding several,
+    from 1), None when the sheet gives none (``[read] segment`` then applies)."""
+    value = row.get("segment")
+    try:
+        k = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+    return int(k) if math.isfinite(k) and k >= 1 else None
+
+
 def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = False,
                   keep_series: bool = False) -> Record:
     """Read and reduce the run of one run-sheet row; never raises for a data problem.
@@ -843,6 +854,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             balance=protocol.balance,
             speed_log=log,
             speed_nominal=nominal,
+            segment=sheet_segment(row),
         )
         # the zeros file at the run file's rate (one acquisition), tapered over the run's trim
         zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,

@@ -85,7 +85,8 @@ def settings_key(
     The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
     version, processing settings, channel mapping (:func:`protocol_settings`, which may be
     given as ``common`` when the keys of many runs are made), file name, manual window, set
-    values and the run's purpose (``test``, which decides which notes are warnings).
+    values, the run's purpose (``test``, which decides which notes are warnings) and, when the
+    sheet gives one, the run's ``segment``.
     """
     payload = dict(protocol_settings(protocol) if common is None else common)
     payload.update({
@@ -94,6 +95,12 @@ def settings_key(
         "nominal": [_num(row.get("speed_nominal")), _num(row.get("accel_nominal"))],
         "test": str(row.get("test", "")).strip().lower(),
     })
+    try:  # the run's acquisition in a file holding several (NaN or <NA>: none given)
+        segment = float(row.get("segment"))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        segment = math.nan
+    if math.isfinite(segment):
+        payload["segment"] = int(segment)
     if row.get("side_files_sha"):  # its carriage log and zeros file are read with the run
         payload["side_files"] = row["side_files_sha"]
     text = json.dumps(payload, sort_keys=True, default=str)

@@ -469,6 +469,9 @@ def _make_day(
         rows = [{**row, "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
                  "window_end_s": round(truth.runs[row["run"]]["t_plateau_end"] - m, 3)}
                 for row in rows]
+    if file_format == "lvm-appended":  # the run is the file's second acquisition
+        columns += ("segment",)
+        rows = [{**row, "segment": 2} for row in rows]
     if test_date is not None:  # the sheet only: truth.json is the same with or without it
         columns += ("date",)
         rows = [{**row, "date": test_date} for row in rows]

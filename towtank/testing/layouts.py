@@ -28,6 +28,10 @@ zero-file         .csv         the plain run file, and the balance at rest befor
 no-speed          .csv         no speed channel at all (a speed log not kept): the run sheet
                                gives the set speed and each run's steady window
                                (``window_start_s``, ``window_end_s``)
+lvm-appended      .lvm         two acquisitions appended under one LVM header, as TU Delft's
+                               load balance wrote them: first the balance at rest
+                               (:data:`APPENDED_FIRST_S`), then, the time jumping by
+                               :data:`APPENDED_GAP_S`, the run; the run sheet's ``segment`` is 2
 ================  ===========  ===================================================================
 
 Names that are not MATLAB identifiers (``Time (s)``) are written as identifiers (``Time_s``)
@@ -63,7 +67,13 @@ LAYOUTS = {
     "position-log": "csv",
     "zero-file": "csv",
     "no-speed": "csv",
+    "lvm-appended": "lvm",
 }
+
+#: The "lvm-appended" layout: length of the first acquisition (the balance at rest, the run's
+#: own first seconds) [s], and the time from its last row to the run's first [s].
+APPENDED_FIRST_S = 2.0
+APPENDED_GAP_S = 77.0
 
 #: The steady window the "no-speed" layout's run sheet gives: the generated plateau, this far
 #: in from each of its ends [s].
@@ -83,7 +93,7 @@ BALANCE_MATRIX = ((20.0, 0.3), (-0.2, -25.0))
 _FIXED = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
 #: Layouts without a time column (the time comes from the file's timing).
-NO_TIME_COLUMN = ("tdms-waveform", "lvm", "mat73")
+NO_TIME_COLUMN = ("tdms-waveform", "lvm", "mat73", "lvm-appended")
 
 
 def protocol_channels(layout: str, section: dict[str, dict]) -> dict[str, dict]:
@@ -129,6 +139,7 @@ def write_layout(
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
         "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
         "speed-log": _csv, "position-log": _csv, "zero-file": _csv, "no-speed": _csv,
+        "lvm-appended": _lvm_appended,
     }[layout]
     writer(frame, path, time_col, units)
     return path
@@ -270,7 +281,28 @@ def _number(x: float) -> str:
     return "" if not np.isfinite(x) else repr(float(x))
 
 
-def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
+def appended_frame(frame: pd.DataFrame, time_col: str) -> pd.DataFrame:
+    """Two acquisitions one after another ("lvm-appended"): the run's first
+    :data:`APPENDED_FIRST_S` (the balance at rest), then the whole run, its times moved on so
+    that they jump by :data:`APPENDED_GAP_S` from the first acquisition's last row."""
+    t = _time_column(frame, time_col)
+    dt = float(np.median(np.diff(t)))
+    n1 = max(2, int(round(APPENDED_FIRST_S / dt)))
+    first = frame.iloc[:n1]
+    second = frame.copy()
+    second[time_col] = np.round(t - t[0] + t[n1 - 1] + APPENDED_GAP_S, 9)
+    return pd.concat([first, second], ignore_index=True)
+
+
+def _lvm_appended(frame: pd.DataFrame, path: Path, time_col: str,
+                  units: dict[str, str]) -> None:
+    _lvm(appended_frame(frame, time_col), path, time_col, units, segments=1)
+
+
+def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str],
+         segments: int = 2) -> None:
+    """LabVIEW Measurement text: the file header, then the rows in ``segments`` blocks, each
+    under its own segment header."""
     t = _time_column(frame, time_col)
     cols = [c for c in frame.columns if c != time_col]
     dt = float(np.median(np.diff(t)))
@@ -281,7 +313,7 @@ def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) 
     half = t.size // 2
     out = io.StringIO()
     out.write("\n".join(head) + "\n")
-    for lo, hi in ((0, half), (half, t.size)):
+    for lo, hi in ((0, half), (half, t.size)) if segments == 2 else ((0, t.size),):
         n = len(cols)
         out.write("\n".join([
             f"Channels\t{n}\t",
