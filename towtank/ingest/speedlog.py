@@ -139,7 +139,7 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
     The log is read in any layout towtank reads (format detected from its name and content),
     its columns' units taken from the file or header when no gain is given.
     """
-    from towtank.ingest.readers import column_unit, stated_units, unit_factor
+    from towtank.ingest.readers import TIME_COLUMN_KEY, column_unit, stated_units, unit_factor
     from towtank.ingest.runfile import read_columns
 
     name = path.name
@@ -151,6 +151,8 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
     def channel(col: tuple[str, float, float], canon: str) -> np.ndarray:
         column, gain, offset = col
         key = column if column in cols else stripped.get(column.strip())
+        if key is None and column.strip() == "time" and TIME_COLUMN_KEY in cols:
+            key = cols[TIME_COLUMN_KEY].item()[0]  # the file's own time (LVM X_Value)
         if key is None:
             listed = ", ".join(f"'{c}'" for c in found) or "none"
             raise RunError(f"the speed log {name} has no column '{column}' ({canon}); columns "
