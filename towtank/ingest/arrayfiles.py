@@ -567,9 +567,11 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
 
         try:
             if opts.group or vectors("/") < 2:
-                fh.visititems(lambda key, obj: groups.setdefault(key, obj)
-                              if isinstance(obj, h5py.Group) and not key.startswith("#")
-                              else None)
+                def note_group(key: str, obj: Any) -> None:  # None: h5py visits on
+                    if isinstance(obj, h5py.Group) and not key.startswith("#"):
+                        groups.setdefault(key, obj)
+
+                fh.visititems(note_group)  # every group, nested ones too
             if opts.group:
                 group_key = opts.group.strip("/") or "/"
                 if group_key not in groups:
