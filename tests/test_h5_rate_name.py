@@ -339,3 +339,18 @@ def test_every_nested_group_is_looked_at(tmp_path):
     assert {"speed", "drag", "lift"} <= set(cols) and float(cols[FS_KEY][0]) == 500.0
     cols, _ = read_columns(f, options=ReadOptions(group="/b/c/500 Hz"))
     assert "drag" in cols
+
+
+def test_a_note_every_run_carries_is_listed_once_in_the_report():
+    import pandas as pd
+
+    from towtank.report.quality import shared_notes
+
+    same = "time from the sample rate 200 Hz, '200.00 Hz' in the name of the group '/200.00 Hz'"
+    notes = pd.DataFrame({"run": [1, 2, 3, 5], "notes": [
+        same, f"{same}; 3 spikes removed", same, f"2 rows dropped; {same}"]})
+    shared, own = shared_notes(notes)
+    assert shared == {same: [1, 2, 3, 5]}
+    assert own == {2: ["3 spikes removed"], 5: ["2 rows dropped"]}
+    few = pd.DataFrame({"run": [1, 2], "notes": [same, same]})
+    assert shared_notes(few) == ({}, {1: [same], 2: [same]})

@@ -74,7 +74,8 @@ class FileDescription:
 
 def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescription:
     """Read ``path`` and say what it holds (raises RunError as the readers do)."""
-    from towtank.ingest.runfile import file_bytes, read_columns, stated_rate
+    from towtank.ingest.runfile import file_bytes, read_columns
+    from towtank.ingest.timing import stated_rate
 
     data = file_bytes(path)
     fmt, gz = file_format(path, data, options)

@@ -28,14 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.arrayfiles import FS_NAME_KEY, read_hdf5_columns, read_mat_columns
+from towtank.ingest.arrayfiles import read_hdf5_columns, read_mat_columns
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns
 from towtank.ingest.protocol import Balance, ChannelMap, channel_map
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
-    FS_KEY,
     TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
@@ -49,6 +48,7 @@ from towtank.ingest.readers import (
     stated_units,
     unit_factor,
 )
+from towtank.ingest.timing import stated_rate, time_source_text, timing_note
 from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
@@ -719,53 +719,6 @@ def calibrate(
     return out
 
 
-def stated_rate(cols: dict[str, np.ndarray], sample_rate_hz: float = 0.0) -> tuple[float, str]:
-    """(sample rate [Hz], where it comes from) for a file without a time column or waveform
-    timing, in this order: a rate the file states as an attribute or scalar (``fs``, ``dt``
-    ...); ``[read] sample_rate_hz``; a rate written in an HDF5 group's or dataset's name
-    (``/200.05 Hz/C.SPEED``, :func:`towtank.ingest.arrayfiles.rate_from_names`). (0.0, "")
-    when there is none."""
-    given = float(sample_rate_hz or 0.0)
-    if FS_KEY in cols and FS_NAME_KEY not in cols:
-        return float(cols[FS_KEY][0]), "the sample rate the file states"
-    if given > 0:
-        return given, f"[read] sample_rate_hz = {given:g} Hz"
-    if FS_KEY in cols:
-        return float(cols[FS_KEY][0]), f"{cols[FS_NAME_KEY].item()}"
-    return 0.0, ""
-
-
-def _timing_note(cols: dict[str, np.ndarray], sample_rate_hz: float) -> str | None:
-    """The run's note on a time built from a rate written in an HDF5 name, or from ``[read]
-    sample_rate_hz`` where such a name states another rate; None otherwise."""
-    if FS_NAME_KEY not in cols or WF_TIME_KEY in cols:
-        return None
-    fs, source = stated_rate(cols, sample_rate_hz)
-    named = float(cols[FS_KEY][0])
-    if source.startswith("[read]"):
-        if abs(named - fs) <= 1e-9 * fs:
-            return None
-        return (f"time from {source} (the file has no time channel; "
-                f"{cols[FS_NAME_KEY].item()} says {named:g} Hz)")
-    return f"time from the sample rate {fs:g} Hz, {source} (the file has no time channel)"
-
-
-def _time_source(cols: dict[str, np.ndarray], used: dict[str, str], full_time: str,
-                 sample_rate_hz: float) -> str:
-    """Where a run's time came from, for ``RawRun.time_source``."""
-    col = used.get("time", "")
-    if col in cols:
-        if TIME_COLUMN_KEY in cols and cols[TIME_COLUMN_KEY].item()[0] == col:
-            return f"the column '{col}' ({cols[TIME_COLUMN_KEY].item()[1]})"
-        return f"the column '{col}'"
-    if WF_TIME_KEY in cols:
-        return "LabVIEW waveform timing (wf_increment)"
-    fs, source = stated_rate(cols, sample_rate_hz)
-    if fs > 0:
-        return f"{fs:g} Hz, {source}" if not source.startswith("[read]") else source
-    return col or full_time
-
-
 def fallback_time(
     cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], sample_rate_hz: float = 0.0
 ) -> np.ndarray | None:
@@ -867,10 +820,10 @@ def _load_run(
     if FS_ERROR_KEY in cols and used.get("time") in cols:
         notes.append(f"{cols[FS_ERROR_KEY].item()}: ignored (the time column gives the time)")
     if used.get("time") == "time (from the file's timing)":
-        timing = _timing_note(cols, options.sample_rate_hz)
+        timing = timing_note(cols, options.sample_rate_hz)
         notes.extend([timing] if timing else [])
-    time_source = _time_source(cols, used, full_time=channel_map(mapping)["time"].column,
-                               sample_rate_hz=options.sample_rate_hz)
+    time_source = time_source_text(cols, used, channel_map(mapping)["time"].column,
+                                   options.sample_rate_hz)
     if speed_log is not None or nominal:  # a placeholder until the time base is known
         chans["speed"] = np.zeros(np.asarray(chans["time"]).size)
         used["speed"] = "[speed_log]" if speed_log is not None else "[nominal]"
