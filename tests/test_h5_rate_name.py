@@ -155,6 +155,9 @@ def test_two_rates_in_names_reject_the_run_in_one_sentence_unless_the_protocol_d
     assert text.count(". ") == 0 and "sample_rate_hz" in text
     raw = load_run(f, mapping, options=ReadOptions(sample_rate_hz=200.0))
     assert raw.fs == pytest.approx(200.0)
+    assert "time from [read] sample_rate_hz = 200 Hz (the file has no time channel, and its " \
+           "group and dataset names state different sample rates (200 Hz in the name of the " \
+           "group '/200 Hz', 100Hz in the name of the dataset '/200 Hz/drag 100Hz'))" in raw.notes
 
 
 @pytest.mark.skipif(not MARIN.is_file(), reason="../shared/real/marin_fsi_h5m is not present "

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from towtank.ingest.arrayfiles import FS_NAME_KEY
-from towtank.ingest.readers import FS_KEY, TIME_COLUMN_KEY, WF_TIME_KEY
+from towtank.ingest.readers import FS_ERROR_KEY, FS_KEY, TIME_COLUMN_KEY, WF_TIME_KEY
 
 
 def stated_rate(cols: dict[str, np.ndarray], sample_rate_hz: float = 0.0) -> tuple[float, str]:
@@ -32,8 +32,14 @@ def stated_rate(cols: dict[str, np.ndarray], sample_rate_hz: float = 0.0) -> tup
 
 def timing_note(cols: dict[str, np.ndarray], sample_rate_hz: float) -> str | None:
     """The run's note on a time built from a rate written in an HDF5 name, or from ``[read]
-    sample_rate_hz`` where such a name states another rate; None otherwise."""
-    if FS_NAME_KEY not in cols or WF_TIME_KEY in cols:
+    sample_rate_hz`` where a name states another rate or the file's stated rate is not one
+    (two different rates in names, ``fs = "fast"``); None otherwise."""
+    if WF_TIME_KEY in cols:
+        return None
+    if FS_NAME_KEY not in cols:
+        if FS_ERROR_KEY in cols and FS_KEY not in cols and sample_rate_hz > 0:
+            return (f"time from [read] sample_rate_hz = {sample_rate_hz:g} Hz (the file has no "
+                    f"time channel, and {cols[FS_ERROR_KEY].item()})")
         return None
     fs, source = stated_rate(cols, sample_rate_hz)
     named = float(cols[FS_KEY][0])
