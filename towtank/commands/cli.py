@@ -181,13 +181,15 @@ def _parser() -> argparse.ArgumentParser:
                     help="seed of the random noise: the same seed gives the same files "
                     "(default 1)")
     sy.add_argument("--format", choices=("csv", "csv.gz", "tdms", "tdms-waveform", "lvm",
-                                         "txt-eu", "mat", "mat73", "hdf5", "two-cell",
+                                         "txt-eu", "mat", "mat73", "hdf5",
+                                         "hdf5-rate-name", "two-cell",
                                          "matrix", "speed-log", "position-log", "zero-file",
                                          "no-speed", "lvm-appended"),
                     default=None, dest="file_format",
                     help="run-file format (default: csv.gz for the hull day, tdms for the fin "
                     "day); tdms-waveform (LabVIEW timing, no time channel), lvm, txt-eu "
                     "(';' and decimal commas, preamble, units row), mat (v5), mat73, hdf5, "
+                    "hdf5-rate-name (MARIN-style: the rate only in the group's name, .h5m), "
                     "two-cell (DragL + DragR), matrix (a 2x2 interaction matrix), speed-log and "
                     "position-log (carriage speed or position in its own file per run, 100 Hz, "
                     "another clock), zero-file (a zeros file per run), no-speed (no speed "

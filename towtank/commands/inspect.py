@@ -46,16 +46,18 @@ def _fmt(x: float, unit: str, digits: int = 4) -> str:
     return "–" if x != x else f"{x:+.{digits}f} {unit}".replace("+", " ", 1)
 
 
-def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 0.0
-                  ) -> list[str]:
+def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 0.0,
+                  timing: str = "") -> list[str]:
     """The printed account of one reduced run (phases, means, acceleration, zero, drift).
 
     The phases are given in seconds from the file's first sample; a file whose time channel
-    holds clock times (``t0`` [s], e.g. 1716280000.53, seconds since 1970) says so once."""
+    holds clock times (``t0`` [s], e.g. 1716280000.53, seconds since 1970) says so once.
+    ``timing`` says where the time came from (``RawRun.time_source``)."""
     shift = t0 if abs(t0) > 1e5 else 0.0
     lines = [
         f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
         + (f"; columns: {', '.join(columns)}" if columns else ""),
+        *([f"timing: {timing}"] if timing else []),
         "phases [s]:" if not shift else
         f"phases [s from the first sample; its time stamp is {t0:.3f} s]:",
     ]
@@ -283,7 +285,8 @@ def inspect_run(
     if proposed:
         print("reduced with the block above and default processing (provisional: check each "
               "line; a force at gain = 1.0 from volts is in volts, not newtons):", file=out)
-    for line in summary_lines(red, raw.columns, t0=float(raw.time[0])):
+    for line in summary_lines(red, raw.columns, t0=float(raw.time[0]),
+                              timing=raw.time_source):
         print(line, file=out)
     target = _target(runfile, png, err, out)
     if target is None:  # refused to overwrite (an error), or not beside the raw data unasked

@@ -6,7 +6,8 @@ array is read, the sizes the file *declares* are checked against the run-file ca
 (:data:`towtank.ingest.runfile.MAX_RUN_FILE_BYTES`): a compressed MATLAB variable or an
 unwritten HDF5 dataset holds far more than the file's size (docs/formats.md §3.1, "Size").
 A sample rate stated as an attribute or a scalar may be text with its unit (``"200 Hz"``);
-one that is not a rate gives the reason, used only if the time must come from it.
+one that is not a rate gives the reason, used only if the time must come from it. An HDF5
+file without either may state its rate in a group's or dataset's name (``/200.05 Hz``).
 """
 
 from __future__ import annotations
@@ -30,6 +31,12 @@ from towtank.ingest.readers import (
     ReadOptions,
     _units_entry,
 )
+
+#: Private column entry: where a sample rate read from a group's or dataset's name stands
+#: (0-d object array holding text such as ``'200.05 Hz' in the name of the group
+#: '/200.05 Hz'``); present
+#: only when ``__fs__`` comes from a name (:func:`rate_from_names`).
+FS_NAME_KEY = "__fs_name__"
 
 
 def _size_cap() -> int:
@@ -291,6 +298,112 @@ def sample_rate_value(value: Any, key: str) -> tuple[float | None, str | None]:
     return (1.0 / number if interval else number), None
 
 
+#: A rate written in a name: a number and a rate unit (``200.05 Hz``, ``200Hz``, ``1 kHz``,
+#: ``500 S/s``), or a rate or interval name, ``=`` or ``:``, a number and optionally its unit
+#: (``fs=200``, ``sample_rate: 1 kHz``, ``dt=5 ms``). The number stands alone: no letter,
+#: digit or point just before it.
+_NAME_NUMBER = r"(\d+(?:\.\d*)?|\.\d+)(?:[eE]([-+]?\d{1,3}))?"
+_NAME_RATE = re.compile(
+    r"(?<![0-9A-Za-z.])" + _NAME_NUMBER
+    + r"\s*(MHz|[kK]Hz|[hH][zZ]|S/s|Sa/s|sps|samples/s)(?![0-9A-Za-z/])")
+_NAME_KEYED = re.compile(
+    r"(?<![0-9A-Za-z])(" + "|".join(sorted((*_FS_NAMES, *_DT_NAMES), key=len, reverse=True))
+    + r")\s*[=:]\s*" + _NAME_NUMBER
+    + r"(?:\s*(MHz|[kK]Hz|[hH][zZ]|S/s|Sa/s|sps|samples/s|ms|us|µs|ns|s)(?![0-9A-Za-z/]))?",
+    re.IGNORECASE)
+
+
+def _name_number(whole: str, exponent: str | None) -> float:
+    return float(f"{whole}e{exponent}" if exponent else whole)  # inf when too large
+
+
+def rates_in_name(name: str) -> list[tuple[float, str]]:
+    """The sample rates [Hz] a group or dataset name states, with the text that states each.
+
+    A number with a rate unit, ``"200.05 Hz"`` → 200.05, ``"200Hz"``, ``"1 kHz"`` → 1000,
+    ``"500 S/s"``; or a rate or interval name with ``=`` or ``:`` (:data:`_FS_NAMES`,
+    :data:`_DT_NAMES`), ``"fs=200"`` → 200, ``"dt = 5 ms"`` → 200 (a bare number is in Hz for
+    a rate, in s for an interval). Only finite positive rates are returned; any text gives a
+    list (empty when it states none), never an error.
+
+    Parameters
+    ----------
+    name : str
+        One component of an HDF5 path (a group's or a dataset's name).
+
+    Returns
+    -------
+    list of (float, str)
+        (rate [Hz], the matched text), in the order they stand in the name.
+    """
+    import math
+
+    found: list[tuple[int, float, str]] = []
+    taken: list[tuple[int, int]] = []
+    for m in _NAME_KEYED.finditer(name):
+        key, unit = m.group(1).lower(), m.group(4)
+        value = _name_number(m.group(2), m.group(3))
+        if unit and _rate_factor(unit):  # a rate unit, whatever the key
+            rate = value * _rate_factor(unit)
+        elif key in _DT_NAMES:  # an interval: s when no unit is written
+            step = value * (_INTERVAL_UNITS.get(unit.lower(), 0.0) if unit else 1.0)
+            rate = 1.0 / step if step > 0 else math.nan
+        else:  # a rate: Hz when no unit is written (an interval unit is not a rate)
+            rate = math.nan if unit else value
+        taken.append(m.span())
+        found.append((m.start(), rate, m.group(0)))
+    for m in _NAME_RATE.finditer(name):
+        if any(a <= m.start() < b for a, b in taken):
+            continue
+        rate = _name_number(m.group(1), m.group(2)) * _rate_factor(m.group(3))
+        found.append((m.start(), rate, m.group(0)))
+    return [(rate, text) for _, rate, text in sorted(found)
+            if math.isfinite(rate) and rate > 0]
+
+
+def _rate_factor(unit: str | None) -> float:
+    """Hz per unit of a rate unit in a name (``MHz`` as written; ``kHz``, ``Hz`` in any case;
+    ``mHz`` is not a rate towtank reads: 0)."""
+    if not unit or unit.lower() not in {"hz", "khz", "mhz", "s/s", "sa/s", "sps", "samples/s"}:
+        return 0.0
+    if unit.lower() == "mhz":
+        return 1e6 if unit == "MHz" else 0.0
+    return 1e3 if unit.lower() == "khz" else 1.0
+
+
+def rate_from_names(names: list[tuple[str, str]]) -> tuple[float | None, str | None,
+                                                          str | None]:
+    """(rate [Hz], where it is stated, None), or (None, None, why not) when the names state
+    different rates, or (None, None, None) when they state none.
+
+    ``names`` holds (what, path) pairs, ``("group", "/200.05 Hz")``, ``("dataset",
+    "/200.05 Hz/C.SPEED")``: :func:`rates_in_name` reads the last component of each path. The
+    same rate stated twice is one rate (equal within 1e-9 relative); two different rates are
+    refused, as a clause for a sentence: "its group and dataset names state different sample
+    rates (200 Hz in the name of the group '/200 Hz', 100Hz in the name of the dataset
+    '/200 Hz/Fx 100Hz')".
+    """
+    seen: list[tuple[float, str, str]] = []
+    for what, path in names:
+        for rate, text in rates_in_name(path.rstrip("/").rsplit("/", 1)[-1]):
+            seen.append((rate, text, f"the name of the {what} '{path}'"))
+    if not seen:
+        return None, None, None
+    first = seen[0][0]
+    other = next((s for s in seen if abs(s[0] - first) > 1e-9 * first), None)
+    if other is not None:
+        return None, None, (
+            f"its group and dataset names state different sample rates ({seen[0][1]} in "
+            f"{seen[0][2]}, {other[1]} in {other[2]})")
+    return first, f"'{seen[0][1]}' in {seen[0][2]}", None
+
+
+def _text_entry(text: str) -> np.ndarray:
+    holder = np.empty((), dtype=object)
+    holder[()] = text
+    return holder
+
+
 def _rate_entries(cols: dict[str, np.ndarray], fs: list[float], errors: list[str]) -> None:
     """``__fs__`` from the first rate the file states, else ``__fs_error__`` (the reason the
     rate it states is not one: the run is rejected with it only if the time must come from
@@ -407,7 +520,11 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
     The channels are the 1-D datasets of ``[read] group`` or, by default, of the group (root
     first) holding the most of them. Units come from a ``unit``/``units`` attribute; the sample
     rate from an ``fs``/``sample_rate`` attribute or scalar dataset, or ``wf_increment``
-    (:func:`sample_rate_value`: a number, or text such as ``"200 Hz"``).
+    (:func:`sample_rate_value`: a number, or text such as ``"200 Hz"``); without one, from a
+    rate written in the name of the chosen group, a group above it or a channel's dataset
+    (``/200.05 Hz/C.SPEED``, as MARIN's exports write it: :func:`rate_from_names`; where it
+    stands is kept in ``__fs_name__``, and two different rates in names are
+    ``__fs_error__``).
 
     Before a dataset is read, the values it declares (its shape: an unwritten dataset or a
     compressed one holds far more than the file's size) are added up and checked against the
@@ -450,9 +567,11 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
 
         try:
             if opts.group or vectors("/") < 2:
-                fh.visititems(lambda key, obj: groups.setdefault(key, obj)
-                              if isinstance(obj, h5py.Group) and not key.startswith("#")
-                              else None)
+                def note_group(key: str, obj: Any) -> None:  # None: h5py visits on
+                    if isinstance(obj, h5py.Group) and not key.startswith("#"):
+                        groups.setdefault(key, obj)
+
+                fh.visititems(note_group)  # every group, nested ones too
             if opts.group:
                 group_key = opts.group.strip("/") or "/"
                 if group_key not in groups:
@@ -502,6 +621,18 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
         _collect(items, cols, fs, errors)
     if not cols:
         raise RunError(f"{name} holds no numeric datasets")
+    if not fs:  # no rate attribute or scalar: a rate written in the group's or a dataset's name
+        parts = [] if group_key == "/" else group_key.strip("/").split("/")
+        owners = [("group", "/" + "/".join(parts[:i])) for i in range(len(parts), 0, -1)]
+        base = "/" + "/".join(parts) if parts else ""
+        rate_hz, where, why = rate_from_names(
+            [*owners, *(("dataset", f"{base}/{k}") for k in cols)])
+        if rate_hz is not None:
+            fs.append(rate_hz)
+            cols[FS_NAME_KEY] = _text_entry(where + (f" ({errors[0]}: not used)" if errors
+                                                     else ""))
+        elif why:
+            errors.append(why)
     _rate_entries(cols, fs, errors)
     cols[UNITS_KEY] = _units_entry(units)
     cols[LABEL_KEY] = np.array([], dtype=float)

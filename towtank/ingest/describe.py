@@ -14,9 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+from towtank.ingest.arrayfiles import FS_NAME_KEY
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
+    TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
     column_unit,
@@ -51,6 +53,11 @@ class FileDescription:
     #: the acquisitions of a file holding several one after another, one line each
     #: (:func:`towtank.ingest.segments.describe_segments`); empty for a file recorded in one go
     segments: list[str] = field(default_factory=list)
+    #: the channel that is the file's time ("" when none), and what it is
+    time_column: str = ""
+    time_what: str = ""
+    #: the rate the block must state in ``[read] sample_rate_hz`` (the protocol's) [Hz], or 0
+    stated_rate_hz: float = 0.0
 
     def lines(self) -> list[str]:
         """The account printed by ``towtank inspect``."""
@@ -68,13 +75,15 @@ class FileDescription:
             out += [f"    {line}" for line in self.segments]
         out.append("  channels:")
         for name, unit, n in self.channels:
-            out.append(f"    {name!r:<40s} {unit or '(no unit)':<10s} {n} samples")
+            what = "   <- the time" if name == self.time_column and self.time_what else ""
+            out.append(f"    {name!r:<40s} {unit or '(no unit)':<10s} {n} samples{what}")
         return out
 
 
 def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescription:
     """Read ``path`` and say what it holds (raises RunError as the readers do)."""
     from towtank.ingest.runfile import file_bytes, read_columns
+    from towtank.ingest.timing import stated_rate
 
     data = file_bytes(path)
     fmt, gz = file_format(path, data, options)
@@ -87,20 +96,38 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
     for c in names:
         arr = np.asarray(cols[c])
         desc.channels.append((c, column_unit(c, units) or "", int(arr.size)))
-    time_col = next((c for c in names if _guess(c) == "time"), None)
+    own = cols[TIME_COLUMN_KEY].item() if TIME_COLUMN_KEY in cols else None
+    time_col = own[0] if own is not None and own[0] in cols else \
+        next((c for c in names if _guess(c) == "time"), None)
+    given = float(getattr(options, "sample_rate_hz", 0.0) or 0.0)
+    fs, source = stated_rate(cols, given)
     if time_col is not None:
         t = np.asarray(cols[time_col], dtype=float)
         dt = np.diff(t[np.isfinite(t)])
         desc.fs = 1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0 else float("nan")
-        desc.timing = f"time column '{time_col}' ({desc.fs:g} Hz)"
+        desc.time_column = time_col
+        if own is not None and own[0] == time_col:
+            desc.time_what = own[1]
+            desc.timing = (f"the column '{time_col}' ({own[1]}), {desc.fs:g} Hz; the file has "
+                           "no channel named time")
+        else:
+            desc.timing = f"time column '{time_col}' ({desc.fs:g} Hz)"
         desc.segments = _segments(cols, t)
     elif WF_TIME_KEY in cols:
         t = cols[WF_TIME_KEY]
         desc.fs = 1.0 / float(t[1] - t[0]) if t.size > 1 else float("nan")
         desc.timing = f"LabVIEW waveform timing (wf_increment), {desc.fs:g} Hz; no time channel"
-    elif FS_KEY in cols:
-        desc.fs = float(cols[FS_KEY][0])
-        desc.timing = f"sample rate stated in the file, {desc.fs:g} Hz; no time channel"
+    elif fs > 0:
+        desc.fs = fs
+        if source.startswith("[read]"):
+            desc.stated_rate_hz = fs
+            named = (f"; {cols[FS_NAME_KEY].item()} says {float(cols[FS_KEY][0]):g} Hz"
+                     if FS_NAME_KEY in cols else "")
+            desc.timing = f"{source} (the protocol's), no time channel{named}"
+        elif FS_NAME_KEY in cols:
+            desc.timing = f"{fs:g} Hz from {source}; no time channel"
+        else:
+            desc.timing = f"sample rate stated in the file, {fs:g} Hz; no time channel"
     elif FS_ERROR_KEY in cols:
         desc.timing = (f"none usable: {cols[FS_ERROR_KEY].item()}; give [read] sample_rate_hz "
                        "or map a time column")
@@ -243,7 +270,9 @@ def protocol_block(desc: FileDescription) -> str:
         delim = {"tab": "\\t"}.get(desc.layout["delimiter"], desc.layout["delimiter"])
         lines.append(f"delimiter = {_toml_string(delim)}")
         lines.append(f"decimal = {_toml_string(desc.layout['decimal'])}")
-    if "time" not in desc.guesses and desc.timing.startswith("none"):
+    if desc.stated_rate_hz > 0:
+        lines.append(f"sample_rate_hz = {desc.stated_rate_hz!r}")
+    elif "time" not in desc.guesses and desc.timing.startswith("none"):
         lines.append("sample_rate_hz = 1000.0   # <- the rate the file was recorded at")
     if desc.segments:
         lines.append(f"segment = 1   # <- which of the file's {len(desc.segments)} "

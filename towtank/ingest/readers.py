@@ -53,6 +53,10 @@ LABEL_KEY = "__label__"
 ROWS_KEY = "__rows__"  # the file's line of each row (header = row 1), as plaincsv's
 #: Sample indices where an LVM segment header starts new rows (:mod:`towtank.ingest.segments`).
 LVM_HEADERS_KEY = "__lvm_headers__"
+#: (column, how it was made) of a file's own time column under another name: LVM's
+#: ``X_Value`` (the time of the first channel), or that column computed from ``X0`` and
+#: ``Delta_X``; the channel ``time`` is taken from it when ``[channels]`` maps no time.
+TIME_COLUMN_KEY = "__time_column__"
 
 #: Extensions and the format each means (``auto``); ``.gz`` of a text format is text too.
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
@@ -470,6 +474,7 @@ def read_lvm_columns(
     if len(marks) < 2:
         raise RunError(f"{name} is not a LabVIEW measurement file (no segment header found)")
     segments: list[dict[str, np.ndarray]] = []
+    computed = False
     head_from = marks[0] + 1
     for k in range(1, len(marks)):
         seg_head = lines[head_from : marks[k]]
@@ -520,6 +525,7 @@ def read_lvm_columns(
             x0 = _first_float(head_vals.get("X0")) or 0.0
             if dx:
                 seg["X_Value"] = x0 + dx * np.arange(n_rows)
+                computed = True
         seg[UNITS_KEY] = _units_entry(units)
         if n_rows:
             if line_no.size == n_rows:
@@ -531,7 +537,12 @@ def read_lvm_columns(
     cols = {c: np.concatenate([np.asarray(s.get(c, np.full(_seg_len(s), np.nan)))
                                for s in segments]) for c in names}
     if "X_Value" in cols and "time" not in {c.lower() for c in cols}:
-        cols["time"] = cols["X_Value"]  # LabVIEW's name for the time of the first channel
+        how = ("LabVIEW's X_Value, computed from the segment headers' X0 and Delta_X: the "
+               "column holds no times" if computed else "LabVIEW's X_Value, the time of the "
+               "first channel")
+        holder = np.empty((), dtype=object)
+        holder[()] = ("X_Value", how)
+        cols[TIME_COLUMN_KEY] = holder  # the time channel when [channels] maps none
     cols[UNITS_KEY] = segments[0][UNITS_KEY]
     if all(ROWS_KEY in s for s in segments):  # the file's line of each row (messages)
         cols[ROWS_KEY] = np.concatenate([s[ROWS_KEY] for s in segments])

@@ -39,6 +39,7 @@ from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
     LVM_HEADERS_KEY,
+    TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
     column_unit,
@@ -52,6 +53,7 @@ from towtank.ingest.readers import (
     unit_factor,
 )
 from towtank.ingest.segments import find_segments, human_duration, segment_error
+from towtank.ingest.timing import stated_rate, time_source_text, timing_note
 from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
@@ -90,6 +92,9 @@ class RawRun:
     #: the run sheet's set speed [m/s] of a run without a measured speed (``speed_source =
     #: "nominal"``; ``speed`` then holds 0), else NaN
     speed_nominal: float = math.nan
+    #: where the time comes from, said for a person: "the column 'Time (s)'", "LabVIEW
+    #: waveform timing (wf_increment)", "[read] sample_rate_hz = 200 Hz" ...
+    time_source: str = ""
 
     @property
     def n(self) -> int:
@@ -644,6 +649,9 @@ def map_channels(
             continue
         key = cm.column if cm.column in cols else stripped.get(cm.column.strip())
         if key is None and canon == "time" and "time" not in mapping and \
+                TIME_COLUMN_KEY in cols:  # the file's time under its own name (LVM X_Value)
+            key = cols[TIME_COLUMN_KEY].item()[0]
+        if key is None and canon == "time" and "time" not in mapping and \
                 fallback_time is not None:
             out["time"] = fallback_time
             if used is not None:
@@ -723,7 +731,7 @@ def fallback_time(
     file's stated sample rate or ``[read] sample_rate_hz``; None when there is neither."""
     if WF_TIME_KEY in cols:
         return np.asarray(cols[WF_TIME_KEY], dtype=np.float64)
-    fs = float(cols[FS_KEY][0]) if FS_KEY in cols else float(sample_rate_hz or 0.0)
+    fs, _ = stated_rate(cols, sample_rate_hz)
     if fs <= 0:
         return None
     full = channel_map(mapping)
@@ -825,6 +833,11 @@ def _load_run(
     full = channel_map(mapping)
     if FS_ERROR_KEY in cols and used.get("time") in cols:
         notes.append(f"{cols[FS_ERROR_KEY].item()}: ignored (the time column gives the time)")
+    if used.get("time") == "time (from the file's timing)":
+        timing = timing_note(cols, options.sample_rate_hz)
+        notes.extend([timing] if timing else [])
+    time_source = time_source_text(cols, used, channel_map(mapping)["time"].column,
+                                   options.sample_rate_hz)
     if speed_log is not None or nominal:  # a placeholder until the time base is known
         chans["speed"] = np.zeros(np.asarray(chans["time"]).size)
         used["speed"] = "[speed_log]" if speed_log is not None else "[nominal]"
@@ -885,6 +898,7 @@ def _load_run(
         columns=tuple(c for c in cols if not c.startswith("__")),
         notes=notes,
         speed_nominal=float(speed_nominal) if nominal else math.nan,  # type: ignore[arg-type]
+        time_source=time_source,
     )
 
 

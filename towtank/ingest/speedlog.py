@@ -46,8 +46,10 @@ class SpeedLog:
         Name pattern of the log relative to the data folder; ``{stem}`` (the run file's name
         without extensions), ``{name}`` (its name), ``{dir}`` (its folder in the data folder)
         and ``{run}`` (the run number, ``{run:03d}`` for 001) are filled in.
-    time : tuple
-        (column, gain, offset) of the log's time [s after gain·(raw − offset)].
+    time : tuple or None
+        (column, gain, offset) of the log's time [s after gain·(raw − offset)]; None: the
+        log's own timing (LabVIEW waveform timing, LVM's ``X_Value``, a rate the file states
+        or writes in an HDF5 group's name, as a run file's: one file per channel).
     speed : tuple or None
         (column, gain, offset) of the carriage speed [m/s].
     position : tuple or None
@@ -57,7 +59,7 @@ class SpeedLog:
     """
 
     file: str
-    time: tuple[str, float, float]
+    time: tuple[str, float, float] | None
     speed: tuple[str, float, float] | None = None
     position: tuple[str, float, float] | None = None
     offset_s: float = 0.0
@@ -104,8 +106,6 @@ def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
     except (KeyError, IndexError, ValueError) as exc:
         raise ProtocolError(f"{src}: 'file' in [speed_log] is {pattern!r}: only {{stem}}, "
                             f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
-    if "time" not in data:
-        raise ProtocolError(f"{src}: [speed_log] needs 'time' (the log's time column).")
     if ("speed" in data) == ("position" in data):
         raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
                             "them).")
@@ -116,7 +116,7 @@ def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
                             f"(within ±3600), but it is {offset!r}.")
     return SpeedLog(
         file=pattern,
-        time=_column(data["time"], "time", src),
+        time=_column(data["time"], "time", src) if "time" in data else None,
         speed=_column(data["speed"], "speed", src) if "speed" in data else None,
         position=_column(data["position"], "position", src) if "position" in data else None,
         offset_s=float(offset),
@@ -139,7 +139,7 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
     The log is read in any layout towtank reads (format detected from its name and content),
     its columns' units taken from the file or header when no gain is given.
     """
-    from towtank.ingest.readers import column_unit, stated_units, unit_factor
+    from towtank.ingest.readers import TIME_COLUMN_KEY, column_unit, stated_units, unit_factor
     from towtank.ingest.runfile import read_columns
 
     name = path.name
@@ -151,6 +151,8 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
     def channel(col: tuple[str, float, float], canon: str) -> np.ndarray:
         column, gain, offset = col
         key = column if column in cols else stripped.get(column.strip())
+        if key is None and column.strip() == "time" and TIME_COLUMN_KEY in cols:
+            key = cols[TIME_COLUMN_KEY].item()[0]  # the file's own time (LVM X_Value)
         if key is None:
             listed = ", ".join(f"'{c}'" for c in found) or "none"
             raise RunError(f"the speed log {name} has no column '{column}' ({canon}); columns "
@@ -165,7 +167,7 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
         unit = column_unit(key, units)
         return arr * unit_factor("speed" if canon == "speed" else canon, unit, key, name)
 
-    t = channel(spec.time, "time")
+    t = channel(spec.time, "time") if spec.time is not None else _own_time(cols, name)
     x = channel(spec.position, "position") if spec.position else channel(spec.speed, "speed")
     ok = np.isfinite(t) & np.isfinite(x)
     t, x = t[ok], x[ok]
@@ -176,6 +178,23 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
         raise RunError(f"the speed log {name}: its time does not increase after t = {t[i]:.4g} s")
     u = np.gradient(x, t) if spec.position else x
     return t + spec.offset_s, u
+
+
+def _own_time(cols: dict[str, Any], name: str) -> np.ndarray:
+    """The time [s] a log without a time column carries (``[speed_log]`` without ``time``):
+    its own timing, found as for a run file (LVM's ``X_Value``, LabVIEW waveform timing, a
+    stated sample rate, a rate in an HDF5 group's name); RunError when it has none."""
+    from towtank.ingest.readers import FS_ERROR_KEY, TIME_COLUMN_KEY
+    from towtank.ingest.runfile import fallback_time
+
+    if TIME_COLUMN_KEY in cols:
+        return np.asarray(cols[cols[TIME_COLUMN_KEY].item()[0]], dtype=np.float64)
+    t = fallback_time(cols, {})
+    if t is None:
+        why = f" ({cols[FS_ERROR_KEY].item()})" if FS_ERROR_KEY in cols else ""
+        raise RunError(f"the speed log {name} has no timing of its own{why}: give [speed_log] "
+                       "time = { column = \"...\" }")
+    return t
 
 
 def _number(v: Any) -> float:

@@ -12,10 +12,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from towtank.analysis.daywide import group_rejections, own_reason
+from towtank.analysis.daywide import group_rejections, own_reason, run_ranges
 from towtank.report import figures, style
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from towtank.pipeline import DayResult
 
 PAGE_H = style.PAGE_SIZE[1]
@@ -134,11 +136,36 @@ def quality_flow(day: DayResult) -> Flow:
     f.gap()
     f.h("Notes on individual runs")
     if len(notes):
-        for r in notes.itertuples():
-            f.li(f"run {int(r.run)}: {r.notes}")
+        shared, own = shared_notes(notes)
+        for text, numbers in shared.items():
+            f.li(f"runs {run_ranges(numbers)}: {text}")
+        for run, texts in own.items():
+            f.li(f"run {run}: {'; '.join(texts)}")
     else:
         f.p("No run needed a repair (gaps, spikes, dropped rows) or a cross-check note.")
     return f
+
+
+#: A run note written word for word on this many runs or more is listed once, with the runs.
+SHARED_NOTE_RUNS = 3
+
+
+def shared_notes(notes: pd.DataFrame) -> tuple[dict[str, list[int]], dict[int, list[str]]]:
+    """The runs' notes (runs.csv's ``notes``, each run's joined by "; ") as ({note written on
+    :data:`SHARED_NOTE_RUNS` runs or more: their numbers}, {run: its other notes}), in the
+    order they first appear: a note every run of a day carries (the time from a rate in an
+    HDF5 group's name, a unit converted) is said once, not once per run."""
+    per_run: dict[int, list[str]] = {}
+    for r in notes.itertuples():
+        parts = [p.strip() for p in str(r.notes).split("; ") if p.strip()]
+        per_run[int(r.run)] = list(dict.fromkeys(parts))
+    where: dict[str, list[int]] = {}
+    for run, parts in per_run.items():
+        for p in parts:
+            where.setdefault(p, []).append(run)
+    shared = {p: runs for p, runs in where.items() if len(runs) >= SHARED_NOTE_RUNS}
+    own = {run: [p for p in parts if p not in shared] for run, parts in per_run.items()}
+    return shared, {run: parts for run, parts in own.items() if parts}
 
 
 def _diagnostics_flow(f: Flow, day: DayResult) -> None:

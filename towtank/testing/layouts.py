@@ -18,6 +18,9 @@ mat73             .mat         MATLAB v7.3 (HDF5 with MATLAB's 512-byte header):
                                top level, no time vector, a scalar ``fs`` [Hz]
 hdf5              .h5          HDF5: group ``data``, one dataset per channel with a ``unit``
                                attribute, ``sample_rate`` on the group
+hdf5-rate-name    .h5m         HDF5 as a MARIN basin export writes it: the sample rate only in
+                               the group's name (``/200.00 Hz``), one dataset per channel, no
+                               time dataset, no attributes (the units in the channels' names)
 two-cell          .csv         the drag from two load cells (``DragL``, ``DragR``) to be summed
 matrix            .csv         a two-component dynamometer: bridges ``Fx``, ``Fy`` with cross-talk
 speed-log         .csv         no speed column; the carriage speed in ``run_NNN_carriage.csv`` at
@@ -61,6 +64,7 @@ LAYOUTS = {
     "mat": "mat",
     "mat73": "mat",
     "hdf5": "h5",
+    "hdf5-rate-name": "h5m",
     "two-cell": "csv",
     "matrix": "csv",
     "speed-log": "csv",
@@ -93,7 +97,7 @@ BALANCE_MATRIX = ((20.0, 0.3), (-0.2, -25.0))
 _FIXED = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
 #: Layouts without a time column (the time comes from the file's timing).
-NO_TIME_COLUMN = ("tdms-waveform", "lvm", "mat73", "lvm-appended")
+NO_TIME_COLUMN = ("tdms-waveform", "lvm", "mat73", "lvm-appended", "hdf5-rate-name")
 
 
 def protocol_channels(layout: str, section: dict[str, dict]) -> dict[str, dict]:
@@ -113,9 +117,9 @@ def variable_name(column: str) -> str:
 def layout_channels(layout: str, channels: LabChannels | None) -> LabChannels | None:
     """The lab's channel names as a layout stores them (MATLAB identifiers in .mat files, no
     '/' in HDF5 names), for the protocol's ``[channels]``."""
-    if channels is None or layout not in ("mat", "mat73", "hdf5"):
+    if channels is None or layout not in ("mat", "mat73", "hdf5", "hdf5-rate-name"):
         return channels
-    fix = variable_name if layout != "hdf5" else (lambda c: c.replace("/", "_per_"))
+    fix = variable_name if layout.startswith("mat") else (lambda c: c.replace("/", "_per_"))
     return replace(channels, **{k: fix(getattr(channels, k))
                                 for k in ("time", "speed", "accel", "drag", "lift")})
 
@@ -137,7 +141,8 @@ def write_layout(
     path.parent.mkdir(parents=True, exist_ok=True)
     writer = {
         "tdms-waveform": _tdms_waveform, "lvm": _lvm, "txt-eu": _txt_eu, "mat": _mat_v5,
-        "mat73": _mat_v73, "hdf5": _hdf5, "two-cell": _csv, "matrix": _csv,
+        "mat73": _mat_v73, "hdf5": _hdf5, "hdf5-rate-name": _hdf5_rate_name, "two-cell": _csv,
+        "matrix": _csv,
         "speed-log": _csv, "position-log": _csv, "zero-file": _csv, "no-speed": _csv,
         "lvm-appended": _lvm_appended,
     }[layout]
@@ -394,3 +399,19 @@ def _hdf5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str])
             ds = grp.create_dataset(col.replace("/", "_per_"),
                                     data=frame[col].to_numpy(np.float64))
             ds.attrs["unit"] = units.get(col, "")
+
+
+def _hdf5_rate_name(frame: pd.DataFrame, path: Path, time_col: str,
+                    units: dict[str, str]) -> None:
+    """A MARIN-style export: the rate written only in the group's name (``/200.00 Hz``), a
+    dataset per channel, no time dataset and no attributes."""
+    import h5py
+
+    t = _time_column(frame, time_col)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    with h5py.File(str(path), "w") as fh:
+        grp = fh.create_group(f"{fs:.2f} Hz")
+        for col in frame.columns:
+            if col != time_col:
+                grp.create_dataset(col.replace("/", "_per_"),
+                                   data=frame[col].to_numpy(np.float64))

@@ -54,8 +54,8 @@ FIN_SAMPLE_DATE = "2024-05-22"
 Config = Literal["hull", "fin", "sting"]
 ChannelStyle = Literal["canonical", "lab"]
 FileFormat = Literal["csv", "csv.gz", "tdms", "tdms-waveform", "lvm", "txt-eu", "mat", "mat73",
-                     "hdf5", "two-cell", "matrix", "speed-log", "position-log", "zero-file",
-                     "no-speed"]
+                     "hdf5", "hdf5-rate-name", "two-cell", "matrix", "speed-log",
+                     "position-log", "zero-file", "no-speed"]
 SheetFormat = Literal["csv", "xlsx"]
 
 _REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
