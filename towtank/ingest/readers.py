@@ -704,6 +704,12 @@ _QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force"
              "lift": "force", "position": "length"}
 
 
+def known_units(canon: str) -> list[str]:
+    """The units towtank converts to SI for channel ``canon`` ([] for a channel it does not
+    know)."""
+    return list(UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {}))
+
+
 def column_unit(column: str, stated: dict[str, str]) -> str | None:
     """The unit of a column: stated by the file, else written in its name ``Speed (mm/s)``."""
     if stated.get(column):

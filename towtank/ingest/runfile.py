@@ -86,6 +86,9 @@ class RawRun:
     #: the run sheet's set speed [m/s] of a run without a measured speed (``speed_source =
     #: "nominal"``; ``speed`` then holds 0), else NaN
     speed_nominal: float = math.nan
+    #: per channel read: (its unit in the file, where that came from: "file", "protocol" or
+    #: "assumed", see :func:`unit_source`)
+    units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -682,19 +685,25 @@ def calibrate(
     units: dict[str, str],
     name: str,
     notes: list[str],
+    sources: dict[str, tuple[str, str]] | None = None,
 ) -> dict[str, np.ndarray]:
     """Raw columns to SI channels: value = gain·(raw − offset) where ``[channels]`` gives a
-    calibration, else the column's unit (stated by the file or in its name, ``Speed (mm/s)``)
-    converted to SI (:func:`towtank.ingest.readers.unit_factor`); infinities become missing."""
+    calibration, else the column's unit (``unit`` in ``[channels]``, else stated by the file
+    or in its name, ``Speed (mm/s)``) converted to SI
+    (:func:`towtank.ingest.readers.unit_factor`); infinities become missing. ``sources``
+    receives, per channel, (its unit, where the unit came from: :func:`unit_source`)."""
     out = {}
     for canon, arr in numeric.items():
         cm = full[canon]
+        column = used.get(canon, cm.column)
+        stated = cm.unit or column_unit(column, units) or _cells_unit(cm, units)
+        if sources is not None:
+            sources[canon] = unit_source(canon, cm, column, stated, cm.unit != "")
         if cm.gain != 1.0 or cm.offset != 0.0:
             with np.errstate(all="ignore"):
                 arr = cm.gain * (arr - cm.offset)
         else:
-            column = used.get(canon, cm.column)
-            unit = column_unit(column, units)
+            unit = stated
             if cm.calibrated and is_volts(unit):  # a stated gain of 1 N per V (or V per V)
                 notes.append(f"{canon} taken from {unit} with the stated gain 1.0 "
                              f"(1 SI unit per {unit})")
@@ -710,6 +719,35 @@ def calibrate(
             notes.append(f"{int(inf.sum())} infinite {canon} value(s) treated as missing")
         out[canon] = arr
     return out
+
+
+#: Where a channel's unit came from (:func:`unit_source`).
+UNIT_SOURCES = ("file", "protocol", "assumed")
+
+
+def _cells_unit(cm: ChannelMap, units: dict[str, str]) -> str | None:
+    """The unit of a sum of load cells (``columns``): the one unit all its cells state."""
+    if not cm.columns:
+        return None
+    found = {column_unit(c, units) for c in cm.columns}
+    return found.pop() if len(found) == 1 else None
+
+
+def unit_source(canon: str, cm: ChannelMap, column: str, stated: str | None,
+                from_protocol: bool = False) -> tuple[str, str]:
+    """(unit, source) of a calibrated channel: the SI unit of ``canon`` and ``"protocol"``
+    when [channels] gives a gain, an offset or a ``unit`` (or the channel is a [balance]
+    output, a [speed_log] or the run sheet's set speed), ``"file"`` when the file states the
+    unit (a units row or header, TDMS ``unit_string``, HDF5/.mat attribute, ``Speed (mm/s)``
+    or the file's own timing), else ``"assumed"``: the SI unit taken without a label."""
+    si = UNITS.get(canon, "")
+    if from_protocol or cm.calibrated or column.startswith("["):
+        return (stated or si) if from_protocol else si, "protocol"
+    if column.startswith("time (from the file"):
+        return "s", "file"
+    if stated:
+        return stated, "file"
+    return si, "assumed"
 
 
 def fallback_time(
@@ -831,7 +869,11 @@ def _load_run(
     numeric, where = _drop_bad_rows(chans, rows, invalid, where, name, max_bad_row_fraction,
                                     notes)
 
-    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
+    units: dict[str, tuple[str, str]] = {}
+    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes, units)
+    if used.get("time", "").startswith("time (from the file") and FS_KEY not in cols and \
+            WF_TIME_KEY not in cols:
+        units["time"] = ("s", "protocol")  # [read] sample_rate_hz
 
     t = _fill_missing_times(numeric, where, name, max_nan_gap_s, notes)
 
@@ -869,6 +911,7 @@ def _load_run(
         columns=tuple(c for c in cols if not c.startswith("__")),
         notes=notes,
         speed_nominal=float(speed_nominal) if nominal else math.nan,  # type: ignore[arg-type]
+        units=units,
     )
 
 

@@ -94,6 +94,9 @@ class RunReduction:
     speed_source: str = "measured"
     #: standard uncertainty of a set speed [m/s]: speed_tolerance·U/√3 (NaN when measured)
     speed_u: float = math.nan
+    #: per channel read from the file: (its unit, where that came from: "file", "protocol" or
+    #: "assumed"), see :func:`towtank.ingest.runfile.unit_source`
+    units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -861,6 +864,10 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         for w in unmapped_force_warnings(protocol, raw.columns, file):
             red.notes.append(w)
             red.warnings.append(w)
+        red.units = dict(raw.units)
+        note = assumed_units_note(red.units)
+        if note:
+            red.notes.append(note)
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
@@ -903,6 +910,23 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
         out.append(f"{file}: the channel '{c}' looks like a force or a load cell of one, but "
                    f"no [channels] entry uses it, so it is in no force ({hint})")
     return out
+
+
+def assumed_units_note(units: dict[str, tuple[str, str]]) -> str:
+    """The runs.csv note of a run whose channels had no unit label: ``drag and lift had no
+    unit label: taken as N`` ('' when every unit was stated)."""
+    from towtank.analysis.daywide import and_list as _and
+
+    by_unit: dict[str, list[str]] = {}
+    for canon, (unit, source) in units.items():
+        if source == "assumed":
+            by_unit.setdefault(unit, []).append(canon)
+    if not by_unit:
+        return ""
+    names = [c for chans in by_unit.values() for c in chans]
+    taken = "; ".join(f"{_and(chans)} taken as {u}" for u, chans in by_unit.items()) \
+        if len(by_unit) > 1 else f"taken as {next(iter(by_unit))}"
+    return f"{_and(names)} had no unit label: {taken}"
 
 
 def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:
