@@ -501,6 +501,8 @@ def read_lvm_columns(
         head_from = i
         units = dict(zip([c for c in names if c and c != "X_Value"],
                          [u.strip() for u in head_vals.get("Y_Unit_Label", [])], strict=False))
+        if (head_vals.get("X_Dimension") or [""])[0].strip().lower() == "time":
+            units["X_Value"] = "s"  # an X axis of time is in seconds in LabVIEW's format
         if "X_Value" in seg and (seg["X_Value"].dtype == object
                                  or np.isnan(seg["X_Value"]).all()):
             dx = _first_float(head_vals.get("Delta_X"))
@@ -517,7 +519,10 @@ def read_lvm_columns(
                                for s in segments]) for c in names}
     if "X_Value" in cols and "time" not in {c.lower() for c in cols}:
         cols["time"] = cols["X_Value"]  # LabVIEW's name for the time of the first channel
-    cols[UNITS_KEY] = segments[0][UNITS_KEY]
+    units_entry = segments[0][UNITS_KEY]
+    if "time" in cols and "X_Value" in units_entry.item():
+        units_entry = _units_entry({**units_entry.item(), "time": units_entry.item()["X_Value"]})
+    cols[UNITS_KEY] = units_entry
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
 
@@ -707,7 +712,8 @@ _QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force"
 def known_units(canon: str) -> list[str]:
     """The units towtank converts to SI for channel ``canon`` ([] for a channel it does not
     know)."""
-    return list(UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {}))
+    shown = {"n": "N", "kn": "kN", "mn": "mN"} if _QUANTITY.get(canon) == "force" else {}
+    return [shown.get(u, u) for u in UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {})]
 
 
 def column_unit(column: str, stated: dict[str, str]) -> str | None:

@@ -697,7 +697,7 @@ def calibrate(
         cm = full[canon]
         column = used.get(canon, cm.column)
         stated = cm.unit or column_unit(column, units) or _cells_unit(cm, units)
-        if sources is not None:
+        if sources is not None and column not in ("[speed_log]", "[nominal]"):
             sources[canon] = unit_source(canon, cm, column, stated, cm.unit != "")
         if cm.gain != 1.0 or cm.offset != 0.0:
             with np.errstate(all="ignore"):
@@ -737,7 +737,7 @@ def unit_source(canon: str, cm: ChannelMap, column: str, stated: str | None,
                 from_protocol: bool = False) -> tuple[str, str]:
     """(unit, source) of a calibrated channel: the SI unit of ``canon`` and ``"protocol"``
     when [channels] gives a gain, an offset or a ``unit`` (or the channel is a [balance]
-    output, a [speed_log] or the run sheet's set speed), ``"file"`` when the file states the
+    output), ``"file"`` when the file states the
     unit (a units row or header, TDMS ``unit_string``, HDF5/.mat attribute, ``Speed (mm/s)``
     or the file's own timing), else ``"assumed"``: the SI unit taken without a label."""
     si = UNITS.get(canon, "")

@@ -864,10 +864,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         for w in unmapped_force_warnings(protocol, raw.columns, file):
             red.notes.append(w)
             red.warnings.append(w)
-        red.units = dict(raw.units)
-        note = assumed_units_note(red.units)
-        if note:
-            red.notes.append(note)
+        record_units(red, raw)
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
@@ -910,6 +907,15 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
         out.append(f"{file}: the channel '{c}' looks like a force or a load cell of one, but "
                    f"no [channels] entry uses it, so it is in no force ({hint})")
     return out
+
+
+def record_units(red: RunReduction, raw: RawRun) -> None:
+    """Keep the run's units and their sources (``raw.units``) on ``red``, with a note (in
+    runs.csv) naming the channels that had no unit label and what was assumed."""
+    red.units = dict(raw.units)
+    note = assumed_units_note(red.units)
+    if note:
+        red.notes.append(note)
 
 
 def assumed_units_note(units: dict[str, tuple[str, str]]) -> str:
