@@ -108,6 +108,10 @@ def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_pa
     assert "the channel 'DragR (V)' looks like a force" in said[0]
     assert 'columns = ["DragL (V)", "DragR (V)"]' in said[0]
     assert "run_021.csv" not in said[0].split(";")[1]  # no one run's file in the sentence
+    from towtank.report.quality import quality_flow
+
+    items = [text for _, text in quality_flow(day).items]
+    assert [t for t in items if "'DragR (V)' looks like a force" in t] == said  # once
     # runs.csv keeps each run's own note
     assert all("'DragR (V)' looks like a force" in " ".join(r.notes)
                for r in day.reductions.values())

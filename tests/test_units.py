@@ -115,6 +115,11 @@ def test_a_day_without_unit_labels_says_so_once(bare_day):
     assert all(r.units["drag"] == ("N", "assumed") for r in day.reductions.values())
     notes = day.runs.set_index("run")["notes"]
     assert all("had no unit label" in notes[r] for r in day.reductions)
+    # the report's quality page: the day's sentence once, not once more per run
+    from towtank.report.quality import quality_flow
+
+    items = [text for _, text in quality_flow(day).items]
+    assert [t for t in items if "had no unit label" in t] == said
     # time and speed stated: the sentence names only the forces
     day = towtank.process_day(_protocol(bare_day, "forces", {"time": "s", "speed": "m/s"}),
                               jobs=1, report=False)

@@ -14,7 +14,8 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "unit_label_sentences",
+__all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
+           "unit_label_sentences",
            "run_ranges", "own_reason", "and_list", "MIN_GROUP"]
 
 #: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
@@ -117,6 +118,22 @@ def _files(members: list[tuple[int, Any]]) -> str:
     return files[0] if len(files) == 1 else f"{files[0]} … {files[-1]}"
 
 
+def _by_text(items: list[tuple[int, Any, str]]) -> dict[str, list[tuple[int, Any, str]]]:
+    """``(run, file, warning)`` by the warning's text without the run's own file and number."""
+    by_text: dict[str, list[tuple[int, Any, str]]] = {}
+    for run, file, w in items:
+        by_text.setdefault(_generic(run, file, w), []).append((run, file, w))
+    return by_text
+
+
+def grouped_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_GROUP
+                     ) -> set[tuple[int, str]]:
+    """The ``(run, warning)`` of ``items`` that :func:`group_run_warnings` says once for the
+    day (the report leaves them out of its notes on single runs)."""
+    return {(m[0], m[2]) for members in _by_text(items).values() if len(members) >= min_group
+            for m in members}
+
+
 def group_run_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_GROUP
                        ) -> list[str]:
     """The day's lines for per-run warnings ``(run, file, warning)``: a warning that is word
@@ -124,11 +141,8 @@ def group_run_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_G
     taken out (``DragR`` left unmapped in every file) is one sentence naming how many runs and
     the first and last file; every other one stays ``run N: warning.``. In order of each
     line's first run."""
-    by_text: dict[str, list[tuple[int, Any, str]]] = {}
-    for run, file, w in items:
-        by_text.setdefault(_generic(run, file, w), []).append((run, file, w))
     lines: list[tuple[int, str]] = []
-    for generic, members in by_text.items():
+    for generic, members in _by_text(items).items():
         if len(members) >= min_group:
             text = own_reason("\x00n", "\x00file", generic)
             text = text.replace("\x00file", "each run's file").replace("run \x00n", "each run")

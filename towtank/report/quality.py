@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from towtank.analysis.daywide import group_rejections, own_reason
+from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason
 from towtank.report import figures, style
 
 if TYPE_CHECKING:
@@ -133,12 +133,33 @@ def quality_flow(day: DayResult) -> Flow:
     notes = runs[runs["notes"].fillna("").astype(str).str.len() > 0]
     f.gap()
     f.h("Notes on individual runs")
-    if len(notes):
-        for r in notes.itertuples():
-            f.li(f"run {int(r.run)}: {r.notes}")
-    else:
+    own = _own_notes(day)
+    every = [(int(r.run), own.get(int(r.run), str(r.notes)), str(r.notes))
+             for r in notes.itertuples()]
+    listed = [(run, text) for run, text, _ in every if text]
+    if any(text != full for _, text, full in every):
+        f.p("Notes said once for the day under Warnings (a channel without a unit label, a "
+            "channel left unmapped in many runs) are not repeated here; runs.csv keeps them.")
+    for run, text in listed:
+        f.li(f"run {run}: {text}")
+    if not len(notes):
         f.p("No run needed a repair (gaps, spikes, dropped rows) or a cross-check note.")
     return f
+
+
+def _own_notes(day: DayResult) -> dict[int, str]:
+    """Each reduced run's notes without those the day says once (runs.csv keeps them all): the
+    run's units without a label (:func:`towtank.analysis.daywide.unit_label_sentences`) and
+    warnings grouped over many runs (:func:`towtank.analysis.daywide.grouped_warnings`)."""
+    from towtank.reduce.run import assumed_units_note
+
+    reds = sorted(day.reductions.values(), key=lambda r: r.run)
+    grouped = grouped_warnings([(r.run, r.file, w) for r in reds for w in r.warnings])
+    out = {}
+    for r in reds:
+        skip = {assumed_units_note(r.units)} - {""}
+        out[r.run] = "; ".join(n for n in r.notes if n not in skip and (r.run, n) not in grouped)
+    return out
 
 
 def _diagnostics_flow(f: Flow, day: DayResult) -> None:
