@@ -70,6 +70,11 @@ def test_a_unit_stated_in_the_protocol_is_used_and_recorded(tmp_path, frame):
     gained = load_run(path, {"drag": ChannelMap(column="drag", gain=2.0, calibrated=True)},
                       options=ReadOptions())
     assert gained.units["drag"][1] == "protocol"
+    # the API's reduction carries them, and the run's note names what was assumed
+    red = towtank.reduce_run(kilo, file="run_001.csv")
+    assert red.units == kilo.units
+    assert "time, speed and lift had no unit label: time taken as s; speed taken as m/s; lift " \
+        "taken as N" in red.notes
 
 
 def test_a_unit_towtank_cannot_convert_is_refused(tmp_path):
