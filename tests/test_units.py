@@ -77,6 +77,16 @@ def test_a_unit_stated_in_the_protocol_is_used_and_recorded(tmp_path, frame):
         "taken as N" in red.notes
 
 
+def test_the_protocol_unit_replaces_the_files_with_a_note(tmp_path, frame):
+    path = syn.write_run_file(frame, tmp_path / "run_001.txt", layout="txt-eu")  # speed in mm/s
+    read = load_run(path, {}, options=ReadOptions())
+    told = load_run(path, {"speed": ChannelMap(column="speed", unit="cm/s")},
+                    options=ReadOptions())
+    assert told.units["speed"] == ("cm/s", "protocol")
+    np.testing.assert_allclose(told.speed, 10.0 * read.speed, rtol=1e-12)
+    assert 'speed: the file states mm/s; [channels] unit = "cm/s" is used' in told.notes
+
+
 def test_a_unit_towtank_cannot_convert_is_refused(tmp_path):
     syn.make_hull_day(tmp_path, seed=3, file_format="csv", sheet_format="csv",
                       channel_style="canonical")

@@ -696,7 +696,11 @@ def calibrate(
     for canon, arr in numeric.items():
         cm = full[canon]
         column = used.get(canon, cm.column)
-        stated = cm.unit or column_unit(column, units) or _cells_unit(cm, units)
+        in_file = column_unit(column, units) or _cells_unit(cm, units)
+        stated = cm.unit or in_file
+        if cm.unit and in_file and in_file.lower() != cm.unit.lower():
+            notes.append(f"{canon}: the file states {in_file}; [channels] unit = "
+                         f"\"{cm.unit}\" is used")
         if sources is not None and column not in ("[speed_log]", "[nominal]"):
             sources[canon] = unit_source(canon, cm, column, stated, cm.unit != "")
         if cm.gain != 1.0 or cm.offset != 0.0:
@@ -721,10 +725,6 @@ def calibrate(
     return out
 
 
-#: Where a channel's unit came from (:func:`unit_source`).
-UNIT_SOURCES = ("file", "protocol", "assumed")
-
-
 def _cells_unit(cm: ChannelMap, units: dict[str, str]) -> str | None:
     """The unit of a sum of load cells (``columns``): the one unit all its cells state."""
     if not cm.columns:
@@ -735,11 +735,15 @@ def _cells_unit(cm: ChannelMap, units: dict[str, str]) -> str | None:
 
 def unit_source(canon: str, cm: ChannelMap, column: str, stated: str | None,
                 from_protocol: bool = False) -> tuple[str, str]:
-    """(unit, source) of a calibrated channel: the SI unit of ``canon`` and ``"protocol"``
-    when [channels] gives a gain, an offset or a ``unit`` (or the channel is a [balance]
-    output), ``"file"`` when the file states the
-    unit (a units row or header, TDMS ``unit_string``, HDF5/.mat attribute, ``Speed (mm/s)``
-    or the file's own timing), else ``"assumed"``: the SI unit taken without a label."""
+    """(unit, source) of one channel read from ``column``.
+
+    ``"protocol"`` when [channels] gives a ``unit`` (``from_protocol``: that unit), a gain or
+    an offset, or the channel is a [balance] output (the SI unit of ``canon``: the calibration
+    gives it); ``"file"`` when the file states the unit (a units row or header, TDMS
+    ``unit_string``, LVM ``Y_Unit_Label``, an HDF5/.mat attribute, ``Speed (mm/s)``) or the
+    time comes from the file's own timing; else ``"assumed"``: no label anywhere, the SI unit
+    of ``canon`` is taken.
+    """
     si = UNITS.get(canon, "")
     if from_protocol or cm.calibrated or column.startswith("["):
         return (stated or si) if from_protocol else si, "protocol"
