@@ -921,8 +921,6 @@ def record_units(red: RunReduction, raw: RawRun) -> None:
 def assumed_units_note(units: dict[str, tuple[str, str]]) -> str:
     """The runs.csv note of a run whose channels had no unit label: ``drag and lift had no
     unit label: taken as N`` ('' when every unit was stated)."""
-    from towtank.analysis.daywide import and_list as _and
-
     by_unit: dict[str, list[str]] = {}
     for canon, (unit, source) in units.items():
         if source == "assumed":
@@ -933,6 +931,11 @@ def assumed_units_note(units: dict[str, tuple[str, str]]) -> str:
     taken = "; ".join(f"{_and(chans)} taken as {u}" for u, chans in by_unit.items()) \
         if len(by_unit) > 1 else f"taken as {next(iter(by_unit))}"
     return f"{_and(names)} had no unit label: {taken}"
+
+
+def _and(names: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
 def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:
