@@ -87,6 +87,26 @@ def test_the_protocol_unit_replaces_the_files_with_a_note(tmp_path, frame):
     assert 'speed: the file states mm/s; [channels] unit = "cm/s" is used' in told.notes
 
 
+def test_a_label_towtank_does_not_convert_is_said(tmp_path, frame):
+    """'lbs' is not a unit towtank converts (lbf is): the values are taken as N, and the run's
+    note and the day's sentence say so (not "from the file")."""
+    path = tmp_path / "run_001.csv"
+    frame.rename(columns={"drag": "drag (lbs)"}).to_csv(path, index=False)
+    raw = load_run(path, {"drag": ChannelMap(column="drag (lbs)")}, options=ReadOptions())
+    assert raw.units["drag"] == ("lbs", "unknown")
+    np.testing.assert_allclose(raw.drag, frame["drag"], atol=1e-9)  # taken as N
+    red = towtank.reduce_run(raw, file="run_001.csv")
+    assert "drag's unit label 'lbs' is not one towtank converts: taken as N" in red.notes
+    from towtank.analysis.daywide import unit_label_sentences
+
+    said = unit_label_sentences([(r, f"run_{r:03d}.csv", raw.units) for r in (1, 2, 3)])
+    assert said == [
+        f"time, speed and lift had no unit label in 3 run files (run_001.csv … run_003.csv): "
+        f"time taken as s; speed taken as m/s; lift taken as N; {SILENCE}.",
+        f"drag's unit label 'lbs' is not one towtank converts in 3 run files (run_001.csv … "
+        f"run_003.csv): taken as N; {SILENCE}."]
+
+
 def test_a_unit_towtank_cannot_convert_is_refused(tmp_path):
     syn.make_hull_day(tmp_path, seed=3, file_format="csv", sheet_format="csv",
                       channel_style="canonical")

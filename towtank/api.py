@@ -230,8 +230,8 @@ def reduce_run(
         ``.speed_mean`` [m/s], ``.drag_mean_raw`` [N] (steady mean, zero and drift removed,
         tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still_pre, accel, steady, decel,
         still_post as (start, end) in seconds), ``.notes``, ``.warnings``, ``.units`` (per
-        channel: its unit and where it came from, "file", "protocol" or "assumed") and the
-        decimated samples.
+        channel: its unit and where it came from, "file", "protocol", "assumed" or
+        "unknown") and the decimated samples.
 
     Raises
     ------

@@ -177,6 +177,27 @@ def unit_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, str]]]
         files = f"{n} run file{'s' if n > 1 else ''} ({_files(members)})"
         out.append(f"{names} had no unit label in {files}: {taken}; state `unit` in "
                    "[channels] to silence this.")
+    return out + _unknown_label_sentences(items)
+
+
+def _unknown_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, str]]]]
+                             ) -> list[str]:
+    """One sentence per channel and unit label towtank does not convert (source
+    ``"unknown"``): ``drag's unit label 'lb' is not one towtank converts in 42 run files
+    (...): taken as N; ...``."""
+    from towtank.ingest.calibration import UNITS
+
+    groups: dict[tuple[str, str], list[tuple[int, Any]]] = {}
+    for run, file, units in items:
+        for c, (u, src) in units.items():
+            if src == "unknown":
+                groups.setdefault((c, u), []).append((run, file))
+    out = []
+    for (c, u), members in sorted(groups.items(), key=lambda g: min(m[0] for m in g[1])):
+        n = len(members)
+        out.append(f"{c}'s unit label '{u}' is not one towtank converts in {n} run "
+                   f"file{'s' if n > 1 else ''} ({_files(members)}): taken as "
+                   f"{UNITS.get(c, 'SI')}; state `unit` in [channels] to silence this.")
     return out
 
 

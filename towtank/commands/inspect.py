@@ -164,7 +164,7 @@ def units_text(units: dict[str, tuple[str, str]]) -> str:
     """``time s (file), drag N (assumed: no unit label)``: each channel's unit in the file and
     where it came from."""
     how = {"assumed": "assumed: no unit label", "protocol": "from the protocol",
-           "file": "from the file"}
+           "file": "from the file", "unknown": "from the file, not converted: taken as SI"}
     return ", ".join(f"{c} {u} ({how.get(src, src)})" for c, (u, src) in units.items())
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from towtank.ingest.protocol import ChannelMap
-from towtank.ingest.readers import column_unit, is_volts, unit_factor
+from towtank.ingest.readers import column_unit, converts, is_volts, unit_factor
 
 __all__ = ["UNITS", "calibrate", "unit_source"]
 
@@ -83,14 +83,17 @@ def unit_source(canon: str, cm: ChannelMap, column: str, stated: str | None,
     an offset, or the channel is a [balance] output (the SI unit of ``canon``: the calibration
     gives it); ``"file"`` when the file states the unit (a units row or header, TDMS
     ``unit_string``, LVM ``Y_Unit_Label``, an HDF5/.mat attribute, ``Speed (mm/s)``) or the
-    time comes from the file's own timing; else ``"assumed"``: no label anywhere, the SI unit
-    of ``canon`` is taken.
+    time comes from the file's own timing; ``"unknown"`` for a label towtank does not convert
+    (``lb``, ``-``: the values are taken in the SI unit, with the label kept); else
+    ``"assumed"``: no label anywhere, the SI unit of ``canon`` is taken.
     """
     si = UNITS.get(canon, "")
     if from_protocol or cm.calibrated or column.startswith("["):
         return (stated or si) if from_protocol else si, "protocol"
     if column.startswith("time (from the file"):
         return "s", "file"
+    if stated and not converts(canon, stated):
+        return stated, "unknown"  # a label towtank does not convert: the values taken as SI
     if stated:
         return stated, "file"
     return si, "assumed"

@@ -716,6 +716,13 @@ def known_units(canon: str) -> list[str]:
     return [shown.get(u, u) for u in UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {})]
 
 
+def converts(canon: str, unit: str) -> bool:
+    """True when towtank knows ``unit`` for channel ``canon`` (:data:`UNIT_FACTORS`), or it
+    is a voltage (a raw signal that needs a gain)."""
+    key = unit.strip().lower()
+    return is_volts(unit) or key in {u.lower() for u in known_units(canon)}
+
+
 def column_unit(column: str, stated: dict[str, str]) -> str | None:
     """The unit of a column: stated by the file, else written in its name ``Speed (mm/s)``."""
     if stated.get(column):

@@ -83,8 +83,8 @@ class RawRun:
     #: the run sheet's set speed [m/s] of a run without a measured speed (``speed_source =
     #: "nominal"``; ``speed`` then holds 0), else NaN
     speed_nominal: float = math.nan
-    #: per channel read: (its unit in the file, where that came from: "file", "protocol" or
-    #: "assumed", see :func:`unit_source`)
+    #: per channel read: (its unit in the file, where that came from: "file", "protocol",
+    #: "assumed" or "unknown", see :func:`towtank.ingest.calibration.unit_source`)
     units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     @property

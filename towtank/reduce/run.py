@@ -94,8 +94,8 @@ class RunReduction:
     speed_source: str = "measured"
     #: standard uncertainty of a set speed [m/s]: speed_tolerance·U/√3 (NaN when measured)
     speed_u: float = math.nan
-    #: per channel read from the file: (its unit, where that came from: "file", "protocol" or
-    #: "assumed"), see :func:`towtank.ingest.runfile.unit_source`
+    #: per channel read from the file: (its unit, where that came from: "file", "protocol",
+    #: "assumed" or "unknown"), see :func:`towtank.ingest.calibration.unit_source`
     units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
 
@@ -910,27 +910,32 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
 
 
 def record_units(red: RunReduction, raw: RawRun) -> None:
-    """Keep the run's units and their sources (``raw.units``) on ``red``, with a note (in
-    runs.csv) naming the channels that had no unit label and what was assumed."""
+    """Keep the run's units and their sources (``raw.units``) on ``red``, with notes (in
+    runs.csv) naming the channels whose unit was assumed (:func:`units_notes`)."""
     red.units = dict(raw.units)
-    note = assumed_units_note(red.units)
-    if note:
-        red.notes.append(note)
+    red.notes.extend(units_notes(red.units))
 
 
-def assumed_units_note(units: dict[str, tuple[str, str]]) -> str:
-    """The runs.csv note of a run whose channels had no unit label: ``drag and lift had no
-    unit label: taken as N`` ('' when every unit was stated)."""
+def units_notes(units: dict[str, tuple[str, str]]) -> list[str]:
+    """The notes of a run whose channels had no unit label (``drag and lift had no unit label:
+    taken as N``) or one towtank does not convert (``drag's unit label 'lb' is not one towtank
+    converts: taken as N``); [] when every unit was stated and known."""
+    from towtank.ingest.calibration import UNITS
+
     by_unit: dict[str, list[str]] = {}
+    out = []
     for canon, (unit, source) in units.items():
         if source == "assumed":
             by_unit.setdefault(unit, []).append(canon)
-    if not by_unit:
-        return ""
-    names = [c for chans in by_unit.values() for c in chans]
-    taken = "; ".join(f"{_and(chans)} taken as {u}" for u, chans in by_unit.items()) \
-        if len(by_unit) > 1 else f"taken as {next(iter(by_unit))}"
-    return f"{_and(names)} had no unit label: {taken}"
+    if by_unit:
+        names = [c for chans in by_unit.values() for c in chans]
+        taken = "; ".join(f"{_and(chans)} taken as {u}" for u, chans in by_unit.items()) \
+            if len(by_unit) > 1 else f"taken as {next(iter(by_unit))}"
+        out.append(f"{_and(names)} had no unit label: {taken}")
+    out += [f"{canon}'s unit label '{unit}' is not one towtank converts: taken as "
+            f"{UNITS.get(canon, 'SI')}" for canon, (unit, source) in units.items()
+            if source == "unknown"]
+    return out
 
 
 def _and(names: list[str]) -> str:

@@ -151,13 +151,13 @@ def _own_notes(day: DayResult) -> dict[int, str]:
     """Each reduced run's notes without those the day says once (runs.csv keeps them all): the
     run's units without a label (:func:`towtank.analysis.daywide.unit_label_sentences`) and
     warnings grouped over many runs (:func:`towtank.analysis.daywide.grouped_warnings`)."""
-    from towtank.reduce.run import assumed_units_note
+    from towtank.reduce.run import units_notes
 
     reds = sorted(day.reductions.values(), key=lambda r: r.run)
     grouped = grouped_warnings([(r.run, r.file, w) for r in reds for w in r.warnings])
     out = {}
     for r in reds:
-        skip = {assumed_units_note(r.units)} - {""}
+        skip = set(units_notes(r.units))
         out[r.run] = "; ".join(n for n in r.notes if n not in skip and (r.run, n) not in grouped)
     return out
 
