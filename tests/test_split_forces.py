@@ -91,7 +91,8 @@ def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_pa
     # the day with both cells: no warning about a channel left out
     day = towtank.process_day(protocol, jobs=1, report=False)
     assert not [w for w in day.warnings if "no [channels] entry uses it" in w]
-    # only the left cell mapped: every run says so, naming run, file and channel
+    # only the left cell mapped: said once for the day, naming the channel, how many runs and
+    # the first and last file (not once per run)
     half = protocol_sections("two-cell", syn.hull_protocol_sections(
         ".", "out", sheet_format="csv", channels=layout_channels("two-cell", syn.LabChannels()),
         channel_style="lab"))
@@ -99,9 +100,37 @@ def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_pa
     one = syn.write_protocol(tmp_path / "half.toml", **half)
     day = towtank.process_day(one, jobs=1, report=False)
     said = [w for w in day.warnings if "no [channels] entry uses it" in w]
-    assert len(said) == len(day.reductions) > 0
-    assert any(w.startswith("run 21: run_021.csv: the channel 'DragR (V)' looks like a force")
-               and 'columns = ["DragL (V)", "DragR (V)"]' in w for w in said), said[:2]
+    n = len(day.reductions)
+    assert n > 3 and len(said) == 1, said[:3]
+    first, last = min(day.reductions), max(day.reductions)
+    assert said[0].startswith(
+        f"{n} runs ({day.reductions[first].file} … {day.reductions[last].file}; runs ")
+    assert "the channel 'DragR (V)' looks like a force" in said[0]
+    assert 'columns = ["DragL (V)", "DragR (V)"]' in said[0]
+    assert "run_021.csv" not in said[0].split(";")[1]  # no one run's file in the sentence
+    from towtank.report.quality import quality_flow
+
+    items = [text for _, text in quality_flow(day).items]
+    assert [t for t in items if "'DragR (V)' looks like a force" in t] == said  # once
+    # runs.csv keeps each run's own note
+    assert all("'DragR (V)' looks like a force" in " ".join(r.notes)
+               for r in day.reductions.values())
+
+
+def test_per_run_warnings_are_grouped_only_when_shared():
+    from towtank.analysis.daywide import group_run_warnings
+
+    same = [(r, f"run_{r:03d}.lvm", f"run_{r:03d}.lvm: the channel 'Fx2' is in no force")
+            for r in (1, 2, 3, 5)]
+    other = [(4, "run_004.lvm", "run_004.lvm: the channel 'Fy2' is in no force")]
+    lines = group_run_warnings(same + other)
+    assert lines == [
+        "4 runs (run_001.lvm … run_005.lvm; runs 1–3, 5): the channel 'Fx2' is in no "
+        "force.",
+        "run 4: run_004.lvm: the channel 'Fy2' is in no force.",
+    ]
+    # two runs alike are still said run by run
+    assert len(group_run_warnings(same[:2])) == 2
 
 
 @pytest.mark.skipif(not UNH.exists(), reason="../shared/real/unh_rvat_2013/test.tdms is not "

@@ -233,8 +233,9 @@ def reduce_run(
     RunReduction
         ``.speed_mean`` [m/s], ``.drag_mean_raw`` [N] (steady mean, zero and drift removed,
         tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still_pre, accel, steady, decel,
-        still_post as (start, end) in seconds), ``.notes``, ``.warnings`` and the decimated
-        samples.
+        still_post as (start, end) in seconds), ``.notes``, ``.warnings``, ``.units`` (per
+        channel: its unit and where it came from, "file", "protocol", "assumed" or
+        "unknown") and the decimated samples.
 
     Raises
     ------
@@ -242,11 +243,14 @@ def reduce_run(
         The run cannot be reduced; ``.reason`` is one sentence saying why.
     """
     from towtank.ingest.protocol import Processing
+    from towtank.reduce.run import record_units
     from towtank.reduce.run import reduce_run as _reduce
 
     processing = Processing() if protocol is None else _protocol(protocol).processing
-    return _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
-                   speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+    red = _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
+                  speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+    record_units(red, raw)
+    return red
 
 
 __all__ = ["ProtocolError", "load_protocol", "process_day", "read_run", "reduce_run"]

@@ -375,8 +375,12 @@ def process_day(
                                        warnings_out=day_warnings)
     tares = tare_models(protocol, sheet, reductions, day_warnings)
     apply_tares(protocol, sheet, reductions, tares, rejected)
-    for red in reductions.values():
-        day_warnings.extend(f"run {red.run}: {w}." for w in red.warnings)
+    from towtank.analysis.daywide import group_run_warnings, unit_label_sentences
+
+    ordered = sorted(reductions.values(), key=lambda r: r.run)
+    day_warnings.extend(unit_label_sentences([(r.run, r.file, r.units) for r in ordered]))
+    day_warnings.extend(group_run_warnings([(r.run, r.file, w) for r in ordered
+                                            for w in r.warnings]))
     for rec in sheet.to_dict("records"):
         temp = rec["water_temp_C"]
         if rec["status"] != "void" and not 0.0 <= temp <= 40.0:

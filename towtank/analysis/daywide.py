@@ -14,7 +14,9 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["RejectionGroup", "group_rejections", "run_ranges", "own_reason", "MIN_GROUP"]
+__all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
+           "unit_label_sentences",
+           "run_ranges", "own_reason", "and_list", "MIN_GROUP"]
 
 #: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
 #: not void (a fault in 3 of 40 files is those files' own, and is listed run by run).
@@ -108,3 +110,97 @@ def group_rejections(runs: pd.DataFrame, min_group: int = MIN_GROUP) -> list[Rej
         else:
             groups += [RejectionGroup([m[0]], m[2], False) for m in members]
     return sorted(groups, key=lambda g: g.runs[0])
+
+
+def _files(members: list[tuple[int, Any]]) -> str:
+    """``run_001.lvm … run_042.lvm`` (the first and last file of runs in run order)."""
+    files = [str(f) for _, f in sorted(members, key=lambda m: m[0])]
+    return files[0] if len(files) == 1 else f"{files[0]} … {files[-1]}"
+
+
+def _by_text(items: list[tuple[int, Any, str]]) -> dict[str, list[tuple[int, Any, str]]]:
+    """``(run, file, warning)`` by the warning's text without the run's own file and number."""
+    by_text: dict[str, list[tuple[int, Any, str]]] = {}
+    for run, file, w in items:
+        by_text.setdefault(_generic(run, file, w), []).append((run, file, w))
+    return by_text
+
+
+def grouped_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_GROUP
+                     ) -> set[tuple[int, str]]:
+    """The ``(run, warning)`` of ``items`` that :func:`group_run_warnings` says once for the
+    day (the report leaves them out of its notes on single runs)."""
+    return {(m[0], m[2]) for members in _by_text(items).values() if len(members) >= min_group
+            for m in members}
+
+
+def group_run_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_GROUP
+                       ) -> list[str]:
+    """The day's lines for per-run warnings ``(run, file, warning)``: a warning that is word
+    for word the same in at least ``min_group`` runs once each run's file name and number are
+    taken out (``DragR`` left unmapped in every file) is one sentence naming how many runs and
+    the first and last file; every other one stays ``run N: warning.``. In order of each
+    line's first run."""
+    lines: list[tuple[int, str]] = []
+    for generic, members in _by_text(items).items():
+        if len(members) >= min_group:
+            text = own_reason("\x00n", "\x00file", generic)
+            text = text.replace("\x00file", "each run's file").replace("run \x00n", "each run")
+            first = min(m[0] for m in members)
+            lines.append((first, f"{len(members)} runs ({_files([m[:2] for m in members])}; "
+                                 f"runs {run_ranges([m[0] for m in members])}): "
+                                 f"{text.rstrip('.')}."))
+        else:
+            lines += [(m[0], f"run {m[0]}: {m[2].rstrip('.')}.") for m in members]
+    return [line for _, line in sorted(lines, key=lambda x: x[0])]
+
+
+def unit_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, str]]]]) -> list[str]:
+    """One sentence per set of channels that had no unit label, over the day's runs ``(run,
+    file, units)`` (units: channel → (unit, source), source ``"assumed"`` when no unit was
+    stated): ``drag and lift had no unit label in 42 run files (run_001.lvm … run_042.lvm):
+    taken as N; state `unit` in [channels] to silence this.``"""
+    groups: dict[tuple[tuple[str, str], ...], list[tuple[int, Any]]] = {}
+    for run, file, units in items:
+        key = tuple((c, u) for c, (u, src) in units.items() if src == "assumed")
+        if key:
+            groups.setdefault(key, []).append((run, file))
+    out = []
+    for key, members in sorted(groups.items(), key=lambda g: min(m[0] for m in g[1])):
+        by_unit: dict[str, list[str]] = {}
+        for c, u in key:
+            by_unit.setdefault(u, []).append(c)
+        names = and_list([c for c, _ in key])
+        taken = f"taken as {key[0][1]}" if len(by_unit) == 1 else "; ".join(
+            f"{and_list(cs)} taken as {u}" for u, cs in by_unit.items())
+        n = len(members)
+        files = f"{n} run file{'s' if n > 1 else ''} ({_files(members)})"
+        out.append(f"{names} had no unit label in {files}: {taken}; state `unit` in "
+                   "[channels] to silence this.")
+    return out + _unknown_label_sentences(items)
+
+
+def _unknown_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, str]]]]
+                             ) -> list[str]:
+    """One sentence per channel and unit label towtank does not convert (source
+    ``"unknown"``): ``drag's unit label 'lb' is not one towtank converts in 42 run files
+    (...): taken as N; ...``."""
+    from towtank.ingest.calibration import UNITS
+
+    groups: dict[tuple[str, str], list[tuple[int, Any]]] = {}
+    for run, file, units in items:
+        for c, (u, src) in units.items():
+            if src == "unknown":
+                groups.setdefault((c, u), []).append((run, file))
+    out = []
+    for (c, u), members in sorted(groups.items(), key=lambda g: min(m[0] for m in g[1])):
+        n = len(members)
+        out.append(f"{c}'s unit label '{u}' is not one towtank converts in {n} run "
+                   f"file{'s' if n > 1 else ''} ({_files(members)}): taken as "
+                   f"{UNITS.get(c, 'SI')}; state `unit` in [channels] to silence this.")
+    return out
+
+
+def and_list(names: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]

@@ -58,6 +58,7 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 
         f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
         + (f"; columns: {', '.join(columns)}" if columns else ""),
         *([f"timing: {timing}"] if timing else []),
+        *([f"units: {units_text(red.units)}"] if red.units else []),
         "phases [s]:" if not shift else
         f"phases [s from the first sample; its time stamp is {t0:.3f} s]:",
     ]
@@ -173,6 +174,14 @@ def _missing_channel(reason: str) -> bool:
     return "missing" in reason and "columns found" in reason
 
 
+def units_text(units: dict[str, tuple[str, str]]) -> str:
+    """``time s (file), drag N (assumed: no unit label)``: each channel's unit in the file and
+    where it came from."""
+    how = {"assumed": "assumed: no unit label", "protocol": "from the protocol",
+           "file": "from the file", "unknown": "from the file, not converted: taken as SI"}
+    return ", ".join(f"{c} {u} ({how.get(src, src)})" for c, (u, src) in units.items())
+
+
 def inspect_run(
     runfile: str | Path,
     protocol_path: str | Path | None = None,
@@ -212,7 +221,7 @@ def inspect_run(
     out = out or sys.stdout
     err = err or sys.stderr
     from towtank.ingest.runfile import load_run
-    from towtank.reduce.run import reduce_run
+    from towtank.reduce.run import record_units, reduce_run
 
     runfile = Path(runfile)
     channels, p, read, protocol = _settings(protocol_path)
@@ -263,6 +272,7 @@ def inspect_run(
             read, channels = proposal
             raw = load()
         red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
+        record_units(red, raw)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "

@@ -85,6 +85,10 @@ class ChannelMap:
     #: is then taken as calibrated (N per V as given), not refused. Set by the parser from the
     #: keys present; not a protocol key (the [channels] schema does not accept it).
     calibrated: bool = False
+    #: The unit the column is recorded in (``unit`` in [channels]): it replaces any unit the
+    #: file states and silences the day's note on channels without a unit. Without a gain the
+    #: values are converted from it to SI; with a gain it is the raw unit (the gain gives SI).
+    unit: str = ""
 
 
 @dataclass(frozen=True)
@@ -670,8 +674,26 @@ def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
         if "columns" in c:
             c["column"] = " + ".join(c["columns"])
         c["calibrated"] = "gain" in c or "offset" in c
+        if "unit" in c:
+            c["unit"] = _channel_unit(name, c["unit"], "gain" in c, src)
         channels[name] = ChannelMap(**c)
     return channels
+
+
+def _channel_unit(name: str, unit: str, has_gain: bool, src: str) -> str:
+    """``unit`` of [channels.<name>], checked: a unit towtank converts for that channel (or, with
+    a gain, any raw unit such as V); ProtocolError otherwise."""
+    from towtank.ingest.readers import known_units
+
+    unit = unit.strip()
+    known = known_units(name)
+    if not unit or (not has_gain and known and unit.lower() not in {k.lower() for k in known}):
+        raise ProtocolError(
+            f"{src}: 'unit' in [channels.{name}] is {unit!r}, which towtank cannot convert for "
+            f"the {name} channel; use one of {', '.join(known)} (a channel in volts needs a "
+            "'gain' [SI unit per V])."
+        )
+    return unit
 
 
 def _processing(data: Any, src: str) -> Processing:

@@ -519,6 +519,8 @@ def read_lvm_columns(
         head_from = i
         units = dict(zip([c for c in names if c and c != "X_Value"],
                          [u.strip() for u in head_vals.get("Y_Unit_Label", [])], strict=False))
+        if (head_vals.get("X_Dimension") or [""])[0].strip().lower() == "time":
+            units["X_Value"] = "s"  # an X axis of time is in seconds in LabVIEW's format
         if "X_Value" in seg and (seg["X_Value"].dtype == object
                                  or np.isnan(seg["X_Value"]).all()):
             dx = _first_float(head_vals.get("Delta_X"))
@@ -732,6 +734,20 @@ _UNIT_WORDS = {u for table in UNIT_FACTORS.values() for u in table} | set(_VOLTS
 _UNIT_IN_NAME = re.compile(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]\s*$")
 _QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force",
              "lift": "force", "position": "length"}
+
+
+def known_units(canon: str) -> list[str]:
+    """The units towtank converts to SI for channel ``canon`` ([] for a channel it does not
+    know)."""
+    shown = {"n": "N", "kn": "kN", "mn": "mN"} if _QUANTITY.get(canon) == "force" else {}
+    return [shown.get(u, u) for u in UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {})]
+
+
+def converts(canon: str, unit: str) -> bool:
+    """True when towtank knows ``unit`` for channel ``canon`` (:data:`UNIT_FACTORS`), or it
+    is a voltage (a raw signal that needs a gain)."""
+    key = unit.strip().lower()
+    return is_volts(unit) or key in {u.lower() for u in known_units(canon)}
 
 
 def column_unit(column: str, stated: dict[str, str]) -> str | None:

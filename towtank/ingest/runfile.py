@@ -31,6 +31,7 @@ import numpy as np
 
 from towtank.errors import RunError
 from towtank.ingest.arrayfiles import read_hdf5_columns, read_mat_columns
+from towtank.ingest.calibration import UNITS, calibrate, unit_source  # noqa: F401 - re-exported
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns
@@ -42,15 +43,12 @@ from towtank.ingest.readers import (
     TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
-    column_unit,
     file_format,
-    is_volts,
     plain_csv,
     read_lvm_columns,
     read_tdms_columns,
     read_text_columns,
     stated_units,
-    unit_factor,
 )
 from towtank.ingest.segments import find_segments, human_duration, segment_error
 from towtank.ingest.timing import stated_rate, time_source_text, timing_note
@@ -60,7 +58,6 @@ from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 REQUIRED_CHANNELS = ("time", "speed", "drag")
 OPTIONAL_CHANNELS = ("accel", "lift")
 FORCE_CHANNELS = ("drag", "lift")
-UNITS = {"time": "s", "speed": "m/s", "accel": "m/s²", "drag": "N", "lift": "N"}
 
 MIN_SAMPLES = 10
 MIN_FS_HZ = 10.0  # below this the time channel is not in seconds (ms? sample numbers?)
@@ -95,6 +92,9 @@ class RawRun:
     #: where the time comes from, said for a person: "the column 'Time (s)'", "LabVIEW
     #: waveform timing (wf_increment)", "[read] sample_rate_hz = 200 Hz" ...
     time_source: str = ""
+    #: per channel read: (its unit in the file, where that came from: "file", "protocol",
+    #: "assumed" or "unknown", see :func:`towtank.ingest.calibration.unit_source`)
+    units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -687,43 +687,6 @@ def map_channels(
     return out
 
 
-def calibrate(
-    numeric: dict[str, np.ndarray],
-    full: dict[str, ChannelMap],
-    used: dict[str, str],
-    units: dict[str, str],
-    name: str,
-    notes: list[str],
-) -> dict[str, np.ndarray]:
-    """Raw columns to SI channels: value = gain·(raw − offset) where ``[channels]`` gives a
-    calibration, else the column's unit (stated by the file or in its name, ``Speed (mm/s)``)
-    converted to SI (:func:`towtank.ingest.readers.unit_factor`); infinities become missing."""
-    out = {}
-    for canon, arr in numeric.items():
-        cm = full[canon]
-        if cm.gain != 1.0 or cm.offset != 0.0:
-            with np.errstate(all="ignore"):
-                arr = cm.gain * (arr - cm.offset)
-        else:
-            column = used.get(canon, cm.column)
-            unit = column_unit(column, units)
-            if cm.calibrated and is_volts(unit):  # a stated gain of 1 N per V (or V per V)
-                notes.append(f"{canon} taken from {unit} with the stated gain 1.0 "
-                             f"(1 SI unit per {unit})")
-                factor = 1.0
-            else:
-                factor = unit_factor(canon, unit, column, name)
-            if factor != 1.0:
-                arr = arr * factor
-                notes.append(f"{canon} converted from {unit} to SI (×{factor:g})")
-        inf = np.isinf(arr)
-        if inf.any():
-            arr = np.where(inf, np.nan, arr)
-            notes.append(f"{int(inf.sum())} infinite {canon} value(s) treated as missing")
-        out[canon] = arr
-    return out
-
-
 def fallback_time(
     cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], sample_rate_hz: float = 0.0
 ) -> np.ndarray | None:
@@ -858,7 +821,11 @@ def _load_run(
     numeric, where = _drop_bad_rows(chans, rows, invalid, where, name, max_bad_row_fraction,
                                     notes)
 
-    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes)
+    units: dict[str, tuple[str, str]] = {}
+    numeric = calibrate(numeric, full, used, stated_units(cols), name, notes, units)
+    if used.get("time", "").startswith("time (from the file") and FS_KEY not in cols and \
+            WF_TIME_KEY not in cols:
+        units["time"] = ("s", "protocol")  # [read] sample_rate_hz
 
     t = _fill_missing_times(numeric, where, name, max_nan_gap_s, notes)
     chosen = segment if segment is not None else (options.segment or None)
@@ -899,6 +866,7 @@ def _load_run(
         notes=notes,
         speed_nominal=float(speed_nominal) if nominal else math.nan,  # type: ignore[arg-type]
         time_source=time_source,
+        units=units,
     )
 
 

@@ -126,6 +126,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "columns": ("strs", False),
         "gain": (_NUM, False),
         "offset": (_NUM, False),
+        "unit": ("str", False),
     },
     "tare": {
         "source": ("str", False),

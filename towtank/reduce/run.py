@@ -94,6 +94,9 @@ class RunReduction:
     speed_source: str = "measured"
     #: standard uncertainty of a set speed [m/s]: speed_tolerance·U/√3 (NaN when measured)
     speed_u: float = math.nan
+    #: per channel read from the file: (its unit, where that came from: "file", "protocol",
+    #: "assumed" or "unknown"), see :func:`towtank.ingest.calibration.unit_source`
+    units: dict[str, tuple[str, str]] = field(default_factory=dict)
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -878,6 +881,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
         for w in unmapped_force_warnings(protocol, raw.columns, file):
             red.notes.append(w)
             red.warnings.append(w)
+        record_units(red, raw)
         test = str(row.get("test", "")).strip().lower()
         if test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
@@ -920,6 +924,40 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
         out.append(f"{file}: the channel '{c}' looks like a force or a load cell of one, but "
                    f"no [channels] entry uses it, so it is in no force ({hint})")
     return out
+
+
+def record_units(red: RunReduction, raw: RawRun) -> None:
+    """Keep the run's units and their sources (``raw.units``) on ``red``, with notes (in
+    runs.csv) naming the channels whose unit was assumed (:func:`units_notes`)."""
+    red.units = dict(raw.units)
+    red.notes.extend(units_notes(red.units))
+
+
+def units_notes(units: dict[str, tuple[str, str]]) -> list[str]:
+    """The notes of a run whose channels had no unit label (``drag and lift had no unit label:
+    taken as N``) or one towtank does not convert (``drag's unit label 'lb' is not one towtank
+    converts: taken as N``); [] when every unit was stated and known."""
+    from towtank.ingest.calibration import UNITS
+
+    by_unit: dict[str, list[str]] = {}
+    out = []
+    for canon, (unit, source) in units.items():
+        if source == "assumed":
+            by_unit.setdefault(unit, []).append(canon)
+    if by_unit:
+        names = [c for chans in by_unit.values() for c in chans]
+        taken = "; ".join(f"{_and(chans)} taken as {u}" for u, chans in by_unit.items()) \
+            if len(by_unit) > 1 else f"taken as {next(iter(by_unit))}"
+        out.append(f"{_and(names)} had no unit label: {taken}")
+    out += [f"{canon}'s unit label '{unit}' is not one towtank converts: taken as "
+            f"{UNITS.get(canon, 'SI')}" for canon, (unit, source) in units.items()
+            if source == "unknown"]
+    return out
+
+
+def _and(names: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
 def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:

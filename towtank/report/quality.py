@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from towtank.analysis.daywide import group_rejections, own_reason, run_ranges
+from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason, run_ranges
 from towtank.report import figures, style
 
 if TYPE_CHECKING:
@@ -136,7 +136,13 @@ def quality_flow(day: DayResult) -> Flow:
     f.gap()
     f.h("Notes on individual runs")
     if len(notes):
-        shared, own = shared_notes(notes)
+        own_text = _own_notes(day)
+        kept = notes.assign(notes=[own_text.get(int(r.run), str(r.notes))
+                                   for r in notes.itertuples()])
+        if (kept["notes"].astype(str) != notes["notes"].astype(str)).any():
+            f.p("Notes said once for the day under Warnings (a channel without a unit label, a "
+                "channel left unmapped in many runs) are not repeated here; runs.csv keeps them.")
+        shared, own = shared_notes(kept)
         for text, numbers in shared.items():
             f.li(f"runs {run_ranges(numbers)}: {text}")
         for run, texts in own.items():
@@ -166,6 +172,21 @@ def shared_notes(notes: pd.DataFrame) -> tuple[dict[str, list[int]], dict[int, l
     shared = {p: runs for p, runs in where.items() if len(runs) >= SHARED_NOTE_RUNS}
     own = {run: [p for p in parts if p not in shared] for run, parts in per_run.items()}
     return shared, {run: parts for run, parts in own.items() if parts}
+
+
+def _own_notes(day: DayResult) -> dict[int, str]:
+    """Each reduced run's notes without those the day says once (runs.csv keeps them all): the
+    run's units without a label (:func:`towtank.analysis.daywide.unit_label_sentences`) and
+    warnings grouped over many runs (:func:`towtank.analysis.daywide.grouped_warnings`)."""
+    from towtank.reduce.run import units_notes
+
+    reds = sorted(day.reductions.values(), key=lambda r: r.run)
+    grouped = grouped_warnings([(r.run, r.file, w) for r in reds for w in r.warnings])
+    out = {}
+    for r in reds:
+        skip = set(units_notes(r.units))
+        out[r.run] = "; ".join(n for n in r.notes if n not in skip and (r.run, n) not in grouped)
+    return out
 
 
 def _diagnostics_flow(f: Flow, day: DayResult) -> None:
