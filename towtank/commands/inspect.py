@@ -238,7 +238,6 @@ def inspect_run(
         zeros = log = nominal = segment = None
         if protocol is not None:  # as process: the run's zeros file and speed log
             number = _run_number(runfile)
-            segment = _sheet_segment(protocol, runfile)
             if p.speed_source == "nominal":  # the speed (and window) of the sheet's row
                 row = _sheet_row(protocol, runfile)
                 number = int(row["run"])
@@ -250,10 +249,26 @@ def inspect_run(
                 if math.isfinite(ws) and math.isfinite(we):
                     window = (float(ws), float(we))
             log = run_speed_log(protocol.speed_log, runfile.parent, runfile.name, number)
-        run = load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
-                       max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                       options=read, balance=balance, speed_log=log, speed_nominal=nominal,
-                       segment=segment)
+
+        def read_file(segment: int | None):  # noqa: ANN202 - RawRun
+            return load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
+                            max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
+                            options=read, balance=balance, speed_log=log,
+                            speed_nominal=nominal, segment=segment)
+
+        # the run sheet (pandas) is read for a segment only when the file holds several
+        try:
+            run = read_file(None)
+            several = protocol is not None and any(
+                n.startswith("segment ") and " acquisitions)" in n for n in run.notes)
+        except RunError as exc:
+            if protocol is None or " segment" not in exc.reason:
+                raise
+            run, several = None, True
+        if several:
+            segment = _sheet_segment(protocol, runfile)
+            if segment is not None or run is None:
+                run = read_file(segment)
         if protocol is not None:  # the zeros file at the run's rate, tapered as process does
             zeros = run_zero_levels(protocol.zeros, runfile.parent, runfile.name, number,
                                     channels, read, balance, fs=run.fs, taper_s=p.trim)
