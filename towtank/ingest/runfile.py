@@ -175,18 +175,6 @@ def sha256_bytes(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def file_kind(path: Path) -> str:
-    """'csv', 'csv.gz' or 'tdms' from the file name."""
-    name = path.name.lower()
-    if name.endswith(".csv.gz"):
-        return "csv.gz"
-    if name.endswith(".csv"):
-        return "csv"
-    if name.endswith(".tdms"):
-        return "tdms"
-    raise RunError(f"{path.name} is neither .csv, .csv.gz nor .tdms")
-
-
 # --------------------------------------------------------------------------- row bookkeeping
 class _Where:
     """Where a sample sits in the file: its row (CSV, header = row 1) or sample number (TDMS)."""
@@ -456,11 +444,6 @@ def time_base(
     exact = np.all(np.abs(dt[regular] - med) <= 1e-9 * med) if regular.any() else True
     fs = fs_med if exact else float(np.count_nonzero(regular) / np.sum(dt[regular]))
     return TimeBase(fs=fs, steps=k.astype(np.int64))
-
-
-def check_time(t: np.ndarray, name: str) -> float:
-    """Check the time channel increases at a regular rate; return the sample rate [Hz]."""
-    return time_base(t, name).fs
 
 
 def despike(
