@@ -25,7 +25,7 @@ from towtank.testing import synthetic as syn
 
 SEED = 5
 SPEED = "Carriage speed (m/s)"
-UNH = Path("/work/shared/real/unh_rvat_2013/test.tdms")
+UNH = Path(__file__).resolve().parents[2] / "shared" / "real" / "unh_rvat_2013" / "test.tdms"
 
 
 def _day(root: Path, *, windows: bool, **processing) -> tuple[Path, dict]:
@@ -240,7 +240,7 @@ def test_the_api_reads_a_run_at_its_set_speed(tmp_path):
     assert red.drag_mean_raw == pytest.approx(run["drag_model"] + run["tare_drag"], abs=3e-3)
 
 
-KITE = Path("/work/shared/real/tudelft_kite_lvm")
+KITE = Path(__file__).resolve().parents[2] / "shared" / "real" / "tudelft_kite_lvm"
 
 
 @pytest.mark.skipif(not (KITE / "normal_aoa_16_vw_20.lvm").exists(),

@@ -289,7 +289,7 @@ def _protocol_text(root: Path) -> str:
 
 
 # ------------------------------------------------------------------ the real LVM file
-KITE = Path("/work/shared/real/tudelft_kite_lvm")
+KITE = Path(__file__).resolve().parents[2] / "shared" / "real" / "tudelft_kite_lvm"
 VW10 = KITE / "normal_aoa_16_vw_10.lvm"
 
 

@@ -28,8 +28,6 @@ from towtank.testing.layouts import layout_channels, protocol_sections
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "real"
 UNH = REAL / "unh_rvat_2013" / "test.tdms"
-if not UNH.exists():  # the worktree may sit elsewhere than beside ../shared
-    UNH = Path("/work/shared/real/unh_rvat_2013/test.tdms")
 
 
 @pytest.mark.parametrize("names, parts", [

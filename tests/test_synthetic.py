@@ -193,7 +193,7 @@ def test_tare_forces_on_sting_and_hull():
 
 
 def test_quiet_fin_run_uses_sandia_at_each_reynolds():
-    sandia = pytest.importorskip("towtank.reference.sandia")
+    from towtank.reference import sandia
     fin = syn.FinTruth()
     frame, truth = _quiet_run("fin", 10.0, 2.0, 0.5, fin=fin)
     t = frame["time"].to_numpy()
@@ -242,7 +242,7 @@ def test_sut2_truth_model_scale_values():
 
 
 def test_sut2_truth_at_18C_with_water_module():
-    water = pytest.importorskip("towtank.reference.water")
+    from towtank.reference import water
     rho = water.water_properties(18.0).rho
     hull = syn.sut2_hull_truth(rho)
     assert -hull.X_udot == pytest.approx(0.017, rel=0.02)
@@ -405,7 +405,6 @@ SMALL_HULL_PLAN = [
 
 
 def test_make_hull_day_small(tmp_path):
-    pytest.importorskip("towtank.reference.water")
     kw = dict(seed=5, runs=SMALL_HULL_PLAN, file_format="csv", sheet_format="csv")
     truth = syn.make_hull_day(tmp_path / "a", **kw)
     syn.make_hull_day(tmp_path / "b", **kw)
@@ -448,7 +447,6 @@ def test_make_hull_day_small(tmp_path):
 
 
 def test_make_hull_day_quiet_is_exact(tmp_path):
-    pytest.importorskip("towtank.reference.water")
     plan = [syn.RunSpec("hull", 0.0, 1.6, 0.5), syn.RunSpec("sting", 0.0, 1.6, 0.5)]
     truth = syn.make_hull_day(
         tmp_path, runs=plan, noise=syn.Noise.quiet(), file_format="csv",
@@ -467,8 +465,6 @@ def test_make_hull_day_quiet_is_exact(tmp_path):
 
 
 def test_make_fin_day_small(tmp_path):
-    pytest.importorskip("towtank.reference.water")
-    pytest.importorskip("towtank.reference.sandia")
     from nptdms import TdmsFile
 
     plan = [
@@ -629,7 +625,6 @@ def test_sheet_date_is_optional(tmp_path):
 ])
 def test_sample_days_report_date_comes_from_the_sheet(day, protocol, date):
     """The shipped days' report says "Test date: <date>", found in the run sheet's date column."""
-    pytest.importorskip("matplotlib")
     from towtank.ingest.protocol import load_protocol
     from towtank.ingest.runsheet import read_run_sheet
     from towtank.report import provenance

@@ -24,7 +24,7 @@ from towtank.ingest.runfile import load_run
 from towtank.testing import synthetic as syn
 from towtank.testing.layouts import LAYOUTS
 
-KITE = Path("/work/shared/real/tudelft_kite_lvm")
+KITE = Path(__file__).resolve().parents[2] / "shared" / "real" / "tudelft_kite_lvm"
 SILENCE = "state `unit` in [channels] to silence this"
 
 
