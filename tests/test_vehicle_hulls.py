@@ -309,3 +309,6 @@ def test_a_drdc_hull_is_refused_naming_the_hulls_towtank_has(tmp_path, capsys):
     assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "'drdc'" in err and "series58" in err and "table" in err
+    # one sentence that says how to give the body instead: a radius table x_m, r_m
+    assert "hull_table" in err and "x_m, r_m" in err
+    assert err.strip().count("\n") == 0 and err.strip().endswith(".")

@@ -185,6 +185,12 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
     design = {k: getattr(_design, f"parse_{k}")(data.pop(k), src)
               for k in ("propeller", "pressure_hull") if k in data}
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
+    if v["hull"] == "drdc":
+        raise ProtocolError(
+            f"{src}: towtank has no 'drdc' hull (the DRDC standard submarine's bow and stern "
+            "equations could not be found, docs/method.md \"Hull families\"), so give the body "
+            "as a radius table: hull = \"table\" with hull_table = a CSV of the columns x_m, r_m "
+            "from nose to tail (the other hulls are myring, suboff, series58).")
     if v["hull"] not in HULLS:
         from towtank.ingest import protocol as _p
 
