@@ -37,6 +37,7 @@ VEHICLE_SCHEMA: dict[str, tuple[str, bool]] = {
     "origin_m": ("float", False),
     "added_mass": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
     "damping": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
+    "fin_lift": ("str", False),  # "towtank" | "prestero" (towtank.vehicle.predict)
     "fin_limit_deg": ("float", False),
 }
 #: ``[vehicle.series58]``: length and largest diameter [m], Gertler's (1950) parameters [-]
@@ -110,6 +111,7 @@ class Vehicle:
     fins: tuple[VehicleFin, ...] = ()
     added_mass: str = "towtank"
     damping: str = "towtank"
+    fin_lift: str = "towtank"
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
 

@@ -26,7 +26,9 @@ point (``x_origin_m`` aft of the nose); SNAME symbols. Every term is the one of 
 - fin lift: lifting line ``c_La = a0 / (1 + a0/(pi AR_e))`` with the section slope
   a0 = 0.9 * 2 pi and the hull-mirrored aspect ratio AR_e = 2 span/chord
   (:func:`towtank.analysis.fins.finite_span_slope`), giving Y_uvf, Y_urf, N_uvf, N_urf and the
-  control derivatives (:func:`towtank.analysis.fins.control_derivatives`).
+  control derivatives (:func:`towtank.analysis.fins.control_derivatives`), the lift
+  ``rho c_La S_fin`` of both fins of a pair; ``fin_lift = "prestero"`` counts one fin per pair,
+  ``1/2 rho c_La S_fin``, the reading of Prestero's printed REMUS fin terms (Y_uudr = 9.64).
 
 References
 ----------
@@ -356,11 +358,13 @@ def fin_rolling_drag(profile: HullProfile, pair: FinPair, x_origin: float, rho: 
 def _added_mass_strips(
     profile: HullProfile, pairs: Sequence[FinPair], plane: str, x_origin: float, rho: float,
     hull_factor: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Sectional transverse added mass m(x) [kg/m] at body stations x for one plane."""
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """Sectional transverse added mass m(x) [kg/m] at body stations x for one plane: the hull's
+    stations and strips, then each fin pair's stations and its strips' excess over the hull."""
     xb = x_origin - profile.x_m[::-1]
     m = hull_factor * rho * np.pi * profile.r_m[::-1] ** 2
-    extra_x, extra_m = [], []
+    extra_x: list[np.ndarray] = []
+    extra_m: list[np.ndarray] = []
     for pair in pairs:
         if pair.plane != plane:
             continue
@@ -371,7 +375,8 @@ def _added_mass_strips(
     return xb, m, extra_x, extra_m
 
 
-def _moments(xb, m, extra_x, extra_m, power: int) -> float:
+def _moments(xb: np.ndarray, m: np.ndarray, extra_x: list[np.ndarray],
+             extra_m: list[np.ndarray], power: int) -> float:
     total = float(trapezoid(m * xb**power, xb))
     for xs, ms in zip(extra_x, extra_m, strict=True):
         total += float(trapezoid(ms * xs**power, xs))
@@ -392,6 +397,7 @@ def predict_coefficients(
     x_origin_m: float | None = None,
     added_mass: str = "towtank",
     damping: str = "towtank",
+    fin_lift: str = "towtank",
 ) -> pd.DataFrame:
     """The predicted coefficient set of a finned body of revolution (module docstring).
 
@@ -419,6 +425,14 @@ def predict_coefficients(
         value where it differs); "prestero": the hull's axial drag alone,
         ``-1/2 rho c_d A_f`` (:func:`hull_axial_drag_coefficient`), and the cross-flow terms of
         :func:`prestero_cross_flow`, which reproduce his printed REMUS table
+    fin_lift : {"towtank", "prestero"}
+        "towtank": the lift of both fins of a pair, ``F = rho c_La S_fin`` (two fins, each
+        ``1/2 rho c_La S_fin u^2 delta``); "prestero": one fin per pair,
+        ``F = 1/2 rho c_La S_fin``, which reads Prestero's printed REMUS fin terms (his
+        Y_uudr = 9.64 kg/(m rad) against 21.3 for the pair). Either way Y_uudr = F,
+        N_uudr = F x_fin, Z_uuds = -F, M_uuds = F x_fin and the fins' parts of Y_uv, Z_uw
+        (-F), N_uv (-F x_fin), M_uw (F x_fin), Y_ur (-F x_fin), Z_uq (F x_fin), N_ur, M_uq
+        (-F x_fin^2) (Prestero 2001 eqs. 3.29-3.44)
 
     Returns
     -------
@@ -429,6 +443,8 @@ def predict_coefficients(
         raise ValueError(f"added_mass must be 'towtank' or 'prestero', not {added_mass!r}.")
     if damping not in ("towtank", "prestero"):
         raise ValueError(f"damping must be 'towtank' or 'prestero', not {damping!r}.")
+    if fin_lift not in ("towtank", "prestero"):
+        raise ValueError(f"fin_lift must be 'towtank' or 'prestero', not {fin_lift!r}.")
     length = profile.length
     diameter = profile.max_diameter
     x0 = profile.x_buoyancy if x_origin_m is None else float(x_origin_m)
@@ -563,24 +579,29 @@ def predict_coefficients(
         ar = fin_analysis.effective_aspect_ratio(pair.span_m, pair.chord_m, "wall")
         return float(fin_analysis.finite_span_slope(a0, ar))
 
-    def fsum(pairs, fx) -> float:
-        return sum(rho * fin_slope(p) * p.area * fx(p.x_m) for p in pairs)
+    # F = rho c_La S_fin: the lift of both fins of a pair (each 1/2 rho c_La S_fin u^2 delta);
+    # fin_lift = "prestero" counts one fin per pair, as his printed REMUS terms read
+    per_pair = 1.0 if fin_lift == "towtank" else 0.5
 
-    lift_txt = body + "; fins: lifting line c_La = a0/(1 + a0/(pi 2 span/chord)), a0 = 0.9 2 pi"
+    def fsum(pairs, fx) -> float:
+        return sum(per_pair * rho * fin_slope(p) * p.area * fx(p.x_m) for p in pairs)
+
+    fin_count = ("both fins of a pair, rho c_La S_fin" if fin_lift == "towtank" else
+                 "one fin per pair, 1/2 rho c_La S_fin (fin_lift = prestero: his printed REMUS "
+                 "reading)")
+    lift_txt = (body + "; fins: lifting line c_La = a0/(1 + a0/(pi 2 span/chord)), a0 = 0.9 2 pi, "
+                + fin_count)
     ref_lift = "Hoerner (1965); Prestero (2001) eqs. 3.29-3.40; Anderson s. 5.3"
     add("Y_uv", -lift - fsum(fins_y, lambda x: 1.0), lift_txt, ref_lift)
     add("Z_uw", -lift - fsum(fins_z, lambda x: 1.0), lift_txt, ref_lift)
     add("N_uv", -lift * x_cp - fsum(fins_y, lambda x: x), lift_txt, ref_lift)
     add("M_uw", lift * x_cp + fsum(fins_z, lambda x: x), lift_txt, ref_lift)
-    add("Y_ur", -fsum(fins_y, lambda x: x), "fin lift (lifting line); added-mass part in C_A(v)",
-        ref_lift)
-    add("Z_uq", fsum(fins_z, lambda x: x), "fin lift (lifting line); added-mass part in C_A(v)",
-        ref_lift)
-    add("N_ur", -fsum(fins_y, lambda x: x * x),
-        "fin lift (lifting line); added-mass part in C_A(v)", ref_lift)
-    add("M_uq", -fsum(fins_z, lambda x: x * x),
-        "fin lift (lifting line); added-mass part in C_A(v)", ref_lift)
-    ctrl = "control derivative, pair lift rho c_La S_fin (lifting line)"
+    rate_txt = f"fin lift (lifting line, {fin_count}); added-mass part in C_A(v)"
+    add("Y_ur", -fsum(fins_y, lambda x: x), rate_txt, ref_lift)
+    add("Z_uq", fsum(fins_z, lambda x: x), rate_txt, ref_lift)
+    add("N_ur", -fsum(fins_y, lambda x: x * x), rate_txt, ref_lift)
+    add("M_uq", -fsum(fins_z, lambda x: x * x), rate_txt, ref_lift)
+    ctrl = f"control derivative, lift of {fin_count} (lifting line)"
     ref_ctrl = "Prestero (2001) eqs. 3.41-3.44"
     if fins_y:
         add("Y_uudr", fsum(fins_y, lambda x: 1.0), ctrl, ref_ctrl)

@@ -46,7 +46,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     predicted = predict_coefficients(profile, fins, rho=rho, nu=nu, speed_m_s=vehicle.speed_m_s,
                                      x_origin_m=vehicle.origin_m,
                                      added_mass=getattr(vehicle, "added_mass", "towtank"),
-                                     damping=getattr(vehicle, "damping", "towtank"))
+                                     damping=getattr(vehicle, "damping", "towtank"),
+                                     fin_lift=getattr(vehicle, "fin_lift", "towtank"))
     masses = vmodel.mass_properties(vehicle, profile, rho)
     model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
