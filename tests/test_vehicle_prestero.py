@@ -310,9 +310,10 @@ def _prestero_fin_terms() -> dict[str, float]:
 
 def _fin_parts(fin_lift: str) -> dict[str, float]:
     hull, fins = _remus_geometry()
-    kw = dict(rho=RHO, nu=1.19e-6, speed_m_s=1.5, x_origin_m=0.611)
-    with_fins = predict_coefficients(hull, fins, fin_lift=fin_lift, **kw)
-    bare = predict_coefficients(hull, [], fin_lift=fin_lift, **kw)
+    with_fins = predict_coefficients(hull, fins, rho=RHO, nu=1.19e-6, speed_m_s=1.5,
+                                     x_origin_m=0.611, fin_lift=fin_lift)
+    bare = predict_coefficients(hull, [], rho=RHO, nu=1.19e-6, speed_m_s=1.5, x_origin_m=0.611,
+                                fin_lift=fin_lift)
     a = with_fins.set_index("symbol")["value"]
     b = bare.set_index("symbol")["value"].reindex(a.index).fillna(0.0)
     return {s: float(a[s] - b[s]) for s in FIN_TERMS}  # the fins' share (body lift removed)
