@@ -106,6 +106,7 @@ class Dynamics:
     m_inv: np.ndarray = field(init=False)
     ma: np.ndarray = field(init=False)
     terms: list = field(init=False)
+    wings: Any = field(init=False)  # a glider's wings (towtank.vehicle.wings) or None
 
     def __post_init__(self) -> None:
         mdl = self.model
@@ -125,6 +126,13 @@ class Dynamics:
         self.m_inv = np.linalg.inv(self.m_total)
         self.terms = _terms(mdl["coefficients"])
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
+        glider = mdl.get("glider")
+        if isinstance(glider, dict) and "wing_area_m2" in glider:
+            from towtank.vehicle.wings import Wings
+
+            self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
+        else:
+            self.wings = None
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
         tau = np.zeros(6)
@@ -134,6 +142,8 @@ class Dynamics:
                 prod *= (dr if kind == "dr" else ds) if kind in ("dr", "ds") else (
                     abs(nu[i]) if kind == "abs" else nu[i])
             tau[dof] += prod
+        if self.wings is not None:
+            tau += self.wings.force(nu)
         return tau
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
