@@ -25,7 +25,8 @@ MAX_SPIRAL_LINES = 8
 
 @styled
 def steady_figure(table: pd.DataFrame, name: str) -> Figure:
-    """The figure of steady.csv ``table`` (columns of :data:`towtank.vehicle.spiral.STEADY_COLUMNS`)."""
+    """The figure of steady.csv ``table`` (columns of
+    :data:`towtank.vehicle.spiral.STEADY_COLUMNS`)."""
     fig = Figure(figsize=STEADY_SIZE, layout="constrained")
     ax_v, ax_g, ax_r = fig.subplots(1, 3)
     ok = table[table["converged"].astype(bool)]
@@ -42,8 +43,8 @@ def steady_figure(table: pd.DataFrame, name: str) -> Figure:
         if len(glides):
             ax.legend(title="ballast", fontsize="small")
         else:
-            ax.text(0.5, 0.5, "no converged wings-level glide\n(roll 0) in the table", ha="center", va="center",
-                    transform=ax.transAxes)
+            ax.text(0.5, 0.5, "no converged wings-level glide\n(roll 0) in the table",
+                    ha="center", va="center", transform=ax.transAxes)
     spirals = ok[ok["roll_deg"] != 0.0]
     if len(spirals):
         groups = list(spirals.groupby(["ballast_cc", "pitch_deg"], sort=True))
