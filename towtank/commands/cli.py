@@ -162,6 +162,9 @@ def _parser() -> argparse.ArgumentParser:
     si.add_argument("--duration-s", type=float, metavar="T", help="simulated time [s]")
     si.add_argument("--dive-angle-deg", type=float, metavar="A", dest="dive_angle",
                     help="dive: hold this pitch, nose down, with the stern planes (PD law) [deg]")
+    si.add_argument("--roll-deg", type=float, metavar="R", dest="roll_deg",
+                    help="glide: roll the glider by its roll mass ([vehicle.glider]), "
+                    "starboard down positive [deg]")
     si.add_argument("--samples", type=int, default=0, metavar="N",
                     help="draw the measured coefficients N times for 95 %% bands")
     si.add_argument("--out", type=Path, metavar="DIR",
@@ -492,7 +495,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         args.model, args.manoeuvre, rudder_deg=args.rudder_deg,
         sternplane_deg=args.sternplane_deg, speed=args.speed,
         net_buoyancy_n=args.net_buoyancy, out=args.out, samples=args.samples,
-        duration_s=args.duration_s, dive_angle_deg=args.dive_angle)
+        duration_s=args.duration_s, dive_angle_deg=args.dive_angle, roll_deg=args.roll_deg)
 
 
 def cmd_steady(args: argparse.Namespace) -> int:
