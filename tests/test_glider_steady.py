@@ -256,3 +256,37 @@ def test_bad_glider_sections_refused(tmp_path):
         bad.write_text(text.replace(old, new), encoding="utf-8")
         with pytest.raises(ProtocolError, match=words.replace("[", r"\[")):
             load_protocol(bad, check_paths=False, require_runs=False)
+
+
+def test_simulate_roll_option_refusals(model, tmp_path, capsys):
+    path = write_model(model, tmp_path / "model.json")
+    for args, words in ((["--manoeuvre", "turning", "--roll-deg", "5"], "for --manoeuvre glide"),
+                        (["--manoeuvre", "glide", "--roll-deg", "60"], "at most"),
+                        (["--manoeuvre", "glide", "--roll-deg", "95"], "+-80")):
+        assert main(["simulate", str(path), *args, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert words in err and len(err.strip().splitlines()) == 1
+    bare = dict(model)
+    bare.pop("glider")
+    bare_path = write_model(bare, tmp_path / "bare.json")
+    assert main(["simulate", str(bare_path), "--manoeuvre", "glide", "--roll-deg", "5",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "no 'glider' block" in capsys.readouterr().err
+    finless = dict(model, coefficients={k: v for k, v in model["coefficients"].items()
+                                        if "dr" not in k})
+    assert main(["simulate", str(write_model(finless, tmp_path / "finless.json")),
+                 "--manoeuvre", "glide", "--rudder-deg", "5", "--out", str(tmp_path / "o")]) == 2
+    assert "has no rudder" in capsys.readouterr().err
+
+
+def test_glide_rudder_turns(model):
+    """The glide takes the rudder: the glider trimmed at -20 deg turns with 10 deg of rudder
+    and goes straight without."""
+    x, mdl, _ = solve_state(model, -300.0, -20.0, 0.0)
+    held = _held(mdl, x)
+    start = np.r_[np.zeros(4), math.radians(-20.0), 0.0, x[0], 0.0, x[2], 0.0, 0.0, 0.0]
+    turned = simulate(held, "glide", 0.6, rudder_deg=10.0, duration_s=300.0,
+                      initial_state=start)
+    straight = simulate(held, "glide", 0.6, duration_s=300.0, initial_state=start)
+    assert abs(turned["psi_deg"].iloc[-1]) > 20.0
+    assert abs(straight["psi_deg"].iloc[-1]) < 1e-6
