@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from towtank.errors import ProtocolError
 
@@ -135,9 +136,9 @@ def simulate_command(
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:
             print(f"warning: {warning}", file=sys.stderr)
-    kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
-                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
-                  dive_angle_deg=dive_angle_deg, roll_deg=roll_deg)
+    kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+                                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
+                                  dive_angle_deg=dive_angle_deg, roll_deg=roll_deg)
     try:
         ts = simulate(model, manoeuvre, **kwargs)
         metrics = manoeuvre_metrics(ts)
