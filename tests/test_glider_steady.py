@@ -290,3 +290,12 @@ def test_glide_rudder_turns(model):
     straight = simulate(held, "glide", 0.6, duration_s=300.0, initial_state=start)
     assert abs(turned["psi_deg"].iloc[-1]) > 20.0
     assert abs(straight["psi_deg"].iloc[-1]) < 1e-6
+
+
+def test_simulate_refuses_a_bad_glider_block(model, tmp_path, capsys):
+    bad = dict(model, glider=dict(model["glider"], wing_area_m2="big"))
+    path = write_model(bad, tmp_path / "bad.json")
+    assert main(["simulate", str(path), "--manoeuvre", "turning", "--out",
+                 str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "'wing_area_m2'" in err and len(err.strip().splitlines()) == 1

@@ -58,10 +58,21 @@ def _check_dive_angle(model: dict | None, manoeuvre: str, angle: float | None) -
 
 
 def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: str) -> list[str]:
-    """--roll-deg: a glide only, finite, within +-80 deg, and a model with a roll mass
-    (its ``glider`` block, [vehicle.glider]) that can give that roll at rest."""
+    """The model's ``glider`` block, when it has one (its wings enter every simulation), and
+    --roll-deg: a glide only, finite, within +-80 deg, and a model with a roll mass that can
+    give that roll at rest."""
     import math
 
+    from towtank.vehicle.glider_controls import (
+        glider_problems,
+        roll_mass_angle_for_static_roll_deg,
+    )
+
+    glider = None if model is None else model.get("glider")
+    if glider is not None:  # its wings enter every simulation
+        problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
+        if problems:
+            return problems
     if roll is None:
         return []
     if manoeuvre != "glide":
@@ -70,18 +81,9 @@ def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: st
         return [f"--roll-deg must be within +-80 deg, not {roll:g}."]
     if model is None or not roll:
         return []
-    from towtank.vehicle.glider_controls import (
-        glider_problems,
-        roll_mass_angle_for_static_roll_deg,
-    )
-
-    glider = model.get("glider")
     if glider is None:
         return [f"{name}: --roll-deg needs the model's roll mass, but it has no 'glider' block "
                 "([vehicle.glider] with roll_mass_kg and roll_mass_radius_m)."]
-    problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
-    if problems:
-        return problems
     try:
         roll_mass_angle_for_static_roll_deg(model, roll)
     except ValueError as exc:
