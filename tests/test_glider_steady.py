@@ -118,6 +118,9 @@ def test_paper_003_larger_roll_smaller_radius_and_period(model):
         assert np.all(np.diff(table["turn_radius_m"]) < 0)
         assert np.all(np.diff(table["turn_period_s"]) < 0)
         assert np.all(np.diff(np.abs(table["roll_mass_angle_deg"])) > 0)
+    # rolled to starboard the glider turns to starboard descending and to port climbing
+    assert solve_state(model, -300.0, -20.0, 10.0)[0][3] > 0
+    assert solve_state(model, 300.0, 20.0, 10.0)[0][3] < 0
 
 
 def test_spiral_against_the_time_domain(model):
