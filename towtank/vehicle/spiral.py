@@ -33,7 +33,7 @@ from towtank.vehicle.model import coriolis_added_mass
 from towtank.vehicle.simulate import Dynamics
 
 __all__ = ["STEADY_COLUMNS", "body_rates", "equilibrium_residual", "steady_state",
-           "steady_table", "ROLL_STEP_DEG", "TOLERANCE"]
+           "solve_state", "steady_table", "ROLL_STEP_DEG", "TOLERANCE"]
 
 STEADY_COLUMNS = ("ballast_cc", "net_buoyancy_N", "pitch_deg", "roll_deg", "speed_m_s", "u_m_s",
                   "v_m_s", "w_m_s", "angle_of_attack_deg", "sideslip_deg", "glide_angle_deg",
@@ -90,8 +90,7 @@ def _solve_glide(model: dict[str, Any], dyn: Dynamics, theta: float
         return tau[[0, 2, 4]] / scale[[0, 2, 4]]
 
     dx0 = -glide["trim_moment_Nm"] / (mp * 9.80665 * math.cos(theta)) if mp > 0 else 0.0
-    sol = root(resid, np.array([u, w, dx0 * float(model["mass_kg"]) / float(model["mass_kg"])]),
-               method="hybr", tol=1e-14)
+    sol = root(resid, np.array([u, w, dx0]), method="hybr", tol=1e-14)
     ok = bool(np.max(np.abs(resid(sol.x))) < TOLERANCE and sol.x[0] > 0)
     return sol.x, ok, "" if ok else "the pitch balance has no solution"
 
