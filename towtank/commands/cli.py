@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+import re
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -43,6 +44,7 @@ examples:
   towtank synth /tmp/day --day hull                   generate a synthetic test day
   towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
   towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
+  towtank steady pred/model.json --ballast-cc -200,-450 --pitch-deg -45:-5:5
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
 in runs.csv); 2 the protocol or run sheet is unusable, or the output folder cannot be written
@@ -160,11 +162,35 @@ def _parser() -> argparse.ArgumentParser:
     si.add_argument("--duration-s", type=float, metavar="T", help="simulated time [s]")
     si.add_argument("--dive-angle-deg", type=float, metavar="A", dest="dive_angle",
                     help="dive: hold this pitch, nose down, with the stern planes (PD law) [deg]")
+    si.add_argument("--roll-deg", type=float, metavar="R", dest="roll_deg",
+                    help="glide: roll the glider by its roll mass ([vehicle.glider]), "
+                    "starboard down positive [deg]")
     si.add_argument("--samples", type=int, default=0, metavar="N",
                     help="draw the measured coefficients N times for 95 %% bands")
     si.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: ./simulate_<manoeuvre>)")
     si.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+
+    st = sub.add_parser(
+        "steady",
+        help="a glider's steady glides and spirals over lists of ballast, pitch and roll",
+        description="The steady glide (roll 0) and steady spiral of a model.json with a "
+        "'glider' block ([vehicle.glider]) for every ballast, pitch and roll, with the moving "
+        "mass's travel and the roll mass's angle that hold them: steady.csv and steady.png. "
+        "Lists: -200,-300,-450 or start:stop:step (-45:-5:5).",
+    )
+    st.add_argument("model", type=Path, help="model.json")
+    st.add_argument("--ballast-cc", required=True, metavar="LIST", dest="ballast_cc",
+                    help="pumped volume from neutral [cc], negative heavy (descent)")
+    st.add_argument("--pitch-deg", required=True, metavar="LIST", dest="pitch_deg",
+                    help="pitch, nose up positive [deg]")
+    st.add_argument("--roll-deg", metavar="LIST", dest="roll_deg",
+                    help="roll, starboard down positive [deg] (default 0: glides only)")
+    st.add_argument("--out", type=Path, metavar="DIR",
+                    help="output folder (default: ./steady)")
+    st.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    # lists such as -200,-300 or -45:-5:5 are values, not options
+    st._negative_number_matcher = re.compile(r"^-[\d.eE:,+-]+$")
 
     sy = sub.add_parser(
         "synth",
@@ -469,10 +495,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         args.model, args.manoeuvre, rudder_deg=args.rudder_deg,
         sternplane_deg=args.sternplane_deg, speed=args.speed,
         net_buoyancy_n=args.net_buoyancy, out=args.out, samples=args.samples,
-        duration_s=args.duration_s, dive_angle_deg=args.dive_angle)
+        duration_s=args.duration_s, dive_angle_deg=args.dive_angle, roll_deg=args.roll_deg)
+
+
+def cmd_steady(args: argparse.Namespace) -> int:
+    from towtank.commands.steady import steady_command
+
+    return steady_command(args.model, args.ballast_cc, args.pitch_deg, args.roll_deg,
+                          out=args.out)
 
 
 COMMANDS = {
+    "steady": cmd_steady,
     "predict": cmd_predict,
     "simulate": cmd_simulate,
     "process": cmd_process,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from towtank.errors import ProtocolError
 
@@ -23,7 +24,7 @@ def _check_controls(model: dict, manoeuvre: str, rudder: float, stern: float,
     0 or missing: no [[vehicle.fins]] of that plane) would sail straight on: refused."""
     coef = model.get("coefficients", {}) or {}
     needs = []
-    if manoeuvre in ("turning", "zigzag", "spiral") and rudder:
+    if manoeuvre in ("turning", "zigzag", "spiral", "glide") and rudder:
         needs.append("rudder")
     if manoeuvre == "dive" and stern:
         needs.append("sternplane")
@@ -56,11 +57,46 @@ def _check_dive_angle(model: dict | None, manoeuvre: str, angle: float | None) -
     return problems
 
 
+def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: str) -> list[str]:
+    """The model's ``glider`` block, when it has one (its wings enter every simulation), and
+    --roll-deg: a glide only, finite, within +-80 deg, and a model with a roll mass that can
+    give that roll at rest."""
+    import math
+
+    from towtank.vehicle.glider_controls import (
+        glider_problems,
+        roll_mass_angle_for_static_roll_deg,
+    )
+
+    glider = None if model is None else model.get("glider")
+    if glider is not None:  # its wings enter every simulation
+        problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
+        if problems:
+            return problems
+    if roll is None:
+        return []
+    if manoeuvre != "glide":
+        return [f"--roll-deg is for --manoeuvre glide, not {manoeuvre}."]
+    if not (math.isfinite(roll) and abs(roll) <= 80.0):
+        return [f"--roll-deg must be within +-80 deg, not {roll:g}."]
+    if model is None or not roll:
+        return []
+    if glider is None:
+        return [f"{name}: --roll-deg needs the model's roll mass, but it has no 'glider' block "
+                "([vehicle.glider] with roll_mass_kg and roll_mass_radius_m)."]
+    try:
+        roll_mass_angle_for_static_roll_deg(model, roll)
+    except ValueError as exc:
+        return [f"{name}: --roll-deg {roll:g}: {exc}"]
+    return []
+
+
 def simulate_command(
     model_path: Path, manoeuvre: str, *, rudder_deg: float | None = None,
     sternplane_deg: float | None = None, speed: float | None = None,
     net_buoyancy_n: float | None = None, out: Path | None = None, samples: int = 0,
     duration_s: float | None = None, seed: int = 1, dive_angle_deg: float | None = None,
+    roll_deg: float | None = None,
 ) -> int:
     """Simulate, write manoeuvre.csv, metrics.csv and manoeuvre.png; print the metrics.
 
@@ -88,6 +124,7 @@ def simulate_command(
         model, manoeuvre, speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
         duration_s=duration_s, net_buoyancy_n=net_buoyancy_n, samples=samples, name=name)
     problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
+    problems += _check_roll(model, manoeuvre, roll_deg, name)
     if problems:
         raise ProtocolError(schema.joined(problems))
     if manoeuvre == "glide" and net_buoyancy_n is None:
@@ -101,9 +138,9 @@ def simulate_command(
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:
             print(f"warning: {warning}", file=sys.stderr)
-    kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
-                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
-                  dive_angle_deg=dive_angle_deg)
+    kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+                                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
+                                  dive_angle_deg=dive_angle_deg, roll_deg=roll_deg)
     try:
         ts = simulate(model, manoeuvre, **kwargs)
         metrics = manoeuvre_metrics(ts)

@@ -114,6 +114,7 @@ class Vehicle:
     fin_lift: str = "towtank"
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
+    glider: dict[str, Any] | None = None  # [vehicle.glider] (towtank.vehicle.glider_controls)
 
 
 def _check(values: dict[str, Any], spec: dict[str, tuple[str, bool]], label: str,
@@ -186,6 +187,10 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
 
     design = {k: getattr(_design, f"parse_{k}")(data.pop(k), src)
               for k in ("propeller", "pressure_hull") if k in data}
+    if "glider" in data:  # ballast, moving mass, roll mass, wings (#26)
+        from towtank.vehicle.glider_controls import parse_glider
+
+        design["glider"] = parse_glider(data.pop("glider"), src)
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
     if v["hull"] == "drdc":
         raise ProtocolError(

@@ -51,10 +51,20 @@ def steady_glide(model: dict[str, Any], net_buoyancy_n: float, pitch_deg: float,
     # start from a drag-only glide along the body axis
     x_uu = min(dyn.x_uu, -1e-9)
     u0 = math.sqrt(abs(net_weight * math.sin(theta)) / -x_uu) if net_weight else 0.0
-    sol = root(residual, np.array([max(u0, 0.05), 0.0]), method="hybr", tol=1e-12)
-    u, w = sol.x
-    ok = bool(sol.success and u > 0 and np.max(np.abs(residual(sol.x))) < 1e-6 * max(
-        1.0, abs(net_weight)))
+    # then, if that fails (a wing beyond stall), from angles of attack up to 85 deg along
+    # the glide's own side (w of the sign of the net weight's heave component)
+    starts = [np.array([max(u0, 0.05), 0.0])]
+    speed0 = max(u0, 0.05)
+    sign = 1.0 if net_weight * math.cos(theta) >= 0 else -1.0
+    starts += [speed0 * np.array([math.cos(a), sign * math.sin(a)])
+               for a in np.radians(np.arange(5.0, 90.0, 10.0))]
+    for x0 in starts:
+        sol = root(residual, x0, method="hybr", tol=1e-12)
+        u, w = sol.x
+        ok = bool(sol.success and u > 0 and np.max(np.abs(residual(sol.x))) < 1e-6 * max(
+            1.0, abs(net_weight)))
+        if ok:
+            break
     nan = float("nan")
     if not ok:
         return dict(zip(GLIDE_COLUMNS, (net_buoyancy_n, pitch_deg) + (nan,) * 7 + (False,),

@@ -106,6 +106,7 @@ class Dynamics:
     m_inv: np.ndarray = field(init=False)
     ma: np.ndarray = field(init=False)
     terms: list = field(init=False)
+    wings: Any = field(init=False)  # a glider's wings (towtank.vehicle.wings) or None
 
     def __post_init__(self) -> None:
         mdl = self.model
@@ -125,6 +126,13 @@ class Dynamics:
         self.m_inv = np.linalg.inv(self.m_total)
         self.terms = _terms(mdl["coefficients"])
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
+        glider = mdl.get("glider")
+        if isinstance(glider, dict) and "wing_area_m2" in glider:
+            from towtank.vehicle.wings import Wings
+
+            self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
+        else:
+            self.wings = None
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
         tau = np.zeros(6)
@@ -134,6 +142,8 @@ class Dynamics:
                 prod *= (dr if kind == "dr" else ds) if kind in ("dr", "ds") else (
                     abs(nu[i]) if kind == "abs" else nu[i])
             tau[dof] += prod
+        if self.wings is not None:
+            tau += self.wings.force(nu)
         return tau
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
@@ -189,6 +199,8 @@ def simulate(
     max_step_s: float | None = None,
     max_steps: int | None = None,
     dive_angle_deg: float | None = None,
+    roll_deg: float | None = None,
+    initial_state: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -216,12 +228,27 @@ def simulate(
     dive_angle_deg : float, optional
         dive: the pitch to hold, nose down positive [deg]; the stern plane then follows
         :func:`pitch_command` (``sternplane_deg`` unused)
+    roll_deg : float, optional
+        glide: roll the glider by its roll mass, turned to the angle that gives this roll at
+        rest (:func:`towtank.vehicle.glider_controls.roll_mass_angle_for_static_roll_deg`,
+        eq. G6) [deg, starboard down positive]; needs the model's ``glider`` roll mass
+    initial_state : numpy.ndarray, optional
+        The 12 states at t = 0 (x, y, z [m], phi, theta, psi [rad], u, v, w [m/s], p, q, r
+        [rad/s]); default at rest in attitude, moving at ``speed_m_s`` along x
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
                          f"{manoeuvre!r}.")
     if not (math.isfinite(speed_m_s) and speed_m_s > 0):
         raise ValueError(f"the speed must be > 0 m/s, not {speed_m_s}.")
+    if manoeuvre == "glide" and roll_deg:  # the roll mass turned (#26)
+        from towtank.vehicle.glider_controls import (
+            cg_with_controls,
+            roll_mass_angle_for_static_roll_deg,
+        )
+
+        gamma = math.radians(roll_mass_angle_for_static_roll_deg(model, roll_deg))
+        model = dict(model, cg_m=cg_with_controls(model, 0.0, gamma).tolist())
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
     dyn = Dynamics(model, weight)
     if duration_s is None:
@@ -231,10 +258,13 @@ def simulate(
     h = max_step_s if max_step_s is not None else duration_s / 2000.0
     budget = _Budget(duration_s, MAX_STEPS if max_steps is None else max_steps)
     thrust = 0.0 if manoeuvre == "glide" else -dyn.x_uu * speed_m_s * abs(speed_m_s)
-    dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag") else 0.0
+    dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag",
+                                                   "glide") else 0.0
     ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
     state0 = np.zeros(12)
     state0[6] = speed_m_s
+    if initial_state is not None:
+        state0 = np.asarray(initial_state, dtype=float).copy()
     closed = manoeuvre == "dive" and dive_angle_deg is not None
     if closed:
         limit = math.radians(float(model.get("fin_limit_deg", FIN_LIMIT_DEG)))
@@ -293,6 +323,8 @@ def simulate(
     if closed:
         out.attrs["dive_angle_deg"] = float(dive_angle_deg)
     out.attrs["check_deg"] = abs(rudder_deg)
+    if manoeuvre == "glide" and (roll_deg or rudder_deg):
+        out.attrs["turning"] = True  # metrics: turn radius and period (#26)
     return out
 
 
@@ -584,13 +616,24 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         steady("depth_rate_m_s", "depth_rate_m_s", "m/s")
         steady("speed_m_s", "speed_m_s", "m/s")
         note = check("depth_rate_m_s", "speed_m_s")
+        ahead = q["horizontal_speed_m_s" if ts.attrs.get("turning") else "xr"][last]
         glide = nan if note else float(np.degrees(np.arctan2(
-            np.mean(-q["depth_rate_m_s"][last]), np.mean(q["xr"][last]))))
+            np.mean(-q["depth_rate_m_s"][last]), np.mean(ahead))))
         rows.append(("glide_angle_deg", glide, "deg", note))
         steady("angle_of_attack_deg", "angle_of_attack_deg", "deg", angle=True)
         rows.append(("depth_change_m", float(ts["z_m"].iloc[-1] - ts["z_m"].iloc[0]), "m", ""))
         if "dive_angle_deg" in ts.attrs:
             rows += _dive_angle_rows(ts, float(ts.attrs["dive_angle_deg"]))
+        if ts.attrs.get("turning"):  # a glide rolled or with rudder: a spiral (#26)
+            note = check("yaw_rate_deg_s", "speed_m_s", "depth_rate_m_s")
+            yaw = float(np.mean(q["yaw_rate_deg_s"][last]))
+            if not note and abs(yaw) < sd.MIN_YAW_RATE_DEG_S:
+                note = f"not turning: the yaw rate is below {sd.MIN_YAW_RATE_DEG_S:g} deg/s"
+            radius = nan if note else sd.circle_fit(ts["x_m"].to_numpy()[last],
+                                                    ts["y_m"].to_numpy()[last])[2]
+            rows.append(("steady_turn_radius_m", radius, "m", note))
+            rows.append(("turn_period_s", nan if note else 360.0 / abs(yaw), "s", note))
+            steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
     return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
 
 

@@ -60,6 +60,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
                      "x_buoyancy_m": float(profile.x_buoyancy)}
     if vehicle.fin_limit_deg is not None:
         model["fin_limit_deg"] = float(vehicle.fin_limit_deg)
+    if getattr(vehicle, "glider", None) is not None:  # [vehicle.glider] (#26)
+        model["glider"] = dict(vehicle.glider)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
                              _powering(vehicle, profile, fins, rho, nu),
                              _pressure_hull(vehicle, profile, rho))
