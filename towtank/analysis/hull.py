@@ -37,6 +37,7 @@ import pandas as pd
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
 from towtank.reduce.tare import TareModel, tare_design
 from towtank.stats.intervals import bm_dof, cr2_covariance, welch_satterthwaite
+from towtank.stats.quantiles import normal_quantile, t95
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -46,7 +47,6 @@ KIND = {s: ("added_mass" if s.endswith("dot") else "damping") for s in SYMBOLS}
 UNIT = {s: ("kg" if KIND[s] == "added_mass" else "kg/m") for s in SYMBOLS}
 MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv",
           "Z_w|w|": "Y_v|v|"}
-Z95 = 1.959963984540054
 ANGLE_TOL_DEG = 0.5
 
 
@@ -326,7 +326,7 @@ def fit_added_mass(
         [reg_var, *(v for v, _ in tare_parts), mass_sd**2],
         [res.dof, *(nu for _, nu in tare_parts), math.inf],
     )
-    half = _t95(dof) * u_c if u_c > 0 else 0.0
+    half = t95(dof) * u_c if u_c > 0 else 0.0
     by_run = {int(r): float(np.mean(res.resid[s["run"] == r])) for r in run_ids}
     errors = ("clustered by run" if res.clustered
               else f"samples as independent: only {len(run_ids)} runs")
@@ -461,7 +461,7 @@ def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: f
     var_tare = max(float(g @ tare_cov @ g), 0.0) if tare_cov is not None else 0.0
     se = math.sqrt(var_reg + var_tare)
     nu = welch_satterthwaite([var_reg, var_tare], [dof, tare_dof])
-    half = _t95(nu) * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
+    half = t95(nu) * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
     return Estimate(symbol, value, se, value - half, value + half, method, n,
                     u_regression=math.sqrt(var_reg), u_tare=math.sqrt(var_tare), u_mass=0.0,
                     dof=float(nu))
@@ -475,12 +475,6 @@ def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
     groups = {reductions[int(r)].tare_group for r in sel["run"] if int(r) in reductions}
     dofs = [tares[g].drag.dof for g in groups if g in tares]
     return float(min(dofs)) if dofs else math.inf
-
-
-def _t95(dof: int) -> float:
-    from scipy.stats import t
-
-    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
 
 
 def _influence(x: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -637,7 +631,7 @@ def fit_transverse(
     q90 = 0.5 * rho * lateral_area
     value, se = -q90 * cd90, q90 * cd90_se
     nu = welch_satterthwaite([reg_var, tare_var], [dof, _tare_dof(tr, reductions, tares)])
-    tq = _t95(nu)
+    tq = t95(nu)
     est = Estimate(
         "Y_v|v|", value, se, value - tq * se, value + tq * se,
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
@@ -858,7 +852,7 @@ def coefficients_table(
         rel_len = k * length_sd / hull.length
         prime_se = math.hypot(e.std_error / scale, abs(prime) * rel_len)
         half = (e.ci_high - e.ci_low) / 2.0
-        factor = half / e.std_error if e.std_error > 0 else Z95
+        factor = half / e.std_error if e.std_error > 0 else normal_quantile()
         rows.append({
             "symbol": s, "value": e.value, "unit": UNIT[s], "prime": prime,
             "ci_low": e.ci_low, "ci_high": e.ci_high, "method": e.method,

@@ -60,7 +60,6 @@ CAPTION_CHARS = _base.CAPTION_CHARS
 CAPTION_LINE_IN = _base.CAPTION_LINE_IN
 PAGE_FOOTER_IN = _base.PAGE_FOOTER_IN
 PAGE_HEADER_IN = _base.PAGE_HEADER_IN
-Z95 = _base.Z95
 _fmt = _base._fmt
 _layout = _base._layout
 _new_figure = _base._new_figure
@@ -69,6 +68,7 @@ math_symbol = _base.math_symbol
 math_text = _base.math_text
 styled = _base.styled
 t95 = _base.t95
+normal_quantile = _base.normal_quantile
 true_minus = _base.true_minus
 wrap_caption = _base.wrap_caption
 place_legend = _base.place_legend
@@ -338,7 +338,7 @@ def cd90_interval(dm: Any, estimate: Any = None) -> tuple[float, float]:
     dof = float(getattr(estimate, "dof", math.nan))
     if not math.isfinite(se) or se <= 0:
         return 0.0, dof
-    q = t95(dof) if math.isfinite(dof) and dof > 0 else Z95
+    q = t95(dof) if math.isfinite(dof) and dof > 0 else normal_quantile()
     return q * se, dof
 
 
@@ -431,13 +431,8 @@ def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
     # lifting-line theory holds for attached flow only: draw the finite-span expectation up to
     # the angle whose effective angle α − α_i reaches the 2-D section's stall (its first local
     # maximum of C_L); beyond it the self-consistent solution jumps between branches
-    pos = alpha >= 0
-    drops = np.flatnonzero(np.diff(cl2[pos]) < 0)
-    if drops.size:
-        stall_2d = float(alpha[pos][drops[0]])
-        effective = alpha - np.degrees(cl3 / (np.pi * e * aspect_ratio))
-        beyond = np.abs(effective) > stall_2d
-        cl3, cd3 = np.where(beyond, np.nan, cl3), np.where(beyond, np.nan, cd3)
+    attached = fins.attached_flow(alpha, cl3, res, aspect_ratio, e)
+    cl3, cd3 = np.where(attached, cl3, np.nan), np.where(attached, cd3, np.nan)
     return cl2, cd2, cl3, cd3
 
 
