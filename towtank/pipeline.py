@@ -675,11 +675,11 @@ def _hull_stage(day: DayResult) -> None:
         added_mass=not day.protocol.water.is_air,
     ))
     for sym, am in hf.added_mass.items():
-        if am.estimate.agreement.startswith("DISAGREE"):
+        verdict = am.estimate.agreement
+        if verdict is not None and not verdict.agrees:
             day.warnings.append(
                 f"{sym}: the curve-difference estimate {am.estimate.alt_value:.4g} kg and the "
-                f"joint regression {am.estimate.value:.4g} kg disagree "
-                f"({am.estimate.agreement[10:]})."
+                f"joint regression {am.estimate.value:.4g} kg disagree ({verdict.detail})."
             )
     if hf.damping is not None and hf.damping.outliers:
         dm = hf.damping

@@ -128,9 +128,9 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
 def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
 
-    cd = am.curve_difference or {}
-    levels = list(cd.get("levels") or [])
-    q = cd.get("steady_quadratic")
+    cd = am.curve_difference
+    levels = cd.levels
+    q = cd.steady_quadratic
     parts = [day.reductions[r].samples for r in am.runs if r in day.reductions]
     s = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
     st = s["phase"] == PHASE_STEADY
@@ -143,21 +143,21 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     dmax = 0.0
     for i, lv in enumerate(levels):
         color = style.PALETTE[(i + 1) % len(style.PALETTE)]
-        sel = acc & (np.abs(s["a"] - lv["accel"]) <= 0.15 * abs(lv["accel"]))
+        sel = acc & (np.abs(s["a"] - lv.accel) <= 0.15 * abs(lv.accel))
         shown |= sel
         ax.plot(s["U"][sel], s["drag"][sel], "o", ms=2.0, mew=0, color=color, alpha=0.5,
                 zorder=2)
-        u = np.linspace(*lv["speed_range"], 60)
-        d_a = np.polyval(lv["quadratic"], u)
+        u = np.linspace(*lv.speed_range, 60)
+        d_a = np.polyval(lv.quadratic, u)
         ax.plot(u, d_a, color=color, lw=1.7, zorder=4)
         handles.append(Line2D([], [], color=color, marker="o", ms=3,
-                              label=f"$a$ = {lv['accel']:.2f} m/s²: samples, $D_a(U)$"))
+                              label=f"$a$ = {lv.accel:.2f} m/s²: samples, $D_a(U)$"))
         if q is not None:
             diff = d_a - (q[0] * u * np.abs(u) + q[1] * u)
             ax_d.plot(u, diff, color=color, lw=1.6)
             dmax = max(dmax, float(np.max(diff)))
-        ax_d.axhline(am.M * lv["accel"], color=color, ls=":", lw=1.2)
-        dmax = max(dmax, am.M * lv["accel"])
+        ax_d.axhline(am.M * lv.accel, color=color, ls=":", lw=1.2)
+        dmax = max(dmax, am.M * lv.accel)
     other = acc & ~shown
     if other.any():
         ax.plot(s["U"][other], s["drag"][other], "o", ms=2, mew=0, color="#cfcfcf", zorder=1)
@@ -184,7 +184,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     title = "\n".join([
         f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
         f"curve difference: {_fmt(alt)} kg" + (
-            f" ({est.agreement.split(':')[0]})" if est.agreement else ""),
+            f" ({est.agreement.verdict})" if est.agreement is not None else ""),
         math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
     ])
     place_legend(ax_d, [Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),

@@ -202,15 +202,15 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
              f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
              f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
              f"Mean residual of the joint regression by run [mN]: {resid}.")
-        levels = (am.curve_difference or {}).get("levels") or []
+        levels = am.curve_difference.levels
         if levels:
             f.mono(f"     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
                    f"   {sym} [kg]")
             for lv in levels:
-                lo, hi = lv["speed_range"]
+                lo, hi = lv.speed_range
                 speeds = f"{lo:.3f} – {hi:.3f}"
-                f.mono(f"     {lv['accel']:8.3f}   {speeds:>17s}   {lv['n']:7d}   "
-                       f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
+                f.mono(f"     {lv.accel:8.3f}   {speeds:>17s}   {lv.n:7d}   "
+                       f"{lv.delta_drag:11.5f}   {lv.M:10.5f}   {lv.value:8.5f}")
     dm = hf.damping
     if dm is not None:
         t = dm.runs

@@ -638,7 +638,7 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
             rows.append({"symbol": sym, "mass": am.mass, "M": am.M, "M_se": am.M_se,
                          "k2": am.k2, "k1": am.k1, "dof": am.dof, "runs": " ".join(
                              map(str, am.runs)), "value": e.value, "alt_value": e.alt_value,
-                         "agreement": e.agreement})
+                         "agreement": str(e.agreement or "")})
         w.table(pd.DataFrame(rows), units={**UNITS, "mass": "kg", "M": "kg", "M_se": "kg",
                                            "k2": "N s²/m²", "k1": "N s/m", "value": "kg",
                                            "alt_value": "kg"})
@@ -651,13 +651,13 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
         w.title("Added mass: curve difference per acceleration level (report eqs. 7–8)")
         lv_rows = []
         for s, am in hf.added_mass.items():
-            for lv in (am.curve_difference or {}).get("levels") or []:
-                p2, p1, p0 = lv["quadratic"]
-                lv_rows.append({"symbol": s, "accel": lv["accel"],
-                                "speed_low": lv["speed_range"][0],
-                                "speed_high": lv["speed_range"][1], "n": lv["n"],
-                                "delta_drag": lv["delta_drag"], "M": lv["M"],
-                                "value": lv["value"], "p2": p2, "p1": p1, "p0": p0})
+            for lv in am.curve_difference.levels:
+                p2, p1, p0 = lv.quadratic
+                lv_rows.append({"symbol": s, "accel": lv.accel,
+                                "speed_low": lv.speed_range[0],
+                                "speed_high": lv.speed_range[1], "n": lv.n,
+                                "delta_drag": lv.delta_drag, "M": lv.M,
+                                "value": lv.value, "p2": p2, "p1": p1, "p0": p0})
         if lv_rows:
             w.table(pd.DataFrame(lv_rows), units={
                 "accel": "m/s²", "speed_low": "m/s", "speed_high": "m/s", "n": "samples",
