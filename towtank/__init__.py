@@ -44,7 +44,7 @@ _API = {
     "load_protocol": "towtank.api",
     "read_run": "towtank.api",
     "reduce_run": "towtank.api",
-    "DayResult": "towtank.pipeline",
+    "DayResult": "towtank.results",
     "ProtocolError": "towtank.errors",
     "RunError": "towtank.errors",
 }

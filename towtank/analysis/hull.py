@@ -881,6 +881,35 @@ def fit_hull(
     )
 
 
+def hull_warnings(hull: HullFit) -> list[str]:
+    """The day's sentences about a hull fit's verdicts (its ``messages`` aside): two added-mass
+    estimates that disagree (:func:`agreement`) and the C_D(α) fit's flagged runs
+    (|studentized residual| > 3 or Cook's distance > max(4/n, 0.5))."""
+    out: list[str] = []
+    for sym, am in hull.added_mass.items():
+        verdict = am.estimate.agreement
+        if verdict is not None and not verdict.agrees:
+            out.append(
+                f"{sym}: the curve-difference estimate {am.estimate.alt_value:.4g} kg and the "
+                f"joint regression {am.estimate.value:.4g} kg disagree ({verdict.detail})."
+            )
+    if hull.damping is not None and hull.damping.outliers:
+        dm = hull.damping
+        t = dm.runs.set_index("run")
+        flagged = ", ".join(
+            f"{r} (studentized residual {t.loc[r, 'student']:+.3g}, Cook's distance "
+            f"{t.loc[r, 'cooks']:.2g})" for r in dm.outliers)
+        one = len(dm.outliers) == 1
+        out.append(
+            f"C_D(α) fit: {'run' if one else 'runs'} {flagged} "
+            f"{'is' if one else 'are'} flagged as {'an outlier' if one else 'outliers'} "
+            f"(|studentized residual| > 3 or Cook's distance > {max(4.0 / len(t), 0.5):.2g}); "
+            f"{'it is' if one else 'they are'} still in the fit: check "
+            f"{'it' if one else 'them'} before trusting X_u|u|, X_uv, X_v|v| and Y_uv."
+        )
+    return out
+
+
 def load_reference(reference: str) -> dict[str, float]:
     """Reference prime values by symbol: a built-in set ('remus', 'remus-prestero2001') or a
     CSV (symbol, prime)."""

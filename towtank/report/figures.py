@@ -47,8 +47,8 @@ from towtank.report.tare_figure import fig_tare
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from towtank.pipeline import DayResult
     from towtank.reduce.run import RunReduction
+    from towtank.results import DayResult
 
 # the figures' shared basics, also reached as figures.<name> by the PDF and the tests
 _E_NUMBER = _base._E_NUMBER

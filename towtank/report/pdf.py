@@ -46,7 +46,7 @@ from towtank.report.provenance import creation_date, report_date
 from towtank.report.tables import missing_accel_note
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
 MARGIN_IN = 0.6  # left and right page margin [in]
@@ -368,7 +368,7 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
     A coefficient equal to another by the hull's symmetry shows that symbol as its method
     ("= Y_vdot") instead of a footnote.
     """
-    coef = day.hull.coefficients
+    coef = day.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
@@ -435,7 +435,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _text_block(fig, y + 0.01, geometry, width=90, fontsize=8.5, color="black",
                          indent_in=1.0) + 0.02
     y += 0.15
-    if day.hull is not None and len(day.hull.coefficients):
+    if day.hull is not None and len(day.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
         header, rows, methods, hl = coefficient_rows(day)
         y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
@@ -449,7 +449,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
-        for r in day.hull.coefficients.to_dict("records"):
+        for r in day.coefficients.to_dict("records"):
             method = str(r.get("method", ""))
             # the method footnote states the second estimate already (fit.fit_added_mass)
             if (r.get("agreement") and not method.startswith(("=", "same as"))

@@ -18,7 +18,7 @@ from towtank.report import figures, style
 if TYPE_CHECKING:
     import pandas as pd
 
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 PAGE_H = style.PAGE_SIZE[1]
 
@@ -231,7 +231,7 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
             f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
                    f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
     if getattr(hf, "lift_slope", None):
-        f.li(lift_slope_text(hf, day.hull.coefficients))
+        f.li(lift_slope_text(hf, day.coefficients))
     _budget_flow(f, hf)
 
 

@@ -44,7 +44,7 @@ from towtank.report.safetext import clean_text
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
 
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
           "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
@@ -383,10 +383,10 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         w.note(f"geometry_source: {m.geometry_source}")
     w.gap()
     w.title("Key results")
-    if day.hull is not None and len(day.hull.coefficients):
+    if day.hull is not None and len(day.coefficients):
         cols = [c for c in ("symbol", "value", "unit", "ci_low", "ci_high", "prime",
-                            "reference_prime", "diff_pct") if c in day.hull.coefficients]
-        w.table(day.hull.coefficients, columns=cols, row_fill=_fill_for_diff)
+                            "reference_prime", "diff_pct") if c in day.coefficients]
+        w.table(day.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
         w.note("No hull coefficients: " + _why_no_hull(day))
     if day.fin_result is not None and len(day.fin_result.curves):
@@ -413,10 +413,10 @@ def _why_no_hull(day: DayResult) -> str:
 
 
 def _coefficients(w: SheetWriter, day: DayResult) -> None:
-    if day.hull is None or len(day.hull.coefficients) == 0:
+    if day.hull is None or len(day.coefficients) == 0:
         _note_sheet(w, "No hull coefficients: " + _why_no_hull(day))
         return
-    coef = day.hull.coefficients
+    coef = day.coefficients
     cols = [c for c in COEFFICIENT_ORDER if c in coef.columns]
     cols += [c for c in coef.columns if c not in cols]
     w.table(coef, columns=cols, row_fill=_fill_for_diff)
