@@ -69,6 +69,9 @@ class Agreement(str):
         self.difference, self.tolerance = float(difference), float(tolerance)
         return self
 
+    def __getnewargs__(self) -> tuple[bool, float, float]:  # type: ignore[override]
+        return self.agrees, self.difference, self.tolerance  # copy and pickle rebuild it
+
     @staticmethod
     def _verdict(agrees: bool) -> str:
         return "agree" if agrees else "DISAGREE"
