@@ -310,8 +310,9 @@ class DayResult:
         stages = [name for name, r in (("hull", self.hull), ("fins", self.fin_result),
                                        ("scaling", self.scaling_result),
                                        ("vehicle", self.vehicle)) if r is not None]
+        n = len(self.warnings)
         return (f"{len(self.runs)} runs, {len(self.reductions)} reduced, {self.n_rejected} "
-                f"rejected; {len(self.warnings)} warnings; stages: "
+                f"rejected; {n} warning{'' if n == 1 else 's'}; stages: "
                 f"{', '.join(stages) or 'none'}.")
 
     def __repr__(self) -> str:

@@ -57,7 +57,7 @@ class ScalingResult:
         ff = (f", 1 + k = {self.form_factor.one_plus_k:.4g}" if self.form_factor is not None
               else "")
         return (f"ScalingResult(λ = {self.scale:g}, {len(self.table)} prototype speeds, "
-                f"R = {k2:.4g}·U|U| + {k1:.4g}·U{ff})")
+                f"R = {k2:.4g}·U|U| {k1:+.4g}·U{ff})")
 
     def _repr_html_(self) -> str:
         return f"<p><b>{_html(repr(self))}</b></p>" + self.table.to_html(max_rows=20)
