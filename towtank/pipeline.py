@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -410,9 +410,10 @@ def reduce_runs(
             path = protocol.campaign.data_dir / str(rec["file"])
             known = cache.known_file(path)
             hit = cache.get(known[0], keys[run]) if known is not None else None
-            if hit is not None and (hit.sha256 != known[0] or hit.file != str(rec["file"])):
+            if hit is not None and known is not None and (
+                    hit.sha256 != known[0] or hit.file != str(rec["file"])):
                 hit = None  # an entry that is not this file's reduction: a miss
-            if hit is not None:  # its stamp: the file as the cached reduction read it
+            if hit is not None and known is not None:  # its stamp: the file as it was read
                 reductions[run] = replace(hit, run=run, file_stamp=known[1])
                 continue
         to_reduce.append(rec)
@@ -623,7 +624,8 @@ def fin_stage(protocol: Protocol, runs: pd.DataFrame) -> tuple[FinResult | None,
     sel = sel[~beyond]
     if sel.empty:
         return None, warn
-    ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, fin.mounting))
+    mounting: Literal["free", "wall"] = "wall" if fin.mounting == "wall" else "free"
+    ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, mounting))
     linear_max = fin.linear_max_deg
     # Sandia's Re clamp (Re outside 1e4-1e7) goes to the day's warnings, so that the report
     # and provenance carry it; any other warning goes on as a Python warning

@@ -635,7 +635,6 @@ def fit_damping(
         x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
         cov_tare = _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
         tare_dof = _tare_dof(sel, reductions, tares)
-        lin = {"tare_cov": cov_tare, "tare_dof": tare_dof}
         student, cooks = _influence(x, np.asarray(res.resid))
         table = pd.DataFrame({
             "run": sel["run"].to_numpy(int), "angle_deg": sel["angle_deg"].to_numpy(float),
@@ -646,11 +645,10 @@ def fit_damping(
         outl = table.loc[(np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5)), "run"]
         fit = DampingFit(params=params, cov=cov + cov_tare, dof=dof, rho=rho, area=area,
                          runs=table, outliers=[int(r) for r in outl])
-        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
-        est["X_uv"] = _lin("X_uv", np.array([0, -q, 0]), params, cov, dof, method, n, **lin)
-        est["X_v|v|"] = _lin("X_v|v|", np.array([-q, 0, q / 2]), params, cov, dof, method, n,
-                             **lin)
-        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
+        for sym, g in (("X_u|u|", [0, 0, -q]), ("X_uv", [0, -q, 0]),
+                       ("X_v|v|", [-q, 0, q / 2]), ("Y_uv", [0, 0, -q])):
+            est[sym] = _lin(sym, np.array(g), params, cov, dof, method, n,
+                            tare_cov=cov_tare, tare_dof=tare_dof)
         return fit, est, msgs
     zero = sel[np.abs(sel["angle_deg"]) <= ANGLE_TOL_DEG]
     msgs.append(
