@@ -19,7 +19,7 @@ from __future__ import annotations
 import html
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -31,10 +31,20 @@ from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel, tare_table
 from towtank.vehicle.stage import VehiclePrediction
 
+R = TypeVar("R")
+
 __all__ = [
     "DayResult", "Estimate", "FinResult", "HullResult", "ScalingResult", "Summary",
     "TareResult", "VehicleResult",
 ]
+
+
+def require(result: R | None, stage: str) -> R:
+    """``result``, which the caller only reaches when its stage ran (a report page or sheet
+    listed for it); ValueError naming the stage otherwise."""
+    if result is None:
+        raise ValueError(f"the day has no {stage} result")
+    return result
 
 
 def _esc(text: object) -> str:

@@ -43,6 +43,7 @@ from matplotlib.patches import Patch
 from towtank.report import figure_base as _base
 from towtank.report import style
 from towtank.report.tare_figure import fig_tare
+from towtank.results import require
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -147,7 +148,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
         shown |= sel
         ax.plot(s["U"][sel], s["drag"][sel], "o", ms=2.0, mew=0, color=color, alpha=0.5,
                 zorder=2)
-        u = np.linspace(*lv.speed_range, 60)
+        u = np.linspace(lv.speed_range[0], lv.speed_range[1], 60)
         d_a = np.polyval(lv.quadratic, u)
         ax.plot(u, d_a, color=color, lw=1.7, zorder=4)
         handles.append(Line2D([], [], color=color, marker="o", ms=3,
@@ -538,7 +539,7 @@ def sci(x: float, digits: int = 2) -> str:
 
 def scaling_caption(day: DayResult) -> str:
     """Caption of :func:`fig_scaling`."""
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     k2, k1 = sr.resistance
     ff = sr.form_factor
     ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (mean and s.d. over "
@@ -629,7 +630,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
 
 
 def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     tab = sr.table
     bars = []
     sel = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]

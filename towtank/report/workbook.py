@@ -40,6 +40,7 @@ import pandas as pd
 from towtank import __version__
 from towtank.report import style
 from towtank.report.safetext import clean_text
+from towtank.results import require
 
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
@@ -491,7 +492,7 @@ def _has_control(day: DayResult) -> bool:
 
 
 def _fin_curves(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.fin_result.curves)
+    w.table(require(day.fin_result, "fin").curves)
     w.gap()
     w.note("Lift slope over the linear range of each speed group with its 95 % interval, "
            "beside the same fit through the 2-D Sandia section and the finite-span "
@@ -499,7 +500,7 @@ def _fin_curves(w: SheetWriter, day: DayResult) -> None:
 
 
 def _fin_control(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.fin_result.control)
+    w.table(require(day.fin_result, "fin").control)
 
 
 def _scaling(w: SheetWriter, day: DayResult) -> None:
@@ -525,7 +526,7 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
 
 
 def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     k2, k1 = sr.resistance
     rows: list[tuple[str, Any, str]] = [
         ("scale λ", sr.scale, "-"),
@@ -568,13 +569,14 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
 
 
 def _form_factor(w: SheetWriter, day: DayResult) -> None:
-    ff = day.scaling_result.form_factor
+    sr = require(day.scaling_result, "scaling")
+    ff = require(sr.form_factor, "form factor")
     data = {"speed": ff.speeds, "runs": ff.speed_runs, "one_plus_k": ff.speed_values}
     units = {"speed": "m/s", "runs": "-", "one_plus_k": "-"}
     if len(ff.speed_reynolds) == len(ff.speeds):
         data["re"], units["re"] = ff.speed_reynolds, "-"
     w.table(pd.DataFrame(data), units=units)
-    trend = day.scaling_result.form_factor_trend
+    trend = sr.form_factor_trend
     if trend is not None and math.isfinite(trend.slope):
         w.gap()
         w.pairs([("slope d(1 + k)/dRe", trend.slope, "-"),
@@ -582,7 +584,7 @@ def _form_factor(w: SheetWriter, day: DayResult) -> None:
                  ("slope, 95 % interval high", trend.ci_high, "-"),
                  ("slope p-value", trend.p_value, "-"),
                  ("trend with Re significant", "yes" if trend.significant else "no", "")])
-        w.note(day.scaling_result.form_factor_trend_text)
+        w.note(sr.form_factor_trend_text)
 
 
 def _quality(w: SheetWriter, day: DayResult) -> None:
