@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -607,55 +607,13 @@ def vehicle_stage(protocol: Protocol, hull: HullResult | None,
 
 
 def fin_stage(protocol: Protocol, runs: pd.DataFrame) -> tuple[FinResult | None, list[str]]:
-    """The fin table and curves against the Sandia section data, and their warnings; None
-    without a [fin] or usable fin runs."""
-    fin = protocol.fin
-    sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
-    if fin is None or sel.empty:
-        return None, []
-    from towtank.analysis import fins
-    from towtank.reference import sandia
+    """The fins against the Sandia section data
+    (:func:`towtank.analysis.fin_analysis.analyse_fins`); (None, []) without a [fin]."""
+    from towtank.analysis.fin_analysis import analyse_fins
 
-    warn: list[str] = []
-    beyond = sel["angle_deg"].abs() > 180.0  # the section data stop there (ValueError)
-    for run, angle in zip(sel.loc[beyond, "run"], sel.loc[beyond, "angle_deg"], strict=True):
-        warn.append(f"run {run}: fin angle {angle:g}° is outside −180…180°, the range of the "
-                    "Sandia section data; the run is left out of the fin analysis.")
-    sel = sel[~beyond]
-    if sel.empty:
-        return None, warn
-    mounting: Literal["free", "wall"] = "wall" if fin.mounting == "wall" else "free"
-    ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, mounting))
-    linear_max = fin.linear_max_deg
-    # Sandia's Re clamp (Re outside 1e4-1e7) goes to the day's warnings, so that the report
-    # and provenance carry it; any other warning goes on as a Python warning
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        table = fins.fin_table(sel, ar, fin.oswald_e)
-        curves = fins.fin_curves(table, linear_max, aspect_ratio=ar, e=fin.oswald_e)
-    for w in caught:
-        if issubclass(w.category, sandia.SandiaRangeWarning):
-            text = f"fin: {w.message}"
-            if text not in warn:
-                warn.append(text)
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    warn += fins.low_reynolds_warnings(table)
-    warn += fins.lift_slope_warnings(curves, linear_max)
-    warn += fins.two_dimensional_warning(curves, ar)
-    control = None
-    if fin.x_m is not None and len(curves):
-        slope, source = fins.control_lift_slope(curves, linear_max)
-        if np.isfinite(slope):
-            rho = float(sel["rho"].mean())
-            control = fins.control_derivatives(slope, fin.area, fin.x_m, rho, source)
-        else:
-            warn.append(f"fin control derivatives: {source}; fin_control.csv is not written.")
-    result = FinResult(
-        table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
-        aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=list(warn),
-    )
-    return result, warn
+    if protocol.fin is None:
+        return None, []
+    return analyse_fins(runs, protocol.fin)
 
 
 def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | None

@@ -24,6 +24,7 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 
+from towtank.analysis.fin_analysis import FinResult
 from towtank.analysis.hull import SYMBOLS, UNIT, Estimate, HullFit
 from towtank.analysis.scaling import ScalingResult
 from towtank.ingest.protocol import Protocol
@@ -176,30 +177,6 @@ class HullResult:
 
     def _repr_html_(self) -> str:
         return self.summary()._repr_html_()
-
-
-@dataclass(frozen=True, repr=False)
-class FinResult:
-    """The fins of the day against the Sandia NACA 0015 section data."""
-
-    table: pd.DataFrame  # fins.csv
-    curves: pd.DataFrame  # fin_curves.csv
-    force_vs_speed: pd.DataFrame
-    aspect_ratio: float  # effective aspect ratio [-]
-    oswald_e: float  # [-]
-    control: pd.DataFrame | None  # fin_control.csv
-    warnings: list[str] = field(default_factory=list)
-
-    def to_frame(self) -> pd.DataFrame:
-        """fins.csv: one row per fin run."""
-        return self.table.copy()
-
-    def __repr__(self) -> str:
-        return (f"FinResult({len(self.table)} fin runs, {len(self.curves)} speed groups, "
-                f"AR_eff = {self.aspect_ratio:.4g}, e = {self.oswald_e:g})")
-
-    def _repr_html_(self) -> str:
-        return f"<p><b>{_esc(repr(self))}</b></p>" + self.curves.to_html(index=False)
 
 
 @dataclass(frozen=True, repr=False)
