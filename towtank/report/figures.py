@@ -43,13 +43,13 @@ from matplotlib.patches import Patch
 from towtank.report import figure_base as _base
 from towtank.report import style
 from towtank.report.tare_figure import fig_tare
-from towtank.results import require
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.axes import Axes
 
     from towtank.reduce.run import RunReduction
-    from towtank.results import DayResult
+    from towtank.results import DayResult, ScalingResult
 
 # the figures' shared basics, also reached as figures.<name> by the PDF and the tests
 _E_NUMBER = _base._E_NUMBER
@@ -537,9 +537,8 @@ def sci(x: float, digits: int = 2) -> str:
     return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
 
 
-def scaling_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_scaling`."""
-    sr = require(day.scaling_result, "scaling")
+def scaling_caption(sr: ScalingResult) -> str:
+    """Caption of :func:`fig_scaling`, from the scaling result it draws."""
     k2, k1 = sr.resistance
     ff = sr.form_factor
     ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (mean and s.d. over "
@@ -578,7 +577,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     fig = _new_figure(page)
     gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
                  title=f"Scaling to the prototype (λ = {sr.scale:g})",
-                 text=scaling_caption(day))
+                 text=scaling_caption(sr))
 
     ax_m = fig.add_subplot(gs[0, 0])
     umax = max(hi, float(tab["speed_model_froude"].max())) * 1.08
@@ -625,17 +624,18 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_title(f"Prototype ({proto.water.medium})" if proto is not None else "Prototype")
     place_legend(ax_p, fontsize=6.8)
 
-    _reynolds_panel(fig.add_subplot(gs[1, :]), day, ok_hull)
+    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
+    _reynolds_panel(fig.add_subplot(gs[1, :]), sr, near["re"])
     return fig
 
 
-def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
-    sr = require(day.scaling_result, "scaling")
+def _reynolds_panel(ax: Axes, sr: ScalingResult, model_re: pd.Series) -> None:
+    """The Reynolds ranges of the model tests (``model_re``: the hull runs' Re [-]), of the
+    form-factor runs, of the model at the Froude speeds and of the prototype."""
     tab = sr.table
     bars = []
-    sel = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
-    if sel["re"].notna().any():
-        bars.append(("model tests", float(sel["re"].min()), float(sel["re"].max()),
+    if model_re.notna().any():
+        bars.append(("model tests", float(model_re.min()), float(model_re.max()),
                      style.PALETTE[0]))
     if sr.form_factor is not None:
         bars.append(("form-factor runs", *sr.form_factor.re_range, style.PALETTE[2]))
