@@ -210,3 +210,18 @@ def test_verdicts_are_typed_and_survive_copy():
     for again in (copy.deepcopy(v), pickle.loads(pickle.dumps(v))):
         assert isinstance(again, Agreement) and again.agrees is False and again == v
     assert agreement(1.0, 1.001, 0.001, 0.0).agrees
+
+
+def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
+    """A day without hull coefficients: its summary is the runs by configuration and status,
+    its FinResult prints in one line and gives fins.csv; nothing raises for the absent stages."""
+    day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
+    assert day.hull is None and day.fin_result is not None
+    text = str(day.summary())
+    assert "fin" in text and "ok" in text and len(repr(day)) < 5000
+    assert "stages: fins" in repr(day)
+    assert repr(day.fin_result).startswith("FinResult(") and "\n" not in repr(day.fin_result)
+    pd.testing.assert_frame_equal(day.fin_result.to_frame(), day.fins)
+    assert day.coefficients.empty and list(day.coefficients.columns)[:2] == ["symbol", "value"]
+    assert isinstance(day.fin_result, towtank.FinResult)
+    assert "<table" in day._repr_html_() and "<table" in day.tare._repr_html_()

@@ -1,10 +1,10 @@
 """The report's figures, drawn only from what the day's stages computed.
 
-Each ``fig_*`` function takes the :class:`~towtank.pipeline.DayResult` and returns a
+Each ``fig_*`` function takes the :class:`~towtank.results.DayResult` and returns a
 :class:`matplotlib.figure.Figure` (or None when the day has no data for it). Nothing is fitted
 here: fit lines come from the stored parameters (``DampingFit.params``/``cov``, the
 curve-difference quadratics of :class:`~towtank.analysis.hull.AddedMassFit`, the resistance curve of
-:class:`~towtank.pipeline.ScalingResult`), and reference curves are given functions evaluated on
+:class:`~towtank.results.ScalingResult`), and reference curves are given functions evaluated on
 a grid (:func:`towtank.reference.sandia.section_coefficients`,
 :func:`towtank.analysis.fins.finite_span_coefficients`).
 
