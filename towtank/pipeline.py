@@ -290,33 +290,25 @@ def process_day(
                            protocol.sheet, air=protocol.water.is_air)
     day_warnings = list(protocol.warnings) + list(sheet.attrs.get("warnings", [])) + \
         unlisted_warnings(protocol, sheet)
-    notes = sheet.attrs.get("notes", [])
-    if notes:
-        shown = "; ".join(repr(n if len(n) <= 80 else n[:77] + "...") for n in notes[:3])
-        shown += "; ..." if len(notes) > 3 else ""
-        day_warnings.append(f"the run sheet's {len(notes)} line(s) of text among or below the "
-                            f"table are read as notes, not runs: {shown}.")
+    from towtank.analysis.daywide import (
+        group_run_warnings,
+        sheet_note_sentences,
+        temperature_sentences,
+        unit_label_sentences,
+    )
+
+    day_warnings.extend(sheet_note_sentences(sheet.attrs.get("notes", [])))
     todo, rejected = runs_to_reduce(protocol, sheet)
     reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
                                        progress=progress, debug=debug, cache_dir=cache_dir,
                                        warnings_out=day_warnings)
     tares = tare_models(protocol, sheet, reductions, day_warnings)
     apply_tares(protocol, sheet, reductions, tares, rejected)
-    from towtank.analysis.daywide import group_run_warnings, unit_label_sentences
-
     ordered = sorted(reductions.values(), key=lambda r: r.run)
     day_warnings.extend(unit_label_sentences([(r.run, r.file, r.units) for r in ordered]))
     day_warnings.extend(group_run_warnings([(r.run, r.file, w) for r in ordered
                                             for w in r.warnings]))
-    for rec in sheet.to_dict("records"):
-        temp = rec["water_temp_C"]
-        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
-            day_warnings.append(
-                f"run {rec['run']}: air temperature {temp:g} °C is outside 0–40 °C, the usual "
-                "range of a test rig in air (a unit mistake?)." if protocol.water.is_air else
-                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
-                "ITTC water properties are extrapolated (a unit mistake?)."
-            )
+    day_warnings.extend(temperature_sentences(sheet, air=protocol.water.is_air))
     runs = run_table(protocol, sheet, reductions, rejected)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
