@@ -225,3 +225,9 @@ def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
     assert day.coefficients.empty and list(day.coefficients.columns)[:2] == ["symbol", "value"]
     assert isinstance(day.fin_result, towtank.FinResult)
     assert "<table" in day._repr_html_() and "<table" in day.tare._repr_html_()
+    from towtank.report import figures
+
+    fig = figures.fig_fin_coefficients(day.fin_result)  # the result drawn, not the day
+    assert fig is not None and len(fig.axes) == 2
+    assert len(figures.fig_fin_forces(day.fin_result).axes) == len(
+        figures.fig_fin_forces(day).axes)

@@ -22,7 +22,7 @@ PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
 CAPTION_CHARS = 118  # wrap width of captions on a page-wide figure
 CAPTION_LINE_IN = 7.8 * 1.35 / 72  # height of one caption line [in]
-_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")  # two-sided 95 % normal quantile
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")  # exponents of ×10ⁿ
 
 
 # ------------------------------------------------------------------------------------ helpers

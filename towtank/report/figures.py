@@ -43,13 +43,14 @@ from matplotlib.patches import Patch
 from towtank.report import figure_base as _base
 from towtank.report import style
 from towtank.report.tare_figure import fig_tare
+from towtank.results import DayResult, FinResult
 
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.axes import Axes
 
     from towtank.reduce.run import RunReduction
-    from towtank.results import DayResult, ScalingResult
+    from towtank.results import ScalingResult
 
 # the figures' shared basics, also reached as figures.<name> by the PDF and the tests
 _E_NUMBER = _base._E_NUMBER
@@ -369,20 +370,27 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
 
 
 # ----------------------------------------------------------------------------- (c,d) fins
+def _fin_result(fins: FinResult | DayResult | None) -> FinResult | None:
+    """The fin result of ``fins``: itself, or a day's ``fin_result``."""
+    return fins.fin_result if isinstance(fins, DayResult) else fins
+
+
 @styled
-def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
+                   ) -> Figure | None:
     """Fin drag (top) and lift (bottom) against speed, one line per angle (report Figs. 14–15).
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    fins : FinResult or DayResult
+        The fin result drawn (``day.fin_result``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    if day.fin_result is None or len(day.fin_result.force_vs_speed) == 0:
+    fr = _fin_result(fins)
+    if fr is None or len(fr.force_vs_speed) == 0:
         return None
-    fv = day.fin_result.force_vs_speed
+    fv = fr.force_vs_speed
     angles = sorted(fv["angle_deg"].unique())
     # qualitative colours and a marker per angle: ten shades of one colour map cannot be told
     # apart where the lines cross
@@ -438,7 +446,8 @@ def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
 
 
 @styled
-def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = False
+                         ) -> Figure | None:
     """Fin C_L and C_D against α beside the Sandia 2-D section and the finite-span expectation.
 
     One colour per speed group; the Sandia NACA 0015 curves at the group's mean Re (solid) and
@@ -446,12 +455,12 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    fins : FinResult or DayResult
+        The fin result drawn (``day.fin_result``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    fr = day.fin_result
+    fr = _fin_result(fins)
     if fr is None or len(fr.table) == 0:
         return None
     tab = fr.table
