@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from towtank.ingest.protocol import Protocol, load_protocol, model_geometry
+from towtank.ingest.protocol import (
+    Protocol,
+    SpeedLog,
+    Water,
+    ZeroFile,
+    load_protocol,
+    model_geometry,
+)
 from towtank.ingest.runsheet import read_run_sheet, unlisted_files
 from towtank.ingest.speedlog import log_path, log_sha
 from towtank.reduce.run import (
@@ -136,7 +143,7 @@ def water_at(temperature_C: float, water_type: str, salinity: float | None,
     return float(w.rho), float(w.nu)
 
 
-def medium_at(water: Any, temperature_C: float | None = None) -> tuple[float, float]:
+def medium_at(water: Water, temperature_C: float | None = None) -> tuple[float, float]:
     """(rho [kg/m³], nu [m²/s]) of a protocol's [water] or [prototype.water] medium.
 
     ``water`` is a :class:`towtank.ingest.protocol.Water`; ``temperature_C`` [°C] a run's
@@ -319,7 +326,7 @@ def process_day(
     return analyse(day)
 
 
-def _side_files(protocol: Protocol) -> list[Any]:
+def _side_files(protocol: Protocol) -> list[SpeedLog | ZeroFile]:
     """The protocol's per-run side files: carriage log ([speed_log]), zeros file ([zeros])."""
     return [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
 
