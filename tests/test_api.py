@@ -122,3 +122,112 @@ def test_public_names():
         assert "pandas" not in sys.modules and "towtank.pipeline" not in sys.modules
     """)
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def _session() -> str:
+    """The code block of docs/api.md's "A notebook session"."""
+    text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    section = text.split("## A notebook session", 1)[1]
+    return section.split("```python\n", 1)[1].split("```", 1)[0]
+
+
+def test_the_notebook_session_of_the_docs_runs(monkeypatch, capsys):
+    """Every statement of docs/api.md's notebook session runs, from the repository's folder,
+    and gives what its comment says: the summary table, 90 % intervals inside the 95 % ones,
+    the estimate's own interval equal to the table's, and figures from the results."""
+    import ast
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    monkeypatch.chdir(ROOT)
+    code = _session()
+    names: dict[str, object] = {}
+    for node in ast.parse(code).body:  # one statement at a time, as a notebook's cells
+        exec(compile(ast.Module([node], []), "docs/api.md", "exec"), names)
+    printed = capsys.readouterr().out
+    day, ci, est = names["day"], names["ci"], names["est"]
+    assert "X_udot" in printed and "[0.025" in printed and "0.975]" in printed
+    coef = day.coefficients.set_index("symbol")
+    assert list(ci.columns) == ["lower", "upper"] and ci.index.name == "symbol"
+    wide = day.hull.conf_int()
+    assert wide["lower"].to_numpy() == pytest.approx(coef.loc[wide.index, "ci_low"].to_numpy())
+    assert (ci["lower"] > wide["lower"]).all() and (ci["upper"] < wide["upper"]).all()
+    assert est.conf_int(0.10) == pytest.approx(tuple(ci.loc["X_udot"]))
+    assert est.agreement.agrees
+    assert len(names["fig"].axes[0].lines) + len(names["fig"].axes[0].containers) > 0
+    assert len(repr(day)) < 5000 and "DataFrame" not in repr(day)
+    assert len(day._repr_html_()) < 20000 and "X_udot" in day._repr_html_()
+    # the scaling stage gives its own table: the hull's is not written into
+    assert day.hull.coefficients["prototype_value"].isna().all()
+    assert day.prototype_values["prototype_value"].notna().all()
+    assert coef["prototype_value"].to_numpy() == pytest.approx(
+        day.prototype_values.set_index("symbol").loc[coef.index, "prototype_value"].to_numpy())
+    import dataclasses
+
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        day.hull = None
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_conf_int_follows_alpha_with_the_estimates_own_dof():
+    """A 90 % interval is value ∓ t₀.₉₅(ν)·u_c: narrower than the 95 % one by t₀.₉₅/t₀.₉₇₅ at
+    each estimate's own Welch–Satterthwaite ν."""
+    import math
+
+    from scipy import stats
+
+    from towtank.analysis.hull import Estimate
+
+    e = Estimate("X_udot", -0.017, 0.0005, -0.017 - stats.t.ppf(0.975, 6) * 0.0005,
+                 -0.017 + stats.t.ppf(0.975, 6) * 0.0005, "m", 6, dof=6.0)
+    lo, hi = e.conf_int(0.10)
+    assert hi - lo == pytest.approx(2 * stats.t.ppf(0.95, 6) * 0.0005, rel=1e-12)
+    assert (lo, hi) != pytest.approx((e.ci_low, e.ci_high))
+    assert e.conf_int() == (e.ci_low, e.ci_high)
+    assert math.isinf(Estimate("x", 1.0, 0.1, 0, 2, "m", 1, dof=0.0).conf_int(0.2)[1])
+
+
+def test_namespace_and_reprs_are_short():
+    public = [n for n in dir(towtank) if not n.startswith("__")]
+    assert "Any" not in public and "annotations" not in public
+    assert set(dir(towtank)) == set(towtank.__all__)
+    assert towtank.DayResult.__module__ == "towtank.results"
+
+
+def test_verdicts_are_typed_and_survive_copy():
+    import copy
+    import pickle
+
+    from towtank.analysis.hull import Agreement, agreement
+
+    v = agreement(1.000, 1.010, 0.001, 0.0)
+    assert isinstance(v, Agreement) and not v.agrees
+    assert v.difference == pytest.approx(0.010) and v.tolerance == pytest.approx(0.002)
+    assert v == "DISAGREE: difference +0.01 kg exceeds 0.002 kg"  # the CSV's sentence
+    for again in (copy.deepcopy(v), pickle.loads(pickle.dumps(v))):
+        assert isinstance(again, Agreement) and again.agrees is False and again == v
+    assert agreement(1.0, 1.001, 0.001, 0.0).agrees
+
+
+def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
+    """A day without hull coefficients: its summary is the runs by configuration and status,
+    its FinResult prints in one line and gives fins.csv; nothing raises for the absent stages."""
+    day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
+    assert day.hull is None and day.fin_result is not None
+    text = str(day.summary())
+    assert "fin" in text and "ok" in text and len(repr(day)) < 5000
+    assert "stages: fins" in repr(day)
+    assert repr(day.fin_result).startswith("FinResult(") and "\n" not in repr(day.fin_result)
+    pd.testing.assert_frame_equal(day.fin_result.to_frame(), day.fins)
+    assert day.coefficients.empty and list(day.coefficients.columns)[:2] == ["symbol", "value"]
+    assert isinstance(day.fin_result, towtank.FinResult)
+    assert "<table" in day._repr_html_() and "<table" in day.tare._repr_html_()
+    from towtank.report import figures
+
+    fig = figures.fig_fin_coefficients(day.fin_result)  # the result drawn, not the day
+    assert fig is not None and len(fig.axes) == 2
+    assert len(figures.fig_fin_forces(day.fin_result).axes) == len(
+        figures.fig_fin_forces(day).axes)

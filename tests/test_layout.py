@@ -30,6 +30,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("reduce",),
     ("analysis",),
     ("vehicle",),
+    ("results",),
     ("pipeline",),
     ("report",),
     ("api",),

@@ -46,7 +46,7 @@ def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
     synthetic.write_protocol(fin / "p.toml", **synthetic.fin_protocol_sections(".", "out"))
     for name, folder, date in (("hull", hull, REPORT_DATE), ("fin", fin, None)):
         day = process_day(folder / "p.toml", jobs=1)
-        day.report_date = date
+        day = replace(day, report_date=date)
         out[name] = (day, write_outputs(day, folder / "out"))
     return out
 

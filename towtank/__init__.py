@@ -8,7 +8,8 @@ The subpackages are the stages of the data's path, in order::
     analysis   hull coefficients with intervals, fins against Sandia, scaling to the prototype
     report     CSV tables, workbook, PDF and figures
 
-with ``pipeline`` wiring them for a day, ``reference`` (water, Sandia, hull geometry,
+with ``pipeline`` wiring them for a day into the typed results of ``results`` (``DayResult``
+and one result per stage), ``reference`` (water, Sandia, hull geometry,
 reference coefficient sets), ``stats`` (robust and interval statistics) and ``runtime`` (cache,
 workers) beneath them, ``commands`` (the ``towtank`` command line) above, and ``testing`` (the
 synthetic-day generator) beside, never used by the others.
@@ -17,22 +18,25 @@ The public API, for scripts and notebooks (see docs/api.md)::
 
     import towtank
     day = towtank.process_day("protocols/sut2_hull.toml")
-    day.coefficients
+    print(day.hull.summary())      # the coefficient table; day.hull.conf_int(0.10)
+    day.coefficients               # coefficients.csv as a DataFrame
 
 is loaded on first use, so that ``import towtank`` stays cheap.
 """
-
-from __future__ import annotations
-
-from typing import Any
 
 __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
     "DayResult",
+    "Estimate",
+    "FinResult",
+    "HullResult",
     "ProtocolError",
     "RunError",
+    "ScalingResult",
+    "TareResult",
+    "VehicleResult",
     "load_protocol",
     "process_day",
     "read_run",
@@ -44,13 +48,19 @@ _API = {
     "load_protocol": "towtank.api",
     "read_run": "towtank.api",
     "reduce_run": "towtank.api",
-    "DayResult": "towtank.pipeline",
+    "DayResult": "towtank.results",
+    "Estimate": "towtank.results",
+    "FinResult": "towtank.results",
+    "HullResult": "towtank.results",
+    "ScalingResult": "towtank.results",
+    "TareResult": "towtank.results",
+    "VehicleResult": "towtank.results",
     "ProtocolError": "towtank.errors",
     "RunError": "towtank.errors",
 }
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     """The API's names, imported on first use (PEP 562)."""
     if name in _API:
         import importlib
@@ -62,4 +72,5 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    """The public API only (``__all__``): not the subpackages loaded, nor helpers."""
+    return sorted(__all__)

@@ -24,6 +24,7 @@ for an unusable protocol or run sheet (what the command line turns into exit sta
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -32,8 +33,8 @@ from towtank.errors import ProtocolError
 if TYPE_CHECKING:
     from towtank.ingest.protocol import Protocol
     from towtank.ingest.runfile import RawRun
-    from towtank.pipeline import DayResult
     from towtank.reduce.run import RunReduction
+    from towtank.results import DayResult
 
 
 def load_protocol(path: str | Path) -> Protocol:
@@ -122,7 +123,7 @@ def process_day(
         cache_dir=Path(out_dir) / ".cache" if out_dir is not None and cache else None,
     )
     if date is not None:
-        day.report_date = date
+        day = replace(day, report_date=date)
     if out_dir is not None:
         from towtank.ingest.protocol import check_output_dir
         from towtank.report import write_outputs

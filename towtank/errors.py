@@ -30,7 +30,3 @@ class RunError(TowtankError):
             who.append(f"run {self.run}")
         head = ": ".join(filter(None, [", ".join(who), self.file]))
         return f"{head}: {self.reason}" if head else self.reason
-
-    def for_run(self, run: int, file: str) -> RunError:
-        """The same reason, attributed to ``run`` and ``file``."""
-        return RunError(self.reason, run=run, file=file)

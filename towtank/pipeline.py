@@ -10,29 +10,37 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from towtank.ingest.protocol import Protocol, load_protocol, model_geometry
+from towtank.ingest.protocol import (
+    Protocol,
+    SpeedLog,
+    Water,
+    ZeroFile,
+    load_protocol,
+    model_geometry,
+)
 from towtank.ingest.runsheet import read_run_sheet, unlisted_files
 from towtank.ingest.speedlog import log_path, log_sha
 from towtank.reduce.run import (
     RunReduction,
     apply_tare,
     crashed_record,
-    force_coefficient,
     reduce_record,
 )
 from towtank.reduce.tare import TareModel, fit_tare_group
 from towtank.reference.sets import BUILTIN_REFERENCES
+from towtank.results import DayResult, FinResult, HullResult, ScalingResult, VehicleResult
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 from towtank.runtime.pause import pause_at
 
-G = 9.80665
+__all__ = ["DayResult", "FinResult", "HullResult", "ScalingResult", "VehicleResult",
+           "process_day"]
 
 #: What the fitting stages import: loaded while the workers reduce the runs.
 ANALYSIS_MODULES = (
@@ -46,59 +54,6 @@ ANALYSIS_MODULES = (
     "towtank.reference.water",
     "towtank.reference.air",
 )
-
-
-@dataclass
-class DayResult:
-    """Everything computed for a day; the report stage only formats it."""
-
-    protocol: Protocol
-    sheet: pd.DataFrame
-    reductions: dict[int, RunReduction]
-    rejected: dict[int, str]
-    tares: dict[str, TareModel]
-    runs: pd.DataFrame
-    warnings: list[str] = field(default_factory=list)
-    hull: Any = None  # HullResult: .fit (towtank.analysis.hull.HullFit), .coefficients
-    fin_result: Any = None  # FinResult: table, curves, control, aspect ratio
-    scaling_result: Any = None  # ScalingResult: table, scale, prototype water, form factor
-    inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
-    report_date: str | None = None
-    # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
-    previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
-    vehicle: Any = None  # towtank.vehicle.stage.VehiclePrediction of a [vehicle] section
-
-    @property
-    def n_rejected(self) -> int:
-        """Number of rejected runs."""
-        return len(self.rejected)
-
-    @property
-    def coefficients(self) -> pd.DataFrame:
-        """coefficients.csv of the day: one row per hull coefficient (empty without hull runs)."""
-        if self.hull is not None:
-            return self.hull.coefficients
-        from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
-
-        return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
-
-    @property
-    def fins(self) -> pd.DataFrame:
-        """fins.csv of the day: one row per fin run (empty without fin runs)."""
-        if self.fin_result is not None:
-            return self.fin_result.table
-        from towtank.analysis.fins import FIN_TABLE_COLUMNS
-
-        return pd.DataFrame(columns=list(FIN_TABLE_COLUMNS))
-
-    @property
-    def scaling(self) -> pd.DataFrame:
-        """scaling.csv of the day: one row per prototype speed (empty when not scaled)."""
-        if self.scaling_result is not None:
-            return self.scaling_result.table
-        from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
-
-        return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
 
 
 def fit_tares(
@@ -188,7 +143,7 @@ def water_at(temperature_C: float, water_type: str, salinity: float | None,
     return float(w.rho), float(w.nu)
 
 
-def medium_at(water: Any, temperature_C: float | None = None) -> tuple[float, float]:
+def medium_at(water: Water, temperature_C: float | None = None) -> tuple[float, float]:
     """(rho [kg/m³], nu [m²/s]) of a protocol's [water] or [prototype.water] medium.
 
     ``water`` is a :class:`towtank.ingest.protocol.Water`; ``temperature_C`` [°C] a run's
@@ -244,10 +199,6 @@ def check_prototype_speeds(protocol: Protocol) -> None:
         ) from None
 
 
-#: A hull run within this of α = 90° is a transverse tow [deg] (the hull fit's angle tolerance):
-#: its drag coefficient is on the lateral area, as C_D,90 of Y_v|v|.
-TRANSVERSE_TOL_DEG = 0.5
-
 RUN_COLUMNS = [
     "run", "file", "config", "angle_deg", "status", "reason", "speed_mean", "accel_mean",
     "drag_mean", "lift_mean", "tare_drag", "cd", "cl", "re", "fn",
@@ -268,7 +219,11 @@ def run_table(
     reductions: dict[int, RunReduction],
     rejected: dict[int, str],
 ) -> pd.DataFrame:
-    """runs.csv: one row per run of the sheet (docs/formats.md §5), then extension columns."""
+    """runs.csv: one row per run of the sheet (docs/formats.md §5), then extension columns;
+    each usable run's coefficients from
+    :func:`towtank.analysis.run_coefficients.run_coefficients`."""
+    from towtank.analysis.run_coefficients import run_coefficients
+
     rows = []
     model, fin = protocol.model, protocol.fin
     for rec in sheet.to_dict("records"):
@@ -302,29 +257,8 @@ def run_table(
                 w = red.windows.get(name)
                 if w is not None:
                     row[f"{name}_start_s"], row[f"{name}_end_s"] = w
-            ref_len = None
-            if rec["config"] == "hull" and model is not None:
-                area, ref_len = model.frontal_area, model.length_m
-                row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
-                row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
-                row["cd_lateral"] = force_coefficient(red.drag_mean, rho, model.lateral_area, u)
-                if abs(float(rec["angle_deg"]) - 90.0) <= TRANSVERSE_TOL_DEG:  # a transverse tow
-                    row.update(cd_ref=row["cd_lateral"], ref_area="lateral",
-                               ref_area_m2=model.lateral_area)
-                else:
-                    row.update(cd_ref=row["cd"], ref_area="frontal", ref_area_m2=area)
-            elif rec["config"] == "fin" and fin is not None:
-                area, ref_len = fin.area, fin.chord_m
-                row["cd"] = force_coefficient(red.drag_mean, rho, area, u)
-                row["cl"] = force_coefficient(red.lift_mean, rho, area, u)
-                row.update(cd_ref=row["cd"], ref_area="fin", ref_area_m2=area)
-            elif model is not None:
-                ref_len = model.length_m
-            elif fin is not None:
-                ref_len = fin.chord_m
-            if ref_len:
-                row["re"] = u * ref_len / nu
-                row["fn"] = u / math.sqrt(G * ref_len)
+            row.update(run_coefficients(str(rec["config"]), float(rec["angle_deg"]),
+                                        red.drag_mean, red.lift_mean, u, rho, nu, model, fin))
         rows.append(row)
     df = pd.DataFrame(rows, columns=RUN_COLUMNS + EXTRA_COLUMNS)
     extra = [c for c in sheet.columns if c not in df.columns and c not in ("sheet_row",
@@ -363,33 +297,25 @@ def process_day(
                            protocol.sheet, air=protocol.water.is_air)
     day_warnings = list(protocol.warnings) + list(sheet.attrs.get("warnings", [])) + \
         unlisted_warnings(protocol, sheet)
-    notes = sheet.attrs.get("notes", [])
-    if notes:
-        shown = "; ".join(repr(n if len(n) <= 80 else n[:77] + "...") for n in notes[:3])
-        shown += "; ..." if len(notes) > 3 else ""
-        day_warnings.append(f"the run sheet's {len(notes)} line(s) of text among or below the "
-                            f"table are read as notes, not runs: {shown}.")
+    from towtank.analysis.daywide import (
+        group_run_warnings,
+        sheet_note_sentences,
+        temperature_sentences,
+        unit_label_sentences,
+    )
+
+    day_warnings.extend(sheet_note_sentences(sheet.attrs.get("notes", [])))
     todo, rejected = runs_to_reduce(protocol, sheet)
     reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
                                        progress=progress, debug=debug, cache_dir=cache_dir,
                                        warnings_out=day_warnings)
     tares = tare_models(protocol, sheet, reductions, day_warnings)
     apply_tares(protocol, sheet, reductions, tares, rejected)
-    from towtank.analysis.daywide import group_run_warnings, unit_label_sentences
-
     ordered = sorted(reductions.values(), key=lambda r: r.run)
     day_warnings.extend(unit_label_sentences([(r.run, r.file, r.units) for r in ordered]))
     day_warnings.extend(group_run_warnings([(r.run, r.file, w) for r in ordered
                                             for w in r.warnings]))
-    for rec in sheet.to_dict("records"):
-        temp = rec["water_temp_C"]
-        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
-            day_warnings.append(
-                f"run {rec['run']}: air temperature {temp:g} °C is outside 0–40 °C, the usual "
-                "range of a test rig in air (a unit mistake?)." if protocol.water.is_air else
-                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
-                "ITTC water properties are extrapolated (a unit mistake?)."
-            )
+    day_warnings.extend(temperature_sentences(sheet, air=protocol.water.is_air))
     runs = run_table(protocol, sheet, reductions, rejected)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
@@ -397,11 +323,10 @@ def process_day(
         previews=previews,
     )
     check_prototype_speeds(protocol)
-    _analyse(day)
-    return day
+    return analyse(day)
 
 
-def _side_files(protocol: Protocol) -> list[Any]:
+def _side_files(protocol: Protocol) -> list[SpeedLog | ZeroFile]:
     """The protocol's per-run side files: carriage log ([speed_log]), zeros file ([zeros])."""
     return [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
 
@@ -484,9 +409,10 @@ def reduce_runs(
             path = protocol.campaign.data_dir / str(rec["file"])
             known = cache.known_file(path)
             hit = cache.get(known[0], keys[run]) if known is not None else None
-            if hit is not None and (hit.sha256 != known[0] or hit.file != str(rec["file"])):
+            if hit is not None and known is not None and (
+                    hit.sha256 != known[0] or hit.file != str(rec["file"])):
                 hit = None  # an entry that is not this file's reduction: a miss
-            if hit is not None:  # its stamp: the file as the cached reduction read it
+            if hit is not None and known is not None:  # its stamp: the file as it was read
                 reductions[run] = replace(hit, run=run, file_stamp=known[1])
                 continue
         to_reduce.append(rec)
@@ -592,284 +518,142 @@ def _sha(path: Path) -> str:
         return ""
 
 
-def _analyse(day: DayResult) -> None:
-    """The fitting stages: hull coefficients, fins, similarity (each on the reduced runs)."""
+def analyse(day: DayResult) -> DayResult:
+    """The fitting stages on the reduced runs, in order: hull coefficients, fins, scaling,
+    vehicle. Each stage returns its result and its warnings; a stage's TowtankError becomes a
+    warning of the day. Returns the day with the results (the given day is not changed)."""
     from towtank.errors import TowtankError
 
     pause_at("fits")  # a test hook (towtank.runtime.pause); returns at once otherwise
-    for stage in (_hull_stage, _fin_stage, _scaling_stage, _vehicle_stage):
-        try:
-            stage(day)
-        except TowtankError as exc:
-            day.warnings.append(str(exc))
+    warns = list(day.warnings)
+    p, runs = day.protocol, day.runs
+    hull = fin = scaling = vehicle = None
+    prototype = None
+    try:
+        hull, more = hull_stage(p, runs, day.reductions, day.tares)
+        warns += more
+    except TowtankError as exc:
+        warns.append(str(exc))
+    try:
+        fin, more = fin_stage(p, runs)
+        warns += more
+    except TowtankError as exc:
+        warns.append(str(exc))
+    try:
+        scaling, prototype, more = scaling_stage(p, runs, hull)
+        warns += more
+    except TowtankError as exc:
+        warns.append(str(exc))
+    try:
+        vehicle = vehicle_stage(p, hull, prototype)
+        warns += list(vehicle.warnings) if vehicle is not None else []
+    except TowtankError as exc:
+        warns.append(str(exc))
+    return replace(day, warnings=warns, hull=hull, fin_result=fin, scaling_result=scaling,
+                   vehicle=vehicle, prototype_values=prototype)
 
 
-@dataclass
-class HullResult:
-    fit: Any  # towtank.analysis.hull.HullFit
-    coefficients: pd.DataFrame
-
-
-@dataclass
-class FinResult:
-    table: pd.DataFrame  # fins.csv
-    curves: pd.DataFrame
-    force_vs_speed: pd.DataFrame
-    aspect_ratio: float
-    oswald_e: float
-    control: pd.DataFrame | None
-    warnings: list[str]
-
-
-@dataclass
-class ScalingResult:
-    table: pd.DataFrame  # scaling.csv
-    resistance: tuple[float, float]  # k2 [N s²/m²], k1 [N s/m] of R = k2·U|U| + k1·U
-    tested_speed_range: tuple[float, float]
-    form_factor: Any  # towtank.analysis.similarity.FormFactor or None
-    statement: str
-    rho_p: float
-    nu_p: float
-    rho_m: float
-    nu_m: float
-    scale: float
-    length_prototype: float = math.nan  # [m]
-    wetted_area_prototype: float | None = None  # λ²·S_m [m²], None when S_m is not known
-    delta_cf: float = 0.0
-    #: towtank.analysis.similarity.ResistanceRecommendation: which column is R_p, and why
-    recommendation: Any = None
-    #: towtank.analysis.similarity.FormFactorTrend of 1 + k against Re (None without 1 + k)
-    form_factor_trend: Any = None
-    form_factor_trend_text: str = ""
-
-
-def _hull_stage(day: DayResult) -> None:
+def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction],
+               tares: dict[str, TareModel]) -> tuple[HullResult | None, list[str]]:
+    """The hull coefficients (:func:`towtank.analysis.hull.fit_hull`) and their warnings; None
+    without a [model] or usable hull runs."""
     from towtank.analysis import hull as fit
+    from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
 
-    model = day.protocol.model
-    runs = day.runs
+    model = protocol.model
     if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
-        return
+        return None, []
     hf = fit.fit_hull(
         runs,
-        day.reductions,
+        reductions,
         mass=model.mass_kg,
         mass_sd=model.mass_uncertainty_kg,
         length=model.length_m,
         frontal_area=model.frontal_area,
         lateral_area=model.lateral_area,
-        alpha_max_deg=day.protocol.processing.damping_alpha_max_deg,
-        tares=day.tares,
-        rho=medium_at(day.protocol.water)[0],
+        alpha_max_deg=protocol.processing.damping_alpha_max_deg,
+        tares=tares,
+        rho=medium_at(protocol.water)[0],
     )
-    ref = fit.load_reference(day.protocol.campaign.reference)
+    ref = fit.load_reference(protocol.campaign.reference)
     table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
-    day.hull = HullResult(fit=hf, coefficients=table)
-    day.warnings.extend(hf.messages)
-    from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
-
-    day.warnings.extend(plausibility_warnings(
+    warns = list(hf.messages)
+    warns += plausibility_warnings(
         table, rho=hf.rho,
         volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
         frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
-        added_mass=not day.protocol.water.is_air,
-    ))
-    for sym, am in hf.added_mass.items():
-        if am.estimate.agreement.startswith("DISAGREE"):
-            day.warnings.append(
-                f"{sym}: the curve-difference estimate {am.estimate.alt_value:.4g} kg and the "
-                f"joint regression {am.estimate.value:.4g} kg disagree "
-                f"({am.estimate.agreement[10:]})."
-            )
-    if hf.damping is not None and hf.damping.outliers:
-        dm = hf.damping
-        t = dm.runs.set_index("run")
-        flagged = ", ".join(
-            f"{r} (studentized residual {t.loc[r, 'student']:+.3g}, Cook's distance "
-            f"{t.loc[r, 'cooks']:.2g})" for r in dm.outliers)
-        one = len(dm.outliers) == 1
-        day.warnings.append(
-            f"C_D(α) fit: {'run' if one else 'runs'} {flagged} "
-            f"{'is' if one else 'are'} flagged as {'an outlier' if one else 'outliers'} "
-            f"(|studentized residual| > 3 or Cook's distance > {max(4.0 / len(t), 0.5):.2g}); "
-            f"{'it is' if one else 'they are'} still in the fit: check "
-            f"{'it' if one else 'them'} before trusting X_u|u|, X_uv, X_v|v| and Y_uv."
-        )
+        added_mass=not protocol.water.is_air,
+    )
+    warns += fit.hull_warnings(hf)
+    return HullResult(fit=hf, coefficients=table, warnings=tuple(warns)), warns
 
 
-def _vehicle_stage(day: DayResult) -> None:
+def vehicle_stage(protocol: Protocol, hull: HullResult | None,
+                  prototype_values: pd.DataFrame | None = None) -> VehicleResult | None:
     """Prediction and model of the protocol's [vehicle]; predicted beside measured."""
-    if getattr(day.protocol, "vehicle", None) is None:
-        return
+    if getattr(protocol, "vehicle", None) is None:
+        return None
     from towtank.vehicle.compare import day_vehicle
 
-    day.vehicle, table, warnings = day_vehicle(
-        day.protocol, day.hull.coefficients if day.hull is not None else None)
-    if table is not None:
-        day.hull.coefficients = table
-    day.warnings.extend(warnings)
+    measured = None
+    if hull is not None:
+        measured = hull.coefficients
+        if prototype_values is not None:  # coefficients.csv as the scaling stage leaves it
+            measured = measured.copy()
+            measured["prototype_value"] = prototype_values["prototype_value"].to_numpy()
+    prediction, table, warns = day_vehicle(protocol, measured)
+    return VehicleResult(prediction=prediction, coefficients=table, warnings=tuple(warns))
 
 
-def _fin_stage(day: DayResult) -> None:
-    fin = day.protocol.fin
-    runs = day.runs
-    sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
-    if fin is None or sel.empty:
-        return
-    from towtank.analysis import fins
-    from towtank.reference import sandia
+def fin_stage(protocol: Protocol, runs: pd.DataFrame) -> tuple[FinResult | None, list[str]]:
+    """The fins against the Sandia section data
+    (:func:`towtank.analysis.fin_analysis.analyse_fins`); (None, []) without a [fin]."""
+    from towtank.analysis.fin_analysis import analyse_fins
 
-    warn: list[str] = []
-    beyond = sel["angle_deg"].abs() > 180.0  # the section data stop there (ValueError)
-    for run, angle in zip(sel.loc[beyond, "run"], sel.loc[beyond, "angle_deg"], strict=True):
-        warn.append(f"run {run}: fin angle {angle:g}° is outside −180…180°, the range of the "
-                    "Sandia section data; the run is left out of the fin analysis.")
-    sel = sel[~beyond]
-    if sel.empty:
-        day.warnings.extend(warn)
-        return
-    ar = float(fins.effective_aspect_ratio(fin.span_m, fin.chord_m, fin.mounting))
-    linear_max = fin.linear_max_deg
-    # Sandia's Re clamp (Re outside 1e4-1e7) goes to the day's warnings, so that the report
-    # and provenance carry it; any other warning goes on as a Python warning
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        table = fins.fin_table(sel, ar, fin.oswald_e)
-        curves = fins.fin_curves(table, linear_max, aspect_ratio=ar, e=fin.oswald_e)
-    for w in caught:
-        if issubclass(w.category, sandia.SandiaRangeWarning):
-            text = f"fin: {w.message}"
-            if text not in warn:
-                warn.append(text)
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    warn += fins.low_reynolds_warnings(table)
-    warn += fins.lift_slope_warnings(curves, linear_max)
-    warn += fins.two_dimensional_warning(curves, ar)
-    control = None
-    if fin.x_m is not None and len(curves):
-        slope, source = fins.control_lift_slope(curves, linear_max)
-        if np.isfinite(slope):
-            rho = float(sel["rho"].mean())
-            control = fins.control_derivatives(slope, fin.area, fin.x_m, rho, source)
-        else:
-            warn.append(f"fin control derivatives: {source}; fin_control.csv is not written.")
-    day.fin_result = FinResult(
-        table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
-        aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=warn,
-    )
-    day.warnings.extend(warn)
+    if protocol.fin is None:
+        return None, []
+    return analyse_fins(runs, protocol.fin)
 
 
-def _scaling_stage(day: DayResult) -> None:
-    from statsmodels.regression.linear_model import OLS
+def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | None
+                  ) -> tuple[ScalingResult | None, pd.DataFrame | None, list[str]]:
+    """Scaling to the [prototype] (:func:`towtank.analysis.scaling.scale_to_prototype`) and
+    the hull coefficients' prototype values (:func:`towtank.analysis.scaling.prototype_values`);
+    (None, None, []) without a [model] and a [prototype]."""
+    from towtank.analysis import scaling
 
-    from towtank.analysis import similarity
-
-    p = day.protocol
-    model, proto = p.model, p.prototype
+    model, proto = protocol.model, protocol.prototype
     if model is None or proto is None:
-        return
-    scale = model_scale(p)
+        return None, None, []
+    scale = model_scale(protocol)
     assert scale is not None
     rho_p, nu_p = medium_at(proto.water)
-    rho_m, nu_m = medium_at(p.water)
-    if day.hull is not None:
-        coef = day.hull.coefficients
-        kinds = coef["symbol"].map(lambda s: "added_mass" if s.endswith("dot") else "damping")
-        coef["prototype_value"] = [
-            float(similarity.prototype_value(pr, rho_p, proto.length_m, k))
-            for pr, k in zip(coef["prime"], kinds, strict=True)
-        ]
-    runs = day.runs
-    zero = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
-                & (np.abs(runs["angle_deg"]) <= 0.5)]
-    if len(zero) < 2:
-        day.warnings.append(
-            "scaling.csv needs two or more steady hull runs at α = 0 for the resistance curve."
-        )
-        return
-    u = zero["speed_mean"].to_numpy(float)
-    r = zero["drag_mean"].to_numpy(float)
-    res = OLS(r, np.column_stack([u * np.abs(u), u])).fit()
-    k2, k1 = (float(v) for v in res.params)
-    ff = None
-    one_plus_k = math.nan
-    if model.wetted_area_m2 is not None:
-        try:
-            ff = similarity.form_factor(
-                r, u, model.wetted_area_m2, float(zero["rho"].mean()),
-                float(zero["nu"].mean()), model.length_m, re_min=p.processing.laminar_re,
-            )
-            one_plus_k = float(ff.one_plus_k)
-        except ValueError as exc:
-            day.warnings.append(f"form factor: {exc}")
-    else:
-        day.warnings.append(
-            "drag_ittc57 needs the model's wetted area ([model] wetted_area_m2 or a Myring "
-            "description); it is left empty and no form factor is found."
-        )
-    table = similarity.scaling_table(
-        np.asarray(proto.speeds_m_s),
-        scale=scale,
-        length_model=model.length_m,
-        length_prototype=proto.length_m,
-        rho_m=rho_m, nu_m=nu_m, rho_p=rho_p, nu_p=nu_p,
-        resistance_model=lambda um: k2 * um * abs(um) + k1 * um,
-        tested_speed_range=(float(u.min()), float(u.max())),
-        wetted_area_model=model.wetted_area_m2,
-        one_plus_k=one_plus_k,
-        delta_cf=proto.delta_cf,
+    rho_m, nu_m = medium_at(protocol.water)
+    values = (scaling.prototype_values(hull.coefficients, rho_p, proto.length_m)
+              if hull is not None else None)
+    result, warns = scaling.scale_to_prototype(
+        runs, model, proto, scale=scale, rho_m=rho_m, nu_m=nu_m, rho_p=rho_p, nu_p=nu_p,
+        laminar_re=protocol.processing.laminar_re,
+        damping_alpha_max_deg=protocol.processing.damping_alpha_max_deg,
+        free_surface=not protocol.water.is_air,
     )
-    hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
-                     & (np.abs(runs["angle_deg"]) <= p.processing.damping_alpha_max_deg)]
-    # a run towed backwards (negative speed) has no Reynolds range of its own to compare
-    re_ok = hull_runs["re"][np.isfinite(hull_runs["re"]) & (hull_runs["re"] > 0)]
-    if len(re_ok) == 0:  # only backward tows: their size is the Reynolds number
-        re_ok = np.abs(zero["re"])[np.isfinite(zero["re"]) & (zero["re"] != 0)]
-    re_model = (float(re_ok.min()), float(re_ok.max()))
-    re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
-    air = p.water.is_air  # no free surface: no waves, no depth, no Froude similarity
-    depth = model.depth_m if model.diameter_m is not None and not air else None
-    statement = similarity.similarity_statement(
-        re_model, re_proto, depth, model.diameter_m if depth is not None else None,
-        turbulent_re=p.processing.laminar_re, free_surface=not air,
-    )
-    deep_ratio = depth / model.diameter_m if depth is not None and model.diameter_m else None
-    recommendation = similarity.recommend_resistance(
-        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()), free_surface=not air)
-    table["drag_recommended"] = (table[recommendation.column] if recommendation.column in table
-                                 else math.nan)
-    table["recommended"] = recommendation.column
-    trend, trend_text = None, ""
-    if ff is not None:
-        trend = similarity.form_factor_trend(ff.speed_reynolds, ff.speed_values)
-        trend_text = similarity.form_factor_trend_statement(trend, ff.one_plus_k)
-    day.scaling_result = ScalingResult(
-        recommendation=recommendation, form_factor_trend=trend,
-        form_factor_trend_text=trend_text,
-        table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
-        form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
-        scale=scale, length_prototype=proto.length_m,
-        wetted_area_prototype=(model.wetted_area_m2 * scale**2
-                               if model.wetted_area_m2 is not None else None),
-        delta_cf=proto.delta_cf,
-    )
-    outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
-    deep = air or (depth is not None and model.diameter_m is not None
-                   and depth / model.diameter_m > similarity.DEEP_SUBMERGENCE_DEPTH_RATIO)
-    if outside and not deep:  # deeply submerged, Froude scaling is not what counts
-        day.warnings.append(
-            "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "
-            "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s" + (
-                " (the model ran near the surface, where Froude similarity is needed)."
-                if depth is not None else
-                " (give [model] depth_m: deeply submerged, Froude similarity is not needed).")
-        )
-    laminar = table.loc[table["re_prototype"] < p.processing.laminar_re, "speed_prototype"]
-    if len(laminar):
-        day.warnings.append(
-            "prototype speeds " + ", ".join(f"{v:g}" for v in laminar) + " m/s give Re below "
-            f"{p.processing.laminar_re:g} ([processing] laminar_re), where the flow need not be "
-            "turbulent: the ITTC-57 drag there is indicative only."
-        )
+    return result, values, warns
+
+
+# The in-place forms of the stages, for scripts written against them: each sets its result
+# and adds its warnings on the object given (a DayResult, or any object with those fields).
+def _set(day: Any, **values: Any) -> None:
+    for name, value in values.items():
+        object.__setattr__(day, name, value)
+
+
+def _hull_stage(day: Any) -> None:
+    hull, warns = hull_stage(day.protocol, day.runs, day.reductions, day.tares)
+    _set(day, hull=hull)
+    day.warnings.extend(warns)
+
+
+def _fin_stage(day: Any) -> None:
+    fin, warns = fin_stage(day.protocol, day.runs)
+    _set(day, fin_result=fin)
+    day.warnings.extend(warns)

@@ -15,7 +15,7 @@ from typing import Any
 import pandas as pd
 
 __all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
-           "unit_label_sentences",
+           "unit_label_sentences", "sheet_note_sentences", "temperature_sentences",
            "run_ranges", "own_reason", "and_list", "MIN_GROUP"]
 
 #: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
@@ -204,3 +204,30 @@ def _unknown_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, st
 def and_list(names: list[str]) -> str:
     """``a``, ``a and b``, ``a, b and c``."""
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def sheet_note_sentences(notes: list[str]) -> list[str]:
+    """One sentence for the run sheet's lines of text read as notes (the first three shown,
+    each cut at 80 characters); none without notes."""
+    if not notes:
+        return []
+    shown = "; ".join(repr(n if len(n) <= 80 else n[:77] + "...") for n in notes[:3])
+    shown += "; ..." if len(notes) > 3 else ""
+    return [f"the run sheet's {len(notes)} line(s) of text among or below the table are read "
+            f"as notes, not runs: {shown}."]
+
+
+def temperature_sentences(sheet: pd.DataFrame, *, air: bool = False) -> list[str]:
+    """A sentence per run (void ones aside) whose temperature lies outside 0–40 °C [°C]:
+    outside the ITTC water properties' range in water, the usual range of a rig in air."""
+    out = []
+    for rec in sheet.to_dict("records"):
+        temp = rec["water_temp_C"]
+        if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
+            out.append(
+                f"run {rec['run']}: air temperature {temp:g} °C is outside 0–40 °C, the usual "
+                "range of a test rig in air (a unit mistake?)." if air else
+                f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
+                "ITTC water properties are extrapolated (a unit mistake?)."
+            )
+    return out

@@ -32,6 +32,7 @@ import numpy.typing as npt
 import pandas as pd
 
 from towtank.reference import sandia
+from towtank.stats import grouping
 
 __all__ = [
     "FIN_COLUMNS",
@@ -49,6 +50,7 @@ __all__ = [
     "lift_slope_warnings",
     "low_reynolds_warnings",
     "section_stall_angle",
+    "attached_flow",
     "speed_groups",
 ]
 
@@ -427,12 +429,47 @@ def section_stall_angle(reynolds: npt.ArrayLike) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 
 
-def speed_groups(speed_mean: npt.ArrayLike, rel_tol: float = 0.05) -> np.ndarray:
-    """Group runs by nominal carriage speed.
+def attached_flow(alpha_deg: npt.ArrayLike, cl_3d: npt.ArrayLike, reynolds: npt.ArrayLike,
+                  aspect_ratio: float, e: float = 1.0) -> np.ndarray:
+    """Where lifting-line theory holds: the effective angle is at or below the section's stall.
 
-    Sorted speeds are chained into one group while each is within ``rel_tol`` of the previous
-    one (single linkage: a gap larger than ``rel_tol`` times the smaller speed starts a new
-    group). A group's label is its mean speed rounded to 0.01 m/s.
+    |α − α_i| ≤ α_stall(Re), α_i = C_L,3D/(π·e·AR) [rad] (Anderson [1]_ section 5.3) and
+    α_stall the 2-D section's stall angle (:func:`section_stall_angle`). Past it the
+    self-consistent solution jumps between branches, so no finite-span value is given there.
+    The one home of the attached-flow mask (the fin table and the report's curves).
+
+    Parameters
+    ----------
+    alpha_deg : array_like
+        Geometric angle of attack [deg].
+    cl_3d : array_like
+        Finite-span lift coefficient at that angle [-] (:func:`finite_span_coefficients`).
+    reynolds : array_like
+        Reynolds number on the chord [-].
+    aspect_ratio : float
+        Effective aspect ratio [-].
+    e : float, default 1
+        Oswald span efficiency [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        True where the flow is attached (False where Re or C_L is NaN).
+    """
+    alpha = np.asarray(alpha_deg, dtype=float)
+    effective = alpha - np.rad2deg(np.asarray(cl_3d, dtype=float) / (np.pi * e * aspect_ratio))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sandia.SandiaRangeWarning)  # said by the table
+        stall = section_stall_angle(np.broadcast_to(np.asarray(reynolds, dtype=float),
+                                                    alpha.shape))
+    return np.asarray(np.abs(effective) <= stall)
+
+
+def speed_groups(speed_mean: npt.ArrayLike, rel_tol: float = 0.05) -> np.ndarray:
+    """Group runs by nominal carriage speed, labelled by the group's mean speed.
+
+    The groups are :func:`towtank.stats.grouping.speed_groups` (single linkage on the sorted
+    speeds); a group's label is its mean speed rounded to 0.01 m/s.
 
     Parameters
     ----------
@@ -448,15 +485,9 @@ def speed_groups(speed_mean: npt.ArrayLike, rel_tol: float = 0.05) -> np.ndarray
     """
     speed = np.asarray(speed_mean, dtype=float).ravel()
     labels = np.full(speed.shape, np.nan)
-    idx = np.flatnonzero(np.isfinite(speed))
-    if idx.size == 0:
-        return labels
-    order = idx[np.argsort(speed[idx], kind="stable")]
-    sorted_speed = speed[order]
-    gaps = np.diff(sorted_speed) > rel_tol * np.abs(sorted_speed[:-1])
-    group_id = np.concatenate([[0], np.cumsum(gaps)])
-    for g in np.unique(group_id):
-        members = order[group_id == g]
+    groups = grouping.speed_groups(speed, rel_tol)
+    for g in np.unique(groups[groups >= 0]):
+        members = groups == g
         labels[members] = round(float(np.mean(speed[members])), 2)
     return labels
 
@@ -500,11 +531,7 @@ def fin_table(runs: pd.DataFrame, aspect_ratio: float, e: float = 1.0) -> pd.Dat
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sandia.SandiaRangeWarning)  # already said once
         cl3d, cd3d = finite_span_coefficients(alpha, re, aspect_ratio, e)
-        stall = section_stall_angle(re)
-    # lifting-line theory holds for attached flow only: past the section's stall the
-    # self-consistent solution jumps between branches, so no finite-span value is given there
-    effective = alpha - np.rad2deg(cl3d / (np.pi * e * aspect_ratio))
-    attached = np.abs(effective) <= stall
+        attached = attached_flow(alpha, cl3d, re, aspect_ratio, e)
     cl3d = np.where(attached, cl3d, np.nan)
     cd3d = np.where(attached, cd3d, np.nan)
     out["cl_sandia"] = cl2d

@@ -28,7 +28,7 @@ missing; nothing is ever extrapolated into a value.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -37,6 +37,7 @@ import pandas as pd
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
 from towtank.reduce.tare import TareModel, tare_design
 from towtank.stats.intervals import bm_dof, cr2_covariance, welch_satterthwaite
+from towtank.stats.quantiles import interval, normal_quantile, t95
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -46,13 +47,62 @@ KIND = {s: ("added_mass" if s.endswith("dot") else "damping") for s in SYMBOLS}
 UNIT = {s: ("kg" if KIND[s] == "added_mass" else "kg/m") for s in SYMBOLS}
 MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv",
           "Z_w|w|": "Y_v|v|"}
-Z95 = 1.959963984540054
 ANGLE_TOL_DEG = 0.5
 
 
-@dataclass
+class Agreement(str):
+    """The verdict of two estimates of one added mass: do they agree, by how much, within what.
+
+    A typed verdict (``agrees``, ``difference`` [kg], ``tolerance`` [kg]) that reads as its
+    sentence, "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds … kg",
+    the agreement column of coefficients.csv; nothing parses the sentence back.
+    """
+
+    agrees: bool
+    difference: float
+    tolerance: float
+
+    def __new__(cls, agrees: bool, difference: float, tolerance: float) -> Agreement:
+        text = f"{cls._verdict(agrees)}: {cls._detail(agrees, difference, tolerance)}"
+        self = super().__new__(cls, text)
+        self.agrees = bool(agrees)
+        self.difference, self.tolerance = float(difference), float(tolerance)
+        return self
+
+    def __getnewargs__(self) -> tuple[bool, float, float]:  # type: ignore[override]
+        return self.agrees, self.difference, self.tolerance  # copy and pickle rebuild it
+
+    @staticmethod
+    def _verdict(agrees: bool) -> str:
+        return "agree" if agrees else "DISAGREE"
+
+    @staticmethod
+    def _detail(agrees: bool, difference: float, tolerance: float) -> str:
+        word = "within" if agrees else "exceeds"
+        return f"difference {difference:+.2g} kg {word} {tolerance:.2g} kg"
+
+    @property
+    def verdict(self) -> str:
+        """"agree" or "DISAGREE"."""
+        return self._verdict(self.agrees)
+
+    @property
+    def detail(self) -> str:
+        """"difference … kg within/exceeds … kg"."""
+        return self._detail(self.agrees, self.difference, self.tolerance)
+
+    def __repr__(self) -> str:
+        return f"Agreement({self.verdict}, difference={self.difference:+.3g} kg, " \
+               f"tolerance={self.tolerance:.3g} kg)"
+
+
+@dataclass(frozen=True)
 class Estimate:
-    """One coefficient: model-scale SI value, standard uncertainty, 95 % interval."""
+    """One coefficient: model-scale SI value, its uncertainty budget, d.o.f. and 95 % interval.
+
+    ``conf_int(alpha)`` gives the interval at any level from the same budget:
+    value ∓ t₁₋α/₂(ν)·u_c, ν the Welch–Satterthwaite degrees of freedom ``dof`` (GUM G.4.1).
+    """
 
     symbol: str
     value: float
@@ -63,13 +113,69 @@ class Estimate:
     n_runs: int
     alt_value: float = math.nan
     alt_method: str = ""
-    agreement: str = ""
+    agreement: Agreement | None = None
     # the uncertainty budget, u_c² = u_regression² + u_tare² + u_mass² (GUM eq. 10), in the
     # value's unit, and the degrees of freedom of the interval's t (Welch–Satterthwaite)
     u_regression: float = math.nan
     u_tare: float = math.nan
     u_mass: float = math.nan
     dof: float = math.nan
+
+    def conf_int(self, alpha: float = 0.05) -> tuple[float, float]:
+        """(lower, upper): the two-sided interval of level 1 − ``alpha`` [the value's unit].
+
+        With the default ``alpha`` = 0.05 these are ``ci_low`` and ``ci_high``.
+        """
+        if alpha == 0.05 or not math.isfinite(self.std_error):
+            return self.ci_low, self.ci_high
+        return interval(self.value, self.std_error, self.dof, alpha)
+
+    def __repr__(self) -> str:
+        return (f"Estimate({self.symbol} = {self.value:.5g} ± {self.std_error:.2g}, "
+                f"95 % [{self.ci_low:.5g}, {self.ci_high:.5g}], dof={self.dof:.3g})")
+
+
+@dataclass
+class CurveLevel:
+    """One acceleration level of the curve difference (report eqs. 7–8)."""
+
+    accel: float  # mean acceleration of the level [m/s²]
+    delta_drag: float  # mean ΔD = D_a(U) − D_s(U) over the common speed range [N]
+    M: float  # m − X = ΔD / a [kg]
+    value: float  # X [kg]
+    speed_range: tuple[float, float]  # [m/s]
+    n: int  # samples
+    quadratic: list[float]  # p2 [N s²/m²], p1 [N s/m], p0 [N] of D_a(U)
+
+    def __getitem__(self, key: str) -> Any:  # the mapping access of the former dict
+        return getattr(self, key)
+
+
+@dataclass
+class CurveDifference:
+    """The report's curve-difference estimate of an added mass and its levels.
+
+    ``value`` [kg] is None when the runs cannot give it; ``spread`` [kg] is the standard
+    deviation of the per-level values; ``steady_quadratic`` (q2 [N s²/m²], q1 [N s/m]) the
+    steady D_s(U). Item access (``cd["value"]``) is kept for scripts written against the
+    former dict.
+    """
+
+    value: float | None = None
+    spread: float = 0.0
+    levels: list[CurveLevel] = field(default_factory=list)
+    steady_quadratic: list[float] | None = None
+
+    def __getitem__(self, key: str) -> Any:
+        return getattr(self, key)
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        if key not in {f.name for f in fields(self)}:
+            raise KeyError(key)
+        setattr(self, key, value)
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return getattr(self, key, default)
 
 
 @dataclass
@@ -87,7 +193,7 @@ class AddedMassFit:
     accel_levels: list[float]
     residual_by_run: dict[int, float]
     estimate: Estimate
-    curve_difference: dict[str, object] = field(default_factory=dict)
+    curve_difference: CurveDifference = field(default_factory=CurveDifference)
     regression_se: float = math.nan  # the regression's alone (CR2, clustered by run) [kg]
     regression_dof: float = math.nan  # Bell–McCaffrey (clustered), samples − 3 otherwise
     tare_se: float = math.nan  # the subtracted tare's [kg]
@@ -326,49 +432,37 @@ def fit_added_mass(
         [reg_var, *(v for v, _ in tare_parts), mass_sd**2],
         [res.dof, *(nu for _, nu in tare_parts), math.inf],
     )
-    half = _t95(dof) * u_c if u_c > 0 else 0.0
+    half = t95(dof) * u_c if u_c > 0 else 0.0
     by_run = {int(r): float(np.mean(res.resid[s["run"] == r])) for r in run_ids}
     errors = ("clustered by run" if res.clustered
               else f"samples as independent: only {len(run_ids)} runs")
+    method = ("joint regression D = k2·U|U| + k1·U + (m − " + symbol + ")·a over steady and "
+              f"constant-acceleration samples of {len(run_ids)} runs (report eqs. 7–8; "
+              f"errors {errors})")
+    cd = curve_difference(reductions, run_ids, mass)
+    alt, alt_method, verdict = math.nan, "", None
+    if cd.value is not None and math.isfinite(float(cd.value)):
+        alt = float(cd.value)
+        alt_method = ("curve difference (report eqs. 7–8: per-acceleration quadratic minus "
+                      "steady quadratic)")
+        verdict = agreement(value, alt, M_se, float(cd.spread))
+        method += (f"; second estimate (curve difference, report eqs. 7–8) {alt:.5g} kg: "
+                   f"{verdict.verdict} ({verdict.detail})")
     est = Estimate(
-        symbol=symbol,
-        value=value,
-        std_error=u_c,
-        ci_low=value - half,
-        ci_high=value + half,
-        method="joint regression D = k2·U|U| + k1·U + (m − " + symbol + ")·a over steady and "
-        f"constant-acceleration samples of {len(run_ids)} runs (report eqs. 7–8; "
-        f"errors {errors})",
-        n_runs=len(run_ids),
-        u_regression=math.sqrt(reg_var), u_tare=math.sqrt(tare_var), u_mass=float(mass_sd),
-        dof=float(dof),
+        symbol=symbol, value=value, std_error=u_c, ci_low=value - half, ci_high=value + half,
+        method=method, n_runs=len(run_ids), alt_value=alt, alt_method=alt_method,
+        agreement=verdict, u_regression=math.sqrt(reg_var), u_tare=math.sqrt(tare_var),
+        u_mass=float(mass_sd), dof=float(dof),
     )
-    fit = AddedMassFit(
+    return AddedMassFit(
         symbol=symbol, mass=mass, M=M, M_se=M_se, k2=k2, k1=k1, dof=dof, runs=list(run_ids),
         accel_levels=accel_levels(reductions, run_ids), residual_by_run=by_run, estimate=est,
-        regression_se=math.sqrt(reg_var), regression_dof=res.dof,
+        curve_difference=cd, regression_se=math.sqrt(reg_var), regression_dof=res.dof,
         tare_se=math.sqrt(tare_var),
     )
-    fit.curve_difference = curve_difference(reductions, run_ids, mass)
-    cd = fit.curve_difference
-    if cd.get("value") is not None and math.isfinite(float(cd["value"])):  # type: ignore[arg-type]
-        alt = float(cd["value"])  # type: ignore[arg-type]
-        spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]
-        est.alt_value = alt
-        est.alt_method = (
-            "curve difference (report eqs. 7–8: per-acceleration quadratic minus "
-            "steady quadratic)"
-        )
-        est.agreement = agreement(value, alt, M_se, spread)
-        verdict, detail = est.agreement.split(": ", 1)
-        est.method += (
-            f"; second estimate (curve difference, report eqs. 7–8) {alt:.5g} kg: "
-            f"{verdict} ({detail})"
-        )
-    return fit
 
 
-def agreement(primary: float, second: float, se: float, spread: float) -> str:
+def agreement(primary: float, second: float, se: float, spread: float) -> Agreement:
     """Do the joint regression and the curve difference agree? A sentence saying so.
 
     They agree when |second − primary| ≤ 2·√(se² + spread²), se the joint regression's
@@ -386,19 +480,18 @@ def agreement(primary: float, second: float, se: float, spread: float) -> str:
 
     Returns
     -------
-    str
-        "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds … kg".
+    Agreement
+        ``.agrees``, ``.difference`` [kg], ``.tolerance`` [kg]; it reads as "agree: difference
+        … kg within … kg" or "DISAGREE: difference … kg exceeds … kg".
     """
     tol = 2.0 * math.hypot(se, spread)
     diff = second - primary
-    if abs(diff) <= max(tol, 1e-12):
-        return f"agree: difference {diff:+.2g} kg within {tol:.2g} kg"
-    return f"DISAGREE: difference {diff:+.2g} kg exceeds {tol:.2g} kg"
+    return Agreement(abs(diff) <= max(tol, 1e-12), diff, tol)
 
 
 def curve_difference(
     reductions: dict[int, RunReduction], run_ids: list[int], mass: float
-) -> dict[str, object]:
+) -> CurveDifference:
     """The report's method: ΔD = D_a(U) − D_s(U) averaged over the common speed range.
 
     Per acceleration level a quadratic D_a(U) = p2·U² + p1·U + p0 through that level's
@@ -409,11 +502,11 @@ def curve_difference(
     st = s["phase"] == PHASE_STEADY
     acc = s["phase"] == PHASE_ACCEL
     if st.sum() < 3 or acc.sum() < 3:
-        return {"value": None, "levels": []}
+        return CurveDifference()
     us, ds = s["U"][st], s["drag"][st]
     q, *_ = np.linalg.lstsq(np.column_stack([us * np.abs(us), us]), ds, rcond=None)
     levels = accel_levels(reductions, run_ids)
-    out_levels = []
+    out_levels: list[CurveLevel] = []
     for level in levels:
         sel = acc & (np.abs(s["a"] - level) <= 0.15 * abs(level))
         if sel.sum() < 4:
@@ -428,18 +521,18 @@ def curve_difference(
         dd = np.polyval(p, grid) - (q[0] * grid * np.abs(grid) + q[1] * grid)
         a_mean = float(np.mean(s["a"][sel]))
         M_a = float(np.mean(dd)) / a_mean
-        out_levels.append({"accel": a_mean, "delta_drag": float(np.mean(dd)), "M": M_a,
-                           "value": mass - M_a, "speed_range": (float(lo), float(hi)),
-                           "n": int(sel.sum()), "quadratic": p.tolist()})
+        out_levels.append(CurveLevel(accel=a_mean, delta_drag=float(np.mean(dd)), M=M_a,
+                                     value=mass - M_a, speed_range=(float(lo), float(hi)),
+                                     n=int(sel.sum()), quadratic=p.tolist()))
     if not out_levels:
-        return {"value": None, "levels": []}
-    vals = np.array([lv["value"] for lv in out_levels])
-    return {
-        "value": float(np.mean(vals)),
-        "spread": float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0,
-        "levels": out_levels,
-        "steady_quadratic": q.tolist(),
-    }
+        return CurveDifference()
+    vals = np.array([lv.value for lv in out_levels])
+    return CurveDifference(
+        value=float(np.mean(vals)),
+        spread=float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0,
+        levels=out_levels,
+        steady_quadratic=q.tolist(),
+    )
 
 
 # -------------------------------------------------------------------------------- damping
@@ -461,7 +554,7 @@ def _lin(symbol: str, g: np.ndarray, params: np.ndarray, cov: np.ndarray, dof: f
     var_tare = max(float(g @ tare_cov @ g), 0.0) if tare_cov is not None else 0.0
     se = math.sqrt(var_reg + var_tare)
     nu = welch_satterthwaite([var_reg, var_tare], [dof, tare_dof])
-    half = _t95(nu) * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
+    half = t95(nu) * se if se > 0 else 0.0  # an exact fit: a zero-width interval, not nan
     return Estimate(symbol, value, se, value - half, value + half, method, n,
                     u_regression=math.sqrt(var_reg), u_tare=math.sqrt(var_tare), u_mass=0.0,
                     dof=float(nu))
@@ -475,12 +568,6 @@ def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
     groups = {reductions[int(r)].tare_group for r in sel["run"] if int(r) in reductions}
     dofs = [tares[g].drag.dof for g in groups if g in tares]
     return float(min(dofs)) if dofs else math.inf
-
-
-def _t95(dof: int) -> float:
-    from scipy.stats import t
-
-    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
 
 
 def _influence(x: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -548,7 +635,6 @@ def fit_damping(
         x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
         cov_tare = _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
         tare_dof = _tare_dof(sel, reductions, tares)
-        lin = {"tare_cov": cov_tare, "tare_dof": tare_dof}
         student, cooks = _influence(x, np.asarray(res.resid))
         table = pd.DataFrame({
             "run": sel["run"].to_numpy(int), "angle_deg": sel["angle_deg"].to_numpy(float),
@@ -559,11 +645,10 @@ def fit_damping(
         outl = table.loc[(np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5)), "run"]
         fit = DampingFit(params=params, cov=cov + cov_tare, dof=dof, rho=rho, area=area,
                          runs=table, outliers=[int(r) for r in outl])
-        est["X_u|u|"] = _lin("X_u|u|", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
-        est["X_uv"] = _lin("X_uv", np.array([0, -q, 0]), params, cov, dof, method, n, **lin)
-        est["X_v|v|"] = _lin("X_v|v|", np.array([-q, 0, q / 2]), params, cov, dof, method, n,
-                             **lin)
-        est["Y_uv"] = _lin("Y_uv", np.array([0, 0, -q]), params, cov, dof, method, n, **lin)
+        for sym, g in (("X_u|u|", [0, 0, -q]), ("X_uv", [0, -q, 0]),
+                       ("X_v|v|", [-q, 0, q / 2]), ("Y_uv", [0, 0, -q])):
+            est[sym] = _lin(sym, np.array(g), params, cov, dof, method, n,
+                            tare_cov=cov_tare, tare_dof=tare_dof)
         return fit, est, msgs
     zero = sel[np.abs(sel["angle_deg"]) <= ANGLE_TOL_DEG]
     msgs.append(
@@ -637,7 +722,7 @@ def fit_transverse(
     q90 = 0.5 * rho * lateral_area
     value, se = -q90 * cd90, q90 * cd90_se
     nu = welch_satterthwaite([reg_var, tare_var], [dof, _tare_dof(tr, reductions, tares)])
-    tq = _t95(nu)
+    tq = t95(nu)
     est = Estimate(
         "Y_v|v|", value, se, value - tq * se, value + tq * se,
         f"transverse tow R = ½ρA_lat·C_D,90·U|U| by OLS over {len(tr)} steady runs at α = 90° "
@@ -797,6 +882,35 @@ def fit_hull(
     )
 
 
+def hull_warnings(hull: HullFit) -> list[str]:
+    """The day's sentences about a hull fit's verdicts (its ``messages`` aside): two added-mass
+    estimates that disagree (:func:`agreement`) and the C_D(α) fit's flagged runs
+    (|studentized residual| > 3 or Cook's distance > max(4/n, 0.5))."""
+    out: list[str] = []
+    for sym, am in hull.added_mass.items():
+        verdict = am.estimate.agreement
+        if verdict is not None and not verdict.agrees:
+            out.append(
+                f"{sym}: the curve-difference estimate {am.estimate.alt_value:.4g} kg and the "
+                f"joint regression {am.estimate.value:.4g} kg disagree ({verdict.detail})."
+            )
+    if hull.damping is not None and hull.damping.outliers:
+        dm = hull.damping
+        t = dm.runs.set_index("run")
+        flagged = ", ".join(
+            f"{r} (studentized residual {t.loc[r, 'student']:+.3g}, Cook's distance "
+            f"{t.loc[r, 'cooks']:.2g})" for r in dm.outliers)
+        one = len(dm.outliers) == 1
+        out.append(
+            f"C_D(α) fit: {'run' if one else 'runs'} {flagged} "
+            f"{'is' if one else 'are'} flagged as {'an outlier' if one else 'outliers'} "
+            f"(|studentized residual| > 3 or Cook's distance > {max(4.0 / len(t), 0.5):.2g}); "
+            f"{'it is' if one else 'they are'} still in the fit: check "
+            f"{'it' if one else 'them'} before trusting X_u|u|, X_uv, X_v|v| and Y_uv."
+        )
+    return out
+
+
 def load_reference(reference: str) -> dict[str, float]:
     """Reference prime values by symbol: a built-in set ('remus', 'remus-prestero2001') or a
     CSV (symbol, prime)."""
@@ -858,14 +972,15 @@ def coefficients_table(
         rel_len = k * length_sd / hull.length
         prime_se = math.hypot(e.std_error / scale, abs(prime) * rel_len)
         half = (e.ci_high - e.ci_low) / 2.0
-        factor = half / e.std_error if e.std_error > 0 else Z95
+        factor = half / e.std_error if e.std_error > 0 else normal_quantile()
         rows.append({
             "symbol": s, "value": e.value, "unit": UNIT[s], "prime": prime,
             "ci_low": e.ci_low, "ci_high": e.ci_high, "method": e.method,
             "reference_prime": ref, "diff_pct": diff, "prototype_value": math.nan,
             "std_error": e.std_error, "prime_ci_low": prime - factor * prime_se,
             "prime_ci_high": prime + factor * prime_se, "n_runs": e.n_runs,
-            "alt_value": e.alt_value, "alt_method": e.alt_method, "agreement": e.agreement,
+            "alt_value": e.alt_value, "alt_method": e.alt_method,
+            "agreement": str(e.agreement or ""),
             "u_regression": e.u_regression, "u_tare": e.u_tare, "u_mass": e.u_mass,
             "dof": e.dof,
         })

@@ -24,7 +24,8 @@ from towtank.analysis.form_factor_trend import (  # noqa: F401  (re-exported)
 )
 
 #: Standard acceleration of gravity [m/s^2].
-STANDARD_GRAVITY = 9.80665
+from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.stats.grouping import speed_groups  # noqa: F401  (re-exported)
 
 #: Depth-to-diameter ratio beyond which a submerged body of revolution makes no significant waves.
 DEEP_SUBMERGENCE_DEPTH_RATIO = 3.0
@@ -320,34 +321,6 @@ class FormFactor:
     speed_reynolds: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-def speed_groups(speed: ArrayLike, rel_tol: float = 0.02) -> np.ndarray:
-    """Group points by tested speed: repeats at one carriage speed share a group.
-
-    Sorted speeds are chained into one group while each lies within ``rel_tol`` of the previous
-    one (single linkage: a gap larger than ``rel_tol`` times the smaller speed starts a group).
-
-    Parameters
-    ----------
-    speed : array_like
-        Speed of each point [m/s], finite
-    rel_tol : float, default 0.02
-        Relative gap that separates two tested speeds [-]
-
-    Returns
-    -------
-    numpy.ndarray
-        Integer group of each point, 0 for the slowest speed, numbered upwards.
-    """
-    u = np.abs(np.atleast_1d(np.asarray(speed, dtype=float)).ravel())
-    if u.size == 0:
-        return np.zeros(0, dtype=int)
-    order = np.argsort(u, kind="stable")
-    gaps = np.diff(u[order]) > rel_tol * u[order][:-1]
-    groups = np.empty(u.size, dtype=int)
-    groups[order] = np.concatenate(([0], np.cumsum(gaps)))
-    return groups
-
-
 def form_factor(
     drag: ArrayLike,
     speed: ArrayLike,
@@ -416,7 +389,7 @@ def form_factor(
             f"No steady point reaches Re = {re_min:.3g} (highest Re = {top}), so the form factor "
             "cannot be taken outside the laminar range."
         )
-    groups = speed_groups(u[used], rel_tol)
+    groups = speed_groups(np.abs(u[used]), rel_tol)
     count = np.bincount(groups)
     speeds = np.bincount(groups, weights=u[used]) / count
     speed_values = np.bincount(groups, weights=values[used]) / count

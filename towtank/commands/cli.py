@@ -7,6 +7,7 @@ Imports of the heavy libraries are deferred to the sub-command that needs them, 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import os
 import re
@@ -372,7 +373,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
             bar.close()
         opened.stop()  # what the day read; the writing reads its own files
     if args.date:
-        day.report_date = args.date
+        day = dataclasses.replace(day, report_date=args.date)
     try:  # the sheet may name run files anywhere: none of them may be an output's target
         check_output_dir(out, protocol, day.inputs)
     except ProtocolError as exc:

@@ -779,12 +779,6 @@ def force_coefficient(force: float, rho: float, area: float, speed: float) -> fl
     return force / q if q > 0 else math.nan
 
 
-def check_reduction(red: RunReduction) -> None:
-    """Sanity checks on a reduced run that reject it with one sentence."""
-    if not math.isfinite(red.drag_mean_raw):
-        raise RunError("the steady drag mean is not finite")
-
-
 def _internal_error_sentence(exc: BaseException) -> str:
     last = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
     where = f" in {Path(last.filename).name}:{last.lineno}" if last else ""

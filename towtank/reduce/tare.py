@@ -239,7 +239,8 @@ def tare_table(tares: dict[str, TareModel]) -> Any:
     and accelerations [m/s²] it covers.
     """
     import pandas as pd  # not at import: the reduction's workers never load pandas
-    from scipy.stats import t as student
+
+    from towtank.stats.quantiles import normal_quantile, t95
 
     rows = []
     for group in sorted(tares):
@@ -247,8 +248,7 @@ def tare_table(tares: dict[str, TareModel]) -> Any:
         for channel, fit in (("drag", model.drag), ("lift", model.lift)):
             if fit is None:
                 continue
-            q = float(student.ppf(0.975, fit.dof)) if math.isfinite(fit.dof) and fit.dof > 0 \
-                else 1.959963984540054
+            q = t95(fit.dof) if math.isfinite(fit.dof) and fit.dof > 0 else normal_quantile()
             se = np.sqrt(np.clip(np.diag(fit.cov), 0.0, None))
             row: dict[str, object] = {"tare_group": group, "channel": channel,
                                       "runs": " ".join(str(r) for r in model.runs)}

@@ -42,8 +42,8 @@ import numpy as np
 from towtank.signal.phases import PHASE_NAMES
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
     from towtank.reduce.run import RunReduction
+    from towtank.results import DayResult
 
 EXPORT_FORMATS = ("mat", "hdf5", "parquet")
 

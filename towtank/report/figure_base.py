@@ -16,13 +16,13 @@ from matplotlib.figure import Figure
 
 from towtank.report import style
 from towtank.report.safetext import clean_text
+from towtank.stats.quantiles import normal_quantile, t95  # noqa: F401  (the figures')
 
 PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
 CAPTION_CHARS = 118  # wrap width of captions on a page-wide figure
 CAPTION_LINE_IN = 7.8 * 1.35 / 72  # height of one caption line [in]
-Z95 = 1.959963984540054
-_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")  # two-sided 95 % normal quantile
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")  # exponents of ×10ⁿ
 
 
 # ------------------------------------------------------------------------------------ helpers
@@ -109,13 +109,6 @@ def math_text(text: str) -> str:
     )
     text = true_minus(text)
     return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
-
-
-def t95(dof: int) -> float:
-    """Two-sided 95 % Student-t quantile for ``dof`` degrees of freedom (inf if dof ≤ 0)."""
-    from scipy.stats import t
-
-    return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
 
 
 def _new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Figure:

@@ -1,10 +1,10 @@
 """The report's figures, drawn only from what the day's stages computed.
 
-Each ``fig_*`` function takes the :class:`~towtank.pipeline.DayResult` and returns a
+Each ``fig_*`` function takes the :class:`~towtank.results.DayResult` and returns a
 :class:`matplotlib.figure.Figure` (or None when the day has no data for it). Nothing is fitted
 here: fit lines come from the stored parameters (``DampingFit.params``/``cov``, the
 curve-difference quadratics of :class:`~towtank.analysis.hull.AddedMassFit`, the resistance curve of
-:class:`~towtank.pipeline.ScalingResult`), and reference curves are given functions evaluated on
+:class:`~towtank.results.ScalingResult`), and reference curves are given functions evaluated on
 a grid (:func:`towtank.reference.sandia.section_coefficients`,
 :func:`towtank.analysis.fins.finite_span_coefficients`).
 
@@ -43,12 +43,14 @@ from matplotlib.patches import Patch
 from towtank.report import figure_base as _base
 from towtank.report import style
 from towtank.report.tare_figure import fig_tare
+from towtank.results import DayResult, FinResult
 
 if TYPE_CHECKING:
+    import pandas as pd
     from matplotlib.axes import Axes
 
-    from towtank.pipeline import DayResult
     from towtank.reduce.run import RunReduction
+    from towtank.results import ScalingResult
 
 # the figures' shared basics, also reached as figures.<name> by the PDF and the tests
 _E_NUMBER = _base._E_NUMBER
@@ -60,7 +62,6 @@ CAPTION_CHARS = _base.CAPTION_CHARS
 CAPTION_LINE_IN = _base.CAPTION_LINE_IN
 PAGE_FOOTER_IN = _base.PAGE_FOOTER_IN
 PAGE_HEADER_IN = _base.PAGE_HEADER_IN
-Z95 = _base.Z95
 _fmt = _base._fmt
 _layout = _base._layout
 _new_figure = _base._new_figure
@@ -69,6 +70,7 @@ math_symbol = _base.math_symbol
 math_text = _base.math_text
 styled = _base.styled
 t95 = _base.t95
+normal_quantile = _base.normal_quantile
 true_minus = _base.true_minus
 wrap_caption = _base.wrap_caption
 place_legend = _base.place_legend
@@ -128,9 +130,9 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
 def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
 
-    cd = am.curve_difference or {}
-    levels = list(cd.get("levels") or [])
-    q = cd.get("steady_quadratic")
+    cd = am.curve_difference
+    levels = cd.levels
+    q = cd.steady_quadratic
     parts = [day.reductions[r].samples for r in am.runs if r in day.reductions]
     s = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
     st = s["phase"] == PHASE_STEADY
@@ -143,21 +145,21 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     dmax = 0.0
     for i, lv in enumerate(levels):
         color = style.PALETTE[(i + 1) % len(style.PALETTE)]
-        sel = acc & (np.abs(s["a"] - lv["accel"]) <= 0.15 * abs(lv["accel"]))
+        sel = acc & (np.abs(s["a"] - lv.accel) <= 0.15 * abs(lv.accel))
         shown |= sel
         ax.plot(s["U"][sel], s["drag"][sel], "o", ms=2.0, mew=0, color=color, alpha=0.5,
                 zorder=2)
-        u = np.linspace(*lv["speed_range"], 60)
-        d_a = np.polyval(lv["quadratic"], u)
+        u = np.linspace(lv.speed_range[0], lv.speed_range[1], 60)
+        d_a = np.polyval(lv.quadratic, u)
         ax.plot(u, d_a, color=color, lw=1.7, zorder=4)
         handles.append(Line2D([], [], color=color, marker="o", ms=3,
-                              label=f"$a$ = {lv['accel']:.2f} m/s²: samples, $D_a(U)$"))
+                              label=f"$a$ = {lv.accel:.2f} m/s²: samples, $D_a(U)$"))
         if q is not None:
             diff = d_a - (q[0] * u * np.abs(u) + q[1] * u)
             ax_d.plot(u, diff, color=color, lw=1.6)
             dmax = max(dmax, float(np.max(diff)))
-        ax_d.axhline(am.M * lv["accel"], color=color, ls=":", lw=1.2)
-        dmax = max(dmax, am.M * lv["accel"])
+        ax_d.axhline(am.M * lv.accel, color=color, ls=":", lw=1.2)
+        dmax = max(dmax, am.M * lv.accel)
     other = acc & ~shown
     if other.any():
         ax.plot(s["U"][other], s["drag"][other], "o", ms=2, mew=0, color="#cfcfcf", zorder=1)
@@ -184,7 +186,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     title = "\n".join([
         f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
         f"curve difference: {_fmt(alt)} kg" + (
-            f" ({est.agreement.split(':')[0]})" if est.agreement else ""),
+            f" ({est.agreement.verdict})" if est.agreement is not None else ""),
         math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
     ])
     place_legend(ax_d, [Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
@@ -338,7 +340,7 @@ def cd90_interval(dm: Any, estimate: Any = None) -> tuple[float, float]:
     dof = float(getattr(estimate, "dof", math.nan))
     if not math.isfinite(se) or se <= 0:
         return 0.0, dof
-    q = t95(dof) if math.isfinite(dof) and dof > 0 else Z95
+    q = t95(dof) if math.isfinite(dof) and dof > 0 else normal_quantile()
     return q * se, dof
 
 
@@ -368,20 +370,27 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
 
 
 # ----------------------------------------------------------------------------- (c,d) fins
+def _fin_result(fins: FinResult | DayResult | None) -> FinResult | None:
+    """The fin result of ``fins``: itself, or a day's ``fin_result``."""
+    return fins.fin_result if isinstance(fins, DayResult) else fins
+
+
 @styled
-def fig_fin_forces(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
+                   ) -> Figure | None:
     """Fin drag (top) and lift (bottom) against speed, one line per angle (report Figs. 14–15).
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    fins : FinResult or DayResult
+        The fin result drawn (``day.fin_result``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    if day.fin_result is None or len(day.fin_result.force_vs_speed) == 0:
+    fr = _fin_result(fins)
+    if fr is None or len(fr.force_vs_speed) == 0:
         return None
-    fv = day.fin_result.force_vs_speed
+    fv = fr.force_vs_speed
     angles = sorted(fv["angle_deg"].unique())
     # qualitative colours and a marker per angle: ten shades of one colour map cannot be told
     # apart where the lines cross
@@ -431,18 +440,14 @@ def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
     # lifting-line theory holds for attached flow only: draw the finite-span expectation up to
     # the angle whose effective angle α − α_i reaches the 2-D section's stall (its first local
     # maximum of C_L); beyond it the self-consistent solution jumps between branches
-    pos = alpha >= 0
-    drops = np.flatnonzero(np.diff(cl2[pos]) < 0)
-    if drops.size:
-        stall_2d = float(alpha[pos][drops[0]])
-        effective = alpha - np.degrees(cl3 / (np.pi * e * aspect_ratio))
-        beyond = np.abs(effective) > stall_2d
-        cl3, cd3 = np.where(beyond, np.nan, cl3), np.where(beyond, np.nan, cd3)
+    attached = fins.attached_flow(alpha, cl3, res, aspect_ratio, e)
+    cl3, cd3 = np.where(attached, cl3, np.nan), np.where(attached, cd3, np.nan)
     return cl2, cd2, cl3, cd3
 
 
 @styled
-def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = False
+                         ) -> Figure | None:
     """Fin C_L and C_D against α beside the Sandia 2-D section and the finite-span expectation.
 
     One colour per speed group; the Sandia NACA 0015 curves at the group's mean Re (solid) and
@@ -450,12 +455,12 @@ def fig_fin_coefficients(day: DayResult, *, page: bool = False) -> Figure | None
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    fins : FinResult or DayResult
+        The fin result drawn (``day.fin_result``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    fr = day.fin_result
+    fr = _fin_result(fins)
     if fr is None or len(fr.table) == 0:
         return None
     tab = fr.table
@@ -541,9 +546,8 @@ def sci(x: float, digits: int = 2) -> str:
     return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
 
 
-def scaling_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_scaling`."""
-    sr = day.scaling_result
+def scaling_caption(sr: ScalingResult) -> str:
+    """Caption of :func:`fig_scaling`, from the scaling result it draws."""
     k2, k1 = sr.resistance
     ff = sr.form_factor
     ff_text = (f"Form factor 1 + k = {ff.one_plus_k:.3f} ± {ff.std:.3f} (mean and s.d. over "
@@ -582,7 +586,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     fig = _new_figure(page)
     gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
                  title=f"Scaling to the prototype (λ = {sr.scale:g})",
-                 text=scaling_caption(day))
+                 text=scaling_caption(sr))
 
     ax_m = fig.add_subplot(gs[0, 0])
     umax = max(hi, float(tab["speed_model_froude"].max())) * 1.08
@@ -629,17 +633,18 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_title(f"Prototype ({proto.water.medium})" if proto is not None else "Prototype")
     place_legend(ax_p, fontsize=6.8)
 
-    _reynolds_panel(fig.add_subplot(gs[1, :]), day, ok_hull)
+    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
+    _reynolds_panel(fig.add_subplot(gs[1, :]), sr, near["re"])
     return fig
 
 
-def _reynolds_panel(ax: Axes, day: DayResult, ok_hull: Any) -> None:
-    sr = day.scaling_result
+def _reynolds_panel(ax: Axes, sr: ScalingResult, model_re: pd.Series) -> None:
+    """The Reynolds ranges of the model tests (``model_re``: the hull runs' Re [-]), of the
+    form-factor runs, of the model at the Froude speeds and of the prototype."""
     tab = sr.table
     bars = []
-    sel = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
-    if sel["re"].notna().any():
-        bars.append(("model tests", float(sel["re"].min()), float(sel["re"].max()),
+    if model_re.notna().any():
+        bars.append(("model tests", float(model_re.min()), float(model_re.max()),
                      style.PALETTE[0]))
     if sr.form_factor is not None:
         bars.append(("form-factor runs", *sr.form_factor.re_range, style.PALETTE[2]))

@@ -17,7 +17,7 @@ from towtank.runtime import interrupt, manifest
 from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 
 def _swap_into_place(tmp: Path, out_dir: Path) -> None:

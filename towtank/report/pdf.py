@@ -44,9 +44,10 @@ from towtank.report import figures, style
 from towtank.report import quality as _quality
 from towtank.report.provenance import creation_date, report_date
 from towtank.report.tables import missing_accel_note
+from towtank.results import require
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
 MARGIN_IN = 0.6  # left and right page margin [in]
@@ -368,7 +369,7 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
     A coefficient equal to another by the hull's symmetry shows that symbol as its method
     ("= Y_vdot") instead of a footnote.
     """
-    coef = day.hull.coefficients
+    coef = day.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
@@ -435,7 +436,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _text_block(fig, y + 0.01, geometry, width=90, fontsize=8.5, color="black",
                          indent_in=1.0) + 0.02
     y += 0.15
-    if day.hull is not None and len(day.hull.coefficients):
+    if day.hull is not None and len(day.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
         header, rows, methods, hl = coefficient_rows(day)
         y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
@@ -449,7 +450,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
-        for r in day.hull.coefficients.to_dict("records"):
+        for r in day.coefficients.to_dict("records"):
             method = str(r.get("method", ""))
             # the method footnote states the second estimate already (fit.fit_added_mass)
             if (r.get("agreement") and not method.startswith(("=", "same as"))
@@ -477,7 +478,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
 
 
 def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
-    c = day.fin_result.curves
+    fr = require(day.fin_result, "fin")
+    c = fr.curves
     header = [r"$U$ group [m/s]", "Re", "runs", r"$dC_L/d\alpha$ [1/rad]", "95 % interval",
               "Sandia 2-D", "lifting line", "stall [deg]", r"$C_{L,max}$", r"$C_{D,min}$"]
     rows = []
@@ -492,12 +494,12 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
                      stall, _v(r["cl_max"], ".3f"), _v(r["cd_min"], ".4f")])
     used = _table(fig, y, header, rows, [1.0, 0.75, 0.45, 1.15, 1.1, 0.8, 0.8, 0.8, 0.65, 0.65])
     used += 0.08 + _text_block(fig, y + used + 0.08, (
-        f"Effective aspect ratio {day.fin_result.aspect_ratio:.3g}, span efficiency "
-        f"{day.fin_result.oswald_e:.3g}. "
+        f"Effective aspect ratio {fr.aspect_ratio:.3g}, span efficiency "
+        f"{fr.oswald_e:.3g}. "
         "Stall '> x': C_L still rising at the largest angle tested. "
         "Sandia 2-D and lifting line: the same straight-line fit through the 2-D section data "
         "and the finite-span expectation at the group's mean Re."), width=125, fontsize=7)
-    ctrl = day.fin_result.control
+    ctrl = fr.control
     if ctrl is not None and len(ctrl):
         recs = ctrl.to_dict("records")
         text = "Control derivatives (pair of fins, Prestero 2001): " + "; ".join(
@@ -515,7 +517,7 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
 def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
     """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer to the
     Fin runs pages (:func:`_draw_fin_runs`)."""
-    t = day.fin_result.table
+    t = require(day.fin_result, "fin").table
     used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
     if not fin_runs_fit(day):  # the page plan's rule: the Fin runs pages hold it otherwise
         return used + _text_block(fig, y + used, f"{len(t)} fin runs: in the Fin runs "
@@ -532,11 +534,11 @@ FIN_ROW_IN = 0.19
 def fin_runs_fit(day: DayResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
     """Whether the fin runs' table fits on the summary page below ``top_in``."""
     room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - top_in
-    return (len(day.fin_result.table) + 1) * FIN_ROW_IN <= room
+    return (len(require(day.fin_result, "fin").table) + 1) * FIN_ROW_IN <= room
 
 
 def _draw_fin_runs(fig: Figure, day: DayResult, runs: list[int]) -> None:
-    t = day.fin_result.table
+    t = require(day.fin_result, "fin").table
     recs = [r for r in t.to_dict("records") if int(r["run"]) in set(runs)]
     y = figures.PAGE_HEADER_IN + 0.25
     used = _fin_rows(fig, y, recs)
@@ -561,7 +563,7 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
     """The prototype resistance table: the recommended estimate named in its header and
     shaded, the Froude-scaled model resistance beside it for comparison; then the rule behind
     the recommendation, the form factor with its trend over Re, and what was used."""
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     rec = getattr(sr, "recommendation", None)
     recommended = rec.column if rec is not None else "none"
     ittc_head = r"$R_p$ ITTC-57 [N]" + (", recommended" if recommended == "drag_ittc57" else "")

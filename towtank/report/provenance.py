@@ -21,7 +21,7 @@ from towtank import __version__
 from towtank.reference.sets import reference_name
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 
 def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:

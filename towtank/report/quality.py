@@ -18,7 +18,7 @@ from towtank.report import figures, style
 if TYPE_CHECKING:
     import pandas as pd
 
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 PAGE_H = style.PAGE_SIZE[1]
 
@@ -202,15 +202,15 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
              f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
              f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
              f"Mean residual of the joint regression by run [mN]: {resid}.")
-        levels = (am.curve_difference or {}).get("levels") or []
+        levels = am.curve_difference.levels
         if levels:
             f.mono(f"     a [m/s²]   speed range [m/s]   samples   mean ΔD [N]   m − X [kg]"
                    f"   {sym} [kg]")
             for lv in levels:
-                lo, hi = lv["speed_range"]
+                lo, hi = lv.speed_range
                 speeds = f"{lo:.3f} – {hi:.3f}"
-                f.mono(f"     {lv['accel']:8.3f}   {speeds:>17s}   {lv['n']:7d}   "
-                       f"{lv['delta_drag']:11.5f}   {lv['M']:10.5f}   {lv['value']:8.5f}")
+                f.mono(f"     {lv.accel:8.3f}   {speeds:>17s}   {lv.n:7d}   "
+                       f"{lv.delta_drag:11.5f}   {lv.M:10.5f}   {lv.value:8.5f}")
     dm = hf.damping
     if dm is not None:
         t = dm.runs
@@ -231,7 +231,7 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
             f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
                    f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
     if getattr(hf, "lift_slope", None):
-        f.li(lift_slope_text(hf, day.hull.coefficients))
+        f.li(lift_slope_text(hf, day.coefficients))
     _budget_flow(f, hf)
 
 

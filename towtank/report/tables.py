@@ -12,7 +12,7 @@ import numpy as np
 if TYPE_CHECKING:
     import pandas as pd
 
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 
 def write_csv(df: pd.DataFrame, path: Path) -> None:

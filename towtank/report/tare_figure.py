@@ -20,7 +20,7 @@ from towtank.report.figure_base import (
 )
 
 if TYPE_CHECKING:
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 
 #: Units of the tare coefficients t2, t1, m_t of T = t2·U|U| + t1·U + m_t·a.

@@ -40,11 +40,12 @@ import pandas as pd
 from towtank import __version__
 from towtank.report import style
 from towtank.report.safetext import clean_text
+from towtank.results import require
 
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
 
-    from towtank.pipeline import DayResult
+    from towtank.results import DayResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
           "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
@@ -383,10 +384,10 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         w.note(f"geometry_source: {m.geometry_source}")
     w.gap()
     w.title("Key results")
-    if day.hull is not None and len(day.hull.coefficients):
+    if day.hull is not None and len(day.coefficients):
         cols = [c for c in ("symbol", "value", "unit", "ci_low", "ci_high", "prime",
-                            "reference_prime", "diff_pct") if c in day.hull.coefficients]
-        w.table(day.hull.coefficients, columns=cols, row_fill=_fill_for_diff)
+                            "reference_prime", "diff_pct") if c in day.coefficients]
+        w.table(day.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
         w.note("No hull coefficients: " + _why_no_hull(day))
     if day.fin_result is not None and len(day.fin_result.curves):
@@ -413,10 +414,10 @@ def _why_no_hull(day: DayResult) -> str:
 
 
 def _coefficients(w: SheetWriter, day: DayResult) -> None:
-    if day.hull is None or len(day.hull.coefficients) == 0:
+    if day.hull is None or len(day.coefficients) == 0:
         _note_sheet(w, "No hull coefficients: " + _why_no_hull(day))
         return
-    coef = day.hull.coefficients
+    coef = day.coefficients
     cols = [c for c in COEFFICIENT_ORDER if c in coef.columns]
     cols += [c for c in coef.columns if c not in cols]
     w.table(coef, columns=cols, row_fill=_fill_for_diff)
@@ -491,7 +492,7 @@ def _has_control(day: DayResult) -> bool:
 
 
 def _fin_curves(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.fin_result.curves)
+    w.table(require(day.fin_result, "fin").curves)
     w.gap()
     w.note("Lift slope over the linear range of each speed group with its 95 % interval, "
            "beside the same fit through the 2-D Sandia section and the finite-span "
@@ -499,7 +500,7 @@ def _fin_curves(w: SheetWriter, day: DayResult) -> None:
 
 
 def _fin_control(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.fin_result.control)
+    w.table(require(day.fin_result, "fin").control)
 
 
 def _scaling(w: SheetWriter, day: DayResult) -> None:
@@ -525,7 +526,7 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
 
 
 def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     k2, k1 = sr.resistance
     rows: list[tuple[str, Any, str]] = [
         ("scale λ", sr.scale, "-"),
@@ -568,13 +569,14 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
 
 
 def _form_factor(w: SheetWriter, day: DayResult) -> None:
-    ff = day.scaling_result.form_factor
+    sr = require(day.scaling_result, "scaling")
+    ff = require(sr.form_factor, "form factor")
     data = {"speed": ff.speeds, "runs": ff.speed_runs, "one_plus_k": ff.speed_values}
     units = {"speed": "m/s", "runs": "-", "one_plus_k": "-"}
     if len(ff.speed_reynolds) == len(ff.speeds):
         data["re"], units["re"] = ff.speed_reynolds, "-"
     w.table(pd.DataFrame(data), units=units)
-    trend = day.scaling_result.form_factor_trend
+    trend = sr.form_factor_trend
     if trend is not None and math.isfinite(trend.slope):
         w.gap()
         w.pairs([("slope d(1 + k)/dRe", trend.slope, "-"),
@@ -582,7 +584,7 @@ def _form_factor(w: SheetWriter, day: DayResult) -> None:
                  ("slope, 95 % interval high", trend.ci_high, "-"),
                  ("slope p-value", trend.p_value, "-"),
                  ("trend with Re significant", "yes" if trend.significant else "no", "")])
-        w.note(day.scaling_result.form_factor_trend_text)
+        w.note(sr.form_factor_trend_text)
 
 
 def _quality(w: SheetWriter, day: DayResult) -> None:
@@ -638,7 +640,7 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
             rows.append({"symbol": sym, "mass": am.mass, "M": am.M, "M_se": am.M_se,
                          "k2": am.k2, "k1": am.k1, "dof": am.dof, "runs": " ".join(
                              map(str, am.runs)), "value": e.value, "alt_value": e.alt_value,
-                         "agreement": e.agreement})
+                         "agreement": str(e.agreement or "")})
         w.table(pd.DataFrame(rows), units={**UNITS, "mass": "kg", "M": "kg", "M_se": "kg",
                                            "k2": "N s²/m²", "k1": "N s/m", "value": "kg",
                                            "alt_value": "kg"})
@@ -651,13 +653,13 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
         w.title("Added mass: curve difference per acceleration level (report eqs. 7–8)")
         lv_rows = []
         for s, am in hf.added_mass.items():
-            for lv in (am.curve_difference or {}).get("levels") or []:
-                p2, p1, p0 = lv["quadratic"]
-                lv_rows.append({"symbol": s, "accel": lv["accel"],
-                                "speed_low": lv["speed_range"][0],
-                                "speed_high": lv["speed_range"][1], "n": lv["n"],
-                                "delta_drag": lv["delta_drag"], "M": lv["M"],
-                                "value": lv["value"], "p2": p2, "p1": p1, "p0": p0})
+            for lv in am.curve_difference.levels:
+                p2, p1, p0 = lv.quadratic
+                lv_rows.append({"symbol": s, "accel": lv.accel,
+                                "speed_low": lv.speed_range[0],
+                                "speed_high": lv.speed_range[1], "n": lv.n,
+                                "delta_drag": lv.delta_drag, "M": lv.M,
+                                "value": lv.value, "p2": p2, "p1": p1, "p0": p0})
         if lv_rows:
             w.table(pd.DataFrame(lv_rows), units={
                 "accel": "m/s²", "speed_low": "m/s", "speed_high": "m/s", "n": "samples",

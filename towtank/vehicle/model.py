@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import trapezoid
 
+from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle import hull as hulls
 
 __all__ = [
@@ -37,7 +38,7 @@ __all__ = [
     "read_model",
 ]
 
-G = 9.80665
+G = STANDARD_GRAVITY  # [m/s²]
 SYMBOL_RE = re.compile(r"^[XYZKMN]_(\|[uvwpqr]\||[uvwpqr]|dr|ds)+$")
 _DOF = "XYZKMN"
 _VEL = "uvwpqr"

@@ -29,6 +29,8 @@ import math
 import pandas as pd
 from scipy.optimize import brentq
 
+from towtank.reference.constants import STANDARD_GRAVITY
+
 __all__ = [
     "G",
     "axial_stress",
@@ -39,7 +41,7 @@ __all__ = [
     "pressure_hull_table",
 ]
 
-G = 9.80665  # standard gravity [m/s^2]
+G = STANDARD_GRAVITY  # [m/s²]
 
 
 def axial_stress(pressure_pa, radius_m, thickness_m):

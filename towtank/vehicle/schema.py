@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from towtank.reference.constants import STANDARD_GRAVITY
+
 __all__ = [
     "MAX_MODEL_BYTES",
     "MAX_DEPTH",
@@ -88,7 +90,7 @@ COVARIANCE_TOLERANCE = 1e-9
 #: Smallest eigenvalue of the mass matrix relative to its largest [-].
 MASS_MATRIX_TOLERANCE = 1e-10
 
-_G = 9.80665
+_G = STANDARD_GRAVITY  # [m/s²]
 _FACTOR = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
 _ADDED_MASS = re.compile(r"^[XYZKMN]_[uvwpqr]dot$")
 

@@ -1,0 +1,236 @@
+"""The day's scaling to the prototype: resistance curve, form factor, prototype values.
+
+From the steady hull runs at α = 0 the model resistance R(U) = k2·U|U| + k1·U is fitted by
+ordinary least squares; the form factor 1 + k is found from the same runs where the model's
+wetted area is known (:func:`towtank.analysis.similarity.form_factor`, ITTC 7.5-02-02-02); the
+prototype speeds are then scaled by Froude's and Reynolds's laws and the ITTC-57 line
+(:func:`towtank.analysis.similarity.scaling_table`, docs/method.md "Similarity and scaling"),
+and every hull coefficient gets its prototype value, prime × ½ρ_p·L_p^k
+(:func:`towtank.analysis.similarity.prototype_value`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from towtank.analysis import similarity
+from towtank.analysis.similarity import FormFactor, FormFactorTrend, ResistanceRecommendation
+from towtank.ingest.protocol import Model, Prototype
+
+#: A hull run within this of α = 0 is a straight tow of the resistance curve [deg].
+STRAIGHT_TOL_DEG = 0.5
+
+
+@dataclass(frozen=True, repr=False)
+class ScalingResult:
+    """Scaling of the day to the prototype (scaling.csv and its constants)."""
+
+    table: pd.DataFrame  # scaling.csv
+    resistance: tuple[float, float]  # k2 [N s²/m²], k1 [N s/m] of R = k2·U|U| + k1·U
+    tested_speed_range: tuple[float, float]  # [m/s]
+    form_factor: FormFactor | None
+    statement: str
+    rho_p: float  # [kg/m³]
+    nu_p: float  # [m²/s]
+    rho_m: float  # [kg/m³]
+    nu_m: float  # [m²/s]
+    scale: float  # λ = L_p / L_m [-]
+    length_prototype: float = math.nan  # [m]
+    wetted_area_prototype: float | None = None  # λ²·S_m [m²], None when S_m is not known
+    delta_cf: float = 0.0
+    #: which column of scaling.csv is R_p, and why
+    recommendation: ResistanceRecommendation | None = None
+    #: 1 + k against Re (None without 1 + k)
+    form_factor_trend: FormFactorTrend | None = None
+    form_factor_trend_text: str = ""
+
+    def to_frame(self) -> pd.DataFrame:
+        """scaling.csv: one row per prototype speed."""
+        return self.table.copy()
+
+    def __repr__(self) -> str:
+        k2, k1 = self.resistance
+        ff = (f", 1 + k = {self.form_factor.one_plus_k:.4g}" if self.form_factor is not None
+              else "")
+        return (f"ScalingResult(λ = {self.scale:g}, {len(self.table)} prototype speeds, "
+                f"R = {k2:.4g}·U|U| {k1:+.4g}·U{ff})")
+
+    def _repr_html_(self) -> str:
+        return f"<p><b>{_html(repr(self))}</b></p>" + self.table.to_html(max_rows=20)
+
+
+def _html(text: str) -> str:
+    import html
+
+    return html.escape(text)
+
+
+def prototype_values(coefficients: pd.DataFrame, rho_p: float, length_p: float) -> pd.DataFrame:
+    """The prototype value of every hull coefficient: prime × ½ρ_p·L_p³ (added mass) or
+    × ½ρ_p·L_p² (damping), :func:`towtank.analysis.similarity.prototype_value`.
+
+    Parameters
+    ----------
+    coefficients : DataFrame
+        coefficients.csv's ``symbol`` and ``prime`` columns.
+    rho_p : float
+        Prototype water density [kg/m³].
+    length_p : float
+        Prototype length [m].
+
+    Returns
+    -------
+    DataFrame
+        ``symbol``, ``prototype_value`` (SI, the coefficient's unit), one row per coefficient.
+    """
+    kinds = coefficients["symbol"].map(lambda s: "added_mass" if s.endswith("dot") else "damping")
+    values = [float(similarity.prototype_value(pr, rho_p, length_p, k))
+              for pr, k in zip(coefficients["prime"], kinds, strict=True)]
+    return pd.DataFrame({"symbol": coefficients["symbol"].to_numpy(), "prototype_value": values})
+
+
+def scale_to_prototype(
+    runs: pd.DataFrame,
+    model: Model,
+    prototype: Prototype,
+    *,
+    scale: float,
+    rho_m: float,
+    nu_m: float,
+    rho_p: float,
+    nu_p: float,
+    laminar_re: float,
+    damping_alpha_max_deg: float,
+    free_surface: bool = True,
+) -> tuple[ScalingResult | None, list[str]]:
+    """Scale the day's hull resistance to the prototype; the result and its warnings.
+
+    The model resistance R(U) = k2·U|U| + k1·U is fitted by OLS to the steady hull runs at
+    |α| ≤ 0.5° (two or more needed); 1 + k (:func:`towtank.analysis.similarity.form_factor`)
+    needs the model's wetted area; then :func:`towtank.analysis.similarity.scaling_table`, the
+    similarity statement and the recommended prototype resistance.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv of the day (``config``, ``status``, ``angle_deg``, ``speed_mean`` [m/s],
+        ``drag_mean`` [N], ``rho`` [kg/m³], ``nu`` [m²/s], ``re`` [-]).
+    model, prototype : Model, Prototype
+        The protocol's [model] and [prototype].
+    scale : float
+        λ = L_p / L_m [-].
+    rho_m, nu_m : float
+        Tank water density [kg/m³] and kinematic viscosity [m²/s].
+    rho_p, nu_p : float
+        Prototype water's, likewise.
+    laminar_re : float
+        Reynolds number below which the flow need not be turbulent [-].
+    damping_alpha_max_deg : float
+        Largest |α| of the runs whose Reynolds range is the model's [deg].
+    free_surface : bool, default True
+        False in air (no waves, no depth, no Froude similarity).
+
+    Returns
+    -------
+    (ScalingResult or None, list of str)
+        None when fewer than two straight runs give the resistance curve.
+    """
+    from statsmodels.regression.linear_model import OLS
+
+    warn: list[str] = []
+    zero = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
+                & (np.abs(runs["angle_deg"]) <= STRAIGHT_TOL_DEG)]
+    if len(zero) < 2:
+        warn.append(
+            "scaling.csv needs two or more steady hull runs at α = 0 for the resistance curve."
+        )
+        return None, warn
+    u = zero["speed_mean"].to_numpy(float)
+    r = zero["drag_mean"].to_numpy(float)
+    res = OLS(r, np.column_stack([u * np.abs(u), u])).fit()
+    k2, k1 = (float(v) for v in res.params)
+    ff = None
+    one_plus_k = math.nan
+    if model.wetted_area_m2 is not None:
+        try:
+            ff = similarity.form_factor(
+                r, u, model.wetted_area_m2, float(zero["rho"].mean()),
+                float(zero["nu"].mean()), model.length_m, re_min=laminar_re,
+            )
+            one_plus_k = float(ff.one_plus_k)
+        except ValueError as exc:
+            warn.append(f"form factor: {exc}")
+    else:
+        warn.append(
+            "drag_ittc57 needs the model's wetted area ([model] wetted_area_m2 or a Myring "
+            "description); it is left empty and no form factor is found."
+        )
+    table = similarity.scaling_table(
+        np.asarray(prototype.speeds_m_s),
+        scale=scale,
+        length_model=model.length_m,
+        length_prototype=prototype.length_m,
+        rho_m=rho_m, nu_m=nu_m, rho_p=rho_p, nu_p=nu_p,
+        resistance_model=lambda um: k2 * um * abs(um) + k1 * um,
+        tested_speed_range=(float(u.min()), float(u.max())),
+        wetted_area_model=model.wetted_area_m2,
+        one_plus_k=one_plus_k,
+        delta_cf=prototype.delta_cf,
+    )
+    hull_runs = runs[(runs["config"] == "hull") & (runs["status"] == "ok")
+                     & (np.abs(runs["angle_deg"]) <= damping_alpha_max_deg)]
+    # a run towed backwards (negative speed) has no Reynolds range of its own to compare
+    re_ok = hull_runs["re"][np.isfinite(hull_runs["re"]) & (hull_runs["re"] > 0)]
+    if len(re_ok) == 0:  # only backward tows: their size is the Reynolds number
+        re_ok = np.abs(zero["re"])[np.isfinite(zero["re"]) & (zero["re"] != 0)]
+    re_model = (float(re_ok.min()), float(re_ok.max()))
+    re_proto = (float(table["re_prototype"].min()), float(table["re_prototype"].max()))
+    air = not free_surface
+    depth = model.depth_m if model.diameter_m is not None and not air else None
+    statement = similarity.similarity_statement(
+        re_model, re_proto, depth, model.diameter_m if depth is not None else None,
+        turbulent_re=laminar_re, free_surface=not air,
+    )
+    deep_ratio = depth / model.diameter_m if depth is not None and model.diameter_m else None
+    recommendation = similarity.recommend_resistance(
+        deep_ratio, bool(np.isfinite(table["drag_ittc57"]).any()), free_surface=not air)
+    table["drag_recommended"] = (table[recommendation.column] if recommendation.column in table
+                                 else math.nan)
+    table["recommended"] = recommendation.column
+    trend, trend_text = None, ""
+    if ff is not None:
+        trend = similarity.form_factor_trend(ff.speed_reynolds, ff.speed_values)
+        trend_text = similarity.form_factor_trend_statement(trend, ff.one_plus_k)
+    result = ScalingResult(
+        recommendation=recommendation, form_factor_trend=trend,
+        form_factor_trend_text=trend_text,
+        table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
+        form_factor=ff, statement=statement, rho_p=rho_p, nu_p=nu_p, rho_m=rho_m, nu_m=nu_m,
+        scale=scale, length_prototype=prototype.length_m,
+        wetted_area_prototype=(model.wetted_area_m2 * scale**2
+                               if model.wetted_area_m2 is not None else None),
+        delta_cf=prototype.delta_cf,
+    )
+    outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
+    deep = air or (depth is not None and model.diameter_m is not None
+                   and depth / model.diameter_m > similarity.DEEP_SUBMERGENCE_DEPTH_RATIO)
+    if outside and not deep:  # deeply submerged, Froude scaling is not what counts
+        warn.append(
+            "Froude-scaled drag is extrapolated beyond the tested model speeds for prototype "
+            "speeds " + ", ".join(f"{v:g}" for v in outside) + " m/s" + (
+                " (the model ran near the surface, where Froude similarity is needed)."
+                if depth is not None else
+                " (give [model] depth_m: deeply submerged, Froude similarity is not needed).")
+        )
+    laminar = table.loc[table["re_prototype"] < laminar_re, "speed_prototype"]
+    if len(laminar):
+        warn.append(
+            "prototype speeds " + ", ".join(f"{v:g}" for v in laminar) + " m/s give Re below "
+            f"{laminar_re:g} ([processing] laminar_re), where the flow need not be "
+            "turbulent: the ITTC-57 drag there is indicative only."
+        )
+    return result, warn
