@@ -382,7 +382,7 @@ def read_text_columns(
                             skip_blank_lines=True, on_bad_lines="skip", dtype=str)
     except Exception as exc:  # noqa: BLE001 - pandas raises many types for odd text
         raise RunError(f"{name} is not a readable text table ({exc})") from None
-    cols: dict[str, np.ndarray] = {}
+    cols = {}
     bad_numbers = 0
     for col in frame.columns:
         text = frame[col].str.strip()
