@@ -484,9 +484,10 @@ def reduce_runs(
             path = protocol.campaign.data_dir / str(rec["file"])
             known = cache.known_file(path)
             hit = cache.get(known[0], keys[run]) if known is not None else None
-            if hit is not None and (hit.sha256 != known[0] or hit.file != str(rec["file"])):
-                hit = None  # an entry that is not this file's reduction: a miss
-            if hit is not None:  # its stamp: the file as the cached reduction read it
+            # a hit is this file's reduction (else a miss); its stamp: the file as the cached
+            # reduction read it
+            if (known is not None and hit is not None and hit.sha256 == known[0]
+                    and hit.file == str(rec["file"])):
                 reductions[run] = replace(hit, run=run, file_stamp=known[1])
                 continue
         to_reduce.append(rec)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from towtank.errors import ProtocolError
 
@@ -90,6 +91,7 @@ def simulate_command(
     problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
     if problems:
         raise ProtocolError(schema.joined(problems))
+    assert model is not None  # a model that could not be read is one of the problems above
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
@@ -101,9 +103,9 @@ def simulate_command(
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:
             print(f"warning: {warning}", file=sys.stderr)
-    kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
-                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
-                  dive_angle_deg=dive_angle_deg)
+    kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+                                  net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
+                                  dive_angle_deg=dive_angle_deg)
     try:
         ts = simulate(model, manoeuvre, **kwargs)
         metrics = manoeuvre_metrics(ts)
@@ -121,7 +123,8 @@ def simulate_command(
 
     def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
-        if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+        # the steady glides around this one (docs/method.md); a glide's buoyancy is set above
+        if manoeuvre == "glide" and net_buoyancy_n is not None:
             from towtank.vehicle.glider import glide_table
 
             sign = -1.0 if net_buoyancy_n <= 0 else 1.0
