@@ -477,7 +477,7 @@ def _tare_dof(sel: pd.DataFrame, reductions: dict[int, RunReduction] | None,
     return float(min(dofs)) if dofs else math.inf
 
 
-def _t95(dof: int) -> float:
+def _t95(dof: float) -> float:
     from scipy.stats import t
 
     return float(t.ppf(0.975, dof)) if dof > 0 else math.inf
@@ -548,7 +548,7 @@ def fit_damping(
         x = np.column_stack([alpha**2, alpha, np.ones_like(alpha)])
         cov_tare = _run_tare_cov(np.linalg.pinv(x), sel, reductions, tares, q)
         tare_dof = _tare_dof(sel, reductions, tares)
-        lin = {"tare_cov": cov_tare, "tare_dof": tare_dof}
+        lin: dict[str, Any] = {"tare_cov": cov_tare, "tare_dof": tare_dof}
         student, cooks = _influence(x, np.asarray(res.resid))
         table = pd.DataFrame({
             "run": sel["run"].to_numpy(int), "angle_deg": sel["angle_deg"].to_numpy(float),
