@@ -111,7 +111,7 @@ def math_text(text: str) -> str:
     return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
 
 
-def t95(dof: int) -> float:
+def t95(dof: float) -> float:
     """Two-sided 95 % Student-t quantile for ``dof`` degrees of freedom (inf if dof ≤ 0)."""
     from scipy.stats import t
 

@@ -147,7 +147,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
         shown |= sel
         ax.plot(s["U"][sel], s["drag"][sel], "o", ms=2.0, mew=0, color=color, alpha=0.5,
                 zorder=2)
-        u = np.linspace(*lv["speed_range"], 60)
+        u = np.linspace(lv["speed_range"][0], lv["speed_range"][1], 60)
         d_a = np.polyval(lv["quadratic"], u)
         ax.plot(u, d_a, color=color, lw=1.7, zorder=4)
         handles.append(Line2D([], [], color=color, marker="o", ms=3,

@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from towtank.testing.truth import FileFormat
 
-LAYOUTS: tuple[FileFormat, ...] = ("csv", "tdms", "tdms-waveform", "mat", "mat73", "hdf5", "lvm", "txt-eu")
+LAYOUTS: tuple[FileFormat, ...] = ("csv", "tdms", "tdms-waveform", "mat", "mat73", "hdf5", "lvm",
+                                   "txt-eu")
 TARGET = 1.5  # largest time ratio to CSV for the TDMS and MATLAB layouts
 
 
