@@ -351,6 +351,7 @@ def fit_added_mass(
     )
     fit.curve_difference = curve_difference(reductions, run_ids, mass)
     cd = fit.curve_difference
+    # the ignores: curve_difference's dict holds float or None values (a typed result replaces it)
     if cd.get("value") is not None and math.isfinite(float(cd["value"])):  # type: ignore[arg-type]
         alt = float(cd["value"])  # type: ignore[arg-type]
         spread = float(cd.get("spread", 0.0))  # type: ignore[arg-type]

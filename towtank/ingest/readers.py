@@ -760,7 +760,7 @@ def column_unit(column: str, stated: dict[str, str]) -> str | None:
 
 def is_volts(unit: str | None) -> bool:
     """True for a unit of voltage (V, mV, µV): a raw bridge or amplifier signal."""
-    return bool(unit) and unit.strip().lower() in _VOLTS  # type: ignore[union-attr]
+    return unit is not None and unit.strip().lower() in _VOLTS
 
 
 def unit_factor(canon: str, unit: str | None, column: str, name: str) -> float:

@@ -815,9 +815,9 @@ Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | Non
 def sheet_segment(row: dict[str, Any]) -> int | None:
     """The run sheet's ``segment`` of a row (the run's acquisition in a file holding several,
     from 1), None when the sheet gives none (``[read] segment`` then applies)."""
-    value = row.get("segment")
+    value = row.get("segment", math.nan)
     try:
-        k = float(value)  # type: ignore[arg-type]
+        k = float(value)
     except (TypeError, ValueError):
         return None
     return int(k) if math.isfinite(k) and k >= 1 else None

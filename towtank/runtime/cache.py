@@ -96,7 +96,7 @@ def settings_key(
         "test": str(row.get("test", "")).strip().lower(),
     })
     try:  # the run's acquisition in a file holding several (NaN or <NA>: none given)
-        segment = float(row.get("segment"))  # type: ignore[arg-type]
+        segment = float(row.get("segment", math.nan))
     except (TypeError, ValueError):
         segment = math.nan
     if math.isfinite(segment):

@@ -17,13 +17,16 @@ import json
 import types
 import typing
 import zipfile
-from typing import Any, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 
 __all__ = ["RecordError", "to_bytes", "from_bytes", "check_value"]
 
-T = TypeVar("T")
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 
 #: The JSON member of a record.
 HEADER = "__record__.json"
@@ -133,7 +136,7 @@ def from_bytes(blob: bytes, cls: type[T]) -> T:
     if not isinstance(header, dict):
         raise RecordError("record header is not a table")
     hints = typing.get_type_hints(cls)
-    names = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    names = {f.name for f in dataclasses.fields(cls)}
     if set(header) != names:
         raise RecordError("record fields differ from the class's")
     used: set[str] = set()
