@@ -376,7 +376,7 @@ def form_factor(
             f"drag and speed must have the same length ({r.size} and {u.size} points given)."
         )
     area = _positive(wetted_area, "wetted_area")
-    re = reynolds_number(u, _positive(length, "length"), _positive(nu, "nu"))
+    re = np.asarray(reynolds_number(u, _positive(length, "length"), _positive(nu, "nu")))
     values = np.full(r.shape, np.nan)
     valid = np.isfinite(re) & (re > 100.0) & np.isfinite(r)
     ct = r[valid] / (0.5 * _positive(rho, "rho") * area * u[valid] ** 2)
@@ -733,16 +733,16 @@ def scaling_table(
     if not lo <= hi:
         raise ValueError(f"tested_speed_range must be (lowest, highest), not ({lo}, {hi}).")
     u_p = check_prototype_speeds(speeds_prototype, l_p, nu_p)
-    u_m_froude = froude_speed_model(u_p, lam)
+    u_m_froude = np.asarray(froude_speed_model(u_p, lam))
     u_m_reynolds = reynolds_speed_model(u_p, lam, nu_m, nu_p)
     r_m = np.array([float(resistance_model(float(u))) for u in u_m_froude], dtype=float)
     if wetted_area_model is None or not math.isfinite(one_plus_k):
         drag_ittc57 = np.full(u_p.shape, np.nan)
     else:
         wetted_area_prototype = _positive(wetted_area_model, "wetted_area_model") * lam**2
-        drag_ittc57 = ittc57_drag(
+        drag_ittc57 = np.asarray(ittc57_drag(
             u_p, l_p, wetted_area_prototype, rho_p, nu_p, one_plus_k, delta_cf
-        )
+        ))
     table = pd.DataFrame(
         {
             "speed_prototype": u_p,

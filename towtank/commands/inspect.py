@@ -331,10 +331,11 @@ PNG_KEY = "towtank inspect"
 def _png_source(path: Path) -> str | None:
     """The run file an existing inspect plot shows, or None for any other file."""
     try:
-        from PIL import Image
+        from PIL import Image, PngImagePlugin
 
         with Image.open(path) as im:
-            return im.text.get(PNG_KEY) if im.format == "PNG" else None  # type: ignore[attr-defined]
+            return (im.text.get(PNG_KEY) if isinstance(im, PngImagePlugin.PngImageFile)
+                    else None)
     except Exception:  # noqa: BLE001 - not an image, or unreadable: not ours
         return None
 

@@ -69,7 +69,7 @@ def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: st
     )
 
     glider = None if model is None else model.get("glider")
-    if glider is not None:  # its wings enter every simulation
+    if model is not None and glider is not None:  # its wings enter every simulation
         problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
         if problems:
             return problems
@@ -127,6 +127,7 @@ def simulate_command(
     problems += _check_roll(model, manoeuvre, roll_deg, name)
     if problems:
         raise ProtocolError(schema.joined(problems))
+    assert model is not None  # a model that could not be read is one of the problems above
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
@@ -158,7 +159,8 @@ def simulate_command(
 
     def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
-        if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+        # the steady glides around this one (docs/method.md); a glide's buoyancy is set above
+        if manoeuvre == "glide" and net_buoyancy_n is not None:
             from towtank.vehicle.glider import glide_table
 
             sign = -1.0 if net_buoyancy_n <= 0 else 1.0

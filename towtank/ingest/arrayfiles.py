@@ -627,7 +627,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
         base = "/" + "/".join(parts) if parts else ""
         rate_hz, where, why = rate_from_names(
             [*owners, *(("dataset", f"{base}/{k}") for k in cols)])
-        if rate_hz is not None:
+        if rate_hz is not None and where is not None:  # a rate comes with where it is stated
             fs.append(rate_hz)
             cols[FS_NAME_KEY] = _text_entry(where + (f" ({errors[0]}: not used)" if errors
                                                      else ""))

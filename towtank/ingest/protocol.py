@@ -14,7 +14,7 @@ import tomllib
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from towtank.errors import ProtocolError
 from towtank.ingest.readers import ReadOptions
@@ -191,7 +191,7 @@ class Fin:
     chord_m: float
     span_m: float
     section: str = "NACA0015"
-    mounting: str = "free"
+    mounting: Literal["free", "wall"] = "free"  # FIN_MOUNTINGS
     oswald_e: float = 1.0
     x_m: float | None = None
     linear_max_deg: float = 10.0  # largest |angle of attack| of the lift-slope fit [deg]

@@ -382,7 +382,7 @@ def read_text_columns(
                             skip_blank_lines=True, on_bad_lines="skip", dtype=str)
     except Exception as exc:  # noqa: BLE001 - pandas raises many types for odd text
         raise RunError(f"{name} is not a readable text table ({exc})") from None
-    cols: dict[str, np.ndarray] = {}
+    cols = {}
     bad_numbers = 0
     for col in frame.columns:
         text = frame[col].str.strip()
@@ -760,7 +760,7 @@ def column_unit(column: str, stated: dict[str, str]) -> str | None:
 
 def is_volts(unit: str | None) -> bool:
     """True for a unit of voltage (V, mV, µV): a raw bridge or amplifier signal."""
-    return bool(unit) and unit.strip().lower() in _VOLTS  # type: ignore[union-attr]
+    return unit is not None and unit.strip().lower() in _VOLTS
 
 
 def unit_factor(canon: str, unit: str | None, column: str, name: str) -> float:

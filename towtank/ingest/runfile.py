@@ -847,7 +847,7 @@ def _load_run(
         sha256=digest,
         columns=tuple(c for c in cols if not c.startswith("__")),
         notes=notes,
-        speed_nominal=float(speed_nominal) if nominal else math.nan,  # type: ignore[arg-type]
+        speed_nominal=float(speed_nominal) if speed_nominal is not None else math.nan,
         time_source=time_source,
         units=units,
     )

@@ -586,7 +586,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
                 f"{src}: row {sheet_row} has run number {run_text!r}, which is not a whole number "
                 f"from 0 to {MAX_RUN_NUMBER}."
             ) from None
-        out: dict[str, object] = {"run": run, "sheet_row": sheet_row}
+        out: dict[str, Any] = {"run": run, "sheet_row": sheet_row}
         out["file"] = _as_text(rec["file"])
         if not out["file"]:
             errors.append("the sheet gives no data file")
@@ -600,7 +600,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         out["test"] = test
         try:
             out["angle_deg"] = _converted(_as_float(rec["angle_deg"]), units.get("angle_deg"))
-            if math.isnan(out["angle_deg"]):  # type: ignore[arg-type]
+            if math.isnan(out["angle_deg"]):
                 raise ValueError
         except ValueError:
             errors.append(f"angle_deg {_as_text(rec['angle_deg'])!r} is not a number")
@@ -611,12 +611,12 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
             except ValueError:
                 errors.append(f"{col} {_as_text(rec.get(col))!r} is not a number")
                 out[col] = float("nan")
-        if math.isnan(out["water_temp_C"]):  # type: ignore[arg-type]
+        if math.isnan(out["water_temp_C"]):
             out["water_temp_C"] = float(default_temperature_C)
         else:
-            problem = (temperature_problem(out["water_temp_C"],  # type: ignore[arg-type]
+            problem = (temperature_problem(out["water_temp_C"],
                                            AIR_TEMPERATURE_RANGE_C, "of air in a test rig")
-                       if air else temperature_problem(out["water_temp_C"]))  # type: ignore
+                       if air else temperature_problem(out["water_temp_C"]))
             if problem is not None:
                 errors.append(f"water_temp_C: {problem}")
                 out["water_temp_C"] = float(default_temperature_C)
@@ -630,9 +630,9 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         if "segment" in raw.columns:
             out["segment"] = _segment(rec.get("segment"), errors)
         ws, we = out["window_start_s"], out["window_end_s"]
-        if math.isnan(ws) != math.isnan(we):  # type: ignore[arg-type]
+        if math.isnan(ws) != math.isnan(we):
             errors.append("window_start_s and window_end_s must be given together")
-        elif not math.isnan(ws) and not we > ws:  # type: ignore[operator, arg-type]
+        elif not math.isnan(ws) and not we > ws:
             errors.append(f"window_end_s ({we}) must be after window_start_s ({ws})")
         for col in raw.columns:
             if col not in KNOWN:

@@ -168,7 +168,13 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
         return arr * unit_factor("speed" if canon == "speed" else canon, unit, key, name)
 
     t = channel(spec.time, "time") if spec.time is not None else _own_time(cols, name)
-    x = channel(spec.position, "position") if spec.position else channel(spec.speed, "speed")
+    if spec.position:
+        x = channel(spec.position, "position")
+    elif spec.speed is not None:
+        x = channel(spec.speed, "speed")
+    else:
+        raise ProtocolError(f"the speed log {name}: [speed_log] needs either 'speed' or "
+                            "'position' (one of them).")
     ok = np.isfinite(t) & np.isfinite(x)
     t, x = t[ok], x[ok]
     if t.size < 3:

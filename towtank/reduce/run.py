@@ -355,7 +355,7 @@ def reduce_nominal(
             f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
             f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered")
     has_lift = raw.lift is not None
-    forces = [raw.drag] + ([raw.lift] if has_lift else [])
+    forces = [raw.drag] + ([raw.lift] if raw.lift is not None else [])
     filt = conditioning.lowpass(np.column_stack(forces), fs, p.cutoff_hz, p.filter_order)
     levels = raw.zero_levels or {}
     n = t.size
@@ -374,7 +374,9 @@ def reduce_nominal(
     s0, s1 = steady
     post = rest_at_end(t, filt[:, 0] - zeros[0], steady, fs, p) if p.drift == "linear" else None
     steady_force = max(abs(float(np.mean(filt[s0:s1, i])) - zeros[i]) for i in range(len(names)))
-    zeroed, drifts, warnings = [], [], []
+    zeroed: list[np.ndarray] = []
+    drifts: list[float] = []
+    warnings: list[str] = []
     for i, name in enumerate(names):
         w = None if name in levels else pre
         if post is not None:
@@ -807,9 +809,9 @@ Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | Non
 def sheet_segment(row: dict[str, Any]) -> int | None:
     """The run sheet's ``segment`` of a row (the run's acquisition in a file holding several,
     from 1), None when the sheet gives none (``[read] segment`` then applies)."""
-    value = row.get("segment")
+    value = row.get("segment", math.nan)
     try:
-        k = float(value)  # type: ignore[arg-type]
+        k = float(value)
     except (TypeError, ValueError):
         return None
     return int(k) if math.isfinite(k) and k >= 1 else None

@@ -27,15 +27,17 @@ from __future__ import annotations
 import math
 import re
 import textwrap
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import matplotlib as mpl
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
+from matplotlib.transforms import Bbox
 
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
@@ -127,8 +129,8 @@ def page_plan(day: DayResult) -> list[Page]:
         pages.append(Page("runs", "Runs", chunk,
                           subtitle=f"runs {chunk[0]}–{chunk[-1]}" if len(chunk) > 1 else ""))
     q = _paginate(quality_flow(day), QUALITY_HEIGHT_IN)
-    for i, chunk in enumerate(q):
-        pages.append(Page("quality", "Quality", chunk,
+    for i, part in enumerate(q):
+        pages.append(Page("quality", "Quality", part,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
     runs = thumbnail_runs(day)
     for k in range(0, len(runs), THUMBS_PER_PAGE):
@@ -319,7 +321,7 @@ METHOD_NOTE = (
 def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
            col_widths: list[float], *, fontsize: float = 7.5, row_in: float = 0.22,
            highlight: dict[tuple[int, int], str] | None = None,
-           align: list[str] | None = None) -> float:
+           align: Sequence[Literal["left", "center", "right"]] | None = None) -> float:
     """A matplotlib table across the page; returns the inches used."""
     n = len(rows) + 1
     height = n * row_in
@@ -328,7 +330,7 @@ def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
     ax.set_axis_off()
     total = sum(col_widths)
     tab = ax.table(cellText=rows, colLabels=header, colWidths=[w / total for w in col_widths],
-                   bbox=(0, 0, 1, 1), cellLoc="right")
+                   bbox=Bbox.from_bounds(0, 0, 1, 1), cellLoc="right")
     tab.auto_set_font_size(False)
     tab.set_fontsize(fontsize)
     for (r, c), cell in tab.get_celld().items():
@@ -337,7 +339,8 @@ def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
         cell.PAD = 0.04
         if align is not None:
             cell.get_text().set_horizontalalignment(align[c])
-            cell._loc = align[c]  # noqa: SLF001 - keeps the alignment when the table redraws
+            # private, not in matplotlib's stubs: keeps the alignment when the table redraws
+            cell._loc = align[c]  # type: ignore[attr-defined]  # noqa: SLF001
         if r == 0:
             cell.set_facecolor("#" + style.XL_HEADER_FILL)
             cell.get_text().set_fontweight("bold")
@@ -440,7 +443,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
         header, rows, methods, hl = coefficient_rows(day)
         y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
-                    highlight=hl, align=["center"] + ["right"] * 7 + ["center"],
+                    highlight=hl, align=("center",) + ("right",) * 7 + ("center",),
                     fontsize=7.8) + 0.1
         notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
         notes.append(f"Shaded: |diff %| > {DIFF_HIGHLIGHT_PCT:g} against the reference. "
@@ -690,7 +693,7 @@ class ThumbGrid:
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
-                    where = {"x": 0.5, "y": 0.97, "va": "top"}
+                    where: dict[str, Any] = {"x": 0.5, "y": 0.97, "va": "top"}
                 else:
                     ax.set_axis_off()
                     twin.set_visible(False)
@@ -779,14 +782,14 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     path = folder / "report.pdf"
     plan = page_plan(day)
     groups = split_pages(plan, parts)
-    parts = [folder / f".report-part-{k}.pdf" for k in range(len(groups))]
+    part_files = [folder / f".report-part-{k}.pdf" for k in range(len(groups))]
     try:
         run_beside([
             (f"report.pdf pages {g[0] + 1}–{g[-1] + 1}", partial(_write_part, day, plan, g, part))
-            for g, part in zip(groups, parts, strict=True)
+            for g, part in zip(groups, part_files, strict=True)
         ])
         writer = PdfWriter()
-        for part in parts:
+        for part in part_files:
             writer.append(part)
         date, _ = report_date(day)
         created = creation_date(date)
@@ -803,7 +806,7 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
         with open(path, "wb") as fh:
             writer.write(fh)
     finally:
-        for part in parts:
+        for part in part_files:
             part.unlink(missing_ok=True)
     return path
 

@@ -19,6 +19,7 @@ import pandas as pd
 
 from towtank import __version__
 from towtank.reference.sets import reference_name
+from towtank.results import require
 
 if TYPE_CHECKING:
     from towtank.results import DayResult
@@ -101,7 +102,7 @@ def _tare_provenance(day: DayResult) -> list[dict[str, Any]]:
 
 def _scaling_provenance(day: DayResult) -> dict[str, Any]:
     """The prototype, its water and the form factor behind scaling.csv."""
-    sr = day.scaling_result
+    sr = require(day.scaling_result, "scaling")
     proto = day.protocol.prototype
     ff = sr.form_factor
     return {

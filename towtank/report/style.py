@@ -6,6 +6,11 @@ colours too without pulling in matplotlib.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the rc key names as matplotlib's stubs list them; no import at run time
+    from matplotlib.typing import RcKeyType
+
 #: A4 portrait [in].
 PAGE_SIZE: tuple[float, float] = (8.27, 11.69)
 #: Size of a stand-alone figure (PNG) and of a figure page's drawing area [in].
@@ -14,7 +19,7 @@ FIGURE_SIZE: tuple[float, float] = (8.27, 9.6)
 PNG_DPI = 150
 
 #: matplotlib rc settings applied with ``plt.rc_context`` around every drawing.
-RC: dict[str, object] = {
+RC: dict[RcKeyType, Any] = {
     "font.family": "DejaVu Sans",
     "font.size": 8.5,
     "axes.titlesize": 9.5,
@@ -75,7 +80,7 @@ XL_DIFF_FILL = "FFE699"
 XL_NOTE_FONT_COLOR = "7F7F7F"
 
 
-def rc() -> dict[str, object]:
+def rc() -> dict[RcKeyType, Any]:
     """The rc dict, with the colour cycle made from :data:`PALETTE`."""
     from cycler import cycler
 

@@ -21,19 +21,20 @@ from towtank.report.figure_base import (
 
 if TYPE_CHECKING:
     from towtank.results import DayResult
+    from towtank.reduce.tare import TareFit
 
 
 #: Units of the tare coefficients t2, t1, m_t of T = t2·U|U| + t1·U + m_t·a.
 TARE_UNITS = ("N s²/m²", "N s/m", "kg")
 
 
-def _interval(fit: object) -> np.ndarray:
+def _interval(fit: TareFit) -> np.ndarray:
     """Half-widths of the 95 % intervals of (t2, t1, m_t): Student's t at the fit's dof."""
     se = np.sqrt(np.maximum(np.diag(np.asarray(fit.cov, dtype=float)), 0.0))
     return t95(fit.dof) * se
 
 
-def tare_terms(fit: object) -> str:
+def tare_terms(fit: TareFit) -> str:
     """The fitted coefficients of one channel with their 95 % intervals, e.g.
     ``t2 = 0.08001 ± 0.0012 N s²/m², t1 = …, m_t = … kg``."""
     half = _interval(fit)
@@ -66,7 +67,9 @@ def tare_caption(day: DayResult) -> str:
 
 def _run_list(runs: tuple[int, ...]) -> str:
     """Run numbers as ranges: (1, 2, 3, 5) -> "1–3, 5"."""
-    out, start, prev = [], None, None
+    out: list[str] = []
+    start: int | None = None
+    prev = 0  # the last run of the range from start; set with start
     for r in sorted(runs):
         if start is None:
             start = prev = r

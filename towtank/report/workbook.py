@@ -272,7 +272,8 @@ class SheetWriter:
         formats = {c: column_format(cell_value(r.get(c)) for r in records) if per_column
                    else None for c in cols}
         for i, rec in enumerate(records, start=1):
-            fill = self.st.get(row_fill(rec)) if row_fill else None
+            style = row_fill(rec) if row_fill else None
+            fill = self.st.get(style) if style is not None else None
             for j, c in enumerate(cols, start=1):
                 cell = self._put(head + i, j, rec.get(c), formats[c])
                 if fill is not None:
@@ -313,7 +314,7 @@ def _fill_for_status(rec: dict[str, Any]) -> str | None:
 
 def _fill_for_diff(rec: dict[str, Any]) -> str | None:
     try:
-        d = float(rec.get("diff_pct"))
+        d = float(rec.get("diff_pct", math.nan))
     except (TypeError, ValueError):
         return None
     return "diff" if math.isfinite(d) and abs(d) > DIFF_HIGHLIGHT_PCT else None

@@ -96,7 +96,7 @@ def settings_key(
         "test": str(row.get("test", "")).strip().lower(),
     })
     try:  # the run's acquisition in a file holding several (NaN or <NA>: none given)
-        segment = float(row.get("segment"))  # type: ignore[arg-type]
+        segment = float(row.get("segment", math.nan))
     except (TypeError, ValueError):
         segment = math.nan
     if math.isfinite(segment):
@@ -155,7 +155,7 @@ class RunCache:
         A further check of an entry read back (e.g. its arrays' lengths); False is a miss.
     """
 
-    def __init__(self, directory: str | Path, kind: type, check: Any = None):
+    def __init__(self, directory: str | Path, kind: type[Any], check: Any = None):
         self.dir = Path(directory)
         self.kind = kind
         self._check = check
@@ -297,7 +297,11 @@ class RunCache:
         self._dirty = True
         if (len(self._pending) >= PACK_ENTRIES
                 and time.monotonic() - self._last_write >= PACK_SECONDS):
-            self._guarded(lambda: (self._write_pack(), self._write_index()))
+            def write() -> None:
+                self._write_pack()
+                self._write_index()
+
+            self._guarded(write)
 
     # ----------------------------------------------------------------------------- disk
     def _guarded(self, write: Any) -> None:
@@ -418,7 +422,7 @@ def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int, i
 def _installed() -> list[str]:
     """Names (with versions) of the distributions installed on sys.path: a library upgraded
     changes the outputs' provenance, so it changes the fingerprint. One listing per folder."""
-    out = []
+    out: list[str] = []
     for entry in sys.path:
         try:
             names = os.listdir(entry or ".")

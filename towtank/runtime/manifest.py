@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -294,9 +295,7 @@ def lock_path(out_dir: Path) -> Path:
 
 
 def _lock_fd(fd: int, blocking: bool) -> bool:
-    try:
-        import fcntl
-    except ImportError:  # Windows
+    if sys.platform == "win32":  # no fcntl on Windows
         import msvcrt
 
         try:
@@ -305,6 +304,8 @@ def _lock_fd(fd: int, blocking: bool) -> bool:
             return True
         except OSError:
             return False
+    import fcntl
+
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
         return True

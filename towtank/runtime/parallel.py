@@ -487,7 +487,7 @@ def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool])
     return [func(protocol, rec, debug=debug) for rec in records]
 
 
-def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
+def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]]) -> None:
     """Run independent ``(name, task)`` pairs at once: the first here, the others forked.
 
     For tasks that share nothing and write their own files (the parts of the report). Where
@@ -531,11 +531,11 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
         from towtank.runtime.storage import os_error
 
         codes = [code for _, _, code in failures if code is not None]
-        exc: Exception = (os_error(codes[0]) if codes
-                          else RuntimeError("; ".join(f for f, _, _ in failures)))
+        error: Exception = (os_error(codes[0]) if codes
+                            else RuntimeError("; ".join(f for f, _, _ in failures)))
         for what, trace, _ in failures:
-            exc.add_note(trace or what)
-        raise exc
+            error.add_note(trace or what)
+        raise error
 
 
 def _outcomes(children: list[tuple[str, Any, Any]]) -> list[tuple[str, str, int | None]]:
@@ -565,7 +565,7 @@ def _kill_children(children: list[tuple[str, Any, Any]]) -> None:
             recv.close()
 
 
-def _run_in_child(task: Callable[[], None], send: Any) -> None:
+def _run_in_child(task: Callable[[], object], send: Any) -> None:
     """In a forked process: one task; sends None, or (error, traceback, storage errno or
     None)."""
     import traceback

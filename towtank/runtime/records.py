@@ -17,13 +17,16 @@ import json
 import types
 import typing
 import zipfile
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 
 __all__ = ["RecordError", "to_bytes", "from_bytes", "check_value"]
 
-T = TypeVar("T")
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 
 #: The JSON member of a record.
 HEADER = "__record__.json"
@@ -65,7 +68,9 @@ def to_bytes(record: Any) -> bytes:
         else:
             header[f.name] = _plain(value)
     buf = io.BytesIO()
-    np.savez(buf, **arrays)  # stored, not deflated: sizes are what they say
+    # stored, not deflated: sizes are what they say; the cast because the names (a0, a1, ...)
+    # are never savez's own keyword allow_pickle, which mypy cannot see
+    np.savez(buf, **cast(dict[str, Any], arrays))
     with zipfile.ZipFile(buf, "a", compression=zipfile.ZIP_STORED) as zf:
         zf.writestr(HEADER, json.dumps(header, allow_nan=True))
     return buf.getvalue()
@@ -131,7 +136,7 @@ def from_bytes(blob: bytes, cls: type[T]) -> T:
     if not isinstance(header, dict):
         raise RecordError("record header is not a table")
     hints = typing.get_type_hints(cls)
-    names = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    names = {f.name for f in dataclasses.fields(cls)}
     if set(header) != names:
         raise RecordError("record fields differ from the class's")
     used: set[str] = set()

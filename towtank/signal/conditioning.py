@@ -169,9 +169,12 @@ def zero_line(
     drift : float
         Post-run minus pre-run zero [N] (0 without a post window).
     """
-    if pre is None and level is None:
+    if level is not None:
+        z0 = float(level)
+    elif pre is not None:
+        z0 = float(np.mean(force[pre[0] : pre[1]]))
+    else:
         raise ValueError("zero_line needs the pre-run window or a level")
-    z0 = float(np.mean(force[pre[0] : pre[1]])) if level is None else float(level)  # type: ignore[index]
     if post is None or post[1] - post[0] < 2:
         return np.full(t.shape, z0), z0, 0.0
     z1 = float(np.mean(force[post[0] : post[1]]))

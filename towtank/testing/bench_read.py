@@ -16,12 +16,17 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-LAYOUTS = ("csv", "tdms", "tdms-waveform", "mat", "mat73", "hdf5", "lvm", "txt-eu")
+if TYPE_CHECKING:
+    from towtank.testing.truth import FileFormat
+
+LAYOUTS: tuple[FileFormat, ...] = ("csv", "tdms", "tdms-waveform", "mat", "mat73", "hdf5", "lvm",
+                                   "txt-eu")
 TARGET = 1.5  # largest time ratio to CSV for the TDMS and MATLAB layouts
 
 
-def _write(root: Path, layout: str, seed: int) -> Path:
+def _write(root: Path, layout: FileFormat, seed: int) -> Path:
     from towtank.testing import synthetic as syn
     from towtank.testing.layouts import layout_channels, protocol_sections
 
@@ -34,7 +39,8 @@ def _write(root: Path, layout: str, seed: int) -> Path:
     channels = layout_channels(layout, syn.LabChannels())
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv", channels=channels,
                                           channel_style="lab")
-    return syn.write_protocol(proto, **protocol_sections(layout, sections))
+    tables: dict[str, Any] = protocol_sections(layout, sections)
+    return syn.write_protocol(proto, **tables)
 
 
 def time_layout(protocol_path: Path, repeat: int) -> tuple[float, int, int]:

@@ -61,7 +61,7 @@ SHEET_COLUMNS = (
 _FIXED_TIME = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
 
-def _xlsx_bytes(rows: list[dict[str, Any]], columns: Sequence[str]) -> bytes:
+def _xlsx_bytes(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> bytes:
     """An .xlsx workbook with one sheet ``runs``, byte-for-byte reproducible."""
     import openpyxl
 
@@ -414,7 +414,7 @@ def _make_day(
         truth.coefficients = hull.coefficients(rho0)
         truth.primes = hull.primes(rho0)
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for spec, number, temp, stream in zip(plan, numbers, temps, streams[1:], strict=True):
         if temp not in water_cache:
             water_cache[temp] = _water(temp, water_type)

@@ -82,7 +82,7 @@ class HullTruth:
     length, diameter : float
         Overall length L [m] and diameter D [m].
     frontal_area : float, optional
-        Frontal area A [m^2]; default pi D^2 / 4.
+        Frontal area A [m^2]; left out (NaN), pi D^2 / 4.
     lateral_area : float, default 0.0152
         Projected side area for transverse tows [m^2].
     """
@@ -97,11 +97,11 @@ class HullTruth:
     cl_alpha: float = 2.0
     length: float = 0.353
     diameter: float = 0.05
-    frontal_area: float | None = None
+    frontal_area: float = math.nan
     lateral_area: float = 0.0152
 
     def __post_init__(self) -> None:
-        if self.frontal_area is None:
+        if self.frontal_area is None or math.isnan(self.frontal_area):
             object.__setattr__(self, "frontal_area", math.pi * self.diameter**2 / 4.0)
 
     def cd(self, alpha_deg: Any) -> np.ndarray:

@@ -106,7 +106,7 @@ def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
         raise TowtankError(f"[vehicle]: no prediction ({exc})") from None
     if coefficients is None or coefficients.empty:
         return first, None, []
-    length = first.profile.length
+    length: float | None = first.profile.length
     model, vehicle = getattr(protocol, "model", None), protocol.vehicle
     if model is not None and model.myring is not None and vehicle.hull == "myring" and (
             vehicle.myring == {k: float(getattr(model.myring, k)) for k in vehicle.myring}):

@@ -167,7 +167,7 @@ def json_depth(value: Any, limit: int = MAX_DEPTH) -> int:
     depth = 0
     level = [value]
     while level and depth <= limit:
-        nxt = []
+        nxt: list[Any] = []
         for item in level:
             if isinstance(item, dict):
                 nxt.extend(item.values())
@@ -263,8 +263,9 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
         if key not in model:
             continue
         value = model[key]
-        nums = [_number(v) for v in value] if isinstance(value, list) else []
-        if len(nums) != 3 or any(n is None for n in nums):
+        raw = [_number(v) for v in value] if isinstance(value, list) else []
+        nums = [n for n in raw if n is not None]
+        if len(raw) != 3 or len(nums) != 3:
             problems.append(f"{name}: '{key}' must be a list of three numbers [{labels}], "
                             f"finite [{unit}], not {_show(value)}.")
         elif positive and min(nums) <= 0:
@@ -303,6 +304,9 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
         problems += check_covariance(model["covariance"], name)
     if problems:  # the checks below need every value above
         return problems
+    # no problem: every required key is there and valid (the scalars are numbers)
+    assert mass is not None and weight is not None and buoyancy is not None
+    assert isinstance(coefficients, dict)
 
     if abs(weight - mass * _G) > WEIGHT_TOLERANCE * mass * _G:
         problems.append(f"{name}: 'weight_N' must be mass_kg x g ({mass * _G:.6g} N for "

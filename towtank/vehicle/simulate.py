@@ -266,7 +266,7 @@ def simulate(
     if initial_state is not None:
         state0 = np.asarray(initial_state, dtype=float).copy()
     closed = manoeuvre == "dive" and dive_angle_deg is not None
-    if closed:
+    if manoeuvre == "dive" and dive_angle_deg is not None:  # closed
         limit = math.radians(float(model.get("fin_limit_deg", FIN_LIMIT_DEG)))
         sigma = 1.0 if float(model["coefficients"].get("M_uuds", -1.0)) <= 0 else -1.0
         theta_cmd = -math.radians(dive_angle_deg)
@@ -294,8 +294,8 @@ def simulate(
         while t0 < duration_s:
             def event(t, y, target=target):  # noqa: ANN001
                 return y[5] - target * check
-            event.terminal = True
-            event.direction = target
+            # solve_ivp reads these two attributes of an event function
+            vars(event).update(terminal=True, direction=target)
             sol = budget.solve(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
                                (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
                                max_step=h, events=event)
@@ -320,7 +320,7 @@ def simulate(
         "sternplane_deg": np.degrees([stern(y) for y in states]) if closed else np.degrees(ds),
     })
     out.attrs["manoeuvre"] = manoeuvre
-    if closed:
+    if closed and dive_angle_deg is not None:
         out.attrs["dive_angle_deg"] = float(dive_angle_deg)
     out.attrs["check_deg"] = abs(rudder_deg)
     if manoeuvre == "glide" and (roll_deg or rudder_deg):
