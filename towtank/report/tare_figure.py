@@ -20,8 +20,8 @@ from towtank.report.figure_base import (
 )
 
 if TYPE_CHECKING:
-    from towtank.results import DayResult
     from towtank.reduce.tare import TareFit
+    from towtank.results import DayResult
 
 
 #: Units of the tare coefficients t2, t1, m_t of T = t2·U|U| + t1·U + m_t·a.
