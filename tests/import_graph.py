@@ -78,8 +78,9 @@ def imports(path: Path, module: str, known: set[str]) -> list[Import]:
         above = lines[node.lineno - 2] if node.lineno > 1 else ""
         startup = local and (STARTUP_MARK in here or STARTUP_MARK in above)
 
-        def edge(target: str, names: tuple[str, ...] = (), node: ast.stmt = node) -> Import:
-            return Import(module, target, names, node.lineno, local, startup)
+        def edge(target: str, names: tuple[str, ...] = (), line: int = node.lineno,
+                 local: bool = local, startup: bool = startup) -> Import:
+            return Import(module, target, names, line, local, startup)
 
         if isinstance(node, ast.Import):
             found += [edge(a.name) for a in node.names]
@@ -192,8 +193,6 @@ def private_attribute_uses(package_dir: Path) -> list[tuple[str, int, str]]:
     for m, p in mods.items():
         aliases: set[str] = set()
         tree = ast.parse(p.read_text(encoding="utf-8"))
-        for e in imports(p, m, known):
-            pass
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom):
                 for a in node.names:
