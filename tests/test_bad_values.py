@@ -247,20 +247,20 @@ def test_a_huge_sheet_or_run_file_is_refused_before_it_is_read(tmp_path):
 
 
 def test_a_gzip_bomb_is_refused(tmp_path):
-    from towtank.ingest import runfile
+    from towtank.ingest import readers, runfile
 
     path = tmp_path / "bomb.csv.gz"
     with gzip.open(path, "wb", compresslevel=9) as fh:
         block = b"0" * (1 << 20)
         for _ in range(40):
             fh.write(block)
-    old = runfile.MAX_RUN_FILE_BYTES
+    old = readers.MAX_RUN_FILE_BYTES
     try:
-        runfile.MAX_RUN_FILE_BYTES = 16 << 20
+        readers.MAX_RUN_FILE_BYTES = 16 << 20
         with pytest.raises(runfile.RunError, match="too large for one run"):
             runfile.read_columns(path)
     finally:
-        runfile.MAX_RUN_FILE_BYTES = old
+        readers.MAX_RUN_FILE_BYTES = old
 
 
 # ------------------------------------------------------------------------ 16: messages

@@ -254,7 +254,7 @@ def cmd_process(args: argparse.Namespace) -> int:
 
 def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
     from towtank.errors import ProtocolError
-    from towtank.ingest.protocol import check_output_dir, load_protocol
+    from towtank.ingest.protocol import load_protocol, with_output_dir
 
     try:
         protocol = load_protocol(args.protocol)
@@ -262,8 +262,8 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
         _err(str(exc))
         return EXIT_UNUSABLE
     try:
-        out = check_output_dir(
-            args.out if args.out is not None else protocol.campaign.output_dir, protocol
+        protocol, out = with_output_dir(
+            protocol, args.out if args.out is not None else protocol.campaign.output_dir
         )
     except ProtocolError as exc:
         _err(str(exc))
@@ -311,7 +311,7 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
 def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
              opened: Recorder) -> int:
     from towtank.errors import ProtocolError
-    from towtank.ingest.protocol import check_output_dir
+    from towtank.ingest.protocol import with_output_dir
     from towtank.pipeline import process_day
     from towtank.report import write_outputs
 
@@ -348,7 +348,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
     if args.date:
         day.report_date = args.date
     try:  # the sheet may name run files anywhere: none of them may be an output's target
-        check_output_dir(out, protocol, day.inputs)
+        with_output_dir(protocol, out, day.inputs)
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
