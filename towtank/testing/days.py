@@ -22,8 +22,8 @@ from towtank import __version__ as _TOWTANK_VERSION
 from towtank.testing.instruments import (
     LabChannels,
     Noise,
-    _csv_bytes,
-    _water,
+    csv_bytes,
+    medium_properties,
     simulate_run,
     write_run_file,
 )
@@ -125,7 +125,7 @@ def write_run_sheet(
         path.write_bytes(_xlsx_bytes(rows, columns))
     elif suffix == ".csv":
         frame = pd.DataFrame([{c: r.get(c, "") for c in columns} for r in rows], columns=columns)
-        path.write_bytes(_csv_bytes(frame))
+        path.write_bytes(csv_bytes(frame))
     else:
         raise ValueError(f"{path.name}: a run sheet must be .csv or .xlsx.")
     return path
@@ -392,7 +392,7 @@ def _make_day(
     day_rng = np.random.default_rng(streams[0])
     temps = _run_temperatures(plan, temperature_C, temperature_spread_C, day_rng)
 
-    nominal = _water(temperature_C, water_type)
+    nominal = medium_properties(temperature_C, water_type)
     rho0, nu0 = float(nominal.rho), float(nominal.nu)
     water_cache: dict[float, Any] = {}
     truth = DayTruth(
@@ -417,7 +417,7 @@ def _make_day(
     rows = []
     for spec, number, temp, stream in zip(plan, numbers, temps, streams[1:], strict=True):
         if temp not in water_cache:
-            water_cache[temp] = _water(temp, water_type)
+            water_cache[temp] = medium_properties(temp, water_type)
         tare = tares.get(spec.tare_group, TareTruth.none())
         frame, run_truth = simulate_run(
             spec.config,
@@ -561,7 +561,7 @@ def make_hull_day(
     -------
     DayTruth
     """
-    nominal = _water(temperature_C, water_type)
+    nominal = medium_properties(temperature_C, water_type)
     hull = sut2_hull_truth(float(nominal.rho)) if hull is None else hull
     return _make_day(
         out_dir,

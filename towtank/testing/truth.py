@@ -58,7 +58,7 @@ FileFormat = Literal["csv", "csv.gz", "tdms", "tdms-waveform", "lvm", "txt-eu", 
                      "position-log", "zero-file", "no-speed"]
 SheetFormat = Literal["csv", "xlsx"]
 
-_REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
+REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
 
 
 
@@ -392,7 +392,7 @@ def tare_forces(
     return drag, lift
 
 
-def _model_forces(
+def model_forces(
     config: str,
     angle_deg: float,
     u: np.ndarray,
@@ -403,6 +403,9 @@ def _model_forces(
     rho: float,
     nu: float,
 ) -> tuple[np.ndarray, np.ndarray]:
+    """The model's true drag and lift [N] in a run of ``config`` (``"hull"``, ``"fin"``; the
+    sting alone otherwise: zero) at ``angle_deg`` [deg], speed ``u`` [m/s] and acceleration
+    ``a`` [m/s²], in water of density ``rho`` [kg/m³] and kinematic viscosity ``nu`` [m²/s]."""
     if config == "hull":
         assert hull is not None
         return hull_forces(u, a, angle_deg, hull, rho)
