@@ -10,8 +10,9 @@ imports and every cross-module use of a ``_private`` name.
 Every ``import`` and ``from ... import`` counts, at the top of a module, under ``if
 TYPE_CHECKING:`` or inside a function. ``from towtank.report import figures`` is an import of
 the module ``towtank.report.figures`` (and of the package ``towtank.report``). A function-local
-import marked as a start-up saving (a comment holding :data:`STARTUP_MARK` on the import's line
-or on the line just above it) is kept out of the circle check: the lazy imports that keep
+import marked as a start-up saving (a comment holding :data:`STARTUP_MARK` on the import's line,
+or on a comment line just above it or above the run of imports it belongs to) is kept out of the
+circle check: the lazy imports that keep
 pandas, scipy or matplotlib out of ``towtank inspect`` and ``--help``.
 """
 
@@ -62,6 +63,19 @@ def _is_local(node: ast.AST, parents: dict[ast.AST, ast.AST]) -> bool:
     return False
 
 
+def _marked(lines: list[str], lineno: int) -> bool:
+    """Whether the import on line ``lineno`` (from 1) holds :data:`STARTUP_MARK`, or the comment
+    just above it or above the run of imports and comments it ends does."""
+    if STARTUP_MARK in lines[lineno - 1]:
+        return True
+    j = lineno - 2
+    while j >= 0 and lines[j].strip().startswith(("#", "import ", "from ")):
+        if STARTUP_MARK in lines[j]:
+            return True
+        j -= 1
+    return False
+
+
 def imports(path: Path, module: str, known: set[str]) -> list[Import]:
     """Every import in ``path`` (the module ``module``); ``known`` is the package's modules."""
     text = path.read_text(encoding="utf-8")
@@ -74,9 +88,7 @@ def imports(path: Path, module: str, known: set[str]) -> list[Import]:
         if not isinstance(node, (ast.Import, ast.ImportFrom)):
             continue
         local = _is_local(node, parents)
-        here = lines[node.lineno - 1]
-        above = lines[node.lineno - 2] if node.lineno > 1 else ""
-        startup = local and (STARTUP_MARK in here or STARTUP_MARK in above)
+        startup = local and _marked(lines, node.lineno)
 
         def edge(target: str, names: tuple[str, ...] = (), line: int = node.lineno,
                  local: bool = local, startup: bool = startup) -> Import:

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
+import pandas as pd
+
+from towtank.analysis import similarity
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol import Prototype, Water, load_protocol
+from towtank.pipeline import medium_at, process_day
 
 
 def scale_command(
@@ -19,14 +25,6 @@ def scale_command(
     (:func:`towtank.analysis.similarity.check_prototype_speeds`) with a ProtocolError (exit status
     2).
     """
-    import math
-
-    import pandas as pd
-
-    from towtank.analysis import similarity
-    from towtank.ingest.protocol import Prototype, Water, load_protocol
-    from towtank.pipeline import medium_at, process_day
-
     protocol = load_protocol(protocol_path)
     if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
         bad = next(s for s in speeds if not (math.isfinite(s) and s > 0))

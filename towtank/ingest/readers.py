@@ -35,6 +35,7 @@ hdf5       HDF5 datasets of one group (h5py; :mod:`towtank.ingest.arrayfiles`)
 from __future__ import annotations
 
 import io
+import logging
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -326,6 +327,8 @@ def read_text_columns(
     a units row under the header. Values that are not numbers are kept as text (the run's
     checks count and drop such rows).
     """
+    # start-up saving: pandas (~0.27 s) for a text column only: the reduction's workers and towtank
+    # inspect never load it
     import pandas as pd
 
     opts = options or ReadOptions()
@@ -414,6 +417,8 @@ def _numeric_body(body: bytes, header: list[str], delim: str,
     to points first: the separator is then not a comma); None sends it to the general path."""
     if delim == "whitespace" or len(set(header)) != len(header) or not body.strip():
         return None
+    # start-up saving: pyarrow (~80 ms) only when a text file is read: not for towtank predict,
+    # simulate or a protocol's check
     import pyarrow as pa
     from pyarrow import csv as pacsv
 
@@ -592,6 +597,8 @@ def _lvm_block(block: list[str], names: list[str], sep: str,
                dec: str) -> tuple[dict[str, np.ndarray], int] | None:
     """A segment's data lines through pyarrow when every named cell is a number (the comment
     column aside); None sends the segment to the line-by-line reader."""
+    # start-up saving: pyarrow (~80 ms) only when a text file is read: not for towtank predict,
+    # simulate or a protocol's check
     import pyarrow as pa
     from pyarrow import csv as pacsv
 
@@ -651,8 +658,7 @@ def read_tdms_columns(
     when a channel carries it; ``unit_string`` properties give the units. With several groups
     the channels of ``[read] group`` (or of every group) are listed.
     """
-    import logging
-
+    # start-up saving: npTDMS (~0.12 s) only for a TDMS file
     from nptdms import TdmsFile
 
     # nptdms logs what it finds odd in a damaged file; the run's one sentence says it instead

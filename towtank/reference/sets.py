@@ -60,6 +60,8 @@ def reference_name(reference: str) -> str:
 
 def reference_table(name: str) -> pd.DataFrame:
     """The packaged CSV of the built-in set ``name`` (comments dropped)."""
+    # start-up saving: pandas (~0.27 s) only for the tables: towtank.ingest.protocol imports this
+    # module
     import pandas as pd
 
     file, _, _ = BUILTIN_REFERENCES[name]
@@ -80,6 +82,8 @@ def design_tool_table1() -> pd.DataFrame:
     Columns: printed_exp, printed_value (the two numbers as printed, SI), error_pct_printed (the
     tool's error [%]) and prestero2001 (Prestero's 2001 value where the row has one, SI).
     """
+    # start-up saving: pandas (~0.27 s) only for the tables: towtank.ingest.protocol imports this
+    # module
     import pandas as pd
 
     with resources.files("towtank.reference").joinpath(

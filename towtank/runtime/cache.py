@@ -32,6 +32,7 @@ import hashlib
 import json
 import math
 import os
+import platform
 import re
 import stat
 import sys
@@ -42,8 +43,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import towtank
 from towtank import __version__
 from towtank.runtime import records
+from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import is_real_dir, read_regular, sha256_regular
 
 CACHE_FORMAT = 4  # of entries and settings keys (4: npz records, never pickles)
@@ -455,10 +458,6 @@ class DayStamp:
     @property
     def key(self) -> str:
         if self._key is None:
-            import platform
-
-            import towtank
-
             c = self._protocol.campaign
             ref = Path(str(c.reference))
             payload = {
@@ -482,8 +481,6 @@ class DayStamp:
         """(size, mtime_ns, ctime_ns, inode) of every file the output folder's manifest says
         towtank wrote: stat only, nothing read (a FIFO or a 12 GB file the user put beside the
         outputs is not towtank's, and not looked at); a link or a non-file is None."""
-        from towtank.runtime.manifest import read_manifest
-
         data = read_manifest(self.out_dir)
         files = sorted(data["files"]) if data else []
         return {rel: _lstamp(self.out_dir / rel) for rel in files}

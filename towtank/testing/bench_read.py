@@ -17,14 +17,16 @@ import sys
 import time
 from pathlib import Path
 
+from towtank.ingest.protocol import load_protocol
+from towtank.ingest.runfile import file_bytes, load_run
+from towtank.testing import synthetic as syn
+from towtank.testing.layouts import layout_channels, protocol_sections
+
 LAYOUTS = ("csv", "tdms", "tdms-waveform", "mat", "mat73", "hdf5", "lvm", "txt-eu")
 TARGET = 1.5  # largest time ratio to CSV for the TDMS and MATLAB layouts
 
 
 def _write(root: Path, layout: str, seed: int) -> Path:
-    from towtank.testing import synthetic as syn
-    from towtank.testing.layouts import layout_channels, protocol_sections
-
     day = root / layout
     proto = day / "protocol.toml"
     if proto.is_file():
@@ -39,9 +41,6 @@ def _write(root: Path, layout: str, seed: int) -> Path:
 
 def time_layout(protocol_path: Path, repeat: int) -> tuple[float, int, int]:
     """(best time to load every run file [s], files, bytes) of one day."""
-    from towtank.ingest.protocol import load_protocol
-    from towtank.ingest.runfile import file_bytes, load_run
-
     protocol = load_protocol(protocol_path)
     data_dir = protocol.campaign.data_dir
     files = sorted(p for p in data_dir.iterdir() if p.is_file())

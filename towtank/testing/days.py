@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+import openpyxl
 import pandas as pd
 
 from towtank import __version__ as _TOWTANK_VERSION
@@ -28,6 +29,7 @@ from towtank.testing.instruments import (
     write_run_file,
 )
 from towtank.testing.layouts import LAYOUTS
+from towtank.testing.layouts import NO_SPEED_WINDOW_MARGIN_S as m
 from towtank.testing.truth import (
     FIN_SAMPLE_DATE,
     FIN_SAMPLE_SEED,
@@ -63,8 +65,6 @@ _FIXED_TIME = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
 def _xlsx_bytes(rows: list[dict[str, Any]], columns: Sequence[str]) -> bytes:
     """An .xlsx workbook with one sheet ``runs``, byte-for-byte reproducible."""
-    import openpyxl
-
     wb = openpyxl.Workbook()
     ws = wb.active
     ws.title = "runs"
@@ -463,8 +463,6 @@ def _make_day(
 
     columns: tuple[str, ...] = SHEET_COLUMNS
     if file_format == "no-speed":  # the lab's steady windows: the set speed has no trace
-        from towtank.testing.layouts import NO_SPEED_WINDOW_MARGIN_S as m
-
         columns += ("window_start_s", "window_end_s")
         rows = [{**row, "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
                  "window_end_s": round(truth.runs[row["run"]]["t_plateau_end"] - m, 3)}

@@ -9,6 +9,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from towtank.reference.sandia import section_coefficients
+
 GENERATOR_VERSION = "1.0"
 """Version of the generator's numerics; bumped whenever a seed would give different numbers."""
 
@@ -356,8 +358,6 @@ def fin_forces(
     lift : numpy.ndarray
         0.5 rho S C_L U|U| [N].
     """
-    from towtank.reference.sandia import section_coefficients
-
     u = np.asarray(speed, dtype=float)
     a = np.asarray(accel, dtype=float)
     re = np.clip(np.abs(u) * fin.chord / nu, 1e4, 1e7)
