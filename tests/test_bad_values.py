@@ -17,6 +17,7 @@ import time
 import warnings
 import zipfile
 from pathlib import Path
+from typing import Any, Literal
 
 import pandas as pd
 import pytest
@@ -30,11 +31,12 @@ from towtank.testing import synthetic as syn
 SEED = 11
 
 
-def _day(root: Path, sheet_edit=None, *, sheet_format: str = "csv", **sections) -> Path:
+def _day(root: Path, sheet_edit=None, *, sheet_format: Literal["csv", "xlsx"] = "csv",
+         **sections) -> Path:
     """A hull day (CSV run files) in ``root``; its protocol path. ``sections`` update the
     protocol's sections (``model={...}``, ``processing={...}``)."""
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format=sheet_format)
-    sec = syn.hull_protocol_sections(".", "out", sheet_format=sheet_format)
+    sec: dict[str, Any] = syn.hull_protocol_sections(".", "out", sheet_format=sheet_format)
     for name, values in sections.items():
         sec.setdefault(name, {}).update(values)
     if sheet_edit is not None:
@@ -50,7 +52,7 @@ def _row(frame: pd.DataFrame, i: int) -> tuple[int, str]:
 
 
 # ----------------------------------------------- 8, 9, 10, 16: one bad run, the day goes on
-BAD = {}  # run -> words its reason must hold
+BAD: dict[int, str] = {}  # run -> words its reason must hold
 
 
 def _damage(frame: pd.DataFrame, root: Path) -> None:

@@ -372,7 +372,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
         _err(str(exc))
         return EXIT_UNUSABLE
     except OSError as exc:
-        if exc.errno not in _STORAGE_ERRNOS:
+        if exc.errno is None or exc.errno not in _STORAGE_ERRNOS:
             raise
         # the system's own words for the errno: a library's strerror may be a paragraph
         # (h5py's names its driver, the time and the buffer's address)

@@ -13,7 +13,7 @@ import re
 import sys
 import tomllib
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.describe import describe_file, protocol_block
@@ -365,7 +365,8 @@ def _save(fig, path: Path, runfile: str) -> None:  # noqa: ANN001 - a matplotlib
     import matplotlib as mpl
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    with mpl.rc_context(style.rc()):
+    rc: Any = style.rc()  # matplotlib's stubs want its own key type
+    with mpl.rc_context(rc):
         fig.savefig(path, dpi=style.PNG_DPI, facecolor="white",
                     metadata={"Software": None, PNG_KEY: runfile})
 

@@ -31,6 +31,7 @@ def scale_command(
         raise ProtocolError(f"--speeds: the prototype speed {bad:g} m/s is not a finite speed > 0.")
     if protocol.model is None:
         raise ProtocolError(f"{protocol.path.name}: scaling needs a [model] section.")
+    model = protocol.model
     proto = protocol.prototype
     if proto is None:
         if protocol.model.scale is None or not speeds:
@@ -78,7 +79,7 @@ def scale_command(
             for v, ok in zip(table["drag_froude"], table["froude_in_tested_range"], strict=True)
         ],
     })
-    print(f"{protocol.name}: model L = {protocol.model.length_m:g} m, prototype "
+    print(f"{protocol.name}: model L = {model.length_m:g} m, prototype "
           f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.medium} "
           f"{proto.water.temperature_C:g} °C")
     print(show.to_string(index=False))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -92,6 +93,7 @@ def simulate_command(
     problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
     if problems:
         raise ProtocolError(schema.joined(problems))
+    assert model is not None  # read_model raised, and so problems stopped us, otherwise
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
@@ -99,7 +101,7 @@ def simulate_command(
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:
             print(f"warning: {warning}", file=sys.stderr)
-    kwargs = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
+    kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
                   dive_angle_deg=dive_angle_deg)
     try:
@@ -120,8 +122,9 @@ def simulate_command(
     def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
         if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
-            sign = -1.0 if net_buoyancy_n <= 0 else 1.0
-            size = abs(net_buoyancy_n) or 1.0
+            net = float(net_buoyancy_n or 0.0)  # set above for a glide
+            sign = -1.0 if net <= 0 else 1.0
+            size = abs(net) or 1.0
             table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
                                 [sign * p for p in range(5, 50, 5)])
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")

@@ -627,7 +627,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
             [*owners, *(("dataset", f"{base}/{k}") for k in cols)])
         if rate_hz is not None:
             fs.append(rate_hz)
-            cols[FS_NAME_KEY] = _text_entry(where + (f" ({errors[0]}: not used)" if errors
+            cols[FS_NAME_KEY] = _text_entry((where or "") + (f" ({errors[0]}: not used)" if errors
                                                      else ""))
         elif why:
             errors.append(why)

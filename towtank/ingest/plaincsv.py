@@ -232,8 +232,8 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
             cols[key] = np.full(table.num_rows, np.nan)
         elif pa.types.is_timestamp(column.type):
             ns = column.cast(pa.int64()).to_numpy(zero_copy_only=False).astype(np.float64)
-            first = ns[np.isfinite(ns)][0] if np.isfinite(ns).any() else 0.0
-            cols[key] = (ns - first) * 1e-9
+            t0 = float(ns[np.isfinite(ns)][0]) if np.isfinite(ns).any() else 0.0
+            cols[key] = (ns - t0) * 1e-9
         else:
             cols[key] = column.to_numpy(zero_copy_only=False)
     cols[_ROWS_KEY] = rows

@@ -381,9 +381,8 @@ def read_text_columns(
     body = b"\n".join(lines[first:])
     fast = _numeric_body(body, header, delim, decimal)
     if fast is not None:
-        cols = fast
-        frame_len = len(next(iter(cols.values()))) if cols else 0
-        return _text_result(cols, units, delim, decimal, head, first, frame_len)
+        frame_len = len(next(iter(fast.values()))) if fast else 0
+        return _text_result(fast, units, delim, decimal, head, first, frame_len)
     sep = r"\s+" if delim == "whitespace" else delim
     try:
         frame = pd.read_csv(io.BytesIO(body), sep=sep, header=None, decimal=decimal,

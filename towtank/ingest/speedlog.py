@@ -88,7 +88,9 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
         return arr * unit_factor("speed" if canon == "speed" else canon, unit, key, name)
 
     t = channel(spec.time, "time") if spec.time is not None else _own_time(cols, name)
-    x = channel(spec.position, "position") if spec.position else channel(spec.speed, "speed")
+    x = (channel(spec.position, "position") if spec.position is not None
+         else channel(spec.speed, "speed") if spec.speed is not None
+         else np.full(t.shape, np.nan))  # never: [speed_log] gives speed or position
     ok = np.isfinite(t) & np.isfinite(x)
     t, x = t[ok], x[ok]
     if t.size < 3:

@@ -357,7 +357,7 @@ def reduce_nominal(
             f"the low-pass cut-off of [processing] cutoff_hz = {p.cutoff_hz:g} Hz is not below "
             f"half the file's sample rate ({fs:g} Hz / 2), so the run cannot be filtered")
     has_lift = raw.lift is not None
-    forces = [raw.drag] + ([raw.lift] if has_lift else [])
+    forces = [raw.drag] + ([raw.lift] if raw.lift is not None else [])
     filt = conditioning.lowpass(np.column_stack(forces), fs, p.cutoff_hz, p.filter_order)
     levels = raw.zero_levels or {}
     n = t.size
@@ -376,7 +376,9 @@ def reduce_nominal(
     s0, s1 = steady
     post = rest_at_end(t, filt[:, 0] - zeros[0], steady, fs, p) if p.drift == "linear" else None
     steady_force = max(abs(float(np.mean(filt[s0:s1, i])) - zeros[i]) for i in range(len(names)))
-    zeroed, drifts, warnings = [], [], []
+    zeroed: list[np.ndarray] = []
+    drifts: list[float] = []
+    warnings: list[str] = []
     for i, name in enumerate(names):
         w = None if name in levels else pre
         if post is not None:

@@ -285,7 +285,7 @@ class RunCache:
         if blob is None:
             return None
         try:
-            value = records.from_bytes(blob, self.kind)
+            value: Any = records.from_bytes(blob, self.kind)
         except records.RecordError:
             return None
         if self._check is not None and not self._check(value):
@@ -300,7 +300,11 @@ class RunCache:
         self._dirty = True
         if (len(self._pending) >= PACK_ENTRIES
                 and time.monotonic() - self._last_write >= PACK_SECONDS):
-            self._guarded(lambda: (self._write_pack(), self._write_index()))
+            self._guarded(self._write_pack_and_index)
+
+    def _write_pack_and_index(self) -> None:
+        self._write_pack()
+        self._write_index()
 
     # ----------------------------------------------------------------------------- disk
     def _guarded(self, write: Any) -> None:
@@ -421,7 +425,7 @@ def _tree(root: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, int, int, i
 def _installed() -> list[str]:
     """Names (with versions) of the distributions installed on sys.path: a library upgraded
     changes the outputs' provenance, so it changes the fingerprint. One listing per folder."""
-    out = []
+    out: list[str] = []
     for entry in sys.path:
         try:
             names = os.listdir(entry or ".")

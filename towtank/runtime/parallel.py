@@ -528,11 +528,11 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], None]]]) -> None:
         raise
     if failures:
         codes = [code for _, _, code in failures if code is not None]
-        exc: Exception = (os_error(codes[0]) if codes
-                          else RuntimeError("; ".join(f for f, _, _ in failures)))
+        error: Exception = (os_error(codes[0]) if codes
+                            else RuntimeError("; ".join(f for f, _, _ in failures)))
         for what, trace, _ in failures:
-            exc.add_note(trace or what)
-        raise exc
+            error.add_note(trace or what)
+        raise error
 
 
 def _outcomes(children: list[tuple[str, Any, Any]]) -> list[tuple[str, str, int | None]]:

@@ -47,7 +47,7 @@ def to_bytes(record: Any) -> bytes:
     """
     if not dataclasses.is_dataclass(record) or isinstance(record, type):
         raise TypeError("to_bytes takes a dataclass instance")
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, Any] = {}
     header: dict[str, Any] = {}
 
     def ref(arr: np.ndarray) -> dict[str, str]:

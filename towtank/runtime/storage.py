@@ -46,7 +46,7 @@ def chained_errno(exc: BaseException) -> int | None:
         if id(e) in seen:
             continue
         seen.add(id(e))
-        if isinstance(e, OSError) and e.errno in STORAGE_ERRNOS:
+        if isinstance(e, OSError) and e.errno is not None and e.errno in STORAGE_ERRNOS:
             return int(e.errno)
         stack.extend(c for c in (e.__cause__, e.__context__) if c is not None)
     return None

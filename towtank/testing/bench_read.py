@@ -16,6 +16,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any, cast
 
 from towtank.ingest.protocol import load_protocol
 from towtank.ingest.runfile import file_bytes, load_run
@@ -31,12 +32,13 @@ def _write(root: Path, layout: str, seed: int) -> Path:
     proto = day / "protocol.toml"
     if proto.is_file():
         return proto
-    syn.make_hull_day(day, seed=seed, file_format=layout, sheet_format="csv",
+    syn.make_hull_day(day, seed=seed, file_format=cast(Any, layout), sheet_format="csv",
                       channel_style="lab")
     channels = layout_channels(layout, syn.LabChannels())
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv", channels=channels,
                                           channel_style="lab")
-    return syn.write_protocol(proto, **protocol_sections(layout, sections))
+    laid_out: dict[str, Any] = protocol_sections(layout, sections)
+    return syn.write_protocol(proto, **laid_out)
 
 
 def time_layout(protocol_path: Path, repeat: int) -> tuple[float, int, int]:

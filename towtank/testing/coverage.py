@@ -109,7 +109,7 @@ def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[d
     tmp = Path(tempfile.mkdtemp(prefix=f"cov_{condition}_", dir=workdir))
     try:
         truth = make_hull_day(tmp, seed=seed, file_format="csv", sheet_format="csv", **kw)
-        sections = hull_protocol_sections(".", "out", sheet_format="csv")
+        sections: dict[str, Any] = hull_protocol_sections(".", "out", sheet_format="csv")
         true_mass = float(sections["model"]["mass_kg"])
         sections["model"]["mass_kg"] = weighed_mass(sections["model"], seed)
         weighing_error = sections["model"]["mass_kg"] - true_mass

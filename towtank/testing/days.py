@@ -118,13 +118,13 @@ def write_run_sheet(
     pathlib.Path
     """
     path = Path(path)
-    rows = [dict(r) for r in rows]
+    table = [dict(r) for r in rows]
     path.parent.mkdir(parents=True, exist_ok=True)
     suffix = path.suffix.lower()
     if suffix == ".xlsx":
-        path.write_bytes(_xlsx_bytes(rows, columns))
+        path.write_bytes(_xlsx_bytes(table, columns))
     elif suffix == ".csv":
-        frame = pd.DataFrame([{c: r.get(c, "") for c in columns} for r in rows], columns=columns)
+        frame = pd.DataFrame([{c: r.get(c, "") for c in columns} for r in table], columns=columns)
         path.write_bytes(csv_bytes(frame))
     else:
         raise ValueError(f"{path.name}: a run sheet must be .csv or .xlsx.")
@@ -414,7 +414,7 @@ def _make_day(
         truth.coefficients = hull.coefficients(rho0)
         truth.primes = hull.primes(rho0)
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for spec, number, temp, stream in zip(plan, numbers, temps, streams[1:], strict=True):
         if temp not in water_cache:
             water_cache[temp] = medium_properties(temp, water_type)
@@ -464,7 +464,8 @@ def _make_day(
     columns: tuple[str, ...] = SHEET_COLUMNS
     if file_format == "no-speed":  # the lab's steady windows: the set speed has no trace
         columns += ("window_start_s", "window_end_s")
-        rows = [{**row, "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
+        rows = [{**row,
+                 "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
                  "window_end_s": round(truth.runs[row["run"]]["t_plateau_end"] - m, 3)}
                 for row in rows]
     if file_format == "lvm-appended":  # the run is the file's second acquisition

@@ -450,7 +450,7 @@ def write_run_file(
         raise ValueError(f"tdms_dtype must be 'float64' or 'float32', not {tdms_dtype!r}.")
     path = Path(path)
     if layout is not None:
-        lab = layout_channels(layout, channels or LabChannels())
+        lab = layout_channels(layout, channels or LabChannels()) or LabChannels()
         out = to_file_frame(frame, channel_style, lab)
         units = {}
         for canon in frame.columns:

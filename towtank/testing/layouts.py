@@ -121,8 +121,8 @@ def layout_channels(layout: str, channels: LabChannels | None) -> LabChannels | 
     if channels is None or layout not in ("mat", "mat73", "hdf5", "hdf5-rate-name"):
         return channels
     fix = variable_name if layout.startswith("mat") else (lambda c: c.replace("/", "_per_"))
-    return replace(channels, **{k: fix(getattr(channels, k))
-                                for k in ("time", "speed", "accel", "drag", "lift")})
+    return replace(channels, time=fix(channels.time), speed=fix(channels.speed),
+                   accel=fix(channels.accel), drag=fix(channels.drag), lift=fix(channels.lift))
 
 
 def _time_column(frame: pd.DataFrame, time_col: str) -> np.ndarray:

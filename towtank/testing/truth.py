@@ -128,6 +128,7 @@ class HullTruth:
         rho : float
             Water density [kg/m^3] used to turn C_D into dimensional damping.
         """
+        assert self.frontal_area is not None  # set by __post_init__
         q = 0.5 * rho * self.frontal_area
         q_lat = 0.5 * rho * self.lateral_area
         x_uu = -q * self.c0
@@ -315,6 +316,7 @@ def hull_forces(
         drag = 0.5 * rho * hull.lateral_area * hull.cd90 * uu
         lift = np.zeros_like(u)
     elif ang <= 30.0:
+        assert hull.frontal_area is not None  # set by HullTruth.__post_init__
         drag = 0.5 * rho * hull.frontal_area * hull.cd(angle_deg) * uu
         lift = 0.5 * rho * hull.frontal_area * hull.cl(angle_deg) * uu
     else:
