@@ -4,6 +4,12 @@ Every key is checked against a schema: an unknown or misspelt key is an error th
 suggests the nearest valid key, a missing required key or a value of the wrong type likewise, and
 paths are resolved relative to the protocol file. Nothing downstream ever sees an unvalidated
 value. All errors are :class:`~towtank.errors.ProtocolError` with one sentence for the user.
+
+The protocol's types are in :mod:`towtank.ingest.protocol_types` and the parsers of the lab
+sections in :mod:`towtank.ingest.sections` (both importable from here too); this module reads the
+file and checks the campaign, water, model, fin, prototype, channels and processing sections.
+:func:`with_output_dir` checks an output folder for a protocol
+(:mod:`towtank.runtime.outfolder`).
 """
 
 from __future__ import annotations
