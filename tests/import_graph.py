@@ -143,7 +143,6 @@ def circles(g: dict[str, set[str]]) -> list[list[str]]:
     on: set[str] = set()
     out: list[list[str]] = []
     counter = [0]
-    sys.setrecursionlimit(max(10_000, sys.getrecursionlimit()))
 
     def visit(v: str) -> None:
         index[v] = low[v] = counter[0]
