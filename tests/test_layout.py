@@ -283,3 +283,20 @@ def test_the_ingest_readers_and_the_protocol_import_no_circle(module):
         return seen
 
     assert module not in reach(module, set())
+
+
+READERS = ("readers", "plaincsv", "arrayfiles", "columns", "timing", "segments", "calibration",
+           "runfile", "speedlog", "zerofile", "runsheet", "describe")
+PARSERS = ("protocol", "sections", "schema", "vehicle_protocol", "design_inputs")
+
+
+def test_the_readers_depend_on_the_protocol_types_not_on_its_parsers():
+    """The config layer: the readers of run files, logs, zeros files and sheets take the
+    protocol's types (towtank.ingest.protocol_types), never the parsers that build them."""
+    wrong = sorted({
+        f"{e.module} imports {e.target}" for e in all_imports(PACKAGE)
+        if e.module.removeprefix("towtank.ingest.") in READERS
+        and e.target.removeprefix("towtank.ingest.") in PARSERS
+        and e.target.startswith("towtank.ingest.")
+    })
+    assert not wrong, "\n".join(wrong)

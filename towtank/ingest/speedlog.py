@@ -36,9 +36,8 @@ from towtank.ingest.readers import (
     stated_units,
     unit_factor,
 )
-from towtank.ingest.sections import parse_speed_log
 
-__all__ = ["SpeedLog", "parse_speed_log", "log_path", "read_speed_log", "speed_on_run_time",
+__all__ = ["SpeedLog", "log_path", "read_speed_log", "speed_on_run_time",
            "STILL_FRACTION"]
 
 #: The log's first and last speeds count as "still" below this fraction of its peak speed [-].

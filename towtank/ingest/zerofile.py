@@ -33,11 +33,10 @@ from towtank.ingest.columns import file_bytes, read_columns
 from towtank.ingest.protocol_types import ZeroFile, channel_map
 from towtank.ingest.readers import stated_units
 from towtank.ingest.runfile import map_channels
-from towtank.ingest.sections import parse_zero_file
 from towtank.ingest.speedlog import log_path
 from towtank.signal.conditioning import still_level
 
-__all__ = ["ZeroFile", "parse_zero_file", "zero_levels", "run_zero_levels",
+__all__ = ["ZeroFile", "zero_levels", "run_zero_levels",
            "with_zero_levels"]
 
 
