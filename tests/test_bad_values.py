@@ -17,6 +17,7 @@ import time
 import warnings
 import zipfile
 from pathlib import Path
+from typing import Any, Literal
 
 import pandas as pd
 import pytest
@@ -30,11 +31,12 @@ from towtank.testing import synthetic as syn
 SEED = 11
 
 
-def _day(root: Path, sheet_edit=None, *, sheet_format: str = "csv", **sections) -> Path:
+def _day(root: Path, sheet_edit=None, *, sheet_format: Literal["csv", "xlsx"] = "csv",
+         **sections) -> Path:
     """A hull day (CSV run files) in ``root``; its protocol path. ``sections`` update the
     protocol's sections (``model={...}``, ``processing={...}``)."""
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format=sheet_format)
-    sec = syn.hull_protocol_sections(".", "out", sheet_format=sheet_format)
+    sec: dict[str, Any] = syn.hull_protocol_sections(".", "out", sheet_format=sheet_format)
     for name, values in sections.items():
         sec.setdefault(name, {}).update(values)
     if sheet_edit is not None:
@@ -50,7 +52,7 @@ def _row(frame: pd.DataFrame, i: int) -> tuple[int, str]:
 
 
 # ----------------------------------------------- 8, 9, 10, 16: one bad run, the day goes on
-BAD = {}  # run -> words its reason must hold
+BAD: dict[int, str] = {}  # run -> words its reason must hold
 
 
 def _damage(frame: pd.DataFrame, root: Path) -> None:
@@ -247,20 +249,20 @@ def test_a_huge_sheet_or_run_file_is_refused_before_it_is_read(tmp_path):
 
 
 def test_a_gzip_bomb_is_refused(tmp_path):
-    from towtank.ingest import runfile
+    from towtank.ingest import readers, runfile
 
     path = tmp_path / "bomb.csv.gz"
     with gzip.open(path, "wb", compresslevel=9) as fh:
         block = b"0" * (1 << 20)
         for _ in range(40):
             fh.write(block)
-    old = runfile.MAX_RUN_FILE_BYTES
+    old = readers.MAX_RUN_FILE_BYTES
     try:
-        runfile.MAX_RUN_FILE_BYTES = 16 << 20
+        readers.MAX_RUN_FILE_BYTES = 16 << 20
         with pytest.raises(runfile.RunError, match="too large for one run"):
             runfile.read_columns(path)
     finally:
-        runfile.MAX_RUN_FILE_BYTES = old
+        readers.MAX_RUN_FILE_BYTES = old
 
 
 # ------------------------------------------------------------------------ 16: messages

@@ -8,6 +8,7 @@ that says what they are; a killed run's temporary folders are swept.
 
 from __future__ import annotations
 
+import dataclasses
 import gzip
 import hashlib
 import json
@@ -21,10 +22,16 @@ from conftest import write_hull_protocol
 
 from towtank.commands import cli
 from towtank.errors import ProtocolError, RunError
-from towtank.ingest.protocol import load_protocol, read_reference_csv
+from towtank.ingest.protocol import (
+    check_output_dir,
+    load_protocol,
+    read_reference_csv,
+    with_output_dir,
+)
 from towtank.ingest.runfile import read_columns
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.report.outputs import sweep_stale_temporaries
+from towtank.runtime import manifest, outfolder
 from towtank.testing import synthetic as syn
 
 HIGH = 0.5
@@ -60,6 +67,38 @@ def test_output_folder_may_not_be_or_hold_the_data(tmp_path, capsys):
         assert _process(protocol, out) == 2, out
         assert "raw run files" in capsys.readouterr().err
     assert _tree_hashes(tmp_path) == before
+
+
+def test_outputs_put_back_are_said_by_a_new_protocol_the_frozen_one_unchanged(tmp_path):
+    """An interrupted run left no output folder, only its last complete set beside it: the
+    check puts it back and says so in a new protocol (dataclasses.replace); the protocol given
+    is never changed in place."""
+    loaded = load_protocol(_day(tmp_path))
+    before = loaded.warnings
+    out = tmp_path / "out"
+
+    def interrupted(name: str) -> None:
+        old = tmp_path / f".out.old-{name}"
+        old.mkdir()
+        (old / "runs.csv").write_text("run\n1\n", encoding="utf-8")
+        manifest.write_manifest(old, manifest.describe(old, outfolder.OUTPUT_NAMES))
+
+    interrupted("1")
+    new, folder = with_output_dir(loaded, out)
+    assert folder == out.resolve() and (out / "runs.csv").read_text() == "run\n1\n"
+    assert loaded.warnings == before  # untouched
+    assert new is not loaded and len(new.warnings) == len(before) + 1
+    assert "interrupted run" in new.warnings[-1] and ".out.old-1" in new.warnings[-1]
+    assert dataclasses.replace(new, warnings=before) == loaded
+    again, _ = with_output_dir(new, out)  # nothing to put back: the protocol as given
+    assert again is new
+    # the folder-only check says it as a Python warning, the protocol still untouched
+    out.rename(tmp_path / ".out.moved")
+    interrupted("2")
+    with pytest.warns(UserWarning, match="interrupted run"):
+        assert check_output_dir(out, loaded) == out.resolve()
+    assert loaded.warnings == before
+    assert outfolder.check_output_dir(out, loaded.campaign.data_dir).recovered is None
 
 
 def test_output_may_not_overwrite_the_run_sheet(tmp_path, capsys):

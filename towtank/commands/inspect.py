@@ -9,13 +9,21 @@ the sample rate and any notes, and writes a PNG of speed and forces with the pha
 from __future__ import annotations
 
 import math
+import re
 import sys
+import tomllib
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
-from towtank.errors import RunError
+from towtank.errors import ProtocolError, RunError
+from towtank.ingest.describe import describe_file, protocol_block
 from towtank.ingest.extensions import EXTENSIONS
-from towtank.reduce.run import RunReduction
+from towtank.ingest.protocol import Processing, load_protocol, read_and_channels
+from towtank.ingest.runfile import load_run
+from towtank.ingest.speedlog import run_speed_log
+from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+from towtank.reduce.run import RunReduction, record_units, reduce_run, run_preview, sheet_segment
+from towtank.report import style
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
 
@@ -92,8 +100,6 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 
 
 
 def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Processing, Read
-    from towtank.ingest.protocol import Processing, load_protocol
-
     if protocol_path is None:
         return {}, Processing(), None, None
     protocol = load_protocol(protocol_path, check_paths=False)
@@ -103,7 +109,8 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
 def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
     """The run sheet's row of ``runfile`` (matched by path under the data folder, else by
     name), for a protocol whose speed comes from the sheet (``speed_source = "nominal"``)."""
-    from towtank.errors import ProtocolError
+    # start-up saving: the run sheet's reader loads pandas (~0.27 s), which towtank inspect needs
+    # only for a speed from the sheet
     from towtank.ingest.runsheet import read_run_sheet
 
     try:
@@ -127,8 +134,6 @@ def _sheet_segment(protocol, runfile: Path) -> int | None:  # noqa: ANN001 - a P
     """The run sheet's ``segment`` of ``runfile`` (the run's acquisition in a file holding
     several), None when the sheet gives none, lists no such file or cannot be read (then
     ``[read] segment`` applies, and a file with several segments says so)."""
-    from towtank.reduce.run import sheet_segment
-
     try:
         return sheet_segment(_sheet_row(protocol, runfile))
     except RunError:
@@ -138,8 +143,6 @@ def _sheet_segment(protocol, runfile: Path) -> int | None:  # noqa: ANN001 - a P
 def _run_number(runfile: Path) -> int:
     """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
     ``{run}`` of a ``[zeros]`` pattern."""
-    import re
-
     found = re.findall(r"\d+", plot_name(runfile))
     return int(found[-1]) if found else 0
 
@@ -148,12 +151,6 @@ def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadO
     """Print what the file holds and a ``[read]``/``[channels]`` block to paste into a
     protocol; return the block parsed as a protocol parses it (ReadOptions, channels), or None
     when the file cannot be described or the block names no channel."""
-    import tomllib
-
-    from towtank.errors import ProtocolError
-    from towtank.ingest.describe import describe_file, protocol_block
-    from towtank.ingest.protocol import read_and_channels
-
     try:
         desc = describe_file(runfile, read)
     except RunError:
@@ -220,9 +217,6 @@ def inspect_run(
     """
     out = out or sys.stdout
     err = err or sys.stderr
-    from towtank.ingest.runfile import load_run
-    from towtank.reduce.run import record_units, reduce_run
-
     runfile = Path(runfile)
     channels, p, read, protocol = _settings(protocol_path)
     raw = None
@@ -230,9 +224,6 @@ def inspect_run(
     window: tuple[float, float] | None = None
 
     def load():  # noqa: ANN202 - RawRun
-        from towtank.ingest.speedlog import run_speed_log
-        from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
-
         nonlocal window
         balance = protocol.balance if protocol is not None else None
         zeros = log = nominal = segment = None
@@ -331,6 +322,7 @@ PNG_KEY = "towtank inspect"
 def _png_source(path: Path) -> str | None:
     """The run file an existing inspect plot shows, or None for any other file."""
     try:
+        # start-up saving: Pillow (~20 ms) only when a PNG of that name exists
         from PIL import Image, PngImagePlugin
 
         with Image.open(path) as im:
@@ -370,18 +362,18 @@ def _target(runfile: Path, png: str | Path | None, err: TextIO, out: TextIO
 
 
 def _save(fig, path: Path, runfile: str) -> None:  # noqa: ANN001 - a matplotlib Figure
+    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
     import matplotlib as mpl
 
-    from towtank.report import style
-
     path.parent.mkdir(parents=True, exist_ok=True)
-    with mpl.rc_context(style.rc()):
+    rc: Any = style.rc()  # matplotlib's stubs want its own key type
+    with mpl.rc_context(rc):
         fig.savefig(path, dpi=style.PNG_DPI, facecolor="white",
                     metadata={"Software": None, PNG_KEY: runfile})
 
 
 def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa: ANN001
-    from towtank.reduce.run import run_preview
+    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
     from towtank.report.figures import fig_preview
 
     fig = fig_preview(run_preview(raw),
@@ -392,6 +384,7 @@ def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa
 def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
                runfile: str | Path | None = None, settings: str | None = None) -> Path:
     """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
+    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
     from towtank.report.figures import fig_run
 
     title = f"{red.file}: speed and forces (zero and drift removed, no tare)"

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
+
+from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol import load_protocol
+from towtank.vehicle import model as vmodel
+from towtank.vehicle.stage import predict_vehicle
 
 #: The files ``predict`` always writes.
 PREDICT_OUTPUTS = frozenset({"predicted.csv", "model.json"})
@@ -19,12 +25,6 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
     The protocol needs [water] and [vehicle] (its [campaign] may leave out the run sheet and
     the data folder). Output folder: ``--out``, else the protocol's output folder.
     """
-    import pandas as pd
-
-    from towtank.ingest.protocol import load_protocol
-    from towtank.vehicle import model as vmodel
-    from towtank.vehicle.stage import predict_vehicle
-
     protocol = load_protocol(protocol_path, check_paths=False, require_runs=False)
     if protocol.vehicle is None:
         raise ProtocolError(f"{protocol.path.name}: prediction needs a [vehicle] section.")
@@ -32,8 +32,6 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
         result = predict_vehicle(protocol)
     except ValueError as exc:  # a bad hull table or hull description
         raise ProtocolError(f"{protocol.path.name}: {exc}") from None
-    from towtank.commands.storage import write_outputs_or_stop
-
     folder = Path(out) if out is not None else protocol.campaign.output_dir
 
     extra = {name: getattr(result, attr) for attr, name in DESIGN_OUTPUTS.items()

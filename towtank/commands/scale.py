@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
+import pandas as pd
+
+from towtank.analysis import similarity
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol import Prototype, Water, load_protocol
+from towtank.pipeline import medium_at, process_day
 
 
 def scale_command(
@@ -19,21 +25,13 @@ def scale_command(
     (:func:`towtank.analysis.similarity.check_prototype_speeds`) with a ProtocolError (exit status
     2).
     """
-    import math
-
-    import pandas as pd
-
-    from towtank.analysis import similarity
-    from towtank.ingest.protocol import Prototype, Water, load_protocol
-    from towtank.pipeline import medium_at, process_day
-
     protocol = load_protocol(protocol_path)
     if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
         bad = next(s for s in speeds if not (math.isfinite(s) and s > 0))
         raise ProtocolError(f"--speeds: the prototype speed {bad:g} m/s is not a finite speed > 0.")
     if protocol.model is None:
         raise ProtocolError(f"{protocol.path.name}: scaling needs a [model] section.")
-    model_length_m = protocol.model.length_m
+    model = protocol.model
     proto = protocol.prototype
     if proto is None:
         if protocol.model.scale is None or not speeds:
@@ -81,7 +79,7 @@ def scale_command(
             for v, ok in zip(table["drag_froude"], table["froude_in_tested_range"], strict=True)
         ],
     })
-    print(f"{protocol.name}: model L = {model_length_m:g} m, prototype "
+    print(f"{protocol.name}: model L = {model.length_m:g} m, prototype "
           f"L = {proto.length_m:g} m (λ = {sc.scale:g}), {proto.water.medium} "
           f"{proto.water.temperature_C:g} °C")
     print(show.to_string(index=False))

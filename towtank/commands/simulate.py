@@ -2,10 +2,20 @@
 
 from __future__ import annotations
 
+import math
+import sys
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
+from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
+from towtank.report.manoeuvre_figure import save_manoeuvre_figure
+from towtank.vehicle import schema
+from towtank.vehicle.glider import glide_table
+from towtank.vehicle.model import read_model
+from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate, trim_warning
 
 DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, "glide": 0.0}
 DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0}
@@ -41,8 +51,6 @@ def _check_controls(model: dict, manoeuvre: str, rudder: float, stern: float,
 def _check_dive_angle(model: dict | None, manoeuvre: str, angle: float | None) -> list[str]:
     """--dive-angle-deg: a dive only, finite and within +-80 deg; the model's optional
     ``fin_limit_deg`` more than 0 and at most 45 deg."""
-    import math
-
     problems = []
     if angle is not None:
         if manoeuvre != "dive":
@@ -103,12 +111,6 @@ def simulate_command(
     With ``samples`` > 0 the measured coefficients are drawn ``samples`` times from their
     covariance and metrics.csv gains ci_low, ci_high (2.5 and 97.5 percentiles).
     """
-    import pandas as pd
-
-    from towtank.vehicle import schema
-    from towtank.vehicle.model import read_model
-    from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate
-
     name = Path(model_path).name
     problems: list[str] = []
     model = None
@@ -127,15 +129,11 @@ def simulate_command(
     problems += _check_roll(model, manoeuvre, roll_deg, name)
     if problems:
         raise ProtocolError(schema.joined(problems))
-    assert model is not None  # a model that could not be read is one of the problems above
+    assert model is not None  # read_model raised, and so problems stopped us, otherwise
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
     if manoeuvre != "glide":  # a glide is out of trim on purpose
-        import sys
-
-        from towtank.vehicle.simulate import trim_warning
-
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:
             print(f"warning: {warning}", file=sys.stderr)
@@ -159,19 +157,15 @@ def simulate_command(
 
     def write(tmp: Path) -> None:
         ts.to_csv(tmp / "manoeuvre.csv", index=False, float_format="%.6g")
-        # the steady glides around this one (docs/method.md); a glide's buoyancy is set above
-        if manoeuvre == "glide" and net_buoyancy_n is not None:
-            from towtank.vehicle.glider import glide_table
-
-            sign = -1.0 if net_buoyancy_n <= 0 else 1.0
-            size = abs(net_buoyancy_n) or 1.0
+        if manoeuvre == "glide":  # the steady glides around this one (docs/method.md)
+            net = float(net_buoyancy_n or 0.0)  # set above for a glide
+            sign = -1.0 if net <= 0 else 1.0
+            size = abs(net) or 1.0
             table = glide_table(model, [sign * size * f for f in (0.5, 1.0, 2.0)],
                                 [sign * p for p in range(5, 50, 5)])
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
         metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
         _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", str(model.get("name", "model")))
-
-    from towtank.commands.storage import write_outputs_or_stop
 
     write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
@@ -183,6 +177,4 @@ def simulate_command(
 
 def _figure(ts, metrics, manoeuvre: str, path: Path, name: str) -> None:  # noqa: ANN001
     """manoeuvre.png: the track and the time histories (towtank.report.manoeuvre_figure)."""
-    from towtank.report.manoeuvre_figure import save_manoeuvre_figure
-
     save_manoeuvre_figure(ts, manoeuvre, path, name)

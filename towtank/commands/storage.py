@@ -8,6 +8,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from towtank.errors import ProtocolError
+from towtank.runtime.manifest import writing_outputs
+from towtank.runtime.storage import storage_error
 
 __all__ = ["write_outputs_or_stop"]
 
@@ -21,9 +23,6 @@ def write_outputs_or_stop(folder: Path, names: frozenset[str],
     ProtocolError (exit 2) saying that the folder is as it was: the outputs are written into
     a temporary folder first and moved into place only when all of them are complete, and a
     folder this call created is removed."""
-    from towtank.runtime.manifest import writing_outputs
-    from towtank.runtime.storage import storage_error
-
     folder = Path(folder)
     existed = folder.exists()
     try:

@@ -7,11 +7,17 @@ The only production module that imports the test tooling: the generator stays ou
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import sys
 import tempfile
 from pathlib import Path
+
+from towtank.runtime import manifest
+from towtank.testing import synthetic
+from towtank.testing.handsheet import write_hand_typed_sheet
+from towtank.testing.layouts import layout_channels, protocol_sections
 
 EXIT_OK, EXIT_UNUSABLE = 0, 2
 
@@ -26,8 +32,6 @@ def synth_command(args: argparse.Namespace) -> int:
     write there (its manifest says which) is never replaced: the day is made in a temporary
     folder beside OUTDIR and moved in only when nothing foreign would be overwritten.
     """
-    from towtank.runtime import manifest
-
     out = Path(args.outdir).resolve()
     if out.exists() and not out.is_dir():
         return _refuse(f"{out} is a file, not a folder.")
@@ -67,8 +71,6 @@ def _refuse(sentence: str) -> int:
 
 def _synth_files(out: Path) -> dict:
     """The files an earlier synth run wrote in ``out`` (from its manifest)."""
-    import json
-
     try:
         data = json.loads((out / SYNTH_MANIFEST).read_text(encoding="utf-8"))
         return dict(data["files"])
@@ -78,8 +80,6 @@ def _synth_files(out: Path) -> dict:
 
 def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
     """Write the day into ``tmp``; the message to print once it is in ``out``."""
-    from towtank.testing import synthetic
-
     if args.day == "samples":
         synthetic.write_sample_days(tmp)
         return f"sample days written to {out}"
@@ -90,16 +90,12 @@ def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
     sheet = {"sheet_format": plain} if plain else {}
     if args.day == "air":  # the hull day in air: its layouts as the hull day's
         synthetic.make_air_hull_day(tmp, seed=args.seed, **formats)
-        from towtank.testing.layouts import layout_channels, protocol_sections
-
         layout = args.file_format or ""
         channels = layout_channels(layout, synthetic.LabChannels())
         sections = synthetic.air_protocol_sections(".", "out", channels=channels, **sheet)
         sections = protocol_sections(layout, sections)
     elif args.day == "hull":
         synthetic.make_hull_day(tmp, seed=args.seed, **formats)
-        from towtank.testing.layouts import layout_channels, protocol_sections
-
         layout = args.file_format or ""
         channels = layout_channels(layout, synthetic.LabChannels())
         sections = synthetic.hull_protocol_sections(".", "out", channels=channels, **sheet)
@@ -108,8 +104,6 @@ def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
         synthetic.make_fin_day(tmp, seed=args.seed, **formats)
         sections = synthetic.fin_protocol_sections(".", "out", **sheet)
     if hand:  # the same runs, typed as a lab types them
-        from towtank.testing.handsheet import write_hand_typed_sheet
-
         path = Path(tmp) / f"run_sheet.{plain}"
         write_hand_typed_sheet(path, hand, path)
     protocol = synthetic.write_protocol(

@@ -3,7 +3,7 @@
 The columns come back as from the text readers of :mod:`towtank.ingest.readers` (``name ->
 float64 array`` and the private ``__units__``, ``__fs__``, ``__fs_error__`` entries). Before any
 array is read, the sizes the file *declares* are checked against the run-file cap
-(:data:`towtank.ingest.runfile.MAX_RUN_FILE_BYTES`): a compressed MATLAB variable or an
+(:data:`towtank.ingest.readers.MAX_RUN_FILE_BYTES`): a compressed MATLAB variable or an
 unwritten HDF5 dataset holds far more than the file's size (docs/formats.md §3.1, "Size").
 A sample rate stated as an attribute or a scalar may be text with its unit (``"200 Hz"``);
 one that is not a rate gives the reason, used only if the time must come from it. An HDF5
@@ -13,23 +13,26 @@ file without either may state its rate in a group's or dataset's name (``/200.05
 from __future__ import annotations
 
 import io
+import math
 import re
 import struct
+import zlib
 from typing import Any
 
 import numpy as np
 
 from towtank.errors import RunError
+from towtank.ingest import readers
 from towtank.ingest.readers import (
-    _DT_NAMES,
-    _FS_NAMES,
-    _HDF5_SIGNATURE,
+    DT_NAMES,
     FS_ERROR_KEY,
     FS_KEY,
+    FS_NAMES,
+    HDF5_SIGNATURE,
     LABEL_KEY,
     UNITS_KEY,
     ReadOptions,
-    _units_entry,
+    units_entry,
 )
 
 #: Private column entry: where a sample rate read from a group's or dataset's name stands
@@ -41,11 +44,9 @@ FS_NAME_KEY = "__fs_name__"
 
 def _size_cap() -> int:
     """The largest run file [bytes], also the most its arrays may declare as float64 numbers
-    (:data:`towtank.ingest.runfile.MAX_RUN_FILE_BYTES`: a .mat or HDF5 file holds far more
+    (:data:`towtank.ingest.readers.MAX_RUN_FILE_BYTES`: a .mat or HDF5 file holds far more
     than its size when it is compressed or leaves a dataset unwritten)."""
-    from towtank.ingest import runfile
-
-    return int(runfile.MAX_RUN_FILE_BYTES)
+    return int(readers.MAX_RUN_FILE_BYTES)
 
 
 def _too_much(name: str, what: str, nbytes: int) -> RunError:
@@ -167,8 +168,6 @@ def _mat5_inflated(data: bytes, name: str) -> bytes:  # noqa: C901 - one pass, i
     scipy then reads a bounded buffer). The uncompressed file is then walked for the
     dimensions of every (nested) variable (:class:`_Mat5Budget`). Files that are not MAT v5
     (v4, v7.3) are returned as they are."""
-    import zlib
-
     if len(data) < 136 or data[126:128] not in (b"IM", b"MI"):
         return data
     order = "<" if data[126:128] == b"IM" else ">"
@@ -255,9 +254,7 @@ def sample_rate_value(value: Any, key: str) -> tuple[float | None, str | None]:
     rate must be a finite positive number. The reason is a clause for a sentence: "its sample
     rate attribute fs = 'fast' is not a number".
     """
-    import math
-
-    interval = key.lower() in _DT_NAMES
+    interval = key.lower() in DT_NAMES
     what = f"its sample {'interval' if interval else 'rate'} attribute {key}"
     if value is None:
         return None, f"{what} cannot be read as one value"
@@ -307,7 +304,7 @@ _NAME_RATE = re.compile(
     r"(?<![0-9A-Za-z.])" + _NAME_NUMBER
     + r"\s*(MHz|[kK]Hz|[hH][zZ]|S/s|Sa/s|sps|samples/s)(?![0-9A-Za-z/])")
 _NAME_KEYED = re.compile(
-    r"(?<![0-9A-Za-z])(" + "|".join(sorted((*_FS_NAMES, *_DT_NAMES), key=len, reverse=True))
+    r"(?<![0-9A-Za-z])(" + "|".join(sorted((*FS_NAMES, *DT_NAMES), key=len, reverse=True))
     + r")\s*[=:]\s*" + _NAME_NUMBER
     + r"(?:\s*(MHz|[kK]Hz|[hH][zZ]|S/s|Sa/s|sps|samples/s|ms|us|µs|ns|s)(?![0-9A-Za-z/]))?",
     re.IGNORECASE)
@@ -321,8 +318,8 @@ def rates_in_name(name: str) -> list[tuple[float, str]]:
     """The sample rates [Hz] a group or dataset name states, with the text that states each.
 
     A number with a rate unit, ``"200.05 Hz"`` → 200.05, ``"200Hz"``, ``"1 kHz"`` → 1000,
-    ``"500 S/s"``; or a rate or interval name with ``=`` or ``:`` (:data:`_FS_NAMES`,
-    :data:`_DT_NAMES`), ``"fs=200"`` → 200, ``"dt = 5 ms"`` → 200 (a bare number is in Hz for
+    ``"500 S/s"``; or a rate or interval name with ``=`` or ``:`` (:data:`FS_NAMES`,
+    :data:`DT_NAMES`), ``"fs=200"`` → 200, ``"dt = 5 ms"`` → 200 (a bare number is in Hz for
     a rate, in s for an interval). Only finite positive rates are returned; any text gives a
     list (empty when it states none), never an error.
 
@@ -336,8 +333,6 @@ def rates_in_name(name: str) -> list[tuple[float, str]]:
     list of (float, str)
         (rate [Hz], the matched text), in the order they stand in the name.
     """
-    import math
-
     found: list[tuple[int, float, str]] = []
     taken: list[tuple[int, int]] = []
     for m in _NAME_KEYED.finditer(name):
@@ -345,7 +340,7 @@ def rates_in_name(name: str) -> list[tuple[float, str]]:
         value = _name_number(m.group(2), m.group(3))
         if unit and _rate_factor(unit):  # a rate unit, whatever the key
             rate = value * _rate_factor(unit)
-        elif key in _DT_NAMES:  # an interval: s when no unit is written
+        elif key in DT_NAMES:  # an interval: s when no unit is written
             step = value * (_INTERVAL_UNITS.get(unit.lower(), 0.0) if unit else 1.0)
             rate = 1.0 / step if step > 0 else math.nan
         else:  # a rate: Hz when no unit is written (an interval unit is not a rate)
@@ -419,11 +414,11 @@ def _rate_entries(cols: dict[str, np.ndarray], fs: list[float], errors: list[str
 def _collect(items: dict[str, Any], cols: dict[str, np.ndarray], fs: list[float],
              errors: list[str] | None = None) -> None:
     """Vectors of a MATLAB/HDF5 namespace as columns; a sample rate or interval noted (a
-    scalar, or text such as ``"200 Hz"``, named as in ``_FS_NAMES``/``_DT_NAMES``), or why
+    scalar, or text such as ``"200 Hz"``, named as in ``FS_NAMES``/``DT_NAMES``), or why
     it is not one (in ``errors``)."""
     for key, value in items.items():
         low = key.lower()
-        is_rate = low in _FS_NAMES or low in _DT_NAMES
+        is_rate = low in FS_NAMES or low in DT_NAMES
         if is_rate and (isinstance(value, str | bytes) or np.size(value) <= 1):
             rate, why = sample_rate_value(value, key)
             if rate is not None:
@@ -446,8 +441,9 @@ def read_mat_columns(
     the struct holding the most vectors when the top level holds none). A scalar ``fs``,
     ``sample_rate`` or ``dt`` gives the sample rate of a file without a time vector.
     """
-    if data[512:520] == _HDF5_SIGNATURE or data[:8] == _HDF5_SIGNATURE:
+    if data[512:520] == HDF5_SIGNATURE or data[:8] == HDF5_SIGNATURE:
         return read_hdf5_columns(data, name, options, matlab=True)
+    # start-up saving: scipy.io (~0.46 s) only for a MATLAB file
     import scipy.io
 
     opts = options or ReadOptions()
@@ -487,6 +483,7 @@ def _h5_members(group: Any, name: str) -> dict[str, Any]:
     """The objects a group's links lead to, without following a link out of the file: an
     external link (it names another file) and a soft link to nothing are left out; a soft
     link that leads back into itself rejects the run."""
+    # start-up saving: h5py (~90 ms) only for an HDF5 file
     import h5py
 
     out = {}
@@ -531,6 +528,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
     run-file cap as float64 numbers. External links are not followed; a loop of soft links
     rejects the run.
     """
+    # start-up saving: h5py (~90 ms) only for an HDF5 file
     import h5py
 
     opts = options or ReadOptions()
@@ -589,7 +587,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
             declared = 0
             for key, obj in datasets(group_key).items():
                 shape = tuple(obj.shape or ())
-                rate = key.lower() in _FS_NAMES or key.lower() in _DT_NAMES
+                rate = key.lower() in FS_NAMES or key.lower() in DT_NAMES
                 if not _vector_shape(shape) or (obj.dtype.kind not in "fiub" and not (
                         rate and int(np.prod(shape)) <= 1)):
                     continue  # not a channel: never read
@@ -611,7 +609,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
                     errors.extend([why] if why else [])
             for owner in (chosen, fh):
                 for key in owner.attrs.keys():
-                    if key.lower() in _FS_NAMES or key.lower() in _DT_NAMES:
+                    if key.lower() in FS_NAMES or key.lower() in DT_NAMES:
                         rate_hz, why = sample_rate_value(attribute(owner, key), key)
                         fs.extend([rate_hz] if rate_hz else [])
                         errors.extend([why] if why else [])
@@ -629,11 +627,11 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
             [*owners, *(("dataset", f"{base}/{k}") for k in cols)])
         if rate_hz is not None and where is not None:  # a rate comes with where it is stated
             fs.append(rate_hz)
-            cols[FS_NAME_KEY] = _text_entry(where + (f" ({errors[0]}: not used)" if errors
+            cols[FS_NAME_KEY] = _text_entry((where or "") + (f" ({errors[0]}: not used)" if errors
                                                      else ""))
         elif why:
             errors.append(why)
     _rate_entries(cols, fs, errors)
-    cols[UNITS_KEY] = _units_entry(units)
+    cols[UNITS_KEY] = units_entry(units)
     cols[LABEL_KEY] = np.array([], dtype=float)
     return cols, []

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from towtank.ingest.protocol import ChannelMap
+from towtank.ingest.protocol_types import ChannelMap
 from towtank.ingest.readers import column_unit, converts, is_volts, unit_factor
 
 __all__ = ["UNITS", "calibrate", "unit_source"]

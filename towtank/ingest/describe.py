@@ -18,6 +18,8 @@ from towtank.ingest.arrayfiles import FS_NAME_KEY
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
+    LVM_HEADERS_KEY,
+    ROWS_KEY,
     TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
@@ -26,6 +28,9 @@ from towtank.ingest.readers import (
     stated_units,
     text_layout,
 )
+from towtank.ingest.runfile import file_bytes, read_columns
+from towtank.ingest.segments import describe_segments, find_segments
+from towtank.ingest.timing import stated_rate
 
 #: Words in a column name that suggest a canonical channel (lower case, first match wins).
 _GUESSES = (
@@ -82,9 +87,6 @@ class FileDescription:
 
 def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescription:
     """Read ``path`` and say what it holds (raises RunError as the readers do)."""
-    from towtank.ingest.runfile import file_bytes, read_columns
-    from towtank.ingest.timing import stated_rate
-
     data = file_bytes(path)
     fmt, gz = file_format(path, data, options)
     cols, _ = read_columns(path, data, options)
@@ -146,9 +148,6 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
 
 def _segments(cols: dict[str, np.ndarray], t: np.ndarray) -> list[str]:
     """One line per acquisition of a file holding several (none for one)."""
-    from towtank.ingest.readers import LVM_HEADERS_KEY, ROWS_KEY
-    from towtank.ingest.segments import describe_segments, find_segments
-
     segs = find_segments(t, headers=cols.get(LVM_HEADERS_KEY))
     if len(segs) < 2:
         return []

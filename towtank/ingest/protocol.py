@@ -4,56 +4,79 @@ Every key is checked against a schema: an unknown or misspelt key is an error th
 suggests the nearest valid key, a missing required key or a value of the wrong type likewise, and
 paths are resolved relative to the protocol file. Nothing downstream ever sees an unvalidated
 value. All errors are :class:`~towtank.errors.ProtocolError` with one sentence for the user.
+
+The protocol's types are in :mod:`towtank.ingest.protocol_types` and the parsers of the lab
+sections in :mod:`towtank.ingest.sections` (both importable from here too); this module reads the
+file and checks the campaign, water, model, fin, prototype, channels and processing sections.
+:func:`with_output_dir` checks an output folder for a protocol
+(:mod:`towtank.runtime.outfolder`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import tomllib
+import warnings as _warnings
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 from towtank.errors import ProtocolError
-from towtank.ingest.readers import ReadOptions
-from towtank.ingest.schema import (  # noqa: F401  (SCHEMA, TOP_LEVEL: public names)
-    _NUM,
-    _PROCESSING_CHOICES,
-    _PROCESSING_POSITIVE,
-    _PROCESSING_RANGES,
+from towtank.ingest.protocol_types import (  # noqa: F401 - the types, importable from here too
+    Balance,
+    Campaign,
+    ChannelMap,
+    Fin,
+    Model,
+    Myring,
+    Protocol,
+    Prototype,
+    SpeedLog,
+    TareSource,
+    Water,
+    ZeroFile,
+    channel_map,
+)
+from towtank.ingest.readers import ReadOptions, known_units
+from towtank.ingest.schema import (  # noqa: F401 - SCHEMA, TOP_LEVEL: public here too
     CANONICAL_CHANNELS,
+    NUM,
+    PROCESSING_CHOICES,
+    PROCESSING_POSITIVE,
+    PROCESSING_RANGES,
     SCHEMA,
     TOP_LEVEL,
     Processing,
     ReportOptions,
-    _coerce,
-    _positive,
-    _section,
-    _suggest,
     check_keys,
+    check_positive,
+    checked_section,
+    suggest,
 )
-from towtank.ingest.sections import (  # noqa: F401
+from towtank.ingest.sections import (  # noqa: F401 - MASS_RATIO_RANGE: public here too
     MASS_RATIO_RANGE,
-    Balance,
-    TareSource,
-    _balance,
-    _check_mass,
-    _read_options,
-    _tare_source,
+    check_mass,
+    parse_balance,
+    parse_read_options,
+    parse_speed_log,
+    parse_tare,
+    parse_zero_file,
 )
-from towtank.ingest.sheetlayout import SheetOptions, parse_sheet_options
-from towtank.ingest.speedlog import SpeedLog, parse_speed_log
-from towtank.ingest.zerofile import ZeroFile, parse_zero_file
+from towtank.ingest.sheetlayout import SheetOptions, parse_sheet_options  # noqa: F401
+from towtank.ingest.vehicle_protocol import parse_vehicle
+from towtank.reference import geometry
 from towtank.reference.air import (
     AIR_PRESSURE_RANGE_PA,
     AIR_TEMPERATURE_RANGE_C,
     DEFAULT_RELATIVE_HUMIDITY_PCT,
     STANDARD_PRESSURE_PA,
 )
-from towtank.reference.sets import BUILTIN_REFERENCES
+from towtank.reference.sets import BUILTIN_REFERENCES, read_reference_csv
 from towtank.reference.water import temperature_problem
+from towtank.runtime import outfolder
+from towtank.runtime.outfolder import OUTPUT_NAMES  # noqa: F401 - public here too
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
@@ -72,175 +95,12 @@ AIR_KEYS = ("pressure_Pa", "relative_humidity_pct")
 FIN_MOUNTINGS = ("free", "wall")
 
 
-@dataclass(frozen=True)
-class ChannelMap:
-    """How a canonical channel is found in a run file: value = gain·(raw − offset), where raw
-    is the column, or the sum of ``columns`` (a balance with several load cells per force)."""
-
-    column: str
-    gain: float = 1.0
-    offset: float = 0.0
-    columns: tuple[str, ...] = ()
-    #: True when [channels] states a gain or an offset (even ``gain = 1.0``): a column in volts
-    #: is then taken as calibrated (N per V as given), not refused. Set by the parser from the
-    #: keys present; not a protocol key (the [channels] schema does not accept it).
-    calibrated: bool = False
-    #: The unit the column is recorded in (``unit`` in [channels]): it replaces any unit the
-    #: file states and silences the day's note on channels without a unit. Without a gain the
-    #: values are converted from it to SI; with a gain it is the raw unit (the gain gives SI).
-    unit: str = ""
-
-
-@dataclass(frozen=True)
-class Campaign:
-    name: str
-    run_sheet: Path
-    data_dir: Path
-    output_dir: Path
-    reference: str = "remus"
-    test_date: str | None = None
-
-
-@dataclass(frozen=True)
-class Water:
-    """The medium of the tests ([water]) or of the prototype ([prototype.water]).
-
-    ``type`` is ``"fresh"``, ``"sea"`` or ``"air"``; temperature [°C]; salinity [g/kg] (sea
-    water); absolute pressure [Pa] and relative humidity [%] (air only: None for water).
-    """
-
-    type: str = "fresh"
-    temperature_C: float = 15.0
-    salinity_g_kg: float | None = None
-    pressure_Pa: float | None = None
-    relative_humidity_pct: float | None = None
-
-    def __post_init__(self) -> None:
-        if self.type == "air":  # air always has its state: the defaults where not given
-            if self.pressure_Pa is None:
-                object.__setattr__(self, "pressure_Pa", STANDARD_PRESSURE_PA)
-            if self.relative_humidity_pct is None:
-                object.__setattr__(self, "relative_humidity_pct",
-                                   DEFAULT_RELATIVE_HUMIDITY_PCT)
-
-    @property
-    def is_air(self) -> bool:
-        """True for a gas (air): no free surface, no buoyancy worth a check."""
-        return self.type == "air"
-
-    @property
-    def medium(self) -> str:
-        """The medium in words: "fresh water", "sea water" or "air"."""
-        return "air" if self.is_air else f"{self.type} water"
-
-
-@dataclass(frozen=True)
-class Myring:
-    """Myring hull description [m, deg]; see :mod:`towtank.reference.geometry`."""
-
-    a: float
-    b: float
-    c: float
-    n: float
-    theta_deg: float
-    d: float
-    a_offset: float = 0.0
-    c_offset: float = 0.0
-
-
-@dataclass(frozen=True)
-class Model:
-    length_m: float
-    diameter_m: float | None
-    mass_kg: float
-    name: str = "model"
-    frontal_area_m2: float | None = None
-    lateral_area_m2: float | None = None
-    wetted_area_m2: float | None = None
-    volume_m3: float | None = None
-    scale: float | None = None
-    depth_m: float | None = None
-    mass_uncertainty_kg: float = 0.0005  # added-mass intervals
-    length_uncertainty_m: float = 0.0005  # prime-value intervals
-    diameter_uncertainty_m: float = 0.0001  # provenance only: D cancels in every coefficient
-    myring: Myring | None = None
-    geometry_source: str = "as given in the protocol"
-    #: Which of frontal_area_m2, lateral_area_m2, wetted_area_m2, volume_m3 the Myring
-    #: description supplied (the protocol did not give them).
-    myring_computed: tuple[str, ...] = ()
-
-    @property
-    def frontal_area(self) -> float:
-        """Frontal area A [m²]: given, or π D²/4."""
-        if self.frontal_area_m2 is not None:
-            return self.frontal_area_m2
-        assert self.diameter_m is not None
-        return math.pi * self.diameter_m**2 / 4.0
-
-    @property
-    def lateral_area(self) -> float:
-        """Projected side area for transverse tows [m²]: given, or L·D."""
-        if self.lateral_area_m2 is not None:
-            return self.lateral_area_m2
-        assert self.diameter_m is not None
-        return self.length_m * self.diameter_m
-
-
-@dataclass(frozen=True)
-class Fin:
-    chord_m: float
-    span_m: float
-    section: str = "NACA0015"
-    mounting: Literal["free", "wall"] = "free"  # FIN_MOUNTINGS
-    oswald_e: float = 1.0
-    x_m: float | None = None
-    linear_max_deg: float = 10.0  # largest |angle of attack| of the lift-slope fit [deg]
-
-    @property
-    def area(self) -> float:
-        """Planform area S = chord × span [m²]."""
-        return self.chord_m * self.span_m
-
-
-@dataclass(frozen=True)
-class Prototype:
-    length_m: float
-    speeds_m_s: tuple[float, ...]
-    water: Water
-    delta_cf: float = 0.0
-
-
-@dataclass(frozen=True)
-class Protocol:
-    path: Path
-    campaign: Campaign
-    water: Water
-    model: Model | None
-    fin: Fin | None
-    prototype: Prototype | None
-    channels: dict[str, ChannelMap]
-    processing: Processing
-    report: ReportOptions
-    warnings: tuple[str, ...] = field(default=())
-    read: ReadOptions = field(default_factory=ReadOptions)
-    balance: Balance | None = None
-    tare: TareSource = field(default_factory=TareSource)
-    vehicle: Any = None  # towtank.ingest.vehicle_protocol.Vehicle of a [vehicle] section
-    speed_log: SpeedLog | None = None  # [speed_log]: carriage speed from its own file
-    zeros: ZeroFile | None = None  # [zeros]: the balance zero from its own file
-    sheet: SheetOptions = field(default_factory=SheetOptions)  # [sheet]: a hand-typed sheet
-
-    @property
-    def name(self) -> str:
-        return self.campaign.name
-
-
 def _water(values: dict[str, Any], label: str, src: str) -> Water:
     wtype = values.get("type", "fresh")
     if wtype not in WATER_TYPES:
         raise ProtocolError(
             f"{src}: 'type' in [{label}] must be one of {', '.join(WATER_TYPES)}, "
-            f"but it is {wtype!r}{_suggest(wtype, WATER_TYPES)}"
+            f"but it is {wtype!r}{suggest(wtype, WATER_TYPES)}"
         )
     if wtype == "air":
         return _air(values, label, src)
@@ -422,7 +282,7 @@ def load_protocol(
 
     for key in data:
         if key not in TOP_LEVEL:
-            raise ProtocolError(f"{src}: unknown section [{key}]{_suggest(key, TOP_LEVEL)}")
+            raise ProtocolError(f"{src}: unknown section [{key}]{suggest(key, TOP_LEVEL)}")
     if not require_runs:  # towtank predict: the vehicle and the water are enough
         camp = data.setdefault("campaign", {})
         if isinstance(camp, dict):
@@ -444,7 +304,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     """The validated protocol from parsed TOML (see :func:`load_protocol`)."""
     base = path.resolve().parent
     campaign = _campaign(data["campaign"], base, src, check_paths)
-    water = _water(_section(data["water"], "water", "water", src), "water", src)
+    water = _water(checked_section(data["water"], "water", "water", src), "water", src)
 
     model = _model(data["model"], src, water) if "model" in data else None
     fin = _fin(data["fin"], src) if "fin" in data else None
@@ -456,8 +316,6 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
             "remove [vehicle] or set [water] type to fresh or sea."
         )
     if "vehicle" in data:
-        from towtank.ingest.vehicle_protocol import parse_vehicle
-
         vehicle = parse_vehicle(data["vehicle"], base, src,
                                 model.myring if model is not None else None, check_paths)
     if model is None and fin is None and vehicle is None:
@@ -465,11 +323,11 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
 
     prototype = _prototype(data["prototype"], model, src) if "prototype" in data else None
     channels = _channels(data["channels"], src) if "channels" in data else {}
-    balance = _balance(data["balance"], channels, src) if "balance" in data else None
+    balance = parse_balance(data["balance"], channels, src) if "balance" in data else None
 
     processing = _processing(data.get("processing", {}), src)
-    report = ReportOptions(**_section(data.get("report", {}), "report", "report", src))
-    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+    report = ReportOptions(**checked_section(data.get("report", {}), "report", "report", src))
+    read = parse_read_options(checked_section(data.get("read", {}), "read", "read", src), src)
     if processing.speed_source == "nominal" and ("speed_log" in data or "speed" in channels):
         given = "[speed_log]" if "speed_log" in data else "[channels] speed"
         raise ProtocolError(
@@ -492,7 +350,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         read=read,
         vehicle=vehicle,
         balance=balance,
-        tare=_tare_source(data.get("tare", {}), base, src, check_paths),
+        tare=parse_tare(data.get("tare", {}), base, src, check_paths),
         speed_log=parse_speed_log(data.get("speed_log"), src),
         zeros=parse_zero_file(data.get("zeros"), src),
         sheet=parse_sheet_options(data.get("sheet"), src),
@@ -502,7 +360,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
 def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     """``[campaign]``: paths resolved, the reference and (with ``check_paths``) the sheet and
     data folder checked."""
-    camp = _section(data, "campaign", "campaign", src)
+    camp = checked_section(data, "campaign", "campaign", src)
 
     output_dir = (
         base / camp["output_dir"]
@@ -551,17 +409,17 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
 
 def _model(data: Any, src: str, water: Water | None = None) -> Model:
     """``[model]`` checked, its Myring geometry filled in and its mass checked."""
-    m = _section(data, "model", "model", src)
-    _positive(
+    m = checked_section(data, "model", "model", src)
+    check_positive(
         m,
-        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == _NUM),
+        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == NUM),
         "model",
         src,
     )
     myring = None
     if "myring" in m:
-        my = _section(m.pop("myring"), "model.myring", "model.myring", src)
-        _positive(my, ("a", "b", "c", "n", "d"), "model.myring", src)
+        my = checked_section(m.pop("myring"), "model.myring", "model.myring", src)
+        check_positive(my, ("a", "b", "c", "n", "d"), "model.myring", src)
         myring = Myring(**my)
     if "diameter_m" not in m and "frontal_area_m2" not in m and myring is None:
         raise ProtocolError(
@@ -571,14 +429,14 @@ def _model(data: Any, src: str, water: Water | None = None) -> Model:
     if myring is not None:
         model = _with_myring_geometry(model, src)
     if water is None or not water.is_air:  # in air the displaced mass bounds nothing
-        _check_mass(model, src)
+        check_mass(model, src)
     return model
 
 
 def _fin(data: Any, src: str) -> Fin:
     """``[fin]`` checked (NACA 0015 only: the shipped section data)."""
-    f = _section(data, "fin", "fin", src)
-    _positive(f, ("chord_m", "span_m", "oswald_e", "linear_max_deg"), "fin", src)
+    f = checked_section(data, "fin", "fin", src)
+    check_positive(f, ("chord_m", "span_m", "oswald_e", "linear_max_deg"), "fin", src)
     if f.get("linear_max_deg", 0.0) > 90.0:
         raise ProtocolError(
             f"{src}: 'linear_max_deg' in [fin] is the largest angle of attack of the "
@@ -588,7 +446,7 @@ def _fin(data: Any, src: str) -> Fin:
     if mounting not in FIN_MOUNTINGS:
         raise ProtocolError(
             f"{src}: 'mounting' in [fin] must be one of {', '.join(FIN_MOUNTINGS)}, "
-            f"but it is {mounting!r}{_suggest(mounting, FIN_MOUNTINGS)}"
+            f"but it is {mounting!r}{suggest(mounting, FIN_MOUNTINGS)}"
         )
     section = f.get("section", "NACA0015")
     if section.replace(" ", "").upper() != "NACA0015":
@@ -602,7 +460,7 @@ def _fin(data: Any, src: str) -> Fin:
 def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
     """``[prototype]``: its length (given, or the model's × scale, which must agree), speeds,
     roughness allowance and water."""
-    p = _section(data, "prototype", "prototype", src)
+    p = checked_section(data, "prototype", "prototype", src)
     if "length_m" in p:
         length_p = p["length_m"]
     elif model is not None and model.scale is not None:
@@ -634,7 +492,7 @@ def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
             "about 0.0004)."
         )
     pw = (
-        _water(_section(p["water"], "prototype.water", "prototype.water", src),
+        _water(checked_section(p["water"], "prototype.water", "prototype.water", src),
                "prototype.water", src)
         if "water" in p
         else Water(type="sea", temperature_C=15.0)
@@ -654,16 +512,16 @@ def read_and_channels(data: dict[str, Any], src: str
     them (ProtocolError otherwise)."""
     check_keys(data, ["read", "channels"], "fragment", src)
     channels = _channels(data["channels"], src) if "channels" in data else {}
-    read = _read_options(_section(data.get("read", {}), "read", "read", src), src)
+    read = parse_read_options(checked_section(data.get("read", {}), "read", "read", src), src)
     return read, channels
 
 
 def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
     """``[channels]``: each channel's column (or summed load cells), gain and offset."""
     channels: dict[str, ChannelMap] = {}
-    ch = _section(data, "channels", "channels", src)
+    ch = checked_section(data, "channels", "channels", src)
     for name, spec in ch.items():
-        c = _section(spec, "channel", f"channels.{name}", src)
+        c = checked_section(spec, "channel", f"channels.{name}", src)
         if c.get("gain", 1.0) == 0:
             raise ProtocolError(f"{src}: 'gain' in [channels.{name}] must not be zero.")
         if ("column" in c) == ("columns" in c):
@@ -683,8 +541,6 @@ def _channels(data: Any, src: str) -> dict[str, ChannelMap]:
 def _channel_unit(name: str, unit: str, has_gain: bool, src: str) -> str:
     """``unit`` of [channels.<name>], checked: a unit towtank converts for that channel (or, with
     a gain, any raw unit such as V); ProtocolError otherwise."""
-    from towtank.ingest.readers import known_units
-
     unit = unit.strip()
     known = known_units(name)
     if not unit or (not has_gain and known and unit.lower() not in {k.lower() for k in known}):
@@ -698,30 +554,26 @@ def _channel_unit(name: str, unit: str, has_gain: bool, src: str) -> str:
 
 def _processing(data: Any, src: str) -> Processing:
     """``[processing]``: positive values, ranges and choices checked."""
-    proc_values = _section(data, "processing", "processing", src)
-    _positive(proc_values, _PROCESSING_POSITIVE, "processing", src)
-    for key, (low, high) in _PROCESSING_RANGES.items():
+    proc_values = checked_section(data, "processing", "processing", src)
+    check_positive(proc_values, PROCESSING_POSITIVE, "processing", src)
+    for key, (low, high) in PROCESSING_RANGES.items():
         value = proc_values.get(key)
         if value is not None and not low <= value <= high:
             raise ProtocolError(
                 f"{src}: '{key}' in [processing] must lie in {low:g}–{high:g}, but it is {value}."
             )
-    for key, choices in _PROCESSING_CHOICES.items():
+    for key, choices in PROCESSING_CHOICES.items():
         value = proc_values.get(key)
         if value is not None and value not in choices:
             raise ProtocolError(
                 f"{src}: '{key}' in [processing] must be one of {', '.join(choices)}, but it is "
-                f"{value!r}{_suggest(value, choices)}"
+                f"{value!r}{suggest(value, choices)}"
             )
     return Processing(**proc_values)
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:
     """Fill the areas and volume the protocol leaves out from the Myring description."""
-    from dataclasses import replace
-
-    from towtank.reference import geometry
-
     my = model.myring
     assert my is not None
     try:
@@ -749,7 +601,7 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
         + ("; " if computed and given else "")
         + (", ".join(given) + " as given in the protocol" if given else "")
     )
-    return replace(
+    return dataclasses.replace(
         model,
         diameter_m=model.diameter_m if model.diameter_m is not None else my.d,
         frontal_area_m2=model.frontal_area_m2 or g.frontal_area,
@@ -812,124 +664,54 @@ def model_geometry(model: Model, scale: float | None = None) -> list[dict[str, A
     ]
 
 
-def channel_map(protocol_channels: dict[str, ChannelMap]) -> dict[str, ChannelMap]:
-    """The complete mapping: protocol entries, canonical names for the rest."""
-    out = {name: ChannelMap(column=name) for name in CANONICAL_CHANNELS}
-    out.update(protocol_channels)
+def output_inputs(protocol: Protocol, inputs: Iterable[str | Path] = ()) -> list[Path]:
+    """The files an output folder must not overwrite: the protocol, the run sheet, a reference
+    CSV the protocol names, and ``inputs`` (the run files the sheet names, wherever they lie)."""
+    out = [protocol.path, protocol.campaign.run_sheet, *(Path(p) for p in inputs)]
+    if protocol.campaign.reference not in BUILTIN_REFERENCES:
+        out.append(Path(protocol.campaign.reference))
     return out
 
 
-#: Every entry towtank writes into an output folder (docs/formats.md §5; the cache aside).
-OUTPUT_NAMES = frozenset({
-    "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
-    "scaling.csv", "tare.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
-    "predicted.csv", "model.json", "export",
-})
+def with_output_dir(
+    protocol: Protocol, out_dir: str | Path, inputs: Iterable[str | Path] = ()
+) -> tuple[Protocol, Path]:
+    """The output folder checked (:func:`towtank.runtime.outfolder.check_output_dir`) for this
+    protocol's inputs, and the protocol with the folder's note among its warnings.
 
+    The protocol is frozen and is never changed: when the check put back a set of outputs that
+    an interrupted run left beside a missing folder, a new protocol (``dataclasses.replace``)
+    carries that sentence with the day's warnings.
 
-def read_reference_csv(path: str | Path) -> dict[str, float]:
-    """Reference prime values of a user CSV with the columns ``symbol`` and ``prime`` [-].
-
-    Lines starting with ``#`` are comments; column names are matched without regard to case
-    or surrounding spaces; other columns are ignored.
+    Returns
+    -------
+    (Protocol, Path)
+        The protocol (the one given when there is nothing to say) and the resolved folder.
 
     Raises
     ------
     ProtocolError
-        The file cannot be read, lacks a column, holds no row, repeats a symbol or has a prime
-        that is not a finite number (one sentence naming the file and the row).
+        See :func:`towtank.runtime.outfolder.check_output_dir`.
     """
-    import csv
-    import math
-
-    from towtank.ingest.schema import check_table_size
-
-    path = Path(path)
-    check_table_size(path, "reference CSV", str(path))
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProtocolError(f"{path}: the reference CSV cannot be read ({exc}).") from None
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1)
-             if line.strip() and not line.lstrip().startswith("#")]
-    if not lines:
-        raise ProtocolError(f"{path}: the reference CSV is empty (it needs the columns symbol "
-                            "and prime and one row per coefficient).")
-    rows = list(csv.reader([line for _, line in lines]))
-    header = [h.strip().lower() for h in rows[0]]
-    if "symbol" not in header or "prime" not in header:
-        raise ProtocolError(
-            f"{path}: a reference CSV needs the columns symbol and prime "
-            f"(found {', '.join(repr(h) for h in rows[0])})."
-        )
-    i_sym, i_prime = header.index("symbol"), header.index("prime")
-    out: dict[str, float] = {}
-    for (lineno, _), row in zip(lines[1:], rows[1:], strict=True):
-        cells = row + [""] * (len(header) - len(row))
-        sym, raw = cells[i_sym].strip(), cells[i_prime].strip()
-        try:
-            value = float(raw)
-        except ValueError:
-            value = math.nan
-        if not sym or not math.isfinite(value):
-            raise ProtocolError(
-                f"{path}: line {lineno} needs a symbol and a finite prime value "
-                f"(found symbol {sym!r}, prime {raw!r})."
-            )
-        if sym in out:
-            raise ProtocolError(f"{path}: line {lineno} repeats the symbol {sym!r}.")
-        out[sym] = value
-    if not out:
-        raise ProtocolError(f"{path}: the reference CSV has a header but no coefficient rows.")
-    return out
+    folder = outfolder.check_output_dir(out_dir, protocol.campaign.data_dir,
+                                        output_inputs(protocol, inputs))
+    if folder.recovered and folder.recovered not in protocol.warnings:
+        protocol = dataclasses.replace(protocol, warnings=(*protocol.warnings, folder.recovered))
+    return protocol, folder.path
 
 
 def check_output_dir(
     out_dir: str | Path, protocol: Protocol, inputs: Iterable[str | Path] = ()
 ) -> Path:
-    """The output folder, resolved, after checking that writing there cannot touch an input
-    nor a file towtank did not write (docs/formats.md §4).
+    """The output folder, resolved, after :func:`with_output_dir`'s checks; the protocol is
+    left as it is (a frozen protocol is never changed).
 
-    A set of outputs that an interrupted run left beside a missing output folder is put back
-    first (:func:`towtank.runtime.manifest.recover_outputs`; said in the day's warnings).
-
-    ``inputs`` are further input files (the run files the sheet names, wherever they lie).
-
-    Raises
-    ------
-    ProtocolError
-        ``out_dir`` is a file; it is, holds or lies inside the data folder; one of the
-        outputs would replace the protocol, the run sheet, the reference CSV or an input; or
-        it holds an entry with an output's name that towtank did not write.
+    For callers that need only the folder. A sentence about outputs put back after an
+    interrupted run is given as a Python warning (:class:`UserWarning`); use
+    :func:`with_output_dir` to have it among the day's warnings instead.
     """
-    from towtank.runtime import manifest
-
-    out = Path(out_dir).resolve()
-    recovered = manifest.recover_outputs(out)
-    if recovered and recovered not in protocol.warnings:  # said with the day's warnings
-        object.__setattr__(protocol, "warnings", (*protocol.warnings, recovered))
-    if out.exists() and not out.is_dir():
-        raise ProtocolError(f"the output folder {out} is a file, not a folder.")
-    data = protocol.campaign.data_dir.resolve()
-    if out == data or data.is_relative_to(out) or out.is_relative_to(data):
-        raise ProtocolError(
-            f"the output folder {out} would mix the outputs with the raw run files in {data}; "
-            "choose another folder with --out or [campaign] output_dir."
-        )
-    inputs = [protocol.path, protocol.campaign.run_sheet, *(Path(p) for p in inputs)]
-    if protocol.campaign.reference not in BUILTIN_REFERENCES:
-        inputs.append(Path(protocol.campaign.reference))
-    for name in sorted(OUTPUT_NAMES):
-        target = out / name
-        for path in inputs:
-            if target == Path(path).resolve() or Path(path).resolve().is_relative_to(target):
-                raise ProtocolError(
-                    f"the output folder {out} would overwrite the input {path} with the "
-                    f"output {name}; choose another folder with --out or [campaign] output_dir."
-                )
-    manifest.refuse_foreign(out, OUTPUT_NAMES)
-    problem = manifest.unwritable(out)
-    if problem:
-        raise ProtocolError(f"the output folder {out} cannot be written ({problem}); choose "
-                            "another folder with --out or [campaign] output_dir.")
-    return out
+    folder = outfolder.check_output_dir(out_dir, protocol.campaign.data_dir,
+                                        output_inputs(protocol, inputs))
+    if folder.recovered:
+        _warnings.warn(folder.recovered, UserWarning, stacklevel=2)
+    return folder.path

@@ -18,40 +18,38 @@ Raw files are only ever opened for reading. Every check is vectorised (no per-sa
 
 from __future__ import annotations
 
-import gzip
-import hashlib
-import io
 import math
-import os
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.arrayfiles import read_hdf5_columns, read_mat_columns
 from towtank.ingest.calibration import UNITS, calibrate, unit_source  # noqa: F401 - re-exported
+from towtank.ingest.columns import (  # noqa: F401 - the file primitives, importable here too
+    fallback_time,
+    file_bytes,
+    file_bytes_stamped,
+    read_columns,
+    sha256_bytes,
+)
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
-from towtank.ingest.plaincsv import read_csv_columns
-from towtank.ingest.protocol import Balance, ChannelMap, channel_map
-from towtank.ingest.readers import (
+from towtank.ingest.plaincsv import read_csv_columns  # noqa: F401 - importable here too
+from towtank.ingest.protocol_types import Balance, ChannelMap, channel_map
+from towtank.ingest.readers import (  # noqa: F401 - MAX_RUN_FILE_BYTES: importable here too
     FS_ERROR_KEY,
     FS_KEY,
     LVM_HEADERS_KEY,
+    MAX_RUN_FILE_BYTES,
     TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
-    file_format,
-    plain_csv,
-    read_lvm_columns,
-    read_tdms_columns,
-    read_text_columns,
     stated_units,
 )
 from towtank.ingest.segments import find_segments, human_duration, segment_error
-from towtank.ingest.timing import stated_rate, time_source_text, timing_note
+from towtank.ingest.speedlog import speed_on_run_time
+from towtank.ingest.timing import time_source_text, timing_note
 from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
@@ -101,80 +99,6 @@ class RawRun:
         return int(self.time.size)
 
 
-#: Largest run file read [bytes] (after decompression): 1 GiB, about 8 hours of four channels
-#: at 1 kHz in binary, 3 hours as text. A run's samples are held in memory several times
-#: over while it is reduced; a larger file is rejected with one sentence, not left to the
-#: out-of-memory killer.
-MAX_RUN_FILE_BYTES = 1 << 30
-
-
-def _too_large(name: str, what: str, size: int | None = None) -> str:
-    amount = f"{size / 2**30:.1f} GiB" if size is not None else "larger than that"
-    return (f"{name} is too large for one run ({what} {amount}; towtank reads run files up to "
-            f"{MAX_RUN_FILE_BYTES / 2**30:g} GiB): split the recording into its runs")
-
-
-def file_bytes(path: Path) -> bytes:
-    """The file's bytes, opened read-only; a missing or unreadable file is a RunError.
-
-    Only a regular file is opened: a named pipe or a device would block the read forever.
-    """
-    return file_bytes_stamped(path)[0]
-
-
-def file_bytes_stamped(path: Path) -> tuple[bytes, tuple[int, int, int, int] | None]:
-    """:func:`file_bytes` and the file's (size, mtime_ns, ctime_ns, inode) as it was read, or
-    None for the stamp when the file changed while it was being read.
-
-    The stamp is what the cache may remember with the sha256 of these bytes: a stat taken
-    later could belong to a newer version of the file.
-    """
-    import stat
-
-    try:
-        mode = os.stat(path).st_mode
-        if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
-            raise RunError(f"{path.name} is not a regular file (a pipe, socket or device)")
-        size = os.stat(path).st_size
-        if size > MAX_RUN_FILE_BYTES:
-            raise RunError(_too_large(path.name, "it is", size))
-        with open(path, "rb") as fh:
-            before = os.fstat(fh.fileno())
-            data = fh.read()
-            after = os.fstat(fh.fileno())
-        stamps = [(st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino) for st in (before, after)]
-        return data, (stamps[0] if stamps[0] == stamps[1] and len(data) == before.st_size
-                      else None)
-    except FileNotFoundError:
-        raise RunError(
-            f"the data file {path.name} is not found in {path.parent}{_near_name(path)}"
-        ) from None
-    except IsADirectoryError:
-        raise RunError(f"{path.name} is a folder, not a data file") from None
-    except OSError as exc:
-        raise RunError(f"{path.name} cannot be read ({exc.strerror or exc})") from None
-
-
-def _near_name(path: Path) -> str:
-    """'; did you mean ...?' for a file of the folder whose name differs only in case or in
-    Unicode normalisation (a sheet typed on another system), else ''."""
-    import unicodedata
-
-    def key(name: str) -> str:
-        return unicodedata.normalize("NFC", name).casefold()
-
-    try:
-        names = [p.name for p in path.parent.iterdir()]
-    except OSError:
-        return ""
-    same = [n for n in names if key(n) == key(path.name) and n != path.name]
-    return f"; did you mean {same[0]!r}?" if same else ""
-
-
-def sha256_bytes(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
 # --------------------------------------------------------------------------- row bookkeeping
 class _Where:
     """Where a sample sits in the file: its row (CSV, header = row 1) or sample number (TDMS)."""
@@ -211,7 +135,9 @@ def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Float64 array and a mask of entries that hold text that is not a number."""
     if values.dtype.kind in "fiub":
         return values.astype(np.float64, copy=False), np.zeros(values.size, dtype=bool)
-    import pandas as pd  # text in a numeric column only: the reduction's workers never load it
+    # start-up saving: pandas (~0.27 s) for text in a numeric column only: the reduction's workers
+    # never load it
+    import pandas as pd
 
     s = pd.Series(values, dtype=object)
     as_text = s.astype("string").str.strip()
@@ -221,57 +147,6 @@ def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dtype=bool, na_value=True
     )
     return num.to_numpy(dtype=np.float64, na_value=np.nan), bad
-
-
-def read_columns(
-    path: Path, data: bytes | None = None, options: ReadOptions | None = None
-) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Read a run file's columns (raw units) from its bytes, in the format of ``[read]``.
-
-    Plain CSV goes through pyarrow (:func:`read_csv_columns`); other text, LVM, TDMS, MATLAB
-    and HDF5 through :mod:`towtank.ingest.readers`.
-    """
-    if data is None:
-        data = file_bytes(path)
-    fmt, gz = file_format(path, data, options)
-    if fmt == "tdms":
-        return read_tdms_columns(data, path.name, options)
-    if fmt == "mat":
-        return read_mat_columns(data, path.name, options)
-    if fmt == "hdf5":
-        return read_hdf5_columns(data, path.name, options)
-    if gz:
-        if not data:
-            raise RunError(f"{path.name} is empty (0 bytes)")
-        try:
-            with gzip.GzipFile(fileobj=io.BytesIO(data)) as gzf:
-                data = gzf.read(MAX_RUN_FILE_BYTES + 1)
-            if len(data) > MAX_RUN_FILE_BYTES:
-                raise RunError(_too_large(path.name, "decompressed, it is"))
-        except EOFError:
-            raise RunError(
-                f"{path.name} cannot be decompressed: the gzip stream ends early (truncated file)"
-            ) from None
-        except (OSError, zlib.error) as exc:
-            raise RunError(f"{path.name} cannot be decompressed ({exc})") from None
-    elif data[:2] == b"\x1f\x8b":
-        raise RunError(
-            f"{path.name} is gzip-compressed although its name does not end in .gz "
-            f"(rename it {path.name}.gz)"
-        )
-    nul = data.find(b"\x00", 0, 65536)
-    if nul >= 0:
-        raise RunError(
-            f"{path.name} is not a text file: it holds NUL bytes (the first at byte {nul}), "
-            "as a file the DAQ never finished writing does"
-        )
-    if fmt == "lvm":
-        return read_lvm_columns(data, path.name, options)
-    opts = options or ReadOptions()
-    if (fmt == "csv" and opts.delimiter in ("auto", ",") and opts.decimal in ("auto", ".")
-            and not opts.skip_rows and plain_csv(data)):
-        return read_csv_columns(data, path.name)
-    return read_text_columns(data, path.name, opts)
 
 
 # ------------------------------------------------------------------------------ checks/repairs
@@ -479,6 +354,7 @@ def despike(
     cand[-2:] = big[-2:]
     if not cand.any():
         return x, 0
+    # start-up saving: scipy.ndimage (~0.5 s) only when a channel holds spikes to replace
     from scipy.ndimage import median_filter
 
     med = median_filter(x, size=window, mode="nearest")
@@ -670,23 +546,6 @@ def map_channels(
     return out
 
 
-def fallback_time(
-    cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], sample_rate_hz: float = 0.0
-) -> np.ndarray | None:
-    """Time [s] of a file without a time column: LabVIEW waveform timing, else ``k/fs`` with the
-    file's stated sample rate or ``[read] sample_rate_hz``; None when there is neither."""
-    if WF_TIME_KEY in cols:
-        return np.asarray(cols[WF_TIME_KEY], dtype=np.float64)
-    fs, _ = stated_rate(cols, sample_rate_hz)
-    if fs <= 0:
-        return None
-    full = channel_map(mapping)
-    ref = cols.get(full["drag"].column)
-    if ref is None:
-        ref = next((v for k, v in cols.items() if not k.startswith("__")), None)
-    return None if ref is None else np.arange(np.asarray(ref).size, dtype=np.float64) / fs
-
-
 def load_run(
     path: Path,
     mapping: dict[str, ChannelMap],
@@ -831,8 +690,6 @@ def _load_run(
     if tb.n_lost:
         t, where = _put_back_lost(numeric, tb, where, notes)
     if speed_log is not None:
-        from towtank.ingest.speedlog import speed_on_run_time
-
         numeric["speed"] = speed_on_run_time(t, *speed_log)
         notes.append(f"carriage speed from the speed log {speed_log[2]}")
 

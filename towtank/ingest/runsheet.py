@@ -8,17 +8,22 @@ pipeline rejects that run while processing the rest.
 
 from __future__ import annotations
 
+import csv
+import difflib
 import io
 import math
+import posixpath
 import re
 import zipfile
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree as ET  # noqa: N817 - the usual name
 
 import numpy as np
 import pandas as pd
 
 from towtank.errors import ProtocolError
+from towtank.ingest.readers import EXTENSIONS
 from towtank.ingest.sheetlayout import (
     STATUS_WORDS,
     TEST_WORDS,
@@ -183,8 +188,6 @@ def _bounded_xlsx(path: Path) -> Path | io.BytesIO:
 
 def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
     """A CSV sheet's cells as text, separated by ``,``, ``;`` or tab (found from the lines)."""
-    import csv
-
     raw = path.read_bytes()
     try:
         text = raw.decode("utf-8-sig")
@@ -288,8 +291,6 @@ def known_columns(columns: list[str], src: str) -> list[str]:
     ProtocolError
         Naming the column and the known column it resembles (or the unit it is in).
     """
-    import difflib
-
     by_norm = {_norm(k): k for k in KNOWN}
     out = [c if c in KNOWN else by_norm.get(_norm(c), c) for c in columns]
     seen: dict[str, str] = {}
@@ -346,6 +347,7 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None,
         or a formula has no saved value at all (a workbook written by a program and never
         saved by Excel), which would read as an empty cell.
     """
+    # start-up saving: openpyxl (~0.3 s) only for an .xlsx sheet
     import openpyxl
 
     opts = opts or SheetOptions()
@@ -452,9 +454,6 @@ _PKG_NS = "{http://schemas.openxmlformats.org/package/2006/relationships}"
 
 def _worksheet_part(zf: zipfile.ZipFile, title: str) -> str | None:
     """The zip member holding worksheet ``title`` (``xl/worksheets/sheetN.xml``)."""
-    import posixpath
-    from xml.etree import ElementTree as ET  # noqa: N817 - the usual name
-
     book = ET.fromstring(zf.read("xl/workbook.xml"))
     rid = next((el.get(f"{_REL_NS}id") for el in book.iter(f"{_MAIN_NS}sheet")
                 if el.get("name") == title), None)
@@ -473,8 +472,6 @@ def _unsaved_formulas(source: Path | io.BytesIO, title: str) -> list[tuple[str, 
     saves the empty string a formula such as ``=IF(…,"",…)`` returns as ``<v></v>``, which
     is a value, an empty cell). A program that writes formulas without computing them (as
     openpyxl does) leaves ``<v/>`` with no type, or no ``<v>`` at all."""
-    from xml.etree import ElementTree as ET  # noqa: N817 - the usual name
-
     with zipfile.ZipFile(source) as zf:
         part = _worksheet_part(zf, title)
         if part is None or part not in zf.namelist():
@@ -684,8 +681,6 @@ def unlisted_files(sheet: pd.DataFrame, data_dir: Path) -> list[str]:
     """Data files in ``data_dir`` that no row of the sheet names (the lab may have forgotten):
     every file with an extension towtank reads as a run file
     (:data:`towtank.ingest.readers.EXTENSIONS`, and those of text formats gzipped)."""
-    from towtank.ingest.readers import EXTENSIONS
-
     suffixes = tuple(EXTENSIONS) + tuple(f"{e}.gz" for e, kind in EXTENSIONS.items()
                                          if kind in ("csv", "text"))
     named = {Path(f).as_posix() for f in sheet["file"]}

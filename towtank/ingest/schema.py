@@ -11,6 +11,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.runtime.safefile import MAX_TABLE_BYTES, check_table_size  # noqa: F401 - here too
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
 
@@ -55,7 +56,7 @@ class ReportOptions:
 
 # --------------------------------------------------------------------------------------------
 # Schema: key -> (kind, required). kinds: str, float, int, bool, path, floats, table
-_NUM = "float"
+NUM = "float"
 SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     "campaign": {
         "name": ("str", True),
@@ -67,65 +68,65 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
     "water": {
         "type": ("str", False),
-        "temperature_C": (_NUM, True),
-        "salinity_g_kg": (_NUM, False),
-        "pressure_Pa": (_NUM, False),
-        "relative_humidity_pct": (_NUM, False),
+        "temperature_C": (NUM, True),
+        "salinity_g_kg": (NUM, False),
+        "pressure_Pa": (NUM, False),
+        "relative_humidity_pct": (NUM, False),
     },
     "model": {
         "name": ("str", False),
-        "length_m": (_NUM, True),
-        "diameter_m": (_NUM, False),
-        "mass_kg": (_NUM, True),
-        "frontal_area_m2": (_NUM, False),
-        "lateral_area_m2": (_NUM, False),
-        "wetted_area_m2": (_NUM, False),
-        "volume_m3": (_NUM, False),
-        "scale": (_NUM, False),
-        "depth_m": (_NUM, False),
-        "mass_uncertainty_kg": (_NUM, False),
-        "length_uncertainty_m": (_NUM, False),
-        "diameter_uncertainty_m": (_NUM, False),
+        "length_m": (NUM, True),
+        "diameter_m": (NUM, False),
+        "mass_kg": (NUM, True),
+        "frontal_area_m2": (NUM, False),
+        "lateral_area_m2": (NUM, False),
+        "wetted_area_m2": (NUM, False),
+        "volume_m3": (NUM, False),
+        "scale": (NUM, False),
+        "depth_m": (NUM, False),
+        "mass_uncertainty_kg": (NUM, False),
+        "length_uncertainty_m": (NUM, False),
+        "diameter_uncertainty_m": (NUM, False),
         "myring": ("table", False),
     },
     "model.myring": {
-        "a": (_NUM, True),
-        "b": (_NUM, True),
-        "c": (_NUM, True),
-        "n": (_NUM, True),
-        "theta_deg": (_NUM, True),
-        "d": (_NUM, True),
-        "a_offset": (_NUM, False),
-        "c_offset": (_NUM, False),
+        "a": (NUM, True),
+        "b": (NUM, True),
+        "c": (NUM, True),
+        "n": (NUM, True),
+        "theta_deg": (NUM, True),
+        "d": (NUM, True),
+        "a_offset": (NUM, False),
+        "c_offset": (NUM, False),
     },
     "fin": {
-        "chord_m": (_NUM, True),
-        "span_m": (_NUM, True),
+        "chord_m": (NUM, True),
+        "span_m": (NUM, True),
         "section": ("str", False),
         "mounting": ("str", False),
-        "oswald_e": (_NUM, False),
-        "x_m": (_NUM, False),
-        "linear_max_deg": (_NUM, False),
+        "oswald_e": (NUM, False),
+        "x_m": (NUM, False),
+        "linear_max_deg": (NUM, False),
     },
     "prototype": {
-        "length_m": (_NUM, False),
+        "length_m": (NUM, False),
         "speeds_m_s": ("floats", True),
-        "delta_cf": (_NUM, False),
+        "delta_cf": (NUM, False),
         "water": ("table", False),
     },
     "prototype.water": {
         "type": ("str", False),
-        "temperature_C": (_NUM, True),
-        "salinity_g_kg": (_NUM, False),
-        "pressure_Pa": (_NUM, False),
-        "relative_humidity_pct": (_NUM, False),
+        "temperature_C": (NUM, True),
+        "salinity_g_kg": (NUM, False),
+        "pressure_Pa": (NUM, False),
+        "relative_humidity_pct": (NUM, False),
     },
     "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
     "channel": {
         "column": ("str", False),
         "columns": ("strs", False),
-        "gain": (_NUM, False),
-        "offset": (_NUM, False),
+        "gain": (NUM, False),
+        "offset": (NUM, False),
         "unit": ("str", False),
     },
     "tare": {
@@ -138,7 +139,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "matrix": ("matrix", True),
     },
     "processing": {
-        f.name: ({"int": "int", "bool": "bool", "str": "str"}.get(str(f.type).split(" ")[0], _NUM),
+        f.name: ({"int": "int", "bool": "bool", "str": "str"}.get(str(f.type).split(" ")[0], NUM),
                  False)
         for f in fields(Processing)
     },  # annotations are strings here: "float", "int | None", "bool", ...
@@ -153,7 +154,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "decimal": ("str", False),
         "skip_rows": ("int", False),
         "group": ("str", False),
-        "sample_rate_hz": (_NUM, False),
+        "sample_rate_hz": (NUM, False),
         "segment": ("int", False),
     },
 }
@@ -175,7 +176,7 @@ _KIND_WORDS = {
 }
 
 
-def _suggest(key: str, valid: list[str] | tuple[str, ...]) -> str:
+def suggest(key: str, valid: list[str] | tuple[str, ...]) -> str:
     near = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
     if not near:
         near = difflib.get_close_matches(key.lower(), [v.lower() for v in valid], n=1, cutoff=0.4)
@@ -202,7 +203,7 @@ def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
     return value
 
 
-def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
+def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
         f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
     )
@@ -250,37 +251,8 @@ def _coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind == "matrix":
         if not isinstance(value, list) or not value:
             raise bad
-        return tuple(_coerce(row, "floats", where, src) for row in value)
+        return tuple(coerce(row, "floats", where, src) for row in value)
     raise AssertionError(kind)
-
-
-#: Largest table a protocol names and towtank reads whole (the reference CSV, the tare table):
-#: such a table has a few lines; a larger file is the wrong one (or damaged) and is refused in
-#: one sentence before it is read rather than read into all of the memory.
-MAX_TABLE_BYTES = 64 << 20
-
-
-def check_table_size(path: Any, what: str, src: str) -> None:
-    """Refuse (ProtocolError) a protocol table larger than :data:`MAX_TABLE_BYTES`, or one
-    that is a pipe or a device (reading it would wait forever); a file that cannot be
-    stat'ed is left to its reader, which says what is wrong with it."""
-    import os
-    import stat
-
-    try:
-        st = os.stat(path)
-    except OSError:
-        return
-    if not stat.S_ISREG(st.st_mode) and not stat.S_ISDIR(st.st_mode):
-        raise ProtocolError(f"{src}: the {what} {os.path.basename(path)} is not a regular file "
-                            "(a pipe, socket or device).")
-    size = st.st_size
-    if size > MAX_TABLE_BYTES:
-        raise ProtocolError(
-            f"{src}: the {what} {os.path.basename(path)} is {size / 2**20:.0f} MiB, but towtank "
-            f"reads such tables up to {MAX_TABLE_BYTES >> 20} MiB (they hold a few lines): is "
-            "it the right file?"
-        )
 
 
 def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: str) -> None:
@@ -290,17 +262,17 @@ def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: st
         raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {data!r}.")
     for key in data:
         if key not in keys:
-            raise ProtocolError(f"{src}: unknown key '{key}' in [{label}]{_suggest(key, keys)}")
+            raise ProtocolError(f"{src}: unknown key '{key}' in [{label}]{suggest(key, keys)}")
 
 
-def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
+def checked_section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any]:
     """Validate one table against SCHEMA[schema_name]; return the coerced values."""
     spec = SCHEMA[schema_name]
     check_keys(data, list(spec), label, src)
     out: dict[str, Any] = {}
     for key, value in data.items():
         kind, _ = spec[key]
-        out[key] = _coerce(value, kind, f"'{key}' in [{label}]", src)
+        out[key] = coerce(value, kind, f"'{key}' in [{label}]", src)
     for key, (_kind, required) in spec.items():
         if required and key not in out:
             raise ProtocolError(f"{src}: [{label}] is missing the required key '{key}'.")
@@ -308,12 +280,12 @@ def _section(data: Any, schema_name: str, label: str, src: str) -> dict[str, Any
 
 
 #: [processing] keys that must be > 0, and the closed ranges of the others.
-_PROCESSING_POSITIVE = (
+PROCESSING_POSITIVE = (
     "cutoff_hz", "filter_order", "zero_window_s", "min_steady_s", "min_accel_s",
     "steady_tolerance", "nominal_tolerance", "fit_sample_hz", "damping_alpha_max_deg",
     "laminar_re", "jobs",
 )
-_PROCESSING_RANGES = {
+PROCESSING_RANGES = {
     "cutoff_hz": (0.05, 100000.0),  # below 0.05 Hz a run of tens of seconds is filtered away
     "filter_order": (1, 10),  # a Butterworth of a higher order rings and is ill-conditioned
     "jobs": (1, 4096),
@@ -327,14 +299,14 @@ _PROCESSING_RANGES = {
     "speed_tolerance": (0.0, 0.5),
 }
 #: [processing] keys that take one of a few words.
-_PROCESSING_CHOICES = {
+PROCESSING_CHOICES = {
     "zero_at": ("before_motion", "file_start"),
     "speed_source": ("measured", "nominal"),
     "drift": ("linear", "none"),
 }
 
 
-def _positive(values: dict[str, Any], keys: tuple[str, ...], label: str, src: str) -> None:
+def check_positive(values: dict[str, Any], keys: tuple[str, ...], label: str, src: str) -> None:
     for key in keys:
         if key in values and values[key] is not None and values[key] <= 0:
             raise ProtocolError(

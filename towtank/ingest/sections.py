@@ -1,61 +1,39 @@
 """Protocol sections for real labs' set-ups: ``[tare]`` (sting runs, a tare table or none),
-``[balance]`` (a dynamometer's interaction matrix), ``[read]`` (how run files are read), and the
-plausibility of ``[model] mass_kg`` (docs/formats.md)."""
+``[balance]`` (a dynamometer's interaction matrix), ``[read]`` (how run files are read),
+``[speed_log]`` (the carriage's own log), ``[zeros]`` (a zeros file per run), and the
+plausibility of ``[model] mass_kg`` (docs/formats.md).
+
+Each parser takes the section's TOML table and returns the type of
+:mod:`towtank.ingest.protocol_types` it describes (ProtocolError with one sentence otherwise);
+none reads a run file.
+"""
 
 from __future__ import annotations
 
+import csv
 import math
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol_types import (
+    Balance,
+    ChannelMap,
+    Model,
+    SpeedLog,
+    TareSource,
+    ZeroFile,
+)
 from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
-from towtank.ingest.schema import _section, check_table_size
+from towtank.ingest.schema import check_keys, check_table_size, checked_section
+from towtank.reference.geometry import displaced_volume
 
-if TYPE_CHECKING:
-    from towtank.ingest.protocol import ChannelMap, Model
+__all__ = ["MASS_RATIO_RANGE", "Balance", "TareSource", "check_mass", "parse_balance",
+           "parse_read_options", "parse_speed_log", "parse_tare", "parse_zero_file"]
 
-@dataclass(frozen=True)
-class TareSource:
-    """Where the mounting's force comes from (``[tare]``, docs/formats.md).
-
-    ``sting``: the sheet's sting runs (default); ``table``: a table of tare drag (and lift)
-    against speed measured once (``speeds_m_s`` [m/s], ``drag_N``, ``lift_N`` [N]); ``none``:
-    nothing is subtracted.
-    """
-
-    source: str = "sting"
-    table: str = ""
-    speeds_m_s: tuple[float, ...] = ()
-    drag_N: tuple[float, ...] = ()
-    lift_N: tuple[float, ...] = ()
-
-
-@dataclass(frozen=True)
-class Balance:
-    """A multi-component dynamometer's calibration: outputs = matrix · inputs (docs/formats.md).
-
-    Parameters
-    ----------
-    inputs : tuple of str
-        Raw columns (e.g. bridge voltages [V]).
-    outputs : tuple of str
-        Canonical force channels they give (``drag``, ``lift``).
-    matrix : tuple of tuples of float
-        len(outputs) × len(inputs) interaction matrix [output unit per input unit], cross-talk
-        terms included.
-    """
-
-    inputs: tuple[str, ...]
-    outputs: tuple[str, ...]
-    matrix: tuple[tuple[float, ...], ...]
-
-
-
-def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
+def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
     """``[tare]``: sting runs, a tare table (read and checked here) or none."""
-    t = _section(data, "tare", "tare", src)
+    t = checked_section(data, "tare", "tare", src)
     source = t.get("source", "sting")
     if source not in ("sting", "table", "none"):
         raise ProtocolError(
@@ -70,8 +48,6 @@ def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSour
     path = base / t["table"]
     if not check_paths:
         return TareSource(source="table", table=str(path))
-    import csv
-
     check_table_size(path, "tare table", src)
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
@@ -102,9 +78,9 @@ def _tare_source(data: Any, base: Path, src: str, check_paths: bool) -> TareSour
                       lift_N=tuple(lift))
 
 
-def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
+def parse_balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
     """``[balance]``: the interaction matrix of a multi-component dynamometer, checked."""
-    b = _section(data, "balance", "balance", src)
+    b = checked_section(data, "balance", "balance", src)
     inputs, outputs, matrix = b["inputs"], b["outputs"], b["matrix"]
     if len(matrix) != len(outputs) or any(len(row) != len(inputs) for row in matrix):
         raise ProtocolError(
@@ -125,7 +101,7 @@ def _balance(data: Any, channels: dict[str, ChannelMap], src: str) -> Balance:
     return Balance(inputs=inputs, outputs=outputs, matrix=matrix)
 
 
-def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
+def parse_read_options(values: dict[str, Any], src: str) -> ReadOptions:
     """``[read]``: how run files are read (docs/formats.md, "Run files as recorded")."""
     choices = {"format": FORMATS, "delimiter": tuple(DELIMITERS), "decimal": ("auto", ".", ",")}
     for key, allowed in choices.items():
@@ -152,10 +128,8 @@ def _read_options(values: dict[str, Any], src: str) -> ReadOptions:
 MASS_RATIO_RANGE = (0.05, 20.0)
 
 
-def _check_mass(model: Model, src: str) -> None:
+def check_mass(model: Model, src: str) -> None:
     """Stop on a weighed mass that no body of this size can have (a unit slip)."""
-    from towtank.reference.geometry import displaced_volume
-
     if not 0.05 <= model.length_m <= 20.0 or not 0.005 <= (model.diameter_m or 0.05) <= 3.0:
         return  # a length or diameter in other units: the unit warnings name it
     volume = displaced_volume(model.length_m, model.diameter_m, model.volume_m3)
@@ -172,3 +146,78 @@ def _check_mass(model: Model, src: str) -> None:
             f"{'given' if model.volume_m3 else 'estimated'} volume {volume:.3g} m³); a towed "
             f"model weighs {lo:g}–{hi:g} times that: was it given in {unit}?"
         )
+
+
+_SPEED_LOG_KEYS = ("file", "time", "speed", "position", "offset_s")
+
+
+def _log_column(value: Any, key: str, src: str) -> tuple[str, float, float]:
+    """``{ column = "...", gain = 1.0, offset = 0.0 }`` (or a bare column name)."""
+    where = f"'{key}' in [speed_log]"
+    if isinstance(value, str):
+        value = {"column": value}
+    if not isinstance(value, dict) or not isinstance(value.get("column"), str) \
+            or not value["column"].strip():
+        raise ProtocolError(f"{src}: {where} must be {{ column = \"...\" }} (with optional gain "
+                            f"and offset), but it is {value!r}.")
+    extra = set(value) - {"column", "gain", "offset"}
+    if extra:
+        raise ProtocolError(f"{src}: {where} has the unknown key '{sorted(extra)[0]}'; it takes "
+                            "column, gain and offset.")
+    out = []
+    for k, default in (("gain", 1.0), ("offset", 0.0)):
+        v = value.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ProtocolError(f"{src}: '{k}' of {where} must be a number, but it is {v!r}.")
+        out.append(float(v))
+    if out[0] == 0.0:
+        raise ProtocolError(f"{src}: the gain of {where} is 0.")
+    return value["column"], out[0], out[1]
+
+
+def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
+    """The ``[speed_log]`` table checked (None when the protocol has none)."""
+    if data is None:
+        return None
+    check_keys(data, _SPEED_LOG_KEYS, "speed_log", src)
+    pattern = data.get("file")
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ProtocolError(f"{src}: [speed_log] needs 'file', the log's name pattern (e.g. "
+                            "\"{stem}_carriage.csv\").")
+    try:
+        pattern.format(stem="s", name="n", dir=".", run=1)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ProtocolError(f"{src}: 'file' in [speed_log] is {pattern!r}: only {{stem}}, "
+                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    if ("speed" in data) == ("position" in data):
+        raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
+                            "them).")
+    offset = data.get("offset_s", 0.0)
+    if isinstance(offset, bool) or not isinstance(offset, int | float) \
+            or not math.isfinite(offset) or abs(offset) > 3600.0:
+        raise ProtocolError(f"{src}: 'offset_s' in [speed_log] must be a number of seconds "
+                            f"(within ±3600), but it is {offset!r}.")
+    return SpeedLog(
+        file=pattern,
+        time=_log_column(data["time"], "time", src) if "time" in data else None,
+        speed=_log_column(data["speed"], "speed", src) if "speed" in data else None,
+        position=_log_column(data["position"], "position", src) if "position" in data else None,
+        offset_s=float(offset),
+    )
+
+
+def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
+    """The ``[zeros]`` table checked (None when the protocol has none)."""
+    if data is None:
+        return None
+    check_keys(data, ("file",), "zeros", src)
+    pattern = data.get("file")
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ProtocolError(f"{src}: [zeros] needs 'file', the zeros file's name pattern (e.g. "
+                            "\"{stem}_zero.csv\").")
+    try:
+        pattern.format(stem="s", name="n", dir=".", run=1)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ProtocolError(f"{src}: 'file' in [zeros] is {pattern!r}: only {{stem}}, "
+                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    return ZeroFile(file=pattern)

@@ -19,108 +19,29 @@ a 100 Hz log and a 1 kHz balance give the same filtered speed.
 
 from __future__ import annotations
 
+import hashlib
 import math
-from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 import numpy as np
 
 from towtank.errors import ProtocolError, RunError
-from towtank.ingest.schema import check_keys
+from towtank.ingest.columns import fallback_time, file_bytes, read_columns
+from towtank.ingest.protocol_types import SpeedLog
+from towtank.ingest.readers import (
+    FS_ERROR_KEY,
+    TIME_COLUMN_KEY,
+    column_unit,
+    stated_units,
+    unit_factor,
+)
 
-__all__ = ["SpeedLog", "parse_speed_log", "log_path", "read_speed_log", "speed_on_run_time",
+__all__ = ["SpeedLog", "log_path", "read_speed_log", "speed_on_run_time",
            "STILL_FRACTION"]
 
 #: The log's first and last speeds count as "still" below this fraction of its peak speed [-].
 STILL_FRACTION = 0.02
-
-
-@dataclass(frozen=True)
-class SpeedLog:
-    """The protocol's ``[speed_log]`` (docs/formats.md).
-
-    Parameters
-    ----------
-    file : str
-        Name pattern of the log relative to the data folder; ``{stem}`` (the run file's name
-        without extensions), ``{name}`` (its name), ``{dir}`` (its folder in the data folder)
-        and ``{run}`` (the run number, ``{run:03d}`` for 001) are filled in.
-    time : tuple or None
-        (column, gain, offset) of the log's time [s after gain·(raw − offset)]; None: the
-        log's own timing (LabVIEW waveform timing, LVM's ``X_Value``, a rate the file states
-        or writes in an HDF5 group's name, as a run file's: one file per channel).
-    speed : tuple or None
-        (column, gain, offset) of the carriage speed [m/s].
-    position : tuple or None
-        (column, gain, offset) of the carriage position [m] (speed by eq. 3).
-    offset_s : float
-        Log time + ``offset_s`` = run-file time [s] (eq. 1).
-    """
-
-    file: str
-    time: tuple[str, float, float] | None
-    speed: tuple[str, float, float] | None = None
-    position: tuple[str, float, float] | None = None
-    offset_s: float = 0.0
-
-
-_KEYS = ("file", "time", "speed", "position", "offset_s")
-
-
-def _column(value: Any, key: str, src: str) -> tuple[str, float, float]:
-    """``{ column = "...", gain = 1.0, offset = 0.0 }`` (or a bare column name)."""
-    where = f"'{key}' in [speed_log]"
-    if isinstance(value, str):
-        value = {"column": value}
-    if not isinstance(value, dict) or not isinstance(value.get("column"), str) \
-            or not value["column"].strip():
-        raise ProtocolError(f"{src}: {where} must be {{ column = \"...\" }} (with optional gain "
-                            f"and offset), but it is {value!r}.")
-    extra = set(value) - {"column", "gain", "offset"}
-    if extra:
-        raise ProtocolError(f"{src}: {where} has the unknown key '{sorted(extra)[0]}'; it takes "
-                            "column, gain and offset.")
-    out = []
-    for k, default in (("gain", 1.0), ("offset", 0.0)):
-        v = value.get(k, default)
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-            raise ProtocolError(f"{src}: '{k}' of {where} must be a number, but it is {v!r}.")
-        out.append(float(v))
-    if out[0] == 0.0:
-        raise ProtocolError(f"{src}: the gain of {where} is 0.")
-    return value["column"], out[0], out[1]
-
-
-def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
-    """The ``[speed_log]`` table checked (None when the protocol has none)."""
-    if data is None:
-        return None
-    check_keys(data, _KEYS, "speed_log", src)
-    pattern = data.get("file")
-    if not isinstance(pattern, str) or not pattern.strip():
-        raise ProtocolError(f"{src}: [speed_log] needs 'file', the log's name pattern (e.g. "
-                            "\"{stem}_carriage.csv\").")
-    try:
-        pattern.format(stem="s", name="n", dir=".", run=1)
-    except (KeyError, IndexError, ValueError) as exc:
-        raise ProtocolError(f"{src}: 'file' in [speed_log] is {pattern!r}: only {{stem}}, "
-                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
-    if ("speed" in data) == ("position" in data):
-        raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
-                            "them).")
-    offset = data.get("offset_s", 0.0)
-    if isinstance(offset, bool) or not isinstance(offset, int | float) \
-            or not math.isfinite(offset) or abs(offset) > 3600.0:
-        raise ProtocolError(f"{src}: 'offset_s' in [speed_log] must be a number of seconds "
-                            f"(within ±3600), but it is {offset!r}.")
-    return SpeedLog(
-        file=pattern,
-        time=_column(data["time"], "time", src) if "time" in data else None,
-        speed=_column(data["speed"], "speed", src) if "speed" in data else None,
-        position=_column(data["position"], "position", src) if "position" in data else None,
-        offset_s=float(offset),
-    )
 
 
 def log_path(spec: Any, data_dir: Path, file: str, run: int) -> Path:
@@ -139,8 +60,6 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
     The log is read in any layout towtank reads (format detected from its name and content),
     its columns' units taken from the file or header when no gain is given.
     """
-    from towtank.ingest.readers import TIME_COLUMN_KEY, column_unit, stated_units, unit_factor
-    from towtank.ingest.runfile import read_columns
 
     name = path.name
     cols, _ = read_columns(path, data)
@@ -190,8 +109,6 @@ def _own_time(cols: dict[str, Any], name: str) -> np.ndarray:
     """The time [s] a log without a time column carries (``[speed_log]`` without ``time``):
     its own timing, found as for a run file (LVM's ``X_Value``, LabVIEW waveform timing, a
     stated sample rate, a rate in an HDF5 group's name); RunError when it has none."""
-    from towtank.ingest.readers import FS_ERROR_KEY, TIME_COLUMN_KEY
-    from towtank.ingest.runfile import fallback_time
 
     if TIME_COLUMN_KEY in cols:
         return np.asarray(cols[cols[TIME_COLUMN_KEY].item()[0]], dtype=np.float64)
@@ -238,7 +155,6 @@ def log_sha(spec: Any, data_dir: Path, file: str, run: int) -> str:
     run's cache key, since the reduction depends on the log's bytes as on the run file's."""
     if spec is None:
         return ""
-    import hashlib
 
     try:
         return hashlib.sha256(log_path(spec, data_dir, file, run).read_bytes()).hexdigest()
@@ -252,7 +168,6 @@ def run_speed_log(spec: SpeedLog | None, data_dir: Path, file: str,
     :func:`towtank.ingest.runfile.load_run` (None without ``[speed_log]``)."""
     if spec is None:
         return None
-    from towtank.ingest.runfile import file_bytes
 
     path = log_path(spec, data_dir, file, run)
     try:

@@ -14,6 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest import design_inputs  # powering and pressure hull (#21)
+from towtank.ingest.schema import SCHEMA, coerce, suggest
+from towtank.reference.series58 import SERIES58_PARENT, check_series58
 
 HULLS = ("myring", "suboff", "series58", "table")
 FIN_PLANES = ("rudder", "sternplane")
@@ -119,16 +122,14 @@ class Vehicle:
 
 def _check(values: dict[str, Any], spec: dict[str, tuple[str, bool]], label: str,
            src: str) -> dict[str, Any]:
-    from towtank.ingest import protocol as _p
-
     if not isinstance(values, dict):
         raise ProtocolError(f"{src}: [{label}] must be a table of keys, but it is {values!r}.")
     out: dict[str, Any] = {}
     for key, value in values.items():
         if key not in spec:
             raise ProtocolError(
-                f"{src}: unknown key '{key}' in [{label}]{_p._suggest(key, list(spec))}")
-        out[key] = _p._coerce(value, spec[key][0], f"'{key}' in [{label}]", src)
+                f"{src}: unknown key '{key}' in [{label}]{suggest(key, list(spec))}")
+        out[key] = coerce(value, spec[key][0], f"'{key}' in [{label}]", src)
     for key, (_, required) in spec.items():
         if required and key not in out:
             raise ProtocolError(f"{src}: [{label}] is missing the required key '{key}'.")
@@ -183,9 +184,7 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         raise ProtocolError(f"{src}: [vehicle] must be a table of keys, but it is {data!r}.")
     data = dict(data)
     fins_raw = data.pop("fins", [])
-    from towtank.ingest import design_inputs as _design  # powering and pressure hull (#21)
-
-    design = {k: getattr(_design, f"parse_{k}")(data.pop(k), src)
+    design = {k: getattr(design_inputs, f"parse_{k}")(data.pop(k), src)
               for k in ("propeller", "pressure_hull") if k in data}
     if "glider" in data:  # ballast, moving mass, roll mass, wings (#26)
         from towtank.vehicle.glider_controls import parse_glider
@@ -199,10 +198,8 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
             "as a radius table: hull = \"table\" with hull_table = a CSV of the columns x_m, r_m "
             "from nose to tail (the other hulls are myring, suboff, series58).")
     if v["hull"] not in HULLS:
-        from towtank.ingest import protocol as _p
-
-        raise ProtocolError(f"{src}: 'hull' in [vehicle] must be one of {', '.join(HULLS)}, "
-                            f"but it is {v['hull']!r}{_p._suggest(v['hull'], HULLS)}")
+            raise ProtocolError(f"{src}: 'hull' in [vehicle] must be one of {', '.join(HULLS)}, "
+                            f"but it is {v['hull']!r}{suggest(v['hull'], HULLS)}")
     for key in ("length_m", "scale", "mass_kg", "speed_m_s", "weight_N", "buoyancy_N",
                 "volume_m3"):
         if key in v and not v[key] > 0:
@@ -222,9 +219,7 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
                             "moments of inertia [Ixx, Iyy, Izz].")
     myring = None
     if "myring" in v:
-        from towtank.ingest import protocol as _p
-
-        myring = _check(v.pop("myring"), {k: s for k, s in _p.SCHEMA["model.myring"].items()},
+            myring = _check(v.pop("myring"), {k: s for k, s in SCHEMA["model.myring"].items()},
                         "vehicle.myring", src)
     elif model_myring is not None:
         myring = {k: float(getattr(model_myring, k)) for k in
@@ -277,7 +272,6 @@ def _series58(raw: Any, hull: str, src: str) -> dict[str, float] | None:
                                 "section with length_m and diameter_m (and optionally m, r0, r1, "
                                 "cp).")
         return None
-    from towtank.reference.series58 import SERIES58_PARENT, check_series58
 
     values = {**SERIES58_PARENT, **_check(raw, SERIES58_SCHEMA, "vehicle.series58", src)}
     try:

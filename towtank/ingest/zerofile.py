@@ -21,44 +21,23 @@ taken from the file's start (docs/method.md).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from towtank.errors import ProtocolError, RunError
-from towtank.ingest.schema import check_keys
+from towtank.errors import RunError
+from towtank.ingest.calibration import calibrate
+from towtank.ingest.columns import file_bytes, read_columns
+from towtank.ingest.protocol_types import ZeroFile, channel_map
+from towtank.ingest.readers import stated_units
+from towtank.ingest.runfile import map_channels
+from towtank.ingest.speedlog import log_path
 from towtank.signal.conditioning import still_level
 
-__all__ = ["ZeroFile", "parse_zero_file", "zero_levels", "run_zero_levels",
+__all__ = ["ZeroFile", "zero_levels", "run_zero_levels",
            "with_zero_levels"]
-
-
-@dataclass(frozen=True)
-class ZeroFile:
-    """The protocol's ``[zeros]``: ``file`` is the name pattern of each run's zeros file,
-    relative to the data folder, with ``{stem}``, ``{name}``, ``{dir}`` and ``{run}`` as in
-    ``[speed_log]``."""
-
-    file: str
-
-
-def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
-    """The ``[zeros]`` table checked (None when the protocol has none)."""
-    if data is None:
-        return None
-    check_keys(data, ("file",), "zeros", src)
-    pattern = data.get("file")
-    if not isinstance(pattern, str) or not pattern.strip():
-        raise ProtocolError(f"{src}: [zeros] needs 'file', the zeros file's name pattern (e.g. "
-                            "\"{stem}_zero.csv\").")
-    try:
-        pattern.format(stem="s", name="n", dir=".", run=1)
-    except (KeyError, IndexError, ValueError) as exc:
-        raise ProtocolError(f"{src}: 'file' in [zeros] is {pattern!r}: only {{stem}}, "
-                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
-    return ZeroFile(file=pattern)
 
 
 def zero_levels(path: Path, data: bytes, mapping: dict[str, Any], options: Any = None,
@@ -75,9 +54,6 @@ def zero_levels(path: Path, data: bytes, mapping: dict[str, Any], options: Any =
         Duration of each taper [s] (the run's trim). Without ``fs`` or ``taper_s`` the tapers
         meet in the middle (the Hann window).
     """
-    from towtank.ingest.readers import stated_units
-    from towtank.ingest.runfile import calibrate, channel_map, map_channels, read_columns
-
     name = path.name
     cols, _ = read_columns(path, data, options)
     used: dict[str, str] = {}
@@ -115,9 +91,6 @@ def run_zero_levels(spec: ZeroFile | None, data_dir: Path, file: str, run: int,
     file's rate [Hz]) and ``taper_s`` (the run's trim [s]) as in :func:`zero_levels`."""
     if spec is None:
         return None
-    from towtank.ingest.runfile import file_bytes
-    from towtank.ingest.speedlog import log_path
-
     path = log_path(spec, data_dir, file, run)
     try:
         data = file_bytes(path)
@@ -129,8 +102,6 @@ def run_zero_levels(spec: ZeroFile | None, data_dir: Path, file: str, run: int,
 
 def with_zero_levels(raw: Any, levels: dict[str, float], name: str) -> Any:
     """The run with its zeros from the zeros file ``name`` (and a note saying so)."""
-    from dataclasses import replace
-
     told = ", ".join(f"{k} {v:+.5g} N" for k, v in levels.items())
     return replace(raw, zero_levels=dict(levels),
                    notes=[*raw.notes, f"zeros from the zeros file {name} ({told})"])

@@ -30,7 +30,9 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.protocol import Processing, Protocol
+from towtank.ingest.calibration import UNITS
+from towtank.ingest.describe import force_parts, unmapped_forces
+from towtank.ingest.protocol import Processing, Protocol, channel_map
 from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
@@ -902,9 +904,6 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
     """One sentence per channel of the run file that looks like a force, or a load cell of
     one, and that no [channels] (or [balance]) entry uses: ``DragR`` beside a mapped ``DragL``
     is half the drag left out (:func:`towtank.ingest.describe.unmapped_forces`)."""
-    from towtank.ingest.describe import force_parts, unmapped_forces
-    from towtank.ingest.protocol import channel_map
-
     used: set[str] = set()
     for cm in channel_map(protocol.channels).values():
         used.update(cm.columns or (cm.column,))
@@ -933,8 +932,6 @@ def units_notes(units: dict[str, tuple[str, str]]) -> list[str]:
     """The notes of a run whose channels had no unit label (``drag and lift had no unit label:
     taken as N``) or one towtank does not convert (``drag's unit label 'lb' is not one towtank
     converts: taken as N``); [] when every unit was stated and known."""
-    from towtank.ingest.calibration import UNITS
-
     by_unit: dict[str, list[str]] = {}
     out = []
     for canon, (unit, source) in units.items():

@@ -1,3 +1,4 @@
-"""Runtime helpers that know nothing of hydrodynamics: the reduction cache (``cache``) and the
-worker processes (``parallel``).
+"""Runtime helpers that know nothing of hydrodynamics: the reduction cache (``cache``), the
+worker processes (``parallel``), the output folder's checks (``outfolder``) and manifest
+(``manifest``), and reading files without trusting them (``safefile``).
 """

@@ -32,6 +32,7 @@ import hashlib
 import json
 import math
 import os
+import platform
 import re
 import stat
 import sys
@@ -42,8 +43,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import towtank
 from towtank import __version__
 from towtank.runtime import records
+from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import is_real_dir, read_regular, sha256_regular
 
 CACHE_FORMAT = 4  # of entries and settings keys (4: npz records, never pickles)
@@ -282,7 +285,7 @@ class RunCache:
         if blob is None:
             return None
         try:
-            value = records.from_bytes(blob, self.kind)
+            value: Any = records.from_bytes(blob, self.kind)
         except records.RecordError:
             return None
         if self._check is not None and not self._check(value):
@@ -297,11 +300,11 @@ class RunCache:
         self._dirty = True
         if (len(self._pending) >= PACK_ENTRIES
                 and time.monotonic() - self._last_write >= PACK_SECONDS):
-            def write() -> None:
-                self._write_pack()
-                self._write_index()
+            self._guarded(self._write_pack_and_index)
 
-            self._guarded(write)
+    def _write_pack_and_index(self) -> None:
+        self._write_pack()
+        self._write_index()
 
     # ----------------------------------------------------------------------------- disk
     def _guarded(self, write: Any) -> None:
@@ -459,10 +462,6 @@ class DayStamp:
     @property
     def key(self) -> str:
         if self._key is None:
-            import platform
-
-            import towtank
-
             c = self._protocol.campaign
             ref = Path(str(c.reference))
             payload = {
@@ -486,8 +485,6 @@ class DayStamp:
         """(size, mtime_ns, ctime_ns, inode) of every file the output folder's manifest says
         towtank wrote: stat only, nothing read (a FIFO or a 12 GB file the user put beside the
         outputs is not towtank's, and not looked at); a link or a non-file is None."""
-        from towtank.runtime.manifest import read_manifest
-
         data = read_manifest(self.out_dir)
         files = sorted(data["files"]) if data else []
         return {rel: _lstamp(self.out_dir / rel) for rel in files}

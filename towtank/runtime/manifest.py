@@ -14,11 +14,23 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
+import stat
 import sys
+import tempfile
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+
+if sys.platform == "win32":  # pragma: no cover - Windows locks with msvcrt, others with fcntl
+    import msvcrt
+else:
+    import fcntl
+
+from towtank.errors import ProtocolError
+from towtank.runtime.safefile import read_regular, sha256_regular
 
 __all__ = ["MANIFEST", "INCOMPLETE", "describe", "read_manifest", "write_manifest",
            "foreign_outputs", "refuse_foreign", "known", "recover_outputs",
@@ -31,8 +43,6 @@ _KIND = "towtank output manifest"
 
 def _entry(path: Path) -> dict[str, Any]:
     st = path.stat()
-    from towtank.runtime.safefile import sha256_regular
-
     return {"size": st.st_size, "mtime_ns": st.st_mtime_ns, "sha256": sha256_regular(path)}
 
 
@@ -70,8 +80,6 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
     folder) of at most :data:`MAX_MANIFEST_BYTES`, and an entry that is not a list of
     {size, mtime_ns, sha256} records is dropped (the file it names then counts as not
     towtank's)."""
-    from towtank.runtime.safefile import read_regular
-
     raw = read_regular(folder / MANIFEST, MAX_MANIFEST_BYTES)
     if raw is None:
         return None
@@ -93,8 +101,6 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
 def atomic_write_text(path: Path, text: str) -> None:
     """Write ``path`` by a rename of a temporary file beside it (a name of its own: two
     writers never share one)."""
-    import tempfile
-
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
     try:
         os.fchmod(fd, 0o666 & ~_umask()) if hasattr(os, "fchmod") else None
@@ -123,10 +129,6 @@ def write_manifest(folder: Path, files: dict[str, list[dict[str, Any]]], *,
 def known(path: Path, entries: list[dict[str, Any]]) -> bool:
     """Whether ``path`` is a regular file (not a link, FIFO or device) that is one of the
     versions ``entries`` of the manifest describe."""
-    import stat
-
-    from towtank.runtime.safefile import sha256_regular
-
     try:
         st = os.lstat(path)
     except OSError:
@@ -170,8 +172,6 @@ def refuse_foreign(out_dir: Path, names: set[str] | frozenset[str]) -> None:
     """Stop (ProtocolError) when ``out_dir`` holds an entry named as one of the outputs
     ``names`` (or the incomplete-set marker) that towtank did not write, or that was changed
     since towtank wrote it: writing the day would replace it."""
-    from towtank.errors import ProtocolError
-
     foreign = foreign_outputs(out_dir, set(names) | {INCOMPLETE})
     if foreign:
         more = len(foreign) - 5
@@ -235,8 +235,6 @@ def unwritable(out_dir: Path) -> str | None:
 
     Checked by creating (and removing) a temporary folder beside it, as the outputs will be.
     """
-    import tempfile
-
     parent = out_dir.parent
     while not parent.exists() and parent != parent.parent:  # created only when writing
         parent = parent.parent
@@ -255,9 +253,6 @@ def writing_outputs(folder: Path, names: set[str] | frozenset[str]) -> Iterator[
     of one of those names that towtank did not write; yield a temporary folder inside it to
     write them into; then move each into place by a rename and list it in the folder's
     manifest. For ``predict`` and ``simulate``, which write beside what the user keeps."""
-    import shutil
-    import tempfile
-
     folder = Path(folder).absolute()
     with output_lock(folder):  # one writer at a time, whatever the command
         if folder.exists():
@@ -295,17 +290,13 @@ def lock_path(out_dir: Path) -> Path:
 
 
 def _lock_fd(fd: int, blocking: bool) -> bool:
-    if sys.platform == "win32":  # no fcntl on Windows
-        import msvcrt
-
+    if sys.platform == "win32":  # pragma: no cover - Windows
         try:
             os.lseek(fd, 0, os.SEEK_SET)
             msvcrt.locking(fd, msvcrt.LK_LOCK if blocking else msvcrt.LK_NBLCK, 1)
             return True
         except OSError:
             return False
-    import fcntl
-
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
         return True
@@ -335,10 +326,6 @@ def output_lock(out_dir: Path, wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
     system releases it when its holder ends, however it ends, so a lock left by a killed run
     is no obstacle. Re-entrant within one thread.
     """
-    import threading
-
-    from towtank.errors import ProtocolError
-
     out_dir = Path(out_dir).absolute()
     key = str(out_dir)
     me = threading.get_ident()
@@ -358,8 +345,6 @@ def output_lock(out_dir: Path, wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
         return
     path = lock_path(out_dir)
     path.parent.mkdir(parents=True, exist_ok=True)
-    import time
-
     deadline = time.monotonic() + wait_s
     while True:
         fd = _open_lock(path, out_dir)
@@ -399,10 +384,6 @@ def output_lock(out_dir: Path, wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
 
 def _open_lock(path: Path, out_dir: Path) -> int:
     """A descriptor of the lock file ``path`` (made if missing), checked to be towtank's."""
-    import stat
-
-    from towtank.errors import ProtocolError
-
     flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
     try:
         fd = os.open(path, flags, 0o666)

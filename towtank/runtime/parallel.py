@@ -32,20 +32,25 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import importlib
 import multiprocessing as mp
 import os
+import select
 import signal
 import sys
 import threading
 import time
+import traceback
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from multiprocessing import forkserver, resource_tracker
 from pathlib import Path
 from typing import Any, TypeVar
 
 from towtank.runtime.pause import pause_at
+from towtank.runtime.storage import chained_errno, os_error
 
 T = TypeVar("T")
 
@@ -182,8 +187,6 @@ def _die_with(parent_pid: int) -> None:
         except (AttributeError, OSError):
             fd = None
         if fd is not None:
-            import select
-
             select.select([fd], [], [])
             os._exit(1)
         while not gone():
@@ -228,6 +231,8 @@ def _worker_init(parent_pid: int | None = None) -> None:
     if parent_pid is not None:
         _die_with(parent_pid)
     try:
+        # start-up saving: pyarrow (~70 ms) is loaded in the workers only, not in every
+        # process that imports this module (the command line's, towtank inspect's)
         import pyarrow
 
         pyarrow.set_cpu_count(1)
@@ -242,8 +247,6 @@ def _ready() -> int:
 def _start_forkserver() -> None:
     """Start the fork server now, from this thread, with SIGINT blocked: it is born unable to
     be stopped by Ctrl-C, and ignores it from the first module it preloads."""
-    from multiprocessing import forkserver, resource_tracker
-
     # the resource tracker unblocks SIGINT in the calling thread after starting itself: first
     resource_tracker.ensure_running()
     with _sigint_blocked():
@@ -254,8 +257,6 @@ def end_forkserver() -> None:
     """Kill this process's fork server, if it has one: one still loading its libraries (for
     seconds), or an idle one after Ctrl-C (its interpreter takes a while to wind down); the
     next pool starts another. Not while a pool's workers run: they would be orphaned."""
-    from multiprocessing import forkserver
-
     # the standard library has no public way: its private names, each looked up with care
     server = getattr(forkserver, "_forkserver", None)
     with getattr(server, "_lock", None) or contextlib.nullcontext():
@@ -364,8 +365,6 @@ def load_in_background(modules: Sequence[str]) -> threading.Thread:
     """
 
     def load() -> None:
-        import importlib
-
         for name in modules:
             try:
                 importlib.import_module(name)
@@ -528,8 +527,6 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]]) -> None:
             _kill_children(children)
         raise
     if failures:
-        from towtank.runtime.storage import os_error
-
         codes = [code for _, _, code in failures if code is not None]
         error: Exception = (os_error(codes[0]) if codes
                             else RuntimeError("; ".join(f for f, _, _ in failures)))
@@ -568,10 +565,6 @@ def _kill_children(children: list[tuple[str, Any, Any]]) -> None:
 def _run_in_child(task: Callable[[], object], send: Any) -> None:
     """In a forked process: one task; sends None, or (error, traceback, storage errno or
     None)."""
-    import traceback
-
-    from towtank.runtime.storage import chained_errno
-
     _ignore_sigint()  # born blocking it: a Ctrl-C is the parent's, which then ends this one
     try:
         task()

@@ -17,7 +17,7 @@ import json
 import types
 import typing
 import zipfile
-from typing import TYPE_CHECKING, Any, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -50,7 +50,7 @@ def to_bytes(record: Any) -> bytes:
     """
     if not dataclasses.is_dataclass(record) or isinstance(record, type):
         raise TypeError("to_bytes takes a dataclass instance")
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, Any] = {}
     header: dict[str, Any] = {}
 
     def ref(arr: np.ndarray) -> dict[str, str]:
@@ -68,9 +68,9 @@ def to_bytes(record: Any) -> bytes:
         else:
             header[f.name] = _plain(value)
     buf = io.BytesIO()
-    # stored, not deflated: sizes are what they say; the cast because the names (a0, a1, ...)
-    # are never savez's own keyword allow_pickle, which mypy cannot see
-    np.savez(buf, **cast(dict[str, Any], arrays))
+    # stored, not deflated: sizes are what they say (the names a0, a1, ... are never savez's
+    # own keyword allow_pickle)
+    np.savez(buf, **arrays)
     with zipfile.ZipFile(buf, "a", compression=zipfile.ZIP_STORED) as zf:
         zf.writestr(HEADER, json.dumps(header, allow_nan=True))
     return buf.getvalue()

@@ -4,6 +4,8 @@ Anything may have been put in an output folder in towtank's place: a FIFO (a rea
 link to ``/dev/zero`` or to a 12 GB file (a read fills the memory), a folder. These helpers
 open a path only if it is a regular file, never through a symbolic link and never blocking,
 and read it with a cap (:func:`read_regular`) or by streaming (:func:`sha256_regular`).
+A table a protocol names (reference CSV, tare table) is refused before it is read when it is
+not a regular file or is far too large for a table (:func:`check_table_size`).
 """
 
 from __future__ import annotations
@@ -12,8 +14,12 @@ import hashlib
 import os
 import stat
 from pathlib import Path
+from typing import Any
 
-__all__ = ["read_regular", "sha256_regular", "is_real_dir", "open_regular"]
+from towtank.errors import ProtocolError
+
+__all__ = ["read_regular", "sha256_regular", "is_real_dir", "open_regular", "check_table_size",
+           "MAX_TABLE_BYTES"]
 
 _FLAGS = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) \
     | getattr(os, "O_BINARY", 0)
@@ -86,3 +92,29 @@ def is_real_dir(path: str | Path) -> bool:
         return stat.S_ISDIR(os.lstat(path).st_mode)
     except OSError:
         return False
+
+
+#: Largest table a protocol names and towtank reads whole (the reference CSV, the tare table):
+#: such a table has a few lines; a larger file is the wrong one (or damaged) and is refused in
+#: one sentence before it is read rather than read into all of the memory.
+MAX_TABLE_BYTES = 64 << 20
+
+
+def check_table_size(path: Any, what: str, src: str) -> None:
+    """Refuse (ProtocolError) a protocol table larger than :data:`MAX_TABLE_BYTES`, or one
+    that is a pipe or a device (reading it would wait forever); a file that cannot be
+    stat'ed is left to its reader, which says what is wrong with it."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    if not stat.S_ISREG(st.st_mode) and not stat.S_ISDIR(st.st_mode):
+        raise ProtocolError(f"{src}: the {what} {os.path.basename(path)} is not a regular file "
+                            "(a pipe, socket or device).")
+    size = st.st_size
+    if size > MAX_TABLE_BYTES:
+        raise ProtocolError(
+            f"{src}: the {what} {os.path.basename(path)} is {size / 2**20:.0f} MiB, but towtank "
+            f"reads such tables up to {MAX_TABLE_BYTES >> 20} MiB (they hold a few lines): is "
+            "it the right file?"
+        )

@@ -19,7 +19,7 @@ from towtank.testing.days import (
     hull_protocol_sections,
     make_hull_day,
 )
-from towtank.testing.instruments import LabChannels, Noise, _water
+from towtank.testing.instruments import LabChannels, Noise, medium_properties
 from towtank.testing.truth import (
     HULL_SAMPLE_SEED,
     ChannelStyle,
@@ -79,8 +79,8 @@ def make_air_hull_day(
     -------
     DayTruth
     """
-    rho = float(_water(temperature_C, "air").rho)
-    ratio = rho / float(_water(temperature_C, "fresh").rho)
+    rho = float(medium_properties(temperature_C, "air").rho)
+    ratio = rho / float(medium_properties(temperature_C, "fresh").rho)
     k = AIR_SPEED_FACTOR
     base = TareTruth()
     tare = TareTruth(t2=base.t2 * ratio, t1=base.t1 * ratio * k, m_t=base.m_t,

@@ -27,16 +27,27 @@ from __future__ import annotations
 
 import argparse
 import csv
+import ctypes
 import json
+import multiprocessing as mp
 import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
+
+import pyarrow.csv  # noqa: F401 - imported before the clock starts, as in a warm process
+import pyarrow.csv as pacsv
+
+from towtank.runtime.parallel import default_jobs
+from towtank.testing import synthetic as syn
+from towtank.testing.synthetic import RunSpec, hull_protocol_sections, write_protocol
 
 PLAN_VERSION = 1  # bump when the generated campaign changes
 CHUNK_RUNS = 20  # runs generated per chunk (the unit of generation, caching and parallelism)
@@ -73,8 +84,6 @@ def block_plan(group: str) -> list[Any]:
     40 runs with short plateaus (2 s) and brisk ramps, so a run at 1 kHz is ~10 s and ~0.4 MB
     of CSV.
     """
-    from towtank.testing.synthetic import RunSpec
-
     plan: list[Any] = []
     for v in (0.4, 0.8, 1.2, 1.6, 2.0):
         plan.append(RunSpec("sting", 0.0, v, 1.0, tare_group=group))
@@ -105,8 +114,6 @@ def campaign_plan(first: int, last: int) -> list[Any]:
 def _gen_chunk(args: tuple[str, int, float, int]) -> str:
     """Write chunk ``k`` of the pool (runs k·CHUNK_RUNS+1 ...); returns its folder."""
     pool, k, fs, seed = args
-    from towtank.testing import synthetic as syn
-
     d = Path(pool) / f"chunk_{k:04d}"
     if (d / "done").exists():
         return str(d)
@@ -138,9 +145,6 @@ def ensure_pool(workdir: Path, n_runs: int, fs: float, seed: int, jobs: int,
     t0 = time.perf_counter()
     args = [(str(pool), k, fs, seed) for k in todo]
     if jobs > 1 and len(todo) > 1:
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor
-
         with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("fork")) as ex:
             list(ex.map(_gen_chunk, args))
     else:
@@ -181,8 +185,6 @@ def write_sheet(path: Path, header: list[str], rows: list[dict[str, str]]) -> No
 
 def build_campaign(workdir: Path, pool: Path, n_runs: int, name: str) -> dict[str, Any]:
     """A campaign folder of runs 1..n_runs: data/ (hard links into the pool), sheet, protocol."""
-    from towtank.testing.synthetic import hull_protocol_sections, write_protocol
-
     d = workdir / "campaigns" / name
     shutil.rmtree(d, ignore_errors=True)
     (d / "data").mkdir(parents=True)
@@ -226,8 +228,6 @@ def warm(files: list[Path]) -> int:
 
 
 def _parse_one(path: str) -> int:
-    import pyarrow.csv as pacsv
-
     return pacsv.read_csv(path).num_rows
 
 
@@ -244,17 +244,12 @@ def parse_time(files: list[Path], jobs: int) -> tuple[float, int]:
     The workers are forked fresh (their start-up is included), each takes an interleaved share.
     """
     paths = [str(f) for f in files]
-    import pyarrow.csv  # noqa: F401 - imported before the clock starts, as in a warm process
-
     if jobs <= 1:
         t0 = time.perf_counter()
         c0 = time.process_time()
         rows = _parse_many(paths)
         _LAST_PARSE_CPU[0] = time.process_time() - c0
         return time.perf_counter() - t0, rows
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
-
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("fork")) as ex:
         rows = sum(ex.map(_parse_many, [paths[i::jobs] for i in range(jobs)]))
@@ -287,8 +282,6 @@ def _become_subreaper() -> bool:
     and peak memory of the workers it reaped.
     """
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         return libc.prctl(36, 1, 0, 0, 0) == 0  # PR_SET_CHILD_SUBREAPER
     except (OSError, AttributeError):  # pragma: no cover - not Linux
@@ -395,8 +388,6 @@ def run_bench(
     filters out other load on the machine; peak memory is the largest seen.
     """
     global _CHILD_ENV
-    from towtank.runtime.parallel import default_jobs
-
     jobs = default_jobs() if jobs is None else max(1, jobs)
     repeat = max(1, repeat)
     scales = tuple(sorted(set(scales) | {1}))
@@ -523,8 +514,6 @@ def run_bench(
 
 
 def _self_rss_mb() -> float:
-    import resource
-
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 

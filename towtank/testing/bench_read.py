@@ -16,7 +16,12 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
+
+from towtank.ingest.protocol import load_protocol
+from towtank.ingest.runfile import file_bytes, load_run
+from towtank.testing import synthetic as syn
+from towtank.testing.layouts import layout_channels, protocol_sections
 
 if TYPE_CHECKING:
     from towtank.testing.truth import FileFormat
@@ -27,27 +32,21 @@ TARGET = 1.5  # largest time ratio to CSV for the TDMS and MATLAB layouts
 
 
 def _write(root: Path, layout: FileFormat, seed: int) -> Path:
-    from towtank.testing import synthetic as syn
-    from towtank.testing.layouts import layout_channels, protocol_sections
-
     day = root / layout
     proto = day / "protocol.toml"
     if proto.is_file():
         return proto
-    syn.make_hull_day(day, seed=seed, file_format=layout, sheet_format="csv",
+    syn.make_hull_day(day, seed=seed, file_format=cast(Any, layout), sheet_format="csv",
                       channel_style="lab")
     channels = layout_channels(layout, syn.LabChannels())
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv", channels=channels,
                                           channel_style="lab")
-    tables: dict[str, Any] = protocol_sections(layout, sections)
-    return syn.write_protocol(proto, **tables)
+    laid_out: dict[str, Any] = protocol_sections(layout, sections)
+    return syn.write_protocol(proto, **laid_out)
 
 
 def time_layout(protocol_path: Path, repeat: int) -> tuple[float, int, int]:
     """(best time to load every run file [s], files, bytes) of one day."""
-    from towtank.ingest.protocol import load_protocol
-    from towtank.ingest.runfile import file_bytes, load_run
-
     protocol = load_protocol(protocol_path)
     data_dir = protocol.campaign.data_dir
     files = sorted(p for p in data_dir.iterdir() if p.is_file())

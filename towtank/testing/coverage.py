@@ -19,7 +19,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.stats import beta
 
+from towtank.pipeline import process_day
 from towtank.testing.days import (
     hull_day_plan,
     hull_protocol_sections,
@@ -99,8 +101,6 @@ def weighed_mass(model: dict[str, Any], seed: int) -> float:
 def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[dict[str, Any]]:
     """One generated day under ``condition``: a row per symbol (present, value, interval,
     truth, relative error, inside)."""
-    from towtank.pipeline import process_day
-
     kw = dict(CONDITIONS[condition])
     if kw.get("runs") == "long":
         kw["runs"] = _long_plan()
@@ -140,8 +140,6 @@ def day_result(condition: str, seed: int, workdir: Path | None = None) -> list[d
 
 def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
     """Exact binomial interval for k successes in n trials (Clopper & Pearson 1934)."""
-    from scipy.stats import beta
-
     a = 1.0 - level
     lo = 0.0 if k == 0 else float(beta.ppf(a / 2, k, n - k + 1))
     hi = 1.0 if k == n else float(beta.ppf(1 - a / 2, k + 1, n - k))

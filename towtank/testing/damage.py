@@ -43,6 +43,8 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 
+from towtank.testing import synthetic
+
 __all__ = [
     "read_frame",
     "frame_bytes",
@@ -490,8 +492,6 @@ def make_damaged_day(out_dir: str | Path, seed: int = 1, *, fs: float = 200.0) -
         Unpacks as ``expected, ok_with_note``: run → rejection keyword, and the runs that must
         stay ok with a note.
     """
-    from towtank.testing import synthetic
-
     out_dir = Path(out_dir)
     plan = synthetic.hull_day_plan()
     base = [replace(spec, run=i + 1) for i, spec in enumerate(plan)]

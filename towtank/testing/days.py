@@ -16,18 +16,20 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+import openpyxl
 import pandas as pd
 
 from towtank import __version__ as _TOWTANK_VERSION
 from towtank.testing.instruments import (
     LabChannels,
     Noise,
-    _csv_bytes,
-    _water,
+    csv_bytes,
+    medium_properties,
     simulate_run,
     write_run_file,
 )
 from towtank.testing.layouts import LAYOUTS
+from towtank.testing.layouts import NO_SPEED_WINDOW_MARGIN_S as m
 from towtank.testing.truth import (
     FIN_SAMPLE_DATE,
     FIN_SAMPLE_SEED,
@@ -63,8 +65,6 @@ _FIXED_TIME = _dt.datetime(2024, 5, 21, 9, 0, 0)
 
 def _xlsx_bytes(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> bytes:
     """An .xlsx workbook with one sheet ``runs``, byte-for-byte reproducible."""
-    import openpyxl
-
     wb = openpyxl.Workbook()
     ws = wb.active
     ws.title = "runs"
@@ -118,14 +118,14 @@ def write_run_sheet(
     pathlib.Path
     """
     path = Path(path)
-    rows = [dict(r) for r in rows]
+    table = [dict(r) for r in rows]
     path.parent.mkdir(parents=True, exist_ok=True)
     suffix = path.suffix.lower()
     if suffix == ".xlsx":
-        path.write_bytes(_xlsx_bytes(rows, columns))
+        path.write_bytes(_xlsx_bytes(table, columns))
     elif suffix == ".csv":
-        frame = pd.DataFrame([{c: r.get(c, "") for c in columns} for r in rows], columns=columns)
-        path.write_bytes(_csv_bytes(frame))
+        frame = pd.DataFrame([{c: r.get(c, "") for c in columns} for r in table], columns=columns)
+        path.write_bytes(csv_bytes(frame))
     else:
         raise ValueError(f"{path.name}: a run sheet must be .csv or .xlsx.")
     return path
@@ -392,7 +392,7 @@ def _make_day(
     day_rng = np.random.default_rng(streams[0])
     temps = _run_temperatures(plan, temperature_C, temperature_spread_C, day_rng)
 
-    nominal = _water(temperature_C, water_type)
+    nominal = medium_properties(temperature_C, water_type)
     rho0, nu0 = float(nominal.rho), float(nominal.nu)
     water_cache: dict[float, Any] = {}
     truth = DayTruth(
@@ -417,7 +417,7 @@ def _make_day(
     rows: list[dict[str, Any]] = []
     for spec, number, temp, stream in zip(plan, numbers, temps, streams[1:], strict=True):
         if temp not in water_cache:
-            water_cache[temp] = _water(temp, water_type)
+            water_cache[temp] = medium_properties(temp, water_type)
         tare = tares.get(spec.tare_group, TareTruth.none())
         frame, run_truth = simulate_run(
             spec.config,
@@ -463,10 +463,9 @@ def _make_day(
 
     columns: tuple[str, ...] = SHEET_COLUMNS
     if file_format == "no-speed":  # the lab's steady windows: the set speed has no trace
-        from towtank.testing.layouts import NO_SPEED_WINDOW_MARGIN_S as m
-
         columns += ("window_start_s", "window_end_s")
-        rows = [{**row, "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
+        rows = [{**row,
+                 "window_start_s": round(truth.runs[row["run"]]["t_plateau_start"] + m, 3),
                  "window_end_s": round(truth.runs[row["run"]]["t_plateau_end"] - m, 3)}
                 for row in rows]
     if file_format == "lvm-appended":  # the run is the file's second acquisition
@@ -561,7 +560,7 @@ def make_hull_day(
     -------
     DayTruth
     """
-    nominal = _water(temperature_C, water_type)
+    nominal = medium_properties(temperature_C, water_type)
     hull = sut2_hull_truth(float(nominal.rho)) if hull is None else hull
     return _make_day(
         out_dir,

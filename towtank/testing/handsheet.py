@@ -11,11 +11,15 @@ the same coefficients.
 
 from __future__ import annotations
 
+import csv
 import io
 from pathlib import Path
 from typing import Any
 
+import openpyxl
 import pandas as pd
+
+from towtank.testing.days import pinned_xlsx
 
 __all__ = ["HAND_SHEETS", "write_hand_typed_sheet", "HAND_HEADER", "HAND_NOTES"]
 
@@ -119,8 +123,6 @@ def _cell_text(v: Any) -> str:
 
 
 def _csv(top: list, header: list[str], rows: list, bottom: list) -> bytes:
-    import csv
-
     buf = io.StringIO()
     writer = csv.writer(buf, delimiter=";", lineterminator="\r\n")  # quotes a ';' in a note
     for r in [*top, header, *rows, *bottom]:
@@ -129,10 +131,6 @@ def _csv(top: list, header: list[str], rows: list, bottom: list) -> bytes:
 
 
 def _xlsx(top: list, header: list[str], rows: list, bottom: list) -> bytes:
-    import openpyxl
-
-    from towtank.testing.days import pinned_xlsx
-
     wb = openpyxl.Workbook()
     notes = wb.active
     notes.title = "Notes"

@@ -11,16 +11,27 @@ from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
+from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
 
-from towtank.testing.profiles import _sample_times, plan_profile
+from towtank.reference.air import air_properties
+from towtank.reference.water import water_properties
+from towtank.testing.labchannels import LabChannels
+from towtank.testing.layouts import (
+    balance_frame,
+    layout_channels,
+    write_carriage_log,
+    write_layout,
+    write_zero_file,
+)
+from towtank.testing.profiles import plan_profile, sample_times
 from towtank.testing.truth import (
-    _REFERENCE_FS,
+    REFERENCE_FS,
     ChannelStyle,
     Config,
     FinTruth,
     HullTruth,
     TareTruth,
-    _model_forces,
+    model_forces,
     sut2_hull_truth,
     tare_forces,
 )
@@ -100,15 +111,11 @@ def _as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     return np.random.default_rng(0 if rng is None else rng)
 
 
-def _water(temperature_C: float, water_type: str) -> Any:
+def medium_properties(temperature_C: float, water_type: str) -> Any:
     """The medium's properties: ITTC water, or air (``"air"``: CIPM-2007 at 101325 Pa and
     50 % relative humidity, Sutherland viscosity; the protocol's defaults)."""
     if water_type == "air":
-        from towtank.reference.air import air_properties
-
         return air_properties(temperature_C)
-    from towtank.reference.water import water_properties
-
     return water_properties(temperature_C, water_type)
 
 
@@ -189,7 +196,7 @@ def simulate_run(
     rng = _as_rng(rng)
     noise = Noise() if noise is None else noise
     if water is None:
-        water = _water(temperature_C, water_type)
+        water = medium_properties(temperature_C, water_type)
     rho, nu = float(water.rho), float(water.nu)
     if config == "hull" and hull is None:
         hull = sut2_hull_truth(rho)
@@ -207,10 +214,10 @@ def simulate_run(
         decel=decel,
         tank_length_m=tank_length_m,
     )
-    t = _sample_times(plan.duration, fs)
+    t = sample_times(plan.duration, fs)
     u, a = plan.evaluate(t)
 
-    d_model, l_model = _model_forces(config, angle_deg, u, a, hull=hull, fin=fin, rho=rho, nu=nu)
+    d_model, l_model = model_forces(config, angle_deg, u, a, hull=hull, fin=fin, rho=rho, nu=nu)
     d_tare, l_tare = tare_forces(u, a, tare)
     draws = _draw_imperfections(noise, t.size, rng, accel_channel)
     truth = _plateau_truth(config, angle_deg, plan, hull=hull, fin=fin, tare=tare, rho=rho,
@@ -257,7 +264,7 @@ def _recorded_channels(
     """The recorded channels: forces [N] plus zero, drift, vibration, hum and white noise;
     speed [m/s] plus white noise, quantised; the optional accel [m/s^2] plus white noise."""
     n = t.size
-    scale = math.sqrt(fs / _REFERENCE_FS)
+    scale = math.sqrt(fs / REFERENCE_FS)
     ramp = t / t[-1] if n > 1 else np.zeros_like(t)
     w_vib = 2.0 * np.pi * draws["vib_hz"] * t
     w_hum = 2.0 * np.pi * noise.hum_hz * t
@@ -303,7 +310,7 @@ def _plateau_truth(
     """The run's truth on its plateau, through the very same force functions as the samples
     (so it equals the plateau samples bit for bit), and the realised imperfections."""
     v_arr, zero_arr = np.array([plan.speed]), np.array([0.0])
-    d_plat, l_plat = _model_forces(
+    d_plat, l_plat = model_forces(
         config, angle_deg, v_arr, zero_arr, hull=hull, fin=fin, rho=rho, nu=nu
     )
     td_plat, tl_plat = tare_forces(v_arr, zero_arr, tare)
@@ -360,45 +367,6 @@ _VOLT_DECIMALS = 8
 _UNITS = {"time": "s", "speed": "m/s", "accel": "m/s^2", "drag": "N", "lift": "N"}
 
 
-@dataclass(frozen=True)
-class LabChannels:
-    """A lab's column names and load-cell calibrations (value = gain * (raw - offset)).
-
-    Parameters
-    ----------
-    time, speed, accel : str
-        Column names of the time [s], carriage speed [m/s] and acceleration [m/s^2] channels.
-    drag, lift : str
-        Column names of the load cells, recorded in volts.
-    drag_gain, lift_gain : float
-        Calibrations [N/V]; the lift cell is mounted reversed (negative gain).
-    drag_offset, lift_offset : float
-        Electrical offsets [V].
-    """
-
-    time: str = "Time (s)"
-    speed: str = "Carriage speed (m/s)"
-    accel: str = "Carriage accel (m/s^2)"
-    drag: str = "Fx load cell (V)"
-    lift: str = "Fy load cell (V)"
-    drag_gain: float = 20.0
-    drag_offset: float = 0.0
-    lift_gain: float = -25.0
-    lift_offset: float = 0.0
-
-    def protocol_section(self, accel: bool = False) -> dict[str, dict[str, Any]]:
-        """The protocol's ``[channels]`` table for files written in this style."""
-        out: dict[str, dict[str, Any]] = {
-            "time": {"column": self.time},
-            "speed": {"column": self.speed},
-        }
-        if accel:
-            out["accel"] = {"column": self.accel}
-        out["drag"] = {"column": self.drag, "gain": self.drag_gain, "offset": self.drag_offset}
-        out["lift"] = {"column": self.lift, "gain": self.lift_gain, "offset": self.lift_offset}
-        return out
-
-
 def _clean(x: np.ndarray, decimals: int) -> np.ndarray:
     return np.round(np.asarray(x, dtype=float), decimals) + 0.0  # + 0.0 turns -0.0 into 0.0
 
@@ -439,7 +407,8 @@ def to_file_frame(
     return pd.DataFrame(out)
 
 
-def _csv_bytes(frame: pd.DataFrame) -> bytes:
+def csv_bytes(frame: pd.DataFrame) -> bytes:
+    """The frame as a run file's CSV bytes: a header row, no index, ``\n`` line ends."""
     return frame.to_csv(index=False, lineterminator="\n").encode("utf-8")
 
 
@@ -481,9 +450,7 @@ def write_run_file(
         raise ValueError(f"tdms_dtype must be 'float64' or 'float32', not {tdms_dtype!r}.")
     path = Path(path)
     if layout is not None:
-        from towtank.testing.layouts import layout_channels, write_layout  # noqa: I001
-
-        lab = layout_channels(layout, channels or LabChannels())
+        lab = layout_channels(layout, channels or LabChannels()) or LabChannels()
         out = to_file_frame(frame, channel_style, lab)
         units = {}
         for canon in frame.columns:
@@ -494,19 +461,13 @@ def write_run_file(
         if layout in ("two-cell", "matrix"):
             if channel_style != "lab":
                 raise ValueError(f"the {layout} layout records load cells: channel_style='lab'")
-            from towtank.testing.layouts import balance_frame
-
             out = balance_frame(layout, out, lab)
         if layout == "zero-file":
-            from towtank.testing.layouts import write_zero_file
-
             write_zero_file(out, path, time_col,
                             "speed" if channel_style == "canonical" else lab.speed)
         if layout == "no-speed":
             out = out.drop(columns=["speed" if channel_style == "canonical" else lab.speed])
         if layout in ("speed-log", "position-log"):
-            from towtank.testing.layouts import write_carriage_log
-
             speed_col = "speed" if channel_style == "canonical" else lab.speed
             write_carriage_log(layout, out, path, time_col, speed_col)
             out = out.drop(columns=[speed_col])
@@ -515,12 +476,10 @@ def write_run_file(
     name = path.name.lower()
     path.parent.mkdir(parents=True, exist_ok=True)
     if name.endswith(".csv.gz"):
-        path.write_bytes(gzip.compress(_csv_bytes(out), compresslevel=6, mtime=0))
+        path.write_bytes(gzip.compress(csv_bytes(out), compresslevel=6, mtime=0))
     elif name.endswith(".csv"):
-        path.write_bytes(_csv_bytes(out))
+        path.write_bytes(csv_bytes(out))
     elif name.endswith(".tdms"):
-        from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
-
         lab = channels or LabChannels()
         units = {}
         for canon in frame.columns:

@@ -48,13 +48,14 @@ import io
 import re
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+import h5py
 import numpy as np
 import pandas as pd
+import scipy.io
+from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
 
-if TYPE_CHECKING:
-    from towtank.testing.instruments import LabChannels
+from towtank.testing.labchannels import LabChannels
 
 #: Layout -> file extension.
 LAYOUTS = {
@@ -262,8 +263,6 @@ def protocol_sections(layout: str, sections: dict[str, dict]) -> dict[str, dict]
 
 
 def _tdms_waveform(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
-
     t = _time_column(frame, time_col)
     dt = float(np.median(np.diff(t)))
     objects = [RootObject(properties={"name": path.stem}), GroupObject("Untitled")]
@@ -360,16 +359,12 @@ def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str
 
 
 def _mat_v5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    import scipy.io
-
     run = {variable_name(c): frame[c].to_numpy(np.float64) for c in frame.columns}
     scipy.io.savemat(str(path), {"run": run, "description": "towtank synth"}, format="5",
                      oned_as="column")
 
 
 def _mat_v73(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    import h5py
-
     t = _time_column(frame, time_col)
     fs = 1.0 / float(np.median(np.diff(t)))
     with h5py.File(str(path), "w", userblock_size=512) as fh:
@@ -388,8 +383,6 @@ def _mat_v73(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, st
 
 
 def _hdf5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    import h5py
-
     t = _time_column(frame, time_col)
     with h5py.File(str(path), "w") as fh:
         grp = fh.create_group("data")
@@ -405,8 +398,6 @@ def _hdf5_rate_name(frame: pd.DataFrame, path: Path, time_col: str,
                     units: dict[str, str]) -> None:
     """A MARIN-style export: the rate written only in the group's name (``/200.00 Hz``), a
     dataset per channel, no time dataset and no attributes."""
-    import h5py
-
     t = _time_column(frame, time_col)
     fs = 1.0 / float(np.median(np.diff(t)))
     with h5py.File(str(path), "w") as fh:

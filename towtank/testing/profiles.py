@@ -243,7 +243,9 @@ def plan_profile(
     )
 
 
-def _sample_times(duration: float, fs: float) -> np.ndarray:
+def sample_times(duration: float, fs: float) -> np.ndarray:
+    """Sample times ``k / fs`` [s], k = 0 … floor(duration·fs), of a recording ``duration``
+    [s] long at ``fs`` [Hz] (ValueError for a rate that is not a positive number)."""
     if not (math.isfinite(fs) and fs > 0.0):
         raise ValueError(f"fs must be a positive number, not {fs!r}.")
     n = int(math.floor(duration * fs + 1e-9)) + 1
@@ -294,7 +296,7 @@ def carriage_profile(
         decel=decel,
         tank_length_m=tank_length_m,
     )
-    t = _sample_times(plan.duration, fs)
+    t = sample_times(plan.duration, fs)
     u, a = plan.evaluate(t)
     return t, u, a
 

@@ -9,6 +9,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from towtank.reference.sandia import section_coefficients
+
 GENERATOR_VERSION = "1.0"
 """Version of the generator's numerics; bumped whenever a seed would give different numbers."""
 
@@ -58,7 +60,7 @@ FileFormat = Literal["csv", "csv.gz", "tdms", "tdms-waveform", "lvm", "txt-eu", 
                      "position-log", "zero-file", "no-speed"]
 SheetFormat = Literal["csv", "xlsx"]
 
-_REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
+REFERENCE_FS = 1000.0  # [Hz] sampling rate at which the white-noise sigmas of Noise are given
 
 
 
@@ -126,6 +128,7 @@ class HullTruth:
         rho : float
             Water density [kg/m^3] used to turn C_D into dimensional damping.
         """
+        assert self.frontal_area is not None  # set by __post_init__
         q = 0.5 * rho * self.frontal_area
         q_lat = 0.5 * rho * self.lateral_area
         x_uu = -q * self.c0
@@ -313,6 +316,7 @@ def hull_forces(
         drag = 0.5 * rho * hull.lateral_area * hull.cd90 * uu
         lift = np.zeros_like(u)
     elif ang <= 30.0:
+        assert hull.frontal_area is not None  # set by HullTruth.__post_init__
         drag = 0.5 * rho * hull.frontal_area * hull.cd(angle_deg) * uu
         lift = 0.5 * rho * hull.frontal_area * hull.cl(angle_deg) * uu
     else:
@@ -356,8 +360,6 @@ def fin_forces(
     lift : numpy.ndarray
         0.5 rho S C_L U|U| [N].
     """
-    from towtank.reference.sandia import section_coefficients
-
     u = np.asarray(speed, dtype=float)
     a = np.asarray(accel, dtype=float)
     re = np.clip(np.abs(u) * fin.chord / nu, 1e4, 1e7)
@@ -392,7 +394,7 @@ def tare_forces(
     return drag, lift
 
 
-def _model_forces(
+def model_forces(
     config: str,
     angle_deg: float,
     u: np.ndarray,
@@ -403,6 +405,9 @@ def _model_forces(
     rho: float,
     nu: float,
 ) -> tuple[np.ndarray, np.ndarray]:
+    """The model's true drag and lift [N] in a run of ``config`` (``"hull"``, ``"fin"``; the
+    sting alone otherwise: zero) at ``angle_deg`` [deg], speed ``u`` [m/s] and acceleration
+    ``a`` [m/s²], in water of density ``rho`` [kg/m³] and kinematic viscosity ``nu`` [m²/s]."""
     if config == "hull":
         assert hull is not None
         return hull_forces(u, a, angle_deg, hull, rho)
