@@ -25,8 +25,17 @@ import numpy as np
 import pandas as pd
 
 from towtank.analysis.fin_analysis import FinResult
-from towtank.analysis.hull import SYMBOLS, UNIT, Estimate, HullFit
+from towtank.analysis.fins import FIN_TABLE_COLUMNS
+from towtank.analysis.hull import (
+    COEFFICIENT_COLUMNS,
+    COEFFICIENT_EXTRA_COLUMNS,
+    SYMBOLS,
+    UNIT,
+    Estimate,
+    HullFit,
+)
 from towtank.analysis.scaling import ScalingResult
+from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 from towtank.ingest.protocol import Protocol
 from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel, tare_table
@@ -249,8 +258,6 @@ class DayResult:
         """fins.csv of the day: one row per fin run (empty without fin runs)."""
         if self.fin_result is not None:
             return self.fin_result.table
-        from towtank.analysis.fins import FIN_TABLE_COLUMNS
-
         return pd.DataFrame(columns=list(FIN_TABLE_COLUMNS))
 
     @property
@@ -258,8 +265,6 @@ class DayResult:
         """scaling.csv of the day: one row per prototype speed (empty when not scaled)."""
         if self.scaling_result is not None:
             return self.scaling_result.table
-        from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
-
         return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
 
     @property
@@ -267,8 +272,6 @@ class DayResult:
         """coefficients.csv of the day: the hull's coefficients with their prototype values
         and, with a [vehicle], the predicted beside them (empty without hull runs)."""
         if self.hull is None:
-            from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
-
             return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
         base = self.hull.coefficients
         if self.vehicle is not None and self.vehicle.coefficients is not None:

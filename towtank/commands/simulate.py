@@ -14,6 +14,7 @@ from towtank.errors import ProtocolError
 from towtank.report.manoeuvre_figure import save_manoeuvre_figure
 from towtank.vehicle import schema
 from towtank.vehicle.glider import glide_table
+from towtank.vehicle.glider_controls import glider_problems, roll_mass_angle_for_static_roll_deg
 from towtank.vehicle.model import read_model
 from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate, trim_warning
 
@@ -69,13 +70,6 @@ def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: st
     """The model's ``glider`` block, when it has one (its wings enter every simulation), and
     --roll-deg: a glide only, finite, within +-80 deg, and a model with a roll mass that can
     give that roll at rest."""
-    import math
-
-    from towtank.vehicle.glider_controls import (
-        glider_problems,
-        roll_mass_angle_for_static_roll_deg,
-    )
-
     glider = None if model is None else model.get("glider")
     if model is not None and glider is not None:  # its wings enter every simulation
         problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))

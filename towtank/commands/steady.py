@@ -9,7 +9,15 @@ import re
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
+from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
+from towtank.report.steady_figure import save_steady_figure
+from towtank.vehicle import schema
+from towtank.vehicle.glider_controls import glider_problems
+from towtank.vehicle.model import read_model
+from towtank.vehicle.spiral import steady_table
 
 __all__ = ["STEADY_OUTPUTS", "MAX_COMBINATIONS", "parse_list", "steady_command"]
 
@@ -56,8 +64,6 @@ def parse_list(text: str, option: str) -> list[float]:
 
 def _check(model: dict[str, Any], name: str, ballasts: list[float], pitches: list[float],
            rolls: list[float]) -> list[str]:
-    from towtank.vehicle.glider_controls import glider_problems
-
     glider = model.get("glider")
     if glider is None:
         return [f"{name}: the model has no 'glider' block (ballast, moving mass, wings); give "
@@ -89,12 +95,6 @@ def _check(model: dict[str, Any], name: str, ballasts: list[float], pitches: lis
 def steady_command(model_path: Path, ballast_cc: str, pitch_deg: str,
                    roll_deg: str | None = None, out: Path | None = None) -> int:
     """Solve and write steady.csv and steady.png; print the table."""
-    import pandas as pd
-
-    from towtank.vehicle import schema
-    from towtank.vehicle.model import read_model
-    from towtank.vehicle.spiral import steady_table
-
     name = Path(model_path).name
     ballasts = parse_list(ballast_cc, "--ballast-cc")
     pitches = parse_list(pitch_deg, "--pitch-deg")
@@ -111,11 +111,7 @@ def steady_command(model_path: Path, ballast_cc: str, pitch_deg: str,
 
     def write(tmp: Path) -> None:
         table.to_csv(tmp / "steady.csv", index=False, float_format="%.6g")
-        from towtank.report.steady_figure import save_steady_figure
-
         save_steady_figure(table, tmp / "steady.png", str(model.get("name", "glider")))
-
-    from towtank.commands.storage import write_outputs_or_stop
 
     write_outputs_or_stop(folder, STEADY_OUTPUTS, write)
     show = table.drop(columns=["note"])

@@ -15,6 +15,7 @@ from typing import Any
 
 from towtank.errors import ProtocolError
 from towtank.ingest import design_inputs  # powering and pressure hull (#21)
+from towtank.ingest.glider_inputs import parse_glider
 from towtank.ingest.schema import SCHEMA, coerce, suggest
 from towtank.reference.series58 import SERIES58_PARENT, check_series58
 
@@ -187,8 +188,6 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
     design = {k: getattr(design_inputs, f"parse_{k}")(data.pop(k), src)
               for k in ("propeller", "pressure_hull") if k in data}
     if "glider" in data:  # ballast, moving mass, roll mass, wings (#26)
-        from towtank.vehicle.glider_controls import parse_glider
-
         design["glider"] = parse_glider(data.pop("glider"), src)
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
     if v["hull"] == "drdc":

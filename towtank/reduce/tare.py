@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from towtank.stats.intervals import cr2_covariance
+from towtank.stats.quantiles import normal_quantile, t95
 
 TARE_TERMS = ("t2", "t1", "m_t")
 
@@ -241,8 +242,6 @@ def tare_table(tares: dict[str, TareModel]) -> Any:
     # start-up saving: pandas (~0.27 s) for the tare table only: the reduction's workers never
     # load it
     import pandas as pd
-
-    from towtank.stats.quantiles import normal_quantile, t95
 
     rows = []
     for group in sorted(tares):

@@ -32,7 +32,7 @@ import textwrap
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import matplotlib as mpl
 import numpy as np
@@ -43,14 +43,13 @@ from matplotlib.patches import Patch
 from towtank.report import figure_base as _base
 from towtank.report import style
 from towtank.report.tare_figure import fig_tare
-from towtank.results import DayResult, FinResult
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # towtank.results loads pandas, which `towtank inspect --png` never needs
     import pandas as pd
     from matplotlib.axes import Axes
 
     from towtank.reduce.run import RunReduction
-    from towtank.results import ScalingResult
+    from towtank.results import DayResult, FinResult, ScalingResult
 
 # the figures' shared basics, also reached as figures.<name> by the PDF and the tests
 _E_NUMBER = _base._E_NUMBER
@@ -372,7 +371,9 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
 # ----------------------------------------------------------------------------- (c,d) fins
 def _fin_result(fins: FinResult | DayResult | None) -> FinResult | None:
     """The fin result of ``fins``: itself, or a day's ``fin_result``."""
-    return fins.fin_result if isinstance(fins, DayResult) else fins
+    if hasattr(fins, "fin_result"):  # a DayResult (not imported here: it loads pandas)
+        return cast("DayResult", fins).fin_result
+    return fins
 
 
 @styled
