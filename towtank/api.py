@@ -115,9 +115,10 @@ def process_day(
     loaded = _protocol(protocol)
     out_dir = None
     if out is not None:
-        from towtank.ingest.protocol import check_output_dir
+        from towtank.ingest.protocol import with_output_dir
 
-        out_dir = check_output_dir(Path(out), loaded)
+        # the folder's note (outputs put back after an interrupted run) joins day.warnings
+        loaded, out_dir = with_output_dir(loaded, Path(out))
     day = _process(
         path, protocol=loaded, jobs=jobs,
         cache_dir=Path(out_dir) / ".cache" if out_dir is not None and cache else None,
@@ -125,10 +126,10 @@ def process_day(
     if date is not None:
         day = replace(day, report_date=date)
     if out_dir is not None:
-        from towtank.ingest.protocol import check_output_dir
+        from towtank.ingest.protocol import with_output_dir
         from towtank.report import write_outputs
 
-        check_output_dir(out_dir, loaded, day.inputs)
+        with_output_dir(loaded, out_dir, day.inputs)
         write_outputs(day, out_dir, report=report)
     return day
 
