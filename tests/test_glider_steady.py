@@ -302,3 +302,26 @@ def test_simulate_refuses_a_bad_glider_block(model, tmp_path, capsys):
                  str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "'wing_area_m2'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_spiralling_glide_is_drawn_in_plan_and_a_straight_one_in_the_vertical_plane():
+    """manoeuvre.png: the track of a glide that turns through more than 90° is the plan view
+    (its radius shows there); a straight glide stays in the vertical plane (x, depth)."""
+    import numpy as np
+    import pandas as pd
+
+    from towtank.report.manoeuvre_figure import manoeuvre_figure
+
+    t = np.linspace(0.0, 300.0, 301)
+    turning = np.radians(t * 2.0)  # 600° of heading
+    base = {"t_s": t, "phi_deg": 0 * t, "theta_deg": -20 + 0 * t, "u_m_s": 0.3 + 0 * t,
+            "v_m_s": 0 * t, "w_m_s": 0.1 + 0 * t, "p_deg_s": 0 * t, "q_deg_s": 0 * t,
+            "r_deg_s": 2 + 0 * t, "rudder_deg": 0 * t, "sternplane_deg": 0 * t,
+            "z_m": 0.1 * t}
+    spiral = pd.DataFrame({**base, "x_m": 5 * np.sin(turning), "y_m": 5 * (1 - np.cos(turning)),
+                           "psi_deg": np.degrees(turning)})
+    straight = pd.DataFrame({**base, "x_m": 0.3 * t, "y_m": 0 * t, "psi_deg": 0 * t})
+    labels = [manoeuvre_figure(ts, "glide").axes[0].get_xlabel()
+              + manoeuvre_figure(ts, "glide").axes[0].get_ylabel() for ts in (spiral, straight)]
+    assert "east" in labels[0] and "depth" not in labels[0]
+    assert "depth" in labels[1]

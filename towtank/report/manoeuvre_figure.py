@@ -3,8 +3,9 @@
 One figure, in the report's style (:func:`towtank.report.style.rc`):
 
 - the track, at true scale (equal axes) where its shape allows: the plan view (x north, y east
-  = starboard at the start) of a turning circle, zig-zag or spiral, the vertical plane (x, depth
-  z down) of a dive or glide. A compact track (a turning circle) fills the left column; an
+  = starboard at the start) of a turning circle, zig-zag, spiral or spiralling glide (heading
+  turned by more than 90°), the vertical plane (x, depth z down) of a dive or straight glide.
+  A compact track (a turning circle) fills the left column; an
   elongated one (a zig-zag, a dive) spans the top row with its long side across, and when it is
   more than :data:`EXAGGERATE_ABOVE` times longer than wide its cross-track scale is stretched
   (said on the axis);
@@ -83,6 +84,13 @@ def _elongation(h: np.ndarray, v: np.ndarray) -> float:
 
 
 @styled
+def _spirals(ts: pd.DataFrame) -> bool:
+    """Whether the heading turned by more than a quarter turn: a glide that spirals is drawn in
+    plan view (its radius shows there), a straight one in the vertical plane."""
+    psi = np.unwrap(np.radians(ts["psi_deg"].to_numpy(float)))
+    return bool(psi.size and np.ptp(psi) > np.pi / 2)
+
+
 def manoeuvre_figure(ts: pd.DataFrame, manoeuvre: str, name: str = "model") -> Figure:
     """The figure of one simulated manoeuvre (manoeuvre.png).
 
@@ -102,7 +110,7 @@ def manoeuvre_figure(ts: pd.DataFrame, manoeuvre: str, name: str = "model") -> F
     Figure
         Axes in order: the track, then attitude, controls, speed and depth against time.
     """
-    vertical = manoeuvre in ("dive", "glide")
+    vertical = manoeuvre == "dive" or (manoeuvre == "glide" and not _spirals(ts))
     h, v, hlabel, vlabel, down = _track_axes(ts, vertical)
     ratio = _elongation(h, v)
     elongated = ratio > ELONGATED_ABOVE
