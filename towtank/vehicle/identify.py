@@ -48,7 +48,8 @@ METHODS = ("ukf", "ekf", "ls")
 #: fraction of its prior standard deviation (the record removed >= 99 % of the variance).
 IDENTIFIABLE_RATIO = 0.1
 #: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)].
-PROCESS_SD = np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4])
+PROCESS_SD = 0.3 * np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4,
+                              1e-4])
 #: Passes of the filter: each starts from the previous estimates with a prior of
 #: PASS_PRIOR times their standard deviations (at most the first prior), until the estimates
 #: move by less than PASS_TOL of a standard deviation. The first pass from a far start (zero)
@@ -58,6 +59,8 @@ PROCESS_SD = np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-
 MAX_PASSES = 4
 PASS_PRIOR = 10.0
 PASS_TOL = 0.2
+#: Fractions of the record least squares alone fits one after the other from zero starts.
+LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
 #: Spread of the sigma points (van der Merwe 2004) [-].
 ALPHA = 0.1
 _DOF = "XYZKMN"
@@ -251,15 +254,6 @@ class BatchModel:
                                 (log.rudder[k], log.sternplane[k]))
                 out[k] = aug[:, :12]
         return out
-
-
-_I1, _I2 = [1, 2, 0], [2, 0, 1]
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (N, 3) arrays (or a (3,) with an (N, 3)); faster than
-    :func:`numpy.cross` on the few rows of a sigma-point set."""
-    return a[..., _I1] * b[..., _I2] - a[..., _I2] * b[..., _I1]
 
 
 def _cross3(a: Any, b: Any) -> list[Any]:
@@ -552,7 +546,8 @@ def _fd_steps(x: np.ndarray) -> np.ndarray:
 
 
 def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
-                      start: np.ndarray, sd: np.ndarray) -> dict[str, Any]:
+                      start: np.ndarray, sd: np.ndarray,
+                      windows: tuple[float, ...] = (1.0,)) -> dict[str, Any]:
     """Output-error least squares of the coefficients and the initial measured states.
 
     Minimises ``sum_k sum_i ((y_i(t_k; beta, s0) - z_ik) / sigma_i)^2`` over the measured
@@ -561,12 +556,23 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     Jacobian computed in one batched simulation. Covariance ``s^2 (J^T J)^+`` (pseudo-inverse:
     a direction the record does not constrain gets an infinite variance), ``s^2 = RSS/(m - p)``.
 
+    ``windows``: fractions of the record fitted one after the other, each from the previous
+    estimates (from a far start, zero, the motion the model predicts over the whole record is
+    too far from the measured one for the fit to find its way; over the first part it is
+    not: the usual continuation of output-error fits).
+
     Returns
     -------
     dict
         ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``.
     """
     from scipy.optimize import least_squares
+
+    for frac in windows[:-1]:
+        n = max(int(frac * len(log.t)), 20)
+        sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],
+                           sternplane=log.sternplane[:n], measured=log.measured, name=log.name)
+        start = least_squares_fit(model, sub, symbols, start, sd)["value"]
 
     k = len(symbols)
     s0 = _initial_state(log, model)
@@ -596,14 +602,26 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         out[~np.isfinite(out)] = 1e6
         return out
 
+    cache: dict[bytes, np.ndarray] = {}
+
+    def both(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # the residuals and the forward-difference Jacobian from one batched simulation: on a
+        # few rows the simulation costs about what one row does
+        key = theta.tobytes()
+        if key not in cache:
+            hstep = 1e-6 * np.maximum(np.abs(theta), 1.0)
+            pts = np.vstack([theta, theta + np.diag(hstep)])
+            res = residuals_many(pts)
+            cache.clear()
+            cache[key] = np.vstack([res[0][None, :], ((res[1:] - res[0]) / hstep[:, None])])
+        out = cache[key]
+        return out[0], out[1:].T
+
     def fun(theta: np.ndarray) -> np.ndarray:
-        return residuals_many(theta[None, :])[0]
+        return both(theta)[0]
 
     def jac(theta: np.ndarray) -> np.ndarray:
-        hstep = 1e-6 * np.maximum(np.abs(theta), 1.0)
-        pts = np.vstack([theta, theta + np.diag(hstep)])
-        res = residuals_many(pts)
-        return ((res[1:] - res[0]) / hstep[:, None]).T
+        return both(theta)[1]
 
     theta0 = np.concatenate((start, s0[meas])) / scale
     sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=60)
@@ -618,7 +636,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     for i in range(p):  # an unconstrained direction: infinite variance on its coefficients
         if not np.isfinite(cov[i, i]):
             cov[i, i] = np.inf
-    cov = s2 * np.nan_to_num(cov, nan=np.inf)
+    with np.errstate(over="ignore", invalid="ignore"):
+        cov = s2 * np.nan_to_num(cov, nan=np.inf)
     beta, s_fit = unpack(sol.x)
     return {"value": beta, "sd": np.sqrt(np.diag(cov)[:k]), "covariance": cov[:k, :k],
             "s0": s_fit, "cost": float(sol.cost), "s2": s2}
@@ -683,7 +702,9 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     ls = None
     if method in ("ukf", "ekf"):
         x_start, prior, prev = start_vals, psd, None
+        passes = 0
         for npass in range(1, MAX_PASSES + 1):
+            passes = npass
             res = kalman_fit(model, log, symbols, x_start, prior, sd, method)
             xk, pk = res["x"], res["P"]
             value = xk[0, 12:]
@@ -693,14 +714,15 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
                 break
             prev = value.copy()
             x_start, prior = value.copy(), np.minimum(psd, PASS_PRIOR * sdv)
-        notes.append(f"{method.upper()} and smoother: {npass} passes over the record")
+        notes.append(f"{method.upper()} and smoother: {passes} passes over the record")
         hist = {"t": log.t, "mean": res["x_filtered"][:, 12:],
                 "sd": np.sqrt(np.clip(np.einsum("nii->ni", res["P_filtered"])[:, 12:], 0, None)),
                 "smoothed": xk[:, 12:]}
         if check:
             ls = least_squares_fit(model, log, symbols, value.copy(), sd)
     else:
-        ls = least_squares_fit(model, log, symbols, start_vals, sd)
+        ls = least_squares_fit(model, log, symbols, start_vals, sd,
+                               windows=LS_WINDOWS if start == "zero" else (1.0,))
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
         ls = None
     result = IdentifyResult(symbols=symbols, start=start_vals, value=np.asarray(value),
