@@ -46,14 +46,11 @@ def identify_figure(result: Any, name: str = "model") -> Any:
         if result.check is not None:
             ax.axhline(result.check["value"][j], color="tab:red", lw=1.0, ls="--",
                        label="least squares")
-        ax.axhline(result.start[j], color="0.5", lw=0.8, ls=":", label="start")
-        span = max(8 * float(result.sd[j]), 0.3 * abs(float(result.value[j])), 1e-9)
-        if np.isfinite(span):
-            lo = min(result.value[j] - span, result.start[j] - 0.1 * span)
-            hi = max(result.value[j] + span, result.start[j] + 0.1 * span)
-            ax.set_ylim(lo, hi)
+        span = max(10 * float(result.sd[j]), 0.05 * abs(float(result.value[j])), 1e-9)
+        if np.isfinite(span):  # zoomed on the answer; where it started is in the title
+            ax.set_ylim(result.value[j] - span, result.value[j] + span)
         verdict = "" if ok[j] else " (not identifiable)"
-        ax.set_title(f"{sym}{verdict}", fontsize=9)
+        ax.set_title(f"{sym}{verdict}, from {result.start[j]:.4g}", fontsize=9)
         ax.set_ylabel(coefficient_unit(sym), fontsize=7)
         ax.set_xlabel("t [s]", fontsize=8)
         ax.tick_params(labelsize=7)

@@ -45,8 +45,9 @@ __all__ = ["MAX_STEP_S", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel", "Identif
 MAX_STEP_S = 0.05
 METHODS = ("ukf", "ekf", "ls")
 #: A coefficient is identifiable when its standard deviation after the record is below this
-#: fraction of its prior standard deviation (the record removed >= 99 % of the variance).
-IDENTIFIABLE_RATIO = 0.1
+#: fraction of its prior standard deviation (the record removed >= 99.75 % of the variance;
+#: with the default prior, 3 max(|model value|, 1), an sd below 15 % of the model's value).
+IDENTIFIABLE_RATIO = 0.05
 #: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)].
 PROCESS_SD = 0.3 * np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4,
                               1e-4])
@@ -390,9 +391,11 @@ class IdentifyResult:
                 line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
                         f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
             else:
-                line = (f"{s}: NOT identifiable from this record: the interval {lo:.4g} to "
-                        f"{hi:.4g} is barely narrower than the prior's (sd {self.sd[j]:.3g} of "
-                        f"{self.prior_sd[j]:.3g}); the manoeuvre does not excite it")
+                line = (f"{s}: NOT identifiable from this record: {pct} % interval {lo:.4g} "
+                        f"to {hi:.4g}, its sd {self.sd[j]:.3g} still "
+                        f"{self.sd[j] / self.prior_sd[j]:.0%} of the prior's "
+                        f"{self.prior_sd[j]:.3g} (identifiable below "
+                        f"{IDENTIFIABLE_RATIO:.0%}); the manoeuvre does not excite it enough")
             if agree is not None and self.check is not None:
                 lv = self.check["value"][j]
                 line += ("; least squares agrees" if agree[j] else
@@ -700,6 +703,7 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     notes = list(log.notes)
     hist: dict[str, np.ndarray] = {}
     ls = None
+    s_init = None
     if method in ("ukf", "ekf"):
         x_start, prior, prev = start_vals, psd, None
         passes = 0
@@ -718,12 +722,15 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         hist = {"t": log.t, "mean": res["x_filtered"][:, 12:],
                 "sd": np.sqrt(np.clip(np.einsum("nii->ni", res["P_filtered"])[:, 12:], 0, None)),
                 "smoothed": xk[:, 12:]}
+        s_init = xk[0, :12]
         if check:
             ls = least_squares_fit(model, log, symbols, value.copy(), sd)
+            s_init = ls["s0"]  # the initial state that fits the whole record open loop
     else:
         ls = least_squares_fit(model, log, symbols, start_vals, sd,
                                windows=LS_WINDOWS if start == "zero" else (1.0,))
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
+        s_init = ls["s0"]
         ls = None
     result = IdentifyResult(symbols=symbols, start=start_vals, value=np.asarray(value),
                             sd=np.asarray(sdv), prior_sd=psd, method=method,
@@ -733,7 +740,9 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     fitted["coefficients"] = dict(coef) | {s: float(v) for s, v in zip(symbols, value,
                                                                        strict=True)}
     s0 = _initial_state(log, model)
-    dyn = BatchModel(fitted, [], _start_speed(log, s0))
+    if s_init is not None:  # the estimated initial state, not the first noisy sample
+        s0 = np.asarray(s_init, dtype=float)
+    dyn = BatchModel(fitted, [], _start_speed(log, _initial_state(log, model)))
     sim = dyn.run(s0[None, :], np.zeros((1, 0)), log)[:, 0, :]
     resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
                          measured=list(range(12)), name="resimulated")
