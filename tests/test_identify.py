@@ -165,6 +165,18 @@ def test_a_pitch_term_from_a_flat_turn_is_not_identifiable(remus, sine_clean):
     assert any("M_uq: NOT identifiable" in line for line in res.verdicts())
 
 
+def test_the_extended_filter_from_zero(remus, sine_clean):
+    """--method ekf (the paper's filter): the same three coefficients from zero, within 5 %
+    and inside the 95 % intervals."""
+    log = log_from_frame(_noisy(sine_clean, 2), "sine")
+    res = identify(remus, log, PAPER, method="ekf", start="zero", check=False)
+    truth = np.array([remus["coefficients"][s] for s in PAPER])
+    ci = res.conf_int()
+    assert np.all(np.abs(res.value / truth - 1) < 0.05)
+    assert np.all((ci["ci_low"].to_numpy() <= truth) & (truth <= ci["ci_high"].to_numpy()))
+    assert res.identifiable().all()
+
+
 def test_least_squares_alone_and_the_result_api(remus, sine_clean):
     log = log_from_frame(_noisy(sine_clean, 5), "sine")
     res = identify(remus, log, ["N_ur", "N_uudr"], method="ls", start="zero")
