@@ -214,6 +214,23 @@ def test_a_bad_log_is_one_sentence_and_exit_2(remus, sine_clean, tmp_path, capsy
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize(("estimate", "words"), [
+    ("Q_zz", "not model.json coefficient symbols"),
+    ("N_ur,N_ur", "twice"),
+    (",", "names no coefficient"),
+])
+def test_a_bad_estimate_is_one_sentence_and_exit_2(remus, sine_clean, tmp_path, capsys,
+                                                   estimate, words):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    log = _write(tmp_path / "s.csv", _noisy(sine_clean, 1))
+    assert main(["identify", str(model), str(log), "--estimate", estimate,
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_million_rows_are_refused_in_one_sentence(remus, tmp_path, capsys):
     model = tmp_path / "model.json"
     model.write_text(json.dumps(remus))

@@ -504,43 +504,53 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     f.x = x0.copy()
     f.P = np.diag(p0)
     wc = points.Wc if method == "ukf" else None
-    with np.errstate(all="ignore"):
-        for j in range(n):
-            if j > 0:
-                dt = float(log.t[j] - log.t[j - 1])
-                f.Q = np.diag(qrate * dt)
-                xp, pp = f.x.copy(), f.P.copy()
-                if method == "ukf":
-                    f.predict(dt=dt, k=j)
-                    dx = f._chi - xp
-                    df = f._chi_f - f.x
-                    cross[j] = (wc[:, None] * dx).T @ df
-                else:
-                    pts = np.vstack([xp, xp + np.diag(_fd_steps(xp))])
-                    out = dyn.step(pts, dt, controls(j - 1), controls(j))
-                    jac = ((out[1:] - out[0]) / _fd_steps(xp)[:, None]).T
-                    f.F = jac
-                    f.x = out[0].copy()
-                    f.P = jac @ pp @ jac.T + f.Q
-                    cross[j] = pp @ jac.T
-                x_prior[j], p_prior[j] = f.x.copy(), f.P.copy()
-            zj = log.z[j]
-            idx = [i for i in log.measured if np.isfinite(zj[i])]
-            if idx:
-                r = np.diag(sd[idx] ** 2)
-                if method == "ukf":
-                    f.update(zj[idx], R=r, hx=lambda x, idx=idx: x[idx])
-                else:
-                    h = np.zeros((len(idx), dim))
-                    h[np.arange(len(idx)), idx] = 1.0
-                    f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
-            f.P = 0.5 * (f.P + f.P.T)
-            if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))):
-                raise ValueError(f"the {method.upper()} diverged at t = {log.t[j]:.3g} s (its "
-                                 "state is no longer finite); try --start model, fewer "
-                                 "coefficients or --method ls.")
-            xs[j], ps[j] = f.x, f.P
-    xs_s, ps_s = rts_smooth(xs, ps, x_prior, p_prior, cross)
+    j = 0
+    try:
+        with np.errstate(all="ignore"):
+            for j in range(n):
+                if j > 0:
+                    dt = float(log.t[j] - log.t[j - 1])
+                    f.Q = np.diag(qrate * dt)
+                    xp, pp = f.x.copy(), f.P.copy()
+                    if method == "ukf":
+                        f.predict(dt=dt, k=j)
+                        dx = f._chi - xp
+                        df = f._chi_f - f.x
+                        cross[j] = (wc[:, None] * dx).T @ df
+                    else:
+                        pts = np.vstack([xp, xp + np.diag(_fd_steps(xp))])
+                        out = dyn.step(pts, dt, controls(j - 1), controls(j))
+                        jac = ((out[1:] - out[0]) / _fd_steps(xp)[:, None]).T
+                        f.F = jac
+                        f.x = out[0].copy()
+                        f.P = jac @ pp @ jac.T + f.Q
+                        cross[j] = pp @ jac.T
+                    x_prior[j], p_prior[j] = f.x.copy(), f.P.copy()
+                zj = log.z[j]
+                idx = [i for i in log.measured if np.isfinite(zj[i])]
+                if idx:
+                    r = np.diag(sd[idx] ** 2)
+                    if method == "ukf":
+                        f.update(zj[idx], R=r, hx=lambda x, idx=idx: x[idx])
+                    else:
+                        h = np.zeros((len(idx), dim))
+                        h[np.arange(len(idx)), idx] = 1.0
+                        f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
+                f.P = 0.5 * (f.P + f.P.T)
+                if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))):
+                    raise ValueError(f"the {method.upper()} diverged at t = {log.t[j]:.3g} s (its "
+                                     "state is no longer finite); try --start model, fewer "
+                                     "coefficients or --method ls.")
+                xs[j], ps[j] = f.x, f.P
+    except np.linalg.LinAlgError:
+        raise ValueError(f"the {method.upper()}'s covariance stopped being positive definite at "
+                         f"t = {log.t[j]:.3g} s (the filter diverged); try --start model, fewer "
+                         "coefficients or --method ls.") from None
+    try:
+        xs_s, ps_s = rts_smooth(xs, ps, x_prior, p_prior, cross)
+    except np.linalg.LinAlgError:
+        raise ValueError("the smoother met a singular predicted covariance (the filter "
+                         "diverged); try --start model or --method ls.") from None
     return {"x": xs_s, "P": ps_s, "x_filtered": xs, "P_filtered": ps}
 
 
