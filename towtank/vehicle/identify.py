@@ -503,7 +503,7 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
         f = ExtendedKalmanFilter(dim_x=dim, dim_z=1)
     f.x = x0.copy()
     f.P = np.diag(p0)
-    wc = points.Wc if method == "ukf" else None
+    wc = points.Wc if method == "ukf" else np.zeros(0)
     j = 0
     try:
         with np.errstate(all="ignore"):
