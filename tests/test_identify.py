@@ -150,6 +150,9 @@ def test_paper_case_from_zero_starts(remus, sine_clean, tmp_path, capsys):
     assert math.sqrt(cov["matrix"][i][i]) == pytest.approx(
         (row["ci_high"] - row["ci_low"]) / (2 * 1.959964), rel=1e-3)
     assert (out / "identify.png").stat().st_size > 10_000
+    from towtank.vehicle.model import read_model
+
+    assert read_model(out / "model.json")["coefficients"]["N_ur"] == new["coefficients"]["N_ur"]
     assert json.loads(model_path.read_text()) == remus  # the input model is untouched
 
 

@@ -109,7 +109,12 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         idx = [list(old["symbols"]).index(s) for s in old_sym]
         mat[:len(old_sym), :len(old_sym)] = np.asarray(old["matrix"], dtype=float)[
             np.ix_(idx, idx)]
-    cov = np.where(np.isfinite(result.covariance), result.covariance, 1e300)
+    cov = np.array(result.covariance, dtype=float)
+    free = ~np.isfinite(np.diag(cov))  # a direction the record does not constrain
+    cov[free, :] = 0.0
+    cov[:, free] = 0.0
+    cov[free, free] = 1e300
+    cov[~np.isfinite(cov)] = 0.0
     mat[len(old_sym):, len(old_sym):] = cov
     updated["covariance"] = {"symbols": syms, "matrix": mat.tolist()}
     notes = dict(model.get("notes") or {})

@@ -51,6 +51,8 @@ IDENTIFIABLE_RATIO = 0.05
 #: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)].
 PROCESS_SD = 0.3 * np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4,
                               1e-4])
+#: Prior sd of the speed the thrust balances, a state of the filter when u is measured [m/s].
+THRUST_SPEED_SD = 0.05
 #: Passes of the filter: each starts from the previous estimates with a prior of
 #: PASS_PRIOR times their standard deviations (at most the first prior), until the estimates
 #: move by less than PASS_TOL of a standard deviation. The first pass from a far start (zero)
@@ -137,7 +139,7 @@ class BatchModel:
         self.est_idx, self.est_e = self._table(est)
         self.x_uu = coef.get("X_u|u|", 0.0)
         self.x_uu_j = estimate.index("X_u|u|") if "X_u|u|" in estimate else None
-        self.u0 = float(speed_m_s)
+        self.u0: Any = float(speed_m_s)  # [m/s], or one per row of the states
 
     @staticmethod
     def _table(terms: list[tuple[str, float]]) -> tuple[np.ndarray, np.ndarray]:
@@ -175,7 +177,7 @@ class BatchModel:
             phi = ext[:, self.est_idx].prod(axis=2) * beta[:, self.est_cols]
             tau += phi @ self.est_e
         x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
-        tau[:, 0] += -x_uu * self.u0 * abs(self.u0)
+        tau[:, 0] += -x_uu * self.u0 * np.abs(self.u0)
         m, rg, io = self.mass, self.rg, np.diag(self.io)
         u, v, w_, p, q, r = nu.T  # rows: contiguous work on the few sigma points
         v1, v2 = (u, v, w_), (p, q, r)
@@ -422,13 +424,16 @@ def _initial_state(log: ManoeuvreLog, model: dict[str, Any]) -> np.ndarray:
 
 
 def _start_speed(log: ManoeuvreLog, s0: np.ndarray) -> float:
-    """The speed the thrust balances [m/s]: the mean measured u over the record's first
-    second (the first sample's noise averaged out), else the initial state's."""
+    """The speed the thrust balances [m/s]: the measured u at the record's start, the
+    intercept of a parabola fitted to u over its first 2 s (the noise averaged out, the speed's
+    early change followed), else the initial state's."""
     if 6 in log.measured:
-        first = log.z[log.t <= log.t[0] + 1.0, 6]
-        first = first[np.isfinite(first)]
-        if len(first):
-            return float(np.mean(first))
+        sel = (log.t <= log.t[0] + 2.0) & np.isfinite(log.z[:, 6])
+        if sel.sum() >= 6:
+            coef = np.polyfit(log.t[sel] - log.t[0], log.z[sel, 6], 2)
+            return float(coef[-1])
+        if sel.any():
+            return float(np.mean(log.z[sel, 6]))
     return float(s0[6])
 
 
@@ -464,20 +469,23 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     from filterpy.kalman import UnscentedKalmanFilter as UKF
 
     k = len(symbols)
-    dim = 12 + k
+    thrust = 6 in log.measured  # the speed the thrust balances: one more state
+    dim = 12 + k + (1 if thrust else 0)
     s0 = _initial_state(log, model)
     dyn = BatchModel(model, symbols, _start_speed(log, s0))
     p0 = np.zeros(dim)
     for i in range(12):
         p0[i] = sd[i] ** 2 if i in log.measured else 0.1 ** 2
-    p0[12:] = prior_sd ** 2
+    p0[12:12 + k] = prior_sd ** 2
+    if thrust:
+        p0[-1] = THRUST_SPEED_SD ** 2
     n = len(log.t)
     xs = np.zeros((n, dim))
     ps = np.zeros((n, dim, dim))
     x_prior = np.zeros((n, dim))
     p_prior = np.zeros((n, dim, dim))
     cross = np.zeros((n, dim, dim))
-    qrate = np.concatenate((PROCESS_SD ** 2, np.zeros(k)))
+    qrate = np.concatenate((PROCESS_SD ** 2, np.zeros(dim - 12)))
 
     def controls(j: int) -> tuple[float, float]:
         return (float(log.rudder[j]), float(log.sternplane[j]))
@@ -485,7 +493,13 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     def residual_z(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return a - b
 
-    x0 = np.concatenate((s0, start))
+    x0 = np.concatenate((s0, start, [dyn.u0] if thrust else []))
+
+    def step(aug: np.ndarray, dt: float, c0: tuple[float, float],
+             c1: tuple[float, float]) -> np.ndarray:
+        if thrust:
+            dyn.u0 = aug[:, -1]
+        return dyn.step(aug, dt, c0, c1)
     if method == "ukf":
         points = MerweScaledSigmaPoints(dim, alpha=ALPHA, beta=2.0, kappa=0.0)
 
@@ -494,7 +508,7 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                 sig = self.points_fn.sigma_points(self.x, self.P)
                 j = fx_args["k"]
                 self._chi = sig
-                self.sigmas_f = dyn.step(sig, dt, controls(j - 1), controls(j))
+                self.sigmas_f = step(sig, dt, controls(j - 1), controls(j))
                 self._chi_f = self.sigmas_f.copy()
 
         f: Any = _Batch(dim_x=dim, dim_z=1, dt=0.05, hx=lambda x: x[:1], fx=lambda x, dt: x,
@@ -519,7 +533,7 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                         cross[j] = (wc[:, None] * dx).T @ df
                     else:
                         pts = np.vstack([xp, xp + np.diag(_fd_steps(xp))])
-                        out = dyn.step(pts, dt, controls(j - 1), controls(j))
+                        out = step(pts, dt, controls(j - 1), controls(j))
                         jac = ((out[1:] - out[0]) / _fd_steps(xp)[:, None]).T
                         f.F = jac
                         f.x = out[0].copy()
@@ -609,6 +623,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
 
     def residuals_many(thetas: np.ndarray) -> np.ndarray:
         beta, s = unpack(thetas)
+        if 6 in meas:  # the thrust balances the drag at the fitted initial speed
+            dyn.u0 = s[:, 6]
         sim = dyn.run(s, beta, log)[:, :, meas]  # (n, N, m)
         res = (sim - zm[:, None, :]) * w
         out = res.transpose(1, 0, 2)[:, mask]
@@ -721,17 +737,19 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
             passes = npass
             res = kalman_fit(model, log, symbols, x_start, prior, sd, method)
             xk, pk = res["x"], res["P"]
-            value = xk[0, 12:]
-            cov = pk[0, 12:, 12:]
+            k = len(symbols)
+            value = xk[0, 12:12 + k]
+            cov = pk[0, 12:12 + k, 12:12 + k]
             sdv = np.sqrt(np.clip(np.diag(cov), 0.0, None))
             if prev is not None and np.all(np.abs(value - prev) <= PASS_TOL * sdv):
                 break
             prev = value.copy()
             x_start, prior = value.copy(), np.minimum(psd, PASS_PRIOR * sdv)
         notes.append(f"{method.upper()} and smoother: {passes} passes over the record")
-        hist = {"t": log.t, "mean": res["x_filtered"][:, 12:],
-                "sd": np.sqrt(np.clip(np.einsum("nii->ni", res["P_filtered"])[:, 12:], 0, None)),
-                "smoothed": xk[:, 12:]}
+        hist = {"t": log.t, "mean": res["x_filtered"][:, 12:12 + k],
+                "sd": np.sqrt(np.clip(np.einsum("nii->ni", res["P_filtered"])[:, 12:12 + k],
+                                      0, None)),
+                "smoothed": xk[:, 12:12 + k]}
         s_init = xk[0, :12]
         if check:
             ls = least_squares_fit(model, log, symbols, value.copy(), sd)
@@ -752,7 +770,10 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     s0 = _initial_state(log, model)
     if s_init is not None:  # the estimated initial state, not the first noisy sample
         s0 = np.asarray(s_init, dtype=float)
-    dyn = BatchModel(fitted, [], _start_speed(log, _initial_state(log, model)))
+    speed = _start_speed(log, _initial_state(log, model))
+    if s_init is not None and 6 in log.measured and (ls is not None or method == "ls"):
+        speed = float(s0[6])  # least squares' initial speed, which its thrust balanced
+    dyn = BatchModel(fitted, [], speed)
     sim = dyn.run(s0[None, :], np.zeros((1, 0)), log)[:, 0, :]
     resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
                          measured=list(range(12)), name="resimulated")
