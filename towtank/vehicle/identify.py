@@ -71,26 +71,11 @@ _VEL = "uvwpqr"
 
 
 def coefficient_unit(symbol: str) -> str:
-    """The SI unit of a model.json coefficient, from its symbol (``N_ur``: N·m/((m/s)(rad/s)),
-    ``N_rdot``: N·m/(rad/s²), ``Y_uudr``: N/((m/s)²·rad))."""
-    head, _, sub = symbol.partition("_")
-    force = "N·m" if head in "KMN" else "N"
-    if sub.endswith("dot"):
-        return f"{force}/({'m/s²' if sub[0] in 'uvw' else 'rad/s²'})"
-    import re
+    """The SI unit of a model.json coefficient, as predicted.csv writes it (``N_ur``:
+    kg*m/rad, ``N_rdot``: kg*m^2/rad, ``N_uudr``: kg/rad; :mod:`towtank.vehicle.predict`)."""
+    from towtank.vehicle.predict import _units
 
-    parts = []
-    for tok in re.findall(r"\|[uvwpqr]\||dr|ds|[uvwpqr]", sub):
-        parts.append("rad" if tok in ("dr", "ds") else
-                     "m/s" if tok.strip("|") in "uvw" else "rad/s")
-    if not parts:
-        return force
-    counts: dict[str, int] = {}
-    for p_ in parts:
-        counts[p_] = counts.get(p_, 0) + 1
-    den = "·".join(f"({u}){'²' if n == 2 else '³' if n == 3 else ''}" if "/" in u else
-                   f"{u}{'²' if n == 2 else ''}" for u, n in counts.items())
-    return f"{force}/{den}"
+    return _units(symbol)
 
 
 class BatchModel:
