@@ -117,6 +117,7 @@ def simulate_command(
     try:
         ts = simulate(model, manoeuvre, **kwargs)
         metrics = manoeuvre_metrics(ts)  # of the motion, before any --noise
+        clean = ts
         if noise_sd:
             ts = _add_noise(ts, noise_sd, seed)
         if samples:
@@ -142,7 +143,8 @@ def simulate_command(
                                 [sign * p for p in range(5, 50, 5)])
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
         metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
-        _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", str(model.get("name", "model")))
+        _figure(clean, metrics, manoeuvre, tmp / "manoeuvre.png",
+                str(model.get("name", "model")))
 
     from towtank.commands.storage import write_outputs_or_stop
 
