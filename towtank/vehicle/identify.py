@@ -48,9 +48,10 @@ METHODS = ("ukf", "ekf", "ls")
 #: fraction of its prior standard deviation (the record removed >= 99.75 % of the variance;
 #: with the default prior, 3 max(|model value|, 1), an sd below 15 % of the model's value).
 IDENTIFIABLE_RATIO = 0.05
-#: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)].
-PROCESS_SD = 0.3 * np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4,
-                              1e-4])
+#: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)]: chosen so
+#: that the filter's 95 % intervals cover (docs/method.md, "Coverage"; a tenth of it made them
+#: 40 % too narrow, three times it 30 % too wide, ten times it biased the estimates).
+PROCESS_SD = np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4])
 #: Prior sd of the speed the thrust balances, a state of the filter when u is measured [m/s].
 THRUST_SPEED_SD = 0.05
 #: Passes of the filter: each starts from the previous estimates with a prior of
