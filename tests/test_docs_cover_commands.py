@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from towtank.commands.cli import _parser
+from towtank.commands.identify import IDENTIFY_OUTPUTS
 from towtank.commands.predict import DESIGN_OUTPUTS, PREDICT_OUTPUTS
 from towtank.commands.simulate import SIMULATE_OUTPUTS
 from towtank.commands.steady import STEADY_OUTPUTS
@@ -57,7 +58,8 @@ def test_every_command_and_option_is_documented(command, option):
 
 
 WRITES = {"process": OUTPUT_NAMES, "predict": PREDICT_OUTPUTS | set(DESIGN_OUTPUTS.values()),
-          "simulate": SIMULATE_OUTPUTS, "steady": STEADY_OUTPUTS}
+          "simulate": SIMULATE_OUTPUTS, "steady": STEADY_OUTPUTS,
+          "identify": IDENTIFY_OUTPUTS}
 
 
 @pytest.mark.parametrize("command", sorted(WRITES))

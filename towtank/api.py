@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from towtank.errors import ProtocolError
 
@@ -255,4 +255,38 @@ def reduce_run(
     return red
 
 
-__all__ = ["ProtocolError", "load_protocol", "process_day", "read_run", "reduce_run"]
+def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str], *,
+             method: str = "ukf", start: str = "model", **kwargs: Any) -> Any:
+    """Identify coefficients of a model from a manoeuvre record (``towtank identify``).
+
+    Parameters
+    ----------
+    model : path or dict
+        model.json (read and checked) or the model as a dict
+    log : path or DataFrame
+        The record in simulate's columns (``t_s``, states, ``rudder_deg``, ``sternplane_deg``)
+    estimate : list of str
+        model.json symbols to identify (e.g. ``["N_ur", "N_rdot", "N_uudr"]``)
+    method : {"ukf", "ekf", "ls"}
+    start : {"model", "zero"}
+    **kwargs
+        ``noise``, ``prior_sd``, ``check`` of :func:`towtank.vehicle.identify.identify`
+
+    Returns
+    -------
+    towtank.vehicle.identify.IdentifyResult
+        ``conf_int(alpha)``, ``summary()``, ``table()``, ``verdicts()``.
+    """
+    import pandas as pd
+
+    from towtank.vehicle.identify import identify as _identify
+    from towtank.vehicle.identify_log import log_from_frame, read_log
+    from towtank.vehicle.model import read_model
+
+    mdl = model if isinstance(model, dict) else read_model(model)
+    rec = log_from_frame(log, "log") if isinstance(log, pd.DataFrame) else read_log(log)
+    return _identify(mdl, rec, list(estimate), method=method, start=start, **kwargs)
+
+
+__all__ = ["ProtocolError", "identify", "load_protocol", "process_day", "read_run",
+           "reduce_run"]

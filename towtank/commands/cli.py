@@ -54,6 +54,7 @@ examples:
   towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
   towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
   towtank steady pred/model.json --ballast-cc -200,-450 --pitch-deg -45:-5:5
+  towtank identify pred/model.json sine/manoeuvre.csv --estimate N_ur,N_rdot,N_uudr
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
 in runs.csv); 2 the protocol or run sheet is unusable, or the output folder cannot be written
@@ -160,7 +161,10 @@ def _parser() -> argparse.ArgumentParser:
     )
     si.add_argument("model", type=Path, help="model.json")
     si.add_argument("--manoeuvre", required=True,
-                    choices=("turning", "zigzag", "dive", "spiral", "glide"))
+                    choices=("turning", "zigzag", "dive", "spiral", "glide", "sine",
+                             "schedule"),
+                    help="sine: rudder A sin(2 pi t/T) (--rudder-deg A, --period-s T); "
+                    "schedule: the controls of --schedule FILE")
     si.add_argument("--rudder-deg", type=float, metavar="D",
                     help="rudder angle (zigzag: also the check angle) [deg]")
     si.add_argument("--sternplane-deg", type=float, metavar="D", help="stern-plane angle [deg]")
@@ -174,6 +178,18 @@ def _parser() -> argparse.ArgumentParser:
     si.add_argument("--roll-deg", type=float, metavar="R", dest="roll_deg",
                     help="glide: roll the glider by its roll mass ([vehicle.glider]), "
                     "starboard down positive [deg]")
+    si.add_argument("--period-s", type=float, metavar="T", dest="period_s",
+                    help="sine: the rudder's period [s] (default 10)")
+    si.add_argument("--schedule", type=Path, metavar="FILE",
+                    help="schedule: CSV of t_s, rudder_deg, sternplane_deg (interpolated)")
+    si.add_argument("--noise", metavar="STATE=SD,...",
+                    help="add Gaussian noise to manoeuvre.csv's states, e.g. "
+                    "u=0.01,r=0.2,psi=0.5 (the column's unit: m, deg, m/s, deg/s)")
+    si.add_argument("--seed", type=int, default=1,
+                    help="seed of --noise and of --samples' draws (default 1)")
+    si.add_argument("--sample-hz", type=float, metavar="F", dest="sample_hz",
+                    help="write manoeuvre.csv at this rate [Hz] (default: the integrator's "
+                    "steps)")
     si.add_argument("--samples", type=int, default=0, metavar="N",
                     help="draw the measured coefficients N times for 95 %% bands")
     si.add_argument("--out", type=Path, metavar="DIR",
@@ -200,6 +216,32 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     # lists such as -200,-300 or -45:-5:5 are values, not options
     st._negative_number_matcher = re.compile(r"^-[\d.eE:,+-]+$")
+    idn = sub.add_parser(
+        "identify",
+        help="identify coefficients of a model.json from a manoeuvre record (Kalman filter "
+        "and smoother, checked by least squares)",
+        description="Augmented-state unscented (or extended) Kalman filter with the 6-DOF "
+        "model of 'simulate', a Rauch-Tung-Striebel smoother and output-error least squares "
+        "as the cross-check: identified.csv, model.json (the identified values, sources "
+        "'identified', their covariance) and identify.png in --out; one verdict line per "
+        "coefficient.",
+    )
+    idn.add_argument("model", type=Path, help="model.json")
+    idn.add_argument("log", type=Path, help="manoeuvre record (CSV in simulate's columns)")
+    idn.add_argument("--estimate", required=True, metavar="SYMBOLS",
+                     help="coefficients to identify, comma-separated (N_ur,N_rdot,N_uudr)")
+    idn.add_argument("--method", choices=("ukf", "ekf", "ls"), default="ukf",
+                     help="unscented (default) or extended Kalman filter and smoother, or "
+                     "least squares alone")
+    idn.add_argument("--start", choices=("model", "zero"), default="model",
+                     help="starting values: the model's (default) or zero")
+    idn.add_argument("--protocol", type=Path, metavar="TOML",
+                     help="a protocol whose [channels] maps the record's column names")
+    idn.add_argument("--noise", metavar="STATE=SD,...",
+                     help="measurement noise per state (default: estimated from the record)")
+    idn.add_argument("--out", type=Path, metavar="DIR",
+                     help="output folder (default: ./identify)")
+    idn.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
 
     sy = sub.add_parser(
         "synth",
@@ -499,7 +541,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         args.model, args.manoeuvre, rudder_deg=args.rudder_deg,
         sternplane_deg=args.sternplane_deg, speed=args.speed,
         net_buoyancy_n=args.net_buoyancy, out=args.out, samples=args.samples,
-        duration_s=args.duration_s, dive_angle_deg=args.dive_angle, roll_deg=args.roll_deg)
+        duration_s=args.duration_s, dive_angle_deg=args.dive_angle, roll_deg=args.roll_deg,
+        seed=args.seed, period_s=args.period_s, schedule=args.schedule, noise=args.noise,
+        sample_hz=args.sample_hz)
 
 
 def cmd_steady(args: argparse.Namespace) -> int:
@@ -510,10 +554,21 @@ def cmd_steady(args: argparse.Namespace) -> int:
                           out=args.out)
 
 
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    # start-up saving: a command's modules are loaded when it runs (towtank --help in ~50 ms)
+    from towtank.commands.identify import identify_command
+
+    return identify_command(args.model, args.log, args.estimate, method=args.method,
+                            start=args.start, out=args.out, protocol=args.protocol,
+                            noise=args.noise)
+
+
 COMMANDS = {
     "steady": cmd_steady,
     "predict": cmd_predict,
     "simulate": cmd_simulate,
+    "identify": cmd_identify,
     "process": cmd_process,
     "inspect": cmd_inspect,
     "scale": cmd_scale,

@@ -18,8 +18,10 @@ from towtank.vehicle.glider_controls import glider_problems, roll_mass_angle_for
 from towtank.vehicle.model import read_model
 from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate, trim_warning
 
-DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, "glide": 0.0}
-DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0}
+DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, "glide": 0.0,
+                  "sine": 10.0, "schedule": 0.0}
+DEFAULT_STERN = {"turning": 0.0, "zigzag": 0.0, "spiral": 5.0, "dive": 5.0, "glide": 0.0,
+                 "sine": 0.0, "schedule": 0.0}
 
 
 #: The files ``simulate`` writes.
@@ -35,7 +37,7 @@ def _check_controls(model: dict, manoeuvre: str, rudder: float, stern: float,
     0 or missing: no [[vehicle.fins]] of that plane) would sail straight on: refused."""
     coef = model.get("coefficients", {}) or {}
     needs = []
-    if manoeuvre in ("turning", "zigzag", "spiral", "glide") and rudder:
+    if manoeuvre in ("turning", "zigzag", "spiral", "glide", "sine") and rudder:
         needs.append("rudder")
     if manoeuvre == "dive" and stern:
         needs.append("sternplane")
@@ -99,6 +101,8 @@ def simulate_command(
     net_buoyancy_n: float | None = None, out: Path | None = None, samples: int = 0,
     duration_s: float | None = None, seed: int = 1, dive_angle_deg: float | None = None,
     roll_deg: float | None = None,
+    period_s: float | None = None, schedule: Path | None = None, noise: str | None = None,
+    sample_hz: float | None = None,
 ) -> int:
     """Simulate, write manoeuvre.csv, metrics.csv and manoeuvre.png; print the metrics.
 
@@ -121,6 +125,10 @@ def simulate_command(
         duration_s=duration_s, net_buoyancy_n=net_buoyancy_n, samples=samples, name=name)
     problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
     problems += _check_roll(model, manoeuvre, roll_deg, name)
+    table, noise_sd, more = _check_new_inputs(manoeuvre, period_s, schedule, noise, sample_hz)
+    problems += more
+    if table is not None and duration_s is None:
+        duration_s = float(table["t_s"].iloc[-1])
     if problems:
         raise ProtocolError(schema.joined(problems))
     assert model is not None  # read_model raised, and so problems stopped us, otherwise
@@ -134,9 +142,14 @@ def simulate_command(
     kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
                                   dive_angle_deg=dive_angle_deg, roll_deg=roll_deg)
+    if manoeuvre in ("sine", "schedule") or sample_hz is not None:
+        kwargs.update(period_s=period_s, schedule=table, sample_hz=sample_hz)
     try:
         ts = simulate(model, manoeuvre, **kwargs)
-        metrics = manoeuvre_metrics(ts)
+        metrics = manoeuvre_metrics(ts)  # of the motion, before any --noise
+        clean = ts
+        if noise_sd:
+            ts = _add_noise(ts, noise_sd, seed)
         if samples:
             draws = [manoeuvre_metrics(simulate(m, manoeuvre, **kwargs))
                      .set_index("metric")["value"] for m in sample_models(model, samples, seed)]
@@ -159,7 +172,8 @@ def simulate_command(
                                 [sign * p for p in range(5, 50, 5)])
             table.to_csv(tmp / "glide_table.csv", index=False, float_format="%.6g")
         metrics.to_csv(tmp / "metrics.csv", index=False, float_format="%.6g")
-        _figure(ts, metrics, manoeuvre, tmp / "manoeuvre.png", str(model.get("name", "model")))
+        _figure(clean, metrics, manoeuvre, tmp / "manoeuvre.png",
+                str(model.get("name", "model")))
 
     write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
@@ -167,6 +181,57 @@ def simulate_command(
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"
           + (f" ({samples} samples of the measured coefficients)" if samples else ""))
     return 0
+
+
+def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | None,
+                      noise: str | None, sample_hz: float | None) -> tuple:
+    """--period-s, --schedule, --noise, --sample-hz: (the schedule table or None, the noise
+    {column: sd}, the problems, one sentence each)."""
+    import math
+
+    problems: list[str] = []
+    table = None
+    if period_s is not None:
+        if manoeuvre != "sine":
+            problems.append(f"--period-s is for --manoeuvre sine, not {manoeuvre}.")
+        elif not (math.isfinite(period_s) and 0.5 <= period_s <= 3600):
+            problems.append(f"--period-s must lie within 0.5 and 3600 s, not {period_s:g}.")
+    if (schedule is None) != (manoeuvre != "schedule"):
+        problems.append("--schedule FILE goes with --manoeuvre schedule (and it needs one).")
+    elif schedule is not None:
+        from towtank.vehicle.simulate import read_schedule
+
+        try:
+            table = read_schedule(schedule)
+        except ValueError as exc:
+            problems.append(str(exc))
+        else:
+            if table["t_s"].iloc[-1] <= 0:
+                problems.append(f"{Path(schedule).name}: the schedule must reach past t = 0 s.")
+    if sample_hz is not None and not (math.isfinite(sample_hz) and 0.1 <= sample_hz <= 1000):
+        problems.append(f"--sample-hz must lie within 0.1 and 1000 Hz, not {sample_hz:g}.")
+    noise_sd: dict[str, float] = {}
+    if noise:
+        from towtank.commands.identify import parse_noise
+
+        try:
+            noise_sd = parse_noise(noise)
+        except ProtocolError as exc:
+            problems.append(str(exc))
+    return table, noise_sd, problems
+
+
+def _add_noise(ts, noise_sd: dict[str, float], seed: int):  # noqa: ANN001, ANN202
+    """manoeuvre.csv with independent Gaussian noise of ``noise_sd`` [the column's unit] on
+    the named states (seeded: the same seed, the same record)."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    out = ts.copy()
+    for col, sd in noise_sd.items():
+        out[col] = out[col] + rng.normal(0.0, sd, len(out))
+    out.attrs = dict(ts.attrs) | {"noise": dict(noise_sd)}
+    return out
 
 
 def _figure(ts, metrics, manoeuvre: str, path: Path, name: str) -> None:  # noqa: ANN001

@@ -19,7 +19,12 @@ Manoeuvres (metrics.csv ``metric, value, unit``):
 - dive: stern-plane step; steady pitch and depth rate; with ``dive_angle_deg`` the stern plane
   holds that pitch (nose down) by :func:`pitch_command`; time to the angle and overshoot;
 - spiral: rudder and stern-plane steps; turn radius, pitch and depth change per turn;
-- glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate.
+- glide: no thrust, net buoyancy and stern plane; steady glide angle, speed, depth rate;
+- sine: a sinusoidal rudder ``delta_r = A sin(2 pi t / T)`` (the identification manoeuvre of
+  the REMUS Kalman-filter study, docs/method.md "Identification"); amplitudes of heading and
+  yaw rate over the last half of the run;
+- schedule: the rudder and stern plane follow a table of (t_s, rudder_deg, sternplane_deg),
+  linearly interpolated (:func:`read_schedule`); the same amplitudes.
 
 Steady metrics only when the last fifth of the run is steady (:mod:`towtank.vehicle.steady`),
 else NaN and a note (metrics.csv ``note``).
@@ -61,7 +66,7 @@ TRIM_PITCH_DEG = 2.0
 #: Largest steady depth rate with zero controls of a model in trim [m/s].
 TRIM_DEPTH_RATE_M_S = 0.05
 
-MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide")
+MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide", "sine", "schedule")
 _DOF = "XYZKMN"
 _VEL = "uvwpqr"
 _TOKEN = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
@@ -201,6 +206,9 @@ def simulate(
     dive_angle_deg: float | None = None,
     roll_deg: float | None = None,
     initial_state: np.ndarray | None = None,
+    period_s: float | None = None,
+    schedule: pd.DataFrame | None = None,
+    sample_hz: float | None = None,
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -235,6 +243,14 @@ def simulate(
     initial_state : numpy.ndarray, optional
         The 12 states at t = 0 (x, y, z [m], phi, theta, psi [rad], u, v, w [m/s], p, q, r
         [rad/s]); default at rest in attitude, moving at ``speed_m_s`` along x
+    period_s : float, optional
+        sine: the rudder's period T [s] (``rudder_deg`` its amplitude A); default 10 s
+    schedule : DataFrame, optional
+        schedule: columns ``t_s`` [s], ``rudder_deg``, ``sternplane_deg`` [deg]
+        (:func:`read_schedule`), interpolated linearly, held before and after
+    sample_hz : float, optional
+        Write the time series at this rate [Hz] (the integrator's dense output; a zigzag
+        interpolated linearly) instead of at the integrator's steps
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
@@ -260,7 +276,12 @@ def simulate(
     thrust = 0.0 if manoeuvre == "glide" else -dyn.x_uu * speed_m_s * abs(speed_m_s)
     dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag",
                                                    "glide") else 0.0
-    ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide") else 0.0
+    ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide", "sine") else 0.0
+    rudder_at = _rudder_law(manoeuvre, rudder_deg, period_s, schedule, dr)
+    if manoeuvre == "schedule":
+        tab = schedule if schedule is not None else pd.DataFrame(
+            {"t_s": [0.0], "rudder_deg": [0.0], "sternplane_deg": [0.0]})
+        st_t, st_v = tab["t_s"].to_numpy(float), np.radians(tab["sternplane_deg"].to_numpy(float))
     state0 = np.zeros(12)
     state0[6] = speed_m_s
     if initial_state is not None:
@@ -273,16 +294,30 @@ def simulate(
 
         def stern(y: np.ndarray) -> float:
             return pitch_command(y[4], y[10], theta_cmd, PITCH_KP, PITCH_KD, limit, sigma)
+    elif manoeuvre == "schedule":
+        def stern_at(t: float) -> float:
+            return float(np.interp(t, st_t, st_v))
     else:
         def stern(y: np.ndarray) -> float:
             return ds
-    if manoeuvre != "zigzag":
-        sol = budget.solve(lambda t, y: dyn.rhs(y, dr, stern(y), thrust), (0.0, duration_s),
-                           state0, method="RK45", rtol=1e-8, atol=1e-9, max_step=h,
-                           dense_output=False)
+    t_eval = None
+    if sample_hz is not None:
+        t_eval = np.arange(0.0, duration_s * (1 + 1e-12), 1.0 / sample_hz)
+    if manoeuvre == "schedule":
+        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern_at(t), thrust),
+                           (0.0, duration_s), state0, method="RK45", rtol=1e-8, atol=1e-9,
+                           max_step=h, t_eval=t_eval)
         _check(sol)
         times, states = sol.t, sol.y.T
-        rudder = np.full(len(times), dr)
+        rudder = np.array([rudder_at(t) for t in times])
+        sterns = np.array([stern_at(t) for t in times])
+    elif manoeuvre != "zigzag":
+        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern(y), thrust),
+                           (0.0, duration_s), state0, method="RK45", rtol=1e-8, atol=1e-9,
+                           max_step=h, dense_output=False, t_eval=t_eval)
+        _check(sol)
+        times, states = sol.t, sol.y.T
+        rudder = np.array([rudder_at(t) for t in times])
     else:
         # first execute towards positive heading: the sign of N_uudr decides the rudder's
         sigma = 1.0 if model["coefficients"].get("N_uudr", -1.0) > 0 else -1.0
@@ -310,6 +345,13 @@ def simulate(
         times = np.concatenate(t_parts)
         states = np.concatenate(y_parts)
         rudder = np.concatenate(r_parts)
+        if t_eval is not None:  # the switches repeat a time: the later sample is kept
+            keep = np.r_[np.diff(times) > 0, True]
+            times, states, rudder = times[keep], states[keep], rudder[keep]
+            states = np.column_stack([np.interp(t_eval, times, c) for c in states.T])
+            rudder = np.array([rudder[min(np.searchsorted(times, t, "right") - 1,
+                                          len(times) - 1)] for t in t_eval])
+            times = t_eval
     out = pd.DataFrame({
         "t_s": times, "x_m": states[:, 0], "y_m": states[:, 1], "z_m": states[:, 2],
         "phi_deg": np.degrees(states[:, 3]), "theta_deg": np.degrees(states[:, 4]),
@@ -317,7 +359,8 @@ def simulate(
         "w_m_s": states[:, 8], "p_deg_s": np.degrees(states[:, 9]),
         "q_deg_s": np.degrees(states[:, 10]), "r_deg_s": np.degrees(states[:, 11]),
         "rudder_deg": np.degrees(rudder),
-        "sternplane_deg": np.degrees([stern(y) for y in states]) if closed else np.degrees(ds),
+        "sternplane_deg": (np.degrees(sterns) if manoeuvre == "schedule" else
+                           np.degrees([stern(y) for y in states]) if closed else np.degrees(ds)),
     })
     out.attrs["manoeuvre"] = manoeuvre
     if closed and dive_angle_deg is not None:
@@ -325,6 +368,63 @@ def simulate(
     out.attrs["check_deg"] = abs(rudder_deg)
     if manoeuvre == "glide" and (roll_deg or rudder_deg):
         out.attrs["turning"] = True  # metrics: turn radius and period (#26)
+    return out
+
+
+def _rudder_law(manoeuvre: str, rudder_deg: float, period_s: float | None,
+                schedule: pd.DataFrame | None, dr: float) -> Any:
+    """The rudder angle [rad] as a function of time [s] of the open-loop manoeuvres."""
+    if manoeuvre == "sine":
+        amp = math.radians(rudder_deg)
+        omega = 2.0 * math.pi / (10.0 if period_s is None else float(period_s))
+        return lambda t: amp * math.sin(omega * t)
+    if manoeuvre == "schedule" and schedule is not None:
+        t_s = schedule["t_s"].to_numpy(float)
+        val = np.radians(schedule["rudder_deg"].to_numpy(float))
+        return lambda t: float(np.interp(t, t_s, val))
+    return lambda t: dr
+
+
+#: Columns of a control schedule (``simulate --schedule``).
+SCHEDULE_COLUMNS = ("t_s", "rudder_deg", "sternplane_deg")
+
+
+def read_schedule(path: Any, limit_deg: float = 45.0) -> pd.DataFrame:
+    """A control schedule: CSV with ``t_s`` [s], ``rudder_deg``, ``sternplane_deg`` [deg].
+
+    The times must be finite and increase, the angles finite and within ``limit_deg`` [deg];
+    a missing angle column is 0.
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the file and the problem.
+    """
+    from pathlib import Path
+
+    name = Path(path).name
+    try:
+        tab = pd.read_csv(path)
+    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{name}: cannot be read as a CSV schedule ({exc}).") from None
+    tab.columns = [str(c).strip() for c in tab.columns]
+    if "t_s" not in tab.columns or not ({"rudder_deg", "sternplane_deg"} & set(tab.columns)):
+        raise ValueError(f"{name}: a schedule needs the columns t_s and rudder_deg and/or "
+                         f"sternplane_deg, not {', '.join(map(str, tab.columns)) or 'none'}.")
+    out = pd.DataFrame({c: pd.to_numeric(tab[c], errors="coerce") if c in tab.columns
+                        else 0.0 for c in SCHEDULE_COLUMNS})
+    if len(out) == 0:
+        raise ValueError(f"{name}: the schedule has no rows.")
+    bad = ~np.isfinite(out.to_numpy(float)).all(axis=1)
+    if bad.any():
+        raise ValueError(f"{name}: row {int(np.nonzero(bad)[0][0]) + 2} of the schedule holds a "
+                         "value that is not a finite number.")
+    if (np.diff(out["t_s"].to_numpy()) <= 0).any():
+        raise ValueError(f"{name}: the schedule's t_s must increase from row to row.")
+    big = out[["rudder_deg", "sternplane_deg"]].abs().to_numpy().max()
+    if big > limit_deg:
+        raise ValueError(f"{name}: the schedule's angles must lie within ±{limit_deg:g} deg, "
+                         f"not {big:g}.")
     return out
 
 
@@ -437,7 +537,7 @@ def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) ->
     the length the model's ``length_m`` [m], else 1 m."""
     length = float(model.get("length_m", 1.0))
     duration = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
-    if manoeuvre in ("turning", "spiral", "zigzag"):
+    if manoeuvre in ("turning", "spiral", "zigzag", "sine", "schedule"):
         duration = max(duration, 120.0 * length / speed_m_s)
     return duration
 
@@ -611,6 +711,15 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
             rows.append(("period_s", float(t[switch[2]] - t[switch[0]]), "s", ""))
         if len(switch) >= 1:
             rows.append(("time_to_first_execute_s", float(t[switch[0]]), "s", ""))
+    elif kind in ("sine", "schedule"):
+        half = q["t"] >= 0.5 * q["t"][-1]
+        for metric, col, unit in (("rudder_amplitude_deg", "rudder_deg", "deg"),
+                                  ("heading_amplitude_deg", "psi_deg", "deg"),
+                                  ("yaw_rate_amplitude_deg_s", "r_deg_s", "deg/s"),
+                                  ("pitch_amplitude_deg", "theta_deg", "deg")):
+            vals = ts[col].to_numpy()[half]
+            rows.append((metric, 0.5 * float(np.ptp(vals)) if len(vals) else nan, unit,
+                         "half the peak-to-peak over the last half of the run"))
     else:  # dive, glide
         steady("steady_pitch_deg", "pitch_deg", "deg", angle=True)
         steady("depth_rate_m_s", "depth_rate_m_s", "m/s")

@@ -1,0 +1,387 @@
+"""`towtank identify` (#25): coefficients from a manoeuvre record by the augmented-state
+Kalman filter and smoother, checked by output-error least squares.
+
+The paper case: REMUS (towtank's prediction from protocols/remus_vehicle.toml, Prestero's
+geometry), a sinusoidal rudder of 10 deg and 10 s at 1.5 m/s, the paper's measured states
+``u, v, r, psi, x, y`` with Gaussian noise (u, v 0.01 m/s; r 0.2 deg/s; psi 0.5 deg; x, y
+0.05 m); N_ur (yaw damping, the paper's N_r = N_ur u), N_rdot and N_uudr (the paper's N_delta_r
+= N_uudr u^2) from zero starting values.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from towtank.commands.cli import main
+from towtank.vehicle.identify import BatchModel, identify, rts_smooth
+from towtank.vehicle.identify_log import LogError, log_from_frame, read_log
+from towtank.vehicle.simulate import Dynamics, read_schedule, simulate
+
+REPO = Path(__file__).resolve().parents[1]
+PAPER = ["N_ur", "N_rdot", "N_uudr"]
+NOISE = {"u_m_s": 0.01, "v_m_s": 0.01, "r_deg_s": 0.2, "psi_deg": 0.5, "x_m": 0.05, "y_m": 0.05}
+KEEP = ["t_s", "x_m", "y_m", "psi_deg", "u_m_s", "v_m_s", "r_deg_s", "rudder_deg",
+        "sternplane_deg"]
+
+
+@pytest.fixture(scope="module")
+def remus(tmp_path_factory) -> dict:
+    """REMUS predicted from the shipped protocol, neutrally buoyant (weight = buoyancy)."""
+    out = tmp_path_factory.mktemp("remus")
+    assert main(["predict", str(REPO / "protocols" / "remus_vehicle.toml"), "--out",
+                 str(out / "p")]) == 0
+    model = json.loads((out / "p" / "model.json").read_text())
+    model["buoyancy_N"] = model["weight_N"]
+    return model
+
+
+@pytest.fixture(scope="module")
+def sine_clean(remus) -> pd.DataFrame:
+    return simulate(remus, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=60.0,
+                    sample_hz=20.0)
+
+
+def _noisy(clean: pd.DataFrame, seed: int) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    df = clean[KEEP].copy()
+    for col, sd in NOISE.items():
+        df[col] = df[col] + rng.normal(0.0, sd, len(df))
+    return df
+
+
+def test_batch_model_is_the_simulators_dynamics(remus):
+    rng = np.random.default_rng(3)
+    dyn = Dynamics(remus)
+    for est in (PAPER, ["N_ur", "M_uq"], ["Y_vdot", "N_vdot", "X_u|u|"]):
+        bm = BatchModel(remus, est, 1.5)
+        beta = np.array([[remus["coefficients"].get(s, 0.0) for s in est]])
+        for _ in range(5):
+            s = rng.normal(size=12) * 0.3
+            s[6] += 1.5
+            a = dyn.rhs(s, 0.1, -0.05, -dyn.x_uu * 1.5 ** 2)
+            b = bm.rhs(np.vstack([s, s]), np.vstack([beta, beta]), 0.1, -0.05)
+            np.testing.assert_allclose(b[0], a, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(b[1], a, rtol=1e-12, atol=1e-12)
+
+
+def test_rts_smoother_equals_filterpys():
+    """The smoother over the stored predictions gives filterpy's UKF.rts_smoother."""
+    from filterpy.kalman import MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as UKF
+
+    def fx(x, dt):
+        return np.array([x[0] + dt * x[1], x[1] - dt * (0.5 * x[1] + math.sin(x[0]))])
+
+    def hx(x):
+        return x[:1]
+
+    pts = MerweScaledSigmaPoints(2, alpha=0.3, beta=2.0, kappa=0.0)
+    ukf = UKF(dim_x=2, dim_z=1, dt=0.1, hx=hx, fx=fx, points=pts)
+    ukf.x, ukf.P, ukf.R, ukf.Q = np.array([1.0, 0.0]), np.eye(2) * 0.1, np.eye(1) * 0.01, \
+        np.eye(2) * 1e-3
+    rng = np.random.default_rng(0)
+    zs = np.cos(np.arange(40) * 0.1)[:, None] + rng.normal(0, 0.1, (40, 1))
+    n = len(zs)
+    xs, ps = np.zeros((n, 2)), np.zeros((n, 2, 2))
+    xp, pp, cross = np.zeros((n, 2)), np.zeros((n, 2, 2)), np.zeros((n, 2, 2))
+    for k, z in enumerate(zs):
+        if k:
+            sig = pts.sigma_points(ukf.x, ukf.P)
+            x_before = ukf.x.copy()
+            ukf.predict()
+            f = np.array([fx(s, 0.1) for s in sig])
+            cross[k] = (pts.Wc[:, None] * (sig - x_before)).T @ (f - ukf.x)
+            xp[k], pp[k] = ukf.x, ukf.P
+        ukf.update(z)
+        xs[k], ps[k] = ukf.x, ukf.P
+    mine, mine_p = rts_smooth(xs, ps, xp, pp, cross)
+    ref, ref_p, _ = ukf.rts_smoother(xs, ps)
+    np.testing.assert_allclose(mine, ref, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(mine_p, ref_p, rtol=1e-7, atol=1e-12)
+    assert np.abs(mine - xs).max() > 1e-3  # the smoother did change the estimates
+
+
+def test_paper_case_from_zero_starts(remus, sine_clean, tmp_path, capsys):
+    """N_ur, N_rdot, N_uudr from zero within 5 % and inside their 95 % intervals, by the
+    command line (simulate's CSV columns, the paper's measured states); UKF and least squares
+    agree; model.json gains the values, sources 'identified' and their covariance."""
+    (tmp_path / "m").mkdir()
+    model_path = tmp_path / "m" / "model.json"
+    model_path.write_text(json.dumps(remus))
+    log = tmp_path / "sine.csv"
+    _noisy(sine_clean, 7).to_csv(log, index=False)
+    before = log.read_bytes()
+    out = tmp_path / "id"
+    assert main(["identify", str(model_path), str(log), "--estimate", ",".join(PAPER),
+                 "--start", "zero", "--out", str(out)]) == 0
+    assert log.read_bytes() == before  # the record is never modified
+    said = capsys.readouterr().out
+    tab = pd.read_csv(out / "identified.csv")
+    assert list(tab.columns[:7]) == ["symbol", "start", "value", "ci_low", "ci_high",
+                                     "method", "unit"]
+    for method in ("ukf", "ls"):
+        rows = tab[tab["method"] == method].set_index("symbol")
+        for sym in PAPER:
+            truth = remus["coefficients"][sym]
+            row = rows.loc[sym]
+            assert row["start"] == 0.0
+            assert abs(row["value"] / truth - 1.0) < 0.05, (method, sym, row["value"], truth)
+            assert row["ci_low"] <= truth <= row["ci_high"], (method, sym)
+            assert row["verdict"] == "identifiable"
+            assert row["agree"] == "yes"
+            assert f"{sym}: identifiable" in said
+    new = json.loads((out / "model.json").read_text())
+    for sym in PAPER:
+        assert new["sources"][sym] == "identified"
+        ukf = tab[(tab["method"] == "ukf") & (tab["symbol"] == sym)]["value"].iloc[0]
+        assert new["coefficients"][sym] == pytest.approx(ukf, rel=1e-5)
+    cov = new["covariance"]
+    assert set(PAPER) <= set(cov["symbols"])
+    i = cov["symbols"].index("N_ur")
+    row = tab[(tab["method"] == "ukf") & (tab["symbol"] == "N_ur")].iloc[0]
+    assert math.sqrt(cov["matrix"][i][i]) == pytest.approx(
+        (row["ci_high"] - row["ci_low"]) / (2 * 1.959964), rel=1e-3)
+    assert (out / "identify.png").stat().st_size > 10_000
+    from towtank.vehicle.model import read_model
+
+    assert read_model(out / "model.json")["coefficients"]["N_ur"] == new["coefficients"]["N_ur"]
+    assert json.loads(model_path.read_text()) == remus  # the input model is untouched
+
+
+def test_a_pitch_term_from_a_flat_turn_is_not_identifiable(remus, sine_clean):
+    """M_uq (pitch damping) from the horizontal sine: reported not identifiable, its
+    interval about as wide as the prior; N_ur beside it still identified."""
+    log = log_from_frame(_noisy(sine_clean, 11), "flat")
+    res = identify(remus, log, ["N_ur", "M_uq"], start="model")
+    ok = dict(zip(res.symbols, res.identifiable(), strict=True))
+    assert ok == {"N_ur": True, "M_uq": False}
+    ci = res.conf_int().loc["M_uq"]
+    assert ci["ci_high"] - ci["ci_low"] > 2 * abs(remus["coefficients"]["M_uq"])
+    assert any("M_uq: NOT identifiable" in line for line in res.verdicts())
+
+
+def test_the_extended_filter_from_zero(remus, sine_clean):
+    """--method ekf (the paper's filter): the same three coefficients from zero, within 5 %
+    and inside the 95 % intervals."""
+    log = log_from_frame(_noisy(sine_clean, 2), "sine")
+    res = identify(remus, log, PAPER, method="ekf", start="zero", check=False)
+    truth = np.array([remus["coefficients"][s] for s in PAPER])
+    ci = res.conf_int()
+    assert np.all(np.abs(res.value / truth - 1) < 0.05)
+    assert np.all((ci["ci_low"].to_numpy() <= truth) & (truth <= ci["ci_high"].to_numpy()))
+    assert res.identifiable().all()
+
+
+def test_least_squares_alone_and_the_result_api(remus, sine_clean):
+    log = log_from_frame(_noisy(sine_clean, 5), "sine")
+    res = identify(remus, log, ["N_ur", "N_uudr"], method="ls", start="zero")
+    truth = np.array([remus["coefficients"][s] for s in ("N_ur", "N_uudr")])
+    assert np.all(np.abs(res.value / truth - 1) < 0.05)
+    ci90, ci99 = res.conf_int(0.10), res.conf_int(0.01)
+    assert np.all(ci99["ci_low"] < ci90["ci_low"]) and np.all(ci99["ci_high"] > ci90["ci_high"])
+    assert "N_uudr" in res.summary()
+
+
+def _write(path: Path, df: pd.DataFrame) -> Path:
+    df.to_csv(path, index=False)
+    return path
+
+
+@pytest.mark.parametrize(("mangle", "words"), [
+    (lambda d: d.drop(columns=["rudder_deg"]), "rudder_deg is missing"),
+    (lambda d: d.assign(t_s=d["t_s"].where(d.index != 50, 1.0)), "time goes back"),
+    (lambda d: d.assign(rudder_deg=5.0), "stay at 5 and 0 deg"),
+    (lambda d: d[["t_s", "rudder_deg", "sternplane_deg"]], "no state column"),
+    (lambda d: d.head(5), "fewer than the 20"),
+])
+def test_a_bad_log_is_one_sentence_and_exit_2(remus, sine_clean, tmp_path, capsys, mangle,
+                                              words):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    log = _write(tmp_path / "bad.csv", mangle(_noisy(sine_clean, 1)))
+    before = log.read_bytes()
+    assert main(["identify", str(model), str(log), "--estimate", "N_ur",
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "bad.csv" in err and "Traceback" not in err
+    assert len(err.splitlines()) == 1
+    assert log.read_bytes() == before
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(("estimate", "words"), [
+    ("Q_zz", "not model.json coefficient symbols"),
+    ("N_ur,N_ur", "twice"),
+    (",", "names no coefficient"),
+])
+def test_a_bad_estimate_is_one_sentence_and_exit_2(remus, sine_clean, tmp_path, capsys,
+                                                   estimate, words):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    log = _write(tmp_path / "s.csv", _noisy(sine_clean, 1))
+    assert main(["identify", str(model), str(log), "--estimate", estimate,
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_million_rows_are_refused_in_one_sentence(remus, tmp_path, capsys):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    log = tmp_path / "huge.csv"
+    with open(log, "w") as fh:
+        fh.write("t_s,r_deg_s,rudder_deg,sternplane_deg\n")
+        fh.write("".join(f"{k * 0.001},0,{k % 7},0\n" for k in range(1_000_000)))
+    assert main(["identify", str(model), str(log), "--estimate", "N_ur"]) == 2
+    err = capsys.readouterr().err
+    assert "1000000 rows" in err and "resample" in err
+
+
+def test_gaps_nan_and_irregular_sampling_are_handled(remus, sine_clean):
+    """Drop a 3 s gap, blank 5 % of the values, jitter the sampling: N_ur still within 5 %."""
+    rng = np.random.default_rng(2)
+    df = _noisy(sine_clean, 3)
+    df = df[(df["t_s"] < 20) | (df["t_s"] > 23)]
+    df = df[rng.random(len(df)) > 0.2].copy()  # irregular sampling
+    for col in NOISE:
+        df.loc[rng.random(len(df)) < 0.05, col] = np.nan
+    log = log_from_frame(df, "holes")
+    assert any("gap" in n for n in log.notes)
+    res = identify(remus, log, ["N_ur"], start="zero", check=False)
+    assert abs(res.value[0] / remus["coefficients"]["N_ur"] - 1) < 0.05
+
+
+def test_protocol_channels_map_other_names(remus, sine_clean, tmp_path):
+    df = _noisy(sine_clean, 4).rename(columns={"r_deg_s": "yaw_rate_rad_s"})
+    df["yaw_rate_rad_s"] = np.radians(df["yaw_rate_rad_s"])
+    (tmp_path / "p.toml").write_text(
+        '[channels]\nr_deg_s = { column = "yaw_rate_rad_s", gain = 57.29577951308232 }\n')
+    log_path = _write(tmp_path / "lab.csv", df)
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    assert main(["identify", str(model), str(log_path), "--estimate", "N_ur", "--method", "ls",
+                 "--protocol", str(tmp_path / "p.toml"), "--out", str(tmp_path / "o")]) == 0
+    got = pd.read_csv(tmp_path / "o" / "identified.csv")["value"].iloc[0]
+    assert abs(got / remus["coefficients"]["N_ur"] - 1) < 0.05
+
+
+def test_identify_never_writes_over_its_input_model(remus, tmp_path, capsys, sine_clean):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    log = _write(tmp_path / "s.csv", _noisy(sine_clean, 1))
+    assert main(["identify", str(model), str(log), "--estimate", "N_ur",
+                 "--out", str(tmp_path)]) == 2
+    assert "never writes over its input" in capsys.readouterr().err
+    assert json.loads(model.read_text()) == remus
+
+
+_COLS = ["t_s", "x_m", "psi_deg", "r_deg_s", "rudder_deg", "sternplane_deg", "junk"]
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                                   st.text(max_size=4), st.none()),
+                         min_size=len(_COLS), max_size=len(_COLS)), max_size=40),
+       st.sets(st.sampled_from(_COLS)))
+def test_the_log_reader_never_raises_anything_but_its_sentence(rows, drop):
+    df = pd.DataFrame(rows, columns=_COLS).drop(columns=sorted(drop))
+    try:
+        log = log_from_frame(df.astype(str), "fuzz")
+    except LogError as exc:
+        assert str(exc).startswith("fuzz: ") and "\n" not in str(exc)
+    else:
+        assert np.all(np.diff(log.t) > 0) and log.measured
+
+
+def test_read_log_on_garbage_bytes(tmp_path):
+    p = tmp_path / "g.csv"
+    p.write_bytes(b"\x00\xff\xfe garbage")
+    with pytest.raises(LogError, match="g.csv"):
+        read_log(p)
+    p.write_text('t_s,rudder_deg\n"unclosed,1\n')
+    with pytest.raises(LogError):
+        read_log(p)
+
+
+def test_simulate_sine_schedule_and_noise(remus, tmp_path, capsys):
+    """The sine rudder is A sin(2 pi t/T); a schedule is followed (interpolated); --noise has
+    the asked standard deviation and the same seed gives the same record."""
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    args = ["simulate", str(model), "--manoeuvre", "sine", "--rudder-deg", "8", "--period-s",
+            "6", "--duration-s", "30", "--sample-hz", "10"]
+    assert main(args + ["--out", str(tmp_path / "a")]) == 0
+    ts = pd.read_csv(tmp_path / "a" / "manoeuvre.csv")
+    assert np.diff(ts["t_s"]).max() == pytest.approx(0.1)
+    np.testing.assert_allclose(ts["rudder_deg"], 8 * np.sin(2 * np.pi * ts["t_s"] / 6),
+                               atol=1e-4)
+    noisy = args + ["--noise", "r=0.5,x=0.1", "--seed", "4"]
+    assert main(noisy + ["--out", str(tmp_path / "b")]) == 0
+    assert main(noisy + ["--out", str(tmp_path / "c")]) == 0
+    b = pd.read_csv(tmp_path / "b" / "manoeuvre.csv")
+    assert (tmp_path / "b" / "manoeuvre.csv").read_bytes() == (
+        tmp_path / "c" / "manoeuvre.csv").read_bytes()
+    assert np.std(b["r_deg_s"] - ts["r_deg_s"]) == pytest.approx(0.5, rel=0.15)
+    assert np.std(b["x_m"] - ts["x_m"]) == pytest.approx(0.1, rel=0.15)
+    assert (b["u_m_s"] == ts["u_m_s"]).all()
+    (tmp_path / "s.csv").write_text("t_s,rudder_deg,sternplane_deg\n0,0,0\n5,10,0\n10,10,-4\n")
+    assert main(["simulate", str(model), "--manoeuvre", "schedule", "--schedule",
+                 str(tmp_path / "s.csv"), "--sample-hz", "4", "--out", str(tmp_path / "d")]) == 0
+    d = pd.read_csv(tmp_path / "d" / "manoeuvre.csv")
+    assert d["t_s"].iloc[-1] == pytest.approx(10.0)
+    np.testing.assert_allclose(d["rudder_deg"], np.interp(d["t_s"], [0, 5, 10], [0, 10, 10]),
+                               atol=1e-6)
+    np.testing.assert_allclose(d["sternplane_deg"], np.interp(d["t_s"], [0, 5, 10], [0, 0, -4]),
+                               atol=1e-6)
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("t_s,rudder_deg\n0,0\n0,1\n", "must increase"),
+    ("time,rudder\n0,0\n", "needs the columns t_s"),
+    ("t_s,rudder_deg\n0,0\n1,x\n", "row 3"),
+    ("t_s,rudder_deg\n0,0\n1,60\n", "within ±45"),
+])
+def test_a_bad_schedule_is_one_sentence_and_exit_2(remus, tmp_path, capsys, text, words):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps(remus))
+    (tmp_path / "s.csv").write_text(text)
+    with pytest.raises(ValueError, match=words):
+        read_schedule(tmp_path / "s.csv")
+    assert main(["simulate", str(model), "--manoeuvre", "schedule", "--schedule",
+                 str(tmp_path / "s.csv"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_intervals_hold_the_truth_93_to_98_percent_of_the_time(remus, sine_clean):
+    """100 records with independent noise: each method's 95 % interval of N_ur, N_rdot,
+    N_uudr holds the truth 93-98 % of the time within the binomial sampling error (the
+    Clopper-Pearson 95 % interval of the observed rate overlaps [0.93, 0.98])."""
+    from scipy.stats import binomtest
+
+    truth = np.array([remus["coefficients"][s] for s in PAPER])
+    hits: dict[str, list] = {"ukf": [], "ls": []}
+    for seed in range(100):
+        res = identify(remus, log_from_frame(_noisy(sine_clean, 1000 + seed), "c"), PAPER,
+                       start="zero")
+        for method in hits:
+            ci = res.conf_int(0.05, method)
+            hits[method].append((ci["ci_low"].to_numpy() <= truth)
+                                & (truth <= ci["ci_high"].to_numpy()))
+    for method, h in hits.items():
+        for j, sym in enumerate(PAPER):
+            k = int(np.sum([row[j] for row in h]))
+            ci = binomtest(k, 100).proportion_ci(0.95)
+            assert ci.low <= 0.98 and ci.high >= 0.93, (method, sym, k)

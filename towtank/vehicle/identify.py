@@ -1,0 +1,773 @@
+"""Coefficients from a manoeuvre record: augmented-state Kalman filter and smoother, checked by
+output-error least squares (``towtank identify``; docs/method.md "Identification").
+
+State-space form. The state of the 6-DOF model of :mod:`towtank.vehicle.simulate`
+``s = [x, y, z, phi, theta, psi, u, v, w, p, q, r]`` is augmented with the unknown
+coefficients ``beta`` as random-walk states (the REMUS identification study's ``x* = [x, y, u,
+v, r, psi, beta]``)::
+
+    s_{k+1} = f(s_k, beta_k, delta(t)) + w_s,     beta_{k+1} = beta_k + w_beta,
+    z_k = H s_k + v_k,                             v_k ~ N(0, R)
+
+f is the simulator's right-hand side (Fossen 2011 eqs. 2.40, 7.190, 6.43) integrated from
+sample to sample by the classical 4th-order Runge-Kutta scheme (at most :data:`MAX_STEP_S` per
+step, the controls linear between samples); H picks the measured states. The filter is
+filterpy's unscented Kalman filter (Wan & van der Merwe 2000; scaled sigma points, van der
+Merwe 2004) or its extended one (Jacobian of f by finite differences), followed by the
+Rauch-Tung-Striebel smoother (Rauch, Tung & Striebel 1965; unscented form Särkkä 2008):
+``G_k = D_{k+1} (P^-_{k+1})^{-1}``, ``m^s_k = m_k + G_k (m^s_{k+1} - m^-_{k+1})``,
+``P^s_k = P_k + G_k (P^s_{k+1} - P^-_{k+1}) G_k^T`` with ``D`` the cross-covariance of
+``s_k`` and ``s^-_{k+1}`` (EKF: ``D = P_k F_k^T``).
+
+Cross-check: output-error least squares (:func:`scipy.optimize.least_squares`) of the
+simulated against the measured states, weighted by each channel's noise; the covariance
+``s^2 (J^T J)^{-1}`` from the Jacobian at the optimum, ``s^2`` the residual variance
+(Jategaonkar 2015, ch. 4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from towtank.vehicle.identify_log import STATE_COLUMNS, ManoeuvreLog, noise_sd
+from towtank.vehicle.model import SYMBOL_RE, added_mass_matrix
+
+__all__ = ["MAX_STEP_S", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel", "IdentifyResult",
+           "identify", "rts_smooth", "coefficient_unit", "least_squares_fit", "kalman_fit"]
+
+#: Largest Runge-Kutta step of the process model [s].
+MAX_STEP_S = 0.05
+METHODS = ("ukf", "ekf", "ls")
+#: A coefficient is identifiable when its standard deviation after the record is below this
+#: fraction of its prior standard deviation (the record removed >= 99.75 % of the variance;
+#: with the default prior, 3 max(|model value|, 1), an sd below 15 % of the model's value).
+IDENTIFIABLE_RATIO = 0.05
+#: Process noise of the states, per sqrt(second) [m, rad, m/s, rad/s per sqrt(s)]: chosen so
+#: that the filter's 95 % intervals cover (docs/method.md, "Coverage"; a tenth of it made them
+#: 40 % too narrow, three times it 30 % too wide, ten times it biased the estimates).
+PROCESS_SD = np.array([1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4])
+#: Prior sd of the speed the thrust balances, a state of the filter when u is measured [m/s].
+THRUST_SPEED_SD = 0.05
+#: Passes of the filter: each starts from the previous estimates with a prior of
+#: PASS_PRIOR times their standard deviations (at most the first prior), until the estimates
+#: move by less than PASS_TOL of a standard deviation. The first pass from a far start (zero)
+#: updates the coefficients while their prior is wide and the motion it predicts is far from
+#: the record; what those early updates lock in is a bias of several standard deviations that
+#: the later passes, linearised near the answer, remove (docs/method.md).
+MAX_PASSES = 4
+PASS_PRIOR = 10.0
+PASS_TOL = 0.2
+#: Fractions of the record least squares alone fits one after the other from zero starts.
+LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
+#: Spread of the sigma points (van der Merwe 2004) [-].
+ALPHA = 0.1
+_DOF = "XYZKMN"
+_VEL = "uvwpqr"
+
+
+def coefficient_unit(symbol: str) -> str:
+    """The SI unit of a model.json coefficient, as predicted.csv writes it (``N_ur``:
+    kg*m/rad, ``N_rdot``: kg*m^2/rad, ``N_uudr``: kg/rad; :mod:`towtank.vehicle.predict`)."""
+    from towtank.vehicle.predict import _units
+
+    return _units(symbol)
+
+
+class BatchModel:
+    """The simulator's dynamics for many states and coefficient sets at once.
+
+    The same equations as :class:`towtank.vehicle.simulate.Dynamics` (the tests compare the
+    two), with the estimated coefficients ``beta`` (N, k) taken per row: each hydrodynamic
+    term is ``coefficient * product`` (simulate's module docstring), and an estimated added
+    mass enters ``M_A = M_A0 + sum_j beta_j B_j`` (linear in the ``..dot`` coefficients).
+    The thrust balances the axial drag ``X_u|u|`` at the record's first speed (as simulate's).
+    """
+
+    def __init__(self, model: dict[str, Any], estimate: list[str], speed_m_s: float,
+                 weight: float | None = None) -> None:
+        coef = {k: float(v) for k, v in (model.get("coefficients") or {}).items()}
+        self.estimate = list(estimate)
+        base = dict(coef)
+        for s in estimate:
+            base[s] = 0.0
+        self.mass = float(model["mass_kg"])
+        self.weight = float(model["weight_N"] if weight is None else weight)
+        self.buoyancy = float(model["buoyancy_N"])
+        self.rg = np.asarray(model["cg_m"], dtype=float)
+        self.rb = np.asarray(model["cb_m"], dtype=float)
+        self.io = np.diag(np.asarray(model["inertia_kg_m2"], dtype=float))
+        m_rb = np.zeros((6, 6))
+        m_rb[:3, :3] = self.mass * np.eye(3)
+        m_rb[:3, 3:] = -self.mass * _skew(self.rg)
+        m_rb[3:, :3] = self.mass * _skew(self.rg)
+        m_rb[3:, 3:] = self.io
+        self.ma0 = added_mass_matrix(base)
+        self.mb = []  # d M_A / d beta_j
+        self.dot_index = []
+        for j, s in enumerate(estimate):
+            if s.endswith("dot"):
+                self.mb.append(added_mass_matrix(base | {s: 1.0}) - self.ma0)
+                self.dot_index.append(j)
+        self.m_rb = m_rb
+        self.minv0 = np.linalg.inv(m_rb + self.ma0)
+        # fixed terms: product index table over ext = [nu, |nu|, dr, ds, 1]
+        fixed = [(s, v) for s, v in base.items() if not s.split("_", 1)[1].endswith("dot")
+                 and v != 0.0]
+        self.fixed_idx, self.fixed_c = self._table(fixed)
+        est = [(s, 1.0) for s in estimate if not s.endswith("dot")]
+        self.est_cols = [j for j, s in enumerate(estimate) if not s.endswith("dot")]
+        self.est_idx, self.est_e = self._table(est)
+        self.x_uu = coef.get("X_u|u|", 0.0)
+        self.x_uu_j = estimate.index("X_u|u|") if "X_u|u|" in estimate else None
+        self.u0: Any = float(speed_m_s)  # [m/s], or one per row of the states
+
+    @staticmethod
+    def _table(terms: list[tuple[str, float]]) -> tuple[np.ndarray, np.ndarray]:
+        import re
+
+        rows, coefs = [], []
+        for sym, val in terms:
+            head, _, sub = sym.partition("_")
+            idx = []
+            for tok in re.findall(r"\|[uvwpqr]\||dr|ds|[uvwpqr]", sub):
+                idx.append(12 if tok == "dr" else 13 if tok == "ds" else
+                           6 + _VEL.index(tok[1]) if tok.startswith("|") else _VEL.index(tok))
+            rows.append(idx)
+            c = np.zeros(6)
+            c[_DOF.index(head)] = val
+            coefs.append(c)
+        width = max((len(r) for r in rows), default=1)
+        table = np.array([r + [14] * (width - len(r)) for r in rows], dtype=int).reshape(
+            len(rows), width)
+        return table, np.array(coefs).reshape(len(rows), 6)
+
+    def rhs(self, s: np.ndarray, beta: np.ndarray, dr: float, ds: float) -> np.ndarray:
+        """ds/dt (N, 12) of the states ``s`` (N, 12) with the coefficients ``beta`` (N, k),
+        rudder ``dr`` and stern plane ``ds`` [rad]."""
+        n = s.shape[0]
+        nu = s[:, 6:]
+        ext = np.empty((n, 15))
+        ext[:, :6] = nu
+        ext[:, 6:12] = np.abs(nu)
+        ext[:, 12] = dr
+        ext[:, 13] = ds
+        ext[:, 14] = 1.0
+        tau = ext[:, self.fixed_idx].prod(axis=2) @ self.fixed_c
+        if len(self.est_cols):
+            phi = ext[:, self.est_idx].prod(axis=2) * beta[:, self.est_cols]
+            tau += phi @ self.est_e
+        x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
+        tau[:, 0] += -x_uu * self.u0 * np.abs(self.u0)
+        m, rg, io = self.mass, self.rg, np.diag(self.io)
+        u, v, w_, p, q, r = nu.T  # rows: contiguous work on the few sigma points
+        v1, v2 = (u, v, w_), (p, q, r)
+        c21 = _cross3(v2, v1)
+        top = [m * c21[i] - m * x for i, x in enumerate(_cross3(v2, _cross3(rg, v2)))]
+        bottom = [m * x - y for x, y in zip(_cross3(rg, c21),
+                                            _cross3((io[0] * p, io[1] * q, io[2] * r), v2),
+                                            strict=True)]
+        if self.dot_index:
+            ma = self.ma0 + np.einsum("nj,jab->nab", beta[:, self.dot_index],
+                                      np.array(self.mb))
+            ab = np.einsum("nab,nb->an", ma, nu)
+        else:
+            ma = None
+            ab = self.ma0 @ nu.T
+        a3, b3 = ab[:3], ab[3:]
+        ca_top = _cross3(a3, v2)
+        ca_bot = [x + y for x, y in zip(_cross3(a3, v1), _cross3(b3, v2), strict=True)]
+        phi_, theta, psi = s[:, 3], s[:, 4], s[:, 5]
+        sph, cph, sth, cth = np.sin(phi_), np.cos(phi_), np.sin(theta), np.cos(theta)
+        sps, cps = np.sin(psi), np.cos(psi)
+        wt, bb = self.weight, self.buoyancy
+        xg, yg, zg = self.rg
+        xb, yb, zb = self.rb
+        g = [(wt - bb) * sth, -(wt - bb) * cth * sph, -(wt - bb) * cth * cph,
+             -(yg * wt - yb * bb) * cth * cph + (zg * wt - zb * bb) * cth * sph,
+             (zg * wt - zb * bb) * sth + (xg * wt - xb * bb) * cth * cph,
+             -(xg * wt - xb * bb) * cth * sph - (yg * wt - yb * bb) * sth]
+        forces = tau.T  # C_A(nu) nu enters with + its cross terms (Fossen eq. 6.43)
+        rest = np.array([top[0] - ca_top[0], top[1] - ca_top[1], top[2] - ca_top[2],
+                         bottom[0] - ca_bot[0], bottom[1] - ca_bot[1], bottom[2] - ca_bot[2]])
+        total = forces - rest - np.array(g)
+        if ma is None:
+            nu_dot = (self.minv0 @ total).T
+        else:
+            nu_dot = np.linalg.solve(self.m_rb + ma, total.T[:, :, None])[:, :, 0]
+        out = np.empty((n, 12))
+        out[:, 0] = cps * cth * u + (-sps * cph + cps * sth * sph) * v + (
+            sps * sph + cps * cph * sth) * w_
+        out[:, 1] = sps * cth * u + (cps * cph + sph * sth * sps) * v + (
+            -cps * sph + sth * sps * cph) * w_
+        out[:, 2] = -sth * u + cth * sph * v + cth * cph * w_
+        out[:, 3] = p + (sph * q + cph * r) * sth / cth
+        out[:, 4] = cph * q - sph * r
+        out[:, 5] = (sph * q + cph * r) / cth
+        out[:, 6:] = nu_dot
+        return out
+
+    def step(self, aug: np.ndarray, dt: float, c0: tuple[float, float],
+             c1: tuple[float, float]) -> np.ndarray:
+        """The augmented states (N, 12 + k) after ``dt`` [s]: RK4 in steps of at most
+        :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``."""
+        s, beta = aug[:, :12], aug[:, 12:]
+        nsub = max(1, math.ceil(dt / MAX_STEP_S - 1e-9))
+        h = dt / nsub
+        for i in range(nsub):
+            def ctl(f: float) -> tuple[float, float]:
+                return (c0[0] + f * (c1[0] - c0[0]), c0[1] + f * (c1[1] - c0[1]))
+            fa, fb, fc = i / nsub, (i + 0.5) / nsub, (i + 1) / nsub
+            k1 = self.rhs(s, beta, *ctl(fa))
+            k2 = self.rhs(s + 0.5 * h * k1, beta, *ctl(fb))
+            k3 = self.rhs(s + 0.5 * h * k2, beta, *ctl(fb))
+            k4 = self.rhs(s + h * k3, beta, *ctl(fc))
+            s = s + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return np.concatenate((s, beta), axis=1)
+
+    def run(self, s0: np.ndarray, beta: np.ndarray, log: ManoeuvreLog) -> np.ndarray:
+        """Simulate from ``s0`` (N, 12) with ``beta`` (N, k) along the record's times and
+        controls: states (n_samples, N, 12)."""
+        aug = np.concatenate((s0, beta), axis=1)
+        out = np.empty((len(log.t), s0.shape[0], 12))
+        out[0] = s0
+        with np.errstate(all="ignore"):
+            for k in range(1, len(log.t)):
+                aug = self.step(aug, float(log.t[k] - log.t[k - 1]),
+                                (log.rudder[k - 1], log.sternplane[k - 1]),
+                                (log.rudder[k], log.sternplane[k]))
+                out[k] = aug[:, :12]
+        return out
+
+
+def _cross3(a: Any, b: Any) -> list[Any]:
+    """Cross product of two 3-vectors given as their components (arrays or numbers)."""
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def rts_smooth(xs: np.ndarray, ps: np.ndarray, x_prior: np.ndarray, p_prior: np.ndarray,
+               cross: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rauch-Tung-Striebel smoother over a filter's pass (Särkkä 2008, eqs. 21-23).
+
+    Parameters
+    ----------
+    xs, ps : ndarray
+        Filtered means (n, d) and covariances (n, d, d)
+    x_prior, p_prior : ndarray
+        Predicted means and covariances of step k (index k, from step k-1; index 0 unused)
+    cross : ndarray
+        ``D_k``, cross-covariance of the state at k-1 and the prediction of k (n, d, d)
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Smoothed means and covariances.
+    """
+    xs_s, ps_s = xs.copy(), ps.copy()
+    for k in range(len(xs) - 2, -1, -1):
+        gain = np.linalg.solve(p_prior[k + 1].T, cross[k + 1].T).T
+        xs_s[k] = xs[k] + gain @ (xs_s[k + 1] - x_prior[k + 1])
+        ps_s[k] = ps[k] + gain @ (ps_s[k + 1] - p_prior[k + 1]) @ gain.T
+        ps_s[k] = 0.5 * (ps_s[k] + ps_s[k].T)
+    return xs_s, ps_s
+
+
+@dataclass
+class IdentifyResult:
+    """What :func:`identify` found.
+
+    Attributes
+    ----------
+    symbols : list of str
+    start, value, sd : ndarray
+        Starting values, estimates and standard deviations of the primary method
+    prior_sd : ndarray
+        The filter's prior standard deviation of each coefficient (also the scale of the
+        identifiability verdict of least squares)
+    method : str
+    check : dict or None
+        Least squares' ``value`` and ``sd`` when it ran as the cross-check
+    history : dict
+        ``t`` [s], ``mean`` and ``sd`` (n, k): the smoothed (filter) estimates over time
+    measured, resimulated : DataFrame
+        The record and the model with the estimates simulated along it (manoeuvre.csv columns)
+    covariance : ndarray
+        Covariance of the estimates (k, k)
+    notes : list of str
+    """
+
+    symbols: list[str]
+    start: np.ndarray
+    value: np.ndarray
+    sd: np.ndarray
+    prior_sd: np.ndarray
+    method: str
+    covariance: np.ndarray
+    check: dict[str, np.ndarray] | None = None
+    history: dict[str, np.ndarray] = field(default_factory=dict)
+    measured: pd.DataFrame | None = None
+    resimulated: pd.DataFrame | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def conf_int(self, alpha: float = 0.05, method: str | None = None) -> pd.DataFrame:
+        """Two-sided ``1 - alpha`` intervals (normal): columns ci_low, ci_high, by symbol."""
+        z = stats.norm.ppf(1.0 - alpha / 2.0)
+        val, sd = self._pair(method)
+        return pd.DataFrame({"ci_low": val - z * sd, "ci_high": val + z * sd},
+                            index=pd.Index(self.symbols, name="symbol"))
+
+    def _pair(self, method: str | None) -> tuple[np.ndarray, np.ndarray]:
+        if method in (None, self.method):
+            return self.value, self.sd
+        if method == "ls" and self.check is not None:
+            return self.check["value"], self.check["sd"]
+        raise ValueError(f"no {method} estimates in this result.")
+
+    def identifiable(self, method: str | None = None) -> np.ndarray:
+        """True where the record constrains the coefficient: sd below
+        :data:`IDENTIFIABLE_RATIO` of its prior sd (and finite)."""
+        _, sd = self._pair(method)
+        return np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
+
+    def agree(self, alpha: float = 0.05) -> np.ndarray | None:
+        """Filter and least squares agree where their difference is within its interval:
+        ``|a - b| <= z sqrt(sd_a^2 + sd_b^2)``; None without the cross-check."""
+        if self.check is None:
+            return None
+        z = stats.norm.ppf(1.0 - alpha / 2.0)
+        diff = np.abs(self.value - self.check["value"])
+        return diff <= z * np.hypot(self.sd, self.check["sd"])
+
+    def table(self, alpha: float = 0.05) -> pd.DataFrame:
+        """identified.csv: symbol, start, value, ci_low, ci_high, method, unit, verdict, agree
+        (the primary method's rows, then the cross-check's)."""
+        rows = []
+        agree = self.agree(alpha)
+        methods = [self.method] + (["ls"] if self.check is not None else [])
+        for m in methods:
+            val, _ = self._pair(m)
+            ci = self.conf_int(alpha, m)
+            ok = self.identifiable(m)
+            for j, s in enumerate(self.symbols):
+                rows.append({
+                    "symbol": s, "start": self.start[j], "value": val[j],
+                    "ci_low": ci["ci_low"].iloc[j], "ci_high": ci["ci_high"].iloc[j],
+                    "method": m, "unit": coefficient_unit(s),
+                    "verdict": "identifiable" if ok[j] else "not identifiable",
+                    "agree": "" if agree is None else ("yes" if agree[j] else "no")})
+        return pd.DataFrame(rows)
+
+    def verdicts(self, alpha: float = 0.05) -> list[str]:
+        """One line per coefficient for the terminal."""
+        lines = []
+        ci = self.conf_int(alpha)
+        ok = self.identifiable()
+        agree = self.agree(alpha)
+        pct = round(100 * (1 - alpha))
+        for j, s in enumerate(self.symbols):
+            lo, hi = ci["ci_low"].iloc[j], ci["ci_high"].iloc[j]
+            if ok[j]:
+                line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
+                        f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
+            else:
+                line = (f"{s}: NOT identifiable from this record: {pct} % interval {lo:.4g} "
+                        f"to {hi:.4g}, its sd {self.sd[j]:.3g} still "
+                        f"{self.sd[j] / self.prior_sd[j]:.0%} of the prior's "
+                        f"{self.prior_sd[j]:.3g} (identifiable below "
+                        f"{IDENTIFIABLE_RATIO:.0%}); the manoeuvre does not excite it enough")
+            if agree is not None and self.check is not None:
+                lv = self.check["value"][j]
+                line += ("; least squares agrees" if agree[j] else
+                         "; least squares DISAGREES") + f" ({lv:.4g})"
+            lines.append(line)
+        return lines
+
+    def summary(self, alpha: float = 0.05) -> str:
+        """The table and the verdicts as text."""
+        with pd.option_context("display.width", 140, "display.max_columns", 20):
+            return self.table(alpha).to_string(index=False) + "\n" + "\n".join(
+                self.verdicts(alpha))
+
+
+def _initial_state(log: ManoeuvreLog, model: dict[str, Any]) -> np.ndarray:
+    s0 = np.zeros(12)
+    for i in log.measured:
+        col = log.z[:, i]
+        fin = np.nonzero(np.isfinite(col))[0]
+        s0[i] = col[fin[0]]
+    if 6 not in log.measured:
+        s0[6] = float(model.get("design_speed_m_s", 1.0))
+    return s0
+
+
+def _start_speed(log: ManoeuvreLog, s0: np.ndarray) -> float:
+    """The speed the thrust balances [m/s]: the measured u at the record's start, the
+    intercept of a parabola fitted to u over its first 2 s (the noise averaged out, the speed's
+    early change followed), else the initial state's."""
+    if 6 in log.measured:
+        sel = (log.t <= log.t[0] + 2.0) & np.isfinite(log.z[:, 6])
+        if sel.sum() >= 6:
+            coef = np.polyfit(log.t[sel] - log.t[0], log.z[sel, 6], 2)
+            return float(coef[-1])
+        if sel.any():
+            return float(np.mean(log.z[sel, 6]))
+    return float(s0[6])
+
+
+def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
+               start: np.ndarray, prior_sd: np.ndarray, sd: np.ndarray,
+               method: str = "ukf") -> dict[str, Any]:
+    """Augmented-state UKF or EKF (filterpy) and the RTS smoother over the record.
+
+    Parameters
+    ----------
+    model : dict
+        model.json
+    log : ManoeuvreLog
+    symbols : list of str
+        The estimated coefficients
+    start, prior_sd : ndarray
+        Their starting values and prior standard deviations [their units]
+    sd : ndarray
+        Measurement noise standard deviation of each state [SI] (NaN: not measured)
+    method : {"ukf", "ekf"}
+
+    Returns
+    -------
+    dict
+        ``x`` (n, 12 + k) smoothed means, ``P`` (n, 12 + k, 12 + k) smoothed covariances.
+
+    Raises
+    ------
+    ValueError
+        The filter diverged (one sentence).
+    """
+    from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
+    from filterpy.kalman import UnscentedKalmanFilter as UKF
+
+    k = len(symbols)
+    thrust = 6 in log.measured  # the speed the thrust balances: one more state
+    dim = 12 + k + (1 if thrust else 0)
+    s0 = _initial_state(log, model)
+    dyn = BatchModel(model, symbols, _start_speed(log, s0))
+    p0 = np.zeros(dim)
+    for i in range(12):
+        p0[i] = sd[i] ** 2 if i in log.measured else 0.1 ** 2
+    p0[12:12 + k] = prior_sd ** 2
+    if thrust:
+        p0[-1] = THRUST_SPEED_SD ** 2
+    n = len(log.t)
+    xs = np.zeros((n, dim))
+    ps = np.zeros((n, dim, dim))
+    x_prior = np.zeros((n, dim))
+    p_prior = np.zeros((n, dim, dim))
+    cross = np.zeros((n, dim, dim))
+    qrate = np.concatenate((PROCESS_SD ** 2, np.zeros(dim - 12)))
+
+    def controls(j: int) -> tuple[float, float]:
+        return (float(log.rudder[j]), float(log.sternplane[j]))
+
+    def residual_z(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return a - b
+
+    x0 = np.concatenate((s0, start, [dyn.u0] if thrust else []))
+
+    def step(aug: np.ndarray, dt: float, c0: tuple[float, float],
+             c1: tuple[float, float]) -> np.ndarray:
+        if thrust:
+            dyn.u0 = aug[:, -1]
+        return dyn.step(aug, dt, c0, c1)
+    if method == "ukf":
+        points = MerweScaledSigmaPoints(dim, alpha=ALPHA, beta=2.0, kappa=0.0)
+
+        class _Batch(UKF):  # the process model over all sigma points at once
+            def compute_process_sigmas(self, dt: float, fx: Any = None, **fx_args: Any) -> None:
+                sig = self.points_fn.sigma_points(self.x, self.P)
+                j = fx_args["k"]
+                self._chi = sig
+                self.sigmas_f = step(sig, dt, controls(j - 1), controls(j))
+                self._chi_f = self.sigmas_f.copy()
+
+        f: Any = _Batch(dim_x=dim, dim_z=1, dt=0.05, hx=lambda x: x[:1], fx=lambda x, dt: x,
+                        points=points, residual_z=residual_z)
+    else:
+        f = ExtendedKalmanFilter(dim_x=dim, dim_z=1)
+    f.x = x0.copy()
+    f.P = np.diag(p0)
+    wc = points.Wc if method == "ukf" else np.zeros(0)
+    j = 0
+    try:
+        with np.errstate(all="ignore"):
+            for j in range(n):
+                if j > 0:
+                    dt = float(log.t[j] - log.t[j - 1])
+                    f.Q = np.diag(qrate * dt)
+                    xp, pp = f.x.copy(), f.P.copy()
+                    if method == "ukf":
+                        f.predict(dt=dt, k=j)
+                        dx = f._chi - xp
+                        df = f._chi_f - f.x
+                        cross[j] = (wc[:, None] * dx).T @ df
+                    else:
+                        pts = np.vstack([xp, xp + np.diag(_fd_steps(xp))])
+                        out = step(pts, dt, controls(j - 1), controls(j))
+                        jac = ((out[1:] - out[0]) / _fd_steps(xp)[:, None]).T
+                        f.F = jac
+                        f.x = out[0].copy()
+                        f.P = jac @ pp @ jac.T + f.Q
+                        cross[j] = pp @ jac.T
+                    x_prior[j], p_prior[j] = f.x.copy(), f.P.copy()
+                zj = log.z[j]
+                idx = [i for i in log.measured if np.isfinite(zj[i])]
+                if idx:
+                    r = np.diag(sd[idx] ** 2)
+                    if method == "ukf":
+                        f.update(zj[idx], R=r, hx=lambda x, idx=idx: x[idx])
+                    else:
+                        h = np.zeros((len(idx), dim))
+                        h[np.arange(len(idx)), idx] = 1.0
+                        f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
+                f.P = 0.5 * (f.P + f.P.T)
+                if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))):
+                    raise ValueError(f"the {method.upper()} diverged at t = {log.t[j]:.3g} s (its "
+                                     "state is no longer finite); try --start model, fewer "
+                                     "coefficients or --method ls.")
+                xs[j], ps[j] = f.x, f.P
+    except np.linalg.LinAlgError:
+        raise ValueError(f"the {method.upper()}'s covariance stopped being positive definite at "
+                         f"t = {log.t[j]:.3g} s (the filter diverged); try --start model, fewer "
+                         "coefficients or --method ls.") from None
+    try:
+        xs_s, ps_s = rts_smooth(xs, ps, x_prior, p_prior, cross)
+    except np.linalg.LinAlgError:
+        raise ValueError("the smoother met a singular predicted covariance (the filter "
+                         "diverged); try --start model or --method ls.") from None
+    return {"x": xs_s, "P": ps_s, "x_filtered": xs, "P_filtered": ps}
+
+
+def _fd_steps(x: np.ndarray) -> np.ndarray:
+    return 1e-6 * np.maximum(np.abs(x), 1e-2)
+
+
+def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
+                      start: np.ndarray, sd: np.ndarray,
+                      windows: tuple[float, ...] = (1.0,)) -> dict[str, Any]:
+    """Output-error least squares of the coefficients and the initial measured states.
+
+    Minimises ``sum_k sum_i ((y_i(t_k; beta, s0) - z_ik) / sigma_i)^2`` over the measured
+    states i, ``y`` the model simulated along the record (:meth:`BatchModel.run`), by
+    :func:`scipy.optimize.least_squares` (trust-region reflective) with a finite-difference
+    Jacobian computed in one batched simulation. Covariance ``s^2 (J^T J)^+`` (pseudo-inverse:
+    a direction the record does not constrain gets an infinite variance), ``s^2 = RSS/(m - p)``.
+
+    ``windows``: fractions of the record fitted one after the other, each from the previous
+    estimates (from a far start, zero, the motion the model predicts over the whole record is
+    too far from the measured one for the fit to find its way; over the first part it is
+    not: the usual continuation of output-error fits).
+
+    Returns
+    -------
+    dict
+        ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``.
+    """
+    from scipy.optimize import least_squares
+
+    for frac in windows[:-1]:
+        n = max(int(frac * len(log.t)), 20)
+        sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],
+                           sternplane=log.sternplane[:n], measured=log.measured, name=log.name)
+        start = least_squares_fit(model, sub, symbols, start, sd)["value"]
+
+    k = len(symbols)
+    s0 = _initial_state(log, model)
+    dyn = BatchModel(model, symbols, _start_speed(log, s0))
+    meas = list(log.measured)
+    zm = log.z[:, meas]
+    mask = np.isfinite(zm)
+    w = 1.0 / sd[meas]
+    scale_b = np.maximum(np.abs(start), 1.0)
+    scale_s = np.array([max(sd[i] * 10, 1e-6) for i in meas])
+    scale = np.concatenate((scale_b, scale_s))
+
+    def unpack(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        th = theta * scale
+        s = np.tile(s0, (theta.shape[0], 1)) if theta.ndim == 2 else s0.copy()
+        if theta.ndim == 2:
+            s[:, meas] = th[:, k:]
+            return th[:, :k], s
+        s[meas] = th[k:]
+        return th[:k], s
+
+    def residuals_many(thetas: np.ndarray) -> np.ndarray:
+        beta, s = unpack(thetas)
+        if 6 in meas:  # the thrust balances the drag at the fitted initial speed
+            dyn.u0 = s[:, 6]
+        sim = dyn.run(s, beta, log)[:, :, meas]  # (n, N, m)
+        res = (sim - zm[:, None, :]) * w
+        out = res.transpose(1, 0, 2)[:, mask]
+        out[~np.isfinite(out)] = 1e6
+        return out
+
+    cache: dict[bytes, np.ndarray] = {}
+
+    def both(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # the residuals and the forward-difference Jacobian from one batched simulation: on a
+        # few rows the simulation costs about what one row does
+        key = theta.tobytes()
+        if key not in cache:
+            hstep = 1e-6 * np.maximum(np.abs(theta), 1.0)
+            pts = np.vstack([theta, theta + np.diag(hstep)])
+            res = residuals_many(pts)
+            cache.clear()
+            cache[key] = np.vstack([res[0][None, :], ((res[1:] - res[0]) / hstep[:, None])])
+        out = cache[key]
+        return out[0], out[1:].T
+
+    def fun(theta: np.ndarray) -> np.ndarray:
+        return both(theta)[0]
+
+    def jac(theta: np.ndarray) -> np.ndarray:
+        return both(theta)[1]
+
+    theta0 = np.concatenate((start, s0[meas])) / scale
+    sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=60)
+    j = jac(sol.x) / scale[None, :]
+    m, p = j.shape
+    s2 = float(np.sum(sol.fun ** 2)) / max(m - p, 1)
+    u_, sv, vt = np.linalg.svd(j, full_matrices=False)
+    tol = sv.max() * max(j.shape) * np.finfo(float).eps * 1e3
+    inv = np.where(sv > tol, 1.0 / np.maximum(sv, 1e-300) ** 2, np.inf)
+    with np.errstate(invalid="ignore"):
+        cov = (vt.T * inv) @ vt
+    for i in range(p):  # an unconstrained direction: infinite variance on its coefficients
+        if not np.isfinite(cov[i, i]):
+            cov[i, i] = np.inf
+    with np.errstate(over="ignore", invalid="ignore"):
+        cov = s2 * np.nan_to_num(cov, nan=np.inf)
+    beta, s_fit = unpack(sol.x)
+    return {"value": beta, "sd": np.sqrt(np.diag(cov)[:k]), "covariance": cov[:k, :k],
+            "s0": s_fit, "cost": float(sol.cost), "s2": s2}
+
+
+def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
+             method: str = "ukf", start: str = "model", noise: dict[str, float] | None = None,
+             prior_sd: dict[str, float] | None = None, check: bool = True) -> IdentifyResult:
+    """Identify coefficients of ``model`` from the manoeuvre record ``log``.
+
+    Parameters
+    ----------
+    model : dict
+        model.json (:func:`towtank.vehicle.model.read_model`)
+    log : ManoeuvreLog
+        :func:`towtank.vehicle.identify_log.read_log`
+    estimate : list of str
+        The coefficients to identify (model.json symbols); the others keep their values
+    method : {"ukf", "ekf", "ls"}
+        Augmented-state unscented or extended Kalman filter with the RTS smoother, or
+        output-error least squares alone
+    start : {"model", "zero"}
+        Starting values: the model's, or zero (the REMUS study)
+    noise : dict, optional
+        Measurement noise standard deviation per state column [the column's unit]; default
+        estimated from the record (:func:`towtank.vehicle.identify_log.noise_sd`)
+    prior_sd : dict, optional
+        The filter's prior standard deviation per coefficient; default
+        ``3 max(|model value|, 1)`` (the study's initial P of 10-100 for values of a few units)
+    check : bool
+        With a filter, run least squares too as the cross-check
+
+    Raises
+    ------
+    ValueError
+        A symbol the model cannot take, an unknown method, a diverging filter (one sentence).
+    """
+    if method not in METHODS:
+        raise ValueError(f"--method must be one of {', '.join(METHODS)}, not {method!r}.")
+    if start not in ("model", "zero"):
+        raise ValueError(f"--start must be model or zero, not {start!r}.")
+    symbols = [s.strip() for s in estimate if s.strip()]
+    if not symbols:
+        raise ValueError("--estimate names no coefficient.")
+    bad = [s for s in symbols if not (SYMBOL_RE.match(s) or _dot(s))]
+    if bad:
+        raise ValueError(f"--estimate: {', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not "
+                         "model.json coefficient symbols (e.g. N_ur, N_rdot, N_uudr).")
+    if len(set(symbols)) != len(symbols):
+        raise ValueError("--estimate names a coefficient twice.")
+    coef = model.get("coefficients") or {}
+    model_vals = np.array([float(coef.get(s, 0.0)) for s in symbols])
+    start_vals = model_vals.copy() if start == "model" else np.zeros(len(symbols))
+    psd = np.array([float((prior_sd or {}).get(s, 3.0 * max(abs(v), 1.0)))
+                    for s, v in zip(symbols, model_vals, strict=True)])
+    sd = noise_sd(log)
+    for col, val in (noise or {}).items():
+        i = STATE_COLUMNS.index(col)
+        sd[i] = float(val) * (math.pi / 180.0 if col.endswith(("_deg", "_deg_s")) else 1.0)
+    notes = list(log.notes)
+    hist: dict[str, np.ndarray] = {}
+    ls = None
+    s_init = None
+    if method in ("ukf", "ekf"):
+        x_start, prior, prev = start_vals, psd, None
+        passes = 0
+        for npass in range(1, MAX_PASSES + 1):
+            passes = npass
+            res = kalman_fit(model, log, symbols, x_start, prior, sd, method)
+            xk, pk = res["x"], res["P"]
+            k = len(symbols)
+            value = xk[0, 12:12 + k]
+            cov = pk[0, 12:12 + k, 12:12 + k]
+            sdv = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+            if prev is not None and np.all(np.abs(value - prev) <= PASS_TOL * sdv):
+                break
+            prev = value.copy()
+            x_start, prior = value.copy(), np.minimum(psd, PASS_PRIOR * sdv)
+        notes.append(f"{method.upper()} and smoother: {passes} passes over the record")
+        hist = {"t": log.t, "mean": res["x_filtered"][:, 12:12 + k],
+                "sd": np.sqrt(np.clip(np.einsum("nii->ni", res["P_filtered"])[:, 12:12 + k],
+                                      0, None)),
+                "smoothed": xk[:, 12:12 + k]}
+        s_init = xk[0, :12]
+        if check:
+            ls = least_squares_fit(model, log, symbols, value.copy(), sd)
+            s_init = ls["s0"]  # the initial state that fits the whole record open loop
+    else:
+        ls = least_squares_fit(model, log, symbols, start_vals, sd,
+                               windows=LS_WINDOWS if start == "zero" else (1.0,))
+        value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
+        s_init = ls["s0"]
+        ls = None
+    result = IdentifyResult(symbols=symbols, start=start_vals, value=np.asarray(value),
+                            sd=np.asarray(sdv), prior_sd=psd, method=method,
+                            covariance=np.asarray(cov), history=hist, notes=notes,
+                            check=None if ls is None else {"value": ls["value"], "sd": ls["sd"]})
+    fitted = dict(model)
+    fitted["coefficients"] = dict(coef) | {s: float(v) for s, v in zip(symbols, value,
+                                                                       strict=True)}
+    s0 = _initial_state(log, model)
+    if s_init is not None:  # the estimated initial state, not the first noisy sample
+        s0 = np.asarray(s_init, dtype=float)
+    speed = _start_speed(log, _initial_state(log, model))
+    if s_init is not None and 6 in log.measured and (ls is not None or method == "ls"):
+        speed = float(s0[6])  # least squares' initial speed, which its thrust balanced
+    dyn = BatchModel(fitted, [], speed)
+    sim = dyn.run(s0[None, :], np.zeros((1, 0)), log)[:, 0, :]
+    resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
+                         measured=list(range(12)), name="resimulated")
+    result.measured = log.frame()
+    result.resimulated = resim.frame()
+    return result
+
+
+def _dot(symbol: str) -> bool:
+    return (len(symbol) == 6 and symbol[0] in _DOF and symbol[1] == "_"
+            and symbol[2] in _VEL and symbol[3:] == "dot")
