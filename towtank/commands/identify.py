@@ -3,10 +3,19 @@
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
+from towtank.report.identify_figure import save_identify_figure
+from towtank.vehicle import schema
+from towtank.vehicle.identify import identify
+from towtank.vehicle.identify_log import STATE_COLUMNS, LogError, read_log
+from towtank.vehicle.model import read_model, write_model
 
 #: The files ``identify`` writes.
 IDENTIFY_OUTPUTS = frozenset({"identified.csv", "model.json", "identify.png"})
@@ -16,8 +25,6 @@ def _channels(protocol: Path | None) -> dict[str, Any] | None:
     """The ``[channels]`` table of an optional protocol (TOML)."""
     if protocol is None:
         return None
-    import tomllib
-
     name = Path(protocol).name
     try:
         with open(protocol, "rb") as fh:
@@ -35,8 +42,6 @@ def _channels(protocol: Path | None) -> dict[str, Any] | None:
 def parse_noise(text: str | None) -> dict[str, float]:
     """``--noise u=0.01,r=0.2,psi=0.5``: standard deviation per state, in the state's column
     unit (m, deg, m/s, deg/s); short names (``u``, ``psi``) or the columns (``u_m_s``)."""
-    from towtank.vehicle.identify_log import STATE_COLUMNS
-
     out: dict[str, float] = {}
     if not text:
         return out
@@ -66,13 +71,6 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
                      protocol: Path | None = None, noise: str | None = None) -> int:
     """Identify, write identified.csv, model.json and identify.png; print one verdict line per
     coefficient."""
-    import numpy as np
-
-    from towtank.vehicle import schema
-    from towtank.vehicle.identify import identify
-    from towtank.vehicle.identify_log import LogError, read_log
-    from towtank.vehicle.model import read_model, write_model
-
     name = Path(model_path).name
     try:
         model = read_model(model_path)
@@ -126,11 +124,7 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
     def write(tmp: Path) -> None:
         table.to_csv(tmp / "identified.csv", index=False, float_format="%.6g")
         write_model(updated, tmp / "model.json")
-        from towtank.report.identify_figure import save_identify_figure
-
         save_identify_figure(result, tmp / "identify.png", str(model.get("name", "model")))
-
-    from towtank.commands.storage import write_outputs_or_stop
 
     write_outputs_or_stop(folder, IDENTIFY_OUTPUTS, write)
     for note in result.notes:

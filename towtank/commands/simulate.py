@@ -9,6 +9,7 @@ from typing import Any
 
 import pandas as pd
 
+from towtank.commands.identify import parse_noise
 from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.manoeuvre_figure import save_manoeuvre_figure
@@ -16,7 +17,13 @@ from towtank.vehicle import schema
 from towtank.vehicle.glider import glide_table
 from towtank.vehicle.glider_controls import glider_problems, roll_mass_angle_for_static_roll_deg
 from towtank.vehicle.model import read_model
-from towtank.vehicle.simulate import manoeuvre_metrics, sample_models, simulate, trim_warning
+from towtank.vehicle.simulate import (
+    manoeuvre_metrics,
+    read_schedule,
+    sample_models,
+    simulate,
+    trim_warning,
+)
 
 DEFAULT_RUDDER = {"turning": 15.0, "zigzag": 20.0, "spiral": 15.0, "dive": 0.0, "glide": 0.0,
                   "sine": 10.0, "schedule": 0.0}
@@ -154,8 +161,9 @@ def simulate_command(
             draws = [manoeuvre_metrics(simulate(m, manoeuvre, **kwargs))
                      .set_index("metric")["value"] for m in sample_models(model, samples, seed)]
             table = pd.concat(draws, axis=1)
-            lo = table.quantile(0.025, axis=1)
-            hi = table.quantile(0.975, axis=1)
+            alpha = 0.05  # the 95 % band of the draws
+            lo = table.quantile(alpha / 2, axis=1)
+            hi = table.quantile(1 - alpha / 2, axis=1)
             metrics["ci_low"] = metrics["metric"].map(lo)
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
@@ -199,8 +207,6 @@ def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | N
     if (schedule is None) != (manoeuvre != "schedule"):
         problems.append("--schedule FILE goes with --manoeuvre schedule (and it needs one).")
     elif schedule is not None:
-        from towtank.vehicle.simulate import read_schedule
-
         try:
             table = read_schedule(schedule)
         except ValueError as exc:
@@ -212,8 +218,6 @@ def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | N
         problems.append(f"--sample-hz must lie within 0.1 and 1000 Hz, not {sample_hz:g}.")
     noise_sd: dict[str, float] = {}
     if noise:
-        from towtank.commands.identify import parse_noise
-
         try:
             noise_sd = parse_noise(noise)
         except ProtocolError as exc:

@@ -37,6 +37,7 @@ from scipy import stats
 
 from towtank.vehicle.identify_log import STATE_COLUMNS, ManoeuvreLog, noise_sd
 from towtank.vehicle.model import SYMBOL_RE, added_mass_matrix
+from towtank.vehicle.predict import coefficient_unit
 
 __all__ = ["MAX_STEP_S", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel", "IdentifyResult",
            "identify", "rts_smooth", "coefficient_unit", "least_squares_fit", "kalman_fit"]
@@ -69,14 +70,6 @@ LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
 ALPHA = 0.1
 _DOF = "XYZKMN"
 _VEL = "uvwpqr"
-
-
-def coefficient_unit(symbol: str) -> str:
-    """The SI unit of a model.json coefficient, as predicted.csv writes it (``N_ur``:
-    kg*m/rad, ``N_rdot``: kg*m^2/rad, ``N_uudr``: kg/rad; :mod:`towtank.vehicle.predict`)."""
-    from towtank.vehicle.predict import _units
-
-    return _units(symbol)
 
 
 class BatchModel:

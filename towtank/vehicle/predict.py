@@ -183,7 +183,8 @@ def prime_exponent(symbol: str) -> int:
     return k + sum(ch in "pqr" for ch in sub)
 
 
-def _units(symbol: str) -> str:
+def coefficient_unit(symbol: str) -> str:
+    """The SI unit of a coefficient as predicted.csv writes it (``kg*m/rad`` for N_ur)."""
     k = prime_exponent(symbol)
     # 1/2 rho L^k has units kg m^(k-3); an angular variable adds /rad
     sub = symbol.partition("_")[2].replace("|", "")
@@ -615,7 +616,7 @@ def predict_coefficients(
     # beside 35 kg): written as the 0 it is
     scale = float(np.nanmax(np.abs(out["value"]))) if len(out) else 0.0
     out.loc[np.abs(out["value"]) <= ROUND_OFF * scale, "value"] = 0.0
-    out["unit"] = [_units(s) for s in out["symbol"]]
+    out["unit"] = [coefficient_unit(s) for s in out["symbol"]]
     out["prime"] = [v / (0.5 * rho * length ** prime_exponent(s))
                     for s, v in zip(out["symbol"], out["value"], strict=True)]
     return out[list(PREDICTED_COLUMNS)]
