@@ -670,9 +670,9 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         rows.append((metric, float(sd.wrap_deg(value)) if angle and not note else value, unit,
                      note))
 
-    if kind in ("turning", "spiral"):
-        needs = ("yaw_rate_deg_s", "speed_m_s") + (("depth_rate_m_s",) if kind == "spiral"
-                                                    else ())
+    def turn(needs: tuple[str, ...]) -> tuple[str, float]:
+        """The steady turn's radius row (Kasa's circle of the plan track's steady part); its
+        note (why not steady or not turning, else "") and mean yaw rate [deg/s]."""
         note = check(*needs)
         yaw = float(np.mean(q["yaw_rate_deg_s"][last]))
         if not note and abs(yaw) < sd.MIN_YAW_RATE_DEG_S:
@@ -680,6 +680,12 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         radius = nan if note else sd.circle_fit(ts["x_m"].to_numpy()[last],
                                                 ts["y_m"].to_numpy()[last])[2]
         rows.append(("steady_turn_radius_m", radius, "m", note))
+        return note, yaw
+
+    if kind in ("turning", "spiral"):
+        needs = ("yaw_rate_deg_s", "speed_m_s") + (("depth_rate_m_s",) if kind == "spiral"
+                                                    else ())
+        note, yaw = turn(needs)
         at90, at180 = _at_heading(ts, 90.0), _at_heading(ts, 180.0)
         rows.append(("advance_m", float(at90["x_m"] - ts["x_m"].iloc[0]) if at90 is not None
                      else nan, "m", "" if at90 is not None else "no 90 deg of heading change"))
@@ -734,13 +740,7 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         if "dive_angle_deg" in ts.attrs:
             rows += _dive_angle_rows(ts, float(ts.attrs["dive_angle_deg"]))
         if ts.attrs.get("turning"):  # a glide rolled or with rudder: a spiral (#26)
-            note = check("yaw_rate_deg_s", "speed_m_s", "depth_rate_m_s")
-            yaw = float(np.mean(q["yaw_rate_deg_s"][last]))
-            if not note and abs(yaw) < sd.MIN_YAW_RATE_DEG_S:
-                note = f"not turning: the yaw rate is below {sd.MIN_YAW_RATE_DEG_S:g} deg/s"
-            radius = nan if note else sd.circle_fit(ts["x_m"].to_numpy()[last],
-                                                    ts["y_m"].to_numpy()[last])[2]
-            rows.append(("steady_turn_radius_m", radius, "m", note))
+            note, yaw = turn(("yaw_rate_deg_s", "speed_m_s", "depth_rate_m_s"))
             rows.append(("turn_period_s", nan if note else 360.0 / abs(yaw), "s", note))
             steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
     return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
