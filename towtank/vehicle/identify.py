@@ -557,6 +557,9 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                         h[np.arange(len(idx)), idx] = 1.0
                         f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
                 f.P = 0.5 * (f.P + f.P.T)
+                # the estimate projected onto the process model's domain (Simon 2010): a mean
+                # beyond the bound would see a flat model and could never come back
+                f.x[12:12 + k] = np.minimum(f.x[12:12 + k], dyn.upper)
                 if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))):
                     raise ValueError(f"the {method.upper()} diverged at t = {log.t[j]:.3g} s (its "
                                      "state is no longer finite); try --start model, fewer "
