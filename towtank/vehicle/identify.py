@@ -72,7 +72,8 @@ ALPHA = 0.1
 #: 1977, sec. 4.13) is taken at most DOT_BOUND times the rest of that diagonal entry of the
 #: mass matrix M_RB + M_A: the sigma points of a wide prior (from zero, N_rdot +- 0.4 * 14
 #: kg m^2 for REMUS, I_zz = 3.45 kg m^2) otherwise reach a singular mass matrix and the
-#: predicted motion blows up (docs/method.md, "Robustness from zero starts") [-].
+#: predicted motion blows up; the filter's estimate is projected onto the bound after each
+#: update (Simon 2010) (docs/method.md, "Robustness from zero starts") [-].
 DOT_BOUND = 0.5
 _DOF = "XYZKMN"
 _VEL = "uvwpqr"
