@@ -68,6 +68,14 @@ PASS_TOL = 0.2
 LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
 #: Spread of the sigma points (van der Merwe 2004) [-].
 ALPHA = 0.1
+#: In the filter's process model an estimated diagonal added-mass derivative (X_udot, Y_vdot,
+#: Z_wdot, K_pdot, M_qdot, N_rdot: minus an added mass, <= 0 for a body in a fluid; Newman
+#: 1977, sec. 4.13) is taken at most DOT_BOUND times the rest of that diagonal entry of the
+#: mass matrix M_RB + M_A: the sigma points of a wide prior (from zero, N_rdot +- 0.4 * 14
+#: kg m^2 for REMUS, I_zz = 3.45 kg m^2) otherwise reach a singular mass matrix and the
+#: predicted motion blows up; the filter's estimate is projected onto the bound after each
+#: update (Simon 2010) (docs/method.md, "Robustness from zero starts") [-].
+DOT_BOUND = 0.5
 _DOF = "XYZKMN"
 _VEL = "uvwpqr"
 
@@ -109,6 +117,14 @@ class BatchModel:
                 self.dot_index.append(j)
         self.m_rb = m_rb
         self.minv0 = np.linalg.inv(m_rb + self.ma0)
+        # upper bound of each estimated coefficient in the filter's process model: a diagonal
+        # added-mass derivative (X_udot ... N_rdot) at most half the diagonal of M_RB + M_A0,
+        # so that the total inertia of its degree of freedom stays >= half the known one
+        self.upper = np.full(len(estimate), np.inf)
+        for j, s in enumerate(estimate):
+            if s.endswith("dot") and _DOF.index(s[0]) == _VEL.index(s[2]):
+                i = _DOF.index(s[0])
+                self.upper[j] = DOT_BOUND * (m_rb[i, i] + self.ma0[i, i])
         # fixed terms: product index table over ext = [nu, |nu|, dr, ds, 1]
         fixed = [(s, v) for s, v in base.items() if not s.split("_", 1)[1].endswith("dot")
                  and v != 0.0]
@@ -478,7 +494,12 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
              c1: tuple[float, float]) -> np.ndarray:
         if thrust:
             dyn.u0 = aug[:, -1]
-        return dyn.step(aug, dt, c0, c1)
+        # the motion is predicted with the added masses bounded to the physical side
+        # (DOT_BOUND); the coefficients themselves stay random walks, unclipped
+        phys = aug[:, :12 + k].copy()
+        phys[:, 12:] = np.minimum(phys[:, 12:], dyn.upper)
+        out = dyn.step(phys, dt, c0, c1)
+        return np.concatenate((out[:, :12], aug[:, 12:]), axis=1)
     if method == "ukf":
         points = MerweScaledSigmaPoints(dim, alpha=ALPHA, beta=2.0, kappa=0.0)
 
@@ -530,6 +551,9 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                         h[np.arange(len(idx)), idx] = 1.0
                         f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
                 f.P = 0.5 * (f.P + f.P.T)
+                # the estimate projected onto the process model's domain (Simon 2010): a mean
+                # beyond the bound would see a flat model and could never come back
+                f.x[12:12 + k] = np.minimum(f.x[12:12 + k], dyn.upper)
                 if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.P))):
                     raise ValueError(f"the {method.upper()} diverged at t = {log.t[j]:.3g} s (its "
                                      "state is no longer finite); try --start model, fewer "
