@@ -175,20 +175,27 @@ def _log_column(value: Any, key: str, src: str) -> tuple[str, float, float]:
     return value["column"], out[0], out[1]
 
 
+def _file_pattern(data: dict[str, Any], section: str, what: str, example: str, src: str) -> str:
+    """The ``file`` name pattern of a side-file section ([speed_log], [zeros]): a non-empty
+    string whose only fields are {stem}, {name}, {dir} and {run}; else one sentence."""
+    pattern = data.get("file")
+    if not isinstance(pattern, str) or not pattern.strip():
+        raise ProtocolError(f"{src}: [{section}] needs 'file', {what} name pattern (e.g. "
+                            f"\"{example}\").")
+    try:
+        pattern.format(stem="s", name="n", dir=".", run=1)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise ProtocolError(f"{src}: 'file' in [{section}] is {pattern!r}: only {{stem}}, "
+                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    return pattern
+
+
 def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
     """The ``[speed_log]`` table checked (None when the protocol has none)."""
     if data is None:
         return None
     check_keys(data, _SPEED_LOG_KEYS, "speed_log", src)
-    pattern = data.get("file")
-    if not isinstance(pattern, str) or not pattern.strip():
-        raise ProtocolError(f"{src}: [speed_log] needs 'file', the log's name pattern (e.g. "
-                            "\"{stem}_carriage.csv\").")
-    try:
-        pattern.format(stem="s", name="n", dir=".", run=1)
-    except (KeyError, IndexError, ValueError) as exc:
-        raise ProtocolError(f"{src}: 'file' in [speed_log] is {pattern!r}: only {{stem}}, "
-                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    pattern = _file_pattern(data, "speed_log", "the log's", "{stem}_carriage.csv", src)
     if ("speed" in data) == ("position" in data):
         raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
                             "them).")
@@ -211,13 +218,5 @@ def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
     if data is None:
         return None
     check_keys(data, ("file",), "zeros", src)
-    pattern = data.get("file")
-    if not isinstance(pattern, str) or not pattern.strip():
-        raise ProtocolError(f"{src}: [zeros] needs 'file', the zeros file's name pattern (e.g. "
-                            "\"{stem}_zero.csv\").")
-    try:
-        pattern.format(stem="s", name="n", dir=".", run=1)
-    except (KeyError, IndexError, ValueError) as exc:
-        raise ProtocolError(f"{src}: 'file' in [zeros] is {pattern!r}: only {{stem}}, "
-                            f"{{name}}, {{dir}} and {{run}} can be filled in ({exc}).") from None
+    pattern = _file_pattern(data, "zeros", "the zeros file's", "{stem}_zero.csv", src)
     return ZeroFile(file=pattern)
