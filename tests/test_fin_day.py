@@ -148,7 +148,7 @@ def test_sandia_re_clamp_reaches_the_day_warnings():
     from types import SimpleNamespace
 
     from towtank.ingest.protocol import Fin
-    from towtank.pipeline import _fin_stage
+    from towtank.pipeline import fin_stage
 
     angles = [0.0, 2.5, 5.0, 7.5, 10.0]
     runs = pd.DataFrame({
@@ -160,7 +160,8 @@ def test_sandia_re_clamp_reaches_the_day_warnings():
                           warnings=[], fin_result=None)
     with warnings.catch_warnings():
         warnings.simplefilter("error", sandia.SandiaRangeWarning)  # none escapes to stderr
-        _fin_stage(day)
+        day.fin_result, warns = fin_stage(day.protocol, day.runs)
+        day.warnings.extend(warns)
     clamp = [w for w in day.warnings if w.startswith("fin: Reynolds number")]  # said once
     assert len(clamp) == 1, day.warnings
     assert clamp[0] == (
@@ -248,7 +249,7 @@ def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
     from types import SimpleNamespace
 
     from towtank.ingest.protocol import Fin
-    from towtank.pipeline import _fin_stage
+    from towtank.pipeline import fin_stage
 
     runs = pd.DataFrame({
         "run": [1, 2, 3, 4], "config": "fin", "status": "ok",
@@ -257,7 +258,8 @@ def test_fin_run_beyond_180_deg_is_left_out_with_a_warning():
     })
     day = SimpleNamespace(protocol=SimpleNamespace(fin=Fin(0.12, 0.15)), runs=runs,
                           warnings=[], fin_result=None)
-    _fin_stage(day)
+    day.fin_result, warns = fin_stage(day.protocol, day.runs)
+    day.warnings.extend(warns)
     assert day.fin_result.table["run"].tolist() == [1, 2, 3]
     assert day.warnings[0] == (
         "run 4: fin angle 200° is outside −180…180°, the range of the Sandia section data; "

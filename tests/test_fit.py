@@ -295,10 +295,10 @@ def _rehull(day: Day, runs: pd.DataFrame | None = None):
 
     from towtank import pipeline
 
-    copy = replace(day.result, runs=day.result.runs if runs is None else runs, warnings=[],
-                   hull=None)
-    pipeline._hull_stage(copy)
-    return copy
+    r = day.result
+    runs = r.runs if runs is None else runs
+    hull, warns = pipeline.hull_stage(r.protocol, runs, r.reductions, r.tares)
+    return replace(r, runs=runs, warnings=list(warns), hull=hull)
 
 
 def test_curve_difference_disagreement_is_reported(hull_day: Day, monkeypatch):

@@ -638,22 +638,3 @@ def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | Non
         free_surface=not protocol.water.is_air,
     )
     return result, values, warns
-
-
-# The in-place forms of the stages, for scripts written against them: each sets its result
-# and adds its warnings on the object given (a DayResult, or any object with those fields).
-def _set(day: Any, **values: Any) -> None:
-    for name, value in values.items():
-        object.__setattr__(day, name, value)
-
-
-def _hull_stage(day: Any) -> None:
-    hull, warns = hull_stage(day.protocol, day.runs, day.reductions, day.tares)
-    _set(day, hull=hull)
-    day.warnings.extend(warns)
-
-
-def _fin_stage(day: Any) -> None:
-    fin, warns = fin_stage(day.protocol, day.runs)
-    _set(day, fin_result=fin)
-    day.warnings.extend(warns)
