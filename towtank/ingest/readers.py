@@ -45,6 +45,7 @@ import numpy as np
 
 from towtank.errors import RunError
 from towtank.ingest.extensions import EXTENSIONS  # noqa: F401 - public here too
+from towtank.reference.constants import STANDARD_GRAVITY
 
 UNITS_KEY = "__units__"
 WF_TIME_KEY = "__wf_time__"
@@ -734,10 +735,10 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "speed": {"m/s": 1.0, "mm/s": 1e-3, "cm/s": 1e-2, "km/h": 1 / 3.6, "kn": 0.514444,
               "knots": 0.514444, "kt": 0.514444, "m s-1": 1.0, "m.s-1": 1.0},
     "accel": {"m/s^2": 1.0, "m/s²": 1.0, "m/s2": 1.0, "mm/s^2": 1e-3, "mm/s²": 1e-3,
-              "m s-2": 1.0, "g": 9.80665},
+              "m s-2": 1.0, "g": STANDARD_GRAVITY},
     "length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2},
-    "force": {"n": 1.0, "kn": 1e3, "mn": 1e-3, "kgf": 9.80665, "lbf": 4.4482216152605,
-              "gf": 9.80665e-3},
+    "force": {"n": 1.0, "kn": 1e3, "mn": 1e-3, "kgf": STANDARD_GRAVITY, "lbf": 4.4482216152605,
+              "gf": STANDARD_GRAVITY * 1e-3},
 }
 _VOLTS = {"v": 1.0, "mv": 1e-3, "µv": 1e-6, "uv": 1e-6}
 _UNIT_WORDS = {u for table in UNIT_FACTORS.values() for u in table} | set(_VOLTS) | {

@@ -20,6 +20,7 @@ from typing import Any
 
 from towtank.errors import ProtocolError
 from towtank.ingest.schema import check_keys
+from towtank.reference.constants import STANDARD_GRAVITY
 
 __all__ = ["SheetOptions", "parse_sheet_options", "header_names", "STATUS_WORDS", "TEST_WORDS",
            "CONTRACT_COLUMNS"]
@@ -78,7 +79,7 @@ _UNITS: dict[str, dict[str, tuple[float, float]]] = {
                       "km/h": (1 / 3.6, 0.0), "kn": (0.514444, 0.0), "knots": (0.514444, 0.0),
                       "kt": (0.514444, 0.0), "ms-1": (1.0, 0.0), "m s-1": (1.0, 0.0)},
     "accel_nominal": {"m/s²": (1.0, 0.0), "m/s^2": (1.0, 0.0), "m/s2": (1.0, 0.0),
-                      "mm/s²": (1e-3, 0.0), "mm/s^2": (1e-3, 0.0), "g": (9.80665, 0.0),
+                      "mm/s²": (1e-3, 0.0), "mm/s^2": (1e-3, 0.0), "g": (STANDARD_GRAVITY, 0.0),
                       "m s-2": (1.0, 0.0)},
     "water_temp_C": {"°c": (1.0, 0.0), "c": (1.0, 0.0), "degc": (1.0, 0.0),
                      "deg c": (1.0, 0.0), "celsius": (1.0, 0.0), "k": (1.0, -273.15),

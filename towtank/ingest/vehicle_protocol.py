@@ -17,6 +17,7 @@ from towtank.errors import ProtocolError
 from towtank.ingest import design_inputs  # powering and pressure hull (#21)
 from towtank.ingest.glider_inputs import parse_glider
 from towtank.ingest.schema import SCHEMA, coerce, suggest
+from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.reference.series58 import SERIES58_PARENT, check_series58
 
 HULLS = ("myring", "suboff", "series58", "table")
@@ -147,13 +148,12 @@ def _triple(values: dict[str, Any], key: str, src: str) -> None:
 #: Largest relative difference between a given ``weight_N`` and ``mass_kg`` g [-] (as in
 #: model.json, :data:`towtank.vehicle.schema.WEIGHT_TOLERANCE`).
 WEIGHT_TOLERANCE = 0.01
-_G = 9.80665
 
 
 def _check_weight(v: dict[str, Any], src: str) -> None:
     """Both ``mass_kg`` [kg] and ``weight_N`` [N] given: W = m g within 1 %."""
     if "mass_kg" in v and "weight_N" in v:
-        mg = v["mass_kg"] * _G
+        mg = v["mass_kg"] * STANDARD_GRAVITY
         if math.isfinite(mg) and abs(v["weight_N"] - mg) > WEIGHT_TOLERANCE * mg:
             raise ProtocolError(f"{src}: 'weight_N' = {v['weight_N']:g} N in [vehicle] must be "
                                 f"mass_kg x g ({mg:.6g} N) within 1 %; give one of them.")

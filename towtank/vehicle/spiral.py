@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import root
 
+from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.glider_controls import ballast_model, cg_with_controls, net_buoyancy
 from towtank.vehicle.model import coriolis_added_mass
 from towtank.vehicle.simulate import Dynamics
@@ -89,7 +90,7 @@ def _solve_glide(model: dict[str, Any], dyn: Dynamics, theta: float
         tau = equilibrium_residual(dyn, nu, 0.0, theta, cg_with_controls(model, x[2], 0.0))
         return tau[[0, 2, 4]] / scale[[0, 2, 4]]
 
-    dx0 = -glide["trim_moment_Nm"] / (mp * 9.80665 * math.cos(theta)) if mp > 0 else 0.0
+    dx0 = -glide["trim_moment_Nm"] / (mp * STANDARD_GRAVITY * math.cos(theta)) if mp > 0 else 0.0
     sol = root(resid, np.array([u, w, dx0]), method="hybr", tol=1e-14)
     ok = bool(np.max(np.abs(resid(sol.x))) < TOLERANCE and sol.x[0] > 0)
     return sol.x, ok, "" if ok else "the pitch balance has no solution"
