@@ -1,4 +1,4 @@
-"""Which run next: the remaining runs ranked by how much they would narrow the day's widest interval.
+"""Which run next: the remaining runs ranked by how much they narrow the widest interval.
 
 From the current hull fits (:mod:`towtank.analysis.hull`), each candidate condition (a row of
 the run sheet still to be towed, or a suggested condition not on it) is given the information
@@ -15,11 +15,17 @@ are predicted (docs/method.md "Which run next"):
 * the transverse tow R = ½ρA_lat·C_D,90·U|U| (report eq. 15): one row [U|U|] per run.
 
 For a coefficient ℓ'β of a model with design X now and rows X_c added, the regression variance
-is expected to become u_reg² · ℓ'(X'X + X_c'X_c)⁻¹ℓ / ℓ'(X'X)⁻¹ℓ: the information of the
-run under the fit's residual variance, Cov_new = (Cov⁻¹ + I_run)⁻¹ with I_run = X_c'X_c/σ²,
-and for the clustered added-mass regression the clustered-to-naive variance ratio of the
-current fit carried over (the ratio cancels in the expression). The tare's and the weighed
-mass's parts of each uncertainty budget are kept as they are.
+is expected to become u_reg² · ℓ'(X'X + X_c'X_c)⁻¹ℓ / ℓ'(X'X)⁻¹ℓ · E s²_new / E s²_now: the
+information of the run under the fit's residual variance, Cov_new = (Cov⁻¹ + I_run)⁻¹ with
+I_run = X_c'X_c/σ², times the change of the residual variance the refit will report. For the two
+fits over runs (C_D(α), transverse) that change is expected from a model of each run's residual
+variance, v(U) = θ₀ + θ₁·U⁻⁴ for C_D (a force error of fixed size divided by ½ρAU²: a run at
+0.8 m/s scatters three times more than one at 2 m/s) and θ₀ + θ₁·U⁴ for the transverse tow,
+fitted to the current residuals; E s² = Σ v_i(1 − h_i)/(n − p). For the clustered added-mass
+regression the clustered-to-naive variance ratio of the current fit is carried over (it cancels
+in the expression) and its Bell–McCaffrey degrees of freedom are recomputed on the augmented
+design. The tare's and the weighed mass's parts of each uncertainty budget are kept as they
+are.
 
 Pure functions, no I/O.
 """
