@@ -79,8 +79,14 @@ class Condition:
         """"run 23: α 20°, 1.0 m/s, steady" or "new: α 25°, 1.2 m/s, accel 0.5 m/s²"."""
         head = f"run {self.run}" if self.run is not None else "new"
         cfg = "" if self.config == "hull" else f"{self.config}, "
-        kind = (f"accel {self.accel:.3g} m/s²" if self.test == "accel" else "steady")
-        return f"{head}: {cfg}α {self.angle_deg:g}°, {self.speed:.3g} m/s, {kind}"
+        kind = (f"accel {_num(self.accel)} m/s²" if self.test == "accel" else "steady")
+        return f"{head}: {cfg}α {self.angle_deg:g}°, {_num(self.speed)} m/s, {kind}"
+
+
+def _num(x: float) -> str:
+    """A speed or acceleration as a lab writes it: 1.0, 1.25, 0.15."""
+    text = f"{x:.2f}"
+    return text[:-1] if text.endswith("0") else text
 
 
 @dataclass
@@ -559,7 +565,8 @@ def rank_next_runs(
     n_suggest : int, default 3
         How many suggestions at most.
     alpha_max_deg : float, optional
-        Largest |α| of the C_D(α) fit [deg]; default the fit's own runs' (30° when unknown).
+        Largest |α| of the C_D(α) fit [deg] (the protocol's ``damping_alpha_max_deg``);
+        default 30°.
 
     Returns
     -------
