@@ -233,7 +233,7 @@ def _fraction(days: int, tmp_path: Path) -> tuple[float, tuple[float, float]]:
 
 
 def test_the_first_ranked_run_beats_a_random_one_on_20_days(tmp_path):
-    """The 20-day version of the issue's proof (seeds 0-19, about 20 s): the first ranked run
+    """The 20-day version of the issue's proof (seeds 0-19, about 11 s): the first ranked run
     shrinks the targeted interval more than a random other remaining run on 18 of 20 days
     (90 %, Clopper–Pearson 95 % interval 68–99 %); asserted at least 15 of 20 (75 %)."""
     frac, _ = _fraction(20, tmp_path)
@@ -242,7 +242,7 @@ def test_the_first_ranked_run_beats_a_random_one_on_20_days(tmp_path):
 
 @pytest.mark.slow
 def test_the_first_ranked_run_beats_a_random_one_on_100_days(tmp_path):
-    """The issue's proof (seeds 0-99, about 100 s): the first ranked run shrinks the targeted
+    """The issue's proof (seeds 0-99, about 80 s): the first ranked run shrinks the targeted
     interval more than a random other remaining run on at least 80 % of the days: measured on
     88 of 100 days (Clopper–Pearson 95 % interval 80.0–93.6 %); the target was X_uv on every
     day."""
