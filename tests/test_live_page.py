@@ -518,11 +518,12 @@ def test_the_coefficient_table_is_coefficients_csv(browser, live_server, folder,
     assert len(items) == 3 and items[0].text.startswith("run 32:")
     shot = os.environ.get("TOWTANK_LIVE_SCREENSHOT")
     if shot:
-        browser.execute_script("window.scrollTo(0, 0)")
         height = browser.execute_script("return document.documentElement.scrollHeight")
-        browser.set_window_size(1600, int(height) + 20)
+        browser.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
+            "width": 1600, "height": int(height), "deviceScaleFactor": 1, "mobile": False})
         time.sleep(0.5)
         browser.save_screenshot(shot)
+        browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
 
 
 def test_file_text_is_shown_as_text_never_as_html(browser, live_server, folder, sample_day):

@@ -24,6 +24,7 @@ for the network.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import errno
 import ipaddress
 import json
@@ -35,11 +36,15 @@ from collections.abc import AsyncIterator, Sequence
 from pathlib import Path
 from typing import Any
 
-import anyio
 from starlette.applications import Starlette
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
-from starlette.responses import StreamingResponse
+from starlette.responses import (
+    FileResponse,
+    JSONResponse,
+    PlainTextResponse,
+    Response,
+    StreamingResponse,
+)
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Receive, Scope, Send
@@ -241,7 +246,7 @@ async def _event_stream(request: Request, folder: StateFolder, poll_s: float,
             yield ": keep-alive\n\n"
         if await request.is_disconnected():
             return
-        await anyio.sleep(poll_s)
+        await asyncio.sleep(poll_s)
 
 
 def _parser() -> argparse.ArgumentParser:

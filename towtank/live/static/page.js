@@ -3,7 +3,7 @@
 "use strict";
 
 const STATUS_WORD = { ok: "OK", suspicious: "SUSPICIOUS", rejected: "REJECTED" };
-const SHEET_MARK = { done: "✓", rejected: "✗", "to do": "○", void: "–", waiting: "⧗" };
+const SHEET_MARK = { done: "✓", rejected: "✗", "to do": "○", void: "–", waiting: "◷" };
 const SHEET_ORDER = ["done", "rejected", "waiting", "to do", "void"];
 // coefficients.csv's columns shown, in this order, when present; the interval's width follows ci_high
 const COEF_SHOWN = ["symbol", "value", "unit", "ci_low", "ci_high", "n_runs"];
@@ -40,7 +40,7 @@ function fmt(x) {
   if (x === 0) return "0";
   const a = Math.abs(x);
   let s;
-  if (a >= 1e5 || a < 1e-3) s = x.toExponential(3).replace(/\.?0+e/, "e");
+  if (a >= 1e5 || a < 1e-4) s = x.toExponential(3).replace(/\.?0+e/, "e");
   else s = String(Number(x.toPrecision(4)));
   return s.replace("-", "−");
 }
@@ -136,13 +136,12 @@ function renderSheet(s) {
     li.dataset.run = String(r.run);
     li.dataset.state = state;
     li.appendChild(el("span", "mark", SHEET_MARK[state] || "?"));
-    const parts = ["run " + r.run, r.test];
-    if (isNum(r.angle_deg)) parts.push("α " + fmt(r.angle_deg) + "°");
-    if (isNum(r.speed_m_s)) parts.push(fmt(r.speed_m_s) + " m/s");
-    if (r.config) parts.push(r.config);
-    if (state !== "done") parts.push(state);
-    li.appendChild(document.createTextNode(parts.filter((p) => p !== undefined && p !== null &&
-      p !== "").join(" · ")));
+    li.appendChild(el("span", "run", r.run));
+    li.appendChild(el("span", "test", r.test || ""));
+    li.appendChild(el("span", "angle", isNum(r.angle_deg) ? fmt(r.angle_deg) + "°" : ""));
+    li.appendChild(el("span", "speed", isNum(r.speed_m_s) ? r.speed_m_s.toFixed(2) + " m/s" : ""));
+    li.appendChild(el("span", "state", state === "done" ? "" : state));
+    li.title = [r.file, r.config].filter(Boolean).join(" · ");
     list.appendChild(li);
   }
   const box = clear(document.getElementById("sheet-counts"));
@@ -153,7 +152,7 @@ function renderSheet(s) {
     chip.dataset.state = state;
     box.appendChild(chip);
   }
-  box.appendChild(el("span", "count", "of " + rows.length + " runs"));
+  box.appendChild(el("span", "of", "of " + rows.length + " runs"));
 }
 
 function renderCoefficients(s) {
@@ -263,7 +262,8 @@ async function refresh() {
       document.getElementById("verdict-head").textContent = "waiting for the first state…";
       document.getElementById("verdict-line").textContent = why.reason || "";
     } else if (r.ok) {
-      render(await r.json());
+      const s = await r.json();
+      if (s.version !== shown) render(s);  // the same version twice: nothing to redraw
     }
   } catch (e) {
     setConnection(false);
