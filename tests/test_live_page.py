@@ -171,6 +171,40 @@ def test_version_is_reread_only_when_the_file_changes(folder):
     assert state.version() is None
 
 
+class _Page:
+    """A request whose page goes away after ``polls`` looks."""
+
+    def __init__(self, polls: int) -> None:
+        self.polls = polls
+
+    async def is_disconnected(self) -> bool:
+        self.polls -= 1
+        return self.polls < 0
+
+
+def _stream(folder: Path, polls: int, keepalive_s: float) -> list[str]:
+    import asyncio
+
+    async def collect() -> list[str]:
+        return [m async for m in server._event_stream(
+            _Page(polls), server.StateFolder(folder), 0.001, keepalive_s)]  # type: ignore[arg-type]
+
+    return asyncio.run(collect())
+
+
+def test_event_stream_sends_the_version_then_keep_alives_and_ends_with_the_page(folder):
+    write_state(folder, tiny_state(4))
+    got = _stream(folder, 40, keepalive_s=0.0)  # a keep-alive at every idle look
+    assert got[0] == "retry: 1000\n\n"
+    assert got[1] == 'id: 4\nevent: state\ndata: {"version": 4}\n\n'
+    assert got[2:] and set(got[2:]) == {": keep-alive\n\n"}
+    assert len(got) == 42  # one message per look, and the stream ends when the page has gone
+    # idle with a long keep-alive period: nothing but the version
+    assert _stream(folder, 40, keepalive_s=3600.0)[1:] == [got[1]]
+    # before the first state: no event, only keep-alives
+    assert set(_stream(folder / "none", 5, keepalive_s=0.0)[1:]) == {": keep-alive\n\n"}
+
+
 # ----------------------------------------------------------------------------- the command
 def test_a_host_other_than_loopback_is_refused_with_one_sentence(folder, capsys):
     assert server.main(["--state", str(folder), "--host", "0.0.0.0", "--port", "8050"]) == 2
@@ -541,6 +575,27 @@ def test_file_text_is_shown_as_text_never_as_html(browser, live_server, folder, 
     assert browser.find_element(By.CSS_SELECTOR, "#messages li").text == evil
     assert not browser.find_elements(By.CSS_SELECTOR, "#messages b, #verdict img, #messages img")
     assert browser.title != "pwned"
+
+
+def test_the_page_before_the_first_state_and_before_the_first_fit(browser, live_server, folder):
+    from selenium.webdriver.common.by import By
+
+    url, _ = live_server
+    browser.get(url + "/")
+    # the 503's reason, once the page has asked (the head says "waiting" from the start)
+    wait_for(lambda: "no state yet" in browser.find_element(By.ID, "verdict-line").text, 10)
+    assert "waiting for the first state" in browser.find_element(By.ID, "verdict-head").text
+    write_state(folder, tiny_state(1, sheet=[
+        {"run": 1, "file": "run_001.csv.gz", "test": "steady", "config": "sting",
+         "angle_deg": 0.0, "speed_m_s": 0.1, "state": "waiting"}]))
+    wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute("data-version")
+             == "1", 5)
+    assert browser.find_element(By.ID, "verdict-head").text == "no run reduced yet"
+    assert browser.find_element(By.ID, "next-runs").text == "no fit yet"
+    assert browser.find_element(By.ID, "coef-body").text == "no coefficient yet"
+    assert browser.find_element(By.CSS_SELECTOR, '#sheet li[data-run="1"]') \
+        .get_attribute("data-state") == "waiting"
+    assert browser.find_element(By.ID, "pdf").text == "report.pdf not written yet"
 
 
 def test_the_page_reconnects_when_the_server_restarts(browser, folder, sample_day):

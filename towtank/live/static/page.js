@@ -113,6 +113,7 @@ function renderFigure(id, name, version, alt) {
   }
   const img = el("img");
   img.alt = alt;
+  img.onerror = () => { clear(box).appendChild(el("div", "none", "figure not available")); };
   img.src = "/figures/" + encodeURIComponent(name) + "?v=" + encodeURIComponent(version);
   box.appendChild(img);
 }
