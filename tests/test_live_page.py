@@ -509,6 +509,8 @@ def test_the_page_shows_a_new_verdict_within_2_s(browser, live_server, folder, s
     assert "rejected" in box.get_attribute("class").split()
     assert "REJECTED" in browser.find_element(By.ID, "verdict-head").text
     assert browser.find_element(By.ID, "verdict-reason").text == reason
+    line = browser.find_element(By.ID, "verdict-line").text  # the reason is not shown twice
+    assert line.startswith("run 30  steady") and line.endswith("rejected") and reason not in line
     assert delay < 2.0
     # the sheet: run 30 rejected, 31 waiting, counts as the state says
     item = browser.find_element(By.CSS_SELECTOR, '#sheet li[data-run="30"]')

@@ -86,12 +86,15 @@ function renderVerdict(s) {
   const status = String(latest.status || "");
   box.className = "verdict " + (STATUS_WORD[status] ? status : "none");
   head.textContent = "Run " + latest.run + "  " + (STATUS_WORD[status] || status);
-  line.textContent = latest.line || "";
   const verdicts = Array.isArray(s.verdicts) ? s.verdicts : [];
   let why = null;
   for (let i = verdicts.length - 1; i >= 0; i--) {
     if (verdicts[i].run === latest.run) { why = verdicts[i].reason; break; }
   }
+  // the reason stands on its own line, in colour: not twice when the terminal line ends with it
+  let text = String(latest.line || "");
+  if (why && text.endsWith(why)) text = text.slice(0, -why.length).replace(/[\s:;,—-]+$/, "");
+  line.textContent = text;
   reason.textContent = why || "";
 }
 
