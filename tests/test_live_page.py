@@ -205,6 +205,29 @@ def test_event_stream_sends_the_version_then_keep_alives_and_ends_with_the_page(
     assert set(_stream(folder / "none", 5, keepalive_s=0.0)[1:]) == {": keep-alive\n\n"}
 
 
+def test_events_through_the_test_client(folder):
+    import starlette
+
+    if int(starlette.__version__.split(".")[0]) < 1:
+        pytest.skip("Starlette before 1.0 (0.40 tried) buffers a whole response in its "
+                    "TestClient: the event stream is tested on the real server below.")
+    write_state(folder, tiny_state(1))
+    app = server.create_app(folder, keepalive_s=0.05)  # a line every 0.05 s: reads never block
+    versions = []
+    with TestClient(app, base_url="http://127.0.0.1") as c, c.stream("GET", "/events") as r:
+        assert r.headers["content-type"].startswith("text/event-stream")
+        deadline = time.monotonic() + 10
+        for line in r.iter_lines():
+            if line.startswith("data: "):
+                versions.append(json.loads(line[6:])["version"])
+                if versions == [1]:
+                    write_state(folder, tiny_state(2))
+                else:
+                    break
+            assert time.monotonic() < deadline, f"no event for version 2 in 10 s: {versions}"
+    assert versions == [1, 2]
+
+
 # ----------------------------------------------------------------------------- the command
 def test_a_host_other_than_loopback_is_refused_with_one_sentence(folder, capsys):
     assert server.main(["--state", str(folder), "--host", "0.0.0.0", "--port", "8050"]) == 2
