@@ -623,6 +623,22 @@ def test_the_page_before_the_first_state_and_before_the_first_fit(browser, live_
     assert browser.find_element(By.ID, "pdf").text == "report.pdf not written yet"
 
 
+def test_a_malformed_part_of_the_state_leaves_the_rest_shown(browser, live_server, folder):
+    from selenium.webdriver.common.by import By
+
+    url, _ = live_server
+    write_state(folder, tiny_state(
+        3, latest={"run": 4, "line": "run 4  steady  ok", "status": "ok"},
+        sheet=[None, {"run": 4, "state": "done"}], coefficients="not a list",
+        next_runs=[None], messages=["kept"], verdicts={"not": "a list"}))
+    browser.get(url + "/")
+    wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute("data-version")
+             == "3", 10)
+    assert browser.find_element(By.ID, "verdict-head").text == "Run 4 OK"
+    assert browser.find_element(By.CSS_SELECTOR, '#sheet li[data-run="4"]').text.startswith("✓")
+    assert browser.find_element(By.ID, "messages").text == "kept"
+
+
 def test_the_page_reconnects_when_the_server_restarts(browser, folder, sample_day):
     from selenium.webdriver.common.by import By
 

@@ -133,7 +133,7 @@ function renderSheet(s) {
   const counts = {};
   const list = clear(document.getElementById("sheet"));
   const latest = s.latest ? s.latest.run : null;
-  for (const r of rows) {
+  for (const r of rows.filter((x) => x && typeof x === "object")) {
     const state = String(r.state || "");
     counts[state] = (counts[state] || 0) + 1;
     const li = el("li", state.replace(" ", "-") + (r.run === latest ? " latest" : ""));
@@ -244,14 +244,11 @@ function renderMessages(s) {
 }
 
 function render(s) {
-  renderHeader(s);
-  renderVerdict(s);
-  renderRecent(s);
-  renderFigures(s);
-  renderSheet(s);
-  renderCoefficients(s);
-  renderNext(s);
-  renderMessages(s);
+  // one malformed part of a state leaves the others on the page
+  for (const part of [renderHeader, renderVerdict, renderRecent, renderFigures, renderSheet,
+    renderCoefficients, renderNext, renderMessages]) {
+    try { part(s); } catch (err) { console.error(part.name, err); }
+  }
   shown = s.version;
   document.body.dataset.version = String(s.version);
 }
