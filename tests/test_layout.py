@@ -53,6 +53,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("pipeline",),
     ("report",),
     ("api",),
+    ("live",),
     ("commands", "__main__", "__init__"),
     ("testing",),
 ]
