@@ -71,10 +71,6 @@ ALLOWED_CIRCLES: list[frozenset[str]] = [
                "towtank.report.outputs", "towtank.report.pdf", "towtank.report.quality",
                "towtank.report.tare_figure", "towtank.report.vehicle",
                "towtank.report.workbook"}),
-    # issue #24: vehicle's schema <-> model <-> hull, simulate (towtank.vehicle is edited
-    # elsewhere; its code moves there)
-    frozenset({"towtank.vehicle.hull", "towtank.vehicle.model", "towtank.vehicle.schema",
-               "towtank.vehicle.simulate"}),
 ]
 
 #: Cross-module imports of a ``_private`` name still there: (importer, module, name).
