@@ -8,7 +8,6 @@ a protocol or run-sheet fault stops before anything is written.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -17,10 +16,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from towtank.analysis.similarity import medium_at
 from towtank.ingest.protocol import (
     Protocol,
     SpeedLog,
-    Water,
     ZeroFile,
     load_protocol,
     model_geometry,
@@ -106,52 +105,6 @@ def tare_models(
             )
         return out
     return fit_tares(sheet, reductions)
-
-
-def water_at(temperature_C: float, water_type: str, salinity: float | None,
-             pressure_Pa: float | None = None,
-             relative_humidity_pct: float | None = None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of the tank's or the prototype's medium.
-
-    Water (``fresh``, ``sea``): ITTC 7.5-02-01-03 (:mod:`towtank.reference.water`). Air:
-    CIPM-2007 density at ``pressure_Pa`` [Pa] (default 101325) and ``relative_humidity_pct``
-    [%] (default 50), Sutherland viscosity (:mod:`towtank.reference.air`).
-
-    Out-of-range warnings (WaterPropertyWarning) are silenced here: the protocol's unit checks
-    already put a temperature or salinity outside the ITTC range of [water] and
-    [prototype.water] into the day's warnings, and each run's temperature is checked in
-    :func:`process_day`.
-    """
-    if water_type == "air":
-        from towtank.reference.air import (
-            DEFAULT_RELATIVE_HUMIDITY_PCT,
-            STANDARD_PRESSURE_PA,
-            air_properties,
-        )
-
-        a = air_properties(
-            temperature_C,
-            STANDARD_PRESSURE_PA if pressure_Pa is None else pressure_Pa,
-            DEFAULT_RELATIVE_HUMIDITY_PCT if relative_humidity_pct is None
-            else relative_humidity_pct)
-        return float(a.rho), float(a.nu)
-    from towtank.reference.water import water_properties
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        w = water_properties(temperature_C, water_type, salinity)
-    return float(w.rho), float(w.nu)
-
-
-def medium_at(water: Water, temperature_C: float | None = None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of a protocol's [water] or [prototype.water] medium.
-
-    ``water`` is a :class:`towtank.ingest.protocol.Water`; ``temperature_C`` [°C] a run's
-    temperature, default the section's own (see :func:`water_at`).
-    """
-    t = water.temperature_C if temperature_C is None else temperature_C
-    return water_at(t, water.type, water.salinity_g_kg, water.pressure_Pa,
-                    water.relative_humidity_pct)
 
 
 def model_scale(protocol: Protocol) -> float | None:

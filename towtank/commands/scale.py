@@ -11,7 +11,7 @@ import pandas as pd
 from towtank.analysis import similarity
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import Prototype, Water, load_protocol
-from towtank.pipeline import medium_at, process_day
+from towtank.pipeline import process_day
 
 
 def scale_command(
@@ -46,7 +46,7 @@ def scale_command(
         )
     elif speeds:
         proto = replace(proto, speeds_m_s=tuple(float(s) for s in speeds))
-    _, nu_p = medium_at(proto.water)
+    _, nu_p = similarity.medium_at(proto.water)
     try:
         similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
     except ValueError as exc:
