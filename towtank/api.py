@@ -100,7 +100,9 @@ def process_day(
     -------
     DayResult
         ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.fins`` (fins.csv),
-        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (list of sentences);
+        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (list of
+        :class:`~towtank.results.Notice`: ``str()`` the sentence, ``.stage``, ``.run``,
+        ``.file``);
         ``.rejected`` (run number -> sentence); ``.reductions`` (run number ->
         :class:`~towtank.reduce.run.RunReduction`); ``.tares``; ``.protocol``.
 
