@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -50,46 +50,33 @@ MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv"
 ANGLE_TOL_DEG = 0.5
 
 
-class Agreement(str):
+@dataclass(frozen=True, repr=False)
+class Agreement:
     """The verdict of two estimates of one added mass: do they agree, by how much, within what.
 
-    A typed verdict (``agrees``, ``difference`` [kg], ``tolerance`` [kg]) that reads as its
-    sentence, "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds … kg",
-    the agreement column of coefficients.csv; nothing parses the sentence back.
+    A typed verdict: ``agrees`` (|difference| ≤ tolerance), ``difference`` [kg] (second
+    estimate minus the primary) and ``tolerance`` [kg] (:func:`agreement`). ``str()`` gives its
+    sentence, "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds …
+    kg", the agreement column of coefficients.csv; nothing parses the sentence back.
     """
 
     agrees: bool
-    difference: float
-    tolerance: float
-
-    def __new__(cls, agrees: bool, difference: float, tolerance: float) -> Agreement:
-        text = f"{cls._verdict(agrees)}: {cls._detail(agrees, difference, tolerance)}"
-        self = super().__new__(cls, text)
-        self.agrees = bool(agrees)
-        self.difference, self.tolerance = float(difference), float(tolerance)
-        return self
-
-    def __getnewargs__(self) -> tuple[bool, float, float]:  # type: ignore[override]
-        return self.agrees, self.difference, self.tolerance  # copy and pickle rebuild it
-
-    @staticmethod
-    def _verdict(agrees: bool) -> str:
-        return "agree" if agrees else "DISAGREE"
-
-    @staticmethod
-    def _detail(agrees: bool, difference: float, tolerance: float) -> str:
-        word = "within" if agrees else "exceeds"
-        return f"difference {difference:+.2g} kg {word} {tolerance:.2g} kg"
+    difference: float  # [kg]
+    tolerance: float  # [kg]
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Literal["agree", "DISAGREE"]:
         """"agree" or "DISAGREE"."""
-        return self._verdict(self.agrees)
+        return "agree" if self.agrees else "DISAGREE"
 
     @property
     def detail(self) -> str:
         """"difference … kg within/exceeds … kg"."""
-        return self._detail(self.agrees, self.difference, self.tolerance)
+        word = "within" if self.agrees else "exceeds"
+        return f"difference {self.difference:+.2g} kg {word} {self.tolerance:.2g} kg"
+
+    def __str__(self) -> str:
+        return f"{self.verdict}: {self.detail}"
 
     def __repr__(self) -> str:
         return f"Agreement({self.verdict}, difference={self.difference:+.3g} kg, " \
@@ -486,7 +473,7 @@ def agreement(primary: float, second: float, se: float, spread: float) -> Agreem
     """
     tol = 2.0 * math.hypot(se, spread)
     diff = second - primary
-    return Agreement(abs(diff) <= max(tol, 1e-12), diff, tol)
+    return Agreement(bool(abs(diff) <= max(tol, 1e-12)), float(diff), float(tol))
 
 
 def curve_difference(
