@@ -14,6 +14,8 @@ from typing import Any
 
 import pandas as pd
 
+from towtank.ingest.calibration import UNITS
+
 __all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
            "run_warning_lines", "unit_label_sentences", "sheet_note_sentences",
            "temperature_sentences", "temperature_problems",
@@ -194,8 +196,6 @@ def _unknown_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, st
     """One sentence per channel and unit label towtank does not convert (source
     ``"unknown"``): ``drag's unit label 'lb' is not one towtank converts in 42 run files
     (...): taken as N; ...``."""
-    from towtank.ingest.calibration import UNITS
-
     groups: dict[tuple[str, str], list[tuple[int, Any]]] = {}
     for run, file, units in items:
         for c, (u, src) in units.items():

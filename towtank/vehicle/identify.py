@@ -28,12 +28,16 @@ simulated against the measured states, weighted by each channel's noise; the cov
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
+from filterpy.kalman import UnscentedKalmanFilter as UKF
 from scipy import stats
+from scipy.optimize import least_squares
 
 from towtank.vehicle.fossen import (
     DOF,
@@ -138,8 +142,6 @@ class BatchModel:
 
     @staticmethod
     def _table(terms: list[tuple[str, float]]) -> tuple[np.ndarray, np.ndarray]:
-        import re
-
         rows, coefs = [], []
         for sym, val in terms:
             head, _, sub = sym.partition("_")
@@ -457,9 +459,6 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     ValueError
         The filter diverged (one sentence).
     """
-    from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
-    from filterpy.kalman import UnscentedKalmanFilter as UKF
-
     k = len(symbols)
     thrust = 6 in log.measured  # the speed the thrust balances: one more state
     dim = 12 + k + (1 if thrust else 0)
@@ -593,8 +592,6 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     dict
         ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``.
     """
-    from scipy.optimize import least_squares
-
     for frac in windows[:-1]:
         n = max(int(frac * len(log.t)), 20)
         sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],

@@ -39,12 +39,15 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
+from scipy.optimize import fsolve
 
+from towtank.vehicle import steady as sd
 from towtank.vehicle.fossen import (
     DOF,
     VELOCITIES,
@@ -53,7 +56,9 @@ from towtank.vehicle.fossen import (
     rigid_body_mass_matrix,
     skew,
 )
+from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
 from towtank.vehicle.schema import MAX_STEPS, default_duration
+from towtank.vehicle.wings import Wings
 
 __all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
            "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
@@ -130,8 +135,6 @@ class Dynamics:
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
         glider = mdl.get("glider")
         if isinstance(glider, dict) and "wing_area_m2" in glider:
-            from towtank.vehicle.wings import Wings
-
             self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
         else:
             self.wings = None
@@ -255,11 +258,6 @@ def simulate(
     if not (math.isfinite(speed_m_s) and speed_m_s > 0):
         raise ValueError(f"the speed must be > 0 m/s, not {speed_m_s}.")
     if manoeuvre == "glide" and roll_deg:  # the roll mass turned (#26)
-        from towtank.vehicle.glider_controls import (
-            cg_with_controls,
-            roll_mass_angle_for_static_roll_deg,
-        )
-
         gamma = math.radians(roll_mass_angle_for_static_roll_deg(model, roll_deg))
         model = dict(model, cg_m=cg_with_controls(model, 0.0, gamma).tolist())
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
@@ -397,8 +395,6 @@ def read_schedule(path: Any, limit_deg: float = 45.0) -> pd.DataFrame:
     ValueError
         One sentence naming the file and the problem.
     """
-    from pathlib import Path
-
     name = Path(path).name
     try:
         tab = pd.read_csv(path)
@@ -482,8 +478,6 @@ def trim_state(model: dict[str, Any], speed_m_s: float,
         ``pitch_deg`` [deg], ``depth_rate_m_s`` [m/s, positive down], ``u_m_s``, ``w_m_s``
         [m/s], ``converged`` (False: no steady straight run found; the others NaN)
     """
-    from scipy.optimize import fsolve
-
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
     dyn = Dynamics(model, weight)
     thrust = -dyn.x_uu * speed_m_s * abs(speed_m_s)
@@ -631,8 +625,6 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
     +-180 deg. The turn radius is the least-squares circle through the plan track (x, y) of
     that part (:func:`towtank.vehicle.steady.circle_fit`).
     """
-    from towtank.vehicle import steady as sd
-
     kind = ts.attrs.get("manoeuvre", "turning")
     rows: list[tuple[str, float, str, str]] = []
     nan = float("nan")
