@@ -206,7 +206,8 @@ def test_verdicts_are_typed_and_survive_copy():
     v = agreement(1.000, 1.010, 0.001, 0.0)
     assert isinstance(v, Agreement) and not v.agrees
     assert v.difference == pytest.approx(0.010) and v.tolerance == pytest.approx(0.002)
-    assert v == "DISAGREE: difference +0.01 kg exceeds 0.002 kg"  # the CSV's sentence
+    assert str(v) == "DISAGREE: difference +0.01 kg exceeds 0.002 kg"  # the CSV's sentence
+    assert not isinstance(v, str) and v.verdict == "DISAGREE"  # a verdict, not a string
     for again in (copy.deepcopy(v), pickle.loads(pickle.dumps(v))):
         assert isinstance(again, Agreement) and again.agrees is False and again == v
     assert agreement(1.0, 1.001, 0.001, 0.0).agrees
@@ -231,3 +232,20 @@ def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
     assert fig is not None and len(fig.axes) == 2
     assert len(figures.fig_fin_forces(day.fin_result).axes) == len(
         figures.fig_fin_forces(day).axes)
+
+
+def test_a_notice_is_its_sentence_with_its_stage():
+    from towtank.results import Notice, notices
+
+    n = Notice("run 3: the speed varies.", "reduce", run=3, file="run_003.csv")
+    assert str(n) == "run 3: the speed varies." and f"{n}" == str(n)
+    assert (n.stage, n.run, n.file) == ("reduce", 3, "run_003.csv")
+    assert n == Notice("run 3: the speed varies.", "reduce", 3, "run_003.csv")
+    assert n != Notice("run 3: the speed varies.", "sheet", 3, "run_003.csv")
+    assert [(m.text, m.stage, m.run) for m in notices(["a.", "b."], "hull")] == [
+        ("a.", "hull", None), ("b.", "hull", None)]
+    with pytest.raises(ValueError, match="stage"):
+        Notice("text", "fitting")  # type: ignore[arg-type]
+    with pytest.raises(AttributeError):
+        n.text = "other"  # type: ignore[misc]
+

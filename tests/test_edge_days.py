@@ -21,6 +21,7 @@ from conftest import Day, process, write_hull_protocol
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import load_protocol
 from towtank.reference.water import water_properties
+from towtank.results import STAGES, Notice
 from towtank.testing import synthetic as syn
 
 HIGH = 0.5  # [m/s²] set acceleration of the steady runs
@@ -148,12 +149,27 @@ def test_hand_window_a_little_early_is_used_and_warned(edge_day: Day):
     reaching into the detected acceleration: used, with both warnings on the terminal."""
     row = _row(edge_day, SLIGHT_RUN)
     assert row["status"] == "ok", row["reason"]
-    warned = [w for w in edge_day.result.warnings if w.startswith(f"run {SLIGHT_RUN}:")]
+    warned = [str(w) for w in edge_day.result.warnings if w.run == SLIGHT_RUN]
     assert any("overlaps the detected constant acceleration" in w for w in warned)
     assert any("speed varies" in w for w in warned)
     # the good hand window raises no such warning
-    assert not any(w.startswith(f"run {SHORT_RUN}:") and ("overlaps" in w or "varies" in w)
+    assert not any(w.run == SHORT_RUN and ("overlaps" in str(w) or "varies" in str(w))
                    for w in edge_day.result.warnings)
+
+
+def test_the_day_warnings_are_notices_with_their_stage_run_and_file(edge_day: Day):
+    """Each warning of the day is a Notice: its sentence, the stage it comes from and, for a
+    run's own warning, that run and its file (as the sheet names them)."""
+    notes = edge_day.result.warnings
+    assert notes and all(isinstance(n, Notice) and n.stage in STAGES for n in notes)
+    runs = edge_day.result.runs
+    files = dict(zip(runs["run"].astype(int), runs["file"], strict=True))
+    own = [n for n in notes if n.run is not None]
+    assert {SLIGHT_RUN, NO_ACCEL_RUN, FAST_RUN} <= {n.run for n in own}
+    for n in own:
+        assert str(n).startswith(f"run {n.run}: ") and n.stage in ("reduce", "sheet")
+        assert n.file is None or n.file == files[n.run]
+    assert {n.file for n in own if n.stage == "reduce"} >= {files[SLIGHT_RUN]}
 
 
 def test_accel_run_without_acceleration_stretch_is_warned(edge_day: Day):
@@ -161,10 +177,10 @@ def test_accel_run_without_acceleration_stretch_is_warned(edge_day: Day):
     terminal, not only in runs.csv's notes; a steady run's missing stretch stays a note."""
     row = _row(edge_day, NO_ACCEL_RUN)
     assert row["status"] == "ok" and "no usable constant-acceleration" in row["notes"]
-    assert any(w.startswith(f"run {NO_ACCEL_RUN}:") and "no usable constant-acceleration" in w
+    assert any(w.run == NO_ACCEL_RUN and "no usable constant-acceleration" in str(w)
                for w in edge_day.result.warnings)
     steady_notes = [r for r in PLATEAU_RUNS if "no usable" in _row(edge_day, r)["notes"]]
-    assert not any(w.startswith(f"run {r}:") and "no usable" in w
+    assert not any(w.run == r and "no usable" in str(w)
                    for r in steady_notes for w in edge_day.result.warnings)
 
 
@@ -172,7 +188,7 @@ def test_model_run_faster_than_its_tare_runs_is_flagged(edge_day: Day):
     fast = _row(edge_day, FAST_RUN)
     assert fast["status"] == "ok"
     assert "outside the tare runs' range" in fast["notes"]
-    assert any(w.startswith(f"run {FAST_RUN}:") and "outside the tare" in w
+    assert any(w.run == FAST_RUN and "outside the tare" in str(w)
                for w in edge_day.result.warnings)
     for run in PLATEAU_RUNS:
         assert "outside the tare" not in _row(edge_day, run)["notes"]

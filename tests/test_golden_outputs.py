@@ -67,7 +67,7 @@ def day_digest(name: str, out: Path) -> dict[str, str]:
     book = out / "book"
     book.mkdir()
     digest["report.xlsx (cells)"] = _sha(_workbook_cells(write_workbook(day, book)))
-    digest["warnings"] = _sha(_normalise("\n".join(day.warnings)))
+    digest["warnings"] = _sha(_normalise("\n".join(str(n) for n in day.warnings)))
     return digest
 
 

@@ -51,7 +51,7 @@ def test_a_hand_typed_sheet_gives_the_plain_days_coefficients(style, plain, tmp_
     # the same runs, the void one still void, the notes below the table not runs
     cols = ["run", "file", "config", "test", "angle_deg", "speed_nominal", "status"]
     assert day.sheet[cols].equals(plain.sheet[cols])
-    assert any("read as notes, not runs" in w and "wavemaker" in w for w in day.warnings)
+    assert any("read as notes, not runs" in w and "wavemaker" in w for w in map(str, day.warnings))
     assert set(day.sheet["status"]) == {"ok", "void"}
 
 

@@ -78,7 +78,7 @@ def test_the_set_speed_and_the_sheet_window_give_the_damping(tmp_path, measured)
     assert any("the drift is taken to the file's last" in n for n in red.notes)
     # no acceleration without a speed: the added masses are omitted, and said so
     assert "X_udot" not in set(got.index) or math.isnan(got.get("X_udot", math.nan))
-    assert any("X_udot needs accelerated hull runs" in w for w in day.warnings)
+    assert any("X_udot needs accelerated hull runs" in w for w in map(str, day.warnings))
     runs = day.runs.set_index("run")
     ok = runs[runs["status"] == "ok"]
     assert (ok["speed_source"] == "nominal").all()

@@ -93,19 +93,19 @@ def test_small_day_is_plausible(small_day):
     day = _process_with(small_day)
     assert day.rejected == {}
     assert not any("positive" in w or "displaced mass" in w or "outside the" in w
-                   for w in day.warnings), day.warnings
+                   for w in map(str, day.warnings)), day.warnings
 
 
 def test_drag_in_mv_is_named(small_day):
     """The drag's gain 20 N/V read as N/mV (1000): C_D ≈ 10, a warning naming the units."""
     day = _process_with(small_day, lambda s: s.replace("gain = 20.0", "gain = 1000.0", 1))
-    text = " ".join(day.warnings)
+    text = " ".join(map(str, day.warnings))
     assert "C_D at α = 0 =" in text and "mV" in text, day.warnings
 
 
 def test_drag_sign_flip_is_named(small_day):
     day = _process_with(small_day, lambda s: s.replace("gain = 20.0", "gain = -20.0", 1))
-    text = " ".join(day.warnings)
+    text = " ".join(map(str, day.warnings))
     assert "X_u|u| = +" in text and "X_udot = +" in text and "sign" in text, day.warnings
 
 

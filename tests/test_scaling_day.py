@@ -320,7 +320,7 @@ def test_hot_prototype_water_is_a_day_warning(tmp_path, cache):
     assert n == 1
     (tmp_path / "hot.toml").write_text(text, encoding="utf-8")
     day = process_day(tmp_path / "hot.toml", cache_dir=cache)
-    hits = [w for w in day.warnings if "[prototype.water]" in w]
+    hits = [w for w in map(str, day.warnings) if "[prototype.water]" in w]
     assert len(hits) == 1 and "temperature_C = 45" in hits[0]
 
 

@@ -88,7 +88,7 @@ def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_pa
                                atol=1e-9)
     # the day with both cells: no warning about a channel left out
     day = towtank.process_day(protocol, jobs=1, report=False)
-    assert not [w for w in day.warnings if "no [channels] entry uses it" in w]
+    assert not [w for w in map(str, day.warnings) if "no [channels] entry uses it" in w]
     # only the left cell mapped: said once for the day, naming the channel, how many runs and
     # the first and last file (not once per run)
     half = protocol_sections("two-cell", syn.hull_protocol_sections(
@@ -97,7 +97,7 @@ def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_pa
     half["channels"]["drag"] = {"column": "DragL (V)", "gain": 20.0}
     one = syn.write_protocol(tmp_path / "half.toml", **half)
     day = towtank.process_day(one, jobs=1, report=False)
-    said = [w for w in day.warnings if "no [channels] entry uses it" in w]
+    said = [w for w in map(str, day.warnings) if "no [channels] entry uses it" in w]
     n = len(day.reductions)
     assert n > 3 and len(said) == 1, said[:3]
     first, last = min(day.reductions), max(day.reductions)

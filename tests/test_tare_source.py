@@ -53,7 +53,7 @@ def test_no_tare_subtracts_nothing_and_says_so(day_dir):
     root, truth = day_dir
     p = _protocol(root, '\n[tare]\nsource = "none"\n')
     day = towtank.process_day(p, jobs=1)
-    assert any("no tare is subtracted" in w for w in day.warnings)
+    assert any("no tare is subtracted" in w for w in map(str, day.warnings))
     hull = [r for r in day.reductions.values() if r.tare_group == "" and r.drag_mean_raw]
     assert all(r.drag_mean == r.drag_mean_raw for r in hull)
     got = day.coefficients.set_index("symbol")["value"]

@@ -139,7 +139,7 @@ def _protocol(root: Path, name: str, units: dict[str, str]) -> Path:
 
 def test_a_day_without_unit_labels_says_so_once(bare_day):
     day = towtank.process_day(_protocol(bare_day, "bare", {}), jobs=1, report=False)
-    said = [w for w in day.warnings if "had no unit label" in w]
+    said = [w for w in map(str, day.warnings) if "had no unit label" in w]
     files = sorted(r.file for r in day.reductions.values())
     n = len(files)
     assert n > 3
@@ -158,7 +158,7 @@ def test_a_day_without_unit_labels_says_so_once(bare_day):
     # time and speed stated: the sentence names only the forces
     day = towtank.process_day(_protocol(bare_day, "forces", {"time": "s", "speed": "m/s"}),
                               jobs=1, report=False)
-    said = [w for w in day.warnings if "had no unit label" in w]
+    said = [w for w in map(str, day.warnings) if "had no unit label" in w]
     assert said == [f"drag and lift had no unit label in {n} run files ({files[0]} … "
                     f"{files[-1]}): taken as N; {SILENCE}."]
 
@@ -166,7 +166,7 @@ def test_a_day_without_unit_labels_says_so_once(bare_day):
 def test_units_stated_in_the_protocol_silence_the_note(bare_day):
     units = {"time": "s", "speed": "m/s", "drag": "N", "lift": "N"}
     day = towtank.process_day(_protocol(bare_day, "stated", units), jobs=1, report=False)
-    assert not [w for w in day.warnings if "unit label" in w]
+    assert not [w for w in map(str, day.warnings) if "unit label" in w]
     assert not any("unit label" in str(n) for n in day.runs["notes"])
     assert all(src == "protocol" for r in day.reductions.values()
                for _, src in r.units.values())
@@ -176,7 +176,7 @@ def test_a_day_with_labelled_units_has_no_note(tmp_path):
     syn.make_hull_day(tmp_path, seed=3, file_format="tdms", sheet_format="csv",
                       channel_style="canonical")
     day = towtank.process_day(_protocol(tmp_path, "tdms", {}), jobs=1, report=False)
-    assert not [w for w in day.warnings if "unit label" in w]
+    assert not [w for w in map(str, day.warnings) if "unit label" in w]
     assert all(src == "file" for r in day.reductions.values() for _, src in r.units.values())
 
 
@@ -211,6 +211,6 @@ def test_kite_lvm_channels_without_unit_labels_are_named(tmp_path):
             "no unit label)") in text
     assert "drag and lift had no unit label: taken as N" in text
     day = towtank.process_day(protocol, jobs=1, report=False)
-    assert [w for w in day.warnings if "unit label" in w] == [
+    assert [w for w in map(str, day.warnings) if "unit label" in w] == [
         f"drag and lift had no unit label in 1 run file (normal_aoa_16_vw_20.lvm): taken as N; "
         f"{SILENCE}."]

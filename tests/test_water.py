@@ -147,3 +147,33 @@ def test_viscosity_decreases_with_temperature(pair, water_type):
 @given(st.floats(min_value=0.0, max_value=40.0), st.floats(min_value=1.0, max_value=42.0))
 def test_sea_water_denser_than_fresh(temperature_C, salinity):
     assert density(temperature_C, "sea", salinity) > density(temperature_C)
+
+
+# ------------------------------------------------------------- the medium of a protocol section
+def test_water_at_gives_the_ittc_water_and_the_cipm_air():
+    """water_at: fresh water at 15 °C is the ITTC table's (999.10 kg/m³, 1.1386e-6 m²/s), sea
+    water denser, air the CIPM-2007 density at the given pressure and humidity; outside the
+    ITTC range it says nothing (the protocol's checks do)."""
+    from towtank.reference.air import air_properties
+    from towtank.reference.water import water_at
+
+    rho, nu = water_at(15.0, "fresh", None)
+    assert rho == pytest.approx(999.10, rel=2e-5) and nu == pytest.approx(1.1386e-6, rel=1e-3)
+    assert water_at(15.0, "sea", None)[0] == pytest.approx(1025.98, rel=2e-5)
+    air = air_properties(20.0, 90_000.0, 30.0)
+    assert water_at(20.0, "air", None, 90_000.0, 30.0) == (float(air.rho), float(air.nu))
+    assert water_at(20.0, "air", None)[0] > water_at(20.0, "air", None, 90_000.0)[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert water_at(45.0, "fresh", None)[0] < rho  # no WaterPropertyWarning
+
+
+def test_medium_at_reads_the_section_and_a_runs_temperature():
+    from towtank.analysis.similarity import medium_at
+    from towtank.ingest.protocol_types import Water
+    from towtank.reference.water import water_at
+
+    sea = Water(type="sea", temperature_C=10.0, salinity_g_kg=30.0)
+    assert medium_at(sea) == water_at(10.0, "sea", 30.0)
+    assert medium_at(sea, 20.0) == water_at(20.0, "sea", 30.0)
+    assert medium_at(sea, 20.0)[1] < medium_at(sea)[1]  # warmer water, thinner

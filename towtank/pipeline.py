@@ -8,7 +8,6 @@ a protocol or run-sheet fault stops before anything is written.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -17,14 +16,27 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from towtank.analysis import hull as fit
+from towtank.analysis import scaling, similarity
+from towtank.analysis.daywide import (
+    run_warning_lines,
+    sheet_note_sentences,
+    temperature_problems,
+    unit_label_sentences,
+)
+from towtank.analysis.fin_analysis import analyse_fins
+from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
+from towtank.analysis.run_coefficients import run_coefficients
+from towtank.analysis.similarity import medium_at
+from towtank.errors import ProtocolError, TowtankError
 from towtank.ingest.protocol import (
     Protocol,
     SpeedLog,
-    Water,
     ZeroFile,
     load_protocol,
     model_geometry,
 )
+from towtank.ingest.runfile import sha256_bytes
 from towtank.ingest.runsheet import read_run_sheet, unlisted_files
 from towtank.ingest.speedlog import log_path, log_sha
 from towtank.reduce.run import (
@@ -33,11 +45,23 @@ from towtank.reduce.run import (
     crashed_record,
     reduce_record,
 )
-from towtank.reduce.tare import TareModel, fit_tare_group
+from towtank.reduce.tare import TareModel, fit_tare_group, table_tare
 from towtank.reference.sets import BUILTIN_REFERENCES
-from towtank.results import DayResult, FinResult, HullResult, ScalingResult, VehicleResult
+from towtank.results import (
+    DayResult,
+    FinResult,
+    HullResult,
+    Notice,
+    ScalingResult,
+    Stage,
+    VehicleResult,
+    notices,
+)
+from towtank.runtime import parallel
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 from towtank.runtime.pause import pause_at
+from towtank.runtime.records import same_lengths
+from towtank.vehicle.compare import day_vehicle
 
 __all__ = ["DayResult", "FinResult", "HullResult", "ScalingResult", "VehicleResult",
            "process_day"]
@@ -93,8 +117,6 @@ def tare_models(
                             "those of the model and its mounting together.")
         return {}
     if source.source == "table":
-        from towtank.reduce.tare import table_tare
-
         out = {}
         for group in sorted({str(g) for g in sheet["tare_group"]}):
             out[group], departure = table_tare(group, source.speeds_m_s, source.drag_N,
@@ -106,52 +128,6 @@ def tare_models(
             )
         return out
     return fit_tares(sheet, reductions)
-
-
-def water_at(temperature_C: float, water_type: str, salinity: float | None,
-             pressure_Pa: float | None = None,
-             relative_humidity_pct: float | None = None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of the tank's or the prototype's medium.
-
-    Water (``fresh``, ``sea``): ITTC 7.5-02-01-03 (:mod:`towtank.reference.water`). Air:
-    CIPM-2007 density at ``pressure_Pa`` [Pa] (default 101325) and ``relative_humidity_pct``
-    [%] (default 50), Sutherland viscosity (:mod:`towtank.reference.air`).
-
-    Out-of-range warnings (WaterPropertyWarning) are silenced here: the protocol's unit checks
-    already put a temperature or salinity outside the ITTC range of [water] and
-    [prototype.water] into the day's warnings, and each run's temperature is checked in
-    :func:`process_day`.
-    """
-    if water_type == "air":
-        from towtank.reference.air import (
-            DEFAULT_RELATIVE_HUMIDITY_PCT,
-            STANDARD_PRESSURE_PA,
-            air_properties,
-        )
-
-        a = air_properties(
-            temperature_C,
-            STANDARD_PRESSURE_PA if pressure_Pa is None else pressure_Pa,
-            DEFAULT_RELATIVE_HUMIDITY_PCT if relative_humidity_pct is None
-            else relative_humidity_pct)
-        return float(a.rho), float(a.nu)
-    from towtank.reference.water import water_properties
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        w = water_properties(temperature_C, water_type, salinity)
-    return float(w.rho), float(w.nu)
-
-
-def medium_at(water: Water, temperature_C: float | None = None) -> tuple[float, float]:
-    """(rho [kg/m³], nu [m²/s]) of a protocol's [water] or [prototype.water] medium.
-
-    ``water`` is a :class:`towtank.ingest.protocol.Water`; ``temperature_C`` [°C] a run's
-    temperature, default the section's own (see :func:`water_at`).
-    """
-    t = water.temperature_C if temperature_C is None else temperature_C
-    return water_at(t, water.type, water.salinity_g_kg, water.pressure_Pa,
-                    water.relative_humidity_pct)
 
 
 def model_scale(protocol: Protocol) -> float | None:
@@ -184,9 +160,6 @@ def check_prototype_speeds(protocol: Protocol) -> None:
     Needs the prototype water's viscosity, so it runs once the analysis libraries are loaded
     (after the reductions), not in :func:`towtank.ingest.protocol.load_protocol`.
     """
-    from towtank.analysis import similarity
-    from towtank.errors import ProtocolError
-
     proto = protocol.prototype
     if protocol.model is None or proto is None:
         return
@@ -222,8 +195,6 @@ def run_table(
     """runs.csv: one row per run of the sheet (docs/formats.md §5), then extension columns;
     each usable run's coefficients from
     :func:`towtank.analysis.run_coefficients.run_coefficients`."""
-    from towtank.analysis.run_coefficients import run_coefficients
-
     rows = []
     model, fin = protocol.model, protocol.fin
     for rec in sheet.to_dict("records"):
@@ -295,27 +266,27 @@ def process_day(
         jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
                            protocol.sheet, air=protocol.water.is_air)
-    day_warnings = list(protocol.warnings) + list(sheet.attrs.get("warnings", [])) + \
-        unlisted_warnings(protocol, sheet)
-    from towtank.analysis.daywide import (
-        group_run_warnings,
-        sheet_note_sentences,
-        temperature_sentences,
-        unit_label_sentences,
-    )
-
-    day_warnings.extend(sheet_note_sentences(sheet.attrs.get("notes", [])))
+    day_warnings = [*notices(protocol.warnings, "protocol"),
+                    *notices(sheet.attrs.get("warnings", []), "sheet"),
+                    *unlisted_warnings(protocol, sheet)]
+    day_warnings += notices(sheet_note_sentences(sheet.attrs.get("notes", [])), "sheet")
     todo, rejected = runs_to_reduce(protocol, sheet)
+    said: list[str] = []
     reductions, previews = reduce_runs(protocol, sheet, todo, rejected, jobs=jobs,
                                        progress=progress, debug=debug, cache_dir=cache_dir,
-                                       warnings_out=day_warnings)
-    tares = tare_models(protocol, sheet, reductions, day_warnings)
+                                       warnings_out=said)
+    day_warnings += notices(said, "reduce")
+    said = []
+    tares = tare_models(protocol, sheet, reductions, said)
+    day_warnings += notices(said, "tare")
     apply_tares(protocol, sheet, reductions, tares, rejected)
     ordered = sorted(reductions.values(), key=lambda r: r.run)
-    day_warnings.extend(unit_label_sentences([(r.run, r.file, r.units) for r in ordered]))
-    day_warnings.extend(group_run_warnings([(r.run, r.file, w) for r in ordered
-                                            for w in r.warnings]))
-    day_warnings.extend(temperature_sentences(sheet, air=protocol.water.is_air))
+    day_warnings += notices(unit_label_sentences([(r.run, r.file, r.units) for r in ordered]),
+                            "reduce")
+    day_warnings += [Notice(line, "reduce", run, file) for run, file, line in run_warning_lines(
+        [(r.run, r.file, w) for r in ordered for w in r.warnings])]
+    day_warnings += [Notice(line, "sheet", run) for run, line in temperature_problems(
+        sheet, air=protocol.water.is_air)]
     runs = run_table(protocol, sheet, reductions, rejected)
     day = DayResult(
         protocol=protocol, sheet=sheet, reductions=reductions, rejected=rejected, tares=tares,
@@ -331,12 +302,13 @@ def _side_files(protocol: Protocol) -> list[SpeedLog | ZeroFile]:
     return [spec for spec in (protocol.speed_log, protocol.zeros) if spec is not None]
 
 
-def unlisted_warnings(protocol: Protocol, sheet: pd.DataFrame) -> list[str]:
+def unlisted_warnings(protocol: Protocol, sheet: pd.DataFrame) -> list[Notice]:
     """A warning per data file that no sheet row names (side files of the runs aside)."""
     logs = {log_path(spec, Path("."), str(f), int(r)).as_posix()
             for spec in _side_files(protocol)
             for r, f in zip(sheet["run"], sheet["file"], strict=True)}
-    return [f"{f} is in the data folder but not in the run sheet; it is ignored."
+    return [Notice(f"{f} is in the data folder but not in the run sheet; it is ignored.",
+                   "sheet", file=f)
             for f in unlisted_files(sheet, protocol.campaign.data_dir) if f not in logs]
 
 
@@ -386,8 +358,6 @@ def reduce_runs(
     """Every run of ``todo`` reduced (from the cache, or in worker processes), in sheet order,
     and the previews of runs read but not reduced; rejections are added to ``rejected``, a
     cache that cannot be used to ``warnings_out``."""
-    from towtank.runtime.parallel import map_runs
-
     if warnings_out is None:
         warnings_out = []
     reductions: dict[int, RunReduction] = {}
@@ -421,7 +391,7 @@ def reduce_runs(
         progress(done, len(todo))
     previews: dict[int, dict[str, np.ndarray]] = {}
     for i, (run, red, reason, preview) in enumerate(
-        map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug,
+        parallel.map_runs(reduce_record, protocol, to_reduce, jobs=jobs, debug=debug,
                  on_crash=crashed_record, preload=ANALYSIS_MODULES)
     ):
         if red is not None:
@@ -451,8 +421,6 @@ def reduce_runs(
 def _sound_reduction(red: RunReduction) -> bool:
     """Whether a reduction read back from the cache is whole: its sample tables' columns of
     one length, finite sample rate and sample count, known phase windows."""
-    from towtank.runtime.records import same_lengths
-
     tables = [red.samples, red.thumb] + ([red.series] if red.series is not None else [])
     return (all(same_lengths(t) for t in tables) and math.isfinite(red.fs) and red.fs > 0
             and red.n_samples >= 0
@@ -510,8 +478,6 @@ def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
 
 def _sha(path: Path) -> str:
     """sha256 of a file, or "" when it cannot be read (its run is rejected anyway)."""
-    from towtank.ingest.runfile import sha256_bytes
-
     try:
         return sha256_bytes(path.read_bytes())
     except OSError:
@@ -522,33 +488,35 @@ def analyse(day: DayResult) -> DayResult:
     """The fitting stages on the reduced runs, in order: hull coefficients, fins, scaling,
     vehicle. Each stage returns its result and its warnings; a stage's TowtankError becomes a
     warning of the day. Returns the day with the results (the given day is not changed)."""
-    from towtank.errors import TowtankError
-
     pause_at("fits")  # a test hook (towtank.runtime.pause); returns at once otherwise
     warns = list(day.warnings)
     p, runs = day.protocol, day.runs
     hull = fin = scaling = vehicle = None
     prototype = None
+
+    def failed(exc: TowtankError, stage: Stage) -> None:
+        warns.append(Notice(str(exc), stage))
+
     try:
         hull, more = hull_stage(p, runs, day.reductions, day.tares)
-        warns += more
+        warns += notices(more, "hull")
     except TowtankError as exc:
-        warns.append(str(exc))
+        failed(exc, "hull")
     try:
         fin, more = fin_stage(p, runs)
-        warns += more
+        warns += notices(more, "fins")
     except TowtankError as exc:
-        warns.append(str(exc))
+        failed(exc, "fins")
     try:
         scaling, prototype, more = scaling_stage(p, runs, hull)
-        warns += more
+        warns += notices(more, "scaling")
     except TowtankError as exc:
-        warns.append(str(exc))
+        failed(exc, "scaling")
     try:
         vehicle = vehicle_stage(p, hull, prototype)
-        warns += list(vehicle.warnings) if vehicle is not None else []
+        warns += notices(vehicle.warnings, "vehicle") if vehicle is not None else []
     except TowtankError as exc:
-        warns.append(str(exc))
+        failed(exc, "vehicle")
     return replace(day, warnings=warns, hull=hull, fin_result=fin, scaling_result=scaling,
                    vehicle=vehicle, prototype_values=prototype)
 
@@ -557,9 +525,6 @@ def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, Run
                tares: dict[str, TareModel]) -> tuple[HullResult | None, list[str]]:
     """The hull coefficients (:func:`towtank.analysis.hull.fit_hull`) and their warnings; None
     without a [model] or usable hull runs."""
-    from towtank.analysis import hull as fit
-    from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
-
     model = protocol.model
     if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
         return None, []
@@ -593,8 +558,6 @@ def vehicle_stage(protocol: Protocol, hull: HullResult | None,
     """Prediction and model of the protocol's [vehicle]; predicted beside measured."""
     if getattr(protocol, "vehicle", None) is None:
         return None
-    from towtank.vehicle.compare import day_vehicle
-
     measured = None
     if hull is not None:
         measured = hull.coefficients
@@ -608,8 +571,6 @@ def vehicle_stage(protocol: Protocol, hull: HullResult | None,
 def fin_stage(protocol: Protocol, runs: pd.DataFrame) -> tuple[FinResult | None, list[str]]:
     """The fins against the Sandia section data
     (:func:`towtank.analysis.fin_analysis.analyse_fins`); (None, []) without a [fin]."""
-    from towtank.analysis.fin_analysis import analyse_fins
-
     if protocol.fin is None:
         return None, []
     return analyse_fins(runs, protocol.fin)
@@ -620,8 +581,6 @@ def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | Non
     """Scaling to the [prototype] (:func:`towtank.analysis.scaling.scale_to_prototype`) and
     the hull coefficients' prototype values (:func:`towtank.analysis.scaling.prototype_values`);
     (None, None, []) without a [model] and a [prototype]."""
-    from towtank.analysis import scaling
-
     model, proto = protocol.model, protocol.prototype
     if model is None or proto is None:
         return None, None, []

@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import html
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar, get_args
 
 import numpy as np
 import pandas as pd
@@ -44,9 +45,15 @@ from towtank.vehicle.stage import VehiclePrediction
 R = TypeVar("R")
 
 __all__ = [
-    "DayResult", "Estimate", "FinResult", "HullResult", "ScalingResult", "Summary",
-    "TareResult", "VehicleResult",
+    "DayResult", "Estimate", "FinResult", "HullResult", "Notice", "STAGES", "ScalingResult",
+    "Stage", "Summary", "TareResult", "VehicleResult", "notices",
 ]
+
+#: The step of the day a warning comes from.
+Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "vehicle",
+                "export"]
+#: Every :data:`Stage`, in the order of the pipeline.
+STAGES: tuple[str, ...] = get_args(Stage)
 
 
 def require(result: R | None, stage: str) -> R:
@@ -63,6 +70,47 @@ def _esc(text: object) -> str:
 
 def _level(alpha: float) -> str:
     return f"{100.0 * (1.0 - alpha):g} %"
+
+
+@dataclass(frozen=True)
+class Notice:
+    """One warning of the day: a sentence and where it comes from.
+
+    ``str(notice)`` is the sentence, as ``towtank process`` prints it and the report and the
+    workbook list it; the fields say where it comes from, so that a program picks warnings by
+    stage, run or file and never by their words.
+
+    Attributes
+    ----------
+    text : str
+        The sentence
+    stage : Stage
+        The step it comes from: ``"protocol"``, ``"sheet"``, ``"reduce"``, ``"tare"``,
+        ``"hull"``, ``"fins"``, ``"scaling"``, ``"vehicle"`` or ``"export"``
+    run : int or None
+        The run it is about; None for the day or several runs
+    file : str or None
+        The file it is about (as the sheet names it); None for none or several
+    """
+
+    text: str
+    stage: Stage
+    run: int | None = None
+    file: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.stage not in STAGES:
+            raise ValueError(f"a notice's stage is one of {', '.join(STAGES)}, not "
+                             f"{self.stage!r}")
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def notices(texts: Iterable[str], stage: Stage, run: int | None = None,
+            file: str | None = None) -> list[Notice]:
+    """The sentences ``texts`` of one stage (and run, file) as :class:`Notice` objects."""
+    return [Notice(str(t), stage, run, file) for t in texts]
 
 
 @dataclass(frozen=True)
@@ -231,7 +279,8 @@ class DayResult:
     rejected: dict[int, str]
     tares: dict[str, TareModel]
     runs: pd.DataFrame
-    warnings: list[str] = field(default_factory=list)
+    #: the day's warnings, in the order of the stages (``str()`` of each is its sentence)
+    warnings: list[Notice] = field(default_factory=list)
     hull: HullResult | None = None
     fin_result: FinResult | None = None
     scaling_result: ScalingResult | None = None

@@ -14,8 +14,11 @@ from typing import Any
 
 import pandas as pd
 
+from towtank.ingest.calibration import UNITS
+
 __all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
-           "unit_label_sentences", "sheet_note_sentences", "temperature_sentences",
+           "run_warning_lines", "unit_label_sentences", "sheet_note_sentences",
+           "temperature_sentences", "temperature_problems",
            "run_ranges", "own_reason", "and_list", "MIN_GROUP"]
 
 #: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
@@ -141,18 +144,26 @@ def group_run_warnings(items: list[tuple[int, Any, str]], min_group: int = MIN_G
     taken out (``DragR`` left unmapped in every file) is one sentence naming how many runs and
     the first and last file; every other one stays ``run N: warning.``. In order of each
     line's first run."""
-    lines: list[tuple[int, str]] = []
+    return [line for _, _, line in run_warning_lines(items, min_group)]
+
+
+def run_warning_lines(items: list[tuple[int, Any, str]], min_group: int = MIN_GROUP
+                      ) -> list[tuple[int | None, Any, str]]:
+    """:func:`group_run_warnings` with the run and file of each line: ``(run, file, line)``
+    for a line about one run, ``(None, None, line)`` for a warning said once for many."""
+    lines: list[tuple[int, int | None, Any, str]] = []
     for generic, members in _by_text(items).items():
         if len(members) >= min_group:
             text = own_reason("\x00n", "\x00file", generic)
             text = text.replace("\x00file", "each run's file").replace("run \x00n", "each run")
             first = min(m[0] for m in members)
-            lines.append((first, f"{len(members)} runs ({_files([m[:2] for m in members])}; "
-                                 f"runs {run_ranges([m[0] for m in members])}): "
-                                 f"{text.rstrip('.')}."))
+            lines.append((first, None, None,
+                          f"{len(members)} runs ({_files([m[:2] for m in members])}; "
+                          f"runs {run_ranges([m[0] for m in members])}): "
+                          f"{text.rstrip('.')}."))
         else:
-            lines += [(m[0], f"run {m[0]}: {m[2].rstrip('.')}.") for m in members]
-    return [line for _, line in sorted(lines, key=lambda x: x[0])]
+            lines += [(m[0], m[0], m[1], f"run {m[0]}: {m[2].rstrip('.')}.") for m in members]
+    return [(run, file, line) for _, run, file, line in sorted(lines, key=lambda x: x[0])]
 
 
 def unit_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, str]]]]) -> list[str]:
@@ -185,8 +196,6 @@ def _unknown_label_sentences(items: list[tuple[int, Any, dict[str, tuple[str, st
     """One sentence per channel and unit label towtank does not convert (source
     ``"unknown"``): ``drag's unit label 'lb' is not one towtank converts in 42 run files
     (...): taken as N; ...``."""
-    from towtank.ingest.calibration import UNITS
-
     groups: dict[tuple[str, str], list[tuple[int, Any]]] = {}
     for run, file, units in items:
         for c, (u, src) in units.items():
@@ -220,14 +229,19 @@ def sheet_note_sentences(notes: list[str]) -> list[str]:
 def temperature_sentences(sheet: pd.DataFrame, *, air: bool = False) -> list[str]:
     """A sentence per run (void ones aside) whose temperature lies outside 0–40 °C [°C]:
     outside the ITTC water properties' range in water, the usual range of a rig in air."""
+    return [sentence for _, sentence in temperature_problems(sheet, air=air)]
+
+
+def temperature_problems(sheet: pd.DataFrame, *, air: bool = False) -> list[tuple[int, str]]:
+    """:func:`temperature_sentences` with each sentence's run: ``(run, sentence)``."""
     out = []
     for rec in sheet.to_dict("records"):
         temp = rec["water_temp_C"]
         if rec["status"] != "void" and not 0.0 <= temp <= 40.0:
-            out.append(
+            out.append((int(rec["run"]),
                 f"run {rec['run']}: air temperature {temp:g} °C is outside 0–40 °C, the usual "
                 "range of a test rig in air (a unit mistake?)." if air else
                 f"run {rec['run']}: water temperature {temp:g} °C is outside 0–40 °C, where the "
                 "ITTC water properties are extrapolated (a unit mistake?)."
-            )
+            ))
     return out

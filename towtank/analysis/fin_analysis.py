@@ -9,6 +9,7 @@ with the sentences the day's report carries.
 
 from __future__ import annotations
 
+import html
 import warnings
 from dataclasses import dataclass, field
 from typing import Literal
@@ -42,8 +43,6 @@ class FinResult:
                 f"AR_eff = {self.aspect_ratio:.4g}, e = {self.oswald_e:g})")
 
     def _repr_html_(self) -> str:
-        import html
-
         return f"<p><b>{html.escape(repr(self))}</b></p>" + self.curves.to_html(index=False)
 
 

@@ -29,13 +29,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 
+from towtank.ingest.protocol import read_reference_csv
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
 from towtank.reduce.tare import TareModel, tare_design
+from towtank.reference.sets import BUILTIN_REFERENCES, builtin_reference
 from towtank.stats.intervals import bm_dof, cr2_covariance, welch_satterthwaite
 from towtank.stats.quantiles import interval, normal_quantile, t95
 
@@ -50,46 +52,33 @@ MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv"
 ANGLE_TOL_DEG = 0.5
 
 
-class Agreement(str):
+@dataclass(frozen=True, repr=False)
+class Agreement:
     """The verdict of two estimates of one added mass: do they agree, by how much, within what.
 
-    A typed verdict (``agrees``, ``difference`` [kg], ``tolerance`` [kg]) that reads as its
-    sentence, "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds … kg",
-    the agreement column of coefficients.csv; nothing parses the sentence back.
+    A typed verdict: ``agrees`` (|difference| ≤ tolerance), ``difference`` [kg] (second
+    estimate minus the primary) and ``tolerance`` [kg] (:func:`agreement`). ``str()`` gives its
+    sentence, "agree: difference … kg within … kg" or "DISAGREE: difference … kg exceeds …
+    kg", the agreement column of coefficients.csv; nothing parses the sentence back.
     """
 
     agrees: bool
-    difference: float
-    tolerance: float
-
-    def __new__(cls, agrees: bool, difference: float, tolerance: float) -> Agreement:
-        text = f"{cls._verdict(agrees)}: {cls._detail(agrees, difference, tolerance)}"
-        self = super().__new__(cls, text)
-        self.agrees = bool(agrees)
-        self.difference, self.tolerance = float(difference), float(tolerance)
-        return self
-
-    def __getnewargs__(self) -> tuple[bool, float, float]:  # type: ignore[override]
-        return self.agrees, self.difference, self.tolerance  # copy and pickle rebuild it
-
-    @staticmethod
-    def _verdict(agrees: bool) -> str:
-        return "agree" if agrees else "DISAGREE"
-
-    @staticmethod
-    def _detail(agrees: bool, difference: float, tolerance: float) -> str:
-        word = "within" if agrees else "exceeds"
-        return f"difference {difference:+.2g} kg {word} {tolerance:.2g} kg"
+    difference: float  # [kg]
+    tolerance: float  # [kg]
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Literal["agree", "DISAGREE"]:
         """"agree" or "DISAGREE"."""
-        return self._verdict(self.agrees)
+        return "agree" if self.agrees else "DISAGREE"
 
     @property
     def detail(self) -> str:
         """"difference … kg within/exceeds … kg"."""
-        return self._detail(self.agrees, self.difference, self.tolerance)
+        word = "within" if self.agrees else "exceeds"
+        return f"difference {self.difference:+.2g} kg {word} {self.tolerance:.2g} kg"
+
+    def __str__(self) -> str:
+        return f"{self.verdict}: {self.detail}"
 
     def __repr__(self) -> str:
         return f"Agreement({self.verdict}, difference={self.difference:+.3g} kg, " \
@@ -359,6 +348,7 @@ def joint_regression(
     ClusteredOLS
         params (k2 [N s²/m²], k1 [N s/m], M [kg]), their covariance and its degrees of freedom.
     """
+    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     x = np.column_stack([speed * np.abs(speed), speed, accel])
@@ -486,7 +476,7 @@ def agreement(primary: float, second: float, se: float, spread: float) -> Agreem
     """
     tol = 2.0 * math.hypot(se, spread)
     diff = second - primary
-    return Agreement(abs(diff) <= max(tol, 1e-12), diff, tol)
+    return Agreement(bool(abs(diff) <= max(tol, 1e-12)), float(diff), float(tol))
 
 
 def curve_difference(
@@ -538,6 +528,7 @@ def curve_difference(
 # -------------------------------------------------------------------------------- damping
 def fit_cd_alpha(alpha_rad: np.ndarray, cd: np.ndarray):
     """OLS of C_D(α) = a·α² + b·α + c (report eq. 13); statsmodels results."""
+    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     x = np.column_stack([alpha_rad**2, alpha_rad, np.ones_like(alpha_rad)])
@@ -698,6 +689,7 @@ def fit_transverse(
     tares: dict[str, TareModel] | None = None,
 ) -> tuple[Estimate | None, float, float, pd.DataFrame | None, list[str]]:
     """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|."""
+    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     tr = select_runs(runs, 90.0)
@@ -870,6 +862,7 @@ def fit_hull(
     lift_slope = None
     small = hull_ok[np.abs(hull_ok["angle_deg"]) <= alpha_max_deg]
     if small["cl"].notna().sum() >= 3 and small["angle_deg"].nunique() >= 2:
+        # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
         from statsmodels.regression.linear_model import OLS
 
         a = np.radians(small["angle_deg"].to_numpy(float))
@@ -914,12 +907,8 @@ def hull_warnings(hull: HullFit) -> list[str]:
 def load_reference(reference: str) -> dict[str, float]:
     """Reference prime values by symbol: a built-in set ('remus', 'remus-prestero2001') or a
     CSV (symbol, prime)."""
-    from towtank.reference.sets import BUILTIN_REFERENCES, builtin_reference
-
     if reference in BUILTIN_REFERENCES:
         return builtin_reference(reference)
-    from towtank.ingest.protocol import read_reference_csv
-
     return read_reference_csv(reference)
 
 

@@ -11,8 +11,9 @@ and every hull coefficient gets its prototype value, prime × ½ρ_p·L_p^k
 
 from __future__ import annotations
 
+import html
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -47,6 +48,9 @@ class ScalingResult:
     #: 1 + k against Re (None without 1 + k)
     form_factor_trend: FormFactorTrend | None = None
     form_factor_trend_text: str = ""
+    #: the warning that prototype speeds give Re below [processing] laminar_re (their ITTC-57
+    #: drag indicative only); "" when none does
+    laminar_note: str = ""
 
     def to_frame(self) -> pd.DataFrame:
         """scaling.csv: one row per prototype speed."""
@@ -64,8 +68,6 @@ class ScalingResult:
 
 
 def _html(text: str) -> str:
-    import html
-
     return html.escape(text)
 
 
@@ -139,6 +141,7 @@ def scale_to_prototype(
     (ScalingResult or None, list of str)
         None when fewer than two straight runs give the resistance curve.
     """
+    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     warn: list[str] = []
@@ -228,9 +231,9 @@ def scale_to_prototype(
         )
     laminar = table.loc[table["re_prototype"] < laminar_re, "speed_prototype"]
     if len(laminar):
-        warn.append(
-            "prototype speeds " + ", ".join(f"{v:g}" for v in laminar) + " m/s give Re below "
-            f"{laminar_re:g} ([processing] laminar_re), where the flow need not be "
-            "turbulent: the ITTC-57 drag there is indicative only."
-        )
+        note = ("prototype speeds " + ", ".join(f"{v:g}" for v in laminar) + " m/s give Re "
+                f"below {laminar_re:g} ([processing] laminar_re), where the flow need not be "
+                "turbulent: the ITTC-57 drag there is indicative only.")
+        warn.append(note)
+        result = replace(result, laminar_note=note)
     return result, warn

@@ -24,7 +24,9 @@ from towtank.analysis.form_factor_trend import (  # noqa: F401  (re-exported)
 )
 
 #: Standard acceleration of gravity [m/s^2].
+from towtank.ingest.protocol_types import Water
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.reference.water import water_at
 from towtank.stats.grouping import speed_groups  # noqa: F401  (re-exported)
 
 #: Depth-to-diameter ratio beyond which a submerged body of revolution makes no significant waves.
@@ -56,6 +58,24 @@ SCALING_COLUMNS = (
 #: scaling.csv's columns after :data:`SCALING_COLUMNS`, added by the day's pipeline: the
 #: prototype resistance the report recommends [N] and the column it is taken from (or "none").
 SCALING_RECOMMENDED_COLUMNS = ("drag_recommended", "recommended")
+
+
+def medium_at(water: Water, temperature_C: float | None = None) -> tuple[float, float]:
+    """(rho [kg/m^3], nu [m^2/s]) of a protocol's [water] or [prototype.water] medium
+    (:func:`towtank.reference.water.water_at`: ITTC 7.5-02-01-03 for water, CIPM-2007 and
+    Sutherland for air).
+
+    Parameters
+    ----------
+    water : towtank.ingest.protocol_types.Water
+        The section: type, temperature [°C], salinity [g/kg], pressure [Pa] and relative
+        humidity [%] of air
+    temperature_C : float, optional
+        A run's temperature [°C]; default the section's own
+    """
+    t = water.temperature_C if temperature_C is None else temperature_C
+    return water_at(t, water.type, water.salinity_g_kg, water.pressure_Pa,
+                    water.relative_humidity_pct)
 
 
 def froude_number(

@@ -11,7 +11,7 @@ import pandas as pd
 from towtank.analysis import similarity
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import Prototype, Water, load_protocol
-from towtank.pipeline import medium_at, process_day
+from towtank.pipeline import process_day
 
 
 def scale_command(
@@ -46,7 +46,7 @@ def scale_command(
         )
     elif speeds:
         proto = replace(proto, speeds_m_s=tuple(float(s) for s in speeds))
-    _, nu_p = medium_at(proto.water)
+    _, nu_p = similarity.medium_at(proto.water)
     try:
         similarity.check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
     except ValueError as exc:
@@ -60,7 +60,8 @@ def scale_command(
     day = process_day(protocol_path, protocol=protocol,
                       cache_dir=cache if cache.is_dir() else None)
     if day.scaling_result is None:
-        print("no scaling table: " + " ".join(day.warnings[-1:]))
+        said = [str(n) for n in day.warnings if n.stage == "scaling"]
+        print("no scaling table: " + " ".join(said[-1:]))
         return 1
     sc = day.scaling_result
     table = sc.table
@@ -95,9 +96,8 @@ def scale_command(
     else:
         print("no form factor: R_p ITTC-57 needs the model's wetted area and runs above "
               "the laminar range")
-    for w in day.warnings:
-        if w.startswith("prototype speeds") and "indicative only" in w:
-            print(f"warning: {w}")
+    if sc.laminar_note:
+        print(f"warning: {sc.laminar_note}")
     if sc.recommendation is not None:
         print(sc.recommendation.rule)
     print(sc.statement)

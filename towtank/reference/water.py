@@ -26,6 +26,12 @@ from dataclasses import dataclass
 import iapws
 import numpy as np
 
+from towtank.reference.air import (
+    DEFAULT_RELATIVE_HUMIDITY_PCT,
+    STANDARD_PRESSURE_PA,
+    air_properties,
+)
+
 #: Atmospheric pressure [MPa], the pressure of the ITTC tables.
 ATMOSPHERIC_PRESSURE_MPA = 0.101325
 
@@ -317,3 +323,43 @@ def kinematic_viscosity(
         Kinematic viscosity [m^2/s]
     """
     return water_properties(temperature_C, water_type, salinity_g_kg).nu
+
+
+def water_at(temperature_C: float, water_type: str, salinity_g_kg: float | None,
+             pressure_Pa: float | None = None,
+             relative_humidity_pct: float | None = None) -> tuple[float, float]:
+    """(rho [kg/m^3], nu [m^2/s]) of the tank's or the prototype's medium.
+
+    Water (``fresh``, ``sea``): ITTC 7.5-02-01-03 (:func:`water_properties`). Air
+    (``air``): CIPM-2007 density and Sutherland viscosity
+    (:func:`towtank.reference.air.air_properties`).
+
+    Out-of-range warnings (WaterPropertyWarning) are silenced here: the protocol's unit checks
+    already put a temperature or salinity outside the ITTC range of [water] and
+    [prototype.water] into the day's warnings, and each run's temperature is checked when the
+    day is processed.
+
+    Parameters
+    ----------
+    temperature_C : float
+        Temperature of the medium [°C]
+    water_type : str
+        ``"fresh"``, ``"sea"`` or ``"air"``
+    salinity_g_kg : float or None
+        Absolute salinity [g/kg], sea water only; None for standard sea water (35.165 g/kg)
+    pressure_Pa : float, optional
+        Absolute pressure of air [Pa]; default 101325 Pa
+    relative_humidity_pct : float, optional
+        Relative humidity of air [%]; default 50 %
+    """
+    if water_type == "air":
+        a = air_properties(
+            temperature_C,
+            STANDARD_PRESSURE_PA if pressure_Pa is None else pressure_Pa,
+            DEFAULT_RELATIVE_HUMIDITY_PCT if relative_humidity_pct is None
+            else relative_humidity_pct)
+        return float(a.rho), float(a.nu)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        w = water_properties(temperature_C, water_type, salinity_g_kg)
+    return float(w.rho), float(w.nu)

@@ -202,9 +202,10 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
 
         if export:  # first: a run that cannot be exported is a warning of the report
             from towtank.report.export import export_runs
+            from towtank.results import notices
 
-            day.warnings.extend(w for w in export_runs(day, tmp, tuple(export))
-                                if w not in day.warnings)
+            day.warnings.extend(n for n in notices(export_runs(day, tmp, tuple(export)),
+                                                   "export") if n not in day.warnings)
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
             from towtank.report.vehicle import write_vehicle

@@ -128,7 +128,7 @@ def quality_flow(day: DayResult) -> Flow:
     f.h("Warnings")
     if day.warnings:
         for w in day.warnings:
-            f.li(w)
+            f.li(str(w))
     else:
         f.p("None.")
     _diagnostics_flow(f, day)

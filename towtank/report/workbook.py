@@ -598,7 +598,7 @@ def _quality(w: SheetWriter, day: DayResult) -> None:
     w.gap()
     w.title("Warnings")
     if day.warnings:
-        w.table(pd.DataFrame({"warning": day.warnings}), wrap=("warning",))
+        w.table(pd.DataFrame({"warning": [str(n) for n in day.warnings]}), wrap=("warning",))
     else:
         w.note("None.")
     hf = day.hull.fit if day.hull is not None else None

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from towtank.errors import TowtankError
 from towtank.vehicle.predict import prime_exponent
 from towtank.vehicle.stage import VehiclePrediction, predict_vehicle
 
@@ -98,8 +99,6 @@ def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
         VehiclePrediction, pd.DataFrame | None, list[str]]:
     """The day's prediction and model (measured values first), coefficients.csv with the
     predicted columns (None without measured coefficients) and the warnings."""
-    from towtank.errors import TowtankError
-
     try:
         first = predict_vehicle(protocol)
     except ValueError as exc:  # e.g. a hull table that cannot be read: the day goes on

@@ -37,6 +37,7 @@ from towtank.reference.series58 import (
     series58_coefficients,
     series58_radius,
 )
+from towtank.vehicle.schema import check_hull, joined
 
 __all__ = [
     "HullProfile",
@@ -262,8 +263,6 @@ def table_profile(path: str | Path) -> HullProfile:
         raise ValueError(f"{path.name}: x_m must increase strictly from nose to tail.")
     if np.any(r < 0) or r.max() <= 0:
         raise ValueError(f"{path.name}: r_m must be >= 0 m with at least one positive radius.")
-    from towtank.vehicle.schema import check_hull, joined
-
     problems = check_hull(x, r, path.name)  # a length or fineness no vehicle has
     if problems:
         raise ValueError(joined(problems))

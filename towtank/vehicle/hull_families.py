@@ -21,6 +21,10 @@ from typing import Any
 import pandas as pd
 
 from towtank.ingest.vehicle_protocol import Vehicle, VehicleFin
+from towtank.vehicle import hull as hull_lib
+from towtank.vehicle.model import G
+from towtank.vehicle.simulate import manoeuvre_metrics, simulate
+from towtank.vehicle.stage import predict_vehicle
 
 __all__ = ["TABLE6", "BG_M", "FIN_SPAN_M", "FIN_CHORD_M", "FIN_STATION", "MASS_KG",
            "SPEED_M_S", "RUDDER_DEG", "MYRING_TABLE6", "table6_vehicles", "turning_comparison",
@@ -55,9 +59,6 @@ class _Water:
 def table6_vehicles(hulls: tuple[str, ...] = ("myring", "suboff", "series58")
                     ) -> dict[str, Vehicle]:
     """The ``[vehicle]`` of each hull of Table 6 that towtank has, as stated in the module."""
-    from towtank.vehicle import hull as hull_lib
-    from towtank.vehicle.model import G
-
     out = {}
     for _, row in TABLE6.set_index("hull").loc[list(hulls)].iterrows():
         name = row.name
@@ -93,9 +94,6 @@ def turning_comparison(hulls: tuple[str, ...] = ("myring", "suboff", "series58")
     radius over the length [-] (``simulate --manoeuvre turning --rudder-deg 10`` at 1.25 m/s)
     and the table's three.
     """
-    from towtank.vehicle.simulate import manoeuvre_metrics, simulate
-    from towtank.vehicle.stage import predict_vehicle
-
     vehicles = vehicles or table6_vehicles(hulls)
     table = TABLE6.set_index("hull")
     rows = []

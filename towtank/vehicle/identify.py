@@ -28,15 +28,25 @@ simulated against the measured states, weighted by each channel's noise; the cov
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
+from filterpy.kalman import UnscentedKalmanFilter as UKF
 from scipy import stats
+from scipy.optimize import least_squares
 
+from towtank.vehicle.fossen import (
+    DOF,
+    SYMBOL_RE,
+    VELOCITIES,
+    added_mass_matrix,
+    rigid_body_mass_matrix,
+)
 from towtank.vehicle.identify_log import STATE_COLUMNS, ManoeuvreLog, noise_sd
-from towtank.vehicle.model import SYMBOL_RE, added_mass_matrix
 from towtank.vehicle.predict import coefficient_unit
 
 __all__ = ["MAX_STEP_S", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel", "IdentifyResult",
@@ -76,8 +86,6 @@ ALPHA = 0.1
 #: predicted motion blows up; the filter's estimate is projected onto the bound after each
 #: update (Simon 2010) (docs/method.md, "Robustness from zero starts") [-].
 DOT_BOUND = 0.5
-_DOF = "XYZKMN"
-_VEL = "uvwpqr"
 
 
 class BatchModel:
@@ -103,11 +111,7 @@ class BatchModel:
         self.rg = np.asarray(model["cg_m"], dtype=float)
         self.rb = np.asarray(model["cb_m"], dtype=float)
         self.io = np.diag(np.asarray(model["inertia_kg_m2"], dtype=float))
-        m_rb = np.zeros((6, 6))
-        m_rb[:3, :3] = self.mass * np.eye(3)
-        m_rb[:3, 3:] = -self.mass * _skew(self.rg)
-        m_rb[3:, :3] = self.mass * _skew(self.rg)
-        m_rb[3:, 3:] = self.io
+        m_rb = rigid_body_mass_matrix(self.mass, self.rg, self.io)
         self.ma0 = added_mass_matrix(base)
         self.mb = []  # d M_A / d beta_j
         self.dot_index = []
@@ -122,8 +126,8 @@ class BatchModel:
         # so that the total inertia of its degree of freedom stays >= half the known one
         self.upper = np.full(len(estimate), np.inf)
         for j, s in enumerate(estimate):
-            if s.endswith("dot") and _DOF.index(s[0]) == _VEL.index(s[2]):
-                i = _DOF.index(s[0])
+            if s.endswith("dot") and DOF.index(s[0]) == VELOCITIES.index(s[2]):
+                i = DOF.index(s[0])
                 self.upper[j] = DOT_BOUND * (m_rb[i, i] + self.ma0[i, i])
         # fixed terms: product index table over ext = [nu, |nu|, dr, ds, 1]
         fixed = [(s, v) for s, v in base.items() if not s.split("_", 1)[1].endswith("dot")
@@ -138,18 +142,17 @@ class BatchModel:
 
     @staticmethod
     def _table(terms: list[tuple[str, float]]) -> tuple[np.ndarray, np.ndarray]:
-        import re
-
         rows, coefs = [], []
         for sym, val in terms:
             head, _, sub = sym.partition("_")
             idx = []
             for tok in re.findall(r"\|[uvwpqr]\||dr|ds|[uvwpqr]", sub):
                 idx.append(12 if tok == "dr" else 13 if tok == "ds" else
-                           6 + _VEL.index(tok[1]) if tok.startswith("|") else _VEL.index(tok))
+                           6 + VELOCITIES.index(tok[1]) if tok.startswith("|")
+                           else VELOCITIES.index(tok))
             rows.append(idx)
             c = np.zeros(6)
-            c[_DOF.index(head)] = val
+            c[DOF.index(head)] = val
             coefs.append(c)
         width = max((len(r) for r in rows), default=1)
         table = np.array([r + [14] * (width - len(r)) for r in rows], dtype=int).reshape(
@@ -257,10 +260,6 @@ class BatchModel:
 def _cross3(a: Any, b: Any) -> list[Any]:
     """Cross product of two 3-vectors given as their components (arrays or numbers)."""
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def _skew(a: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
 
 
 def rts_smooth(xs: np.ndarray, ps: np.ndarray, x_prior: np.ndarray, p_prior: np.ndarray,
@@ -460,9 +459,6 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     ValueError
         The filter diverged (one sentence).
     """
-    from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
-    from filterpy.kalman import UnscentedKalmanFilter as UKF
-
     k = len(symbols)
     thrust = 6 in log.measured  # the speed the thrust balances: one more state
     dim = 12 + k + (1 if thrust else 0)
@@ -596,8 +592,6 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     dict
         ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``.
     """
-    from scipy.optimize import least_squares
-
     for frac in windows[:-1]:
         n = max(int(frac * len(log.t)), 20)
         sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],
@@ -786,5 +780,5 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
 
 
 def _dot(symbol: str) -> bool:
-    return (len(symbol) == 6 and symbol[0] in _DOF and symbol[1] == "_"
-            and symbol[2] in _VEL and symbol[3:] == "dot")
+    return (len(symbol) == 6 and symbol[0] in DOF and symbol[1] == "_"
+            and symbol[2] in VELOCITIES and symbol[3:] == "dot")

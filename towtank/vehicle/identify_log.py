@@ -10,6 +10,7 @@ are required. Other column names are mapped by a ``[channels]`` table
 
 from __future__ import annotations
 
+import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -117,8 +118,6 @@ def read_log(path: Any, channels: dict[str, Any] | None = None) -> ManoeuvreLog:
 
 
 def csv_error() -> type[Exception]:
-    import csv
-
     return csv.Error
 
 

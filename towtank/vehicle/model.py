@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import json
 import math
-import re
+import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +25,21 @@ from scipy.integrate import trapezoid
 
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle import hull as hulls
+from towtank.vehicle import schema
+from towtank.vehicle.fossen import (
+    DOF,
+    REQUIRED_KEYS,
+    SYMBOL_RE,
+    VELOCITIES,
+    added_mass_matrix,
+    coriolis_added_mass,
+)
+from towtank.vehicle.schema import ModelError, check_hull, joined
 
 __all__ = [
     "G",
     "SYMBOL_RE",
+    "REQUIRED_KEYS",
     "added_mass_matrix",
     "coriolis_added_mass",
     "lumped_to_fossen",
@@ -39,50 +51,15 @@ __all__ = [
 ]
 
 G = STANDARD_GRAVITY  # [m/s²]
-SYMBOL_RE = re.compile(r"^[XYZKMN]_(\|[uvwpqr]\||[uvwpqr]|dr|ds)+$")
-_DOF = "XYZKMN"
-_VEL = "uvwpqr"
 #: Prestero's lumped terms that carry an added-mass part, and the pair of velocities.
 LUMPED = {"Y_ur": ("u", "r"), "Z_uq": ("u", "q"), "N_uv": ("u", "v"), "M_uw": ("u", "w"),
           "N_ur": ("u", "r"), "M_uq": ("u", "q"), "Y_uv": ("u", "v"), "Z_uw": ("u", "w")}
 
 
-def added_mass_matrix(coefficients: dict[str, float]) -> np.ndarray:
-    """M_A (6x6, symmetric) from the ``<F>_<v>dot`` coefficients: M_A[i, j] = -F_i,vdot_j.
-
-    A missing coefficient is zero; where only one of a symmetric pair is given (Y_rdot,
-    N_vdot) it stands for both.
-    """
-    ma = np.zeros((6, 6))
-    for i, f in enumerate(_DOF):
-        for j, v in enumerate(_VEL):
-            a = coefficients.get(f"{f}_{v}dot")
-            b = coefficients.get(f"{_DOF[j]}_{_VEL[i]}dot")
-            val = a if a is not None else b
-            if val is not None:
-                ma[i, j] = -float(val)
-    return 0.5 * (ma + ma.T)
-
-
-def _skew(a: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-
-
-def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """C_A(nu) nu of Fossen (2011) eq. 6.43, the force the added mass exerts is its negative.
-
-    ``C_A = [[0, -S(A11 nu1 + A12 nu2)], [-S(A11 nu1 + A12 nu2), -S(A21 nu1 + A22 nu2)]]``.
-    """
-    nu1, nu2 = nu[:3], nu[3:]
-    a = ma[:3, :3] @ nu1 + ma[:3, 3:] @ nu2
-    b = ma[3:, :3] @ nu1 + ma[3:, 3:] @ nu2
-    return np.concatenate((-_skew(a) @ nu2, -_skew(a) @ nu1 - _skew(b) @ nu2))
-
-
 def _ca_bilinear(ma: np.ndarray, symbol: str) -> float:
     """The coefficient of the product of two velocities in the force -C_A(nu) nu."""
-    dof = _DOF.index(symbol[0])
-    i, j = (_VEL.index(c) for c in LUMPED[symbol])
+    dof = DOF.index(symbol[0])
+    i, j = (VELOCITIES.index(c) for c in LUMPED[symbol])
 
     def force(x: float, y: float) -> float:
         nu = np.zeros(6)
@@ -131,8 +108,6 @@ def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
     else:
         profile = hulls.table_profile(vehicle.hull_table)
     profile = profile.scaled(vehicle.scale) if vehicle.scale != 1.0 else profile
-    from towtank.vehicle.schema import check_hull, joined
-
     with np.errstate(all="ignore"):
         scale = f", scale = {vehicle.scale:g}" if vehicle.scale != 1.0 else ""
         problems = check_hull(profile.x_m, profile.r_m, f"[vehicle] ({profile.name} hull{scale})")
@@ -275,21 +250,12 @@ def write_model(model: dict[str, Any], path: str | Path) -> Path:
     return path
 
 
-REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
-                 "inertia_kg_m2", "coefficients")
-
-
 def _read_bytes(path: Path, limit: int) -> bytes:
     """The bytes of ``path`` if it is a regular file of at most ``limit`` bytes.
 
     Opened without blocking (a named pipe or a device is refused, never waited on) and read
     no further than ``limit + 1`` bytes.
     """
-    import os
-    import stat
-
-    from towtank.vehicle.schema import ModelError
-
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     try:
         fd = os.open(path, flags)
@@ -325,8 +291,6 @@ def read_model(path: str | Path) -> dict[str, Any]:
     towtank.vehicle.schema.ModelError
         A ValueError whose ``problems`` hold one sentence per problem (all of them).
     """
-    from towtank.vehicle import schema
-
     path = Path(path)
     data = _read_bytes(path, schema.MAX_MODEL_BYTES)
     try:

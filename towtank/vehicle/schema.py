@@ -18,6 +18,7 @@ The limits are module constants, stated in the sentences and in docs/formats.md:
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from typing import Any
@@ -25,6 +26,12 @@ from typing import Any
 import numpy as np
 
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.vehicle.fossen import (
+    REQUIRED_KEYS,
+    SYMBOL_RE,
+    added_mass_matrix,
+    rigid_body_mass_matrix,
+)
 
 __all__ = [
     "MAX_MODEL_BYTES",
@@ -50,6 +57,7 @@ __all__ = [
     "check_covariance",
     "check_simulation",
     "check_hull",
+    "default_duration",
     "joined",
 ]
 
@@ -116,8 +124,6 @@ def joined(problems: list[str]) -> str:
 
 def _show(value: Any, width: int = 60) -> str:
     """A value as a sentence quotes it: as JSON writes it (null, NaN, "text"), shortened."""
-    import json
-
     try:
         text = json.dumps(value, ensure_ascii=False)
     except (TypeError, ValueError, RecursionError):
@@ -183,8 +189,6 @@ def json_depth(value: Any, limit: int = MAX_DEPTH) -> int:
 def _symbol_problem(sym: Any, name: str, where: str = "") -> str | None:
     """The sentence for a symbol that is not a coefficient's (``where``: " in ..." when it is
     not a key of 'coefficients'), else None."""
-    from towtank.vehicle.model import SYMBOL_RE
-
     shown = f"'{sym}'" if isinstance(sym, str) and len(sym) <= 60 else _show(sym)
     if not isinstance(sym, str) or not (SYMBOL_RE.match(sym) or _ADDED_MASS.match(sym)):
         return (f"{name}: {shown}{where} is not a coefficient symbol this model knows "
@@ -224,8 +228,6 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
     list of str
         The problems; empty for a usable model.
     """
-    from towtank.vehicle.model import REQUIRED_KEYS
-
     if not isinstance(model, dict):
         return [f"{name}: the model file is not a JSON object but {_kind(model)}."]
     problems = [f"{name}: the model lacks the key '{key}'." for key in REQUIRED_KEYS
@@ -322,15 +324,7 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
 
 def _check_mass_matrix(mass: float, cg: list[float], inertia: list[float],
                        coefficients: dict[str, float], name: str) -> list[str]:
-    from towtank.vehicle.model import added_mass_matrix
-
-    m_rb = np.zeros((6, 6))
-    rg = np.asarray(cg, dtype=float)
-    skew = np.array([[0.0, -rg[2], rg[1]], [rg[2], 0.0, -rg[0]], [-rg[1], rg[0], 0.0]])
-    m_rb[:3, :3] = mass * np.eye(3)
-    m_rb[:3, 3:] = -mass * skew
-    m_rb[3:, :3] = mass * skew
-    m_rb[3:, 3:] = np.diag(inertia)
+    m_rb = rigid_body_mass_matrix(mass, np.asarray(cg, dtype=float), np.diag(inertia))
     with np.errstate(all="ignore"):
         total = m_rb + added_mass_matrix(coefficients)
         eig = np.linalg.eigvalsh(total) if np.all(np.isfinite(total)) else None
@@ -426,7 +420,7 @@ def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s:
         Control angles [deg], within ± :data:`MAX_CONTROL_DEG`
     duration_s : float, optional
         Simulated time [s], in (0, :data:`MAX_DURATION_S`]; None for the manoeuvre's default
-        (:func:`towtank.vehicle.simulate.default_duration`), which must also lie there
+        (:func:`default_duration`), which must also lie there
     net_buoyancy_n : float, optional
         Buoyancy minus weight [N]: finite, at most :data:`MAX_NET_BUOYANCY_RATIO` times the
         model's weight_N in size, and leaving the vehicle a weight > 0
@@ -459,8 +453,6 @@ def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s:
                             f"{MAX_DURATION_S:g} s (the longest towtank simulates), not "
                             f"{_show(duration_s)}.")
     elif model is not None and speed is not None:
-        from towtank.vehicle.simulate import default_duration
-
         d = default_duration(model, manoeuvre, speed)
         if d > MAX_DURATION_S:
             problems.append(f"{name}: the default simulated time of a {manoeuvre} at "
@@ -490,6 +482,17 @@ def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s:
             problems.append(f"--net-buoyancy-N {net:g} would leave the vehicle no weight (its "
                             f"buoyancy_N is {buoyancy:g} N); it must be less than that.")
     return problems
+
+
+def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) -> float:
+    """The simulated time of a manoeuvre without ``duration_s`` [s]: 40 vehicle lengths of
+    travel at ``speed_m_s`` [m/s] (a glide 200; turning, spiral and zigzag at least 120),
+    the length the model's ``length_m`` [m], else 1 m."""
+    length = float(model.get("length_m", 1.0))
+    duration = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
+    if manoeuvre in ("turning", "spiral", "zigzag", "sine", "schedule"):
+        duration = max(duration, 120.0 * length / speed_m_s)
+    return duration
 
 
 def check_hull(x_m: np.ndarray, r_m: np.ndarray, name: str) -> list[str]:

@@ -39,14 +39,26 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
+from scipy.optimize import fsolve
 
-from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass
-from towtank.vehicle.schema import MAX_STEPS
+from towtank.vehicle import steady as sd
+from towtank.vehicle.fossen import (
+    DOF,
+    VELOCITIES,
+    added_mass_matrix,
+    coriolis_added_mass,
+    rigid_body_mass_matrix,
+    skew,
+)
+from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
+from towtank.vehicle.schema import MAX_STEPS, default_duration
+from towtank.vehicle.wings import Wings
 
 __all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
            "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
@@ -67,15 +79,9 @@ TRIM_PITCH_DEG = 2.0
 TRIM_DEPTH_RATE_M_S = 0.05
 
 MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide", "sine", "schedule")
-_DOF = "XYZKMN"
-_VEL = "uvwpqr"
 _TOKEN = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
 COLUMNS = ("t_s", "x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
            "w_m_s", "p_deg_s", "q_deg_s", "r_deg_s", "rudder_deg", "sternplane_deg")
-
-
-def _skew(a: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
 
 
 def _terms(coefficients: dict[str, float]) -> list[tuple[int, float, list[tuple[str, int]]]]:
@@ -93,10 +99,10 @@ def _terms(coefficients: dict[str, float]) -> list[tuple[int, float, list[tuple[
             if tok in ("dr", "ds"):
                 spec.append((tok, 0))
             elif tok.startswith("|"):
-                spec.append(("abs", _VEL.index(tok[1])))
+                spec.append(("abs", VELOCITIES.index(tok[1])))
             else:
-                spec.append(("vel", _VEL.index(tok)))
-        out.append((_DOF.index(head), float(val), spec))
+                spec.append(("vel", VELOCITIES.index(tok)))
+        out.append((DOF.index(head), float(val), spec))
     return out
 
 
@@ -121,11 +127,7 @@ class Dynamics:
         self.rg = np.asarray(mdl["cg_m"], dtype=float)
         self.rb = np.asarray(mdl["cb_m"], dtype=float)
         self.io = np.diag(np.asarray(mdl["inertia_kg_m2"], dtype=float))
-        m_rb = np.zeros((6, 6))
-        m_rb[:3, :3] = self.mass * np.eye(3)
-        m_rb[:3, 3:] = -self.mass * _skew(self.rg)
-        m_rb[3:, :3] = self.mass * _skew(self.rg)
-        m_rb[3:, 3:] = self.io
+        m_rb = rigid_body_mass_matrix(self.mass, self.rg, self.io)
         self.ma = added_mass_matrix(mdl["coefficients"])
         self.m_total = m_rb + self.ma
         self.m_inv = np.linalg.inv(self.m_total)
@@ -133,8 +135,6 @@ class Dynamics:
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
         glider = mdl.get("glider")
         if isinstance(glider, dict) and "wing_area_m2" in glider:
-            from towtank.vehicle.wings import Wings
-
             self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
         else:
             self.wings = None
@@ -153,9 +153,9 @@ class Dynamics:
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
         nu1, nu2 = nu[:3], nu[3:]
-        s2 = _skew(nu2)
-        top = self.mass * s2 @ nu1 - self.mass * s2 @ _skew(self.rg) @ nu2
-        bottom = self.mass * _skew(self.rg) @ s2 @ nu1 - _skew(self.io @ nu2) @ nu2
+        s2 = skew(nu2)
+        top = self.mass * s2 @ nu1 - self.mass * s2 @ skew(self.rg) @ nu2
+        bottom = self.mass * skew(self.rg) @ s2 @ nu1 - skew(self.io @ nu2) @ nu2
         return np.concatenate((top, bottom))
 
     def restoring(self, phi: float, theta: float) -> np.ndarray:
@@ -258,11 +258,6 @@ def simulate(
     if not (math.isfinite(speed_m_s) and speed_m_s > 0):
         raise ValueError(f"the speed must be > 0 m/s, not {speed_m_s}.")
     if manoeuvre == "glide" and roll_deg:  # the roll mass turned (#26)
-        from towtank.vehicle.glider_controls import (
-            cg_with_controls,
-            roll_mass_angle_for_static_roll_deg,
-        )
-
         gamma = math.radians(roll_mass_angle_for_static_roll_deg(model, roll_deg))
         model = dict(model, cg_m=cg_with_controls(model, 0.0, gamma).tolist())
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
@@ -400,8 +395,6 @@ def read_schedule(path: Any, limit_deg: float = 45.0) -> pd.DataFrame:
     ValueError
         One sentence naming the file and the problem.
     """
-    from pathlib import Path
-
     name = Path(path).name
     try:
         tab = pd.read_csv(path)
@@ -485,8 +478,6 @@ def trim_state(model: dict[str, Any], speed_m_s: float,
         ``pitch_deg`` [deg], ``depth_rate_m_s`` [m/s, positive down], ``u_m_s``, ``w_m_s``
         [m/s], ``converged`` (False: no steady straight run found; the others NaN)
     """
-    from scipy.optimize import fsolve
-
     weight = None if net_buoyancy_n is None else float(model["buoyancy_N"]) - net_buoyancy_n
     dyn = Dynamics(model, weight)
     thrust = -dyn.x_uu * speed_m_s * abs(speed_m_s)
@@ -529,17 +520,6 @@ def trim_warning(model: dict[str, Any], speed_m_s: float,
                 f"{abs(st['depth_rate_m_s']):.3g} m/s (in trim: within +-{TRIM_PITCH_DEG:g} deg "
                 f"and +-{TRIM_DEPTH_RATE_M_S:g} m/s); {check}.")
     return None
-
-
-def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) -> float:
-    """The simulated time of a manoeuvre without ``duration_s`` [s]: 40 vehicle lengths of
-    travel at ``speed_m_s`` [m/s] (a glide 200; turning, spiral and zigzag at least 120),
-    the length the model's ``length_m`` [m], else 1 m."""
-    length = float(model.get("length_m", 1.0))
-    duration = (200.0 if manoeuvre == "glide" else 40.0) * length / speed_m_s
-    if manoeuvre in ("turning", "spiral", "zigzag", "sine", "schedule"):
-        duration = max(duration, 120.0 * length / speed_m_s)
-    return duration
 
 
 class _Stop(Exception):
@@ -645,8 +625,6 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
     +-180 deg. The turn radius is the least-squares circle through the plan track (x, y) of
     that part (:func:`towtank.vehicle.steady.circle_fit`).
     """
-    from towtank.vehicle import steady as sd
-
     kind = ts.attrs.get("manoeuvre", "turning")
     rows: list[tuple[str, float, str, str]] = []
     nan = float("nan")

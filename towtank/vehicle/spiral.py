@@ -29,6 +29,7 @@ import pandas as pd
 from scipy.optimize import root
 
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.vehicle.glider import steady_glide
 from towtank.vehicle.glider_controls import ballast_model, cg_with_controls, net_buoyancy
 from towtank.vehicle.model import coriolis_added_mass
 from towtank.vehicle.simulate import Dynamics
@@ -72,8 +73,6 @@ def _scales(dyn: Dynamics, model: dict[str, Any]) -> np.ndarray:
 def _solve_glide(model: dict[str, Any], dyn: Dynamics, theta: float
                  ) -> tuple[np.ndarray, bool, str]:
     """u, w, travel of the wings-level glide."""
-    from towtank.vehicle.glider import steady_glide
-
     net = dyn.buoyancy - dyn.weight_n
     glide = steady_glide(model, net, math.degrees(theta))
     mp = float(model["glider"]["moving_mass_kg"])

@@ -11,7 +11,9 @@ import pandas as pd
 from towtank.reference import water as water_props
 from towtank.vehicle import model as vmodel
 from towtank.vehicle.hull import HullProfile
-from towtank.vehicle.predict import FinPair, predict_coefficients
+from towtank.vehicle.powering import Propeller, powering_table
+from towtank.vehicle.predict import FinPair, axial_drag, predict_coefficients
+from towtank.vehicle.pressure_hull import pressure_hull_table
 
 
 @dataclass(frozen=True)
@@ -77,9 +79,6 @@ def _powering(vehicle: Any, profile: HullProfile, fins: list[FinPair], rho: floa
     raw = getattr(vehicle, "propeller", None)
     if raw is None:
         return None
-    from towtank.vehicle.powering import Propeller, powering_table
-    from towtank.vehicle.predict import axial_drag
-
     speeds = raw["speeds_m_s"] or [f * vehicle.speed_m_s for f in POWERING_SPEED_FRACTIONS]
     resistance = [-axial_drag(profile, fins, rho, nu, u) * u * u for u in speeds]
     prop = Propeller(raw["diameter_m"], raw["pitch_ratio"], raw["blade_area_ratio"],
@@ -92,8 +91,6 @@ def _pressure_hull(vehicle: Any, profile: HullProfile, rho: float) -> pd.DataFra
     raw = getattr(vehicle, "pressure_hull", None)
     if raw is None:
         return None
-    from towtank.vehicle.pressure_hull import pressure_hull_table
-
     radius = raw["radius_m"] or 0.5 * profile.max_diameter
     spacing = raw["frame_spacing_m"] or profile.length
     return pressure_hull_table(raw["depth_m"], radius, spacing, raw["yield_MPa"] * 1e6,

@@ -1,0 +1,115 @@
+"""The terms every vehicle module shares: the coefficient symbols, model.json's required keys
+and the mass matrices of the Fossen-form model.
+
+A leaf of :mod:`towtank.vehicle` (it imports none of its modules): the checks
+(:mod:`towtank.vehicle.schema`), the model (:mod:`towtank.vehicle.model`), the simulator and
+the identification all take these from here.
+
+``M = M_RB + M_A`` (Fossen 2011, eqs. 3.44 and 6.42), body axes x forward, y starboard, z
+down, SNAME signs, SI units; the added-mass Coriolis and centripetal force is C_A(nu) nu
+(Fossen 2011, eq. 6.43).
+
+References
+----------
+.. [1] Fossen, T. I. (2011), Handbook of Marine Craft Hydrodynamics and Motion Control,
+   Wiley.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+__all__ = [
+    "DOF",
+    "VELOCITIES",
+    "SYMBOL_RE",
+    "REQUIRED_KEYS",
+    "skew",
+    "rigid_body_mass_matrix",
+    "added_mass_matrix",
+    "coriolis_added_mass",
+]
+
+#: The forces and moments of the six degrees of freedom, in the order of the state [-].
+DOF = "XYZKMN"
+#: The body velocities u, v, w [m/s] and p, q, r [rad/s], in the same order.
+VELOCITIES = "uvwpqr"
+#: A hydrodynamic coefficient's symbol: a force or moment and a product of velocities, their
+#: magnitudes and the control angles (``Y_uv``, ``N_r|r|``, ``Y_uudr``).
+SYMBOL_RE = re.compile(r"^[XYZKMN]_(\|[uvwpqr]\||[uvwpqr]|dr|ds)+$")
+#: The keys every model.json holds (docs/formats.md §6).
+REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
+                 "inertia_kg_m2", "coefficients")
+
+
+def skew(a: np.ndarray) -> np.ndarray:
+    """S(a), the skew-symmetric matrix of the cross product: S(a) b = a x b (Fossen 2011,
+    eq. 2.10).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A 3-vector [any unit]
+    """
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def rigid_body_mass_matrix(mass: float, rg: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """M_RB (6x6) about the reference point (Fossen 2011, eq. 3.44).
+
+    ``M_RB = [[m I, -m S(r_g)], [m S(r_g), I_o]]``.
+
+    Parameters
+    ----------
+    mass : float
+        Mass m [kg]
+    rg : numpy.ndarray
+        Centre of gravity r_g from the reference point, body axes [m]
+    inertia : numpy.ndarray
+        Inertia matrix I_o (3x3) about the reference point [kg m^2]
+    """
+    m_rb = np.zeros((6, 6))
+    m_rb[:3, :3] = mass * np.eye(3)
+    m_rb[:3, 3:] = -mass * skew(rg)
+    m_rb[3:, :3] = mass * skew(rg)
+    m_rb[3:, 3:] = inertia
+    return m_rb
+
+
+def added_mass_matrix(coefficients: dict[str, float]) -> np.ndarray:
+    """M_A (6x6, symmetric) from the ``<F>_<v>dot`` coefficients: M_A[i, j] = -F_i,vdot_j
+    (Fossen 2011, eq. 6.42) [kg, kg m, kg m^2].
+
+    A missing coefficient is zero; where only one of a symmetric pair is given (Y_rdot,
+    N_vdot) it stands for both.
+    """
+    ma = np.zeros((6, 6))
+    for i, f in enumerate(DOF):
+        for j, v in enumerate(VELOCITIES):
+            a = coefficients.get(f"{f}_{v}dot")
+            b = coefficients.get(f"{DOF[j]}_{VELOCITIES[i]}dot")
+            val = a if a is not None else b
+            if val is not None:
+                ma[i, j] = -float(val)
+    return 0.5 * (ma + ma.T)
+
+
+def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """C_A(nu) nu of Fossen (2011) eq. 6.43, the force the added mass exerts is its negative
+    [N, N m].
+
+    ``C_A = [[0, -S(A11 nu1 + A12 nu2)], [-S(A11 nu1 + A12 nu2), -S(A21 nu1 + A22 nu2)]]``.
+
+    Parameters
+    ----------
+    ma : numpy.ndarray
+        M_A (6x6) [kg, kg m, kg m^2]
+    nu : numpy.ndarray
+        Body velocities u, v, w [m/s], p, q, r [rad/s]
+    """
+    nu1, nu2 = nu[:3], nu[3:]
+    a = ma[:3, :3] @ nu1 + ma[:3, 3:] @ nu2
+    b = ma[3:, :3] @ nu1 + ma[3:, 3:] @ nu2
+    return np.concatenate((-skew(a) @ nu2, -skew(a) @ nu1 - skew(b) @ nu2))
