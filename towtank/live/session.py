@@ -1,0 +1,579 @@
+"""The watch loop of ``towtank watch``: each run's verdict as its file completes, the day's
+outputs kept up to date (docs/formats.md, "towtank watch").
+
+:class:`WatchSession` holds the day: the last good run sheet, which run files are complete
+(:class:`towtank.live.arrival.ArrivalTracker`), the verdicts given. :meth:`WatchSession.step`
+looks once at the sheet and the files and processes what became complete as one batch;
+:meth:`WatchSession.run` calls it whenever watchfiles reports a change (or every
+:data:`POLL_MS`, so that settle times are checked when nothing happens). A test drives the
+session in-process with :meth:`~WatchSession.step` or :meth:`~WatchSession.run` with a
+condition; the command line adds the page server and Ctrl-C.
+
+"The runs so far": the sheet's rows whose files are complete, the void rows, and the rows the
+sheet alone rejects; a run whose file does not exist yet (or is still being written) is "to
+do", not rejected. After every batch the output folder holds what ``towtank process`` writes
+for those rows (through the same manifest, lock and atomic swap), except that the PDF and
+figures are redrawn at most every ``[watch] pdf_interval_s`` (carried over unchanged in
+between; provenance.json's ``watch`` entry says which runs they cover).
+
+The process stays single-threaded: the report writers fork.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from towtank.errors import ProtocolError
+from towtank.live import arrival
+from towtank.live.state import LIVE_DIR, now_iso, save_figure, write_state
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from towtank.ingest.protocol import Protocol
+    from towtank.results import DayResult
+
+__all__ = ["POLL_MS", "Verdict", "WatchSession", "verdict_line"]
+
+#: The longest the loop waits for a change before it looks at the files anyway [ms].
+POLL_MS = 100
+
+#: Files an output writer leaves in the report that watch carries over between two PDFs.
+PDF_OUTPUTS = ("report.pdf", "figures")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A run's verdict: one line on the terminal and one entry of state.json."""
+
+    run: int
+    file: str
+    test: str
+    angle_deg: float
+    speed_m_s: float | None
+    drag_N: float | None
+    status: str  # ok | suspicious | rejected
+    reason: str | None
+    line: str
+    time: str
+    sha256: str = ""
+
+    def entry(self) -> dict[str, Any]:
+        """The state.json entry."""
+        return {"run": self.run, "file": self.file, "test": self.test,
+                "angle_deg": self.angle_deg, "speed_m_s": self.speed_m_s,
+                "drag_N": self.drag_N, "status": self.status, "reason": self.reason,
+                "line": self.line, "time": self.time}
+
+
+def _num(value: Any) -> float | None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+_RUN_PREFIX = re.compile(r"^run \d+: ")
+
+
+def verdict_line(run: int, test: str, angle_deg: float | None, speed_m_s: float | None,
+                 speed_set: bool, drag_N: float | None, status: str,
+                 reason: str | None) -> str:
+    """``run 17  steady  α 10.0°  U 1.20 m/s  drag 3.41 N  ok``, and for a rejected or
+    suspicious run ``: <the reason in one sentence>``. ``speed_set``: U is the sheet's set
+    speed (the run was not reduced)."""
+    alpha = f"α {angle_deg:.1f}°" if angle_deg is not None else "α –"
+    u = (f"U {speed_m_s:.2f} m/s" + (" (set)" if speed_set else "")
+         if speed_m_s is not None else "U –")
+    d = f"drag {drag_N:.2f} N" if drag_N is not None else "drag –"
+    line = f"run {run}  {test}  {alpha}  {u}  {d}  {status}"
+    if reason:
+        line += ": " + _RUN_PREFIX.sub("", reason.strip())
+    return line
+
+
+@dataclass
+class _Said:
+    """Sentences said once (terminal and state.json messages)."""
+
+    seen: set[str] = field(default_factory=set)
+    messages: list[str] = field(default_factory=list)
+
+
+class WatchSession:
+    """A watched day (see the module's text).
+
+    Parameters
+    ----------
+    protocol : Protocol
+        The day's protocol, its output folder set (``with_output_dir``).
+    out : path
+        The output folder; ``.cache/`` and ``.live/`` are kept in it.
+    jobs : int, optional
+        Worker processes for a batch of several runs (default: the protocol's, else all).
+    report : bool
+        Also write the workbook, the PDF and the figures (else the CSV tables only).
+    date : str, optional
+        The report's test date (``--date``).
+    echo : callable
+        Where the verdict lines and sentences go (default ``print``, flushed).
+    live_figures : bool
+        Draw the live page's figures into ``.live/``.
+    clock : callable
+        The time [s since the epoch] (a test may pass its own).
+    """
+
+    def __init__(self, protocol: Protocol, out: str | Path, *, jobs: int | None = None,
+                 report: bool = True, date: str | None = None,
+                 echo: Callable[[str], None] | None = None, live_figures: bool = True,
+                 clock: Callable[[], float] = time.time) -> None:
+        self.protocol = protocol
+        self.out = Path(out).resolve()
+        self.live_dir = self.out / LIVE_DIR
+        self.cache_dir = self.out / ".cache"
+        self.jobs = jobs if jobs is not None else protocol.processing.jobs
+        self.report = report
+        self.date = date
+        self.echo = echo if echo is not None else _print
+        self.live_figures = live_figures
+        self.clock = clock
+        w = protocol.watch
+        self.tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
+        self.sheet_tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
+        self.sheet_path = Path(protocol.campaign.run_sheet)
+        self.data_dir = Path(protocol.campaign.data_dir)
+        self.sheet: pd.DataFrame | None = None  # the last good sheet
+        self.day: DayResult | None = None
+        self.verdicts: list[Verdict] = []
+        self.given: dict[int, tuple[str, str | None, str]] = {}
+        self.said = _Said()
+        self.version = 0
+        self.batches = 0
+        #: (run, file, sha256) of every reduction this session obtained: a run file is only
+        #: ever reduced complete
+        self.reduced: list[tuple[int, str, str]] = []
+        self.pdf_at: float | None = None  # when the PDF was last drawn [s]
+        self.pdf_runs: list[int] | None = None  # the runs it covers
+        self.pdf_iso: str | None = None
+        self.pdf_stale = False
+        self.latest: Verdict | None = None
+        self.figures: dict[str, str] = {}
+        self.timings: dict[str, float] = {}
+        self._dirty = False
+        self._unlisted: list[str] = []
+        arrival.ignore_lease_breaks()
+
+    # ------------------------------------------------------------------ sentences
+    def say(self, sentence: str, *, once: bool = True) -> None:
+        """Print ``sentence`` (once per session when ``once``) and keep it for state.json."""
+        if once and sentence in self.said.seen:
+            return
+        self.said.seen.add(sentence)
+        self.said.messages.append(sentence)
+        self.echo(sentence)
+
+    # ------------------------------------------------------------------ the sheet
+    def read_sheet(self) -> bool:
+        """Read the run sheet; keep the last good one when it cannot be read (said once per
+        fault). True when a sheet was read."""
+        from towtank.ingest.runsheet import read_run_sheet
+        from towtank.pipeline import unlisted_warnings
+
+        p = self.protocol
+        try:
+            sheet = read_run_sheet(p.campaign.run_sheet, p.water.temperature_C, p.sheet,
+                                   air=p.water.is_air)
+        except ProtocolError as exc:
+            if self.sheet is None:
+                raise
+            self.say(f"{self.sheet_path.name} could not be read ({_strip_dot(str(exc))}); the "
+                     "last good sheet is kept and the sheet is read again at its next change.")
+            return False
+        self.sheet = sheet
+        self._unlisted = unlisted_warnings(p, sheet)
+        self._dirty = True
+        return True
+
+    def names(self) -> dict[str, int]:
+        """The run files the sheet's rows (void ones aside) name -> run."""
+        if self.sheet is None:
+            return {}
+        out: dict[str, int] = {}
+        for run, file, status in zip(self.sheet["run"], self.sheet["file"],
+                                     self.sheet["status"], strict=True):
+            if status != "void" and str(file).strip():
+                out.setdefault(str(file), int(run))
+        return out
+
+    # ------------------------------------------------------------------ one look
+    def scan(self, changed: set[str] | None = None) -> list[str]:
+        """One look at the sheet and the run files; return the files that became complete.
+        ``changed``: paths watchfiles reported (for the lock files and unlisted files)."""
+        now = self.clock()
+        event = self.sheet_tracker.update("sheet", arrival.observe(self.sheet_path, now))
+        st = self.sheet_tracker.files["sheet"]
+        if self.sheet is None:  # the first look: the sheet as it is
+            self.read_sheet()
+            self._sheet_sig = st.complete or st.signature
+        elif event == "complete" and st.complete != self._sheet_sig:
+            self._sheet_sig = st.complete
+            self.read_sheet()
+        for path in sorted(changed or ()):
+            name = Path(path).name
+            if name.startswith("~$"):
+                self.say(f"{name} is Excel's lock file (the sheet is open in Excel); it is "
+                         "ignored.")
+        if changed:
+            self._tell_unlisted()
+        names = self.names()
+        for gone in [n for n in self.tracker.files if n not in names]:
+            self.tracker.forget(gone)
+            self._dirty = True
+        done = []
+        for name in names:
+            path = self.data_dir / name
+            complete = self.tracker.is_complete(name)
+            obs = arrival.observe(path, now, probe=False)
+            st = self.tracker.files.get(name)
+            if not complete and obs.size is not None and st is not None \
+                    and st.signature == (obs.size, obs.mtime_ns):
+                obs = arrival.observe(path, now)  # unchanged since the last look: closed?
+            event = self.tracker.update(name, obs)
+            if event == "complete":
+                done.append(name)
+            elif event == "vanished":
+                self.say(f"{name} appeared and disappeared before it was complete; run "
+                         f"{names[name]} is still to do.", once=False)
+            elif event == "removed":
+                self.say(f"{name} was removed; run {names[name]} is to do again.", once=False)
+                self.given.pop(names[name], None)
+                self._dirty = True
+            elif event == "never_stops":
+                self.say(f"{name} is still being written after "
+                         f"{self.tracker.never_stops_s:g} s ([watch] never_stops_s); run "
+                         f"{names[name]} waits until it stops.")
+        if done:
+            self._dirty = True
+        return done
+
+    _sheet_sig: tuple[int, int] | None = None
+
+    def _tell_unlisted(self) -> None:
+        from towtank.pipeline import unlisted_warnings
+
+        if self.sheet is None:
+            return
+        self._unlisted = unlisted_warnings(self.protocol, self.sheet)
+        for sentence in self._unlisted:
+            if not _inside(self.out, self.data_dir, sentence):
+                self.say(sentence)
+
+    # ------------------------------------------------------------------ one batch
+    def runs_so_far(self) -> pd.DataFrame:
+        """The sheet restricted to the runs so far (see the module's text), sheet order."""
+        assert self.sheet is not None
+        sheet = self.sheet
+        keep = []
+        for status, file, error in zip(sheet["status"], sheet["file"], sheet["sheet_error"],
+                                       strict=True):
+            keep.append(status == "void" or bool(error)
+                        or self.tracker.is_complete(str(file)))
+        sub = sheet[keep].reset_index(drop=True)
+        sub.attrs = dict(sheet.attrs)
+        return sub
+
+    def step(self, changed: set[str] | None = None) -> list[Verdict]:
+        """One look; when something changed, process the runs so far as one batch, print a
+        verdict line per new or changed run and bring the outputs up to date. Returns the
+        verdicts given."""
+        self.scan(changed)
+        verdicts: list[Verdict] = []
+        if self._dirty:
+            self._dirty = False
+            verdicts = self.process()
+        elif self.pdf_stale and self._pdf_due():
+            self.write(pdf=True)
+            self.publish()
+        return verdicts
+
+    def process(self) -> list[Verdict]:
+        """Reduce the runs so far (the cache makes the known ones free), give the verdicts,
+        write the outputs and the live state."""
+        from towtank.pipeline import process_sheet
+
+        t0 = time.perf_counter()
+        sub = self.runs_so_far()
+        new_rows = sum(1 for r in sub["run"] if int(r) not in self.given)
+        jobs = 1 if new_rows <= 1 else self.jobs
+        day = process_sheet(self.protocol, sub, jobs=jobs, cache_dir=self.cache_dir,
+                            unlisted=[w for w in self._unlisted
+                                      if not _inside(self.out, self.data_dir, w)])
+        if self.date:
+            import dataclasses
+
+            day = dataclasses.replace(day, report_date=self.date)
+        self.day = day
+        self.batches += 1
+        verdicts = self._verdicts(day)
+        self.timings["reduce_s"] = time.perf_counter() - t0
+        for v in verdicts:
+            self.echo(v.line)
+        if verdicts:
+            self.latest = verdicts[-1]
+        self.verdicts.extend(verdicts)
+        t1 = time.perf_counter()
+        self.write(pdf=self._pdf_due())
+        self.timings["write_s"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        self.publish()
+        self.timings["state_s"] = time.perf_counter() - t2
+        return verdicts
+
+    def _verdicts(self, day: DayResult) -> list[Verdict]:
+        """The verdict of every run whose (status, reason, content) is new."""
+        out = []
+        stamp = now_iso()
+        for row in day.runs.to_dict("records"):
+            if row["status"] == "void":
+                continue
+            run = int(row["run"])
+            red = day.reductions.get(run)
+            sha = red.sha256 if red is not None else ""
+            if red is not None and (run, str(row["file"]), sha) not in self.reduced:
+                self.reduced.append((run, str(row["file"]), sha))
+            status, reason = str(row["status"]), (str(row["reason"]) or None)
+            if status == "ok" and red is not None and red.warnings:
+                status = "suspicious"
+                reason = red.warnings[0] + (f" (and {len(red.warnings) - 1} more warnings)"
+                                            if len(red.warnings) > 1 else "")
+            if status != "rejected" and status != "suspicious":
+                reason = None
+            key = (status, reason, sha)
+            if self.given.get(run) == key:
+                continue
+            self.given[run] = key
+            u = _num(row["speed_mean"])
+            speed_set = u is None
+            if u is None:
+                u = _num(row["speed_nominal"])
+            angle = _num(row["angle_deg"])
+            test = str(row["test"])
+            drag = _num(row["drag_mean"])
+            line = verdict_line(run, test, angle, u, speed_set, drag, status, reason)
+            from towtank.report.safetext import clean_text
+
+            out.append(Verdict(run=run, file=str(row["file"]), test=test,
+                               angle_deg=angle if angle is not None else math.nan,
+                               speed_m_s=u, drag_N=drag, status=status, reason=reason,
+                               line=clean_text(line), time=stamp, sha256=sha))
+        return out
+
+    # ------------------------------------------------------------------ outputs
+    def _waiting(self) -> bool:
+        return any(self.tracker.is_waiting(n) for n in self.names())
+
+    def _pdf_due(self) -> bool:
+        """Whether the PDF and figures are to be drawn now: never drawn, or drawn more than
+        pdf_interval_s ago and no run file is being written."""
+        if not self.report:
+            return False
+        if self.pdf_at is None:
+            return True
+        return (self.clock() - self.pdf_at >= self.protocol.watch.pdf_interval_s
+                and not self._waiting())
+
+    def write(self, *, pdf: bool) -> None:
+        """The outputs of the runs so far (``towtank process``'s writers, manifest and swap);
+        without ``pdf`` the previous report.pdf and figures/ are carried over unchanged."""
+        from towtank.report import write_outputs
+        from towtank.report.outputs import _report_writers
+
+        day = self.day
+        if day is None:
+            return
+        runs = [int(r) for r in day.runs["run"]]
+        if pdf or self.pdf_runs is None:
+            writers = _report_writers()
+            pdf_runs, pdf_iso = runs, now_iso()
+        else:
+            from towtank.report.workbook import write_workbook
+
+            writers = [write_workbook, self._carry]
+            pdf_runs, pdf_iso = self.pdf_runs, self.pdf_iso
+        extra = {"watch": {"pdf_runs": pdf_runs, "pdf_written": pdf_iso,
+                           "pdf_current": pdf_runs == runs, "runs": runs}}
+        write_outputs(day, self.out, report=self.report, writers=writers,
+                      provenance_extra=extra)
+        if self.report and (pdf or self.pdf_runs is None):
+            self.pdf_at, self.pdf_runs, self.pdf_iso = self.clock(), runs, pdf_iso
+        self.pdf_stale = self.report and self.pdf_runs != runs
+
+    def _carry(self, day: DayResult, folder: Path) -> None:
+        """A report writer: the previous report.pdf and figures/ into the new set as they are."""
+        for name in PDF_OUTPUTS:
+            src = self.out / name
+            if src.is_dir() and not src.is_symlink():
+                shutil.copytree(src, folder / name, copy_function=_link_or_copy)
+            elif src.is_file() and not src.is_symlink():
+                _link_or_copy(str(src), str(folder / name))
+
+    def finish(self) -> None:
+        """At the end: the PDF and figures of the last runs if they are behind."""
+        if self.day is not None and self.pdf_stale:
+            self.write(pdf=True)
+            self.publish()
+
+    # ------------------------------------------------------------------ live state
+    def sheet_states(self) -> list[dict[str, Any]]:
+        """Every sheet row with its state: done | rejected | to do | void | waiting."""
+        if self.sheet is None:
+            return []
+        status = {}
+        if self.day is not None:
+            status = dict(zip(self.day.runs["run"].astype(int), self.day.runs["status"],
+                              strict=True))
+        out = []
+        for row in self.sheet.to_dict("records"):
+            run, file = int(row["run"]), str(row["file"])
+            if row["status"] == "void":
+                state = "void"
+            elif status.get(run) == "rejected":
+                state = "rejected"
+            elif status.get(run) == "ok":
+                state = "done"
+            elif self.tracker.is_waiting(file):
+                state = "waiting"
+            else:
+                state = "to do"
+            out.append({"run": run, "file": file, "test": row["test"],
+                        "config": row["config"], "angle_deg": _num(row["angle_deg"]),
+                        "speed_m_s": _num(row["speed_nominal"]), "state": state})
+        return out
+
+    def state(self) -> dict[str, Any]:
+        """The live state (docs/formats.md, "towtank watch")."""
+        import pandas as pd
+
+        coefficients: list[dict[str, Any]] = []
+        columns: list[str] = []
+        path = self.out / "coefficients.csv"
+        if path.is_file():
+            table = pd.read_csv(path)
+            columns = [str(c) for c in table.columns]
+            coefficients = table.astype(object).where(table.notna(), None).to_dict("records")
+        latest = None
+        if self.latest is not None:
+            latest = {"run": self.latest.run, "line": self.latest.line,
+                      "status": self.latest.status}
+        return {
+            "version": self.version,
+            "protocol": self.protocol.name,
+            "updated": now_iso(),
+            "output_dir": str(self.out),
+            "latest": latest,
+            "verdicts": [v.entry() for v in self.verdicts],
+            "sheet": self.sheet_states(),
+            "coefficients": coefficients,
+            "coefficient_columns": columns,
+            "next_runs": [],
+            "messages": list(self.said.messages),
+            "figures": dict(self.figures),
+            "pdf": ({"written": self.pdf_iso, "runs": len(self.pdf_runs)}
+                    if self.pdf_runs is not None and self.report else None),
+        }
+
+    def publish(self) -> None:
+        """Draw the live figures and write state.json (its version one up)."""
+        if self.live_figures and self.day is not None:
+            t0 = time.perf_counter()
+            self.figures = self._draw()
+            self.timings["figures_s"] = time.perf_counter() - t0
+        self.version += 1
+        write_state(self.live_dir, self.state())
+
+    def _draw(self) -> dict[str, str]:
+        from towtank.report import figures as rf
+
+        day = self.day
+        assert day is not None
+        figs: dict[str, str] = {}
+        v = self.latest
+        if v is not None:
+            red = day.reductions.get(v.run)
+            fig = None
+            if red is not None:
+                fig = rf.fig_run(red, v.line)
+            elif v.run in day.previews:
+                fig = rf.fig_preview(day.previews[v.run], f"run {v.run}", v.reason or "")
+            if fig is not None:
+                figs["latest_run"] = save_figure(fig, self.live_dir, "latest_run.png")
+        for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
+            fig = make(day)
+            if fig is not None:
+                figs[key] = save_figure(fig, self.live_dir, f"{key}.png")
+        return figs
+
+    # ------------------------------------------------------------------ the loop
+    def watched_paths(self) -> list[Path]:
+        """The folders watched: the data folder and the sheet's folder."""
+        paths = [self.data_dir.resolve()]
+        folder = self.sheet_path.resolve().parent
+        if not any(folder == p or p in folder.parents for p in paths):
+            paths.append(folder)
+        return paths
+
+    def run(self, until: Callable[[WatchSession], bool] | None = None, *,
+            timeout_s: float | None = None) -> None:
+        """Watch until ``until(self)`` is true or ``timeout_s`` [s] has passed (forever
+        without either; Ctrl-C raises KeyboardInterrupt). One :meth:`step` per change
+        reported by watchfiles, and at least every :data:`POLL_MS`."""
+        from watchfiles import watch
+
+        start = time.monotonic()
+        self.step()
+        if until is not None and until(self):
+            return
+        for changes in watch(*self.watched_paths(), debounce=50, step=20,
+                             rust_timeout=POLL_MS, yield_on_timeout=True):
+            self.step({path for _change, path in changes})
+            if until is not None and until(self):
+                return
+            if timeout_s is not None and time.monotonic() - start > timeout_s:
+                return
+
+
+def _print(line: str) -> None:
+    print(line, flush=True)
+
+
+def _strip_dot(text: str) -> str:
+    return text.strip().rstrip(".")
+
+
+def _inside(out: Path, data_dir: Path, sentence: str) -> bool:
+    """Whether an unlisted-file sentence names a file in the output folder (towtank's own
+    outputs when the output folder is inside the data folder)."""
+    try:
+        rel = out.resolve().relative_to(data_dir.resolve()).as_posix()
+    except ValueError:
+        return False
+    return sentence.startswith(rel + "/") or sentence.startswith(f".{Path(rel).name}.")
+
+
+def _link_or_copy(src: str, dst: str) -> None:
+    """A hard link (the file is never changed in place: towtank replaces, never rewrites),
+    else a copy."""
+    import os
+
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
