@@ -20,6 +20,7 @@ settles again; a file still changing after ``never_stops_s`` is reported once.
 from __future__ import annotations
 
 import errno
+import math
 import os
 import signal
 import sys
@@ -69,6 +70,7 @@ class FileState:
 
     signature: tuple[int, int] | None = None  # (size, mtime_ns) last seen; None: absent
     changed_at: float = 0.0  # when it last changed [s]
+    seen_at: float = 0.0  # when it was last looked at [s]
     first_seen: float | None = None  # when it appeared in its current run of changes [s]
     complete: tuple[int, int] | None = None  # the signature it was complete with
     writer_open: bool | None = None
@@ -114,11 +116,13 @@ class ArrivalTracker:
             return "vanished"
         sig = (int(obs.size), int(obs.mtime_ns))
         st.writer_open = obs.writer_open
+        seen_before, st.seen_at = st.seen_at, obs.now
         if sig != st.signature:
-            previous = st.changed_at if st.signature is not None else obs.mtime_ns / 1e9
-            # the change happened between the last look and now; its mtime says when (on a
-            # share whose clock differs, the bounds keep it sensible)
-            st.changed_at = min(obs.now, max(obs.mtime_ns / 1e9, previous))
+            # the change happened between the last look and now; its mtime says when, unless
+            # it lies outside (a share whose clock differs): then now, the latest it can be
+            last_look = seen_before if st.signature is not None else -math.inf
+            mtime = obs.mtime_ns / 1e9
+            st.changed_at = mtime if last_look <= mtime <= obs.now else obs.now
             st.signature = sig
             if st.first_seen is None:
                 st.first_seen = st.changed_at
