@@ -17,8 +17,12 @@ import webbrowser
 from pathlib import Path
 
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol import load_protocol, with_output_dir
+from towtank.live.session import WatchSession
 from towtank.live.state import LIVE_DIR
 from towtank.report.safetext import clean_text
+from towtank.runtime import parallel
+from towtank.runtime.manifest import recover_outputs
 
 EXIT_UNUSABLE = 2
 SERVER_MODULE = "towtank.live.server"
@@ -62,9 +66,6 @@ def stop_server(proc: subprocess.Popen[bytes] | None) -> None:
 
 def watch_command(args: argparse.Namespace) -> int:
     """The ``watch`` sub-command; returns the exit status (KeyboardInterrupt goes up)."""
-    from towtank.ingest.protocol import load_protocol, with_output_dir
-    from towtank.runtime.manifest import recover_outputs
-
     if args.out is not None:
         recovered = recover_outputs(Path(args.out).resolve())
         if recovered:
@@ -76,9 +77,6 @@ def watch_command(args: argparse.Namespace) -> int:
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
-    from towtank.live.session import WatchSession
-    from towtank.runtime import parallel
-
     jobs = args.jobs if args.jobs is not None else protocol.processing.jobs
     if jobs is not None and jobs > parallel.default_jobs():
         jobs = parallel.default_jobs()

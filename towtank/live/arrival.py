@@ -23,6 +23,7 @@ import errno
 import math
 import os
 import signal
+import stat
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -199,8 +200,6 @@ def observe(path: str | Path, now: float, *, probe: bool = True) -> Observation:
         st = os.stat(path)
     except OSError:
         return Observation(None, 0, None, now)
-    import stat as _stat
-
-    if not _stat.S_ISREG(st.st_mode):
+    if not stat.S_ISREG(st.st_mode):
         return Observation(None, 0, None, now)
     return Observation(st.st_size, st.st_mtime_ns, writer_open(path) if probe else None, now)

@@ -21,7 +21,9 @@ The process stays single-threaded: the report writers fork.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
 import re
 import shutil
 import time
@@ -30,13 +32,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import pandas as pd
+
 from towtank.errors import ProtocolError
+from towtank.ingest.runsheet import read_run_sheet
 from towtank.live import arrival
 from towtank.live.state import LIVE_DIR, now_iso, save_figure, write_state
+from towtank.pipeline import process_sheet, unlisted_warnings
+from towtank.report import figures as rf
+from towtank.report.outputs import write_outputs
+from towtank.report.safetext import clean_text
+from towtank.report.workbook import write_workbook
 
 if TYPE_CHECKING:
-    import pandas as pd
-
     from towtank.ingest.protocol import Protocol
     from towtank.results import DayResult
 
@@ -184,8 +192,6 @@ class WatchSession:
     def read_sheet(self) -> bool:
         """Read the run sheet; keep the last good one when it cannot be read (said once per
         fault). True when a sheet was read."""
-        from towtank.ingest.runsheet import read_run_sheet
-        from towtank.pipeline import unlisted_warnings
 
         p = self.protocol
         try:
@@ -239,13 +245,13 @@ class WatchSession:
             self._dirty = True
         done = []
         for name in names:
-            path = self.data_dir / name
+            file = self.data_dir / name
             complete = self.tracker.is_complete(name)
-            obs = arrival.observe(path, now, probe=False)
-            st = self.tracker.files.get(name)
-            if not complete and obs.size is not None and st is not None \
-                    and st.signature == (obs.size, obs.mtime_ns):
-                obs = arrival.observe(path, now)  # unchanged since the last look: closed?
+            obs = arrival.observe(file, now, probe=False)
+            known = self.tracker.files.get(name)
+            if not complete and obs.size is not None and known is not None \
+                    and known.signature == (obs.size, obs.mtime_ns):
+                obs = arrival.observe(file, now)  # unchanged since the last look: closed?
             event = self.tracker.update(name, obs)
             if event == "complete":
                 done.append(name)
@@ -267,7 +273,6 @@ class WatchSession:
     _sheet_sig: tuple[int, int] | None = None
 
     def _tell_unlisted(self) -> None:
-        from towtank.pipeline import unlisted_warnings
 
         if self.sheet is None:
             return
@@ -307,7 +312,6 @@ class WatchSession:
     def process(self) -> list[Verdict]:
         """Reduce the runs so far (the cache makes the known ones free), give the verdicts,
         write the outputs and the live state."""
-        from towtank.pipeline import process_sheet
 
         t0 = time.perf_counter()
         sub = self.runs_so_far()
@@ -317,8 +321,6 @@ class WatchSession:
                             unlisted=[w for w in self._unlisted
                                       if not _inside(self.out, self.data_dir, w)])
         if self.date:
-            import dataclasses
-
             day = dataclasses.replace(day, report_date=self.date)
         self.day = day
         self.batches += 1
@@ -368,7 +370,6 @@ class WatchSession:
             test = str(row["test"])
             drag = _num(row["drag_mean"])
             line = verdict_line(run, test, angle, u, speed_set, drag, status, reason)
-            from towtank.report.safetext import clean_text
 
             out.append(Verdict(run=run, file=str(row["file"]), test=test,
                                angle_deg=angle if angle is not None else math.nan,
@@ -393,18 +394,16 @@ class WatchSession:
     def write(self, *, pdf: bool) -> None:
         """The outputs of the runs so far (``towtank process``'s writers, manifest and swap);
         without ``pdf`` the previous report.pdf and figures/ are carried over unchanged."""
-        from towtank.report import write_outputs
-        from towtank.report.outputs import _report_writers
 
         day = self.day
         if day is None:
             return
         runs = [int(r) for r in day.runs["run"]]
+        pdf_iso: str | None
         if pdf or self.pdf_runs is None:
-            writers = _report_writers()
+            writers: list[Any] | None = None  # process's writers
             pdf_runs, pdf_iso = runs, now_iso()
         else:
-            from towtank.report.workbook import write_workbook
 
             writers = [write_workbook, self._carry]
             pdf_runs, pdf_iso = self.pdf_runs, self.pdf_iso
@@ -460,8 +459,6 @@ class WatchSession:
 
     def state(self) -> dict[str, Any]:
         """The live state (docs/formats.md, "towtank watch")."""
-        import pandas as pd
-
         coefficients: list[dict[str, Any]] = []
         columns: list[str] = []
         path = self.out / "coefficients.csv"
@@ -500,7 +497,6 @@ class WatchSession:
         write_state(self.live_dir, self.state())
 
     def _draw(self) -> dict[str, str]:
-        from towtank.report import figures as rf
 
         day = self.day
         assert day is not None
@@ -571,8 +567,6 @@ def _inside(out: Path, data_dir: Path, sentence: str) -> bool:
 def _link_or_copy(src: str, dst: str) -> None:
     """A hard link (the file is never changed in place: towtank replaces, never rewrites),
     else a copy."""
-    import os
-
     try:
         os.link(src, dst)
     except OSError:

@@ -9,6 +9,7 @@ docs/formats.md ("towtank watch").
 from __future__ import annotations
 
 import datetime as dt
+import io
 import json
 import math
 import os
@@ -27,7 +28,7 @@ FIGURE_DPI = 60
 
 def now_iso() -> str:
     """The current UTC time, ISO 8601 to the second (``2026-11-26T13:02:11+00:00``)."""
-    return dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
+    return dt.datetime.now(dt.UTC).replace(microsecond=0).isoformat()
 
 
 def clean_json(value: Any) -> Any:
@@ -77,8 +78,6 @@ def write_state(live_dir: Path, state: dict[str, Any]) -> Path:
 
 def save_figure(fig: Any, live_dir: Path, name: str, dpi: int = FIGURE_DPI) -> str:
     """Save a matplotlib figure as ``live_dir/name`` (PNG, atomically); return ``name``."""
-    import io
-
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     atomic_write_bytes(live_dir / name, buf.getvalue())

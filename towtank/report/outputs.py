@@ -221,7 +221,8 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
         if report:
             run_writers(writers or _report_writers(), day, tmp)
         (tmp / "provenance.json").write_text(
-            json.dumps(provenance(day, provenance_extra), indent=2, sort_keys=False, default=str) + "\n",
+            json.dumps(provenance(day, provenance_extra), indent=2, sort_keys=False,
+                       default=str) + "\n",
             encoding="utf-8",
         )
         manifest.write_manifest(tmp, manifest.describe(tmp, OUTPUT_NAMES))  # marks it complete
