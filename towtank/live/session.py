@@ -165,6 +165,8 @@ class WatchSession:
         self.said = _Said()
         self.version = 0
         self.batches = 0
+        self.writes = 0  # output updates
+        self.fits_stale = False  # the live page's fit figures are behind the outputs
         #: (run, file, sha256) of every reduction this session obtained: a run file is only
         #: ever reduced complete
         self.reduced: list[tuple[int, str, str]] = []
@@ -304,6 +306,9 @@ class WatchSession:
         if self._dirty:
             self._dirty = False
             verdicts = self.process()
+        # slower work only while no run file is being written: its verdict comes first
+        if self.fits_stale and not self._waiting():
+            self.publish(fits=True)
         elif self.pdf_stale and self._pdf_due():
             self.write(pdf=True)
             self.publish()
@@ -331,11 +336,15 @@ class WatchSession:
         if verdicts:
             self.latest = verdicts[-1]
         self.verdicts.extend(verdicts)
+        if verdicts:  # the page has the verdicts at once; the outputs and fits follow
+            self.publish(latest=True)
+        self.timings["verdict_state_s"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         self.write(pdf=self._pdf_due())
         self.timings["write_s"] = time.perf_counter() - t1
         t2 = time.perf_counter()
-        self.publish()
+        self.fits_stale = True
+        self.publish(latest=not verdicts)  # the tables written: their coefficients
         self.timings["state_s"] = time.perf_counter() - t2
         return verdicts
 
@@ -411,6 +420,7 @@ class WatchSession:
                            "pdf_current": pdf_runs == runs, "runs": runs}}
         write_outputs(day, self.out, report=self.report, writers=writers,
                       provenance_extra=extra)
+        self.writes += 1
         if self.report and (pdf or self.pdf_runs is None):
             self.pdf_at, self.pdf_runs, self.pdf_iso = self.clock(), runs, pdf_iso
         self.pdf_stale = self.report and self.pdf_runs != runs
@@ -426,9 +436,10 @@ class WatchSession:
 
     def finish(self) -> None:
         """At the end: the PDF and figures of the last runs if they are behind."""
-        if self.day is not None and self.pdf_stale:
-            self.write(pdf=True)
-            self.publish()
+        if self.day is not None and (self.pdf_stale or self.fits_stale):
+            if self.pdf_stale:
+                self.write(pdf=True)
+            self.publish(fits=True)
 
     # ------------------------------------------------------------------ live state
     def sheet_states(self) -> list[dict[str, Any]]:
@@ -487,32 +498,46 @@ class WatchSession:
                     if self.pdf_runs is not None and self.report else None),
         }
 
-    def publish(self) -> None:
-        """Draw the live figures and write state.json (its version one up)."""
+    def publish(self, *, latest: bool = False, fits: bool = False) -> None:
+        """Write state.json (its version one up), after drawing the latest run's figure
+        (``latest``) and the fits' figures (``fits``); the others stay as they were."""
         if self.live_figures and self.day is not None:
             t0 = time.perf_counter()
-            self.figures = self._draw()
+            figs = dict(self.figures)
+            if latest:
+                figs.pop("latest_run", None)
+                figs.update(self._draw_latest())
+            if fits:
+                figs.pop("damping", None)
+                figs.pop("added_mass", None)
+                figs.update(self._draw_fits())
+                self.fits_stale = False
+            self.figures = figs
             self.timings["figures_s"] = time.perf_counter() - t0
         self.version += 1
         write_state(self.live_dir, self.state())
 
-    def _draw(self) -> dict[str, str]:
+    def _draw_latest(self) -> dict[str, str]:
+        """The latest verdict's run: its traces and phases, or its raw traces when it could
+        not be reduced."""
+        day, v = self.day, self.latest
+        if day is None or v is None:
+            return {}
+        red = day.reductions.get(v.run)
+        fig = None
+        if red is not None:
+            fig = rf.fig_run(red, v.line)
+        elif v.run in day.previews:
+            fig = rf.fig_preview(day.previews[v.run], f"run {v.run}", v.reason or "")
+        if fig is None:
+            return {}
+        return {"latest_run": save_figure(fig, self.live_dir, "latest_run.png")}
 
-        day = self.day
-        assert day is not None
+    def _draw_fits(self) -> dict[str, str]:
+        """The C_D(α) fit and the added-mass plot, those the day has."""
         figs: dict[str, str] = {}
-        v = self.latest
-        if v is not None:
-            red = day.reductions.get(v.run)
-            fig = None
-            if red is not None:
-                fig = rf.fig_run(red, v.line)
-            elif v.run in day.previews:
-                fig = rf.fig_preview(day.previews[v.run], f"run {v.run}", v.reason or "")
-            if fig is not None:
-                figs["latest_run"] = save_figure(fig, self.live_dir, "latest_run.png")
         for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
-            fig = make(day)
+            fig = make(self.day)
             if fig is not None:
                 figs[key] = save_figure(fig, self.live_dir, f"{key}.png")
         return figs
