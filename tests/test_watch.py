@@ -263,9 +263,13 @@ def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(
     for name in ("run_001.csv", "run_002.csv"):
         shutil.copy(tmp_path / "all" / name, data / name)
     clocked(s, 5.0)
-    s.step()  # the first batch draws the PDF
+    s.step()  # the first batch: the tables at once, the PDF drawn beside
     out = tmp_path / "out"
+    assert not (out / "report.pdf").exists() and (out / "runs.csv").is_file()
+    assert s._job is not None
+    assert s._collect_report(wait=True)  # drawn: into the outputs
     first = (out / "report.pdf").read_bytes()
+    assert json.loads((out / "provenance.json").read_text())["watch"]["pdf_current"]
     shutil.copy(tmp_path / "all" / "run_003.csv", data / "run_003.csv")
     s.step()  # within pdf_interval_s: the tables move on, the PDF is carried over
     assert (out / "report.pdf").read_bytes() == first

@@ -102,9 +102,12 @@ def watch_command(args: argparse.Namespace) -> int:
                     webbrowser.open(url)
         session.run()
     finally:
+        session.close()
         stop_server(server)
-        if session.pdf_stale and session.pdf_runs is not None:
-            _err(f"report.pdf covers {len(session.pdf_runs)} of the "
-                 f"{len(session.day.runs) if session.day is not None else 0} runs so far; "
-                 "'towtank process' writes the whole report (the runs come from the cache).")
+        if session.pdf_stale and session.day is not None and len(session.day.runs):
+            covered = ("has no report.pdf yet" if session.pdf_runs is None else
+                       f"has a report.pdf of {len(session.pdf_runs)} of the "
+                       f"{len(session.day.runs)} runs so far")
+            _err(f"the output folder {covered}; 'towtank process' writes the whole report "
+                 "(the runs come from the cache).")
     return 0

@@ -26,6 +26,7 @@ import math
 import os
 import re
 import shutil
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -40,7 +41,9 @@ from towtank.live import arrival
 from towtank.live.state import LIVE_DIR, now_iso, save_figure, write_state
 from towtank.pipeline import process_sheet, unlisted_warnings
 from towtank.report import figures as rf
+from towtank.report.figures import write_figures
 from towtank.report.outputs import write_outputs
+from towtank.report.pdf import write_pdf
 from towtank.report.safetext import clean_text
 from towtank.report.workbook import write_workbook
 
@@ -174,6 +177,11 @@ class WatchSession:
         self.pdf_runs: list[int] | None = None  # the runs it covers
         self.pdf_iso: str | None = None
         self.pdf_stale = False
+        #: the report being drawn: (process id, folder, its runs, when it was started)
+        self._job: tuple[int, Path, list[int], str] | None = None
+        self._staged: Path | None = None  # the folder of the last report drawn
+        for left in self.live_dir.glob(".report-*"):  # of an earlier watch that was killed
+            shutil.rmtree(left, ignore_errors=True)
         self.latest: Verdict | None = None
         self.figures: dict[str, str] = {}
         self.timings: dict[str, float] = {}
@@ -306,12 +314,12 @@ class WatchSession:
         if self._dirty:
             self._dirty = False
             verdicts = self.process()
+        self._collect_report()
         # slower work only while no run file is being written: its verdict comes first
+        if self._report_due():
+            self._start_report()  # a forked process: drawn beside what follows
         if self.fits_stale and not self._waiting():
             self.publish(fits=True)
-        elif self.pdf_stale and self._pdf_due():
-            self.write(pdf=True)
-            self.publish()
         return verdicts
 
     def process(self) -> list[Verdict]:
@@ -340,7 +348,7 @@ class WatchSession:
             self.publish(latest=True)
         self.timings["verdict_state_s"] = time.perf_counter() - t0
         t1 = time.perf_counter()
-        self.write(pdf=self._pdf_due())
+        self.write()
         self.timings["write_s"] = time.perf_counter() - t1
         t2 = time.perf_counter()
         self.fits_stale = True
@@ -390,30 +398,32 @@ class WatchSession:
     def _waiting(self) -> bool:
         return any(self.tracker.is_waiting(n) for n in self.names())
 
-    def _pdf_due(self) -> bool:
-        """Whether the PDF and figures are to be drawn now: never drawn, or drawn more than
-        pdf_interval_s ago and no run file is being written."""
-        if not self.report:
+    def _report_due(self) -> bool:
+        """Whether to start drawing the PDF and figures: they are behind the runs so far, none
+        is being drawn, no run file is being written, and the last was started more than
+        pdf_interval_s ago (or there is none yet)."""
+        if (not self.report or self.day is None or self._job is not None or not self.pdf_stale
+                or not len(self.day.runs)):
             return False
-        if self.pdf_at is None:
-            return True
-        return (self.clock() - self.pdf_at >= self.protocol.watch.pdf_interval_s
-                and not self._waiting())
+        if self._waiting():
+            return False
+        return (self.pdf_at is None
+                or self.clock() - self.pdf_at >= self.protocol.watch.pdf_interval_s)
 
-    def write(self, *, pdf: bool) -> None:
+    def write(self, *, pdf: bool = False) -> None:
         """The outputs of the runs so far (``towtank process``'s writers, manifest and swap);
-        without ``pdf`` the previous report.pdf and figures/ are carried over unchanged."""
-
+        without ``pdf`` the last report.pdf and figures/ drawn (by :meth:`_start_report`, or
+        already in the folder) are carried over unchanged."""
         day = self.day
         if day is None:
             return
         runs = [int(r) for r in day.runs["run"]]
         pdf_iso: str | None
-        if pdf or self.pdf_runs is None:
+        pdf_runs: list[int] | None
+        if pdf:
             writers: list[Any] | None = None  # process's writers
             pdf_runs, pdf_iso = runs, now_iso()
         else:
-
             writers = [write_workbook, self._carry]
             pdf_runs, pdf_iso = self.pdf_runs, self.pdf_iso
         extra = {"watch": {"pdf_runs": pdf_runs, "pdf_written": pdf_iso,
@@ -421,25 +431,99 @@ class WatchSession:
         write_outputs(day, self.out, report=self.report, writers=writers,
                       provenance_extra=extra)
         self.writes += 1
-        if self.report and (pdf or self.pdf_runs is None):
+        if self.report and pdf:
             self.pdf_at, self.pdf_runs, self.pdf_iso = self.clock(), runs, pdf_iso
+            self._drop_staged()
         self.pdf_stale = self.report and self.pdf_runs != runs
 
     def _carry(self, day: DayResult, folder: Path) -> None:
-        """A report writer: the previous report.pdf and figures/ into the new set as they are."""
+        """A report writer: the last report.pdf and figures/ drawn into the new set as they
+        are (from the folder they were drawn in, else from the output folder)."""
+        source = self._staged if self._staged is not None else self.out
         for name in PDF_OUTPUTS:
-            src = self.out / name
+            src = source / name
             if src.is_dir() and not src.is_symlink():
                 shutil.copytree(src, folder / name, copy_function=_link_or_copy)
             elif src.is_file() and not src.is_symlink():
                 _link_or_copy(str(src), str(folder / name))
 
+    def _start_report(self) -> None:
+        """Draw report.pdf and figures/ of the runs so far in a forked process, into a folder
+        of ``.live/``; :meth:`_collect_report` puts them into the outputs when it is done."""
+        day = self.day
+        assert day is not None
+        folder = self.live_dir / f".report-{self.writes}"
+        shutil.rmtree(folder, ignore_errors=True)
+        runs = [int(r) for r in day.runs["run"]]
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            pid = os.fork()
+            if pid == 0:  # the child: never returns
+                code = 1
+                try:
+                    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's
+                    signal.pthread_sigmask(signal.SIG_SETMASK, old)
+                    code = _draw_report(day, folder)
+                finally:
+                    os._exit(code)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        self._job = (pid, folder, runs, now_iso())
+        self.pdf_at = self.clock()
+
+    def _collect_report(self, *, wait: bool = False) -> bool:
+        """When the report being drawn is done: its PDF and figures into the outputs (one
+        more write), or one sentence if it failed. True when a drawing ended."""
+        if self._job is None:
+            return False
+        pid, folder, runs, iso = self._job
+        done, status = os.waitpid(pid, 0 if wait else os.WNOHANG)
+        if done == 0:
+            return False
+        self._job = None
+        if os.waitstatus_to_exitcode(status) == 0 and (folder / "done").is_file():
+            old, self._staged = self._staged, folder
+            self.pdf_runs, self.pdf_iso = runs, iso
+            self.write()
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+            self.publish()
+        else:
+            error = folder / "error.txt"
+            reason = error.read_text(encoding="utf-8").strip() if error.is_file() else \
+                f"its process ended with status {os.waitstatus_to_exitcode(status)}"
+            self.say(f"report.pdf and figures/ of runs {_span(runs)} could not be drawn "
+                     f"({reason}); the previous ones are kept.", once=False)
+            shutil.rmtree(folder, ignore_errors=True)
+        return True
+
+    def _drop_staged(self) -> None:
+        if self._staged is not None:
+            shutil.rmtree(self._staged, ignore_errors=True)
+            self._staged = None
+
     def finish(self) -> None:
-        """At the end: the PDF and figures of the last runs if they are behind."""
+        """At the end: the PDF and figures of every run so far if they are behind (drawn
+        here, waiting for one being drawn), and the live figures."""
+        if self._job is not None:
+            self._collect_report(wait=True)
         if self.day is not None and (self.pdf_stale or self.fits_stale):
             if self.pdf_stale:
                 self.write(pdf=True)
             self.publish(fits=True)
+
+    def close(self) -> None:
+        """Stop a report being drawn (Ctrl-C) and remove its folder."""
+        if self._job is not None:
+            pid, folder, _runs, _iso = self._job
+            self._job = None
+            try:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except (ProcessLookupError, ChildProcessError):
+                pass
+            shutil.rmtree(folder, ignore_errors=True)
+        self._drop_staged()  # the output folder has its own links to its files
 
     # ------------------------------------------------------------------ live state
     def sheet_states(self) -> list[dict[str, Any]]:
@@ -587,6 +671,30 @@ def _inside(out: Path, data_dir: Path, sentence: str) -> bool:
     except ValueError:
         return False
     return sentence.startswith(rel + "/") or sentence.startswith(f".{Path(rel).name}.")
+
+
+def _span(runs: list[int]) -> str:
+    return f"{runs[0]}–{runs[-1]}" if len(runs) > 1 else (str(runs[0]) if runs else "none")
+
+
+def _draw_report(day: DayResult, folder: Path) -> int:
+    """In the forked process: report.pdf and figures/ into ``folder`` (as the protocol's
+    [report] asks), then the marker ``done``; 0, or 1 with the error in ``error.txt``."""
+    try:
+        folder.mkdir(parents=True)
+        options = day.protocol.report
+        if getattr(options, "pdf", True):
+            write_pdf(day, folder)
+        if getattr(options, "figures", True):
+            write_figures(day, folder)
+        (folder / "done").touch()
+        return 0
+    except BaseException as exc:  # noqa: BLE001 - told by the parent in one sentence
+        try:
+            (folder / "error.txt").write_text(f"{type(exc).__name__}: {exc}", encoding="utf-8")
+        except OSError:
+            pass
+        return 1
 
 
 def _link_or_copy(src: str, dst: str) -> None:
