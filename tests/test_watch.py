@@ -11,6 +11,7 @@ Ctrl-C. Waits are bounded by generous timeouts that only catch a hang; nothing i
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import queue
@@ -155,7 +156,10 @@ def test_a_day_played_run_by_run_equals_process_after_every_run(tmp_path):
     assert len(ok) == len(done)
     assert all("  ok" in line or "suspicious" in line for line in ok)
     # the hull fit grew with the day: the C_D(α) figure is there at the end
+    s.finish()
+    state = json.loads((tmp_path / "out" / ".live" / "state.json").read_text())
     assert "damping" in state["figures"] and state["coefficients"]
+    assert (tmp_path / "out" / ".live" / state["figures"]["damping"]).is_file()
     assert state["coefficient_columns"][0] == "symbol"
 
 
@@ -284,6 +288,19 @@ def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(
     prov = json.loads((out / "provenance.json").read_text())["watch"]
     assert prov["pdf_runs"] == [1, 2, 3] and prov["pdf_current"]
     assert (out / "report.pdf").read_bytes() != first
+
+    # Ctrl-C while a report is being drawn: its process is ended and its folder removed
+    shutil.copy(tmp_path / "all" / "run_004.csv", data / "run_004.csv")
+    s.protocol = dataclasses.replace(
+        s.protocol, watch=dataclasses.replace(s.protocol.watch, pdf_interval_s=0.0))
+    clocked(s, 10.0)
+    s.step()
+    assert s._job is not None
+    pid, folder = s._job[0], s._job[1]
+    s.close()
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, os.WNOHANG)  # reaped
+    assert not folder.exists() and not list((out / ".live").glob(".report-*"))
 
 
 # ------------------------------------------------------------------------------ the command

@@ -22,6 +22,7 @@ The process stays single-threaded: the report writers fork.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import re
@@ -180,8 +181,11 @@ class WatchSession:
         #: the report being drawn: (process id, folder, its runs, when it was started)
         self._job: tuple[int, Path, list[int], str] | None = None
         self._staged: Path | None = None  # the folder of the last report drawn
+        self._fits_job: tuple[int, Path] | None = None  # (process id, its listing)
         for left in self.live_dir.glob(".report-*"):  # of an earlier watch that was killed
             shutil.rmtree(left, ignore_errors=True)
+        for left in self.live_dir.glob(".fits-*.json"):
+            left.unlink(missing_ok=True)
         self.latest: Verdict | None = None
         self.figures: dict[str, str] = {}
         self.timings: dict[str, float] = {}
@@ -316,11 +320,42 @@ class WatchSession:
             verdicts = self.process()
         self._collect_report()
         # slower work only while no run file is being written: its verdict comes first
+        self._collect_fits()
         if self._report_due():
-            self._start_report()  # a forked process: drawn beside what follows
-        if self.fits_stale and not self._waiting():
-            self.publish(fits=True)
+            self._start_report()  # forked processes: drawn beside the next verdicts
+        if self.fits_stale and self._fits_job is None and self.live_figures:
+            self._start_fits()
         return verdicts
+
+    def _start_fits(self) -> None:
+        """Draw the live page's fit figures in a forked process (:meth:`_collect_fits`)."""
+        day = self.day
+        listing = self.live_dir / f".fits-{self.version}.json"
+        live_dir = self.live_dir
+        self._fits_job = (_fork(lambda: _draw_fits_child(day, live_dir, listing)), listing)
+        self.fits_stale = False
+
+    def _collect_fits(self, *, wait: bool = False) -> bool:
+        """When the fit figures are drawn: state.json names them (one more version)."""
+        if self._fits_job is None:
+            return False
+        pid, listing = self._fits_job
+        done, status = os.waitpid(pid, 0 if wait else os.WNOHANG)
+        if done == 0:
+            return False
+        self._fits_job = None
+        try:
+            drawn = json.loads(listing.read_text(encoding="utf-8"))
+            listing.unlink()
+        except (OSError, ValueError):
+            drawn = None
+        if os.waitstatus_to_exitcode(status) != 0 or not isinstance(drawn, dict):
+            self.say("the live page's fit figures could not be drawn; the last ones stay.")
+            return True
+        figs = {k: v for k, v in self.figures.items() if k not in ("damping", "added_mass")}
+        self.figures = {**figs, **{str(k): str(v) for k, v in drawn.items()}}
+        self.publish()
+        return True
 
     def process(self) -> list[Verdict]:
         """Reduce the runs so far (the cache makes the known ones free), give the verdicts,
@@ -455,19 +490,7 @@ class WatchSession:
         folder = self.live_dir / f".report-{self.writes}"
         shutil.rmtree(folder, ignore_errors=True)
         runs = [int(r) for r in day.runs["run"]]
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            pid = os.fork()
-            if pid == 0:  # the child: never returns
-                code = 1
-                try:
-                    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's
-                    signal.pthread_sigmask(signal.SIG_SETMASK, old)
-                    code = _draw_report(day, folder)
-                finally:
-                    os._exit(code)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        pid = _fork(lambda: _draw_report(day, folder))
         self._job = (pid, folder, runs, now_iso())
         self.pdf_at = self.clock()
 
@@ -507,21 +530,24 @@ class WatchSession:
         here, waiting for one being drawn), and the live figures."""
         if self._job is not None:
             self._collect_report(wait=True)
+        if self._fits_job is not None:
+            self._collect_fits(wait=True)
         if self.day is not None and (self.pdf_stale or self.fits_stale):
             if self.pdf_stale:
                 self.write(pdf=True)
             self.publish(fits=True)
 
     def close(self) -> None:
-        """Stop a report being drawn (Ctrl-C) and remove its folder."""
+        """Stop a report or figures being drawn (Ctrl-C) and remove their files."""
+        if self._fits_job is not None:
+            pid, listing = self._fits_job
+            self._fits_job = None
+            _end(pid)
+            listing.unlink(missing_ok=True)
         if self._job is not None:
             pid, folder, _runs, _iso = self._job
             self._job = None
-            try:
-                os.kill(pid, signal.SIGKILL)
-                os.waitpid(pid, 0)
-            except (ProcessLookupError, ChildProcessError):
-                pass
+            _end(pid)
             shutil.rmtree(folder, ignore_errors=True)
         self._drop_staged()  # the output folder has its own links to its files
 
@@ -619,12 +645,7 @@ class WatchSession:
 
     def _draw_fits(self) -> dict[str, str]:
         """The C_D(α) fit and the added-mass plot, those the day has."""
-        figs: dict[str, str] = {}
-        for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
-            fig = make(self.day)
-            if fig is not None:
-                figs[key] = save_figure(fig, self.live_dir, f"{key}.png")
-        return figs
+        return _fit_figures(self.day, self.live_dir)
 
     # ------------------------------------------------------------------ the loop
     def watched_paths(self) -> list[Path]:
@@ -671,6 +692,57 @@ def _inside(out: Path, data_dir: Path, sentence: str) -> bool:
     except ValueError:
         return False
     return sentence.startswith(rel + "/") or sentence.startswith(f".{Path(rel).name}.")
+
+
+def _fork(task: Callable[[], int]) -> int:
+    """Run ``task`` in a forked process that ignores Ctrl-C (the parent's to handle) and
+    exits with what it returns; its process id."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        pid = os.fork()
+        if pid == 0:  # the child: never returns
+            code = 1
+            try:
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                signal.pthread_sigmask(signal.SIG_SETMASK, old)
+                code = task()
+            finally:
+                os._exit(code)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    return pid
+
+
+def _end(pid: int) -> None:
+    """Kill and reap a forked process."""
+    try:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    except (ProcessLookupError, ChildProcessError):
+        pass
+
+
+def _draw_fits_child(day: DayResult | None, live_dir: Path, listing: Path) -> int:
+    """In the forked process: the fit figures into ``live_dir``, their names into
+    ``listing`` (JSON); 0, or 1 when they could not be drawn."""
+    try:
+        drawn = _fit_figures(day, live_dir)
+        listing.write_text(json.dumps(drawn), encoding="utf-8")
+        return 0
+    except BaseException:  # noqa: BLE001 - the parent says it in one sentence
+        return 1
+
+
+def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
+    """The C_D(α) fit and the added-mass plot the day has, saved into ``live_dir``."""
+    figs: dict[str, str] = {}
+    if day is None:
+        return figs
+    for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
+        fig = make(day)
+        if fig is not None:
+            figs[key] = save_figure(fig, live_dir, f"{key}.png")
+    return figs
 
 
 def _span(runs: list[int]) -> str:
