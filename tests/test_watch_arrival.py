@@ -104,3 +104,23 @@ def test_the_lease_tells_a_file_open_for_writing(tmp_path):
     assert writer_open(tmp_path / "absent.csv") is None
     assert observe(tmp_path / "absent.csv", 0.0).size is None
     assert observe(tmp_path, 0.0).size is None  # a folder is not a run file
+
+
+def test_state_json_has_no_nan_and_follows_the_umask(tmp_path):
+    import json
+    import math
+    import os
+
+    import numpy as np
+
+    from towtank.live.state import write_state
+
+    path = write_state(tmp_path / ".live", {"version": np.int64(3), "value": math.nan,
+                                            "rows": [{"ci": np.float64(np.inf), "s": "α"}]})
+    text = path.read_text(encoding="utf-8")
+    assert json.loads(text) == {"version": 3, "value": None, "rows": [{"ci": None, "s": "α"}]}
+    assert "NaN" not in text and "Infinity" not in text
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in path.parent.iterdir()] == ["state.json"]  # no temporary left

@@ -25,6 +25,9 @@ STATE_NAME = "state.json"
 #: Resolution of the live page's figures [dpi]: small PNGs, drawn quickly.
 FIGURE_DPI = 60
 
+_UMASK = os.umask(0o022)  # read once (setting it is the only way), then put back
+os.umask(_UMASK)
+
 
 def now_iso() -> str:
     """The current UTC time, ISO 8601 to the second (``2026-11-26T13:02:11+00:00``)."""
@@ -55,6 +58,7 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.fchmod(fd, 0o666 & ~_UMASK)  # as any file the user writes (mkstemp gives 0600)
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
