@@ -101,6 +101,9 @@ def watch_command(args: argparse.Namespace) -> int:
                 if not args.no_browser:
                     webbrowser.open(url)
         session.run()
+    except KeyboardInterrupt:  # the workers and the fork server ignore Ctrl-C: ended here
+        parallel.end_forkserver()
+        raise
     finally:
         session.close()
         stop_server(server)

@@ -57,6 +57,10 @@ __all__ = ["POLL_MS", "Verdict", "WatchSession", "verdict_line"]
 #: The longest the loop waits for a change before it looks at the files anyway [ms].
 POLL_MS = 100
 
+#: Niceness added to the processes drawing the report and the fit figures: on a machine of
+#: two cores the watching process, which gives the verdicts, gets the processor first.
+CHILD_NICE = 10
+
 #: Files an output writer leaves in the report that watch carries over between two PDFs.
 PDF_OUTPUTS = ("report.pdf", "figures")
 
@@ -695,8 +699,8 @@ def _inside(out: Path, data_dir: Path, sentence: str) -> bool:
 
 
 def _fork(task: Callable[[], int]) -> int:
-    """Run ``task`` in a forked process that ignores Ctrl-C (the parent's to handle) and
-    exits with what it returns; its process id."""
+    """Run ``task`` in a forked process that ignores Ctrl-C (the parent's to handle), runs
+    at a lower priority (:data:`CHILD_NICE`) and exits with what it returns; its id."""
     old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         pid = os.fork()
@@ -705,6 +709,7 @@ def _fork(task: Callable[[], int]) -> int:
             try:
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
                 signal.pthread_sigmask(signal.SIG_SETMASK, old)
+                os.nice(CHILD_NICE)  # the next run's verdict comes first
                 code = task()
             finally:
                 os._exit(code)

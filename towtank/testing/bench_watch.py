@@ -23,6 +23,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -95,8 +96,8 @@ def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[fl
     syn.make_hull_day(day, runs=plan_of(runs), fs=fs, file_format="csv", sheet_format="csv")
     shutil.move(day / "data", folder / "all")
     (day / "data").mkdir()
-    protocol = syn.write_protocol(folder / "p.toml",
-                                  **syn.hull_protocol_sections("day", "out", sheet_format="csv"))
+    sections: Any = syn.hull_protocol_sections("day", "out", sheet_format="csv")
+    protocol = syn.write_protocol(folder / "p.toml", **sections)
     proc = subprocess.Popen(
         [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--no-server"],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, start_new_session=True)
