@@ -255,9 +255,9 @@ class WatchSession:
             if name.startswith("~$"):
                 self.say(f"{name} is Excel's lock file (the sheet is open in Excel); it is "
                          "ignored.")
-        if changed:
-            self._tell_unlisted()
         names = self.names()
+        if changed and any(self._unnamed(path, names) for path in changed):
+            self._tell_unlisted()  # a listing of the data folder: only for a new name
         for gone in [n for n in self.tracker.files if n not in names]:
             self.tracker.forget(gone)
             self._dirty = True
@@ -289,6 +289,14 @@ class WatchSession:
         return done
 
     _sheet_sig: tuple[int, int] | None = None
+
+    def _unnamed(self, path: str, names: dict[str, int]) -> bool:
+        """Whether ``path`` (from watchfiles) is in the data folder but no sheet row's file."""
+        try:
+            rel = Path(path).resolve().relative_to(self.data_dir.resolve()).as_posix()
+        except (ValueError, OSError):
+            return False
+        return rel not in names
 
     def _tell_unlisted(self) -> None:
 
