@@ -368,3 +368,22 @@ def test_the_command_gives_a_verdict_and_stops_cleanly_on_ctrl_c(tmp_path):
         assert sha256_regular(out / rel) == entries[-1]["sha256"], rel
     runs = pd.read_csv(out / "runs.csv")
     assert list(runs["run"]) == [1]
+
+
+def test_a_file_that_never_stops_growing_is_said_once_and_never_reduced(tmp_path):
+    protocol = make_day(tmp_path, PLAY[:3], watch={"never_stops_s": 1.0, "settle_s": 0.5})
+    s, _lines = session_of(protocol)
+    data = tmp_path / "day" / "data"
+    src = (tmp_path / "all" / "run_001.csv").read_bytes()
+    ahead = 0.0
+    with open(data / "run_001.csv", "wb") as fh:  # held open, a block before every look
+        for k in range(8):
+            fh.write(src[k * 100:(k + 1) * 100])
+            fh.flush()
+            os.utime(fh.fileno(), ns=(time.time_ns() + k, time.time_ns() + k))
+            clocked(s, ahead)
+            s.step()
+            ahead += 0.4  # each look 0.4 s later than the last: below settle_s
+    said = [m for m in s.said.messages if "still being written" in m]
+    assert len(said) == 1 and "run_001.csv" in said[0] and "never_stops_s" in said[0]
+    assert 1 not in s.given and not s.reduced
