@@ -387,3 +387,21 @@ def test_a_file_that_never_stops_growing_is_said_once_and_never_reduced(tmp_path
     said = [m for m in s.said.messages if "still being written" in m]
     assert len(said) == 1 and "run_001.csv" in said[0] and "never_stops_s" in said[0]
     assert 1 not in s.given and not s.reduced
+
+
+def test_a_file_of_the_users_with_an_outputs_name_stops_the_writes_not_the_verdicts(tmp_path):
+    protocol = make_day(tmp_path, PLAY[:3])
+    s, lines = session_of(protocol)
+    data = tmp_path / "day" / "data"
+    shutil.copy(tmp_path / "all" / "run_001.csv", data / "run_001.csv")
+    clocked(s, 5.0)
+    s.step()
+    mine = "my own notes\n"
+    (tmp_path / "out" / "runs.csv").write_text(mine)  # the user's file now
+    writes = s.writes
+    shutil.copy(tmp_path / "all" / "run_002.csv", data / "run_002.csv")
+    s.step()
+    assert any(line.startswith("run 2  ") for line in lines) and s.writes == writes
+    said = [m for m in s.said.messages if "runs.csv" in m and "verdicts go on" in m]
+    assert len(said) == 1
+    assert (tmp_path / "out" / "runs.csv").read_text() == mine  # never overwritten

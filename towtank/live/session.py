@@ -47,6 +47,7 @@ from towtank.report.outputs import write_outputs
 from towtank.report.pdf import write_pdf
 from towtank.report.safetext import clean_text
 from towtank.report.workbook import write_workbook
+from towtank.runtime.storage import STORAGE_ERRNOS
 
 if TYPE_CHECKING:
     from towtank.ingest.protocol import Protocol
@@ -475,8 +476,20 @@ class WatchSession:
             pdf_runs, pdf_iso = self.pdf_runs, self.pdf_iso
         extra = {"watch": {"pdf_runs": pdf_runs, "pdf_written": pdf_iso,
                            "pdf_current": pdf_runs == runs, "runs": runs}}
-        write_outputs(day, self.out, report=self.report, writers=writers,
-                      provenance_extra=extra)
+        try:
+            write_outputs(day, self.out, report=self.report, writers=writers,
+                          provenance_extra=extra)
+        except ProtocolError as exc:  # a file of the user's with an output's name
+            self.say(f"{_strip_dot(str(exc))}; the verdicts go on, the outputs are written "
+                     "again at the next run.")
+            return
+        except OSError as exc:
+            if exc.errno is None or exc.errno not in STORAGE_ERRNOS:
+                raise
+            self.say(f"the outputs could not be written to {self.out} "
+                     f"({os.strerror(exc.errno)}); the folder holds the last complete set, "
+                     "and they are written again at the next run.")
+            return
         self.writes += 1
         if self.report and pdf:
             self.pdf_at, self.pdf_runs, self.pdf_iso = self.clock(), runs, pdf_iso
