@@ -64,7 +64,7 @@ from towtank.runtime.records import same_lengths
 from towtank.vehicle.compare import day_vehicle
 
 __all__ = ["DayResult", "FinResult", "HullResult", "ScalingResult", "VehicleResult",
-           "process_day"]
+           "process_day", "process_sheet"]
 
 #: What the fitting stages import: loaded while the workers reduce the runs.
 ANALYSIS_MODULES = (
@@ -262,13 +262,30 @@ def process_day(
     """
     if protocol is None:
         protocol = load_protocol(protocol_path)
-    if jobs is None:
-        jobs = protocol.processing.jobs  # None too: every core
     sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
                            protocol.sheet, air=protocol.water.is_air)
+    return process_sheet(protocol, sheet, jobs=jobs, progress=progress, debug=debug,
+                         cache_dir=cache_dir)
+
+
+def process_sheet(
+    protocol: Protocol,
+    sheet: pd.DataFrame,
+    *,
+    jobs: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    debug: bool = False,
+    cache_dir: str | Path | None = None,
+    unlisted: list[Notice] | None = None,
+) -> DayResult:
+    """:func:`process_day` on a run sheet already read (:func:`read_run_sheet`), e.g. the
+    rows of a day whose files are complete (``towtank watch``). ``unlisted``: the warnings of
+    the data files no row names, default :func:`unlisted_warnings` of ``sheet``."""
+    if jobs is None:
+        jobs = protocol.processing.jobs  # None too: every core
     day_warnings = [*notices(protocol.warnings, "protocol"),
                     *notices(sheet.attrs.get("warnings", []), "sheet"),
-                    *unlisted_warnings(protocol, sheet)]
+                    *(unlisted_warnings(protocol, sheet) if unlisted is None else unlisted)]
     day_warnings += notices(sheet_note_sentences(sheet.attrs.get("notes", [])), "sheet")
     todo, rejected = runs_to_reduce(protocol, sheet)
     said: list[str] = []

@@ -50,6 +50,7 @@ examples:
   towtank process day3.toml --out reports/day3 -j 2  choose the output folder and cores
   towtank inspect sample_runs/sut2_hull/data/run_020.csv.gz --protocol protocols/sut2_hull.toml
   towtank scale protocols/sut2_hull.toml --speeds 1 2 3
+  towtank watch day3.toml --no-browser                verdict per run while the tank runs
   towtank synth /tmp/day --day hull                   generate a synthetic test day
   towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
   towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
@@ -102,6 +103,37 @@ def _parser() -> argparse.ArgumentParser:
     pr.add_argument("--no-cache", action="store_true",
                     help="ignore and rebuild the per-run cache in the output folder")
     pr.add_argument("--debug", action="store_true",
+                    help="show a traceback for internal errors instead of one sentence")
+
+    wa = sub.add_parser(
+        "watch",
+        help="process the day run by run while the tank runs: a verdict per run, a live page",
+        description="Give every run of the sheet whose file is complete a verdict line (run, "
+        "test, angle, speed, drag, status and, for a rejected or suspicious run, the reason), "
+        "then watch the data folder and the run sheet: each new, changed or re-recorded run "
+        "file gets its verdict once its writer has closed it (or it has not changed for "
+        "[watch] settle_s), and the outputs of 'process' are brought up to date (the PDF and "
+        "figures at most every [watch] pdf_interval_s). The live state for the browser page "
+        "is in DIR/.live/. Ctrl-C stops it (exit 130); the output folder then holds the last "
+        "complete set.",
+    )
+    wa.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
+    wa.add_argument("--out", type=Path, metavar="DIR",
+                    help="output folder (default: output_dir of the protocol)")
+    wa.add_argument("--port", type=_port, default=8050, metavar="N",
+                    help="port of the live page on 127.0.0.1 (default 8050)")
+    wa.add_argument("--no-browser", action="store_true", help="do not open the page")
+    wa.add_argument("--no-server", action="store_true",
+                    help="no page server (verdict lines and outputs only)")
+    wa.add_argument("--no-report", action="store_true",
+                    help="write the CSV tables only (no workbook, PDF or figures)")
+    wa.add_argument("--jobs", "-j", type=_jobs, metavar="N",
+                    help="runs reduced in parallel when several arrive at once (default: the "
+                         "protocol's [processing] jobs, else all cores)")
+    wa.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
+                    help="test date printed in the report (default: from the inputs)")
+    wa.add_argument("--quiet", "-q", action="store_true", help="no start-up line")
+    wa.add_argument("--debug", action="store_true",
                     help="show a traceback for internal errors instead of one sentence")
 
     ins = sub.add_parser(
@@ -303,6 +335,17 @@ def _jobs(text: str) -> int:
         n = 0
     if n < 1:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return n
+
+
+def _port(text: str) -> int:
+    """``--port``: a TCP port, 1-65535."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if not 1 <= n <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port (a whole number 1-65535)")
     return n
 
 
@@ -564,7 +607,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
                             noise=args.noise)
 
 
+def cmd_watch(args: argparse.Namespace) -> int:
+    # start-up saving: a command's modules are loaded when it runs (towtank --help in ~50 ms)
+    from towtank.commands.watch import watch_command
+
+    return watch_command(args)
+
+
 COMMANDS = {
+    "watch": cmd_watch,
     "steady": cmd_steady,
     "predict": cmd_predict,
     "simulate": cmd_simulate,

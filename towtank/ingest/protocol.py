@@ -50,6 +50,7 @@ from towtank.ingest.schema import (  # noqa: F401 - SCHEMA, TOP_LEVEL: public he
     TOP_LEVEL,
     Processing,
     ReportOptions,
+    WatchOptions,
     check_keys,
     check_positive,
     checked_section,
@@ -354,6 +355,7 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         speed_log=parse_speed_log(data.get("speed_log"), src),
         zeros=parse_zero_file(data.get("zeros"), src),
         sheet=parse_sheet_options(data.get("sheet"), src),
+        watch=_watch(data.get("watch", {}), src),
     )
 
 
@@ -570,6 +572,22 @@ def _processing(data: Any, src: str) -> Processing:
                 f"{value!r}{suggest(value, choices)}"
             )
     return Processing(**proc_values)
+
+
+#: [watch] keys' closed ranges [s].
+WATCH_RANGES = {"settle_s": (0.05, 3600.0), "never_stops_s": (1.0, 86400.0),
+                "pdf_interval_s": (0.0, 86400.0)}
+
+
+def _watch(data: Any, src: str) -> WatchOptions:
+    """``[watch]``: each time [s] a finite number in its range (:data:`WATCH_RANGES`)."""
+    values = checked_section(data, "watch", "watch", src)
+    for key, (low, high) in WATCH_RANGES.items():
+        value = values.get(key)
+        if value is not None and not low <= value <= high:
+            raise ProtocolError(
+                f"{src}: '{key}' in [watch] must lie in {low:g}–{high:g} s, but it is {value}.")
+    return WatchOptions(**values)
 
 
 def _with_myring_geometry(model: Model, src: str) -> Model:

@@ -17,7 +17,12 @@ from pathlib import Path
 from typing import Any, Literal
 
 from towtank.ingest.readers import ReadOptions
-from towtank.ingest.schema import CANONICAL_CHANNELS, Processing, ReportOptions
+from towtank.ingest.schema import (
+    CANONICAL_CHANNELS,
+    Processing,
+    ReportOptions,
+    WatchOptions,
+)
 from towtank.ingest.sheetlayout import SheetOptions
 from towtank.reference.air import DEFAULT_RELATIVE_HUMIDITY_PCT, STANDARD_PRESSURE_PA
 
@@ -256,6 +261,7 @@ class Protocol:
     speed_log: SpeedLog | None = None  # [speed_log]: carriage speed from its own file
     zeros: ZeroFile | None = None  # [zeros]: the balance zero from its own file
     sheet: SheetOptions = field(default_factory=SheetOptions)  # [sheet]: a hand-typed sheet
+    watch: WatchOptions = field(default_factory=WatchOptions)  # [watch]: towtank watch's timings
 
     @property
     def name(self) -> str:

@@ -54,6 +54,21 @@ class ReportOptions:
     figures: bool = True
 
 
+@dataclass(frozen=True)
+class WatchOptions:
+    """``[watch]``: the timings of ``towtank watch`` (docs/formats.md, "towtank watch").
+
+    settle_s [s]: a run file the writer may still hold (its closing cannot be seen, e.g. on a
+    network share) counts as complete once it has not changed for this long.
+    never_stops_s [s]: a file still changing after this long is reported once.
+    pdf_interval_s [s]: the PDF and figures are redrawn at most this often (and at the end).
+    """
+
+    settle_s: float = 1.0
+    never_stops_s: float = 600.0
+    pdf_interval_s: float = 60.0
+
+
 # --------------------------------------------------------------------------------------------
 # Schema: key -> (kind, required). kinds: str, float, int, bool, path, floats, table
 NUM = "float"
@@ -148,6 +163,11 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "pdf": ("bool", False),
         "figures": ("bool", False),
     },
+    "watch": {
+        "settle_s": (NUM, False),
+        "never_stops_s": (NUM, False),
+        "pdf_interval_s": (NUM, False),
+    },
     "read": {
         "format": ("str", False),
         "delimiter": ("str", False),
@@ -159,7 +179,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     },
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
-             "read", "vehicle", "balance", "tare", "speed_log",
+             "watch", "read", "vehicle", "balance", "tare", "speed_log",
              "zeros", "sheet")
 
 _KIND_WORDS = {

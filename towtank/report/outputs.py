@@ -9,7 +9,7 @@ import shutil
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.provenance import provenance
@@ -126,7 +126,11 @@ def sweep_stale_temporaries(out_dir: Path, max_age_s: float = STALE_TEMPORARY_S)
     return gone
 
 
-def foreign_entries(out_dir: Path, keep: tuple[str, ...] = (".cache",)) -> list[str]:
+#: Towtank's own folders kept across output swaps: the run cache and watch's live state.
+KEPT = (".cache", ".live")
+
+
+def foreign_entries(out_dir: Path, keep: tuple[str, ...] = KEPT) -> list[str]:
     """Names in ``out_dir`` that are not towtank's outputs (nor kept, e.g. the cache): the
     user's, and anything else, whatever its name (a leftover of a killed run too: it is left
     alone rather than risk deleting a file of the user's that looks like one)."""
@@ -154,8 +158,9 @@ def write_outputs(
     *,
     report: bool = True,
     writers: list[Writer] | None = None,
-    keep: tuple[str, ...] = (".cache",),
+    keep: tuple[str, ...] = KEPT,
     export: tuple[str, ...] | list[str] = (),
+    provenance_extra: dict[str, Any] | None = None,
 ) -> Path:
     """Write every output of the day into ``out_dir``, replacing the previous outputs.
 
@@ -174,6 +179,8 @@ def write_outputs(
     export : sequence of str
         Also write every usable run's reduced time series in these formats ("mat", "hdf5",
         "parquet") into ``export/`` (:mod:`towtank.report.export`).
+    provenance_extra : dict, optional
+        More entries for provenance.json (``towtank watch``: which runs the PDF covers).
 
     Raises
     ------
@@ -186,12 +193,13 @@ def write_outputs(
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     with manifest.output_lock(out_dir):  # two writers never mix their files
         return _write_outputs(day, out_dir, report=report, writers=writers, keep=keep,
-                              export=export)
+                              export=export, provenance_extra=provenance_extra)
 
 
 def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
                    writers: list[Writer] | None, keep: tuple[str, ...],
-                   export: tuple[str, ...] | list[str]) -> Path:
+                   export: tuple[str, ...] | list[str],
+                   provenance_extra: dict[str, Any] | None = None) -> Path:
     manifest.recover_outputs(out_dir)
     refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)
@@ -214,7 +222,8 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
         if report:
             run_writers(writers or _report_writers(), day, tmp)
         (tmp / "provenance.json").write_text(
-            json.dumps(provenance(day), indent=2, sort_keys=False, default=str) + "\n",
+            json.dumps(provenance(day, provenance_extra), indent=2, sort_keys=False,
+                       default=str) + "\n",
             encoding="utf-8",
         )
         manifest.write_manifest(tmp, manifest.describe(tmp, OUTPUT_NAMES))  # marks it complete

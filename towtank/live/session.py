@@ -1,0 +1,807 @@
+"""The watch loop of ``towtank watch``: each run's verdict as its file completes, the day's
+outputs kept up to date (docs/formats.md, "towtank watch").
+
+:class:`WatchSession` holds the day: the last good run sheet, which run files are complete
+(:class:`towtank.live.arrival.ArrivalTracker`), the verdicts given. :meth:`WatchSession.step`
+looks once at the sheet and the files and processes what became complete as one batch;
+:meth:`WatchSession.run` calls it whenever watchfiles reports a change (or every
+:data:`POLL_MS`, so that settle times are checked when nothing happens). A test drives the
+session in-process with :meth:`~WatchSession.step` or :meth:`~WatchSession.run` with a
+condition; the command line adds the page server and Ctrl-C.
+
+"The runs so far": the sheet's rows whose files are complete, the void rows, and the rows the
+sheet alone rejects; a run whose file does not exist yet (or is still being written) is "to
+do", not rejected. After every batch the output folder holds what ``towtank process`` writes
+for those rows (through the same manifest, lock and atomic swap), except that the PDF and
+figures are redrawn at most every ``[watch] pdf_interval_s`` (carried over unchanged in
+between; provenance.json's ``watch`` entry says which runs they cover).
+
+The process stays single-threaded: the report writers fork.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+import shutil
+import signal
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from towtank.errors import ProtocolError
+from towtank.ingest.runsheet import read_run_sheet
+from towtank.live import arrival
+from towtank.live.state import LIVE_DIR, now_iso, save_figure, write_state
+from towtank.pipeline import process_sheet, unlisted_warnings
+from towtank.report import figures as rf
+from towtank.report.figures import write_figures
+from towtank.report.outputs import write_outputs
+from towtank.report.pdf import write_pdf
+from towtank.report.safetext import clean_text
+from towtank.report.workbook import write_workbook
+from towtank.results import Notice
+from towtank.runtime.storage import STORAGE_ERRNOS
+
+if TYPE_CHECKING:
+    from towtank.ingest.protocol import Protocol
+    from towtank.results import DayResult
+
+__all__ = ["POLL_MS", "Verdict", "WatchSession", "verdict_line"]
+
+#: The longest the loop waits for a change before it looks at the files anyway [ms].
+POLL_MS = 100
+
+#: Niceness added to the processes drawing the report and the fit figures: on a machine of
+#: two cores the watching process, which gives the verdicts, gets the processor first.
+CHILD_NICE = 10
+
+#: Files an output writer leaves in the report that watch carries over between two PDFs.
+PDF_OUTPUTS = ("report.pdf", "figures")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A run's verdict: one line on the terminal and one entry of state.json."""
+
+    run: int
+    file: str
+    test: str
+    angle_deg: float
+    speed_m_s: float | None
+    drag_N: float | None
+    status: str  # ok | suspicious | rejected
+    reason: str | None
+    line: str
+    time: str
+    sha256: str = ""
+
+    def entry(self) -> dict[str, Any]:
+        """The state.json entry."""
+        return {"run": self.run, "file": self.file, "test": self.test,
+                "angle_deg": self.angle_deg, "speed_m_s": self.speed_m_s,
+                "drag_N": self.drag_N, "status": self.status, "reason": self.reason,
+                "line": self.line, "time": self.time}
+
+
+def _num(value: Any) -> float | None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+_RUN_PREFIX = re.compile(r"^run \d+: ")
+
+
+def verdict_line(run: int, test: str, angle_deg: float | None, speed_m_s: float | None,
+                 speed_set: bool, drag_N: float | None, status: str,
+                 reason: str | None) -> str:
+    """``run 17  steady  α 10.0°  U 1.20 m/s  drag 3.41 N  ok``, and for a rejected or
+    suspicious run ``: <the reason in one sentence>``. ``speed_set``: U is the sheet's set
+    speed (the run was not reduced)."""
+    alpha = f"α {angle_deg:.1f}°" if angle_deg is not None else "α –"
+    u = (f"U {speed_m_s:.2f} m/s" + (" (set)" if speed_set else "")
+         if speed_m_s is not None else "U –")
+    d = f"drag {drag_N:.2f} N" if drag_N is not None else "drag –"
+    line = f"run {run}  {test}  {alpha}  {u}  {d}  {status}"
+    if reason:
+        line += ": " + _RUN_PREFIX.sub("", reason.strip())
+    return line
+
+
+@dataclass
+class _Said:
+    """Sentences said once (terminal and state.json messages)."""
+
+    seen: set[str] = field(default_factory=set)
+    messages: list[str] = field(default_factory=list)
+
+
+class WatchSession:
+    """A watched day (see the module's text).
+
+    Parameters
+    ----------
+    protocol : Protocol
+        The day's protocol, its output folder set (``with_output_dir``).
+    out : path
+        The output folder; ``.cache/`` and ``.live/`` are kept in it.
+    jobs : int, optional
+        Worker processes for a batch of several runs (default: the protocol's, else all).
+    report : bool
+        Also write the workbook, the PDF and the figures (else the CSV tables only).
+    date : str, optional
+        The report's test date (``--date``).
+    echo : callable
+        Where the verdict lines and sentences go (default ``print``, flushed).
+    live_figures : bool
+        Draw the live page's figures into ``.live/``.
+    clock : callable
+        The time [s since the epoch] (a test may pass its own).
+    """
+
+    def __init__(self, protocol: Protocol, out: str | Path, *, jobs: int | None = None,
+                 report: bool = True, date: str | None = None,
+                 echo: Callable[[str], None] | None = None, live_figures: bool = True,
+                 clock: Callable[[], float] = time.time) -> None:
+        self.protocol = protocol
+        self.out = Path(out).resolve()
+        self.live_dir = self.out / LIVE_DIR
+        self.cache_dir = self.out / ".cache"
+        self.jobs = jobs if jobs is not None else protocol.processing.jobs
+        self.report = report
+        self.date = date
+        self.echo = echo if echo is not None else _print
+        self.live_figures = live_figures
+        self.clock = clock
+        w = protocol.watch
+        self.tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
+        self.sheet_tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
+        self.sheet_path = Path(protocol.campaign.run_sheet)
+        self.data_dir = Path(protocol.campaign.data_dir)
+        self.sheet: pd.DataFrame | None = None  # the last good sheet
+        self.day: DayResult | None = None
+        self.verdicts: list[Verdict] = []
+        self.given: dict[int, tuple[str, str | None, str]] = {}
+        self.said = _Said()
+        self.version = 0
+        self.batches = 0
+        self.writes = 0  # output updates
+        self.fits_stale = False  # the live page's fit figures are behind the outputs
+        #: (run, file, sha256) of every reduction this session obtained: a run file is only
+        #: ever reduced complete
+        self.reduced: list[tuple[int, str, str]] = []
+        self.pdf_at: float | None = None  # when the PDF was last drawn [s]
+        self.pdf_runs: list[int] | None = None  # the runs it covers
+        self.pdf_iso: str | None = None
+        self.pdf_stale = False
+        #: the report being drawn: (process id, folder, its runs, when it was started)
+        self._job: tuple[int, Path, list[int], str] | None = None
+        self._staged: Path | None = None  # the folder of the last report drawn
+        self._fits_job: tuple[int, Path] | None = None  # (process id, its listing)
+        for left in self.live_dir.glob(".report-*"):  # of an earlier watch that was killed
+            shutil.rmtree(left, ignore_errors=True)
+        for left in self.live_dir.glob(".fits-*.json"):
+            left.unlink(missing_ok=True)
+        self.latest: Verdict | None = None
+        self.figures: dict[str, str] = {}
+        self.timings: dict[str, float] = {}
+        self._dirty = False
+        self._unlisted: list[Notice] = []
+        arrival.ignore_lease_breaks()
+
+    # ------------------------------------------------------------------ sentences
+    def say(self, sentence: str, *, once: bool = True) -> None:
+        """Print ``sentence`` (once per session when ``once``) and keep it for state.json."""
+        if once and sentence in self.said.seen:
+            return
+        self.said.seen.add(sentence)
+        self.said.messages.append(sentence)
+        self.echo(sentence)
+
+    # ------------------------------------------------------------------ the sheet
+    def read_sheet(self) -> bool:
+        """Read the run sheet; keep the last good one when it cannot be read (said once per
+        fault). True when a sheet was read."""
+
+        p = self.protocol
+        try:
+            sheet = read_run_sheet(p.campaign.run_sheet, p.water.temperature_C, p.sheet,
+                                   air=p.water.is_air)
+        except ProtocolError as exc:
+            if self.sheet is None:
+                raise
+            self.say(f"{self.sheet_path.name} could not be read ({_strip_dot(str(exc))}); the "
+                     "last good sheet is kept and the sheet is read again at its next change.")
+            return False
+        self.sheet = sheet
+        self._unlisted = unlisted_warnings(p, sheet)
+        self._dirty = True
+        return True
+
+    def names(self) -> dict[str, int]:
+        """The run files the sheet's rows (void ones aside) name -> run."""
+        if self.sheet is None:
+            return {}
+        out: dict[str, int] = {}
+        for run, file, status in zip(self.sheet["run"], self.sheet["file"],
+                                     self.sheet["status"], strict=True):
+            if status != "void" and str(file).strip():
+                out.setdefault(str(file), int(run))
+        return out
+
+    # ------------------------------------------------------------------ one look
+    def scan(self, changed: set[str] | None = None) -> list[str]:
+        """One look at the sheet and the run files; return the files that became complete.
+        ``changed``: paths watchfiles reported (for the lock files and unlisted files)."""
+        now = self.clock()
+        event = self.sheet_tracker.update("sheet", arrival.observe(self.sheet_path, now))
+        st = self.sheet_tracker.files["sheet"]
+        if self.sheet is None:  # the first look: the sheet as it is
+            self.read_sheet()
+            self._sheet_sig = st.complete or st.signature
+        elif event == "complete" and st.complete != self._sheet_sig:
+            self._sheet_sig = st.complete
+            self.read_sheet()
+        for path in sorted(changed or ()):
+            name = Path(path).name
+            if name.startswith("~$"):
+                self.say(f"{name} is Excel's lock file (the sheet is open in Excel); it is "
+                         "ignored.")
+        names = self.names()
+        if changed and any(self._unnamed(path, names) for path in changed):
+            self._tell_unlisted()  # a listing of the data folder: only for a new name
+        for gone in [n for n in self.tracker.files if n not in names]:
+            self.tracker.forget(gone)
+            self._dirty = True
+        done = []
+        for name in names:
+            file = self.data_dir / name
+            complete = self.tracker.is_complete(name)
+            obs = arrival.observe(file, now, probe=False)
+            known = self.tracker.files.get(name)
+            if not complete and obs.size is not None and known is not None \
+                    and known.signature == (obs.size, obs.mtime_ns):
+                obs = arrival.observe(file, now)  # unchanged since the last look: closed?
+            event = self.tracker.update(name, obs)
+            if event == "complete":
+                done.append(name)
+            elif event == "vanished":
+                self.say(f"{name} appeared and disappeared before it was complete; run "
+                         f"{names[name]} is still to do.", once=False)
+            elif event == "removed":
+                self.say(f"{name} was removed; run {names[name]} is to do again.", once=False)
+                self.given.pop(names[name], None)
+                self._dirty = True
+            elif event == "never_stops":
+                self.say(f"{name} is still being written after "
+                         f"{self.tracker.never_stops_s:g} s ([watch] never_stops_s); run "
+                         f"{names[name]} waits until it stops.")
+        if done:
+            self._dirty = True
+        return done
+
+    _sheet_sig: tuple[int, int] | None = None
+
+    def _unnamed(self, path: str, names: dict[str, int]) -> bool:
+        """Whether ``path`` (from watchfiles) is in the data folder but no sheet row's file."""
+        try:
+            rel = Path(path).resolve().relative_to(self.data_dir.resolve()).as_posix()
+        except (ValueError, OSError):
+            return False
+        return rel not in names
+
+    def _tell_unlisted(self) -> None:
+
+        if self.sheet is None:
+            return
+        self._unlisted = unlisted_warnings(self.protocol, self.sheet)
+        for notice in self._unlisted:
+            if not _inside(self.out, self.data_dir, notice.file):
+                self.say(str(notice))
+
+    # ------------------------------------------------------------------ one batch
+    def runs_so_far(self) -> pd.DataFrame:
+        """The sheet restricted to the runs so far (see the module's text), sheet order."""
+        assert self.sheet is not None
+        sheet = self.sheet
+        keep = []
+        for status, file, error in zip(sheet["status"], sheet["file"], sheet["sheet_error"],
+                                       strict=True):
+            keep.append(status == "void" or bool(error)
+                        or self.tracker.is_complete(str(file)))
+        sub = sheet[keep].reset_index(drop=True)
+        sub.attrs = dict(sheet.attrs)
+        return sub
+
+    def step(self, changed: set[str] | None = None) -> list[Verdict]:
+        """One look; when something changed, process the runs so far as one batch, print a
+        verdict line per new or changed run and bring the outputs up to date. Returns the
+        verdicts given."""
+        self.scan(changed)
+        verdicts: list[Verdict] = []
+        if self._dirty:
+            self._dirty = False
+            verdicts = self.process()
+        self._collect_report()
+        # slower work only while no run file is being written: its verdict comes first
+        self._collect_fits()
+        if self._report_due():
+            self._start_report()  # forked processes: drawn beside the next verdicts
+        if self.fits_stale and self._fits_job is None and self.live_figures:
+            self._start_fits()
+        return verdicts
+
+    def _start_fits(self) -> None:
+        """Draw the live page's fit figures in a forked process (:meth:`_collect_fits`)."""
+        day = self.day
+        listing = self.live_dir / f".fits-{self.version}.json"
+        live_dir = self.live_dir
+        self._fits_job = (_fork(lambda: _draw_fits_child(day, live_dir, listing)), listing)
+        self.fits_stale = False
+
+    def _collect_fits(self, *, wait: bool = False) -> bool:
+        """When the fit figures are drawn: state.json names them (one more version)."""
+        if self._fits_job is None:
+            return False
+        pid, listing = self._fits_job
+        done, status = os.waitpid(pid, 0 if wait else os.WNOHANG)
+        if done == 0:
+            return False
+        self._fits_job = None
+        try:
+            drawn = json.loads(listing.read_text(encoding="utf-8"))
+            listing.unlink()
+        except (OSError, ValueError):
+            drawn = None
+        if os.waitstatus_to_exitcode(status) != 0 or not isinstance(drawn, dict):
+            self.say("the live page's fit figures could not be drawn; the last ones stay.")
+            return True
+        figs = {k: v for k, v in self.figures.items() if k not in ("damping", "added_mass")}
+        self.figures = {**figs, **{str(k): str(v) for k, v in drawn.items()}}
+        self.publish()
+        return True
+
+    def process(self) -> list[Verdict]:
+        """Reduce the runs so far (the cache makes the known ones free), give the verdicts,
+        write the outputs and the live state."""
+
+        t0 = time.perf_counter()
+        sub = self.runs_so_far()
+        new_rows = sum(1 for r in sub["run"] if int(r) not in self.given)
+        jobs = 1 if new_rows <= 1 else self.jobs
+        day = process_sheet(self.protocol, sub, jobs=jobs, cache_dir=self.cache_dir,
+                            unlisted=[w for w in self._unlisted
+                                      if not _inside(self.out, self.data_dir, w.file)])
+        if self.date:
+            day = dataclasses.replace(day, report_date=self.date)
+        self.day = day
+        self.batches += 1
+        verdicts = self._verdicts(day)
+        self.timings["reduce_s"] = time.perf_counter() - t0
+        for v in verdicts:
+            self.echo(v.line)
+        if verdicts:
+            self.latest = verdicts[-1]
+        self.verdicts.extend(verdicts)
+        if verdicts:  # the page has the verdicts at once; the outputs and fits follow
+            self.publish(latest=True)
+        self.timings["verdict_state_s"] = time.perf_counter() - t0
+        t1 = time.perf_counter()
+        self.write()
+        self.timings["write_s"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        self.fits_stale = True
+        self.publish(latest=not verdicts)  # the tables written: their coefficients
+        self.timings["state_s"] = time.perf_counter() - t2
+        return verdicts
+
+    def _verdicts(self, day: DayResult) -> list[Verdict]:
+        """The verdict of every run whose (status, reason, content) is new."""
+        out = []
+        stamp = now_iso()
+        for row in day.runs.to_dict("records"):
+            if row["status"] == "void":
+                continue
+            run = int(row["run"])
+            red = day.reductions.get(run)
+            sha = red.sha256 if red is not None else ""
+            if red is not None and (run, str(row["file"]), sha) not in self.reduced:
+                self.reduced.append((run, str(row["file"]), sha))
+            status, reason = str(row["status"]), (str(row["reason"]) or None)
+            if status == "ok" and red is not None and red.warnings:
+                status = "suspicious"
+                reason = red.warnings[0] + (f" (and {len(red.warnings) - 1} more warnings)"
+                                            if len(red.warnings) > 1 else "")
+            if status != "rejected" and status != "suspicious":
+                reason = None
+            key = (status, reason, sha)
+            if self.given.get(run) == key:
+                continue
+            self.given[run] = key
+            u = _num(row["speed_mean"])
+            speed_set = u is None
+            if u is None:
+                u = _num(row["speed_nominal"])
+            angle = _num(row["angle_deg"])
+            test = str(row["test"])
+            drag = _num(row["drag_mean"])
+            line = verdict_line(run, test, angle, u, speed_set, drag, status, reason)
+
+            out.append(Verdict(run=run, file=str(row["file"]), test=test,
+                               angle_deg=angle if angle is not None else math.nan,
+                               speed_m_s=u, drag_N=drag, status=status, reason=reason,
+                               line=clean_text(line), time=stamp, sha256=sha))
+        return out
+
+    # ------------------------------------------------------------------ outputs
+    def _waiting(self) -> bool:
+        return any(self.tracker.is_waiting(n) for n in self.names())
+
+    def _report_due(self) -> bool:
+        """Whether to start drawing the PDF and figures: they are behind the runs so far, none
+        is being drawn, no run file is being written, and the last was started more than
+        pdf_interval_s ago (or there is none yet)."""
+        if (not self.report or self.day is None or self._job is not None or not self.pdf_stale
+                or not len(self.day.runs)):
+            return False
+        if self._waiting():
+            return False
+        return (self.pdf_at is None
+                or self.clock() - self.pdf_at >= self.protocol.watch.pdf_interval_s)
+
+    def write(self, *, pdf: bool = False) -> None:
+        """The outputs of the runs so far (``towtank process``'s writers, manifest and swap);
+        without ``pdf`` the last report.pdf and figures/ drawn (by :meth:`_start_report`, or
+        already in the folder) are carried over unchanged."""
+        day = self.day
+        if day is None:
+            return
+        runs = [int(r) for r in day.runs["run"]]
+        pdf_iso: str | None
+        pdf_runs: list[int] | None
+        if pdf:
+            writers: list[Any] | None = None  # process's writers
+            pdf_runs, pdf_iso = runs, now_iso()
+        else:
+            writers = [write_workbook, self._carry]
+            pdf_runs, pdf_iso = self.pdf_runs, self.pdf_iso
+        extra = {"watch": {"pdf_runs": pdf_runs, "pdf_written": pdf_iso,
+                           "pdf_current": pdf_runs == runs, "runs": runs}}
+        try:
+            write_outputs(day, self.out, report=self.report, writers=writers,
+                          provenance_extra=extra)
+        except ProtocolError as exc:  # a file of the user's with an output's name
+            self.say(f"{_strip_dot(str(exc))}; the verdicts go on, the outputs are written "
+                     "again at the next run.")
+            return
+        except OSError as exc:
+            if exc.errno is None or exc.errno not in STORAGE_ERRNOS:
+                raise
+            self.say(f"the outputs could not be written to {self.out} "
+                     f"({os.strerror(exc.errno)}); the folder holds the last complete set, "
+                     "and they are written again at the next run.")
+            return
+        self.writes += 1
+        if self.report and pdf:
+            self.pdf_at, self.pdf_runs, self.pdf_iso = self.clock(), runs, pdf_iso
+            self._drop_staged()
+        self.pdf_stale = self.report and self.pdf_runs != runs
+
+    def _carry(self, day: DayResult, folder: Path) -> None:
+        """A report writer: the last report.pdf and figures/ drawn into the new set as they
+        are (from the folder they were drawn in, else from the output folder)."""
+        source = self._staged if self._staged is not None else self.out
+        for name in PDF_OUTPUTS:
+            src = source / name
+            if src.is_dir() and not src.is_symlink():
+                shutil.copytree(src, folder / name, copy_function=_link_or_copy)
+            elif src.is_file() and not src.is_symlink():
+                _link_or_copy(str(src), str(folder / name))
+
+    def _start_report(self) -> None:
+        """Draw report.pdf and figures/ of the runs so far in a forked process, into a folder
+        of ``.live/``; :meth:`_collect_report` puts them into the outputs when it is done."""
+        day = self.day
+        assert day is not None
+        folder = self.live_dir / f".report-{self.writes}"
+        shutil.rmtree(folder, ignore_errors=True)
+        runs = [int(r) for r in day.runs["run"]]
+        pid = _fork(lambda: _draw_report(day, folder))
+        self._job = (pid, folder, runs, now_iso())
+        self.pdf_at = self.clock()
+
+    def _collect_report(self, *, wait: bool = False) -> bool:
+        """When the report being drawn is done: its PDF and figures into the outputs (one
+        more write), or one sentence if it failed. True when a drawing ended."""
+        if self._job is None:
+            return False
+        pid, folder, runs, iso = self._job
+        done, status = os.waitpid(pid, 0 if wait else os.WNOHANG)
+        if done == 0:
+            return False
+        self._job = None
+        if os.waitstatus_to_exitcode(status) == 0 and (folder / "done").is_file():
+            old, self._staged = self._staged, folder
+            self.pdf_runs, self.pdf_iso = runs, iso
+            self.write()
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+            self.publish()
+        else:
+            error = folder / "error.txt"
+            reason = error.read_text(encoding="utf-8").strip() if error.is_file() else \
+                f"its process ended with status {os.waitstatus_to_exitcode(status)}"
+            self.say(f"report.pdf and figures/ of runs {_span(runs)} could not be drawn "
+                     f"({reason}); the previous ones are kept.", once=False)
+            shutil.rmtree(folder, ignore_errors=True)
+        return True
+
+    def _drop_staged(self) -> None:
+        if self._staged is not None:
+            shutil.rmtree(self._staged, ignore_errors=True)
+            self._staged = None
+
+    def finish(self) -> None:
+        """At the end: the PDF and figures of every run so far if they are behind (drawn
+        here, waiting for one being drawn), and the live figures."""
+        if self._job is not None:
+            self._collect_report(wait=True)
+        if self._fits_job is not None:
+            self._collect_fits(wait=True)
+        if self.day is not None and (self.pdf_stale or self.fits_stale):
+            if self.pdf_stale:
+                self.write(pdf=True)
+            self.publish(fits=True)
+
+    def close(self) -> None:
+        """Stop a report or figures being drawn (Ctrl-C) and remove their files."""
+        if self._fits_job is not None:
+            pid, listing = self._fits_job
+            self._fits_job = None
+            _end(pid)
+            listing.unlink(missing_ok=True)
+        if self._job is not None:
+            pid, folder, _runs, _iso = self._job
+            self._job = None
+            _end(pid)
+            shutil.rmtree(folder, ignore_errors=True)
+        self._drop_staged()  # the output folder has its own links to its files
+
+    # ------------------------------------------------------------------ live state
+    def sheet_states(self) -> list[dict[str, Any]]:
+        """Every sheet row with its state: done | rejected | to do | void | waiting."""
+        if self.sheet is None:
+            return []
+        status = {}
+        if self.day is not None:
+            status = dict(zip(self.day.runs["run"].astype(int), self.day.runs["status"],
+                              strict=True))
+        out = []
+        for row in self.sheet.to_dict("records"):
+            run, file = int(row["run"]), str(row["file"])
+            if row["status"] == "void":
+                state = "void"
+            elif status.get(run) == "rejected":
+                state = "rejected"
+            elif status.get(run) == "ok":
+                state = "done"
+            elif self.tracker.is_waiting(file):
+                state = "waiting"
+            else:
+                state = "to do"
+            out.append({"run": run, "file": file, "test": row["test"],
+                        "config": row["config"], "angle_deg": _num(row["angle_deg"]),
+                        "speed_m_s": _num(row["speed_nominal"]), "state": state})
+        return out
+
+    def state(self) -> dict[str, Any]:
+        """The live state (docs/formats.md, "towtank watch")."""
+        coefficients: list[dict[str, Any]] = []
+        columns: list[str] = []
+        path = self.out / "coefficients.csv"
+        if path.is_file():
+            table = pd.read_csv(path)
+            columns = [str(c) for c in table.columns]
+            coefficients = table.astype(object).where(table.notna(), None).to_dict("records")
+        latest = None
+        if self.latest is not None:
+            latest = {"run": self.latest.run, "line": self.latest.line,
+                      "status": self.latest.status}
+        return {
+            "version": self.version,
+            "protocol": self.protocol.name,
+            "updated": now_iso(),
+            "output_dir": str(self.out),
+            "latest": latest,
+            "verdicts": [v.entry() for v in self.verdicts],
+            "sheet": self.sheet_states(),
+            "coefficients": coefficients,
+            "coefficient_columns": columns,
+            "next_runs": [],
+            "messages": list(self.said.messages),
+            "figures": dict(self.figures),
+            "pdf": ({"written": self.pdf_iso, "runs": len(self.pdf_runs)}
+                    if self.pdf_runs is not None and self.report else None),
+        }
+
+    def publish(self, *, latest: bool = False, fits: bool = False) -> None:
+        """Write state.json (its version one up), after drawing the latest run's figure
+        (``latest``) and the fits' figures (``fits``); the others stay as they were."""
+        if self.live_figures and self.day is not None:
+            t0 = time.perf_counter()
+            figs = dict(self.figures)
+            if latest:
+                figs.pop("latest_run", None)
+                figs.update(self._draw_latest())
+            if fits:
+                figs.pop("damping", None)
+                figs.pop("added_mass", None)
+                figs.update(self._draw_fits())
+                self.fits_stale = False
+            self.figures = figs
+            self.timings["figures_s"] = time.perf_counter() - t0
+        self.version += 1
+        write_state(self.live_dir, self.state())
+
+    def _draw_latest(self) -> dict[str, str]:
+        """The latest verdict's run: its traces and phases, or its raw traces when it could
+        not be reduced."""
+        day, v = self.day, self.latest
+        if day is None or v is None:
+            return {}
+        red = day.reductions.get(v.run)
+        fig = None
+        if red is not None:
+            fig = rf.fig_run(red, v.line)
+        elif v.run in day.previews:
+            fig = rf.fig_preview(day.previews[v.run], f"run {v.run}", v.reason or "")
+        if fig is None:
+            return {}
+        return {"latest_run": save_figure(fig, self.live_dir, "latest_run.png")}
+
+    def _draw_fits(self) -> dict[str, str]:
+        """The C_D(α) fit and the added-mass plot, those the day has."""
+        return _fit_figures(self.day, self.live_dir)
+
+    # ------------------------------------------------------------------ the loop
+    def watched_paths(self) -> list[Path]:
+        """The folders watched: the data folder and the sheet's folder."""
+        paths = [self.data_dir.resolve()]
+        folder = self.sheet_path.resolve().parent
+        if not any(folder == p or p in folder.parents for p in paths):
+            paths.append(folder)
+        return paths
+
+    def run(self, until: Callable[[WatchSession], bool] | None = None, *,
+            timeout_s: float | None = None) -> None:
+        """Watch until ``until(self)`` is true or ``timeout_s`` [s] has passed (forever
+        without either; Ctrl-C raises KeyboardInterrupt). One :meth:`step` per change
+        reported by watchfiles, and at least every :data:`POLL_MS`."""
+        from watchfiles import watch
+
+        start = time.monotonic()
+        self.step()
+        if until is not None and until(self):
+            return
+        for changes in watch(*self.watched_paths(), debounce=50, step=20,
+                             rust_timeout=POLL_MS, yield_on_timeout=True):
+            self.step({path for _change, path in changes})
+            if until is not None and until(self):
+                return
+            if timeout_s is not None and time.monotonic() - start > timeout_s:
+                return
+
+
+def _print(line: str) -> None:
+    print(line, flush=True)
+
+
+def _strip_dot(text: str) -> str:
+    return text.strip().rstrip(".")
+
+
+def _inside(out: Path, data_dir: Path, file: str | None) -> bool:
+    """Whether an unlisted file (its path relative to the data folder) is in the output
+    folder (towtank's own outputs when the output folder is inside the data folder)."""
+    if file is None:
+        return False
+    try:
+        rel = out.resolve().relative_to(data_dir.resolve()).as_posix()
+    except ValueError:
+        return False
+    return file.startswith(rel + "/") or file.startswith(f".{Path(rel).name}.")
+
+
+def _fork(task: Callable[[], int]) -> int:
+    """Run ``task`` in a forked process that ignores Ctrl-C (the parent's to handle), runs
+    at a lower priority (:data:`CHILD_NICE`) and exits with what it returns; its id."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        pid = os.fork()
+        if pid == 0:  # the child: never returns
+            code = 1
+            try:
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                signal.pthread_sigmask(signal.SIG_SETMASK, old)
+                os.nice(CHILD_NICE)  # the next run's verdict comes first
+                code = task()
+            finally:
+                os._exit(code)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    return pid
+
+
+def _end(pid: int) -> None:
+    """Kill and reap a forked process."""
+    try:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    except (ProcessLookupError, ChildProcessError):
+        pass
+
+
+def _draw_fits_child(day: DayResult | None, live_dir: Path, listing: Path) -> int:
+    """In the forked process: the fit figures into ``live_dir``, their names into
+    ``listing`` (JSON); 0, or 1 when they could not be drawn."""
+    try:
+        drawn = _fit_figures(day, live_dir)
+        listing.write_text(json.dumps(drawn), encoding="utf-8")
+        return 0
+    except BaseException:  # noqa: BLE001 - the parent says it in one sentence
+        return 1
+
+
+def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
+    """The C_D(α) fit and the added-mass plot the day has, saved into ``live_dir``."""
+    figs: dict[str, str] = {}
+    if day is None:
+        return figs
+    for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
+        fig = make(day)
+        if fig is not None:
+            figs[key] = save_figure(fig, live_dir, f"{key}.png")
+    return figs
+
+
+def _span(runs: list[int]) -> str:
+    return f"{runs[0]}–{runs[-1]}" if len(runs) > 1 else (str(runs[0]) if runs else "none")
+
+
+def _draw_report(day: DayResult, folder: Path) -> int:
+    """In the forked process: report.pdf and figures/ into ``folder`` (as the protocol's
+    [report] asks), then the marker ``done``; 0, or 1 with the error in ``error.txt``."""
+    try:
+        folder.mkdir(parents=True)
+        options = day.protocol.report
+        if getattr(options, "pdf", True):
+            write_pdf(day, folder)
+        if getattr(options, "figures", True):
+            write_figures(day, folder)
+        (folder / "done").touch()
+        return 0
+    except BaseException as exc:  # noqa: BLE001 - told by the parent in one sentence
+        try:
+            (folder / "error.txt").write_text(f"{type(exc).__name__}: {exc}", encoding="utf-8")
+        except OSError:
+            pass
+        return 1
+
+
+def _link_or_copy(src: str, dst: str) -> None:
+    """A hard link (the file is never changed in place: towtank replaces, never rewrites),
+    else a copy."""
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)

@@ -1,0 +1,169 @@
+"""Latency of ``towtank watch``: from a run file's close to its verdict line and to state.json.
+
+``python -m towtank.testing.bench_watch [--runs 50] [--gap-s 3] [--fs 200]`` generates a hull
+day (the sample day's plan, repeated to ``--runs`` runs), starts ``towtank watch --no-browser
+--no-server`` on it with an empty data folder, then writes the run files one by one the way
+LabVIEW does (opened, appended in ten blocks 0.1 s apart, closed), ``--gap-s`` apart. For each
+run it takes the time from the file's close to the verdict line on the command's stdout, and
+to the new state.json (its modification time) that holds the verdict; it prints p50, p95 and
+the largest of each. Not a unit test: it takes minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import queue
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from towtank.testing import synthetic as syn
+from towtank.testing.days import RunSpec, hull_day_plan
+
+BLOCKS = 10
+BLOCK_PAUSE_S = 0.1
+TIMEOUT_S = 60.0
+
+
+def plan_of(n: int) -> list[RunSpec]:
+    """The sample hull day's runs (void ones aside), repeated to ``n`` runs."""
+    base = [r for r in hull_day_plan() if r.status != "void"]
+    return [base[i % len(base)] for i in range(n)]
+
+
+def labview_write(src: Path, dst: Path) -> float:
+    """Write ``src`` into ``dst`` in blocks (open, append, close); the time of the close."""
+    data = src.read_bytes()
+    n = len(data)
+    with open(dst, "wb") as fh:
+        for i in range(BLOCKS):
+            fh.write(data[i * n // BLOCKS:(i + 1) * n // BLOCKS])
+            fh.flush()
+            if i < BLOCKS - 1:
+                time.sleep(BLOCK_PAUSE_S)
+    return time.time()
+
+
+def _reader(stream, q: queue.Queue) -> None:
+    for line in stream:
+        q.put((time.time(), line))
+    q.put((time.time(), None))
+
+
+def _wait_line(q: queue.Queue, text: str) -> float:
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:
+        try:
+            t, line = q.get(timeout=0.5)
+        except queue.Empty:
+            continue
+        if line is None:
+            raise RuntimeError("towtank watch ended")
+        if text in line:
+            return t
+    raise RuntimeError(f"no line with {text!r} within {TIMEOUT_S:g} s")
+
+
+def _wait_state(path: Path, run: int, version: int) -> tuple[float, int]:
+    """(mtime of the first state.json after ``version`` holding run's verdict, its version)."""
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:
+        try:
+            mtime = os.stat(path).st_mtime_ns / 1e9
+            state = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            time.sleep(0.01)
+            continue
+        if state["version"] > version and any(v["run"] == run for v in state["verdicts"]):
+            return mtime, int(state["version"])
+        time.sleep(0.01)
+    raise RuntimeError(f"state.json never gave run {run}")
+
+
+def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[float]]:
+    """The latencies [s] of ``runs`` runs: {"verdict": [...], "state": [...]}."""
+    day = folder / "day"
+    syn.make_hull_day(day, runs=plan_of(runs), fs=fs, file_format="csv", sheet_format="csv")
+    shutil.move(day / "data", folder / "all")
+    (day / "data").mkdir()
+    sections: Any = syn.hull_protocol_sections("day", "out", sheet_format="csv")
+    protocol = syn.write_protocol(folder / "p.toml", **sections)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--no-server"],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, start_new_session=True)
+    q: queue.Queue = queue.Queue()
+    threading.Thread(target=_reader, args=(proc.stdout, q), daemon=True).start()
+    state = folder / "out" / ".live" / "state.json"
+    out: dict[str, list[float]] = {"verdict": [], "state": []}
+    try:
+        _wait_line(q, "Ctrl-C to stop")
+        version = _wait_state_any(state)
+        files = sorted((folder / "all").iterdir())
+        for k, src in enumerate(files, start=1):
+            start = time.monotonic()
+            closed = labview_write(src, day / "data" / src.name)
+            said = _wait_line(q, f"run {k}  ")
+            written, version = _wait_state(state, k, version)
+            out["verdict"].append(said - closed)
+            out["state"].append(written - closed)
+            print(f"run {k:3d}: verdict {said - closed:6.3f} s, state.json "
+                  f"{written - closed:6.3f} s", flush=True)
+            time.sleep(max(0.0, gap_s - (time.monotonic() - start)))
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+    return out
+
+
+def _wait_state_any(path: Path) -> int:
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:
+        try:
+            return int(json.loads(path.read_text(encoding="utf-8"))["version"])
+        except (OSError, ValueError, KeyError):
+            time.sleep(0.05)
+    raise RuntimeError("state.json never appeared")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=50)
+    ap.add_argument("--gap-s", type=float, default=3.0, help="from one file's start to the next")
+    ap.add_argument("--fs", type=float, default=200.0, help="sample rate of the runs [Hz]")
+    ap.add_argument("--keep", type=Path, help="work in this folder and keep it")
+    args = ap.parse_args(argv)
+    folder = args.keep or Path(tempfile.mkdtemp(prefix="bench_watch-"))
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        lat = bench(args.runs, args.gap_s, args.fs, folder)
+    finally:
+        if args.keep is None:
+            shutil.rmtree(folder, ignore_errors=True)
+    print()
+    print(f"{args.runs} runs at {args.fs:g} Hz, {args.gap_s:g} s apart, written in {BLOCKS} "
+          f"blocks {BLOCK_PAUSE_S:g} s apart; {os.cpu_count()} cores")
+    print("| from the file's close to | p50 | p95 | max |")
+    print("|---|---:|---:|---:|")
+    for key, label in (("verdict", "the verdict line"), ("state", "state.json updated")):
+        v = np.asarray(lat[key])
+        print(f"| {label} | {np.percentile(v, 50):.2f} s | {np.percentile(v, 95):.2f} s | "
+              f"{v.max():.2f} s |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
