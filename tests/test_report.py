@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from pypdf import PdfReader
 
 from towtank.pipeline import process_day
-from towtank.report import figures, pdf, provenance, style, workbook, write_outputs
+from towtank.report import figure_base, figures, pdf, provenance, style, workbook, write_outputs
 from towtank.testing import synthetic
 
 REPORT_DATE = "2024-05-21"
@@ -379,9 +379,9 @@ def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
 
 
 def test_math_symbol():
-    assert figures.math_symbol("X_udot") == r"$X_{\dot u}$"
-    assert figures.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
-    assert figures.sci(2.7e5) == "2.7×10⁵"
+    assert figure_base.math_symbol("X_udot") == r"$X_{\dot u}$"
+    assert figure_base.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
+    assert figure_base.sci(2.7e5) == "2.7×10⁵"
     assert Path(pdf.__file__).name == "pdf.py"
 
 

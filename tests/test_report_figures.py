@@ -23,7 +23,7 @@ from towtank.report import figure_base, figures, pdf
 from towtank.report.manoeuvre_figure import manoeuvre_figure, wrapped_heading
 from towtank.report.tare_figure import fig_tare, tare_caption
 from towtank.report.vehicle import fig_predicted
-from towtank.stats.quantiles import normal_quantile
+from towtank.stats.quantiles import normal_quantile, t95
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -68,7 +68,7 @@ def test_tare_caption_gives_both_channels_coefficients_and_the_legend_the_band(h
         # the band is the fit's own: ± t95(dof)·s.e. of the curve at a = 0
         xs, ys = band.get_paths()[0].vertices.T
         centre = fit(xs, np.zeros_like(xs))
-        half = figure_base.t95(fit.dof) * fit.std_error(xs, np.zeros_like(xs))
+        half = t95(fit.dof) * fit.std_error(xs, np.zeros_like(xs))
         assert half.max() > 0
         np.testing.assert_allclose(np.abs(ys - centre), half, rtol=1e-6, atol=1e-12)
 
@@ -131,7 +131,7 @@ def test_transverse_panel_draws_the_fits_own_95_percent_interval(hull_day):
     assert 0.5 * (y.max() + y.min()) == pytest.approx(dm.cd90)
     # Student's t at the estimate's own degrees of freedom, the same relative width as Y_v|v|'s
     assert math.isfinite(est.dof)
-    assert half == pytest.approx(figure_base.t95(est.dof) * dm.cd90_se, rel=1e-9)
+    assert half == pytest.approx(t95(est.dof) * dm.cd90_se, rel=1e-9)
     assert half / dm.cd90 == pytest.approx((est.ci_high - est.value) / abs(est.value), rel=1e-6)
     assert half != pytest.approx(normal_quantile() * dm.cd90_se, rel=1e-3)
     assert any("95 % interval" in t for t in _legend_texts(ax))

@@ -40,9 +40,22 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from towtank.report import figure_base as _base
-from towtank.report import style
+import towtank.report.style as style
+from towtank.report.figure_base import (
+    PAGE_HEADER_IN,
+    align_zero,
+    figure_grid,
+    fmt_number,
+    literal,
+    math_symbol,
+    math_text,
+    new_figure,
+    place_legend,
+    sci,
+    styled,
+)
 from towtank.report.tare_figure import fig_tare
+from towtank.stats.quantiles import normal_quantile, t95
 
 if TYPE_CHECKING:  # towtank.results loads pandas, which `towtank inspect --png` never needs
     import pandas as pd
@@ -51,30 +64,6 @@ if TYPE_CHECKING:  # towtank.results loads pandas, which `towtank inspect --png`
     from towtank.reduce.run import RunReduction
     from towtank.results import DayResult, FinResult, ScalingResult
 
-# the figures' shared basics, also reached as figures.<name> by the PDF and the tests
-_E_NUMBER = _base._E_NUMBER
-_HYPHEN_MINUS = _base._HYPHEN_MINUS
-_MATH_RE = _base._MATH_RE
-_MATH_TOKENS = _base._MATH_TOKENS
-_SUPERSCRIPT = _base._SUPERSCRIPT
-CAPTION_CHARS = _base.CAPTION_CHARS
-CAPTION_LINE_IN = _base.CAPTION_LINE_IN
-PAGE_FOOTER_IN = _base.PAGE_FOOTER_IN
-PAGE_HEADER_IN = _base.PAGE_HEADER_IN
-_fmt = _base._fmt
-_layout = _base._layout
-_new_figure = _base._new_figure
-literal = _base.literal
-math_symbol = _base.math_symbol
-math_text = _base.math_text
-styled = _base.styled
-t95 = _base.t95
-normal_quantile = _base.normal_quantile
-true_minus = _base.true_minus
-wrap_caption = _base.wrap_caption
-place_legend = _base.place_legend
-data_under_legend = _base.data_under_legend
-align_zero = _base.align_zero
 
 
 def _hull_fit(day: DayResult) -> Any:
@@ -116,11 +105,11 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
     fits = [hf.added_mass[s] for s in ANGLE_OF if hf is not None and s in hf.added_mass]
     if not fits:
         return None
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
-                 height_ratios=[1.35, 1.0],
-                 title="Added mass: balance drag against speed at each acceleration",
-                 text=ADDED_MASS_CAPTION)
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
+                     height_ratios=[1.35, 1.0],
+                     title="Added mass: balance drag against speed at each acceleration",
+                     text=ADDED_MASS_CAPTION)
     for col, am in enumerate(fits):
         _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]), day, am)
     return fig
@@ -169,7 +158,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
         handles.append(Line2D([], [], color="black", ls="--", label="steady $D_s(U)$"))
     angle = ANGLE_OF.get(am.symbol, math.nan)
     est = am.estimate
-    ax.set_title(rf"$\alpha$ = {angle:g}°: {math_symbol(am.symbol)} = {_fmt(est.value)} kg")
+    ax.set_title(rf"$\alpha$ = {angle:g}°: {math_symbol(am.symbol)} = {fmt_number(est.value)} kg")
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"Drag $D$ [N]")
     ax.set_xlim(left=0)
@@ -183,10 +172,11 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     ax_d.set_ylim(0, dmax * 1.15 if dmax > 0 else 1.0)
     alt = est.alt_value if math.isfinite(est.alt_value) else math.nan
     title = "\n".join([
-        f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
-        f"curve difference: {_fmt(alt)} kg" + (
+        f"joint regression: {fmt_number(est.value)} kg "
+        f"[{fmt_number(est.ci_low)}, {fmt_number(est.ci_high)}]",
+        f"curve difference: {fmt_number(alt)} kg" + (
             f" ({est.agreement.verdict})" if est.agreement is not None else ""),
-        math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
+        math_text(f"m = {fmt_number(am.mass)} kg, m − {am.symbol} = {fmt_number(am.M)} kg"),
     ])
     place_legend(ax_d, [Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
                         Line2D([], [], color="#555555", ls=":",
@@ -256,10 +246,10 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
         return None
     runs = dm.runs
     has_90 = dm.transverse_runs is not None and len(dm.transverse_runs) > 0
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
-                 right=0.93, title="Damping: drag coefficient against angle of attack",
-                 text=damping_caption(day))
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
+                     right=0.93, title="Damping: drag coefficient against angle of attack",
+                     text=damping_caption(day))
     ax = fig.add_subplot(gs[0, :])
     angles = runs["angle_deg"].to_numpy(float)
     lo, hi = float(np.min(angles)), float(np.max(angles))
@@ -269,7 +259,7 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
     se = np.sqrt(np.maximum(np.diag(dm.cov), 0.0))
     fit_label = "\n".join(
         [r"fit $C_D = a\,\alpha^2 + b\,\alpha + c$ ($\alpha$ in rad):"]
-        + [f"{n} = {_fmt(v, 5)} ± {_fmt(e, 2)} (s.e.)"
+        + [f"{n} = {fmt_number(v, 5)} ± {fmt_number(e, 2)} (s.e.)"
            for n, v, e in zip("abc", dm.params, se, strict=True)]
         + [f"{len(runs)} runs, {dm.dof} residual d.o.f."]
     )
@@ -351,12 +341,12 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
     ax.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5, zorder=4,
             label="transverse runs")
     ax.axhline(cd90, color=style.FIT_COLOR, lw=1.0, zorder=3,
-               label=rf"$C_{{D,90}}$ = {_fmt(cd90)} (OLS of $R$ on $U|U|$)")
+               label=rf"$C_{{D,90}}$ = {fmt_number(cd90)} (OLS of $R$ on $U|U|$)")
     if half > 0:
         nu = f", ν = {dof:.3g}" if math.isfinite(dof) else ""
         ax.fill_between([0.0, xmax], cd90 - half, cd90 + half, color=style.BAND_COLOR,
                         alpha=0.8, lw=0, zorder=1,
-                        label=f"95 % interval ± {_fmt(half, 2)} (Student's t{nu})")
+                        label=f"95 % interval ± {fmt_number(half, 2)} (Student's t{nu})")
         for edge in (cd90 - half, cd90 + half):
             ax.axhline(edge, color=style.FIT_COLOR, lw=0.6, ls="--", zorder=2)
     ax.set_xlim(0, xmax)
@@ -398,13 +388,13 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
     cmap = mpl.colormaps["tab10" if len(angles) <= 10 else "tab20"]
     colors = {a: cmap(i % cmap.N) for i, a in enumerate(angles)}
     markers = {a: "osD^vP*Xh<>p"[i % 12] for i, a in enumerate(angles)}
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 1, page=page, hspace=0.32, right=0.84,
-                 title="Fin forces against carriage speed at each angle of attack",
-                 text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
-                 "Each line joins the runs at one angle of attack α. The drag axis is "
-                 "logarithmic when the drags span more than a factor of 30, so that the small "
-                 "drags of the low angles stay apart.")
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 1, page=page, hspace=0.32, right=0.84,
+                     title="Fin forces against carriage speed at each angle of attack",
+                     text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
+                     "Each line joins the runs at one angle of attack α. The drag axis is "
+                     "logarithmic when the drags span more than a factor of 30, so that the small "
+                     "drags of the low angles stay apart.")
     axes = [fig.add_subplot(gs[i, 0]) for i in range(2)]
     for col, ax, name in (("drag_mean", axes[0], "Drag"), ("lift_mean", axes[1], "Lift")):
         for a in angles:
@@ -473,7 +463,7 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
     amin = min(0.0, float(tab["angle_deg"].min()) - 2.0)
     amax = min(180.0, float(tab["angle_deg"].max()) + 5.0)
     grid = np.linspace(amin, amax, int(round((amax - amin) / 0.25)) + 1)
-    fig = _new_figure(page)
+    fig = new_figure(page)
     text = (
         "C_L = L/(½ρSU²), C_D = D/(½ρSU²) on the planform S = chord × span, Re on the chord. "
         "Solid: two-dimensional NACA 0015 data of Sheldahl & Klimas (1981, SAND80-2114) "
@@ -484,8 +474,8 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
         "effective angle reaches the section's stall."
     )
     n_rows = math.ceil(len(groups) / 4)
-    gs = _layout(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
-                 title="Fin lift and drag coefficients against angle of attack", text=text)
+    gs = figure_grid(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
+                     title="Fin lift and drag coefficients against angle of attack", text=text)
     ax_l, ax_d = fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[1, 0])
     group_handles = []
     for i, (g, re_g) in enumerate(groups):
@@ -526,27 +516,6 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
 # ------------------------------------------------------------------------------ (f) scaling
 
 
-def sci(x: float, digits: int = 2) -> str:
-    """A positive number in scientific notation with Unicode superscripts: 2.7e5 → 2.7×10⁵.
-
-    Plain text, not mathtext: cheap to lay out and found by a PDF text search.
-
-    Parameters
-    ----------
-    x : float
-        The number.
-    digits : int
-        Significant digits.
-    """
-    x = float(x)
-    if not math.isfinite(x) or x <= 0:
-        return _fmt(x)
-    m, _, e = f"{x:.{digits}g}".partition("e")
-    if not e:
-        return m
-    return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
-
-
 def scaling_caption(sr: ScalingResult) -> str:
     """Caption of :func:`fig_scaling`, from the scaling result it draws."""
     k2, k1 = sr.resistance
@@ -584,10 +553,10 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     zero = ok_hull[np.abs(ok_hull["angle_deg"]) <= 0.5]
     k2, k1 = sr.resistance
     lo, hi = sr.tested_speed_range
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
-                 title=f"Scaling to the prototype (λ = {sr.scale:g})",
-                 text=scaling_caption(sr))
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
+                     title=f"Scaling to the prototype (λ = {sr.scale:g})",
+                     text=scaling_caption(sr))
 
     ax_m = fig.add_subplot(gs[0, 0])
     umax = max(hi, float(tab["speed_model_froude"].max())) * 1.08

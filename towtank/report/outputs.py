@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import towtank.report.tables as tables
 from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.provenance import provenance
 from towtank.runtime import interrupt, manifest
@@ -198,8 +199,6 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
     manifest.folder_mode(tmp, out_dir if out_dir.is_dir() else None)
     try:
-        from towtank.report import tables
-
         if export:  # first: a run that cannot be exported is a warning of the report
             from towtank.report.export import export_runs
 

@@ -39,11 +39,21 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
 
+import towtank.report.figures as figures
+import towtank.report.quality as _quality
+import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
 from towtank.reference.sets import reference_name
-from towtank.report import figures, style
-from towtank.report import quality as _quality
+from towtank.report.figure_base import (
+    PAGE_FOOTER_IN,
+    PAGE_HEADER_IN,
+    literal,
+    math_symbol,
+    math_text,
+    sci,
+    true_minus,
+)
 from towtank.report.provenance import creation_date, report_date
 from towtank.report.tables import missing_accel_note
 from towtank.results import require
@@ -102,9 +112,9 @@ def vehicle_pages(day: DayResult) -> list[Page]:
     """The "Vehicle" page of a day with a [vehicle]: its measured coefficients beside those
     predicted from the geometry (:func:`towtank.report.vehicle.fig_predicted`); none without
     a prediction."""
-    from towtank.report.vehicle import _predicted_rows, fig_predicted
+    from towtank.report.vehicle import fig_predicted, predicted_rows
 
-    rows = _predicted_rows(getattr(day, "coefficients", None))
+    rows = predicted_rows(getattr(day, "coefficients", None))
     if rows is None or rows.empty:
         return []
     return [Page("figure", "Vehicle", ("predicted_vs_measured", fig_predicted))]
@@ -167,7 +177,7 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
                      color="#555555")
         fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
     fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
-    fig.text(x0, 0.25 / PAGE_H, figures.literal(day.protocol.name), fontsize=7, color="#555555")
+    fig.text(x0, 0.25 / PAGE_H, literal(day.protocol.name), fontsize=7, color="#555555")
     fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
              fontsize=7, color="#555555", ha="right")
 
@@ -195,7 +205,7 @@ def _water_text(day: DayResult) -> str:
         out += f", {w.pressure_Pa:.6g} Pa, {w.relative_humidity_pct:g} % relative humidity"
     if len(rho):
         out += (f"; ρ = {rho.mean():.{4 if w.is_air else 2}f} kg/m³, "
-                f"ν = {figures.sci(nu.mean(), 4)} m²/s "
+                f"ν = {sci(nu.mean(), 4)} m²/s "
                 "(mean of the runs)")
     return out
 
@@ -255,7 +265,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     title = "Test report, model in air" if day.protocol.water.is_air else "Towing-tank test report"
     fig.text(x0, _y(1.6), title, fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
-    fig.text(x0, _y(2.4), figures.literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
+    fig.text(x0, _y(2.4), literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
     rows = [
         ("Model", _model_text(day) if day.protocol.model is not None else None),
@@ -272,7 +282,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
             continue
         wrapped = textwrap.fill(value, 70)
         fig.text(x0, _y(y), label, fontsize=10, fontweight="bold", va="top")
-        fig.text(x0 + 1.5 / PAGE_W, _y(y), figures.literal(wrapped), fontsize=10, va="top")
+        fig.text(x0 + 1.5 / PAGE_W, _y(y), literal(wrapped), fontsize=10, va="top")
         y += 0.3 + 0.19 * wrapped.count("\n")
     if date and source != "given on the command line":
         fig.text(x0 + 1.5 / PAGE_W, _y(y - 0.05), f"(test date: {source})", fontsize=7.5,
@@ -294,7 +304,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     if day.hull is None:
         return
     text = "\n".join(textwrap.fill(p, 128) for p in METHOD_NOTE)
-    fig.text(x0, _y(PAGE_H - 0.85), figures.math_text(text), fontsize=7.2, color="#444444",
+    fig.text(x0, _y(PAGE_H - 0.85), math_text(text), fontsize=7.2, color="#444444",
              va="bottom", linespacing=1.35)
 
 
@@ -381,14 +391,14 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
         m = str(r.get("method", ""))
         mirror = re.match(r"(?:=|same as)\s*(\S+)", m)
         if mirror:
-            ref = "= " + figures.math_symbol(mirror.group(1))
+            ref = "= " + math_symbol(mirror.group(1))
         else:
             if m not in methods:
                 methods.append(m)
             ref = f"[{methods.index(m) + 1}]"
         diff = r.get("diff_pct", math.nan)
         rows.append([
-            figures.math_symbol(r["symbol"]), _v(r["value"]), r["unit"],
+            math_symbol(r["symbol"]), _v(r["value"]), r["unit"],
             f"{_v(r['ci_low'])} … {_v(r['ci_high'])}", _v(r["prime"], ".4g", 1e3),
             _v(r.get("reference_prime"), ".4g", 1e3), _v(diff, "+.1f"),
             _v(r.get("prototype_value")), ref,
@@ -405,7 +415,7 @@ def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
                 fontsize: float = 7.5, color: str = "#333333", indent_in: float = 0.0) -> float:
     wrapped = textwrap.fill(text, width)
     x = (MARGIN_IN + indent_in) / PAGE_W
-    fig.text(x, _y(top_in), figures.math_text(wrapped), fontsize=fontsize, va="top",
+    fig.text(x, _y(top_in), math_text(wrapped), fontsize=fontsize, va="top",
              color=color, linespacing=1.3)
     return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
 
@@ -429,7 +439,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
             continue
         fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), label, fontsize=8.5, fontweight="bold",
                  va="baseline")
-        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), figures.literal(value), fontsize=8.5,
+        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), literal(value), fontsize=8.5,
                  va="baseline")
         y += 0.21
     geometry = geometry_text(day) if has_model else None
@@ -491,7 +501,7 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
         if r.get("stall_reached") is False:
             stall = f"> {stall}"
         lo, hi = _v(r["lift_slope_ci_low"], ".3f"), _v(r["lift_slope_ci_high"], ".3f")
-        rows.append([_v(r["speed_group"], ".2f"), figures.sci(r["re_mean"]), str(r["n_runs"]),
+        rows.append([_v(r["speed_group"], ".2f"), sci(r["re_mean"]), str(r["n_runs"]),
                      _v(r["lift_slope"], ".3f"), "–" if lo == hi == "–" else f"{lo} … {hi}",
                      _v(r["lift_slope_sandia_2d"], ".3f"), _v(r["lift_slope_3d"], ".3f"),
                      stall, _v(r["cl_max"], ".3f"), _v(r["cd_min"], ".4f")])
@@ -536,14 +546,14 @@ FIN_ROW_IN = 0.19
 
 def fin_runs_fit(day: DayResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
     """Whether the fin runs' table fits on the summary page below ``top_in``."""
-    room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - top_in
+    room = PAGE_H - PAGE_FOOTER_IN - 0.5 - top_in
     return (len(require(day.fin_result, "fin").table) + 1) * FIN_ROW_IN <= room
 
 
 def _draw_fin_runs(fig: Figure, day: DayResult, runs: list[int]) -> None:
     t = require(day.fin_result, "fin").table
     recs = [r for r in t.to_dict("records") if int(r["run"]) in set(runs)]
-    y = figures.PAGE_HEADER_IN + 0.25
+    y = PAGE_HEADER_IN + 0.25
     used = _fin_rows(fig, y, recs)
     _text_block(fig, y + used + 0.12,
                 "Steady means of the fin runs (zero, drift and tare removed): C_L and C_D on "
@@ -555,7 +565,7 @@ def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
     header = ["run", "α [deg]", "U [m/s]", "Re", r"$C_L$", r"$C_D$", r"$C_L$ 2-D",
               r"$C_D$ 2-D", r"$C_L$ finite span", r"$C_D$ finite span"]
     rows = [[str(int(r["run"])), _v(r["angle_deg"], "g"), _v(r["speed_mean"], ".3f"),
-             figures.sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
+             sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
              _v(r["cl_sandia"], ".4f"), _v(r["cd_sandia"], ".4f"), _v(r.get("cl_3d"), ".4f"),
              _v(r.get("cd_3d"), ".4f")] for r in recs]
     return _table(fig, y, header, rows, [0.45, 0.55, 0.6, 0.75, 0.65, 0.65, 0.7, 0.7, 1.0, 1.0],
@@ -579,7 +589,7 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
         froude = _v(r["drag_froude"], ".4g")
         if not r.get("froude_in_tested_range", True):
             froude += " *"
-        rows.append([_v(r["speed_prototype"], ".3g"), figures.sci(r["re_prototype"], 3),
+        rows.append([_v(r["speed_prototype"], ".3g"), sci(r["re_prototype"], 3),
                      _v(r["fn_prototype"], ".3f"), _v(r["speed_model_froude"], ".3f"),
                      _v(r["speed_model_reynolds"], ".3f"), _v(r["drag_ittc57"], ".4g"), froude])
         if recommended == "drag_ittc57":
@@ -610,13 +620,13 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
     x0 = MARGIN_IN / PAGE_W
     for kind, text in lines:
         if kind == "h":
-            fig.text(x0, _y(y + 0.06), figures.literal(text), fontsize=10.5,
+            fig.text(x0, _y(y + 0.06), literal(text), fontsize=10.5,
                      fontweight="bold", va="top")
         elif kind == "mono":
-            fig.text(x0, _y(y), figures.true_minus(figures.literal(text)), fontsize=6.8,
+            fig.text(x0, _y(y), true_minus(literal(text)), fontsize=6.8,
                      family="DejaVu Sans Mono", va="top", color="#222222")
         elif kind in ("p", "li"):
-            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), figures.math_text(text),
+            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), math_text(text),
                      fontsize=7.8, va="top", color="#222222")
         y += LINE_IN[kind]
 
@@ -642,8 +652,8 @@ class ThumbGrid:
 
     def __init__(self) -> None:
         self.fig = _page()
-        top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
-        bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
+        top = (PAGE_HEADER_IN + 0.45) / PAGE_H
+        bottom = (PAGE_FOOTER_IN + 0.45) / PAGE_H
         gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.085, right=0.91, top=1 - top,
                                    bottom=bottom, hspace=0.5, wspace=0.72)
         self.cells = []
@@ -689,7 +699,7 @@ class ThumbGrid:
             if red is None or row["status"] != "ok":
                 reason = short_reason(run, row.get("file"), row.get("reason"))
                 preview = day.previews.get(run) if row["status"] == "rejected" else None
-                ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
+                ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
@@ -700,7 +710,7 @@ class ThumbGrid:
                     where = {"x": 0.5, "y": 0.5, "va": "center"}
                 small = preview is not None  # over a trace: keep the box small
                 box = textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38)
-                ax.text(where["x"], where["y"], figures.literal(box),
+                ax.text(where["x"], where["y"], literal(box),
                         ha="center", va=where["va"], fontsize=6.2 if small else 7, zorder=10,
                         color="#7a0000" if row["status"] == "rejected" else "#555555",
                         transform=ax.transAxes,
@@ -709,9 +719,9 @@ class ThumbGrid:
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
-            ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
+            ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
-        legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
+        legend_y = 1 - (PAGE_HEADER_IN - 0.2) / PAGE_H
         self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
                         ncol=7, fontsize=6.8, frameon=False, columnspacing=1.2,
                         handlelength=1.6, bbox_to_anchor=(0.5, legend_y))
@@ -869,7 +879,7 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
     tare-corrected steady drag and its coefficient on the area its test uses (named in its own
     column); rejected and void runs shaded; a blank acceleration explained below."""
     runs = day.runs.set_index("run", drop=False)
-    y = figures.PAGE_HEADER_IN + 0.25
+    y = PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
               r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
     blank, accel_note = missing_accel_note(day, run_ids)
@@ -879,16 +889,16 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
         ok = r["status"] == "ok"
         cd = r.get("cd_ref", r["cd"])
         area = str(r.get("ref_area") or "")
-        rows.append([str(run), figures.literal(r["config"]), figures.literal(r.get("test") or ""),
+        rows.append([str(run), literal(r["config"]), literal(r.get("test") or ""),
                      _v(r["angle_deg"], "g"),
                      _v(r["speed_mean"], ".3f") if ok else "–",
                      ("– ¹" if run in blank else _v(r["accel_mean"], ".3f")) if ok else "–",
                      _v(r["drag_mean"], ".4g") if ok else "–",
                      _v(cd, ".4f") if ok else "–",
-                     figures.math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
-                     figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
+                     math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
+                     sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
                      _v(r["tare_drag"], ".3g") if ok else "–",
-                     figures.literal(r["status"])])
+                     literal(r["status"])])
         if r["status"] in _STATUS_FILL:
             for c in range(len(header)):
                 fill[(i, c)] = _STATUS_FILL[str(r["status"])]

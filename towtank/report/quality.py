@@ -12,8 +12,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import towtank.report.style as style
 from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason, run_ranges
-from towtank.report import figures, style
+from towtank.report.figure_base import PAGE_FOOTER_IN, PAGE_HEADER_IN
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -98,7 +99,7 @@ def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
     return pages
 
 
-QUALITY_HEIGHT_IN = PAGE_H - figures.PAGE_HEADER_IN - figures.PAGE_FOOTER_IN - 0.6
+QUALITY_HEIGHT_IN = PAGE_H - PAGE_HEADER_IN - PAGE_FOOTER_IN - 0.6
 
 
 def quality_flow(day: DayResult) -> Flow:

@@ -9,15 +9,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from towtank.report import style
+import towtank.report.style as style
 from towtank.report.figure_base import (
-    _layout,
-    _new_figure,
+    figure_grid,
     literal,
+    new_figure,
     place_legend,
     styled,
-    t95,
 )
+from towtank.stats.quantiles import t95
 
 if TYPE_CHECKING:
     from towtank.reduce.tare import TareFit
@@ -98,9 +98,9 @@ def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
     if not tares:
         return None
     has_lift = any(m.lift is not None for m in tares.values())
-    fig = _new_figure(page)
-    gs = _layout(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
-                 title="Sting tare", text=tare_caption(day))
+    fig = new_figure(page)
+    gs = figure_grid(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
+                     title="Sting tare", text=tare_caption(day))
     runs = day.runs
     sting = runs[(runs["config"] == "sting") & (runs["status"] == "ok")]
     channels = [("drag", "drag_mean", r"Tare drag $T_D$ [N]")]

@@ -37,8 +37,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+import towtank.report.style as style
 from towtank import __version__
-from towtank.report import style
 from towtank.report.safetext import clean_text
 from towtank.results import require
 
