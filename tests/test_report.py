@@ -291,7 +291,7 @@ def test_figures_written(days):
 def test_damping_figure_draws_the_stored_fit(days):
     day, _ = days["hull"]
     dm = day.hull.fit.damping
-    fig = figures.fig_damping(day)
+    fig = figures.fig_damping(day.hull)
     ax = fig.axes[0]
     line = next(ln for ln in ax.get_lines() if ln.get_label().startswith("fit"))
     a = np.radians(line.get_xdata())
@@ -299,7 +299,7 @@ def test_damping_figure_draws_the_stored_fit(days):
     # change the stored parameters: the figure follows them (nothing is refitted)
     moved = copy.deepcopy(day)
     moved.hull.fit.damping.params = dm.params + np.array([0.0, 0.0, 0.01])
-    line2 = next(ln for ln in figures.fig_damping(moved).axes[0].get_lines()
+    line2 = next(ln for ln in figures.fig_damping(moved.hull).axes[0].get_lines()
                  if ln.get_label().startswith("fit"))
     np.testing.assert_allclose(line2.get_ydata(), line.get_ydata() + 0.01)
 

@@ -1,7 +1,10 @@
 """The report's figures, drawn only from what the day's stages computed.
 
-Each ``fig_*`` function takes the :class:`~towtank.results.DayResult` and returns a
-:class:`matplotlib.figure.Figure` (or None when the day has no data for it). Nothing is fitted
+Each ``fig_*`` function takes the result it draws (a :class:`~towtank.results.HullResult`,
+:class:`~towtank.results.FinResult`, :class:`~towtank.results.ScalingResult`,
+:class:`~towtank.results.TareResult`, with the run table or the run reductions where it draws
+those too) and returns a :class:`matplotlib.figure.Figure` (or None when there is no data for
+it); :func:`available_figures` binds each to the results of a day. Nothing is fitted
 here: fit lines come from the stored parameters (``DampingFit.params``/``cov``, the
 curve-difference quadratics of :class:`~towtank.analysis.hull.AddedMassFit`, the resistance curve of
 :class:`~towtank.results.ScalingResult`), and reference curves are given functions evaluated on
@@ -30,7 +33,8 @@ from __future__ import annotations
 import math
 import textwrap
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -61,13 +65,19 @@ if TYPE_CHECKING:  # towtank.results loads pandas, which `towtank inspect --png`
     import pandas as pd
     from matplotlib.axes import Axes
 
+    from towtank.ingest.protocol_types import Protocol
     from towtank.reduce.run import RunReduction
-    from towtank.results import DayResult, FinResult, ScalingResult
+    from towtank.results import DayResult, FinResult, HullResult, ScalingResult
 
 
 
-def _hull_fit(day: DayResult) -> Any:
-    return day.hull.fit if day.hull is not None else None
+def _hull_of(hull: HullResult | DayResult | None) -> tuple[HullResult | None, DayResult | None]:
+    """``hull`` as (the hull result, the day it came from): a day given in its place (the
+    older call ``fig_damping(day)``) gives its ``hull``."""
+    if hasattr(hull, "reductions"):  # a DayResult (not imported here: it loads pandas)
+        day = cast("DayResult", hull)
+        return day.hull, day
+    return hull, None
 
 
 # ----------------------------------------------------------------------- (a) added mass
@@ -85,7 +95,9 @@ ADDED_MASS_CAPTION = (
 
 
 @styled
-def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_added_mass(hull: HullResult | DayResult | None,
+                   reductions: Mapping[int, RunReduction] | None = None, *,
+                   page: bool = False) -> Figure | None:
     """Drag against speed at each acceleration, with the steady curve and their difference.
 
     Columns: α = 0 (X_udot) and α = 90° (Y_vdot), those the day has. Top row: the
@@ -96,32 +108,44 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    hull : HullResult
+        The hull result drawn (``day.hull``); a whole day is taken too (its ``hull`` and
+        ``reductions``).
+    reductions : mapping of int to RunReduction
+        The reduced runs by run number (``day.reductions``), whose samples are drawn; needed
+        with a HullResult.
     page : bool
         Lay the figure out as an A4 report page (room for header and footer).
     """
-    hf = _hull_fit(day)
+    result, day = _hull_of(hull)
+    if day is not None and reductions is None:
+        reductions = day.reductions
+    hf = result.fit if result is not None else None
     fits = [hf.added_mass[s] for s in ANGLE_OF if hf is not None and s in hf.added_mass]
     if not fits:
         return None
+    if reductions is None:
+        raise TypeError("fig_added_mass(hull, reductions): the runs' reductions are needed "
+                        "to draw their samples")
     fig = new_figure(page)
     gs = figure_grid(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
                      height_ratios=[1.35, 1.0],
                      title="Added mass: balance drag against speed at each acceleration",
                      text=ADDED_MASS_CAPTION)
     for col, am in enumerate(fits):
-        _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]), day, am)
+        _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]),
+                           reductions, am)
     return fig
 
 
-def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
+def _added_mass_column(ax: Axes, ax_d: Axes, reductions: Mapping[int, RunReduction],
+                       am: Any) -> None:
     from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
 
     cd = am.curve_difference
     levels = cd.levels
     q = cd.steady_quadratic
-    parts = [day.reductions[r].samples for r in am.runs if r in day.reductions]
+    parts = [reductions[r].samples for r in am.runs if r in reductions]
     s = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
     st = s["phase"] == PHASE_STEADY
     acc = s["phase"] == PHASE_ACCEL
@@ -212,11 +236,19 @@ def cd_alpha_curve(params: np.ndarray, cov: np.ndarray, dof: int,
     return mean, t95(dof) * np.sqrt(np.maximum(var, 0.0))
 
 
-def damping_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_damping`."""
+def damping_caption(alpha_max_deg: float | None) -> str:
+    """Caption of :func:`fig_damping`.
+
+    Parameters
+    ----------
+    alpha_max_deg : float or None
+        The largest |α| of the damping fit, the protocol's ``damping_alpha_max_deg`` [deg]
+        (None: not stated).
+    """
+    limit = (f"with |α| ≤ {alpha_max_deg:g}° " if alpha_max_deg is not None
+             else "in the damping fit's angle range ")
     return (
-        "C_D = R/(½ρAU²) of each steady hull run with |α| ≤ "
-        f"{day.protocol.processing.damping_alpha_max_deg:g}° (A the frontal area), coloured by "
+        f"C_D = R/(½ρAU²) of each steady hull run {limit}(A the frontal area), coloured by "
         "speed; the line is the stored quadratic fit C_D(α) = aα² + bα + c (α in rad) and the "
         "band its 95 % confidence interval from the fit's covariance. X_u|u| = −½ρA·c, "
         "X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2), Y_uv = −½ρA·c. Runs circled in red are "
@@ -228,28 +260,36 @@ def damping_caption(day: DayResult) -> str:
 
 
 @styled
-def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_damping(hull: HullResult | DayResult | None, alpha_max_deg: float | None = None, *,
+                page: bool = False) -> Figure | None:
     """C_D against α with the stored quadratic fit and its 95 % band (report Fig. 13).
 
     Below: the fit's studentized residuals per run, and the transverse runs' C_D,90.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    hull : HullResult
+        The hull result drawn (``day.hull``); a whole day is taken too (its ``hull`` and
+        its protocol's ``damping_alpha_max_deg``).
+    alpha_max_deg : float, optional
+        The largest |α| of the damping fit, ``[processing] damping_alpha_max_deg`` [deg],
+        stated in the caption.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    hf = _hull_fit(day)
-    dm = hf.damping if hf is not None else None
-    if dm is None:
+    result, day = _hull_of(hull)
+    if day is not None and alpha_max_deg is None:
+        alpha_max_deg = day.protocol.processing.damping_alpha_max_deg
+    hf = result.fit if result is not None else None
+    if hf is None or hf.damping is None:
         return None
+    dm = hf.damping
     runs = dm.runs
     has_90 = dm.transverse_runs is not None and len(dm.transverse_runs) > 0
     fig = new_figure(page)
     gs = figure_grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
                      right=0.93, title="Damping: drag coefficient against angle of attack",
-                     text=damping_caption(day))
+                     text=damping_caption(alpha_max_deg))
     ax = fig.add_subplot(gs[0, :])
     angles = runs["angle_deg"].to_numpy(float)
     lo, hi = float(np.min(angles)), float(np.max(angles))
@@ -534,21 +574,27 @@ def scaling_caption(sr: ScalingResult) -> str:
 
 
 @styled
-def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_scaling(scaling: ScalingResult | None, runs: pd.DataFrame, protocol: Protocol, *,
+                page: bool = False) -> Figure | None:
     """Model resistance, prototype resistance (Froude and ITTC-57) and the Re ranges.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    scaling : ScalingResult
+        The scaling result drawn (``day.scaling_result``).
+    runs : DataFrame
+        runs.csv's table (``day.runs``): the steady zero-angle hull runs are drawn with the
+        resistance curve, and the Re range of the hull runs.
+    protocol : Protocol
+        The day's protocol: the model's medium, the prototype's and ``[processing]
+        damping_alpha_max_deg`` (the hull runs whose Re range is shown).
     page : bool
         Lay the figure out as an A4 report page.
     """
-    sr = day.scaling_result
+    sr = scaling
     if sr is None:
         return None
     tab = sr.table
-    runs = day.runs
     ok_hull = runs[(runs["config"] == "hull") & (runs["status"] == "ok")]
     zero = ok_hull[np.abs(ok_hull["angle_deg"]) <= 0.5]
     k2, k1 = sr.resistance
@@ -578,7 +624,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_m.set_ylim(bottom=0)
     ax_m.set_xlabel(r"Model speed $U_m$ [m/s]")
     ax_m.set_ylabel(r"Model resistance $R_m$ [N]")
-    ax_m.set_title("Model (air)" if day.protocol.water.is_air else "Model (tank water)")
+    ax_m.set_title("Model (air)" if protocol.water.is_air else "Model (tank water)")
     place_legend(ax_m, fontsize=6.8)
 
     ax_p = fig.add_subplot(gs[0, 1])
@@ -599,11 +645,11 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_ylim(bottom=0)
     ax_p.set_xlabel(r"Prototype speed $U_p$ [m/s]")
     ax_p.set_ylabel(r"Prototype resistance $R_p$ [N]")
-    proto = day.protocol.prototype
+    proto = protocol.prototype
     ax_p.set_title(f"Prototype ({proto.water.medium})" if proto is not None else "Prototype")
     place_legend(ax_p, fontsize=6.8)
 
-    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
+    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= protocol.processing.damping_alpha_max_deg]
     _reynolds_panel(fig.add_subplot(gs[1, :]), sr, near["re"])
     return fig
 
@@ -861,9 +907,23 @@ FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
 )
 
 
+def _figure_arguments(name: str, day: DayResult) -> tuple[Any, ...]:
+    """What figure ``name`` of :data:`FIGURES` draws, taken from the day."""
+    p = day.protocol
+    return {
+        "tare": lambda: (day.tare, day.runs),
+        "added_mass": lambda: (day.hull, day.reductions),
+        "damping": lambda: (day.hull, p.processing.damping_alpha_max_deg),
+        "fin_forces": lambda: (day.fin_result,),
+        "fin_coefficients": lambda: (day.fin_result,),
+        "scaling": lambda: (day.scaling_result, day.runs, p),
+    }[name]()
+
+
 def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figure | None]]]:
-    """The entries of :data:`FIGURES` the day has data for (without drawing them)."""
-    hf = _hull_fit(day)
+    """The entries of :data:`FIGURES` the day has data for (without drawing them), each
+    function bound to the results it draws: call it with ``page=`` only."""
+    hf = day.hull.fit if day.hull is not None else None
     has = {
         "tare": bool(getattr(day, "tares", None)),
         "added_mass": hf is not None and bool(hf.added_mass),
@@ -872,7 +932,8 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
         "fin_coefficients": day.fin_result is not None and len(day.fin_result.table) > 0,
         "scaling": day.scaling_result is not None,
     }
-    return [f for f in FIGURES if has[f[0]]]
+    return [(name, section, partial(func, *_figure_arguments(name, day)))
+            for name, section, func in FIGURES if has[name]]
 
 
 def write_figures(day: DayResult, folder: str | Path) -> list[Path]:
@@ -895,7 +956,7 @@ def write_figures(day: DayResult, folder: str | Path) -> list[Path]:
     written = []
     with mpl.rc_context(style.rc()):
         for name, _section, func in available_figures(day):
-            fig = func(day)
+            fig = func()
             if fig is None:
                 continue
             path = out / f"{name}.png"

@@ -29,6 +29,7 @@ import re
 import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -117,7 +118,8 @@ def vehicle_pages(day: DayResult) -> list[Page]:
     rows = predicted_rows(getattr(day, "coefficients", None))
     if rows is None or rows.empty:
         return []
-    return [Page("figure", "Vehicle", ("predicted_vs_measured", fig_predicted))]
+    return [Page("figure", "Vehicle",
+                 ("predicted_vs_measured", partial(fig_predicted, day.coefficients)))]
 
 
 def page_plan(day: DayResult) -> list[Page]:
@@ -782,8 +784,6 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     Path
         The PDF written.
     """
-    from functools import partial
-
     from pypdf import PdfWriter
 
     from towtank.runtime.parallel import run_beside
@@ -844,8 +844,8 @@ def _render(
             grids["thumbs"] = ThumbGrid()
         return grids["thumbs"].draw(day, page.payload)
     if page.kind == "figure":
-        _name, func = page.payload
-        fig = func(day, page=True)
+        _name, func = page.payload  # bound to the results it draws (available_figures)
+        fig = func(page=True)
         if fig is None:  # available_figures said yes: a stage changed under us
             fig = _page()
             _text_block(fig, 1.2, "No data for this figure.", fontsize=10)

@@ -154,19 +154,20 @@ def predicted_figure(coefficients: Any) -> Any:
     return fig
 
 
-def fig_predicted(day: Any, *, page: bool = False) -> Any:
+def fig_predicted(coefficients: Any, *, page: bool = False) -> Any:
     """The predicted-vs-measured figure of a day with a [vehicle], as a report page: the
     primes over |predicted| (:func:`predicted_figure`) with their numbers and a caption;
-    None when the day has no prediction.
+    None when no coefficient has a prediction.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    coefficients : DataFrame
+        coefficients.csv's table with its ``predicted`` column (``day.coefficients``,
+        docs/formats.md).
     page : bool
         Lay the figure out as an A4 report page.
     """
-    rows = predicted_rows(getattr(day, "coefficients", None))
+    rows = predicted_rows(coefficients)
     if rows is None or rows.empty:
         return None
     with mpl.rc_context(style.rc()):
