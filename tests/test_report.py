@@ -195,7 +195,7 @@ def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
     n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
     n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
-    if day.fin_result is not None and not pdf.fin_runs_fit(day):
+    if day.fin_result is not None and not pdf.fin_runs_fit(day.fin_result):
         n_runs += math.ceil(len(day.fin_result.table) / pdf.RUNS_PER_PAGE)
     n_figs += len(pdf.vehicle_pages(day))  # with a [vehicle]: measured beside predicted
     return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)

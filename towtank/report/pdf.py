@@ -60,7 +60,7 @@ from towtank.report.tables import missing_accel_note
 from towtank.results import require
 
 if TYPE_CHECKING:
-    from towtank.results import DayResult
+    from towtank.results import DayResult, FinResult, ScalingResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
 MARGIN_IN = 0.6  # left and right page margin [in]
@@ -129,7 +129,7 @@ def page_plan(day: DayResult) -> list[Page]:
         pages.append(Page("figure", section, (name, func)))
     pages += vehicle_pages(day)
     fr = day.fin_result
-    if fr is not None and len(fr.table) and not fin_runs_fit(day):
+    if fr is not None and len(fr.table) and not fin_runs_fit(fr):
         fin_ids = [int(r) for r in fr.table["run"]]
         for k in range(0, len(fin_ids), RUNS_PER_PAGE):
             chunk = fin_ids[k:k + RUNS_PER_PAGE]
@@ -479,21 +479,21 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
                          "(see the quality section).", fontsize=8.5) + 0.2
-    if day.fin_result is not None and len(day.fin_result.curves):
+    fr, sr = day.fin_result, day.scaling_result
+    if fr is not None and len(fr.curves):
         y += _heading(fig, y, "Fin: lift slope, stall and minimum drag per speed")
-        y += _fin_table(fig, y, day) + 0.2
-    if day.fin_result is not None and len(day.fin_result.table):
-        y += _fin_runs_table(fig, y, day) + 0.2
-    if day.scaling_result is not None:
+        y += _fin_table(fig, y, fr) + 0.2
+    if fr is not None and len(fr.table):
+        y += _fin_runs_table(fig, y, fr) + 0.2
+    if sr is not None:
         y += _heading(fig, y, "Prototype resistance")
-        y += _scaling_table(fig, y, day)
+        y += _scaling_table(fig, y, sr, similarity_section=day.protocol.model is not None)
     if day.hull is None and day.fin_result is None and day.protocol.model is None:
         _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
                     fontsize=9)
 
 
-def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
-    fr = require(day.fin_result, "fin")
+def _fin_table(fig: Figure, y: float, fr: FinResult) -> float:
     c = fr.curves
     header = [r"$U$ group [m/s]", "Re", "runs", r"$dC_L/d\alpha$ [1/rad]", "95 % interval",
               "Sandia 2-D", "lifting line", "stall [deg]", r"$C_{L,max}$", r"$C_{D,min}$"]
@@ -529,12 +529,12 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
     return used
 
 
-def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
+def _fin_runs_table(fig: Figure, y: float, fr: FinResult) -> float:
     """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer to the
     Fin runs pages (:func:`_draw_fin_runs`)."""
-    t = require(day.fin_result, "fin").table
+    t = fr.table
     used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
-    if not fin_runs_fit(day):  # the page plan's rule: the Fin runs pages hold it otherwise
+    if not fin_runs_fit(fr):  # the page plan's rule: the Fin runs pages hold it otherwise
         return used + _text_block(fig, y + used, f"{len(t)} fin runs: in the Fin runs "
                                   "section, fins.csv and the Fins sheet of report.xlsx.",
                                   fontsize=8)
@@ -546,14 +546,22 @@ FIN_TABLE_TOP_IN = 6.0
 FIN_ROW_IN = 0.19
 
 
-def fin_runs_fit(day: DayResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
-    """Whether the fin runs' table fits on the summary page below ``top_in``."""
+def fin_runs_fit(fins: FinResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
+    """Whether the fin runs' table fits on the summary page below ``top_in``.
+
+    Parameters
+    ----------
+    fins : FinResult
+        The day's fin result (``day.fin_result``): one table row per fin run.
+    top_in : float
+        Where the table starts, from the top of the page [in].
+    """
     room = PAGE_H - PAGE_FOOTER_IN - 0.5 - top_in
-    return (len(require(day.fin_result, "fin").table) + 1) * FIN_ROW_IN <= room
+    return (len(fins.table) + 1) * FIN_ROW_IN <= room
 
 
-def _draw_fin_runs(fig: Figure, day: DayResult, runs: list[int]) -> None:
-    t = require(day.fin_result, "fin").table
+def _draw_fin_runs(fig: Figure, fins: FinResult, runs: list[int]) -> None:
+    t = fins.table
     recs = [r for r in t.to_dict("records") if int(r["run"]) in set(runs)]
     y = PAGE_HEADER_IN + 0.25
     used = _fin_rows(fig, y, recs)
@@ -574,11 +582,12 @@ def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
                   row_in=FIN_ROW_IN, fontsize=7.2)
 
 
-def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
+def _scaling_table(fig: Figure, y: float, sr: ScalingResult, *,
+                   similarity_section: bool) -> float:
     """The prototype resistance table: the recommended estimate named in its header and
     shaded, the Froude-scaled model resistance beside it for comparison; then the rule behind
-    the recommendation, the form factor with its trend over Re, and what was used."""
-    sr = require(day.scaling_result, "scaling")
+    the recommendation, the form factor with its trend over Re, and what was used (with
+    ``similarity_section``, a pointer to the Scaling section's figure)."""
     rec = getattr(sr, "recommendation", None)
     recommended = rec.column if rec is not None else "none"
     ittc_head = r"$R_p$ ITTC-57 [N]" + (", recommended" if recommended == "drag_ittc57" else "")
@@ -612,7 +621,7 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
                f"{ff.n} tested speeds ({ff.n_runs} runs, repeats averaged per speed). "
                if ff is not None else "") + trend)
     note += (" Similarity (Reynolds ranges, depth): the Scaling section."
-             if day.protocol.model is not None else "")
+             if similarity_section else "")
     return used + 0.08 + _text_block(fig, y + used + 0.08, note.strip(), width=125,
                                      fontsize=7)
 
@@ -860,7 +869,7 @@ def _render(
     elif page.kind == "runs":
         _draw_runs(fig, day, page.payload)
     elif page.kind == "fin_runs":
-        _draw_fin_runs(fig, day, page.payload)
+        _draw_fin_runs(fig, require(day.fin_result, "fin"), page.payload)
     return fig
 
 

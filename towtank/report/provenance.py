@@ -19,10 +19,10 @@ import pandas as pd
 
 from towtank import __version__
 from towtank.reference.sets import reference_name
-from towtank.results import require
 
 if TYPE_CHECKING:
-    from towtank.results import DayResult
+    from towtank.ingest.protocol_types import Prototype
+    from towtank.results import DayResult, ScalingResult, TareResult
 
 
 def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -43,7 +43,8 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
                               "quantities": geometry_used(day)},
                  **(extra or {})}
     if day.scaling_result is not None:
-        extra = {"scaling": _scaling_provenance(day), **(extra or {})}
+        extra = {"scaling": _scaling_provenance(day.scaling_result, p.prototype),
+                 **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
@@ -71,7 +72,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "inputs": [{"path": k, "sha256": v} for k, v in day.inputs.items()],
         "settings": settings,
         "runs": {"total": int(len(day.sheet)), "rejected": day.n_rejected},
-        "tare": _tare_provenance(day),
+        "tare": _tare_provenance(day.tare),
         **(extra or {}),
     }
 
@@ -91,19 +92,17 @@ def medium_settings(water: Any) -> dict[str, Any]:
     return out
 
 
-def _tare_provenance(day: DayResult) -> list[dict[str, Any]]:
+def _tare_provenance(tare: TareResult) -> list[dict[str, Any]]:
     """The sting tare fits (tare.csv's rows): coefficients, intervals, runs and ranges."""
     from towtank.reduce.tare import tare_table
 
-    table = tare_table(getattr(day, "tares", None) or {})
+    table = tare_table(tare.models)
     return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
             for row in table.to_dict("records")]
 
 
-def _scaling_provenance(day: DayResult) -> dict[str, Any]:
+def _scaling_provenance(sr: ScalingResult, proto: Prototype | None) -> dict[str, Any]:
     """The prototype, its water and the form factor behind scaling.csv."""
-    sr = require(day.scaling_result, "scaling")
-    proto = day.protocol.prototype
     ff = sr.form_factor
     return {
         "scale": sr.scale,

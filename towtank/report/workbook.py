@@ -45,7 +45,8 @@ from towtank.results import require
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
 
-    from towtank.results import DayResult
+    from towtank.ingest.protocol_types import Protocol
+    from towtank.results import DayResult, FinResult, ScalingResult, TareResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
           "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
@@ -56,7 +57,7 @@ def sheet_names(day: DayResult) -> list[str]:
     detail sheets a day has no data for."""
     fr, sr = day.fin_result, day.scaling_result
     has = {"Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
-           "Fin control": _has_control(day),
+           "Fin control": _has_control(fr),
            "Scaling constants": sr is not None,
            "Form factor": sr is not None and sr.form_factor is not None}
     return [name for name in SHEETS if has.get(name, True)]
@@ -456,10 +457,10 @@ def _missing_accel(day: DayResult) -> tuple[list[int], str]:
     return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
-def _tare(w: SheetWriter, day: DayResult) -> None:
+def _tare(w: SheetWriter, tare: TareResult) -> None:
     from towtank.reduce.tare import tare_table
 
-    table = tare_table(getattr(day, "tares", None) or {})
+    table = tare_table(tare.models)
     if len(table) == 0:
         _note_sheet(w, "No sting tare was fitted: the day has no sting runs, or its tare "
                     "comes from a table or is none ([tare] in the protocol).")
@@ -473,10 +474,9 @@ def _tare(w: SheetWriter, day: DayResult) -> None:
            "coefficient's interval.")
 
 
-def _fins(w: SheetWriter, day: DayResult) -> None:
-    fr = day.fin_result
+def _fins(w: SheetWriter, fr: FinResult | None, protocol: Protocol) -> None:
     if fr is None or len(fr.table) == 0:
-        why = ("the protocol has no [fin]." if day.protocol.fin is None
+        why = ("the protocol has no [fin]." if protocol.fin is None
                else "the day has no usable fin runs; see the Quality sheet.")
         _note_sheet(w, "No fin data: " + why)
         return
@@ -484,32 +484,30 @@ def _fins(w: SheetWriter, day: DayResult) -> None:
     w.gap()
     w.note(f"Effective aspect ratio {fr.aspect_ratio:.4g}, span efficiency e = "
            f"{fr.oswald_e:.3g}; per-speed curves on the Fin curves sheet"
-           + (", control derivatives on the Fin control sheet." if _has_control(day) else "."))
+           + (", control derivatives on the Fin control sheet." if _has_control(fr) else "."))
 
 
-def _has_control(day: DayResult) -> bool:
-    fr = day.fin_result
+def _has_control(fr: FinResult | None) -> bool:
     return fr is not None and fr.control is not None and len(fr.control) > 0
 
 
-def _fin_curves(w: SheetWriter, day: DayResult) -> None:
-    w.table(require(day.fin_result, "fin").curves)
+def _fin_curves(w: SheetWriter, fr: FinResult) -> None:
+    w.table(fr.curves)
     w.gap()
     w.note("Lift slope over the linear range of each speed group with its 95 % interval, "
            "beside the same fit through the 2-D Sandia section and the finite-span "
            "expectation (lifting line); slopes in 1/rad, angles in degrees.")
 
 
-def _fin_control(w: SheetWriter, day: DayResult) -> None:
-    w.table(require(day.fin_result, "fin").control)
+def _fin_control(w: SheetWriter, fr: FinResult) -> None:
+    w.table(fr.control)
 
 
-def _scaling(w: SheetWriter, day: DayResult) -> None:
-    sr = day.scaling_result
+def _scaling(w: SheetWriter, sr: ScalingResult | None, protocol: Protocol) -> None:
     if sr is None:
-        if day.protocol.model is None:
+        if protocol.model is None:
             why = "the protocol has no [model] (a fin day)."
-        elif day.protocol.prototype is None:
+        elif protocol.prototype is None:
             why = "the protocol has no [prototype]."
         else:
             why = "too few steady zero-angle hull runs; see the Quality sheet."
@@ -526,8 +524,7 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
               if sr.form_factor is not None else "."))
 
 
-def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
-    sr = require(day.scaling_result, "scaling")
+def _scaling_constants(w: SheetWriter, sr: ScalingResult, protocol: Protocol) -> None:
     k2, k1 = sr.resistance
     rows: list[tuple[str, Any, str]] = [
         ("scale λ", sr.scale, "-"),
@@ -549,9 +546,9 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
     rows += [("prototype length L_p", sr.length_prototype, "m"),
              ("prototype wetted area S_p = λ²·S_m", sr.wetted_area_prototype, "m²"),
              ("roughness allowance ΔC_F", sr.delta_cf, "-")]
-    t_m = day.protocol.water.temperature_C
-    fm = "air" if day.protocol.water.is_air else "water"
-    proto = day.protocol.prototype
+    t_m = protocol.water.temperature_C
+    fm = "air" if protocol.water.is_air else "water"
+    proto = protocol.prototype
     fp = "air" if proto is not None and proto.water.is_air else "water"
     rows += [(f"model {fm} density at the protocol's {t_m:g} °C (Froude force ratio)",
               sr.rho_m, "kg/m³"),
@@ -569,8 +566,7 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
     w.row += 1
 
 
-def _form_factor(w: SheetWriter, day: DayResult) -> None:
-    sr = require(day.scaling_result, "scaling")
+def _form_factor(w: SheetWriter, sr: ScalingResult) -> None:
     ff = require(sr.form_factor, "form factor")
     data = {"speed": ff.speeds, "runs": ff.speed_runs, "one_plus_k": ff.speed_values}
     units = {"speed": "m/s", "runs": "-", "one_plus_k": "-"}
@@ -714,17 +710,20 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
             yield key, str(v)
 
 
-WRITERS: dict[str, Callable[[SheetWriter, Any], None]] = {
+#: Each sheet's writer, given the results it shows from the day (:func:`sheet_names` says
+#: which sheets a day has).
+WRITERS: dict[str, Callable[[SheetWriter, DayResult], None]] = {
     "Summary": _summary,
     "Coefficients": _coefficients,
     "Runs": _runs,
-    "Tare": _tare,
-    "Fins": _fins,
-    "Fin curves": _fin_curves,
-    "Fin control": _fin_control,
-    "Scaling": _scaling,
-    "Scaling constants": _scaling_constants,
-    "Form factor": _form_factor,
+    "Tare": lambda w, day: _tare(w, day.tare),
+    "Fins": lambda w, day: _fins(w, day.fin_result, day.protocol),
+    "Fin curves": lambda w, day: _fin_curves(w, require(day.fin_result, "fin")),
+    "Fin control": lambda w, day: _fin_control(w, require(day.fin_result, "fin")),
+    "Scaling": lambda w, day: _scaling(w, day.scaling_result, day.protocol),
+    "Scaling constants": lambda w, day: _scaling_constants(
+        w, require(day.scaling_result, "scaling"), day.protocol),
+    "Form factor": lambda w, day: _form_factor(w, require(day.scaling_result, "scaling")),
     "Quality": _quality,
     "Provenance": _provenance,
 }
