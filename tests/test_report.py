@@ -433,7 +433,8 @@ def test_runs_table_says_why_an_acceleration_is_blank(days):
     ok = day.runs[day.runs.status == "ok"]
     expected = [int(r) for r in ok.loc[ok.accel_mean.isna(), "run"]]
     assert expected, "the synthetic day has slow runs whose ramp is too short"
-    blank, note = missing_accel_note(day, [int(r) for r in day.runs.run])
+    blank, note = missing_accel_note(day.runs, day.protocol.processing,
+                                     [int(r) for r in day.runs.run])
     assert blank == expected
     assert "no constant-acceleration stretch" in note and "U/a" in note
     text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages

@@ -891,7 +891,7 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
     y = PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
               r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
-    blank, accel_note = missing_accel_note(day, run_ids)
+    blank, accel_note = missing_accel_note(day.runs, day.protocol.processing, run_ids)
     rows, fill = [], {}
     for i, run in enumerate(run_ids):
         r = runs.loc[run]

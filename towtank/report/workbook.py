@@ -453,7 +453,8 @@ def _missing_accel(day: DayResult) -> tuple[list[int], str]:
     """The usable runs without accel_mean and why (as the PDF's runs table says)."""
     from towtank.report.tables import missing_accel_note
 
-    blank, text = missing_accel_note(day, [int(r) for r in day.runs["run"]])
+    blank, text = missing_accel_note(day.runs, day.protocol.processing,
+                                     [int(r) for r in day.runs["run"]])
     return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
