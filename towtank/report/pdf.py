@@ -60,6 +60,9 @@ from towtank.report.tables import missing_accel_note
 from towtank.results import require
 
 if TYPE_CHECKING:
+    import pandas as pd
+
+    from towtank.ingest.protocol_types import Fin, Model, Water
     from towtank.results import DayResult, FinResult, ScalingResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
@@ -184,22 +187,22 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
              fontsize=7, color="#555555", ha="right")
 
 
-def _medium_word(day: DayResult) -> str:
-    """"air" or "water": the tests' medium in one word."""
-    return "air" if day.protocol.water.is_air else "water"
+def _medium_word(water: Water) -> str:
+    """"air" or "water": the tests' medium (the protocol's [water]) in one word."""
+    return "air" if water.is_air else "water"
 
 
-def _medium_label(day: DayResult) -> str:
+def _medium_label(water: Water) -> str:
     """The title page's label of the medium's line: "Water" or "Air"."""
-    return _medium_word(day).capitalize()
+    return _medium_word(water).capitalize()
 
 
-def _water_text(day: DayResult) -> str:
-    w = day.protocol.water
-    ok = day.runs[day.runs["status"] == "ok"]
+def _water_text(w: Water, runs: pd.DataFrame) -> str:
+    """The medium (the protocol's [water]) with the runs' temperatures and mean ρ, ν."""
+    ok = runs[runs["status"] == "ok"]
     rho = ok["rho"].dropna()
     nu = ok["nu"].dropna()
-    temps = day.runs["water_temp_C"].dropna()
+    temps = runs["water_temp_C"].dropna()
     t = (f"{temps.min():.1f}–{temps.max():.1f} °C" if len(temps) and temps.min() != temps.max()
          else f"{w.temperature_C:g} °C")
     out = f"{w.medium}, {t}"
@@ -212,8 +215,7 @@ def _water_text(day: DayResult) -> str:
     return out
 
 
-def _model_text(day: DayResult) -> str:
-    m = day.protocol.model
+def _model_text(m: Model | None) -> str:
     if m is None:
         return "none (no hull runs)"
     parts = [m.name or "model", f"L = {m.length_m:g} m"]
@@ -246,23 +248,22 @@ def geometry_text(day: DayResult) -> str | None:
     return "; ".join(parts) + "." if parts else None
 
 
-def _fin_text(day: DayResult) -> str | None:
-    fin = day.protocol.fin
+def _fin_text(fin: Fin | None, fins: FinResult | None) -> str | None:
     if fin is None:
         return None
     return (f"{fin.section}, chord {fin.chord_m:g} m, span {fin.span_m:g} m"
-            + (f", effective aspect ratio {day.fin_result.aspect_ratio:.3g}"
-               if day.fin_result else ""))
+            + (f", effective aspect ratio {fins.aspect_ratio:.3g}" if fins else ""))
 
 
-def _counts(day: DayResult) -> str:
-    c = day.runs["status"].value_counts()
-    return (f"{len(day.runs)} in the sheet: {int(c.get('ok', 0))} ok, "
+def _counts(runs: pd.DataFrame) -> str:
+    c = runs["status"].value_counts()
+    return (f"{len(runs)} in the sheet: {int(c.get('ok', 0))} ok, "
             f"{int(c.get('rejected', 0))} rejected, {int(c.get('void', 0))} void")
 
 
 def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     date, source = report_date(day)
+    proto = day.protocol
     x0 = MARGIN_IN / PAGE_W + 0.03
     title = "Test report, model in air" if day.protocol.water.is_air else "Towing-tank test report"
     fig.text(x0, _y(1.6), title, fontsize=24, fontweight="bold")
@@ -270,11 +271,11 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     fig.text(x0, _y(2.4), literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
     rows = [
-        ("Model", _model_text(day) if day.protocol.model is not None else None),
-        ("Fin", _fin_text(day)),
-        (_medium_label(day), _water_text(day)),
+        ("Model", _model_text(proto.model) if proto.model is not None else None),
+        ("Fin", _fin_text(proto.fin, day.fin_result)),
+        (_medium_label(proto.water), _water_text(proto.water, day.runs)),
         ("Test date", date or "not given"),
-        ("Runs", _counts(day)),
+        ("Runs", _counts(day.runs)),
         ("Protocol", str(day.protocol.path.name)),
         ("Program", f"towtank {__version__}"),
     ]
@@ -377,14 +378,18 @@ def _v(x: Any, fmt: str = ".4g", scale: float = 1.0) -> str:
     return text.replace("-", "\u2212")
 
 
-def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[str],
-                                              dict[tuple[int, int], str]]:
+def coefficient_rows(coef: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str],
+                                                  dict[tuple[int, int], str]]:
     """Header, rows, method footnotes and highlighted cells of the summary's table.
 
     A coefficient equal to another by the hull's symmetry shows that symbol as its method
     ("= Y_vdot") instead of a footnote.
+
+    Parameters
+    ----------
+    coef : DataFrame
+        coefficients.csv's table (``day.coefficients``, docs/formats.md).
     """
-    coef = day.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
@@ -431,9 +436,12 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     date, _ = report_date(day)
     y = 0.95
     has_model = day.protocol.model is not None
-    facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
-             ("Fin", _fin_text(day)), (_medium_label(day), _water_text(day)),
-             ("Test date", date or "not given"), ("Runs", _counts(day)),
+    proto = day.protocol
+    facts = [("Campaign", proto.name),
+             ("Model", _model_text(proto.model) if has_model else None),
+             ("Fin", _fin_text(proto.fin, day.fin_result)),
+             (_medium_label(proto.water), _water_text(proto.water, day.runs)),
+             ("Test date", date or "not given"), ("Runs", _counts(day.runs)),
              ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
     for label, value in facts:
@@ -453,7 +461,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     y += 0.15
     if day.hull is not None and len(day.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
-        header, rows, methods, hl = coefficient_rows(day)
+        header, rows, methods, hl = coefficient_rows(day.coefficients)
         y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
                     highlight=hl, align=("center",) + ("right",) * 7 + ("center",),
                     fontsize=7.8) + 0.1
@@ -921,9 +929,9 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
                                "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
                                "lateral area (transverse tows at α = 90°, the C_D,90 of "
                                "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
-                               f"each run's {_medium_word(day)} temperature. Rejected runs "
-                               "(red) and void runs (grey) with their reasons: Quality page "
-                               "and runs.csv.",
+                               f"each run's {_medium_word(day.protocol.water)} temperature. "
+                               "Rejected runs (red) and void runs (grey) with their reasons: "
+                               "Quality page and runs.csv.",
                                fontsize=7.5)
     if accel_note:
         _text_block(fig, y + used, accel_note, fontsize=7.5)
