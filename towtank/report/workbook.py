@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
 
     from towtank.ingest.protocol_types import Protocol
+    from towtank.ingest.schema import Processing
     from towtank.results import DayResult, FinResult, ScalingResult, TareResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
@@ -391,7 +392,7 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
                             "reference_prime", "diff_pct") if c in day.coefficients]
         w.table(day.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
-        w.note("No hull coefficients: " + _why_no_hull(day))
+        w.note("No hull coefficients: " + _why_no_hull(day.protocol))
     if day.fin_result is not None and len(day.fin_result.curves):
         w.gap()
         w.title("Fin: lift slope and stall per speed group")
@@ -409,15 +410,15 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
             w.note(sr.recommendation.rule)
 
 
-def _why_no_hull(day: DayResult) -> str:
-    if day.protocol.model is None:
+def _why_no_hull(protocol: Protocol) -> str:
+    if protocol.model is None:
         return "the protocol has no [model] (a fin day)."
     return "the day has no usable hull runs; see the Quality sheet."
 
 
 def _coefficients(w: SheetWriter, day: DayResult) -> None:
     if day.hull is None or len(day.coefficients) == 0:
-        _note_sheet(w, "No hull coefficients: " + _why_no_hull(day))
+        _note_sheet(w, "No hull coefficients: " + _why_no_hull(day.protocol))
         return
     coef = day.coefficients
     cols = [c for c in COEFFICIENT_ORDER if c in coef.columns]
@@ -444,17 +445,16 @@ def _runs(w: SheetWriter, day: DayResult) -> None:
     w.note("cd_ref: each run's C_D on the area its test uses, named in ref_area (frontal: "
            "hull runs; lateral: transverse tows at α = 90°, the C_D,90 of Y_v|v|; fin: chord × "
            "span); cd keeps the frontal area for every hull run.")
-    blank, why = _missing_accel(day)
+    blank, why = _missing_accel(day.runs, day.protocol.processing)
     if blank:
         w.note(why)
 
 
-def _missing_accel(day: DayResult) -> tuple[list[int], str]:
+def _missing_accel(runs: pd.DataFrame, processing: Processing) -> tuple[list[int], str]:
     """The usable runs without accel_mean and why (as the PDF's runs table says)."""
     from towtank.report.tables import missing_accel_note
 
-    blank, text = missing_accel_note(day.runs, day.protocol.processing,
-                                     [int(r) for r in day.runs["run"]])
+    blank, text = missing_accel_note(runs, processing, [int(r) for r in runs["run"]])
     return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
