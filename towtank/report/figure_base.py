@@ -12,6 +12,8 @@ from collections.abc import Callable
 from typing import Any
 
 import matplotlib as mpl
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PathCollection
 from matplotlib.figure import Figure
 
 import towtank.report.style as style
@@ -217,8 +219,6 @@ def sci(x: float, digits: int = 2) -> str:
 # ------------------------------------------------------------------------- legends and axes
 def _renderer(fig: Figure) -> Any:
     """A renderer of ``fig`` to measure text and legend boxes (an Agg canvas if it has none)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
     return canvas.get_renderer()
 
@@ -238,8 +238,6 @@ def data_under_legend(ax: Any, legend: Any = None, renderer: Any = None) -> int:
     renderer : optional
         A renderer of the axes' figure (made when not given).
     """
-    from matplotlib.collections import PathCollection
-
     leg = legend if legend is not None else ax.get_legend()
     if leg is None:
         return 0

@@ -45,6 +45,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 import towtank.report.style as style
+from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
 from towtank.report.figure_base import (
     PAGE_HEADER_IN,
     align_zero,
@@ -140,8 +141,6 @@ def fig_added_mass(hull: HullResult | DayResult | None,
 
 def _added_mass_column(ax: Axes, ax_d: Axes, reductions: Mapping[int, RunReduction],
                        am: Any) -> None:
-    from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
-
     cd = am.curve_difference
     levels = cd.levels
     q = cd.steady_quadratic
@@ -460,6 +459,8 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
 def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
                     e: float) -> tuple[np.ndarray, ...]:
     """Sandia 2-D and lifting-line curves of one Re on an angle grid (evaluation only)."""
+    # start-up saving: `towtank inspect --png` draws a run with this module and never a fin
+    # figure; analysis.fins and reference.sandia load pandas (+0.2 s measured)
     from towtank.analysis import fins
     from towtank.reference import sandia
 

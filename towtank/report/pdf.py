@@ -35,16 +35,19 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import matplotlib as mpl
 import numpy as np
+from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
+from pypdf import PdfWriter
 
 import towtank.report.figures as figures
 import towtank.report.quality as _quality
 import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
+from towtank.pipeline import geometry_used
 from towtank.reference.sets import reference_name
 from towtank.report.figure_base import (
     PAGE_FOOTER_IN,
@@ -57,7 +60,9 @@ from towtank.report.figure_base import (
 )
 from towtank.report.provenance import creation_date, report_date
 from towtank.report.tables import missing_accel_note
+from towtank.report.vehicle import fig_predicted, predicted_rows
 from towtank.results import require
+from towtank.runtime.parallel import run_beside
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -116,8 +121,6 @@ def vehicle_pages(day: DayResult) -> list[Page]:
     """The "Vehicle" page of a day with a [vehicle]: its measured coefficients beside those
     predicted from the geometry (:func:`towtank.report.vehicle.fig_predicted`); none without
     a prediction."""
-    from towtank.report.vehicle import fig_predicted, predicted_rows
-
     rows = predicted_rows(getattr(day, "coefficients", None))
     if rows is None or rows.empty:
         return []
@@ -229,8 +232,6 @@ def _model_text(m: Model | None) -> str:
 
 def geometry_text(day: DayResult) -> str | None:
     """The hull geometry used, each quantity with its source; None without a [model]."""
-    from towtank.pipeline import geometry_used
-
     short = {"π D²/4 from diameter_m": "π D²/4",
              "L·D from length_m and diameter_m (default)": "L·D, the default",
              "computed from the [model.myring] Myring description": "Myring description"}
@@ -801,10 +802,6 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     Path
         The PDF written.
     """
-    from pypdf import PdfWriter
-
-    from towtank.runtime.parallel import run_beside
-
     folder = Path(folder)
     path = folder / "report.pdf"
     plan = page_plan(day)
@@ -840,8 +837,6 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
 
 def _write_part(day: DayResult, plan: list[Page], pages: list[int], path: Path) -> None:
     """Draw the pages ``pages`` (indices into ``plan``) into the PDF ``path``."""
-    from matplotlib.backends.backend_pdf import PdfPages
-
     meta = {"CreationDate": None, "ModDate": None}  # set on the joined file
     grids: dict[str, ThumbGrid] = {}
     with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:

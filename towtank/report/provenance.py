@@ -16,8 +16,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+import scipy
+from nptdms import TdmsFile
 
 from towtank import __version__
+from towtank.pipeline import geometry_used
+from towtank.reduce.tare import tare_table
 from towtank.reference.sets import reference_name
 
 if TYPE_CHECKING:
@@ -32,11 +36,6 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     from: given in the protocol, computed from the Myring description, or a default) and, when
     scaled, the prototype, its water and the form factor.
     """
-    import numpy
-    import scipy
-
-    from towtank.pipeline import geometry_used
-
     p = day.protocol
     if p.model is not None:
         extra = {"geometry": {"geometry_source": p.model.geometry_source,
@@ -63,7 +62,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "version": __version__,
         "python": platform.python_version(),
         "libraries": {
-            "numpy": numpy.__version__,
+            "numpy": np.__version__,
             "scipy": scipy.__version__,
             "pandas": pd.__version__,
         },
@@ -94,8 +93,6 @@ def medium_settings(water: Any) -> dict[str, Any]:
 
 def _tare_provenance(tare: TareResult) -> list[dict[str, Any]]:
     """The sting tare fits (tare.csv's rows): coefficients, intervals, runs and ranges."""
-    from towtank.reduce.tare import tare_table
-
     table = tare_table(tare.models)
     return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
             for row in table.to_dict("records")]
@@ -162,8 +159,6 @@ def _gzip_mtime(path: Path) -> str | None:
 def _tdms_date(path: Path) -> str | None:
     """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
     try:
-        from nptdms import TdmsFile
-
         meta = TdmsFile.read_metadata(str(path))
         objs = [meta] + list(meta.groups())
         objs += [c for g in meta.groups() for c in g.channels()]

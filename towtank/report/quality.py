@@ -14,6 +14,7 @@ import numpy as np
 
 import towtank.report.style as style
 from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason, run_ranges
+from towtank.reduce.run import units_notes
 from towtank.report.figure_base import PAGE_FOOTER_IN, PAGE_HEADER_IN
 
 if TYPE_CHECKING:
@@ -180,8 +181,6 @@ def _own_notes(reductions: dict[int, RunReduction]) -> dict[int, str]:
     """Each reduced run's notes without those the day says once (runs.csv keeps them all): the
     run's units without a label (:func:`towtank.analysis.daywide.unit_label_sentences`) and
     warnings grouped over many runs (:func:`towtank.analysis.daywide.grouped_warnings`)."""
-    from towtank.reduce.run import units_notes
-
     reds = sorted(reductions.values(), key=lambda r: r.run)
     grouped = grouped_warnings([(r.run, r.file, w) for r in reds for w in r.warnings])
     out = {}

@@ -9,6 +9,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from towtank.reduce.tare import tare_table
+from towtank.report.safetext import csv_text
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -20,8 +23,6 @@ def write_csv(df: pd.DataFrame, path: Path) -> None:
     """A deterministic CSV: full float precision, '\\n' line ends, no index; text cells (and
     column names) a spreadsheet would run as formulas neutralised
     (:func:`towtank.report.safetext.csv_text`)."""
-    from towtank.report.safetext import csv_text
-
     out = df.copy(deep=False)
     for col in out.columns:
         if out[col].dtype == object or str(out[col].dtype) in ("string", "str"):
@@ -45,8 +46,6 @@ def write_tables(day: DayResult, out: Path) -> None:
         if day.fin_result.control is not None:
             write_csv(day.fin_result.control, out / "fin_control.csv")
     write_csv(day.scaling, out / "scaling.csv")
-    from towtank.reduce.tare import tare_table
-
     write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")
 
 

@@ -36,10 +36,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+from openpyxl import Workbook
+from openpyxl.cell import _writer
+from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
+from openpyxl.utils import get_column_letter
 
 import towtank.report.style as style
 from towtank import __version__
+from towtank.pipeline import geometry_used
+from towtank.reduce.tare import tare_table
+from towtank.reference.sets import reference_name
+from towtank.report.provenance import creation_date, provenance, report_date
 from towtank.report.safetext import clean_text
+from towtank.report.tables import missing_accel_note
 from towtank.results import require
 
 if TYPE_CHECKING:
@@ -183,8 +192,6 @@ def header_label(column: str, units: dict[str, str] | None = None) -> str:
 
 
 def _styles() -> dict[str, Any]:
-    from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
-
     return {
         "header_font": Font(bold=True),
         "header_fill": PatternFill("solid", fgColor=style.XL_HEADER_FILL),
@@ -297,8 +304,6 @@ class SheetWriter:
 
     def finish(self, *, min_width: int = 6) -> None:
         """Freeze and filter the first table, size the columns."""
-        from openpyxl.utils import get_column_letter
-
         ws = self.ws
         if self.first_table is not None:
             head, last, ncols = self.first_table
@@ -329,8 +334,6 @@ def _note_sheet(w: SheetWriter, text: str) -> None:
 
 # ------------------------------------------------------------------------------- sheets
 def _summary(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.provenance import report_date
-
     p = day.protocol
     date, source = report_date(day)
     counts = day.runs["status"].value_counts()
@@ -365,8 +368,6 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         rows += [("fin section", p.fin.section, ""), ("fin chord", p.fin.chord_m, "m"),
                  ("fin span", p.fin.span_m, "m")]
     if day.hull is not None:
-        from towtank.reference.sets import reference_name
-
         rows.append(("reference set (reference_prime)", reference_name(p.campaign.reference),
                      ""))
     rows += [
@@ -378,8 +379,6 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     ]
     w.pairs(rows)
     if m is not None:
-        from towtank.pipeline import geometry_used
-
         w.gap()
         w.title("Geometry used")
         w.table(pd.DataFrame(geometry_used(day)),
@@ -452,15 +451,11 @@ def _runs(w: SheetWriter, day: DayResult) -> None:
 
 def _missing_accel(runs: pd.DataFrame, processing: Processing) -> tuple[list[int], str]:
     """The usable runs without accel_mean and why (as the PDF's runs table says)."""
-    from towtank.report.tables import missing_accel_note
-
     blank, text = missing_accel_note(runs, processing, [int(r) for r in runs["run"]])
     return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
 def _tare(w: SheetWriter, tare: TareResult) -> None:
-    from towtank.reduce.tare import tare_table
-
     table = tare_table(tare.models)
     if len(table) == 0:
         _note_sheet(w, "No sting tare was fitted: the day has no sting runs, or its tare "
@@ -670,8 +665,6 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
 
 
 def _provenance(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.provenance import provenance
-
     prov = provenance(day)
     rows: list[tuple[str, Any, str]] = []
     for key in ("program", "version", "python", "protocol", "campaign"):
@@ -739,8 +732,6 @@ def exact_floats() -> Iterator[None]:
     give back the same double (17 significant digits may be needed); the CSV tables carry the
     shortest round-trip repr, and the workbook must hold the same floats.
     """
-    from openpyxl.cell import _writer
-
     original = _writer.safe_string
 
     def exact(value: Any) -> str:
@@ -770,10 +761,6 @@ def write_workbook(day: DayResult, folder: str | Path) -> Path:
     Path
         The workbook written.
     """
-    from openpyxl import Workbook
-
-    from towtank.report.provenance import creation_date, report_date
-
     wb = Workbook()
     wb.remove(wb.active)
     for name in sheet_names(day):
