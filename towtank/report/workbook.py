@@ -56,7 +56,7 @@ if TYPE_CHECKING:
 
     from towtank.ingest.protocol_types import Protocol
     from towtank.ingest.schema import Processing
-    from towtank.results import DayResult, FinResult, ScalingResult, TareResult
+    from towtank.results import DayResult, FinResult, HullResult, ScalingResult, TareResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
           "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
@@ -415,11 +415,13 @@ def _why_no_hull(protocol: Protocol) -> str:
     return "the day has no usable hull runs; see the Quality sheet."
 
 
-def _coefficients(w: SheetWriter, day: DayResult) -> None:
-    if day.hull is None or len(day.coefficients) == 0:
-        _note_sheet(w, "No hull coefficients: " + _why_no_hull(day.protocol))
+def _coefficients(w: SheetWriter, hull: HullResult | None, coef: pd.DataFrame,
+                  protocol: Protocol) -> None:
+    """coefficients.csv's table (``coef``: the hull's coefficients with their prototype and
+    predicted values) with the hull fit's ρ and L in its note."""
+    if hull is None or len(coef) == 0:
+        _note_sheet(w, "No hull coefficients: " + _why_no_hull(protocol))
         return
-    coef = day.coefficients
     cols = [c for c in COEFFICIENT_ORDER if c in coef.columns]
     cols += [c for c in coef.columns if c not in cols]
     w.table(coef, columns=cols, row_fill=_fill_for_diff)
@@ -427,24 +429,24 @@ def _coefficients(w: SheetWriter, day: DayResult) -> None:
     w.note(f"value, ci_low, ci_high, prototype_value, alt_value in the row's unit (SI, model "
            f"scale for value; prototype scale for prototype_value); prime non-dimensional. "
            f"Rows with |diff_pct| > {DIFF_HIGHLIGHT_PCT:g} are highlighted.")
-    hf = day.hull.fit
+    hf = hull.fit
     w.note(f"prime = value/(½ρL³) (added mass) or value/(½ρL²) (damping) with ρ = "
            f"{hf.rho:.3f} kg/m³, the mean of the hull runs' "
-           f"{'air' if day.protocol.water.is_air else 'water'} densities, and L = "
+           f"{'air' if protocol.water.is_air else 'water'} densities, and L = "
            f"{hf.length:g} m. diff_pct = (prime − reference_prime)/|reference_prime|·100, signed: "
            "negative where the prime is more negative than the reference (e.g. a larger added "
            "mass); empty where the reference is 0.")
 
 
-def _runs(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.runs, row_fill=_fill_for_status)
+def _runs(w: SheetWriter, runs: pd.DataFrame, processing: Processing) -> None:
+    w.table(runs, row_fill=_fill_for_status)
     w.gap()
     w.note("Rejected runs are filled red, runs voided in the sheet grey; phase windows "
            "*_start_s/*_end_s in seconds from the start of the file.")
     w.note("cd_ref: each run's C_D on the area its test uses, named in ref_area (frontal: "
            "hull runs; lateral: transverse tows at α = 90°, the C_D,90 of Y_v|v|; fin: chord × "
            "span); cd keeps the frontal area for every hull run.")
-    blank, why = _missing_accel(day.runs, day.protocol.processing)
+    blank, why = _missing_accel(runs, processing)
     if blank:
         w.note(why)
 
@@ -708,8 +710,8 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
 #: which sheets a day has).
 WRITERS: dict[str, Callable[[SheetWriter, DayResult], None]] = {
     "Summary": _summary,
-    "Coefficients": _coefficients,
-    "Runs": _runs,
+    "Coefficients": lambda w, day: _coefficients(w, day.hull, day.coefficients, day.protocol),
+    "Runs": lambda w, day: _runs(w, day.runs, day.protocol.processing),
     "Tare": lambda w, day: _tare(w, day.tare),
     "Fins": lambda w, day: _fins(w, day.fin_result, day.protocol),
     "Fin curves": lambda w, day: _fin_curves(w, require(day.fin_result, "fin")),
