@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import re
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -67,7 +67,7 @@ from towtank.runtime.parallel import run_beside
 if TYPE_CHECKING:
     import pandas as pd
 
-    from towtank.ingest.protocol_types import Fin, Model, Water
+    from towtank.ingest.protocol_types import Fin, Model, Protocol, Water
     from towtank.results import DayResult, FinResult, ScalingResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
@@ -106,15 +106,25 @@ short_reason = _quality.short_reason
 _num = _quality._num
 
 
-def thumbnail_runs(day: DayResult) -> list[int]:
+def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
+                   previews: Mapping[int, Any]) -> list[int]:
     """The runs the appendix draws: all but those a day-wide fault rejected before anything
-    was read (their thumbnails would be empty; the quality page says the fault once)."""
-    skip = {r for g in group_rejections(day.runs) if g.day_wide for r in g.runs
-            if day.previews.get(r) is None}
-    runs = [r for r in day.runs["run"].astype(int) if r not in skip]
-    if skip and not any(r in day.reductions or day.previews.get(r) is not None for r in runs):
+    was read (their thumbnails would be empty; the quality page says the fault once).
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv's table (``day.runs``).
+    reductions, previews : mapping of int
+        The reduced runs and the previews of rejected runs that were read, by run number
+        (``day.reductions``, ``day.previews``).
+    """
+    skip = {r for g in group_rejections(runs) if g.day_wide for r in g.runs
+            if previews.get(r) is None}
+    drawn = [r for r in runs["run"].astype(int) if r not in skip]
+    if skip and not any(r in reductions or previews.get(r) is not None for r in drawn):
         return []  # what is left has nothing to draw either (void runs)
-    return runs
+    return drawn
 
 
 def vehicle_pages(day: DayResult) -> list[Page]:
@@ -150,7 +160,7 @@ def page_plan(day: DayResult) -> list[Page]:
     for i, part in enumerate(q):
         pages.append(Page("quality", "Quality", part,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
-    runs = thumbnail_runs(day)
+    runs = thumbnail_runs(day.runs, day.reductions, day.previews)
     for k in range(0, len(runs), THUMBS_PER_PAGE):
         chunk = runs[k:k + THUMBS_PER_PAGE]
         pages.append(Page("thumbs", "Appendix", chunk,
@@ -174,7 +184,7 @@ def _y(inches_from_top: float) -> float:
     return 1 - inches_from_top / PAGE_H
 
 
-def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) -> None:
+def _decorate(fig: Figure, name: str, page: Page, number: int, total: int) -> None:
     """Section header, rule and footer of a page."""
     x0, x1 = MARGIN_IN / PAGE_W, 1 - MARGIN_IN / PAGE_W
     if page.kind != "title":
@@ -185,7 +195,7 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
                      color="#555555")
         fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
     fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
-    fig.text(x0, 0.25 / PAGE_H, literal(day.protocol.name), fontsize=7, color="#555555")
+    fig.text(x0, 0.25 / PAGE_H, literal(name), fontsize=7, color="#555555")
     fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
              fontsize=7, color="#555555", ha="right")
 
@@ -842,7 +852,7 @@ def _write_part(day: DayResult, plan: list[Page], pages: list[int], path: Path) 
     with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:
         for i in pages:
             fig = _render(day, plan[i], plan, grids)
-            _decorate(fig, day, plan[i], i + 1, len(plan))
+            _decorate(fig, day.protocol.name, plan[i], i + 1, len(plan))
             pdf.savefig(fig)
 
 
@@ -870,7 +880,7 @@ def _render(
     elif page.kind == "quality":
         _draw_quality(fig, page.payload)
     elif page.kind == "runs":
-        _draw_runs(fig, day, page.payload)
+        _draw_runs(fig, day.runs, day.protocol, page.payload)
     elif page.kind == "fin_runs":
         _draw_fin_runs(fig, require(day.fin_result, "fin"), page.payload)
     return fig
@@ -886,15 +896,16 @@ _STATUS_FILL = {"rejected": "#f4cccc", "void": "#e6e6e6"}
 REF_AREA_LABEL = {"frontal": "A", "lateral": "A_lat", "fin": "c·s"}
 
 
-def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
+def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: list[int]
+               ) -> None:
     """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
     tare-corrected steady drag and its coefficient on the area its test uses (named in its own
     column); rejected and void runs shaded; a blank acceleration explained below."""
-    runs = day.runs.set_index("run", drop=False)
+    runs = table.set_index("run", drop=False)
     y = PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
               r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
-    blank, accel_note = missing_accel_note(day.runs, day.protocol.processing, run_ids)
+    blank, accel_note = missing_accel_note(table, protocol.processing, run_ids)
     rows, fill = [], {}
     for i, run in enumerate(run_ids):
         r = runs.loc[run]
@@ -924,7 +935,7 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
                                "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
                                "lateral area (transverse tows at α = 90°, the C_D,90 of "
                                "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
-                               f"each run's {_medium_word(day.protocol.water)} temperature. "
+                               f"each run's {_medium_word(protocol.water)} temperature. "
                                "Rejected runs (red) and void runs (grey) with their reasons: "
                                "Quality page and runs.csv.",
                                fontsize=7.5)
