@@ -287,10 +287,10 @@ def test_air_day_report_text(air_day):
     from towtank.report import pdf
 
     day = process_day(air_day["dir"] / "p.toml", jobs=1)
-    text = pdf._water_text(day)
+    text = pdf._water_text(day.protocol.water, day.runs)
     assert text.startswith("air, ") and "101325 Pa" in text and "50 % relative humidity" in text
     assert "water" not in text
-    assert pdf._medium_label(day) == "Air"
+    assert pdf._medium_label(day.protocol.water) == "Air"
     assert AIR_NOTE in [str(n) for n in day.warnings]
     assert not any("displaced mass" in w and "X_udot" in w for w in map(str, day.warnings))
 

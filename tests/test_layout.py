@@ -67,24 +67,10 @@ INIT_NAMES = {"__version__"}
 
 #: Import circles still there, each as its exact set of modules; the test fails when one of
 #: them grows, shrinks or goes (then take it out of this list), and on any other circle.
-ALLOWED_CIRCLES: list[frozenset[str]] = [
-    # part A, issue #24: report's modules (figures, pdf, workbook, outputs... and the package)
-    frozenset({"towtank.report", "towtank.report.figure_base", "towtank.report.figures",
-               "towtank.report.outputs", "towtank.report.pdf", "towtank.report.quality",
-               "towtank.report.tare_figure", "towtank.report.vehicle",
-               "towtank.report.workbook"}),
-]
+ALLOWED_CIRCLES: list[frozenset[str]] = []
 
 #: Cross-module imports of a ``_private`` name still there: (importer, module, name).
-ALLOWED_PRIVATE: set[tuple[str, str, str]] = {
-    # part A, issue #24: report's figure helpers
-    ("towtank.report.pdf", "towtank.report.vehicle", "_predicted_rows"),
-    ("towtank.report.tare_figure", "towtank.report.figure_base", "_layout"),
-    ("towtank.report.tare_figure", "towtank.report.figure_base", "_new_figure"),
-    ("towtank.report.vehicle", "towtank.report.figure_base", "_fmt"),
-    ("towtank.report.vehicle", "towtank.report.figure_base", "_layout"),
-    ("towtank.report.vehicle", "towtank.report.figure_base", "_new_figure"),
-}
+ALLOWED_PRIVATE: set[tuple[str, str, str]] = set()
 
 
 # --------------------------------------------------------------------------------- checkers

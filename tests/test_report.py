@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from pypdf import PdfReader
 
 from towtank.pipeline import process_day
-from towtank.report import figures, pdf, provenance, style, workbook, write_outputs
+from towtank.report import figure_base, figures, pdf, provenance, style, workbook, write_outputs
 from towtank.testing import synthetic
 
 REPORT_DATE = "2024-05-21"
@@ -195,7 +195,7 @@ def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
     n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
     n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
-    if day.fin_result is not None and not pdf.fin_runs_fit(day):
+    if day.fin_result is not None and not pdf.fin_runs_fit(day.fin_result):
         n_runs += math.ceil(len(day.fin_result.table) / pdf.RUNS_PER_PAGE)
     n_figs += len(pdf.vehicle_pages(day))  # with a [vehicle]: measured beside predicted
     return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
@@ -291,7 +291,7 @@ def test_figures_written(days):
 def test_damping_figure_draws_the_stored_fit(days):
     day, _ = days["hull"]
     dm = day.hull.fit.damping
-    fig = figures.fig_damping(day)
+    fig = figures.fig_damping(day.hull)
     ax = fig.axes[0]
     line = next(ln for ln in ax.get_lines() if ln.get_label().startswith("fit"))
     a = np.radians(line.get_xdata())
@@ -299,7 +299,7 @@ def test_damping_figure_draws_the_stored_fit(days):
     # change the stored parameters: the figure follows them (nothing is refitted)
     moved = copy.deepcopy(day)
     moved.hull.fit.damping.params = dm.params + np.array([0.0, 0.0, 0.01])
-    line2 = next(ln for ln in figures.fig_damping(moved).axes[0].get_lines()
+    line2 = next(ln for ln in figures.fig_damping(moved.hull).axes[0].get_lines()
                  if ln.get_label().startswith("fit"))
     np.testing.assert_allclose(line2.get_ydata(), line.get_ydata() + 0.01)
 
@@ -379,9 +379,9 @@ def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
 
 
 def test_math_symbol():
-    assert figures.math_symbol("X_udot") == r"$X_{\dot u}$"
-    assert figures.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
-    assert figures.sci(2.7e5) == "2.7×10⁵"
+    assert figure_base.math_symbol("X_udot") == r"$X_{\dot u}$"
+    assert figure_base.math_symbol("Y_v|v|") == "$Y_{v|v|}$"
+    assert figure_base.sci(2.7e5) == "2.7×10⁵"
     assert Path(pdf.__file__).name == "pdf.py"
 
 
@@ -433,7 +433,8 @@ def test_runs_table_says_why_an_acceleration_is_blank(days):
     ok = day.runs[day.runs.status == "ok"]
     expected = [int(r) for r in ok.loc[ok.accel_mean.isna(), "run"]]
     assert expected, "the synthetic day has slow runs whose ramp is too short"
-    blank, note = missing_accel_note(day, [int(r) for r in day.runs.run])
+    blank, note = missing_accel_note(day.runs, day.protocol.processing,
+                                     [int(r) for r in day.runs.run])
     assert blank == expected
     assert "no constant-acceleration stretch" in note and "U/a" in note
     text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages

@@ -23,7 +23,7 @@ from towtank.report import figure_base, figures, pdf
 from towtank.report.manoeuvre_figure import manoeuvre_figure, wrapped_heading
 from towtank.report.tare_figure import fig_tare, tare_caption
 from towtank.report.vehicle import fig_predicted
-from towtank.stats.quantiles import normal_quantile
+from towtank.stats.quantiles import normal_quantile, t95
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -52,13 +52,13 @@ def test_tare_caption_gives_both_channels_coefficients_and_the_legend_the_band(h
     day = hull_day.result
     model = next(iter(day.tares.values()))
     assert model.lift is not None  # the synthetic sting measures lift too
-    text = tare_caption(day)
+    text = tare_caption(day.tare)
     for channel in ("drag", "lift"):
         fit = getattr(model, channel)
         assert f"{channel.capitalize()}, group" in text
         for name, value in zip(("t2", "t1", "m_t"), fit.coef, strict=True):
             assert f"{name} = {float(value):.4g}" in text, (channel, name)
-    fig = fig_tare(day)
+    fig = fig_tare(day.tare, day.runs)
     axes = [ax for ax in fig.axes if ax.get_title() in ("Drag", "Lift")]
     assert len(axes) == 2
     for ax in axes:
@@ -68,7 +68,7 @@ def test_tare_caption_gives_both_channels_coefficients_and_the_legend_the_band(h
         # the band is the fit's own: ± t95(dof)·s.e. of the curve at a = 0
         xs, ys = band.get_paths()[0].vertices.T
         centre = fit(xs, np.zeros_like(xs))
-        half = figure_base.t95(fit.dof) * fit.std_error(xs, np.zeros_like(xs))
+        half = t95(fit.dof) * fit.std_error(xs, np.zeros_like(xs))
         assert half.max() > 0
         np.testing.assert_allclose(np.abs(ys - centre), half, rtol=1e-6, atol=1e-12)
 
@@ -86,10 +86,11 @@ def test_data_under_legend_sees_a_legend_on_a_curve():
     assert figure_base.data_under_legend(ax, leg) == 0
 
 
-@pytest.mark.parametrize("func", [fig_tare, figures.fig_added_mass, figures.fig_damping,
-                                  figures.fig_scaling])
-def test_no_legend_covers_data(hull_day, func):
-    fig = func(hull_day.result, page=True)
+@pytest.mark.parametrize("name", ["tare", "added_mass", "damping", "scaling"])
+def test_no_legend_covers_data(hull_day, name):
+    # each figure bound to the day's results as the report draws it
+    (func,) = [f for n, _, f in figures.available_figures(hull_day.result) if n == name]
+    fig = func(page=True)
     legends = 0
     renderer = figure_base._renderer(fig)
     for ax in fig.axes:
@@ -97,7 +98,7 @@ def test_no_legend_covers_data(hull_day, func):
             continue
         legends += 1
         covered = figure_base.data_under_legend(ax, renderer=renderer)
-        assert covered == 0, (func.__name__, ax.get_title(), covered)
+        assert covered == 0, (name, ax.get_title(), covered)
         # ... and it stays inside its axes
         box = ax.get_legend().get_window_extent(renderer)
         frame = ax.get_window_extent(renderer)
@@ -111,11 +112,38 @@ def test_scaling_legend_names_the_recommended_resistance(hull_day):
     # total resistance a comparison (scaling.csv's `recommended`)
     day = hull_day.result
     assert set(day.scaling_result.table["recommended"]) == {"drag_ittc57"}
-    fig = figures.fig_scaling(day, page=True)
+    fig = figures.fig_scaling(day.scaling_result, day.runs, day.protocol, page=True)
     texts = _legend_texts(fig.axes[1])
     assert any("ITTC-57" in t and "(recommended)" in t for t in texts), texts
     assert any("Froude" in t and "comparison only" in t for t in texts), texts
     assert not any("Froude" in t and "(recommended)" in t for t in texts), texts
+
+
+# ------------------------------------------------------------ the result drawn, not the day
+def _drawn(fig: Figure) -> list[str]:
+    """Every axes' title and line data of a figure (repr: NaN compares equal)."""
+    return [repr((ax.get_title(), [ln.get_xydata().tolist() for ln in ax.get_lines()]))
+            for ax in fig.axes]
+
+
+def test_the_hull_figures_draw_the_hull_result_and_still_take_a_day(hull_day):
+    day = hull_day.result
+    alpha_max = day.protocol.processing.damping_alpha_max_deg
+    damping = figures.fig_damping(day.hull, alpha_max)
+    assert _drawn(damping) == _drawn(figures.fig_damping(day))  # the older call: the same
+    caption = " ".join(" ".join(t.get_text() for t in damping.texts).split())
+    assert f"|α| ≤ {alpha_max:g}°" in caption
+    added = figures.fig_added_mass(day.hull, day.reductions)
+    assert _drawn(added) == _drawn(figures.fig_added_mass(day))
+    # the samples drawn are those of the reductions given: one run fewer, fewer points
+    am = next(iter(day.hull.fit.added_mass.values()))
+    fewer = {r: red for r, red in day.reductions.items() if r != am.runs[0]}
+    points = sum(len(ln.get_xdata()) for ln in added.axes[0].get_lines())
+    assert sum(len(ln.get_xdata()) for ln in
+               figures.fig_added_mass(day.hull, fewer).axes[0].get_lines()) < points
+    with pytest.raises(TypeError, match="reductions"):
+        figures.fig_added_mass(day.hull)
+    assert figures.fig_added_mass(None, {}) is None and figures.fig_damping(None) is None
 
 
 # ---------------------------------------------------------------------- transverse band
@@ -123,7 +151,7 @@ def test_transverse_panel_draws_the_fits_own_95_percent_interval(hull_day):
     day = hull_day.result
     dm = day.hull.fit.damping
     est = day.hull.fit.estimates["Y_v|v|"]
-    fig = figures.fig_damping(day)
+    fig = figures.fig_damping(day.hull, day.protocol.processing.damping_alpha_max_deg)
     (ax,) = [a for a in fig.axes if a.get_title().startswith("Transverse")]
     (band,) = _bands(ax)
     y = band.get_paths()[0].vertices[:, 1]
@@ -131,13 +159,13 @@ def test_transverse_panel_draws_the_fits_own_95_percent_interval(hull_day):
     assert 0.5 * (y.max() + y.min()) == pytest.approx(dm.cd90)
     # Student's t at the estimate's own degrees of freedom, the same relative width as Y_v|v|'s
     assert math.isfinite(est.dof)
-    assert half == pytest.approx(figure_base.t95(est.dof) * dm.cd90_se, rel=1e-9)
+    assert half == pytest.approx(t95(est.dof) * dm.cd90_se, rel=1e-9)
     assert half / dm.cd90 == pytest.approx((est.ci_high - est.value) / abs(est.value), rel=1e-6)
     assert half != pytest.approx(normal_quantile() * dm.cd90_se, rel=1e-3)
     assert any("95 % interval" in t for t in _legend_texts(ax))
     lo, hi = ax.get_ylim()
     assert 2 * half / (hi - lo) > 0.03  # the band is a visible part of the axis
-    assert "1.96" not in figures.damping_caption(day)
+    assert "1.96" not in figures.damping_caption(day.protocol.processing.damping_alpha_max_deg)
 
 
 # ------------------------------------------------------------------------- thumbnails
@@ -160,7 +188,7 @@ def test_thumbnails_label_both_axes_and_share_the_zero_line(hull_day):
     assert "[m/s]" in ax.get_ylabel() and "[N]" in twin.get_ylabel()
     assert figure_base.zero_fraction(ax) == pytest.approx(figure_base.zero_fraction(twin))
     grid = pdf.ThumbGrid()
-    runs = pdf.thumbnail_runs(day)[:pdf.THUMBS_PER_PAGE]
+    runs = pdf.thumbnail_runs(day.runs, day.reductions, day.previews)[:pdf.THUMBS_PER_PAGE]
     grid.draw(day, runs)
     drawn = 0
     for ax, twin in grid.cells:
@@ -182,7 +210,7 @@ def test_predicted_vs_measured_is_a_page_of_the_report(hull_day, tmp_path):
     pages = pdf.page_plan(moved)
     assert [p.section for p in pages].count("Vehicle") == 1
     assert len(pages) == len(pdf.page_plan(day)) + 1
-    fig = fig_predicted(moved, page=True)
+    fig = fig_predicted(moved.coefficients, page=True)
     (ax,) = fig.axes
     n = int(np.isfinite(moved.hull.coefficients["predicted"]).sum())
     assert len(ax.get_yticks()) == n and ax.get_xlabel()

@@ -767,8 +767,10 @@ def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
     figs: dict[str, str] = {}
     if day is None:
         return figs
-    for key, make in (("damping", rf.fig_damping), ("added_mass", rf.fig_added_mass)):
-        fig = make(day)
+    drawn = (("damping", rf.fig_damping(
+                 day.hull, day.protocol.processing.damping_alpha_max_deg)),
+             ("added_mass", rf.fig_added_mass(day.hull, day.reductions)))
+    for key, fig in drawn:
         if fig is not None:
             figs[key] = save_figure(fig, live_dir, f"{key}.png")
     return figs

@@ -37,8 +37,15 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import h5py
 import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+from scipy.io import savemat
 
+from towtank.reduce.run import apply_tare, reduce_record
+from towtank.runtime.storage import os_error
 from towtank.signal.phases import PHASE_NAMES
 
 if TYPE_CHECKING:
@@ -65,8 +72,6 @@ def conditioned_runs(day: DayResult) -> Iterator[tuple[int, RunReduction | None,
     A generator: the caller writes a run's series and lets it go before the next run is read,
     so that only one run's full-rate series is held at once (a day of 42 runs of 20 minutes at
     1 kHz is several GB of them)."""
-    from towtank.reduce.run import apply_tare, reduce_record
-
     protocol = day.protocol
     rows = {int(r["run"]): r for r in day.sheet.to_dict("records")}
     for run in sorted(day.reductions):
@@ -116,8 +121,6 @@ def _metas(day: DayResult) -> dict[int, dict[str, Any]]:
 
 
 def _write_mat(path: Path, series: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
-    from scipy.io import savemat
-
     data: dict[str, Any] = {k: np.asarray(v, dtype=float)[:, None] for k, v in series.items()
                             if k != "phase"}
     data["phase"] = np.asarray(series["phase"], dtype=np.int8)[:, None]
@@ -127,10 +130,6 @@ def _write_mat(path: Path, series: dict[str, np.ndarray], meta: dict[str, Any]) 
 
 
 def _write_parquet(path: Path, series: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
-    import pyarrow as pa
-    import pyarrow.compute as pc
-    import pyarrow.parquet as pq
-
     # the system's allocator, not pyarrow's default (mimalloc), which keeps what a run freed
     # cached for the next: tens of MB more of this process's memory than a run needs
     pool = pa.system_memory_pool()
@@ -233,8 +232,6 @@ class _Hdf5Export:
     cleanly (:class:`_NeverFailingFile`)."""
 
     def __init__(self, path: Path, campaign: str) -> None:
-        import h5py
-
         self.path = path
         self.sink = _NeverFailingFile(path)
         try:
@@ -265,8 +262,6 @@ class _Hdf5Export:
         finally:
             self.sink.close()
         if self.sink.error is not None:
-            from towtank.runtime.storage import os_error
-
             code = self.sink.error.errno or errno.EIO
             raise os_error(code, self.path) from self.sink.error
 

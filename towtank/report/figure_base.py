@@ -12,11 +12,12 @@ from collections.abc import Callable
 from typing import Any
 
 import matplotlib as mpl
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PathCollection
 from matplotlib.figure import Figure
 
-from towtank.report import style
+import towtank.report.style as style
 from towtank.report.safetext import clean_text
-from towtank.stats.quantiles import normal_quantile, t95  # noqa: F401  (the figures')
 
 PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]
@@ -111,17 +112,52 @@ def math_text(text: str) -> str:
     return _MATH_RE.sub(lambda m: table[m.group(1)], literal(text))
 
 
-def _new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Figure:
+def new_figure(page: bool, size: tuple[float, float] = style.FIGURE_SIZE) -> Figure:
+    """An empty report figure: an A4 page (:data:`towtank.report.style.PAGE_SIZE`) or ``size``.
+
+    Parameters
+    ----------
+    page : bool
+        Make it an A4 report page.
+    size : tuple of float
+        (width, height) of a figure that is not a page [in].
+    """
     return Figure(figsize=style.PAGE_SIZE if page else size)
 
 
-def _layout(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text: str,
+def figure_grid(fig: Figure, nrows: int, ncols: int, *, page: bool, title: str, text: str,
             top_in: float = 0.8, xlabel_in: float = 0.5, left: float = 0.1,
             right: float = 0.95, **kw: Any) -> Any:
     """Title, caption and a GridSpec between them, with margins in inches.
 
     A page figure keeps room for the PDF page's header and footer; the caption's height is
     known from its wrapped line count, so the axes end just above it.
+
+    Parameters
+    ----------
+    fig : Figure
+        The figure (from :func:`new_figure`).
+    nrows, ncols : int
+        The grid's rows and columns.
+    page : bool
+        Keep room for the PDF page's header (:data:`PAGE_HEADER_IN`) and footer
+        (:data:`PAGE_FOOTER_IN`).
+    title : str
+        Bold title at the top.
+    text : str
+        Caption under the axes (wrapped by :func:`wrap_caption`).
+    top_in : float
+        Room between the top (below the page header) and the axes [in].
+    xlabel_in : float
+        Room between the caption and the axes for the x labels [in].
+    left, right : float
+        The grid's left and right edges [figure fraction].
+    **kw
+        Passed on to :meth:`~matplotlib.figure.Figure.add_gridspec` (``hspace``, ...).
+
+    Returns
+    -------
+    GridSpec
     """
     h = fig.get_size_inches()[1]
     header = PAGE_HEADER_IN if page else 0.0
@@ -144,18 +180,45 @@ def wrap_caption(text: str, width: int = CAPTION_CHARS) -> str:
     return math_text("\n".join(paras))
 
 
-def _fmt(x: float, digits: int = 4) -> str:
-    """A number for a label: ``digits`` significant digits, a true minus sign, '–' for NaN."""
+def fmt_number(x: float, digits: int = 4) -> str:
+    """A number for a label: ``digits`` significant digits, a true minus sign, '–' for NaN.
+
+    Parameters
+    ----------
+    x : float
+        The number (None or not finite gives '–').
+    digits : int
+        Significant digits.
+    """
     if x is None or not math.isfinite(float(x)):
         return "–"
     return f"{float(x):.{digits}g}".replace("-", "\u2212")
 
 
+def sci(x: float, digits: int = 2) -> str:
+    """A positive number in scientific notation with Unicode superscripts: 2.7e5 → 2.7×10⁵.
+
+    Plain text, not mathtext: cheap to lay out and found by a PDF text search.
+
+    Parameters
+    ----------
+    x : float
+        The number.
+    digits : int
+        Significant digits.
+    """
+    x = float(x)
+    if not math.isfinite(x) or x <= 0:
+        return fmt_number(x)
+    m, _, e = f"{x:.{digits}g}".partition("e")
+    if not e:
+        return m
+    return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
+
+
 # ------------------------------------------------------------------------- legends and axes
 def _renderer(fig: Figure) -> Any:
     """A renderer of ``fig`` to measure text and legend boxes (an Agg canvas if it has none)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
     return canvas.get_renderer()
 
@@ -175,8 +238,6 @@ def data_under_legend(ax: Any, legend: Any = None, renderer: Any = None) -> int:
     renderer : optional
         A renderer of the axes' figure (made when not given).
     """
-    from matplotlib.collections import PathCollection
-
     leg = legend if legend is not None else ax.get_legend()
     if leg is None:
         return 0

@@ -1,7 +1,10 @@
 """The report's figures, drawn only from what the day's stages computed.
 
-Each ``fig_*`` function takes the :class:`~towtank.results.DayResult` and returns a
-:class:`matplotlib.figure.Figure` (or None when the day has no data for it). Nothing is fitted
+Each ``fig_*`` function takes the result it draws (a :class:`~towtank.results.HullResult`,
+:class:`~towtank.results.FinResult`, :class:`~towtank.results.ScalingResult`,
+:class:`~towtank.results.TareResult`, with the run table or the run reductions where it draws
+those too) and returns a :class:`matplotlib.figure.Figure` (or None when there is no data for
+it); :func:`available_figures` binds each to the results of a day. Nothing is fitted
 here: fit lines come from the stored parameters (``DampingFit.params``/``cov``, the
 curve-difference quadratics of :class:`~towtank.analysis.hull.AddedMassFit`, the resistance curve of
 :class:`~towtank.results.ScalingResult`), and reference curves are given functions evaluated on
@@ -30,7 +33,8 @@ from __future__ import annotations
 import math
 import textwrap
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -40,45 +44,41 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from towtank.report import figure_base as _base
-from towtank.report import style
+import towtank.report.style as style
+from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
+from towtank.report.figure_base import (
+    PAGE_HEADER_IN,
+    align_zero,
+    figure_grid,
+    fmt_number,
+    literal,
+    math_symbol,
+    math_text,
+    new_figure,
+    place_legend,
+    sci,
+    styled,
+)
 from towtank.report.tare_figure import fig_tare
+from towtank.stats.quantiles import normal_quantile, t95
 
 if TYPE_CHECKING:  # towtank.results loads pandas, which `towtank inspect --png` never needs
     import pandas as pd
     from matplotlib.axes import Axes
 
+    from towtank.ingest.protocol_types import Protocol
     from towtank.reduce.run import RunReduction
-    from towtank.results import DayResult, FinResult, ScalingResult
-
-# the figures' shared basics, also reached as figures.<name> by the PDF and the tests
-_E_NUMBER = _base._E_NUMBER
-_HYPHEN_MINUS = _base._HYPHEN_MINUS
-_MATH_RE = _base._MATH_RE
-_MATH_TOKENS = _base._MATH_TOKENS
-_SUPERSCRIPT = _base._SUPERSCRIPT
-CAPTION_CHARS = _base.CAPTION_CHARS
-CAPTION_LINE_IN = _base.CAPTION_LINE_IN
-PAGE_FOOTER_IN = _base.PAGE_FOOTER_IN
-PAGE_HEADER_IN = _base.PAGE_HEADER_IN
-_fmt = _base._fmt
-_layout = _base._layout
-_new_figure = _base._new_figure
-literal = _base.literal
-math_symbol = _base.math_symbol
-math_text = _base.math_text
-styled = _base.styled
-t95 = _base.t95
-normal_quantile = _base.normal_quantile
-true_minus = _base.true_minus
-wrap_caption = _base.wrap_caption
-place_legend = _base.place_legend
-data_under_legend = _base.data_under_legend
-align_zero = _base.align_zero
+    from towtank.results import DayResult, FinResult, HullResult, ScalingResult
 
 
-def _hull_fit(day: DayResult) -> Any:
-    return day.hull.fit if day.hull is not None else None
+
+def _hull_of(hull: HullResult | DayResult | None) -> tuple[HullResult | None, DayResult | None]:
+    """``hull`` as (the hull result, the day it came from): a day given in its place (the
+    older call ``fig_damping(day)``) gives its ``hull``."""
+    if hasattr(hull, "reductions"):  # a DayResult (not imported here: it loads pandas)
+        day = cast("DayResult", hull)
+        return day.hull, day
+    return hull, None
 
 
 # ----------------------------------------------------------------------- (a) added mass
@@ -96,7 +96,9 @@ ADDED_MASS_CAPTION = (
 
 
 @styled
-def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_added_mass(hull: HullResult | DayResult | None,
+                   reductions: Mapping[int, RunReduction] | None = None, *,
+                   page: bool = False) -> Figure | None:
     """Drag against speed at each acceleration, with the steady curve and their difference.
 
     Columns: α = 0 (X_udot) and α = 90° (Y_vdot), those the day has. Top row: the
@@ -107,32 +109,42 @@ def fig_added_mass(day: DayResult, *, page: bool = False) -> Figure | None:
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    hull : HullResult
+        The hull result drawn (``day.hull``); a whole day is taken too (its ``hull`` and
+        ``reductions``).
+    reductions : mapping of int to RunReduction
+        The reduced runs by run number (``day.reductions``), whose samples are drawn; needed
+        with a HullResult.
     page : bool
         Lay the figure out as an A4 report page (room for header and footer).
     """
-    hf = _hull_fit(day)
+    result, day = _hull_of(hull)
+    if day is not None and reductions is None:
+        reductions = day.reductions
+    hf = result.fit if result is not None else None
     fits = [hf.added_mass[s] for s in ANGLE_OF if hf is not None and s in hf.added_mass]
     if not fits:
         return None
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
-                 height_ratios=[1.35, 1.0],
-                 title="Added mass: balance drag against speed at each acceleration",
-                 text=ADDED_MASS_CAPTION)
+    if reductions is None:
+        raise TypeError("fig_added_mass(hull, reductions): the runs' reductions are needed "
+                        "to draw their samples")
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, len(fits), page=page, hspace=0.4, wspace=0.28,
+                     height_ratios=[1.35, 1.0],
+                     title="Added mass: balance drag against speed at each acceleration",
+                     text=ADDED_MASS_CAPTION)
     for col, am in enumerate(fits):
-        _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]), day, am)
+        _added_mass_column(fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col]),
+                           reductions, am)
     return fig
 
 
-def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
-    from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
-
+def _added_mass_column(ax: Axes, ax_d: Axes, reductions: Mapping[int, RunReduction],
+                       am: Any) -> None:
     cd = am.curve_difference
     levels = cd.levels
     q = cd.steady_quadratic
-    parts = [day.reductions[r].samples for r in am.runs if r in day.reductions]
+    parts = [reductions[r].samples for r in am.runs if r in reductions]
     s = {k: np.concatenate([p[k] for p in parts]) for k in ("phase", "U", "a", "drag")}
     st = s["phase"] == PHASE_STEADY
     acc = s["phase"] == PHASE_ACCEL
@@ -169,7 +181,7 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
         handles.append(Line2D([], [], color="black", ls="--", label="steady $D_s(U)$"))
     angle = ANGLE_OF.get(am.symbol, math.nan)
     est = am.estimate
-    ax.set_title(rf"$\alpha$ = {angle:g}°: {math_symbol(am.symbol)} = {_fmt(est.value)} kg")
+    ax.set_title(rf"$\alpha$ = {angle:g}°: {math_symbol(am.symbol)} = {fmt_number(est.value)} kg")
     ax.set_xlabel(r"Speed $U$ [m/s]")
     ax.set_ylabel(r"Drag $D$ [N]")
     ax.set_xlim(left=0)
@@ -183,10 +195,11 @@ def _added_mass_column(ax: Axes, ax_d: Axes, day: DayResult, am: Any) -> None:
     ax_d.set_ylim(0, dmax * 1.15 if dmax > 0 else 1.0)
     alt = est.alt_value if math.isfinite(est.alt_value) else math.nan
     title = "\n".join([
-        f"joint regression: {_fmt(est.value)} kg [{_fmt(est.ci_low)}, {_fmt(est.ci_high)}]",
-        f"curve difference: {_fmt(alt)} kg" + (
+        f"joint regression: {fmt_number(est.value)} kg "
+        f"[{fmt_number(est.ci_low)}, {fmt_number(est.ci_high)}]",
+        f"curve difference: {fmt_number(alt)} kg" + (
             f" ({est.agreement.verdict})" if est.agreement is not None else ""),
-        math_text(f"m = {_fmt(am.mass)} kg, m − {am.symbol} = {_fmt(am.M)} kg"),
+        math_text(f"m = {fmt_number(am.mass)} kg, m − {am.symbol} = {fmt_number(am.M)} kg"),
     ])
     place_legend(ax_d, [Line2D([], [], color="#555555", lw=1.5, label=r"$D_a - D_s$"),
                         Line2D([], [], color="#555555", ls=":",
@@ -222,11 +235,19 @@ def cd_alpha_curve(params: np.ndarray, cov: np.ndarray, dof: int,
     return mean, t95(dof) * np.sqrt(np.maximum(var, 0.0))
 
 
-def damping_caption(day: DayResult) -> str:
-    """Caption of :func:`fig_damping`."""
+def damping_caption(alpha_max_deg: float | None) -> str:
+    """Caption of :func:`fig_damping`.
+
+    Parameters
+    ----------
+    alpha_max_deg : float or None
+        The largest |α| of the damping fit, the protocol's ``damping_alpha_max_deg`` [deg]
+        (None: not stated).
+    """
+    limit = (f"with |α| ≤ {alpha_max_deg:g}° " if alpha_max_deg is not None
+             else "in the damping fit's angle range ")
     return (
-        "C_D = R/(½ρAU²) of each steady hull run with |α| ≤ "
-        f"{day.protocol.processing.damping_alpha_max_deg:g}° (A the frontal area), coloured by "
+        f"C_D = R/(½ρAU²) of each steady hull run {limit}(A the frontal area), coloured by "
         "speed; the line is the stored quadratic fit C_D(α) = aα² + bα + c (α in rad) and the "
         "band its 95 % confidence interval from the fit's covariance. X_u|u| = −½ρA·c, "
         "X_uv = −½ρA·b, X_v|v| = −½ρA·(a − c/2), Y_uv = −½ρA·c. Runs circled in red are "
@@ -238,28 +259,36 @@ def damping_caption(day: DayResult) -> str:
 
 
 @styled
-def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_damping(hull: HullResult | DayResult | None, alpha_max_deg: float | None = None, *,
+                page: bool = False) -> Figure | None:
     """C_D against α with the stored quadratic fit and its 95 % band (report Fig. 13).
 
     Below: the fit's studentized residuals per run, and the transverse runs' C_D,90.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    hull : HullResult
+        The hull result drawn (``day.hull``); a whole day is taken too (its ``hull`` and
+        its protocol's ``damping_alpha_max_deg``).
+    alpha_max_deg : float, optional
+        The largest |α| of the damping fit, ``[processing] damping_alpha_max_deg`` [deg],
+        stated in the caption.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    hf = _hull_fit(day)
-    dm = hf.damping if hf is not None else None
-    if dm is None:
+    result, day = _hull_of(hull)
+    if day is not None and alpha_max_deg is None:
+        alpha_max_deg = day.protocol.processing.damping_alpha_max_deg
+    hf = result.fit if result is not None else None
+    if hf is None or hf.damping is None:
         return None
+    dm = hf.damping
     runs = dm.runs
     has_90 = dm.transverse_runs is not None and len(dm.transverse_runs) > 0
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
-                 right=0.93, title="Damping: drag coefficient against angle of attack",
-                 text=damping_caption(day))
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.32, height_ratios=[1.5, 1.0],
+                     right=0.93, title="Damping: drag coefficient against angle of attack",
+                     text=damping_caption(alpha_max_deg))
     ax = fig.add_subplot(gs[0, :])
     angles = runs["angle_deg"].to_numpy(float)
     lo, hi = float(np.min(angles)), float(np.max(angles))
@@ -269,7 +298,7 @@ def fig_damping(day: DayResult, *, page: bool = False) -> Figure | None:
     se = np.sqrt(np.maximum(np.diag(dm.cov), 0.0))
     fit_label = "\n".join(
         [r"fit $C_D = a\,\alpha^2 + b\,\alpha + c$ ($\alpha$ in rad):"]
-        + [f"{n} = {_fmt(v, 5)} ± {_fmt(e, 2)} (s.e.)"
+        + [f"{n} = {fmt_number(v, 5)} ± {fmt_number(e, 2)} (s.e.)"
            for n, v, e in zip("abc", dm.params, se, strict=True)]
         + [f"{len(runs)} runs, {dm.dof} residual d.o.f."]
     )
@@ -351,12 +380,12 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
     ax.plot(tr["speed"], tr["cd90"], "o", color=style.PALETTE[1], ms=4.5, zorder=4,
             label="transverse runs")
     ax.axhline(cd90, color=style.FIT_COLOR, lw=1.0, zorder=3,
-               label=rf"$C_{{D,90}}$ = {_fmt(cd90)} (OLS of $R$ on $U|U|$)")
+               label=rf"$C_{{D,90}}$ = {fmt_number(cd90)} (OLS of $R$ on $U|U|$)")
     if half > 0:
         nu = f", ν = {dof:.3g}" if math.isfinite(dof) else ""
         ax.fill_between([0.0, xmax], cd90 - half, cd90 + half, color=style.BAND_COLOR,
                         alpha=0.8, lw=0, zorder=1,
-                        label=f"95 % interval ± {_fmt(half, 2)} (Student's t{nu})")
+                        label=f"95 % interval ± {fmt_number(half, 2)} (Student's t{nu})")
         for edge in (cd90 - half, cd90 + half):
             ax.axhline(edge, color=style.FIT_COLOR, lw=0.6, ls="--", zorder=2)
     ax.set_xlim(0, xmax)
@@ -398,13 +427,13 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
     cmap = mpl.colormaps["tab10" if len(angles) <= 10 else "tab20"]
     colors = {a: cmap(i % cmap.N) for i, a in enumerate(angles)}
     markers = {a: "osD^vP*Xh<>p"[i % 12] for i, a in enumerate(angles)}
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 1, page=page, hspace=0.32, right=0.84,
-                 title="Fin forces against carriage speed at each angle of attack",
-                 text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
-                 "Each line joins the runs at one angle of attack α. The drag axis is "
-                 "logarithmic when the drags span more than a factor of 30, so that the small "
-                 "drags of the low angles stay apart.")
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 1, page=page, hspace=0.32, right=0.84,
+                     title="Fin forces against carriage speed at each angle of attack",
+                     text="Steady-phase means of the fin runs, zero, drift and sting tare removed. "
+                     "Each line joins the runs at one angle of attack α. The drag axis is "
+                     "logarithmic when the drags span more than a factor of 30, so that the small "
+                     "drags of the low angles stay apart.")
     axes = [fig.add_subplot(gs[i, 0]) for i in range(2)]
     for col, ax, name in (("drag_mean", axes[0], "Drag"), ("lift_mean", axes[1], "Lift")):
         for a in angles:
@@ -430,6 +459,8 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
 def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
                     e: float) -> tuple[np.ndarray, ...]:
     """Sandia 2-D and lifting-line curves of one Re on an angle grid (evaluation only)."""
+    # start-up saving: `towtank inspect --png` draws a run with this module and never a fin
+    # figure; analysis.fins and reference.sandia load pandas (+0.2 s measured)
     from towtank.analysis import fins
     from towtank.reference import sandia
 
@@ -473,7 +504,7 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
     amin = min(0.0, float(tab["angle_deg"].min()) - 2.0)
     amax = min(180.0, float(tab["angle_deg"].max()) + 5.0)
     grid = np.linspace(amin, amax, int(round((amax - amin) / 0.25)) + 1)
-    fig = _new_figure(page)
+    fig = new_figure(page)
     text = (
         "C_L = L/(½ρSU²), C_D = D/(½ρSU²) on the planform S = chord × span, Re on the chord. "
         "Solid: two-dimensional NACA 0015 data of Sheldahl & Klimas (1981, SAND80-2114) "
@@ -484,8 +515,8 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
         "effective angle reaches the section's stall."
     )
     n_rows = math.ceil(len(groups) / 4)
-    gs = _layout(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
-                 title="Fin lift and drag coefficients against angle of attack", text=text)
+    gs = figure_grid(fig, 2, 1, page=page, hspace=0.3, top_in=1.2 + 0.17 * n_rows,
+                     title="Fin lift and drag coefficients against angle of attack", text=text)
     ax_l, ax_d = fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[1, 0])
     group_handles = []
     for i, (g, re_g) in enumerate(groups):
@@ -526,27 +557,6 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
 # ------------------------------------------------------------------------------ (f) scaling
 
 
-def sci(x: float, digits: int = 2) -> str:
-    """A positive number in scientific notation with Unicode superscripts: 2.7e5 → 2.7×10⁵.
-
-    Plain text, not mathtext: cheap to lay out and found by a PDF text search.
-
-    Parameters
-    ----------
-    x : float
-        The number.
-    digits : int
-        Significant digits.
-    """
-    x = float(x)
-    if not math.isfinite(x) or x <= 0:
-        return _fmt(x)
-    m, _, e = f"{x:.{digits}g}".partition("e")
-    if not e:
-        return m
-    return f"{m}×10" + str(int(e)).translate(_SUPERSCRIPT)
-
-
 def scaling_caption(sr: ScalingResult) -> str:
     """Caption of :func:`fig_scaling`, from the scaling result it draws."""
     k2, k1 = sr.resistance
@@ -565,29 +575,35 @@ def scaling_caption(sr: ScalingResult) -> str:
 
 
 @styled
-def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_scaling(scaling: ScalingResult | None, runs: pd.DataFrame, protocol: Protocol, *,
+                page: bool = False) -> Figure | None:
     """Model resistance, prototype resistance (Froude and ITTC-57) and the Re ranges.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    scaling : ScalingResult
+        The scaling result drawn (``day.scaling_result``).
+    runs : DataFrame
+        runs.csv's table (``day.runs``): the steady zero-angle hull runs are drawn with the
+        resistance curve, and the Re range of the hull runs.
+    protocol : Protocol
+        The day's protocol: the model's medium, the prototype's and ``[processing]
+        damping_alpha_max_deg`` (the hull runs whose Re range is shown).
     page : bool
         Lay the figure out as an A4 report page.
     """
-    sr = day.scaling_result
+    sr = scaling
     if sr is None:
         return None
     tab = sr.table
-    runs = day.runs
     ok_hull = runs[(runs["config"] == "hull") & (runs["status"] == "ok")]
     zero = ok_hull[np.abs(ok_hull["angle_deg"]) <= 0.5]
     k2, k1 = sr.resistance
     lo, hi = sr.tested_speed_range
-    fig = _new_figure(page)
-    gs = _layout(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
-                 title=f"Scaling to the prototype (λ = {sr.scale:g})",
-                 text=scaling_caption(sr))
+    fig = new_figure(page)
+    gs = figure_grid(fig, 2, 2, page=page, hspace=0.42, wspace=0.3, height_ratios=[1.5, 0.8],
+                     title=f"Scaling to the prototype (λ = {sr.scale:g})",
+                     text=scaling_caption(sr))
 
     ax_m = fig.add_subplot(gs[0, 0])
     umax = max(hi, float(tab["speed_model_froude"].max())) * 1.08
@@ -609,7 +625,7 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_m.set_ylim(bottom=0)
     ax_m.set_xlabel(r"Model speed $U_m$ [m/s]")
     ax_m.set_ylabel(r"Model resistance $R_m$ [N]")
-    ax_m.set_title("Model (air)" if day.protocol.water.is_air else "Model (tank water)")
+    ax_m.set_title("Model (air)" if protocol.water.is_air else "Model (tank water)")
     place_legend(ax_m, fontsize=6.8)
 
     ax_p = fig.add_subplot(gs[0, 1])
@@ -630,11 +646,11 @@ def fig_scaling(day: DayResult, *, page: bool = False) -> Figure | None:
     ax_p.set_ylim(bottom=0)
     ax_p.set_xlabel(r"Prototype speed $U_p$ [m/s]")
     ax_p.set_ylabel(r"Prototype resistance $R_p$ [N]")
-    proto = day.protocol.prototype
+    proto = protocol.prototype
     ax_p.set_title(f"Prototype ({proto.water.medium})" if proto is not None else "Prototype")
     place_legend(ax_p, fontsize=6.8)
 
-    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= day.protocol.processing.damping_alpha_max_deg]
+    near = ok_hull[np.abs(ok_hull["angle_deg"]) <= protocol.processing.damping_alpha_max_deg]
     _reynolds_panel(fig.add_subplot(gs[1, :]), sr, near["re"])
     return fig
 
@@ -892,9 +908,23 @@ FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
 )
 
 
+def _figure_arguments(name: str, day: DayResult) -> tuple[Any, ...]:
+    """What figure ``name`` of :data:`FIGURES` draws, taken from the day."""
+    p = day.protocol
+    return {
+        "tare": lambda: (day.tare, day.runs),
+        "added_mass": lambda: (day.hull, day.reductions),
+        "damping": lambda: (day.hull, p.processing.damping_alpha_max_deg),
+        "fin_forces": lambda: (day.fin_result,),
+        "fin_coefficients": lambda: (day.fin_result,),
+        "scaling": lambda: (day.scaling_result, day.runs, p),
+    }[name]()
+
+
 def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figure | None]]]:
-    """The entries of :data:`FIGURES` the day has data for (without drawing them)."""
-    hf = _hull_fit(day)
+    """The entries of :data:`FIGURES` the day has data for (without drawing them), each
+    function bound to the results it draws: call it with ``page=`` only."""
+    hf = day.hull.fit if day.hull is not None else None
     has = {
         "tare": bool(getattr(day, "tares", None)),
         "added_mass": hf is not None and bool(hf.added_mass),
@@ -903,7 +933,8 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
         "fin_coefficients": day.fin_result is not None and len(day.fin_result.table) > 0,
         "scaling": day.scaling_result is not None,
     }
-    return [f for f in FIGURES if has[f[0]]]
+    return [(name, section, partial(func, *_figure_arguments(name, day)))
+            for name, section, func in FIGURES if has[name]]
 
 
 def write_figures(day: DayResult, folder: str | Path) -> list[Path]:
@@ -926,7 +957,7 @@ def write_figures(day: DayResult, folder: str | Path) -> list[Path]:
     written = []
     with mpl.rc_context(style.rc()):
         for name, _section, func in available_figures(day):
-            fig = func(day)
+            fig = func()
             if fig is None:
                 continue
             path = out / f"{name}.png"

@@ -22,7 +22,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator, MultipleLocator
 
-from towtank.report import style
+import towtank.report.style as style
 from towtank.report.figure_base import place_legend, styled
 
 if TYPE_CHECKING:

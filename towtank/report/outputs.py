@@ -7,13 +7,18 @@ import json
 import os
 import shutil
 import tempfile
+import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import towtank.report.tables as tables
 from towtank.ingest.protocol import OUTPUT_NAMES
+from towtank.report.export import export_runs
 from towtank.report.provenance import provenance
 from towtank.runtime import interrupt, manifest
+from towtank.runtime.parallel import run_beside
 from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
@@ -111,8 +116,6 @@ STALE_TEMPORARY_S = 600.0
 def sweep_stale_temporaries(out_dir: Path, max_age_s: float = STALE_TEMPORARY_S) -> list[Path]:
     """Remove the temporary folders a killed run left beside ``out_dir`` (older than
     ``max_age_s`` [s], so that a run writing at the same time keeps its own); return them."""
-    import time
-
     now = time.time()
     gone = []
     for pattern in (f".{out_dir.name}.tmp-*", f".{out_dir.name}.old-*"):
@@ -206,16 +209,17 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
     manifest.folder_mode(tmp, out_dir if out_dir.is_dir() else None)
     try:
-        from towtank.report import tables
-
         if export:  # first: a run that cannot be exported is a warning of the report
-            from towtank.report.export import export_runs
+            # start-up saving: towtank.results loads the analysis stages, which a day's
+            # writing without an export never needs here
             from towtank.results import notices
 
             day.warnings.extend(n for n in notices(export_runs(day, tmp, tuple(export)),
                                                    "export") if n not in day.warnings)
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
+            # start-up saving: report.vehicle loads matplotlib (+0.32 s measured), which
+            # a day written without its report (report=False) never needs
             from towtank.report.vehicle import write_vehicle
 
             write_vehicle(day, tmp, figure=report)
@@ -267,10 +271,6 @@ def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
     A writer that fails, here or in its process, fails the whole report (the caller then
     writes nothing).
     """
-    from functools import partial
-
-    from towtank.runtime.parallel import run_beside
-
     run_beside([(_writer_name(w), partial(w, day, folder)) for w in writers])
 
 
@@ -284,6 +284,8 @@ def _report_writers() -> list[Writer]:
     The protocol's [report] table may turn the PDF (``pdf = false``) or the PNG figures
     (``figures = false``) off; the workbook is always written.
     """
+    # start-up saving: the report's writers load matplotlib and openpyxl (+0.5 s measured
+    # after report.outputs), which a day written without its report never needs
     from towtank.report.figures import write_figures
     from towtank.report.pdf import write_pdf
     from towtank.report.workbook import write_workbook

@@ -27,29 +27,48 @@ from __future__ import annotations
 import math
 import re
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import matplotlib as mpl
 import numpy as np
+from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
+from pypdf import PdfWriter
 
+import towtank.report.figures as figures
+import towtank.report.quality as _quality
+import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
+from towtank.pipeline import geometry_used
 from towtank.reference.sets import reference_name
-from towtank.report import figures, style
-from towtank.report import quality as _quality
+from towtank.report.figure_base import (
+    PAGE_FOOTER_IN,
+    PAGE_HEADER_IN,
+    literal,
+    math_symbol,
+    math_text,
+    sci,
+    true_minus,
+)
 from towtank.report.provenance import creation_date, report_date
 from towtank.report.tables import missing_accel_note
+from towtank.report.vehicle import fig_predicted, predicted_rows
 from towtank.results import require
+from towtank.runtime.parallel import run_beside
 
 if TYPE_CHECKING:
-    from towtank.results import DayResult
+    import pandas as pd
+
+    from towtank.ingest.protocol_types import Fin, Model, Protocol, Water
+    from towtank.results import DayResult, FinResult, ScalingResult
 
 PAGE_W, PAGE_H = style.PAGE_SIZE
 MARGIN_IN = 0.6  # left and right page margin [in]
@@ -87,27 +106,36 @@ short_reason = _quality.short_reason
 _num = _quality._num
 
 
-def thumbnail_runs(day: DayResult) -> list[int]:
+def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
+                   previews: Mapping[int, Any]) -> list[int]:
     """The runs the appendix draws: all but those a day-wide fault rejected before anything
-    was read (their thumbnails would be empty; the quality page says the fault once)."""
-    skip = {r for g in group_rejections(day.runs) if g.day_wide for r in g.runs
-            if day.previews.get(r) is None}
-    runs = [r for r in day.runs["run"].astype(int) if r not in skip]
-    if skip and not any(r in day.reductions or day.previews.get(r) is not None for r in runs):
+    was read (their thumbnails would be empty; the quality page says the fault once).
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv's table (``day.runs``).
+    reductions, previews : mapping of int
+        The reduced runs and the previews of rejected runs that were read, by run number
+        (``day.reductions``, ``day.previews``).
+    """
+    skip = {r for g in group_rejections(runs) if g.day_wide for r in g.runs
+            if previews.get(r) is None}
+    drawn = [r for r in runs["run"].astype(int) if r not in skip]
+    if skip and not any(r in reductions or previews.get(r) is not None for r in drawn):
         return []  # what is left has nothing to draw either (void runs)
-    return runs
+    return drawn
 
 
 def vehicle_pages(day: DayResult) -> list[Page]:
     """The "Vehicle" page of a day with a [vehicle]: its measured coefficients beside those
     predicted from the geometry (:func:`towtank.report.vehicle.fig_predicted`); none without
     a prediction."""
-    from towtank.report.vehicle import _predicted_rows, fig_predicted
-
-    rows = _predicted_rows(getattr(day, "coefficients", None))
+    rows = predicted_rows(getattr(day, "coefficients", None))
     if rows is None or rows.empty:
         return []
-    return [Page("figure", "Vehicle", ("predicted_vs_measured", fig_predicted))]
+    return [Page("figure", "Vehicle",
+                 ("predicted_vs_measured", partial(fig_predicted, day.coefficients)))]
 
 
 def page_plan(day: DayResult) -> list[Page]:
@@ -117,7 +145,7 @@ def page_plan(day: DayResult) -> list[Page]:
         pages.append(Page("figure", section, (name, func)))
     pages += vehicle_pages(day)
     fr = day.fin_result
-    if fr is not None and len(fr.table) and not fin_runs_fit(day):
+    if fr is not None and len(fr.table) and not fin_runs_fit(fr):
         fin_ids = [int(r) for r in fr.table["run"]]
         for k in range(0, len(fin_ids), RUNS_PER_PAGE):
             chunk = fin_ids[k:k + RUNS_PER_PAGE]
@@ -132,7 +160,7 @@ def page_plan(day: DayResult) -> list[Page]:
     for i, part in enumerate(q):
         pages.append(Page("quality", "Quality", part,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
-    runs = thumbnail_runs(day)
+    runs = thumbnail_runs(day.runs, day.reductions, day.previews)
     for k in range(0, len(runs), THUMBS_PER_PAGE):
         chunk = runs[k:k + THUMBS_PER_PAGE]
         pages.append(Page("thumbs", "Appendix", chunk,
@@ -156,7 +184,7 @@ def _y(inches_from_top: float) -> float:
     return 1 - inches_from_top / PAGE_H
 
 
-def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) -> None:
+def _decorate(fig: Figure, name: str, page: Page, number: int, total: int) -> None:
     """Section header, rule and footer of a page."""
     x0, x1 = MARGIN_IN / PAGE_W, 1 - MARGIN_IN / PAGE_W
     if page.kind != "title":
@@ -167,27 +195,27 @@ def _decorate(fig: Figure, day: DayResult, page: Page, number: int, total: int) 
                      color="#555555")
         fig.add_artist(Line2D([x0, x1], [_y(0.62)] * 2, color="#444444", lw=0.8))
     fig.add_artist(Line2D([x0, x1], [0.42 / PAGE_H] * 2, color="#aaaaaa", lw=0.5))
-    fig.text(x0, 0.25 / PAGE_H, figures.literal(day.protocol.name), fontsize=7, color="#555555")
+    fig.text(x0, 0.25 / PAGE_H, literal(name), fontsize=7, color="#555555")
     fig.text(x1, 0.25 / PAGE_H, f"towtank {__version__}   ·   page {number} of {total}",
              fontsize=7, color="#555555", ha="right")
 
 
-def _medium_word(day: DayResult) -> str:
-    """"air" or "water": the tests' medium in one word."""
-    return "air" if day.protocol.water.is_air else "water"
+def _medium_word(water: Water) -> str:
+    """"air" or "water": the tests' medium (the protocol's [water]) in one word."""
+    return "air" if water.is_air else "water"
 
 
-def _medium_label(day: DayResult) -> str:
+def _medium_label(water: Water) -> str:
     """The title page's label of the medium's line: "Water" or "Air"."""
-    return _medium_word(day).capitalize()
+    return _medium_word(water).capitalize()
 
 
-def _water_text(day: DayResult) -> str:
-    w = day.protocol.water
-    ok = day.runs[day.runs["status"] == "ok"]
+def _water_text(w: Water, runs: pd.DataFrame) -> str:
+    """The medium (the protocol's [water]) with the runs' temperatures and mean ρ, ν."""
+    ok = runs[runs["status"] == "ok"]
     rho = ok["rho"].dropna()
     nu = ok["nu"].dropna()
-    temps = day.runs["water_temp_C"].dropna()
+    temps = runs["water_temp_C"].dropna()
     t = (f"{temps.min():.1f}–{temps.max():.1f} °C" if len(temps) and temps.min() != temps.max()
          else f"{w.temperature_C:g} °C")
     out = f"{w.medium}, {t}"
@@ -195,13 +223,12 @@ def _water_text(day: DayResult) -> str:
         out += f", {w.pressure_Pa:.6g} Pa, {w.relative_humidity_pct:g} % relative humidity"
     if len(rho):
         out += (f"; ρ = {rho.mean():.{4 if w.is_air else 2}f} kg/m³, "
-                f"ν = {figures.sci(nu.mean(), 4)} m²/s "
+                f"ν = {sci(nu.mean(), 4)} m²/s "
                 "(mean of the runs)")
     return out
 
 
-def _model_text(day: DayResult) -> str:
-    m = day.protocol.model
+def _model_text(m: Model | None) -> str:
     if m is None:
         return "none (no hull runs)"
     parts = [m.name or "model", f"L = {m.length_m:g} m"]
@@ -215,8 +242,6 @@ def _model_text(day: DayResult) -> str:
 
 def geometry_text(day: DayResult) -> str | None:
     """The hull geometry used, each quantity with its source; None without a [model]."""
-    from towtank.pipeline import geometry_used
-
     short = {"π D²/4 from diameter_m": "π D²/4",
              "L·D from length_m and diameter_m (default)": "L·D, the default",
              "computed from the [model.myring] Myring description": "Myring description"}
@@ -234,35 +259,34 @@ def geometry_text(day: DayResult) -> str | None:
     return "; ".join(parts) + "." if parts else None
 
 
-def _fin_text(day: DayResult) -> str | None:
-    fin = day.protocol.fin
+def _fin_text(fin: Fin | None, fins: FinResult | None) -> str | None:
     if fin is None:
         return None
     return (f"{fin.section}, chord {fin.chord_m:g} m, span {fin.span_m:g} m"
-            + (f", effective aspect ratio {day.fin_result.aspect_ratio:.3g}"
-               if day.fin_result else ""))
+            + (f", effective aspect ratio {fins.aspect_ratio:.3g}" if fins else ""))
 
 
-def _counts(day: DayResult) -> str:
-    c = day.runs["status"].value_counts()
-    return (f"{len(day.runs)} in the sheet: {int(c.get('ok', 0))} ok, "
+def _counts(runs: pd.DataFrame) -> str:
+    c = runs["status"].value_counts()
+    return (f"{len(runs)} in the sheet: {int(c.get('ok', 0))} ok, "
             f"{int(c.get('rejected', 0))} rejected, {int(c.get('void', 0))} void")
 
 
 def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     date, source = report_date(day)
+    proto = day.protocol
     x0 = MARGIN_IN / PAGE_W + 0.03
     title = "Test report, model in air" if day.protocol.water.is_air else "Towing-tank test report"
     fig.text(x0, _y(1.6), title, fontsize=24, fontweight="bold")
     fig.add_artist(Line2D([x0, 1 - x0], [_y(1.85)] * 2, color="#0072B2", lw=2.0))
-    fig.text(x0, _y(2.4), figures.literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
+    fig.text(x0, _y(2.4), literal(textwrap.fill(day.protocol.name, 48)), fontsize=16,
              va="top")
     rows = [
-        ("Model", _model_text(day) if day.protocol.model is not None else None),
-        ("Fin", _fin_text(day)),
-        (_medium_label(day), _water_text(day)),
+        ("Model", _model_text(proto.model) if proto.model is not None else None),
+        ("Fin", _fin_text(proto.fin, day.fin_result)),
+        (_medium_label(proto.water), _water_text(proto.water, day.runs)),
         ("Test date", date or "not given"),
-        ("Runs", _counts(day)),
+        ("Runs", _counts(day.runs)),
         ("Protocol", str(day.protocol.path.name)),
         ("Program", f"towtank {__version__}"),
     ]
@@ -272,7 +296,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
             continue
         wrapped = textwrap.fill(value, 70)
         fig.text(x0, _y(y), label, fontsize=10, fontweight="bold", va="top")
-        fig.text(x0 + 1.5 / PAGE_W, _y(y), figures.literal(wrapped), fontsize=10, va="top")
+        fig.text(x0 + 1.5 / PAGE_W, _y(y), literal(wrapped), fontsize=10, va="top")
         y += 0.3 + 0.19 * wrapped.count("\n")
     if date and source != "given on the command line":
         fig.text(x0 + 1.5 / PAGE_W, _y(y - 0.05), f"(test date: {source})", fontsize=7.5,
@@ -294,7 +318,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
     if day.hull is None:
         return
     text = "\n".join(textwrap.fill(p, 128) for p in METHOD_NOTE)
-    fig.text(x0, _y(PAGE_H - 0.85), figures.math_text(text), fontsize=7.2, color="#444444",
+    fig.text(x0, _y(PAGE_H - 0.85), math_text(text), fontsize=7.2, color="#444444",
              va="bottom", linespacing=1.35)
 
 
@@ -365,14 +389,18 @@ def _v(x: Any, fmt: str = ".4g", scale: float = 1.0) -> str:
     return text.replace("-", "\u2212")
 
 
-def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[str],
-                                              dict[tuple[int, int], str]]:
+def coefficient_rows(coef: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str],
+                                                  dict[tuple[int, int], str]]:
     """Header, rows, method footnotes and highlighted cells of the summary's table.
 
     A coefficient equal to another by the hull's symmetry shows that symbol as its method
     ("= Y_vdot") instead of a footnote.
+
+    Parameters
+    ----------
+    coef : DataFrame
+        coefficients.csv's table (``day.coefficients``, docs/formats.md).
     """
-    coef = day.coefficients
     header = ["coefficient", "value", "unit", "95 % interval", "prime·10³", "ref.·10³",
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
@@ -381,14 +409,14 @@ def coefficient_rows(day: DayResult) -> tuple[list[str], list[list[str]], list[s
         m = str(r.get("method", ""))
         mirror = re.match(r"(?:=|same as)\s*(\S+)", m)
         if mirror:
-            ref = "= " + figures.math_symbol(mirror.group(1))
+            ref = "= " + math_symbol(mirror.group(1))
         else:
             if m not in methods:
                 methods.append(m)
             ref = f"[{methods.index(m) + 1}]"
         diff = r.get("diff_pct", math.nan)
         rows.append([
-            figures.math_symbol(r["symbol"]), _v(r["value"]), r["unit"],
+            math_symbol(r["symbol"]), _v(r["value"]), r["unit"],
             f"{_v(r['ci_low'])} … {_v(r['ci_high'])}", _v(r["prime"], ".4g", 1e3),
             _v(r.get("reference_prime"), ".4g", 1e3), _v(diff, "+.1f"),
             _v(r.get("prototype_value")), ref,
@@ -405,7 +433,7 @@ def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
                 fontsize: float = 7.5, color: str = "#333333", indent_in: float = 0.0) -> float:
     wrapped = textwrap.fill(text, width)
     x = (MARGIN_IN + indent_in) / PAGE_W
-    fig.text(x, _y(top_in), figures.math_text(wrapped), fontsize=fontsize, va="top",
+    fig.text(x, _y(top_in), math_text(wrapped), fontsize=fontsize, va="top",
              color=color, linespacing=1.3)
     return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
 
@@ -419,9 +447,12 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     date, _ = report_date(day)
     y = 0.95
     has_model = day.protocol.model is not None
-    facts = [("Campaign", day.protocol.name), ("Model", _model_text(day) if has_model else None),
-             ("Fin", _fin_text(day)), (_medium_label(day), _water_text(day)),
-             ("Test date", date or "not given"), ("Runs", _counts(day)),
+    proto = day.protocol
+    facts = [("Campaign", proto.name),
+             ("Model", _model_text(proto.model) if has_model else None),
+             ("Fin", _fin_text(proto.fin, day.fin_result)),
+             (_medium_label(proto.water), _water_text(proto.water, day.runs)),
+             ("Test date", date or "not given"), ("Runs", _counts(day.runs)),
              ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
     for label, value in facts:
@@ -429,7 +460,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
             continue
         fig.text(MARGIN_IN / PAGE_W, _y(y + 0.12), label, fontsize=8.5, fontweight="bold",
                  va="baseline")
-        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), figures.literal(value), fontsize=8.5,
+        fig.text((MARGIN_IN + 1.0) / PAGE_W, _y(y + 0.12), literal(value), fontsize=8.5,
                  va="baseline")
         y += 0.21
     geometry = geometry_text(day) if has_model else None
@@ -441,7 +472,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     y += 0.15
     if day.hull is not None and len(day.coefficients):
         y += _heading(fig, y, "Hull coefficients (model scale, SNAME signs)")
-        header, rows, methods, hl = coefficient_rows(day)
+        header, rows, methods, hl = coefficient_rows(day.coefficients)
         y += _table(fig, y, header, rows, [0.85, 0.85, 0.45, 1.45, 0.75, 0.7, 0.55, 0.95, 0.6],
                     highlight=hl, align=("center",) + ("right",) * 7 + ("center",),
                     fontsize=7.8) + 0.1
@@ -467,21 +498,21 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
                          "(see the quality section).", fontsize=8.5) + 0.2
-    if day.fin_result is not None and len(day.fin_result.curves):
+    fr, sr = day.fin_result, day.scaling_result
+    if fr is not None and len(fr.curves):
         y += _heading(fig, y, "Fin: lift slope, stall and minimum drag per speed")
-        y += _fin_table(fig, y, day) + 0.2
-    if day.fin_result is not None and len(day.fin_result.table):
-        y += _fin_runs_table(fig, y, day) + 0.2
-    if day.scaling_result is not None:
+        y += _fin_table(fig, y, fr) + 0.2
+    if fr is not None and len(fr.table):
+        y += _fin_runs_table(fig, y, fr) + 0.2
+    if sr is not None:
         y += _heading(fig, y, "Prototype resistance")
-        y += _scaling_table(fig, y, day)
+        y += _scaling_table(fig, y, sr, similarity_section=day.protocol.model is not None)
     if day.hull is None and day.fin_result is None and day.protocol.model is None:
         _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
                     fontsize=9)
 
 
-def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
-    fr = require(day.fin_result, "fin")
+def _fin_table(fig: Figure, y: float, fr: FinResult) -> float:
     c = fr.curves
     header = [r"$U$ group [m/s]", "Re", "runs", r"$dC_L/d\alpha$ [1/rad]", "95 % interval",
               "Sandia 2-D", "lifting line", "stall [deg]", r"$C_{L,max}$", r"$C_{D,min}$"]
@@ -491,7 +522,7 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
         if r.get("stall_reached") is False:
             stall = f"> {stall}"
         lo, hi = _v(r["lift_slope_ci_low"], ".3f"), _v(r["lift_slope_ci_high"], ".3f")
-        rows.append([_v(r["speed_group"], ".2f"), figures.sci(r["re_mean"]), str(r["n_runs"]),
+        rows.append([_v(r["speed_group"], ".2f"), sci(r["re_mean"]), str(r["n_runs"]),
                      _v(r["lift_slope"], ".3f"), "–" if lo == hi == "–" else f"{lo} … {hi}",
                      _v(r["lift_slope_sandia_2d"], ".3f"), _v(r["lift_slope_3d"], ".3f"),
                      stall, _v(r["cl_max"], ".3f"), _v(r["cd_min"], ".4f")])
@@ -517,12 +548,12 @@ def _fin_table(fig: Figure, y: float, day: DayResult) -> float:
     return used
 
 
-def _fin_runs_table(fig: Figure, y: float, day: DayResult) -> float:
+def _fin_runs_table(fig: Figure, y: float, fr: FinResult) -> float:
     """fins.csv beside the 3-D expectation, when it fits on the page; else a pointer to the
     Fin runs pages (:func:`_draw_fin_runs`)."""
-    t = require(day.fin_result, "fin").table
+    t = fr.table
     used = _heading(fig, y, "Fin runs: measured against the Sandia section and finite span")
-    if not fin_runs_fit(day):  # the page plan's rule: the Fin runs pages hold it otherwise
+    if not fin_runs_fit(fr):  # the page plan's rule: the Fin runs pages hold it otherwise
         return used + _text_block(fig, y + used, f"{len(t)} fin runs: in the Fin runs "
                                   "section, fins.csv and the Fins sheet of report.xlsx.",
                                   fontsize=8)
@@ -534,16 +565,24 @@ FIN_TABLE_TOP_IN = 6.0
 FIN_ROW_IN = 0.19
 
 
-def fin_runs_fit(day: DayResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
-    """Whether the fin runs' table fits on the summary page below ``top_in``."""
-    room = PAGE_H - figures.PAGE_FOOTER_IN - 0.5 - top_in
-    return (len(require(day.fin_result, "fin").table) + 1) * FIN_ROW_IN <= room
+def fin_runs_fit(fins: FinResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
+    """Whether the fin runs' table fits on the summary page below ``top_in``.
+
+    Parameters
+    ----------
+    fins : FinResult
+        The day's fin result (``day.fin_result``): one table row per fin run.
+    top_in : float
+        Where the table starts, from the top of the page [in].
+    """
+    room = PAGE_H - PAGE_FOOTER_IN - 0.5 - top_in
+    return (len(fins.table) + 1) * FIN_ROW_IN <= room
 
 
-def _draw_fin_runs(fig: Figure, day: DayResult, runs: list[int]) -> None:
-    t = require(day.fin_result, "fin").table
+def _draw_fin_runs(fig: Figure, fins: FinResult, runs: list[int]) -> None:
+    t = fins.table
     recs = [r for r in t.to_dict("records") if int(r["run"]) in set(runs)]
-    y = figures.PAGE_HEADER_IN + 0.25
+    y = PAGE_HEADER_IN + 0.25
     used = _fin_rows(fig, y, recs)
     _text_block(fig, y + used + 0.12,
                 "Steady means of the fin runs (zero, drift and tare removed): C_L and C_D on "
@@ -555,18 +594,19 @@ def _fin_rows(fig: Figure, y: float, recs: list[dict[str, Any]]) -> float:
     header = ["run", "α [deg]", "U [m/s]", "Re", r"$C_L$", r"$C_D$", r"$C_L$ 2-D",
               r"$C_D$ 2-D", r"$C_L$ finite span", r"$C_D$ finite span"]
     rows = [[str(int(r["run"])), _v(r["angle_deg"], "g"), _v(r["speed_mean"], ".3f"),
-             figures.sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
+             sci(r["re"], 3), _v(r["cl"], ".4f"), _v(r["cd"], ".4f"),
              _v(r["cl_sandia"], ".4f"), _v(r["cd_sandia"], ".4f"), _v(r.get("cl_3d"), ".4f"),
              _v(r.get("cd_3d"), ".4f")] for r in recs]
     return _table(fig, y, header, rows, [0.45, 0.55, 0.6, 0.75, 0.65, 0.65, 0.7, 0.7, 1.0, 1.0],
                   row_in=FIN_ROW_IN, fontsize=7.2)
 
 
-def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
+def _scaling_table(fig: Figure, y: float, sr: ScalingResult, *,
+                   similarity_section: bool) -> float:
     """The prototype resistance table: the recommended estimate named in its header and
     shaded, the Froude-scaled model resistance beside it for comparison; then the rule behind
-    the recommendation, the form factor with its trend over Re, and what was used."""
-    sr = require(day.scaling_result, "scaling")
+    the recommendation, the form factor with its trend over Re, and what was used (with
+    ``similarity_section``, a pointer to the Scaling section's figure)."""
     rec = getattr(sr, "recommendation", None)
     recommended = rec.column if rec is not None else "none"
     ittc_head = r"$R_p$ ITTC-57 [N]" + (", recommended" if recommended == "drag_ittc57" else "")
@@ -579,7 +619,7 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
         froude = _v(r["drag_froude"], ".4g")
         if not r.get("froude_in_tested_range", True):
             froude += " *"
-        rows.append([_v(r["speed_prototype"], ".3g"), figures.sci(r["re_prototype"], 3),
+        rows.append([_v(r["speed_prototype"], ".3g"), sci(r["re_prototype"], 3),
                      _v(r["fn_prototype"], ".3f"), _v(r["speed_model_froude"], ".3f"),
                      _v(r["speed_model_reynolds"], ".3f"), _v(r["drag_ittc57"], ".4g"), froude])
         if recommended == "drag_ittc57":
@@ -600,7 +640,7 @@ def _scaling_table(fig: Figure, y: float, day: DayResult) -> float:
                f"{ff.n} tested speeds ({ff.n_runs} runs, repeats averaged per speed). "
                if ff is not None else "") + trend)
     note += (" Similarity (Reynolds ranges, depth): the Scaling section."
-             if day.protocol.model is not None else "")
+             if similarity_section else "")
     return used + 0.08 + _text_block(fig, y + used + 0.08, note.strip(), width=125,
                                      fontsize=7)
 
@@ -610,13 +650,13 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
     x0 = MARGIN_IN / PAGE_W
     for kind, text in lines:
         if kind == "h":
-            fig.text(x0, _y(y + 0.06), figures.literal(text), fontsize=10.5,
+            fig.text(x0, _y(y + 0.06), literal(text), fontsize=10.5,
                      fontweight="bold", va="top")
         elif kind == "mono":
-            fig.text(x0, _y(y), figures.true_minus(figures.literal(text)), fontsize=6.8,
+            fig.text(x0, _y(y), true_minus(literal(text)), fontsize=6.8,
                      family="DejaVu Sans Mono", va="top", color="#222222")
         elif kind in ("p", "li"):
-            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), figures.math_text(text),
+            fig.text(x0 + (0.1 / PAGE_W if kind == "li" else 0), _y(y), math_text(text),
                      fontsize=7.8, va="top", color="#222222")
         y += LINE_IN[kind]
 
@@ -642,8 +682,8 @@ class ThumbGrid:
 
     def __init__(self) -> None:
         self.fig = _page()
-        top = (figures.PAGE_HEADER_IN + 0.45) / PAGE_H
-        bottom = (figures.PAGE_FOOTER_IN + 0.45) / PAGE_H
+        top = (PAGE_HEADER_IN + 0.45) / PAGE_H
+        bottom = (PAGE_FOOTER_IN + 0.45) / PAGE_H
         gs = self.fig.add_gridspec(THUMB_ROWS, THUMB_COLS, left=0.085, right=0.91, top=1 - top,
                                    bottom=bottom, hspace=0.5, wspace=0.72)
         self.cells = []
@@ -689,7 +729,7 @@ class ThumbGrid:
             if red is None or row["status"] != "ok":
                 reason = short_reason(run, row.get("file"), row.get("reason"))
                 preview = day.previews.get(run) if row["status"] == "rejected" else None
-                ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
+                ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
@@ -700,7 +740,7 @@ class ThumbGrid:
                     where = {"x": 0.5, "y": 0.5, "va": "center"}
                 small = preview is not None  # over a trace: keep the box small
                 box = textwrap.fill(f"{row['status']}: {reason}", 44 if small else 38)
-                ax.text(where["x"], where["y"], figures.literal(box),
+                ax.text(where["x"], where["y"], literal(box),
                         ha="center", va=where["va"], fontsize=6.2 if small else 7, zorder=10,
                         color="#7a0000" if row["status"] == "rejected" else "#555555",
                         transform=ax.transAxes,
@@ -709,9 +749,9 @@ class ThumbGrid:
                 continue
             any_lift |= bool(red.has_lift)
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
-            ax.set_title(figures.literal(title), fontsize=7.5, loc="left", fontweight="normal")
+            ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
-        legend_y = 1 - (figures.PAGE_HEADER_IN - 0.2) / PAGE_H
+        legend_y = 1 - (PAGE_HEADER_IN - 0.2) / PAGE_H
         self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
                         ncol=7, fontsize=6.8, frameon=False, columnspacing=1.2,
                         handlelength=1.6, bbox_to_anchor=(0.5, legend_y))
@@ -772,12 +812,6 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     Path
         The PDF written.
     """
-    from functools import partial
-
-    from pypdf import PdfWriter
-
-    from towtank.runtime.parallel import run_beside
-
     folder = Path(folder)
     path = folder / "report.pdf"
     plan = page_plan(day)
@@ -813,14 +847,12 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
 
 def _write_part(day: DayResult, plan: list[Page], pages: list[int], path: Path) -> None:
     """Draw the pages ``pages`` (indices into ``plan``) into the PDF ``path``."""
-    from matplotlib.backends.backend_pdf import PdfPages
-
     meta = {"CreationDate": None, "ModDate": None}  # set on the joined file
     grids: dict[str, ThumbGrid] = {}
     with mpl.rc_context(style.rc()), PdfPages(path, metadata=meta) as pdf:
         for i in pages:
             fig = _render(day, plan[i], plan, grids)
-            _decorate(fig, day, plan[i], i + 1, len(plan))
+            _decorate(fig, day.protocol.name, plan[i], i + 1, len(plan))
             pdf.savefig(fig)
 
 
@@ -834,8 +866,8 @@ def _render(
             grids["thumbs"] = ThumbGrid()
         return grids["thumbs"].draw(day, page.payload)
     if page.kind == "figure":
-        _name, func = page.payload
-        fig = func(day, page=True)
+        _name, func = page.payload  # bound to the results it draws (available_figures)
+        fig = func(page=True)
         if fig is None:  # available_figures said yes: a stage changed under us
             fig = _page()
             _text_block(fig, 1.2, "No data for this figure.", fontsize=10)
@@ -848,9 +880,9 @@ def _render(
     elif page.kind == "quality":
         _draw_quality(fig, page.payload)
     elif page.kind == "runs":
-        _draw_runs(fig, day, page.payload)
+        _draw_runs(fig, day.runs, day.protocol, page.payload)
     elif page.kind == "fin_runs":
-        _draw_fin_runs(fig, day, page.payload)
+        _draw_fin_runs(fig, require(day.fin_result, "fin"), page.payload)
     return fig
 
 
@@ -864,31 +896,32 @@ _STATUS_FILL = {"rejected": "#f4cccc", "void": "#e6e6e6"}
 REF_AREA_LABEL = {"frontal": "A", "lateral": "A_lat", "fin": "c·s"}
 
 
-def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
+def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: list[int]
+               ) -> None:
     """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
     tare-corrected steady drag and its coefficient on the area its test uses (named in its own
     column); rejected and void runs shaded; a blank acceleration explained below."""
-    runs = day.runs.set_index("run", drop=False)
-    y = figures.PAGE_HEADER_IN + 0.25
+    runs = table.set_index("run", drop=False)
+    y = PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
               r"$C_D$", r"$C_D$ area", "Re", "tare [N]", "status"]
-    blank, accel_note = missing_accel_note(day, run_ids)
+    blank, accel_note = missing_accel_note(table, protocol.processing, run_ids)
     rows, fill = [], {}
     for i, run in enumerate(run_ids):
         r = runs.loc[run]
         ok = r["status"] == "ok"
         cd = r.get("cd_ref", r["cd"])
         area = str(r.get("ref_area") or "")
-        rows.append([str(run), figures.literal(r["config"]), figures.literal(r.get("test") or ""),
+        rows.append([str(run), literal(r["config"]), literal(r.get("test") or ""),
                      _v(r["angle_deg"], "g"),
                      _v(r["speed_mean"], ".3f") if ok else "–",
                      ("– ¹" if run in blank else _v(r["accel_mean"], ".3f")) if ok else "–",
                      _v(r["drag_mean"], ".4g") if ok else "–",
                      _v(cd, ".4f") if ok else "–",
-                     figures.math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
-                     figures.sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
+                     math_text(REF_AREA_LABEL.get(area, "–")) if ok else "–",
+                     sci(r["re"], 3) if ok and math.isfinite(float(r["re"])) else "–",
                      _v(r["tare_drag"], ".3g") if ok else "–",
-                     figures.literal(r["status"])])
+                     literal(r["status"])])
         if r["status"] in _STATUS_FILL:
             for c in range(len(header)):
                 fill[(i, c)] = _STATUS_FILL[str(r["status"])]
@@ -902,9 +935,9 @@ def _draw_runs(fig: Figure, day: DayResult, run_ids: list[int]) -> None:
                                "cd_ref, ref_area): A the frontal area (hull runs), A_lat the "
                                "lateral area (transverse tows at α = 90°, the C_D,90 of "
                                "Y_v|v|), c·s chord × span (fin); Re on the length or chord, at "
-                               f"each run's {_medium_word(day)} temperature. Rejected runs "
-                               "(red) and void runs (grey) with their reasons: Quality page "
-                               "and runs.csv.",
+                               f"each run's {_medium_word(protocol.water)} temperature. "
+                               "Rejected runs (red) and void runs (grey) with their reasons: "
+                               "Quality page and runs.csv.",
                                fontsize=7.5)
     if accel_note:
         _text_block(fig, y + used, accel_note, fontsize=7.5)

@@ -16,13 +16,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+import scipy
+from nptdms import TdmsFile
 
 from towtank import __version__
+from towtank.pipeline import geometry_used
+from towtank.reduce.tare import tare_table
 from towtank.reference.sets import reference_name
-from towtank.results import require
 
 if TYPE_CHECKING:
-    from towtank.results import DayResult
+    from towtank.ingest.protocol_types import Prototype
+    from towtank.results import DayResult, ScalingResult, TareResult
 
 
 def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -32,18 +36,14 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     from: given in the protocol, computed from the Myring description, or a default) and, when
     scaled, the prototype, its water and the form factor.
     """
-    import numpy
-    import scipy
-
-    from towtank.pipeline import geometry_used
-
     p = day.protocol
     if p.model is not None:
         extra = {"geometry": {"geometry_source": p.model.geometry_source,
                               "quantities": geometry_used(day)},
                  **(extra or {})}
     if day.scaling_result is not None:
-        extra = {"scaling": _scaling_provenance(day), **(extra or {})}
+        extra = {"scaling": _scaling_provenance(day.scaling_result, p.prototype),
+                 **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
@@ -62,7 +62,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "version": __version__,
         "python": platform.python_version(),
         "libraries": {
-            "numpy": numpy.__version__,
+            "numpy": np.__version__,
             "scipy": scipy.__version__,
             "pandas": pd.__version__,
         },
@@ -71,7 +71,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         "inputs": [{"path": k, "sha256": v} for k, v in day.inputs.items()],
         "settings": settings,
         "runs": {"total": int(len(day.sheet)), "rejected": day.n_rejected},
-        "tare": _tare_provenance(day),
+        "tare": _tare_provenance(day.tare),
         **(extra or {}),
     }
 
@@ -91,19 +91,15 @@ def medium_settings(water: Any) -> dict[str, Any]:
     return out
 
 
-def _tare_provenance(day: DayResult) -> list[dict[str, Any]]:
+def _tare_provenance(tare: TareResult) -> list[dict[str, Any]]:
     """The sting tare fits (tare.csv's rows): coefficients, intervals, runs and ranges."""
-    from towtank.reduce.tare import tare_table
-
-    table = tare_table(getattr(day, "tares", None) or {})
+    table = tare_table(tare.models)
     return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
             for row in table.to_dict("records")]
 
 
-def _scaling_provenance(day: DayResult) -> dict[str, Any]:
+def _scaling_provenance(sr: ScalingResult, proto: Prototype | None) -> dict[str, Any]:
     """The prototype, its water and the form factor behind scaling.csv."""
-    sr = require(day.scaling_result, "scaling")
-    proto = day.protocol.prototype
     ff = sr.form_factor
     return {
         "scale": sr.scale,
@@ -163,8 +159,6 @@ def _gzip_mtime(path: Path) -> str | None:
 def _tdms_date(path: Path) -> str | None:
     """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
     try:
-        from nptdms import TdmsFile
-
         meta = TdmsFile.read_metadata(str(path))
         objs = [meta] + list(meta.groups())
         objs += [c for g in meta.groups() for c in g.channels()]

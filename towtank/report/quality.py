@@ -12,13 +12,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import towtank.report.style as style
 from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason, run_ranges
-from towtank.report import figures, style
+from towtank.reduce.run import units_notes
+from towtank.report.figure_base import PAGE_FOOTER_IN, PAGE_HEADER_IN
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from towtank.results import DayResult
+    from towtank.reduce.run import RunReduction
+    from towtank.results import DayResult, HullResult
 
 PAGE_H = style.PAGE_SIZE[1]
 
@@ -98,7 +101,7 @@ def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
     return pages
 
 
-QUALITY_HEIGHT_IN = PAGE_H - figures.PAGE_HEADER_IN - figures.PAGE_FOOTER_IN - 0.6
+QUALITY_HEIGHT_IN = PAGE_H - PAGE_HEADER_IN - PAGE_FOOTER_IN - 0.6
 
 
 def quality_flow(day: DayResult) -> Flow:
@@ -131,12 +134,12 @@ def quality_flow(day: DayResult) -> Flow:
             f.li(str(w))
     else:
         f.p("None.")
-    _diagnostics_flow(f, day)
+    _diagnostics_flow(f, day.hull, day.coefficients)
     notes = runs[runs["notes"].fillna("").astype(str).str.len() > 0]
     f.gap()
     f.h("Notes on individual runs")
     if len(notes):
-        own_text = _own_notes(day)
+        own_text = _own_notes(day.reductions)
         kept = notes.assign(notes=[own_text.get(int(r.run), str(r.notes))
                                    for r in notes.itertuples()])
         if (kept["notes"].astype(str) != notes["notes"].astype(str)).any():
@@ -174,13 +177,11 @@ def shared_notes(notes: pd.DataFrame) -> tuple[dict[str, list[int]], dict[int, l
     return shared, {run: parts for run, parts in own.items() if parts}
 
 
-def _own_notes(day: DayResult) -> dict[int, str]:
+def _own_notes(reductions: dict[int, RunReduction]) -> dict[int, str]:
     """Each reduced run's notes without those the day says once (runs.csv keeps them all): the
     run's units without a label (:func:`towtank.analysis.daywide.unit_label_sentences`) and
     warnings grouped over many runs (:func:`towtank.analysis.daywide.grouped_warnings`)."""
-    from towtank.reduce.run import units_notes
-
-    reds = sorted(day.reductions.values(), key=lambda r: r.run)
+    reds = sorted(reductions.values(), key=lambda r: r.run)
     grouped = grouped_warnings([(r.run, r.file, w) for r in reds for w in r.warnings])
     out = {}
     for r in reds:
@@ -189,8 +190,10 @@ def _own_notes(day: DayResult) -> dict[int, str]:
     return out
 
 
-def _diagnostics_flow(f: Flow, day: DayResult) -> None:
-    hf = day.hull.fit if day.hull is not None else None
+def _diagnostics_flow(f: Flow, hull: HullResult | None, coefficients: pd.DataFrame) -> None:
+    """The hull fit's diagnostics (``coefficients``: coefficients.csv's table, for the lift
+    slope's comparison with a prediction)."""
+    hf = hull.fit if hull is not None else None
     if hf is None:
         return
     f.gap()
@@ -231,7 +234,7 @@ def _diagnostics_flow(f: Flow, day: DayResult) -> None:
             f.mono(f"     {r.angle_deg:7.1f}   {r.speed:7.3f}   {r.n:d}   {r.runs:<16s}"
                    f"  {r.cd_mean:9.5f}   {r.cd_std:9.2e}   {1e3 * r.drag_std:8.3f}")
     if getattr(hf, "lift_slope", None):
-        f.li(lift_slope_text(hf, day.coefficients))
+        f.li(lift_slope_text(hf, coefficients))
     _budget_flow(f, hf)
 
 

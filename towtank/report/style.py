@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from cycler import cycler
+
 if TYPE_CHECKING:  # the rc key names as matplotlib's stubs list them; no import at run time
     from matplotlib.typing import RcKeyType
 
@@ -82,8 +84,6 @@ XL_NOTE_FONT_COLOR = "7F7F7F"
 
 def rc() -> dict[RcKeyType, Any]:
     """The rc dict, with the colour cycle made from :data:`PALETTE`."""
-    from cycler import cycler
-
     out = dict(RC)
     out["axes.prop_cycle"] = cycler(color=list(PALETTE))
     return out

@@ -9,9 +9,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from towtank.reduce.tare import tare_table
+from towtank.report.safetext import csv_text
+
 if TYPE_CHECKING:
     import pandas as pd
 
+    from towtank.ingest.schema import Processing
     from towtank.results import DayResult
 
 
@@ -19,8 +23,6 @@ def write_csv(df: pd.DataFrame, path: Path) -> None:
     """A deterministic CSV: full float precision, '\\n' line ends, no index; text cells (and
     column names) a spreadsheet would run as formulas neutralised
     (:func:`towtank.report.safetext.csv_text`)."""
-    from towtank.report.safetext import csv_text
-
     out = df.copy(deep=False)
     for col in out.columns:
         if out[col].dtype == object or str(out[col].dtype) in ("string", "str"):
@@ -44,24 +46,33 @@ def write_tables(day: DayResult, out: Path) -> None:
         if day.fin_result.control is not None:
             write_csv(day.fin_result.control, out / "fin_control.csv")
     write_csv(day.scaling, out / "scaling.csv")
-    from towtank.reduce.tare import tare_table
-
     write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")
 
 
-def missing_accel_note(day: DayResult, run_ids: list[int]) -> tuple[list[int], str]:
+def missing_accel_note(runs: pd.DataFrame, processing: Processing, run_ids: list[int]
+                       ) -> tuple[list[int], str]:
     """The usable runs of ``run_ids`` with no acceleration in the table, and why (a footnote).
 
     A run has no mean acceleration when no constant-acceleration stretch of at least
     [processing] min_accel_s remains once the trim is cut from each end: at a low speed the
     ramp to U at the set acceleration lasts only U/a. Such a run is used for its plateau only.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        runs.csv's table (``day.runs``): status, accel_mean [m/s²], speed_nominal [m/s] and
+        accel_nominal [m/s²] of each run.
+    processing : Processing
+        The protocol's [processing] (``min_accel_s`` [s], ``trim`` [s]).
+    run_ids : list of int
+        The runs to look at (one page of the runs table).
     """
-    runs = day.runs.set_index("run", drop=False)
+    runs = runs.set_index("run", drop=False)
     blank = [int(r) for r in run_ids if runs.loc[r, "status"] == "ok"
              and not math.isfinite(float(runs.loc[r, "accel_mean"]))]
     if not blank:
         return [], ""
-    p = day.protocol.processing
+    p = processing
     sel = runs.loc[blank]
     ramp = (sel["speed_nominal"] / sel["accel_nominal"]).to_numpy(float)
     ramp = ramp[np.isfinite(ramp) & (ramp > 0)]

@@ -9,19 +9,21 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from towtank.report import style
+import towtank.report.style as style
 from towtank.report.figure_base import (
-    _layout,
-    _new_figure,
+    figure_grid,
     literal,
+    new_figure,
     place_legend,
     styled,
-    t95,
 )
+from towtank.stats.quantiles import t95
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from towtank.reduce.tare import TareFit
-    from towtank.results import DayResult
+    from towtank.results import TareResult
 
 
 #: Units of the tare coefficients t2, t1, m_t of T = t2·U|U| + t1·U + m_t·a.
@@ -45,17 +47,24 @@ def tare_terms(fit: TareFit) -> str:
                                     strict=True))
 
 
-def tare_caption(day: DayResult) -> str:
+def tare_caption(tare: TareResult) -> str:
     """Caption of :func:`fig_tare`: the model and, per tare group and channel, its fitted
-    coefficients with their 95 % intervals."""
+    coefficients with their 95 % intervals.
+
+    Parameters
+    ----------
+    tare : TareResult
+        The day's sting tare (``day.tare``).
+    """
+    models = tare.models
     parts = []
     for channel in ("drag", "lift"):
-        for group in sorted(day.tares):
-            fit = getattr(day.tares[group], channel)
+        for group in sorted(models):
+            fit = getattr(models[group], channel)
             if fit is None:
                 continue
             parts.append(f"{channel.capitalize()}, group {group} (runs "
-                         f"{_run_list(day.tares[group].runs)}): {tare_terms(fit)}.")
+                         f"{_run_list(models[group].runs)}): {tare_terms(fit)}.")
     return ("The sting alone, towed like the model: the steady means of the sting runs (points) "
             "and the fitted tare T = t2·U|U| + t1·U + m_t·a at a = 0 (line) with its 95 % "
             "confidence band (shaded), per tare group; the tare is subtracted sample by sample "
@@ -84,24 +93,26 @@ def _run_list(runs: tuple[int, ...]) -> str:
 
 
 @styled
-def fig_tare(day: DayResult, *, page: bool = False) -> Figure | None:
+def fig_tare(tare: TareResult, runs: pd.DataFrame, *, page: bool = False) -> Figure | None:
     """Sting tare against speed: the sting runs' steady drag and lift with the fitted tare.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    tare : TareResult
+        The sting tare drawn (``day.tare``): T = t2·U|U| + t1·U + m_t·a per tare group.
+    runs : DataFrame
+        runs.csv's table (``day.runs``): its valid sting runs' steady means [N] against
+        speed [m/s] are drawn as points.
     page : bool
         Lay the figure out as an A4 report page.
     """
-    tares = getattr(day, "tares", None) or {}
+    tares = tare.models
     if not tares:
         return None
     has_lift = any(m.lift is not None for m in tares.values())
-    fig = _new_figure(page)
-    gs = _layout(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
-                 title="Sting tare", text=tare_caption(day))
-    runs = day.runs
+    fig = new_figure(page)
+    gs = figure_grid(fig, 1, 2 if has_lift else 1, page=page, wspace=0.3,
+                     title="Sting tare", text=tare_caption(tare))
     sting = runs[(runs["config"] == "sting") & (runs["status"] == "ok")]
     channels = [("drag", "drag_mean", r"Tare drag $T_D$ [N]")]
     if has_lift:

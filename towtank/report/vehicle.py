@@ -7,6 +7,19 @@ import math
 from pathlib import Path
 from typing import Any
 
+import matplotlib as mpl
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.transforms import blended_transform_factory
+
+import towtank.report.style as style
+from towtank.report.figure_base import (
+    figure_grid,
+    fmt_number,
+    math_symbol,
+    new_figure,
+    place_legend,
+)
 from towtank.vehicle.model import write_model
 
 
@@ -47,8 +60,16 @@ def predicted_caption() -> str:
     )
 
 
-def _predicted_rows(coefficients: Any) -> Any:
-    """The rows of ``coefficients`` with a finite, non-zero prediction."""
+def predicted_rows(coefficients: Any) -> Any:
+    """The rows of ``coefficients`` with a finite, non-zero prediction (those the
+    predicted-vs-measured figure draws); None without a table.
+
+    Parameters
+    ----------
+    coefficients : DataFrame or None
+        coefficients.csv's table, with its ``predicted`` column [-] when the day has a
+        [vehicle] (docs/formats.md); without that column no row is kept.
+    """
     if coefficients is None or "predicted" not in coefficients:
         return coefficients.iloc[0:0] if coefficients is not None else None
     keep = []
@@ -63,12 +84,6 @@ def _predicted_rows(coefficients: Any) -> Any:
 def _draw_predicted(ax: Any, rows: Any, *, symbol: Any = str, numbers: bool = False) -> None:
     """Measured (95 %) and predicted primes of ``rows`` over |predicted| on ``ax``, one row
     per coefficient; with ``numbers`` their values to the right of the axes."""
-    from matplotlib.lines import Line2D
-    from matplotlib.transforms import blended_transform_factory
-
-    from towtank.report import style
-    from towtank.report.figure_base import _fmt, place_legend
-
     meas_color, pred_color = style.PALETTE[0], style.PALETTE[1]
     right = blended_transform_factory(ax.transAxes, ax.transData)
     lows, highs = [0.0], [0.0]
@@ -90,9 +105,9 @@ def _draw_predicted(ax: Any, rows: Any, *, symbol: Any = str, numbers: bool = Fa
         ax.plot(pred / scale, i, "D", mfc="white", mec=pred_color, mew=1.3, ms=6, zorder=4)
         if numbers:
             diff = (float(r["prime"]) - pred) / scale * 100
-            ax.text(1.03, i, f"{_fmt(float(r['prime']) * 1e3)}", transform=right,
+            ax.text(1.03, i, f"{fmt_number(float(r['prime']) * 1e3)}", transform=right,
                     va="center", ha="left", fontsize=7.5)
-            ax.text(1.25, i, f"{_fmt(pred * 1e3)}", transform=right, va="center", ha="left",
+            ax.text(1.25, i, f"{fmt_number(pred * 1e3)}", transform=right, va="center", ha="left",
                     fontsize=7.5)
             ax.text(1.47, i, f"{diff:+.0f} %".replace("-", "\u2212"), transform=right,
                     va="center", ha="left", fontsize=7.5,
@@ -128,12 +143,7 @@ def predicted_figure(coefficients: Any) -> Any:
     coefficients : DataFrame
         coefficients.csv's table with its ``predicted`` column (docs/formats.md).
     """
-    import matplotlib as mpl
-    from matplotlib.figure import Figure
-
-    from towtank.report import style
-
-    rows = _predicted_rows(coefficients)
+    rows = predicted_rows(coefficients)
     if rows is None or rows.empty:
         return None
     with mpl.rc_context(style.rc()):
@@ -144,34 +154,30 @@ def predicted_figure(coefficients: Any) -> Any:
     return fig
 
 
-def fig_predicted(day: Any, *, page: bool = False) -> Any:
+def fig_predicted(coefficients: Any, *, page: bool = False) -> Any:
     """The predicted-vs-measured figure of a day with a [vehicle], as a report page: the
     primes over |predicted| (:func:`predicted_figure`) with their numbers and a caption;
-    None when the day has no prediction.
+    None when no coefficient has a prediction.
 
     Parameters
     ----------
-    day : DayResult
-        The processed day.
+    coefficients : DataFrame
+        coefficients.csv's table with its ``predicted`` column (``day.coefficients``,
+        docs/formats.md).
     page : bool
         Lay the figure out as an A4 report page.
     """
-    import matplotlib as mpl
-
-    from towtank.report import style
-    from towtank.report.figure_base import _layout, _new_figure, math_symbol
-
-    rows = _predicted_rows(getattr(day, "coefficients", None))
+    rows = predicted_rows(coefficients)
     if rows is None or rows.empty:
         return None
     with mpl.rc_context(style.rc()):
-        fig = _new_figure(page)
+        fig = new_figure(page)
         height = fig.get_size_inches()[1]
         # the axes keep ~0.85 in per coefficient (the whole height from 9 on)
         used = 0.85 * len(rows) + 0.6
         free = max(height - used - 4.0, 0.0)
-        gs = _layout(fig, 2, 1, page=page, right=0.6, left=0.14, hspace=0.0,
-                     height_ratios=[used, max(free, 1e-3)], title=PREDICTED_TITLE,
-                     text=predicted_caption())
+        gs = figure_grid(fig, 2, 1, page=page, right=0.6, left=0.14, hspace=0.0,
+                         height_ratios=[used, max(free, 1e-3)], title=PREDICTED_TITLE,
+                         text=predicted_caption())
         _draw_predicted(fig.add_subplot(gs[0, 0]), rows, symbol=math_symbol, numbers=True)
     return fig

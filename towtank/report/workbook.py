@@ -36,16 +36,27 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+from openpyxl import Workbook
+from openpyxl.cell import _writer
+from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
+from openpyxl.utils import get_column_letter
 
+import towtank.report.style as style
 from towtank import __version__
-from towtank.report import style
+from towtank.pipeline import geometry_used
+from towtank.reduce.tare import tare_table
+from towtank.reference.sets import reference_name
+from towtank.report.provenance import creation_date, provenance, report_date
 from towtank.report.safetext import clean_text
+from towtank.report.tables import missing_accel_note
 from towtank.results import require
 
 if TYPE_CHECKING:
     from openpyxl.worksheet.worksheet import Worksheet
 
-    from towtank.results import DayResult
+    from towtank.ingest.protocol_types import Protocol
+    from towtank.ingest.schema import Processing
+    from towtank.results import DayResult, FinResult, HullResult, ScalingResult, TareResult
 
 SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
           "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
@@ -56,7 +67,7 @@ def sheet_names(day: DayResult) -> list[str]:
     detail sheets a day has no data for."""
     fr, sr = day.fin_result, day.scaling_result
     has = {"Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
-           "Fin control": _has_control(day),
+           "Fin control": _has_control(fr),
            "Scaling constants": sr is not None,
            "Form factor": sr is not None and sr.form_factor is not None}
     return [name for name in SHEETS if has.get(name, True)]
@@ -181,8 +192,6 @@ def header_label(column: str, units: dict[str, str] | None = None) -> str:
 
 
 def _styles() -> dict[str, Any]:
-    from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
-
     return {
         "header_font": Font(bold=True),
         "header_fill": PatternFill("solid", fgColor=style.XL_HEADER_FILL),
@@ -295,8 +304,6 @@ class SheetWriter:
 
     def finish(self, *, min_width: int = 6) -> None:
         """Freeze and filter the first table, size the columns."""
-        from openpyxl.utils import get_column_letter
-
         ws = self.ws
         if self.first_table is not None:
             head, last, ncols = self.first_table
@@ -327,8 +334,6 @@ def _note_sheet(w: SheetWriter, text: str) -> None:
 
 # ------------------------------------------------------------------------------- sheets
 def _summary(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.provenance import report_date
-
     p = day.protocol
     date, source = report_date(day)
     counts = day.runs["status"].value_counts()
@@ -363,8 +368,6 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         rows += [("fin section", p.fin.section, ""), ("fin chord", p.fin.chord_m, "m"),
                  ("fin span", p.fin.span_m, "m")]
     if day.hull is not None:
-        from towtank.reference.sets import reference_name
-
         rows.append(("reference set (reference_prime)", reference_name(p.campaign.reference),
                      ""))
     rows += [
@@ -376,8 +379,6 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     ]
     w.pairs(rows)
     if m is not None:
-        from towtank.pipeline import geometry_used
-
         w.gap()
         w.title("Geometry used")
         w.table(pd.DataFrame(geometry_used(day)),
@@ -390,7 +391,7 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
                             "reference_prime", "diff_pct") if c in day.coefficients]
         w.table(day.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
-        w.note("No hull coefficients: " + _why_no_hull(day))
+        w.note("No hull coefficients: " + _why_no_hull(day.protocol))
     if day.fin_result is not None and len(day.fin_result.curves):
         w.gap()
         w.title("Fin: lift slope and stall per speed group")
@@ -408,17 +409,19 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
             w.note(sr.recommendation.rule)
 
 
-def _why_no_hull(day: DayResult) -> str:
-    if day.protocol.model is None:
+def _why_no_hull(protocol: Protocol) -> str:
+    if protocol.model is None:
         return "the protocol has no [model] (a fin day)."
     return "the day has no usable hull runs; see the Quality sheet."
 
 
-def _coefficients(w: SheetWriter, day: DayResult) -> None:
-    if day.hull is None or len(day.coefficients) == 0:
-        _note_sheet(w, "No hull coefficients: " + _why_no_hull(day))
+def _coefficients(w: SheetWriter, hull: HullResult | None, coef: pd.DataFrame,
+                  protocol: Protocol) -> None:
+    """coefficients.csv's table (``coef``: the hull's coefficients with their prototype and
+    predicted values) with the hull fit's ρ and L in its note."""
+    if hull is None or len(coef) == 0:
+        _note_sheet(w, "No hull coefficients: " + _why_no_hull(protocol))
         return
-    coef = day.coefficients
     cols = [c for c in COEFFICIENT_ORDER if c in coef.columns]
     cols += [c for c in coef.columns if c not in cols]
     w.table(coef, columns=cols, row_fill=_fill_for_diff)
@@ -426,40 +429,36 @@ def _coefficients(w: SheetWriter, day: DayResult) -> None:
     w.note(f"value, ci_low, ci_high, prototype_value, alt_value in the row's unit (SI, model "
            f"scale for value; prototype scale for prototype_value); prime non-dimensional. "
            f"Rows with |diff_pct| > {DIFF_HIGHLIGHT_PCT:g} are highlighted.")
-    hf = day.hull.fit
+    hf = hull.fit
     w.note(f"prime = value/(½ρL³) (added mass) or value/(½ρL²) (damping) with ρ = "
            f"{hf.rho:.3f} kg/m³, the mean of the hull runs' "
-           f"{'air' if day.protocol.water.is_air else 'water'} densities, and L = "
+           f"{'air' if protocol.water.is_air else 'water'} densities, and L = "
            f"{hf.length:g} m. diff_pct = (prime − reference_prime)/|reference_prime|·100, signed: "
            "negative where the prime is more negative than the reference (e.g. a larger added "
            "mass); empty where the reference is 0.")
 
 
-def _runs(w: SheetWriter, day: DayResult) -> None:
-    w.table(day.runs, row_fill=_fill_for_status)
+def _runs(w: SheetWriter, runs: pd.DataFrame, processing: Processing) -> None:
+    w.table(runs, row_fill=_fill_for_status)
     w.gap()
     w.note("Rejected runs are filled red, runs voided in the sheet grey; phase windows "
            "*_start_s/*_end_s in seconds from the start of the file.")
     w.note("cd_ref: each run's C_D on the area its test uses, named in ref_area (frontal: "
            "hull runs; lateral: transverse tows at α = 90°, the C_D,90 of Y_v|v|; fin: chord × "
            "span); cd keeps the frontal area for every hull run.")
-    blank, why = _missing_accel(day)
+    blank, why = _missing_accel(runs, processing)
     if blank:
         w.note(why)
 
 
-def _missing_accel(day: DayResult) -> tuple[list[int], str]:
+def _missing_accel(runs: pd.DataFrame, processing: Processing) -> tuple[list[int], str]:
     """The usable runs without accel_mean and why (as the PDF's runs table says)."""
-    from towtank.report.tables import missing_accel_note
-
-    blank, text = missing_accel_note(day, [int(r) for r in day.runs["run"]])
+    blank, text = missing_accel_note(runs, processing, [int(r) for r in runs["run"]])
     return blank, "accel_mean empty: " + text.removeprefix("¹ ") if blank else ""
 
 
-def _tare(w: SheetWriter, day: DayResult) -> None:
-    from towtank.reduce.tare import tare_table
-
-    table = tare_table(getattr(day, "tares", None) or {})
+def _tare(w: SheetWriter, tare: TareResult) -> None:
+    table = tare_table(tare.models)
     if len(table) == 0:
         _note_sheet(w, "No sting tare was fitted: the day has no sting runs, or its tare "
                     "comes from a table or is none ([tare] in the protocol).")
@@ -473,10 +472,9 @@ def _tare(w: SheetWriter, day: DayResult) -> None:
            "coefficient's interval.")
 
 
-def _fins(w: SheetWriter, day: DayResult) -> None:
-    fr = day.fin_result
+def _fins(w: SheetWriter, fr: FinResult | None, protocol: Protocol) -> None:
     if fr is None or len(fr.table) == 0:
-        why = ("the protocol has no [fin]." if day.protocol.fin is None
+        why = ("the protocol has no [fin]." if protocol.fin is None
                else "the day has no usable fin runs; see the Quality sheet.")
         _note_sheet(w, "No fin data: " + why)
         return
@@ -484,32 +482,30 @@ def _fins(w: SheetWriter, day: DayResult) -> None:
     w.gap()
     w.note(f"Effective aspect ratio {fr.aspect_ratio:.4g}, span efficiency e = "
            f"{fr.oswald_e:.3g}; per-speed curves on the Fin curves sheet"
-           + (", control derivatives on the Fin control sheet." if _has_control(day) else "."))
+           + (", control derivatives on the Fin control sheet." if _has_control(fr) else "."))
 
 
-def _has_control(day: DayResult) -> bool:
-    fr = day.fin_result
+def _has_control(fr: FinResult | None) -> bool:
     return fr is not None and fr.control is not None and len(fr.control) > 0
 
 
-def _fin_curves(w: SheetWriter, day: DayResult) -> None:
-    w.table(require(day.fin_result, "fin").curves)
+def _fin_curves(w: SheetWriter, fr: FinResult) -> None:
+    w.table(fr.curves)
     w.gap()
     w.note("Lift slope over the linear range of each speed group with its 95 % interval, "
            "beside the same fit through the 2-D Sandia section and the finite-span "
            "expectation (lifting line); slopes in 1/rad, angles in degrees.")
 
 
-def _fin_control(w: SheetWriter, day: DayResult) -> None:
-    w.table(require(day.fin_result, "fin").control)
+def _fin_control(w: SheetWriter, fr: FinResult) -> None:
+    w.table(fr.control)
 
 
-def _scaling(w: SheetWriter, day: DayResult) -> None:
-    sr = day.scaling_result
+def _scaling(w: SheetWriter, sr: ScalingResult | None, protocol: Protocol) -> None:
     if sr is None:
-        if day.protocol.model is None:
+        if protocol.model is None:
             why = "the protocol has no [model] (a fin day)."
-        elif day.protocol.prototype is None:
+        elif protocol.prototype is None:
             why = "the protocol has no [prototype]."
         else:
             why = "too few steady zero-angle hull runs; see the Quality sheet."
@@ -526,8 +522,7 @@ def _scaling(w: SheetWriter, day: DayResult) -> None:
               if sr.form_factor is not None else "."))
 
 
-def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
-    sr = require(day.scaling_result, "scaling")
+def _scaling_constants(w: SheetWriter, sr: ScalingResult, protocol: Protocol) -> None:
     k2, k1 = sr.resistance
     rows: list[tuple[str, Any, str]] = [
         ("scale λ", sr.scale, "-"),
@@ -549,9 +544,9 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
     rows += [("prototype length L_p", sr.length_prototype, "m"),
              ("prototype wetted area S_p = λ²·S_m", sr.wetted_area_prototype, "m²"),
              ("roughness allowance ΔC_F", sr.delta_cf, "-")]
-    t_m = day.protocol.water.temperature_C
-    fm = "air" if day.protocol.water.is_air else "water"
-    proto = day.protocol.prototype
+    t_m = protocol.water.temperature_C
+    fm = "air" if protocol.water.is_air else "water"
+    proto = protocol.prototype
     fp = "air" if proto is not None and proto.water.is_air else "water"
     rows += [(f"model {fm} density at the protocol's {t_m:g} °C (Froude force ratio)",
               sr.rho_m, "kg/m³"),
@@ -569,8 +564,7 @@ def _scaling_constants(w: SheetWriter, day: DayResult) -> None:
     w.row += 1
 
 
-def _form_factor(w: SheetWriter, day: DayResult) -> None:
-    sr = require(day.scaling_result, "scaling")
+def _form_factor(w: SheetWriter, sr: ScalingResult) -> None:
     ff = require(sr.form_factor, "form factor")
     data = {"speed": ff.speeds, "runs": ff.speed_runs, "one_plus_k": ff.speed_values}
     units = {"speed": "m/s", "runs": "-", "one_plus_k": "-"}
@@ -673,8 +667,6 @@ def _fit_diagnostics(w: SheetWriter, hf: Any) -> None:
 
 
 def _provenance(w: SheetWriter, day: DayResult) -> None:
-    from towtank.report.provenance import provenance
-
     prov = provenance(day)
     rows: list[tuple[str, Any, str]] = []
     for key in ("program", "version", "python", "protocol", "campaign"):
@@ -714,17 +706,20 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
             yield key, str(v)
 
 
-WRITERS: dict[str, Callable[[SheetWriter, Any], None]] = {
+#: Each sheet's writer, given the results it shows from the day (:func:`sheet_names` says
+#: which sheets a day has).
+WRITERS: dict[str, Callable[[SheetWriter, DayResult], None]] = {
     "Summary": _summary,
-    "Coefficients": _coefficients,
-    "Runs": _runs,
-    "Tare": _tare,
-    "Fins": _fins,
-    "Fin curves": _fin_curves,
-    "Fin control": _fin_control,
-    "Scaling": _scaling,
-    "Scaling constants": _scaling_constants,
-    "Form factor": _form_factor,
+    "Coefficients": lambda w, day: _coefficients(w, day.hull, day.coefficients, day.protocol),
+    "Runs": lambda w, day: _runs(w, day.runs, day.protocol.processing),
+    "Tare": lambda w, day: _tare(w, day.tare),
+    "Fins": lambda w, day: _fins(w, day.fin_result, day.protocol),
+    "Fin curves": lambda w, day: _fin_curves(w, require(day.fin_result, "fin")),
+    "Fin control": lambda w, day: _fin_control(w, require(day.fin_result, "fin")),
+    "Scaling": lambda w, day: _scaling(w, day.scaling_result, day.protocol),
+    "Scaling constants": lambda w, day: _scaling_constants(
+        w, require(day.scaling_result, "scaling"), day.protocol),
+    "Form factor": lambda w, day: _form_factor(w, require(day.scaling_result, "scaling")),
     "Quality": _quality,
     "Provenance": _provenance,
 }
@@ -739,8 +734,6 @@ def exact_floats() -> Iterator[None]:
     give back the same double (17 significant digits may be needed); the CSV tables carry the
     shortest round-trip repr, and the workbook must hold the same floats.
     """
-    from openpyxl.cell import _writer
-
     original = _writer.safe_string
 
     def exact(value: Any) -> str:
@@ -770,10 +763,6 @@ def write_workbook(day: DayResult, folder: str | Path) -> Path:
     Path
         The workbook written.
     """
-    from openpyxl import Workbook
-
-    from towtank.report.provenance import creation_date, report_date
-
     wb = Workbook()
     wb.remove(wb.active)
     for name in sheet_names(day):
