@@ -117,6 +117,7 @@ def test_a_day_played_run_by_run_equals_process_after_every_run(tmp_path):
     assert {r["state"] for r in state["sheet"]} == {"to do", "void"}
     done: list[int] = []
     versions = [state["version"]]
+    ranked: list[int] = []  # how many of the sheet's runs were ranked after each run
     for run, file in zip(sheet["run"].astype(int), sheet["file"], strict=True):
         if run in void:
             continue
@@ -145,6 +146,13 @@ def test_a_day_played_run_by_run_equals_process_after_every_run(tmp_path):
         assert all(states[r] == "void" for r in void)
         assert sum(v == "to do" for v in states.values()) == len(sheet) - len(done) - len(void)
         assert state["latest"]["run"] == run
+        # which run next: only runs still to do, each expected to narrow its target
+        todo = {r for r, st in states.items() if st == "to do"}
+        assert all(n["run"] in todo for n in state["next_runs"] if n["run"] is not None)
+        assert all(n["half_width_after"] <= n["half_width_now"] * (1 + 1e-9)
+                   for n in state["next_runs"]
+                   if n["half_width_now"] is not None and n["half_width_after"] is not None)
+        ranked.append(len([n for n in state["next_runs"] if n["run"] is not None]))
         assert "latest_run" in state["figures"]
         assert (tmp_path / "out" / ".live" / state["figures"]["latest_run"]).is_file()
     # every reduction this session made was of a complete file, each file reduced once
@@ -152,6 +160,9 @@ def test_a_day_played_run_by_run_equals_process_after_every_run(tmp_path):
     assert s.reduced and all(sha == final[f] for _run, f, sha in s.reduced)
     assert len({f for _r, f, _s in s.reduced}) == len(s.reduced)
     assert versions == sorted(versions) and len(set(versions)) == len(versions)
+    # once the hull fit exists and runs are left, the top three are ranked and printed
+    assert max(ranked) == 3 and ranked[-1] == 0
+    assert any(line.startswith("  next 1. run ") for line in lines)
     ok = [line for line in lines if line.startswith("run ")]
     assert len(ok) == len(done)
     assert all("  ok" in line or "suspicious" in line for line in ok)

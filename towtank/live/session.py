@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.live import arrival
@@ -197,6 +198,7 @@ class WatchSession:
         self.timings: dict[str, float] = {}
         self._dirty = False
         self._unlisted: list[Notice] = []
+        self.next_runs: list[dict[str, Any]] = []
         arrival.ignore_lease_breaks()
 
     # ------------------------------------------------------------------ sentences
@@ -400,6 +402,11 @@ class WatchSession:
         self.write()
         self.timings["write_s"] = time.perf_counter() - t1
         t2 = time.perf_counter()
+        self.next_runs = self.rank_next(day)
+        self.timings["next_s"] = time.perf_counter() - t2
+        if verdicts:
+            for line in next_run_lines(self.next_runs):
+                self.echo(line)
         self.fits_stale = True
         self.publish(latest=not verdicts)  # the tables written: their coefficients
         self.timings["state_s"] = time.perf_counter() - t2
@@ -627,12 +634,34 @@ class WatchSession:
             "sheet": self.sheet_states(),
             "coefficients": coefficients,
             "coefficient_columns": columns,
-            "next_runs": [],
+            "next_runs": list(self.next_runs),
             "messages": list(self.said.messages),
             "figures": dict(self.figures),
             "pdf": ({"written": self.pdf_iso, "runs": len(self.pdf_runs)}
                     if self.pdf_runs is not None and self.report else None),
         }
+
+    def rank_next(self, day: DayResult) -> list[dict[str, Any]]:
+        """The top three of the sheet's runs still to tow (and up to three conditions not on
+        the sheet), ranked by how much each would narrow the day's widest relative interval
+        (:func:`towtank.analysis.next_run.rank_next_runs`), as state.json's ``next_runs``."""
+        if self.sheet is None:
+            return []
+        states = {row["run"]: row["state"] for row in self.sheet_states()}
+        todo = self.sheet[[states.get(int(r)) == "to do" for r in self.sheet["run"]]]
+        ranked = rank_next_runs(day.hull, day.runs, todo, reductions=day.reductions,
+                                alpha_max_deg=self.protocol.processing.damping_alpha_max_deg)
+        out = []
+        for row in ranked.to_dict("records"):
+            run = row["run"]
+            out.append({
+                "rank": int(row["rank"]),
+                "run": None if pd.isna(run) else int(run),
+                "description": str(row["description"]), "target": str(row["target"]),
+                **{k: _num(row[k]) for k in ("half_width_now", "half_width_after",
+                                             "relative_now", "relative_after")},
+            })
+        return out
 
     def publish(self, *, latest: bool = False, fits: bool = False) -> None:
         """Write state.json (its version one up), after drawing the latest run's figure
@@ -774,6 +803,19 @@ def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
         if fig is not None:
             figs[key] = save_figure(fig, live_dir, f"{key}.png")
     return figs
+
+
+def next_run_lines(ranked: list[dict[str, Any]]) -> list[str]:
+    """The terminal's lines of the next-run ranking: the sheet's top three, then the
+    suggestions, each with the targeted coefficient's half-width now and expected after."""
+    lines = []
+    for row in ranked:
+        now, after = row["half_width_now"], row["half_width_after"]
+        widths = (f"{row['target']} ±{now:.3g} → ±{after:.3g}"
+                  if now is not None and after is not None else str(row["target"]))
+        kind = "next" if row["run"] is not None else "try "
+        lines.append(f"  {kind} {row['rank']}. {row['description']}  ({widths})")
+    return lines
 
 
 def _span(runs: list[int]) -> str:
