@@ -4,9 +4,11 @@
 day (the sample day's plan, repeated to ``--runs`` runs), starts ``towtank watch --no-browser
 --no-server`` on it with an empty data folder, then writes the run files one by one the way
 LabVIEW does (opened, appended in ten blocks 0.1 s apart, closed), ``--gap-s`` apart. For each
-run it takes the time from the file's close to the verdict line on the command's stdout, and
-to the new state.json (its modification time) that holds the verdict; it prints p50, p95 and
-the largest of each. Not a unit test: it takes minutes.
+run it takes the time from the file's close to the verdict line on the command's stdout, to
+the new state.json (its modification time) that holds the verdict, and to the page's update:
+the event the page server pushes to every open page (``GET /events``) for that state (the
+page then redraws in ~0.1 s: tests/test_live_page.py); it prints p50, p95 and the largest of
+each. Not a unit test: it takes minutes.
 """
 
 from __future__ import annotations
@@ -90,23 +92,67 @@ def _wait_state(path: Path, run: int, version: int) -> tuple[float, int]:
     raise RuntimeError(f"state.json never gave run {run}")
 
 
+def _listen(port: int, events: list[tuple[float, int]]) -> None:
+    """The page's event stream: (arrival time, version) of every event, as a page gets it."""
+    import urllib.request
+
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:  # the server starts after the runs already there
+        try:
+            stream = urllib.request.urlopen(f"http://127.0.0.1:{port}/events", timeout=TIMEOUT_S)
+            break
+        except OSError:
+            time.sleep(0.05)
+    else:
+        return
+    for raw in stream:
+        line = raw.decode("utf-8", "replace").strip()
+        if line.startswith("data:"):
+            try:
+                events.append((time.time(), int(json.loads(line[5:])["version"])))
+            except (ValueError, KeyError, TypeError):
+                continue
+
+
+def _wait_event(events: list[tuple[float, int]], version: int) -> float:
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:
+        for t, v in list(events):
+            if v >= version:
+                return t
+        time.sleep(0.005)
+    raise RuntimeError(f"the page server never pushed version {version}")
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
 def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[float]]:
-    """The latencies [s] of ``runs`` runs: {"verdict": [...], "state": [...]}."""
+    """The latencies [s] of ``runs`` runs: {"verdict": [...], "state": [...], "page": [...]}."""
     day = folder / "day"
     syn.make_hull_day(day, runs=plan_of(runs), fs=fs, file_format="csv", sheet_format="csv")
     shutil.move(day / "data", folder / "all")
     (day / "data").mkdir()
     sections: Any = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     protocol = syn.write_protocol(folder / "p.toml", **sections)
+    port = _free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--no-server"],
+        [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--port",
+         str(port)],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, start_new_session=True)
     q: queue.Queue = queue.Queue()
     threading.Thread(target=_reader, args=(proc.stdout, q), daemon=True).start()
     state = folder / "out" / ".live" / "state.json"
-    out: dict[str, list[float]] = {"verdict": [], "state": []}
+    out: dict[str, list[float]] = {"verdict": [], "state": [], "page": []}
+    events: list[tuple[float, int]] = []
     try:
         _wait_line(q, "Ctrl-C to stop")
+        threading.Thread(target=_listen, args=(port, events), daemon=True).start()
         version = _wait_state_any(state)
         files = sorted((folder / "all").iterdir())
         for k, src in enumerate(files, start=1):
@@ -114,10 +160,12 @@ def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[fl
             closed = labview_write(src, day / "data" / src.name)
             said = _wait_line(q, f"run {k}  ")
             written, version = _wait_state(state, k, version)
+            pushed = _wait_event(events, version)
             out["verdict"].append(said - closed)
             out["state"].append(written - closed)
+            out["page"].append(pushed - closed)
             print(f"run {k:3d}: verdict {said - closed:6.3f} s, state.json "
-                  f"{written - closed:6.3f} s", flush=True)
+                  f"{written - closed:6.3f} s, page event {pushed - closed:6.3f} s", flush=True)
             time.sleep(max(0.0, gap_s - (time.monotonic() - start)))
     finally:
         if proc.poll() is None:
@@ -158,7 +206,8 @@ def main(argv: list[str] | None = None) -> int:
           f"blocks {BLOCK_PAUSE_S:g} s apart; {os.cpu_count()} cores")
     print("| from the file's close to | p50 | p95 | max |")
     print("|---|---:|---:|---:|")
-    for key, label in (("verdict", "the verdict line"), ("state", "state.json updated")):
+    for key, label in (("verdict", "the verdict line"), ("state", "state.json updated"),
+                       ("page", "the page's update event")):
         v = np.asarray(lat[key])
         print(f"| {label} | {np.percentile(v, 50):.2f} s | {np.percentile(v, 95):.2f} s | "
               f"{v.max():.2f} s |")
