@@ -806,10 +806,13 @@ def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
 
 
 def next_run_lines(ranked: list[dict[str, Any]]) -> list[str]:
-    """The terminal's lines of the next-run ranking: the sheet's top three, then the
-    suggestions, each with the targeted coefficient's half-width now and expected after."""
+    """The terminal's lines of the next-run ranking: the sheet's top three, then the best
+    condition not on the sheet (the page lists all), each with the targeted coefficient's
+    half-width now and expected after."""
     lines = []
-    for row in ranked:
+    sheet = [row for row in ranked if row["run"] is not None]
+    new = [row for row in ranked if row["run"] is None]
+    for row in sheet[:3] + new[:1]:
         now, after = row["half_width_now"], row["half_width_after"]
         widths = (f"{row['target']} ±{now:.3g} → ±{after:.3g}"
                   if now is not None and after is not None else str(row["target"]))
