@@ -49,7 +49,8 @@ BURST = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.2, 1.6, 2.0)]
             for v in (0.8, 1.2, 1.6, 2.0)])
 
 
-def make_day(root: Path, plan: list[RunSpec], *, watch: dict | None = None) -> Path:
+def make_day(root: Path, plan: list[RunSpec], *, watch: dict | None = None,
+             vehicle: dict | None = None) -> Path:
     """A generated day in ``root/day`` whose run files wait in ``root/all`` (the data folder
     is empty); the protocol ``root/p.toml`` writes into ``root/out``."""
     syn.make_hull_day(root / "day", runs=plan, fs=50.0, file_format="csv", sheet_format="csv",
@@ -58,6 +59,8 @@ def make_day(root: Path, plan: list[RunSpec], *, watch: dict | None = None) -> P
     (root / "day" / "data").mkdir()
     sections = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     sections["watch"] = {"settle_s": 1.0, "pdf_interval_s": 3600.0, **(watch or {})}
+    if vehicle is not None:
+        sections["vehicle"] = vehicle
     return syn.write_protocol(root / "p.toml", **sections)
 
 
@@ -269,6 +272,32 @@ def test_sheet_edits_lock_files_vanishing_and_unlisted_files(tmp_path):
     shutil.copy(tmp_path / "all" / "run_003.csv", data / "run_001.csv")  # recorded over
     settled_step(s, 30.0)
     assert len([line for line in lines if line.startswith("run 1  ")]) == before + 1
+
+
+def test_a_vehicle_figure_drawn_now_beside_the_carried_figures(tmp_path):
+    """A day with a [vehicle]: each write draws figures/predicted_vs_measured.png itself, and
+    the figures carried over from the last report go in beside it (a restarted watch on an
+    output folder with a report once stopped here with FileExistsError)."""
+    protocol = make_day(tmp_path, PLAY[:6], vehicle={"name": "SUT-2 1/4 model",
+                                                     "hull": "myring", "speed_m_s": 1.0})
+    s, _lines = session_of(protocol, report=True)
+    data = tmp_path / "day" / "data"
+    for name in ("run_001.csv", "run_002.csv", "run_003.csv", "run_004.csv", "run_005.csv"):
+        shutil.copy(tmp_path / "all" / name, data / name)
+    clocked(s, 5.0)
+    s.step()
+    assert s._collect_report(wait=True)  # report.pdf and figures/ into the outputs
+    out = tmp_path / "out"
+    drawn = sorted(p.name for p in (out / "figures").iterdir())
+    assert "predicted_vs_measured.png" in drawn and len(drawn) > 1
+    shutil.copy(tmp_path / "all" / "run_006.csv", data / "run_006.csv")
+    verdicts = settled_step(s, 30.0)  # within pdf_interval_s: the figures are carried over
+    assert [v.run for v in verdicts] == [6]
+    assert sorted(p.name for p in (out / "figures").iterdir()) == drawn
+    man = read_manifest(out)
+    assert man is not None and "runs.csv" in man["files"]
+    assert "run_006.csv" in (out / "runs.csv").read_text()
+    s.finish()
 
 
 def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(tmp_path):

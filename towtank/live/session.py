@@ -511,7 +511,10 @@ class WatchSession:
         for name in PDF_OUTPUTS:
             src = source / name
             if src.is_dir() and not src.is_symlink():
-                shutil.copytree(src, folder / name, copy_function=_link_or_copy)
+                # into what this write drew already (figures/predicted_vs_measured.png of a
+                # day with a [vehicle]): the files drawn now stay, the others are carried
+                shutil.copytree(src, folder / name, copy_function=_link_new,
+                                dirs_exist_ok=True)
             elif src.is_file() and not src.is_symlink():
                 _link_or_copy(str(src), str(folder / name))
 
@@ -843,6 +846,12 @@ def _draw_report(day: DayResult, folder: Path) -> int:
         except OSError:
             pass
         return 1
+
+
+def _link_new(src: str, dst: str) -> None:
+    """:func:`_link_or_copy` where ``dst`` is not there yet (a file drawn by this write)."""
+    if not os.path.lexists(dst):
+        _link_or_copy(src, dst)
 
 
 def _link_or_copy(src: str, dst: str) -> None:
