@@ -445,3 +445,18 @@ def test_a_file_of_the_users_with_an_outputs_name_stops_the_writes_not_the_verdi
     said = [m for m in s.said.messages if "runs.csv" in m and "verdicts go on" in m]
     assert len(said) == 1
     assert (tmp_path / "out" / "runs.csv").read_text() == mine  # never overwritten
+
+
+def test_a_second_watch_of_the_same_output_folder_is_refused_in_one_sentence(tmp_path):
+    from towtank.commands.watch import hold_watch_lock
+    from towtank.errors import ProtocolError
+
+    live = tmp_path / "out" / ".live"
+    first = hold_watch_lock(live)
+    with pytest.raises(ProtocolError) as err:
+        hold_watch_lock(live)
+    sentence = str(err.value)
+    assert sentence.count(". ") == 0 and f"(process {os.getpid()})" in sentence
+    assert "already watching into" in sentence and str(tmp_path / "out") in sentence
+    first.close()  # the first watch ends: the next may start
+    hold_watch_lock(live).close()

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import os
 import subprocess
 import sys
 import webbrowser
 from pathlib import Path
+from typing import TextIO
 
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import load_protocol, with_output_dir
@@ -22,7 +24,7 @@ from towtank.live.session import WatchSession
 from towtank.live.state import LIVE_DIR
 from towtank.report.safetext import clean_text
 from towtank.runtime import parallel
-from towtank.runtime.manifest import recover_outputs
+from towtank.runtime.manifest import recover_outputs, try_lock
 
 EXIT_UNUSABLE = 2
 SERVER_MODULE = "towtank.live.server"
@@ -64,6 +66,26 @@ def stop_server(proc: subprocess.Popen[bytes] | None) -> None:
         proc.wait()
 
 
+def hold_watch_lock(live_dir: Path) -> TextIO:
+    """An exclusive lock on ``live_dir/.watch.lock``, held while the returned file stays
+    open (the process's life); ProtocolError when another ``towtank watch`` holds it."""
+    live_dir.mkdir(parents=True, exist_ok=True)
+    fh = open(live_dir / ".watch.lock", "a+", encoding="utf-8")  # noqa: SIM115 - held open
+    if not try_lock(fh.fileno()):
+        fh.seek(0)
+        other = fh.read().strip()
+        fh.close()
+        raise ProtocolError(
+            f"another towtank watch{f' (process {other})' if other.isdigit() else ''} is "
+            f"already watching into {live_dir.parent}; stop it first or give --out another "
+            "folder.")
+    fh.seek(0)
+    fh.truncate()
+    fh.write(str(os.getpid()))
+    fh.flush()
+    return fh
+
+
 def watch_command(args: argparse.Namespace) -> int:
     """The ``watch`` sub-command; returns the exit status (KeyboardInterrupt goes up)."""
     if args.out is not None:
@@ -80,6 +102,14 @@ def watch_command(args: argparse.Namespace) -> int:
     jobs = args.jobs if args.jobs is not None else protocol.processing.jobs
     if jobs is not None and jobs > parallel.default_jobs():
         jobs = parallel.default_jobs()
+    try:  # one watcher per output folder: two would write over each other's live state
+        lock = hold_watch_lock(Path(out).resolve() / LIVE_DIR)
+    except ProtocolError as exc:
+        _err(str(exc))
+        return EXIT_UNUSABLE
+    except OSError as exc:
+        _err(f"the output folder {out} cannot be written ({exc.strerror or exc}).")
+        return EXIT_UNUSABLE
     session = WatchSession(protocol, out, jobs=jobs, report=not args.no_report,
                            date=args.date, echo=_say)
     out = session.out
@@ -107,6 +137,7 @@ def watch_command(args: argparse.Namespace) -> int:
     finally:
         session.close()
         stop_server(server)
+        lock.close()  # the next watch of this folder may start
         if session.pdf_stale and session.day is not None and len(session.day.runs):
             covered = ("has no report.pdf yet" if session.pdf_runs is None else
                        f"has a report.pdf of {len(session.pdf_runs)} of the "

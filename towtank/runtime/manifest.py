@@ -304,6 +304,12 @@ def _lock_fd(fd: int, blocking: bool) -> bool:
         return False
 
 
+def try_lock(fd: int) -> bool:
+    """Take the exclusive lock of the open file ``fd`` without waiting (fcntl's flock, or
+    msvcrt on Windows); False when another process holds it. Held until ``fd`` is closed."""
+    return _lock_fd(fd, blocking=False)
+
+
 def _holder(fd: int) -> str:
     try:
         os.lseek(fd, 0, os.SEEK_SET)
