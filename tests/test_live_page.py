@@ -507,6 +507,16 @@ def wait_for(predicate, timeout: float, step: float = 0.02) -> float:
         time.sleep(step)
 
 
+def open_page(browser: Any, url: str, folder: Path, state: dict[str, Any]) -> None:
+    """Write ``state``, load the page and wait until it shows that state's version."""
+    from selenium.webdriver.common.by import By
+
+    write_state(folder, state)
+    browser.get(url + "/")
+    wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute("data-version")
+             == str(state["version"]), 10)
+
+
 def _number(text: str) -> float:
     return float(text.replace("−", "-"))
 
@@ -514,11 +524,7 @@ def _number(text: str) -> float:
 def test_the_page_shows_a_new_verdict_within_2_s(browser, live_server, folder, sample_day):
     from selenium.webdriver.common.by import By
 
-    url, _ = live_server
-    write_state(folder, day_state(sample_day, folder, 29, 1))
-    browser.get(url + "/")
-    wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute("data-version")
-             == "1", 10)
+    open_page(browser, live_server[0], folder, day_state(sample_day, folder, 29, 1))
     head = browser.find_element(By.ID, "verdict-head")
     assert head.text.startswith("Run 29") and "OK" in head.text
     assert "ok" in browser.find_element(By.ID, "verdict").get_attribute("class").split()
@@ -554,11 +560,7 @@ def test_the_page_shows_a_new_verdict_within_2_s(browser, live_server, folder, s
 def test_the_coefficient_table_is_coefficients_csv(browser, live_server, folder, sample_day):
     from selenium.webdriver.common.by import By
 
-    url, _ = live_server
-    write_state(folder, day_state(sample_day, folder, 30, 5))
-    browser.get(url + "/")
-    wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute("data-version")
-             == "5", 10)
+    open_page(browser, live_server[0], folder, day_state(sample_day, folder, 30, 5))
     coefs = sample_day["coefficients"]
     rows = browser.find_elements(By.CSS_SELECTOR, "#coef-body tr")
     assert len(rows) == len(coefs)

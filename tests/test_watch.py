@@ -33,6 +33,7 @@ from towtank.report.tables import write_tables
 from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import sha256_regular
 from towtank.testing import synthetic as syn
+from towtank.testing.bench_watch import labview_write as write_in_blocks
 from towtank.testing.days import RunSpec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -73,15 +74,9 @@ def session_of(protocol: Path, **kw) -> tuple[WatchSession, list[str]]:
     return WatchSession(p, out, jobs=1, echo=lines.append, **kw), lines
 
 
-def labview_write(src: Path, dst: Path, blocks: int = 6, pause_s: float = 0.05) -> None:
-    """Write ``src``'s bytes into ``dst`` as LabVIEW does: open, append blocks, close."""
-    data = src.read_bytes()
-    n = len(data)
-    with open(dst, "wb") as fh:
-        for i in range(blocks):
-            fh.write(data[i * n // blocks:(i + 1) * n // blocks])
-            fh.flush()
-            time.sleep(pause_s)
+def labview_write(src: Path, dst: Path) -> None:
+    """Write ``src``'s bytes into ``dst`` as LabVIEW does: open, append six blocks, close."""
+    write_in_blocks(src, dst, blocks=6, pause_s=0.05)
 
 
 def reference_tables(root: Path, runs: list[int], tag: str) -> dict[str, str]:

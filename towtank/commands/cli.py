@@ -85,15 +85,8 @@ def _parser() -> argparse.ArgumentParser:
         ".towtank-outputs.json.",
     )
     pr.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
-    pr.add_argument("--out", type=Path, metavar="DIR",
-                    help="output folder (default: output_dir of the protocol)")
-    pr.add_argument("--no-report", action="store_true",
-                    help="write the CSV tables only (no workbook, PDF or figures)")
-    pr.add_argument("--jobs", "-j", type=_jobs, metavar="N",
-                    help="runs reduced in parallel (default: the protocol's [processing] "
-                         "jobs, else all cores)")
-    pr.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
-                    help="test date printed in the report (default: from the inputs)")
+    _day_options(pr, jobs_help="runs reduced in parallel (default: the protocol's "
+                 "[processing] jobs, else all cores)")
     pr.add_argument("--export", action="append", choices=("mat", "hdf5", "parquet"),
                     default=None, metavar="FORMAT",
                     help="also write every usable run's reduced time series (zeroed, filtered, "
@@ -102,8 +95,7 @@ def _parser() -> argparse.ArgumentParser:
     pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
     pr.add_argument("--no-cache", action="store_true",
                     help="ignore and rebuild the per-run cache in the output folder")
-    pr.add_argument("--debug", action="store_true",
-                    help="show a traceback for internal errors instead of one sentence")
+    _debug_option(pr)
 
     wa = sub.add_parser(
         "watch",
@@ -118,23 +110,15 @@ def _parser() -> argparse.ArgumentParser:
         "complete set.",
     )
     wa.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
-    wa.add_argument("--out", type=Path, metavar="DIR",
-                    help="output folder (default: output_dir of the protocol)")
     wa.add_argument("--port", type=_port, default=8050, metavar="N",
                     help="port of the live page on 127.0.0.1 (default 8050)")
     wa.add_argument("--no-browser", action="store_true", help="do not open the page")
     wa.add_argument("--no-server", action="store_true",
                     help="no page server (verdict lines and outputs only)")
-    wa.add_argument("--no-report", action="store_true",
-                    help="write the CSV tables only (no workbook, PDF or figures)")
-    wa.add_argument("--jobs", "-j", type=_jobs, metavar="N",
-                    help="runs reduced in parallel when several arrive at once (default: the "
-                         "protocol's [processing] jobs, else all cores)")
-    wa.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
-                    help="test date printed in the report (default: from the inputs)")
+    _day_options(wa, jobs_help="runs reduced in parallel when several arrive at once "
+                 "(default: the protocol's [processing] jobs, else all cores)")
     wa.add_argument("--quiet", "-q", action="store_true", help="no start-up line")
-    wa.add_argument("--debug", action="store_true",
-                    help="show a traceback for internal errors instead of one sentence")
+    _debug_option(wa)
 
     ins = sub.add_parser(
         "inspect",
@@ -316,6 +300,22 @@ def _parser() -> argparse.ArgumentParser:
                     "synth wrote there (never a file synth did not write)")
     sy.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return p
+
+
+def _day_options(parser: argparse.ArgumentParser, *, jobs_help: str) -> None:
+    """The options ``process`` and ``watch`` share: --out, --no-report, --jobs, --date."""
+    parser.add_argument("--out", type=Path, metavar="DIR",
+                        help="output folder (default: output_dir of the protocol)")
+    parser.add_argument("--no-report", action="store_true",
+                        help="write the CSV tables only (no workbook, PDF or figures)")
+    parser.add_argument("--jobs", "-j", type=_jobs, metavar="N", help=jobs_help)
+    parser.add_argument("--date", metavar="YYYY-MM-DD", type=_iso_date,
+                        help="test date printed in the report (default: from the inputs)")
+
+
+def _debug_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--debug", action="store_true",
+                        help="show a traceback for internal errors instead of one sentence")
 
 
 def _iso_date(text: str) -> str:

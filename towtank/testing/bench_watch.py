@@ -43,16 +43,18 @@ def plan_of(n: int) -> list[RunSpec]:
     return [base[i % len(base)] for i in range(n)]
 
 
-def labview_write(src: Path, dst: Path) -> float:
-    """Write ``src`` into ``dst`` in blocks (open, append, close); the time of the close."""
+def labview_write(src: Path, dst: Path, blocks: int = BLOCKS,
+                  pause_s: float = BLOCK_PAUSE_S) -> float:
+    """Write ``src`` into ``dst`` as LabVIEW does: opened once, ``blocks`` blocks appended
+    ``pause_s`` [s] apart, closed; the time of the close (``time.time()``)."""
     data = src.read_bytes()
     n = len(data)
     with open(dst, "wb") as fh:
-        for i in range(BLOCKS):
-            fh.write(data[i * n // BLOCKS:(i + 1) * n // BLOCKS])
+        for i in range(blocks):
+            fh.write(data[i * n // blocks:(i + 1) * n // blocks])
             fh.flush()
-            if i < BLOCKS - 1:
-                time.sleep(BLOCK_PAUSE_S)
+            if i < blocks - 1:
+                time.sleep(pause_s)
     return time.time()
 
 
