@@ -24,6 +24,8 @@ The public API, for scripts and notebooks (see docs/api.md)::
 is loaded on first use, so that ``import towtank`` stays cheap.
 """
 
+import importlib
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -65,8 +67,6 @@ _API = {
 def __getattr__(name: str) -> object:
     """The API's names, imported on first use (PEP 562)."""
     if name in _API:
-        import importlib
-
         value = getattr(importlib.import_module(_API[name]), name)
         globals()[name] = value
         return value

@@ -28,6 +28,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import pandas as pd
+
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.protocol import Processing, Protocol, channel_map, with_output_dir
 from towtank.ingest.protocol import load_protocol as _load
@@ -268,7 +270,6 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     towtank.vehicle.identify.IdentifyResult
         ``conf_int(alpha)``, ``summary()``, ``table()``, ``verdicts()``.
     """
-    import pandas as pd
 
     # start-up saving: the identification (filterpy, scipy.stats: 0.3-0.7 s measured) loads
     # only for identify

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import nnls
 
 from towtank.analysis.hull import ANGLE_TOL_DEG, MIRROR, SYMBOLS, Estimate, HullFit
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
@@ -246,7 +247,6 @@ def variance_model(kind: str, design: np.ndarray, speeds: np.ndarray,
     residuals by non-negative least squares of e_i²/(1 − h_i) on the basis (E e_i² = (1 − h_i)
     v_i for independent errors). None with too few runs (fewer than two residual degrees of
     freedom) or a fit that fails: the runs are then taken as equally precise."""
-    from scipy.optimize import nnls
 
     n, p = design.shape
     if n - p < 2 or resid.size != n:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from towtank.commands.identify import parse_noise
@@ -195,7 +196,6 @@ def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | N
                       noise: str | None, sample_hz: float | None) -> tuple:
     """--period-s, --schedule, --noise, --sample-hz: (the schedule table or None, the noise
     {column: sd}, the problems, one sentence each)."""
-    import math
 
     problems: list[str] = []
     table = None
@@ -228,7 +228,6 @@ def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | N
 def _add_noise(ts, noise_sd: dict[str, float], seed: int):  # noqa: ANN001, ANN202
     """manoeuvre.csv with independent Gaussian noise of ``noise_sd`` [the column's unit] on
     the named states (seeded: the same seed, the same record)."""
-    import numpy as np
 
     rng = np.random.default_rng(seed)
     out = ts.copy()

@@ -299,6 +299,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _fail(f"port {args.port} on {args.host} is already in use (another watch or "
                          "program): choose another with --port.")
         return _fail(f"cannot listen on {args.host} port {args.port} ({exc.strerror}).")
+    # start-up saving: uvicorn (~0.11 s measured) only once the host and port are usable, so
+    # that a refusal is said at once
     import uvicorn
 
     config = uvicorn.Config(create_app(state_dir), log_level="warning", access_log=False,

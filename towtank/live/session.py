@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
+from watchfiles import watch
 
 from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
@@ -719,7 +720,6 @@ class WatchSession:
         """Watch until ``until(self)`` is true or ``timeout_s`` [s] has passed (forever
         without either; Ctrl-C raises KeyboardInterrupt). One :meth:`step` per change
         reported by watchfiles, and at least every :data:`POLL_MS`."""
-        from watchfiles import watch
 
         start = time.monotonic()
         self.step()
