@@ -19,11 +19,13 @@ import os
 import queue
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
 import threading
 import time
+import urllib.request
 from pathlib import Path
 from typing import Any
 
@@ -96,8 +98,6 @@ def _wait_state(path: Path, run: int, version: int) -> tuple[float, int]:
 
 def _listen(port: int, events: list[tuple[float, int]]) -> None:
     """The page's event stream: (arrival time, version) of every event, as a page gets it."""
-    import urllib.request
-
     end = time.monotonic() + TIMEOUT_S
     while time.monotonic() < end:  # the server starts after the runs already there
         try:
@@ -127,8 +127,6 @@ def _wait_event(events: list[tuple[float, int]], version: int) -> float:
 
 
 def _free_port() -> int:
-    import socket
-
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         return int(sock.getsockname()[1])
