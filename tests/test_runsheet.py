@@ -208,7 +208,10 @@ def test_fuzz_optional_cells(tmp_path, cells):
     rows = [{"run": i + 1, "file": f"run_{i + 1:03d}.csv", "config": "hull", "angle_deg": 5,
              **c} for i, c in enumerate(cells)]
     path = tmp_path / "fuzz.csv"
-    pd.DataFrame(rows).to_csv(path, index=False)
+    # saved as Excel saves a CSV (CRLF): a cell holding a line break is quoted. With bare
+    # "\n" ends a cell's lone "\r" is a line break of the file itself, which the reader
+    # rightly reads as one more row (with its own sheet_error)
+    pd.DataFrame(rows).to_csv(path, index=False, lineterminator="\r\n")
     try:
         df = _read(path)
     except ProtocolError as exc:
@@ -248,3 +251,14 @@ def test_fuzz_optional_cells_xlsx(tmp_path, cells):
     except ProtocolError:
         return
     assert len(df) == len(cells)
+
+
+def test_a_bare_carriage_return_in_a_csv_is_a_line_break_with_its_own_row_error(tmp_path):
+    """A cell ending in a lone CR, written unquoted, splits the line: the reader keeps the
+    runs before it and gives the stray line a sheet_error naming its row, never a crash."""
+    path = tmp_path / "cr.csv"
+    path.write_bytes(b"run,file,config,angle_deg,depth_mm\n1,run_001.csv,hull,5,\n"
+                     b"2,run_002.csv,hull,5,\r0\n")
+    df = _read(path)
+    assert list(df["run"])[:2] == [1, 2] and list(df["sheet_error"])[:2] == ["", ""]
+    assert len(df) == 3 and "row 4 of cr.csv" in df["sheet_error"].iloc[2]
