@@ -1,11 +1,19 @@
 """The commands a lab runs, end to end in a new process each: both sample days, predict,
-simulate and identify. `.ci/run` also runs this file on the declared minimum versions of every
-dependency (.ci/min_constraints.py), so a floor in pyproject.toml that does not work fails CI."""
+simulate and identify, watch with its page server. `.ci/run` also runs this file on the
+declared minimum versions of every dependency (.ci/min_constraints.py), so a floor in
+pyproject.toml that does not work fails CI."""
 
 from __future__ import annotations
 
+import json
+import os
+import signal
+import socket
 import subprocess
 import sys
+import threading
+import time
+import urllib.request
 from pathlib import Path
 
 import pandas as pd
@@ -68,3 +76,60 @@ def test_simulate_a_sine_then_identify(tmp_path):
     assert "N_ur: identifiable" in run.stdout
     for name in ("identified.csv", "model.json", "identify.png"):
         assert (tmp_path / "id" / name).is_file(), name
+
+
+def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
+    """`towtank watch` with its page server (watchfiles, starlette and uvicorn at their floors
+    on .ci/run's minimum versions): a run file written into the watched folder gets its
+    verdict line, the page server on 127.0.0.1 serves the state holding it, Ctrl-C is 130."""
+    from towtank.testing import synthetic as syn
+    from towtank.testing.bench_watch import labview_write
+    from towtank.testing.days import RunSpec
+
+    day = tmp_path / "day"
+    syn.make_hull_day(day, runs=[RunSpec("sting", 0.0, 1.0, 0.5)], fs=50.0, file_format="csv",
+                      sheet_format="csv", seed=2)
+    (day / "data").rename(tmp_path / "all")
+    (day / "data").mkdir()
+    protocol = syn.write_protocol(tmp_path / "p.toml", **syn.hull_protocol_sections(
+        "day", "out", sheet_format="csv"))
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    proc = subprocess.Popen([sys.executable, "-m", "towtank", "watch", str(protocol),
+                             "--no-browser", "--no-report", "--port", str(port)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    said: list[str] = []
+    threading.Thread(target=lambda: said.extend(proc.stdout or ()), daemon=True).start()
+
+    def until(check, what: str) -> None:  # bounds a hang only
+        end = time.monotonic() + 120
+        while not check():
+            assert proc.poll() is None, f"watch ended: {proc.stderr.read() if proc.stderr else ''}"
+            assert time.monotonic() < end, f"{what} never came: {''.join(said)}"
+            time.sleep(0.1)
+
+    try:
+        until(lambda: any("the live page:" in line for line in said), "the page line")
+        labview_write(tmp_path / "all" / "run_001.csv", day / "data" / "run_001.csv")
+        until(lambda: any(line.startswith("run 1  ") for line in said), "run 1's verdict")
+        line = next(x for x in said if x.startswith("run 1  "))
+        assert "steady" in line and "U 1.00 m/s" in line and line.rstrip().endswith("ok")
+
+        def served() -> dict:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/state.json",
+                                            timeout=5) as resp:
+                    return json.loads(resp.read())
+            except OSError:
+                return {}
+
+        until(lambda: (served().get("latest") or {}).get("run") == 1, "the served state")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+        code = proc.wait(timeout=60)
+    assert code == 130
