@@ -7,8 +7,9 @@ LabVIEW does (opened, appended in ten blocks 0.1 s apart, closed), ``--gap-s`` a
 run it takes the time from the file's close to the verdict line on the command's stdout, to
 the new state.json (its modification time) that holds the verdict, and to the page's update:
 the event the page server pushes to every open page (``GET /events``) for that state (the
-page then redraws in ~0.1 s: tests/test_live_page.py); it prints p50, p95 and the largest of
-each. Not a unit test: it takes minutes.
+page then redraws); with ``--browser``, also to the verdict shown on the page itself, open
+in headless Chromium (selenium; Debian's chromium and chromium-driver). It prints p50, p95 and
+the largest of each. Not a unit test: it takes minutes.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ import os
 import queue
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from towtank.testing import synthetic as syn
+from towtank.testing.browser import browser_missing, free_port, start_chromium
 from towtank.testing.days import RunSpec, hull_day_plan
 
 BLOCKS = 10
@@ -126,21 +127,33 @@ def _wait_event(events: list[tuple[float, int]], version: int) -> float:
     raise RuntimeError(f"the page server never pushed version {version}")
 
 
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+def _wait_shown(driver: Any, run: int) -> float:
+    """The time the page in ``driver`` first shows ``run``'s verdict."""
+    from selenium.common.exceptions import WebDriverException  # start-up saving: --browser only
+    from selenium.webdriver.common.by import By
+
+    end = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < end:
+        try:
+            if driver.find_element(By.ID, "verdict-head").text.startswith(f"Run {run} "):
+                return time.time()
+        except WebDriverException:  # the page is being redrawn
+            pass
+        time.sleep(0.005)
+    raise RuntimeError(f"the page never showed run {run}")
 
 
-def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[float]]:
-    """The latencies [s] of ``runs`` runs: {"verdict": [...], "state": [...], "page": [...]}."""
+def bench(runs: int, gap_s: float, fs: float, folder: Path,
+          browser: bool = False) -> dict[str, list[float]]:
+    """The latencies [s] of ``runs`` runs: {"verdict": [...], "state": [...], "page": [...]}
+    and, with ``browser``, "shown": to the verdict on the page in headless Chromium."""
     day = folder / "day"
     syn.make_hull_day(day, runs=plan_of(runs), fs=fs, file_format="csv", sheet_format="csv")
     shutil.move(day / "data", folder / "all")
     (day / "data").mkdir()
     sections: Any = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     protocol = syn.write_protocol(folder / "p.toml", **sections)
-    port = _free_port()
+    port = free_port()
     proc = subprocess.Popen(
         [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--port",
          str(port)],
@@ -148,12 +161,16 @@ def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[fl
     q: queue.Queue = queue.Queue()
     threading.Thread(target=_reader, args=(proc.stdout, q), daemon=True).start()
     state = folder / "out" / ".live" / "state.json"
-    out: dict[str, list[float]] = {"verdict": [], "state": [], "page": []}
+    out: dict[str, list[float]] = {"verdict": [], "state": [], "page": [], "shown": []}
     events: list[tuple[float, int]] = []
+    driver = None
     try:
         _wait_line(q, "Ctrl-C to stop")
         threading.Thread(target=_listen, args=(port, events), daemon=True).start()
         version = _wait_state_any(state)
+        if browser:
+            driver = start_chromium(folder / "chromium")
+            driver.get(f"http://127.0.0.1:{port}/")
         files = sorted((folder / "all").iterdir())
         for k, src in enumerate(files, start=1):
             start = time.monotonic()
@@ -164,10 +181,17 @@ def bench(runs: int, gap_s: float, fs: float, folder: Path) -> dict[str, list[fl
             out["verdict"].append(said - closed)
             out["state"].append(written - closed)
             out["page"].append(pushed - closed)
+            shown = ""
+            if driver is not None:
+                out["shown"].append(_wait_shown(driver, k) - closed)
+                shown = f", on the page {out['shown'][-1]:6.3f} s"
             print(f"run {k:3d}: verdict {said - closed:6.3f} s, state.json "
-                  f"{written - closed:6.3f} s, page event {pushed - closed:6.3f} s", flush=True)
+                  f"{written - closed:6.3f} s, page event {pushed - closed:6.3f} s{shown}",
+                  flush=True)
             time.sleep(max(0.0, gap_s - (time.monotonic() - start)))
     finally:
+        if driver is not None:
+            driver.quit()
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGINT)
             try:
@@ -193,11 +217,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--gap-s", type=float, default=3.0, help="from one file's start to the next")
     ap.add_argument("--fs", type=float, default=200.0, help="sample rate of the runs [Hz]")
     ap.add_argument("--keep", type=Path, help="work in this folder and keep it")
+    ap.add_argument("--browser", action="store_true",
+                    help="also time the verdict shown on the page in headless Chromium")
     args = ap.parse_args(argv)
+    if args.browser and (missing := browser_missing()):
+        print(f"--browser needs Chromium: {missing}.", file=sys.stderr)
+        return 2
     folder = args.keep or Path(tempfile.mkdtemp(prefix="bench_watch-"))
     folder.mkdir(parents=True, exist_ok=True)
     try:
-        lat = bench(args.runs, args.gap_s, args.fs, folder)
+        lat = bench(args.runs, args.gap_s, args.fs, folder, browser=args.browser)
     finally:
         if args.keep is None:
             shutil.rmtree(folder, ignore_errors=True)
@@ -207,7 +236,10 @@ def main(argv: list[str] | None = None) -> int:
     print("| from the file's close to | p50 | p95 | max |")
     print("|---|---:|---:|---:|")
     for key, label in (("verdict", "the verdict line"), ("state", "state.json updated"),
-                       ("page", "the page's update event")):
+                       ("page", "the page's update event"),
+                       ("shown", "the verdict shown on the page (Chromium)")):
+        if not lat[key]:
+            continue
         v = np.asarray(lat[key])
         print(f"| {label} | {np.percentile(v, 50):.2f} s | {np.percentile(v, 95):.2f} s | "
               f"{v.max():.2f} s |")
