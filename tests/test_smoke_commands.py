@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -84,6 +83,7 @@ def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
     verdict line, the page server on 127.0.0.1 serves the state holding it, Ctrl-C is 130."""
     from towtank.testing import synthetic as syn
     from towtank.testing.bench_watch import labview_write
+    from towtank.testing.browser import free_port
     from towtank.testing.days import RunSpec
 
     day = tmp_path / "day"
@@ -93,9 +93,7 @@ def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
     (day / "data").mkdir()
     protocol = syn.write_protocol(tmp_path / "p.toml", **syn.hull_protocol_sections(
         "day", "out", sheet_format="csv"))
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
+    port = free_port()
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])])}
     proc = subprocess.Popen([sys.executable, "-m", "towtank", "watch", str(protocol),
