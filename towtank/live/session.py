@@ -22,6 +22,7 @@ The process stays single-threaded: the report writers fork.
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import math
 import os
@@ -41,7 +42,14 @@ from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.live import arrival
-from towtank.live.state import LIVE_DIR, now_iso, save_figure, write_state
+from towtank.live.state import (
+    LIVE_DIR,
+    claim_live_dir,
+    now_iso,
+    remove_leftovers,
+    save_figure,
+    write_state,
+)
 from towtank.pipeline import process_sheet, unlisted_warnings
 from towtank.report import figures as rf
 from towtank.report.figures import write_figures
@@ -50,7 +58,8 @@ from towtank.report.pdf import write_pdf
 from towtank.report.safetext import clean_text
 from towtank.report.workbook import write_workbook
 from towtank.results import Notice
-from towtank.runtime.storage import STORAGE_ERRNOS
+from towtank.runtime.safefile import read_regular
+from towtank.runtime.storage import STORAGE_ERRNOS, os_error, storage_error
 
 if TYPE_CHECKING:
     from towtank.ingest.protocol import Protocol
@@ -67,6 +76,20 @@ CHILD_NICE = 10
 
 #: Files an output writer leaves in the report that watch carries over between two PDFs.
 PDF_OUTPUTS = ("report.pdf", "figures")
+
+#: What watch writes into the live folder, as its sentences name it when it cannot.
+PAGE = "the live page's state"
+FITS = "the live page's fit figures"
+REPORT = "report.pdf and figures/"
+
+#: A forked drawing that failed for the storage (a full disk...) exits with this plus the
+#: errno, so that the watching process tells it as a storage failure.
+STORAGE_EXIT = 100
+
+#: Largest file a forked drawing leaves for the watching process (its listing, its error)
+#: and largest coefficients.csv read back for the live state [bytes].
+MAX_NOTE_BYTES = 1 << 20
+MAX_TABLE_BYTES = 64 << 20
 
 
 @dataclass(frozen=True)
@@ -190,10 +213,9 @@ class WatchSession:
         self._job: tuple[int, Path, list[int], str] | None = None
         self._staged: Path | None = None  # the folder of the last report drawn
         self._fits_job: tuple[int, Path] | None = None  # (process id, its listing)
-        for left in self.live_dir.glob(".report-*"):  # of an earlier watch that was killed
-            shutil.rmtree(left, ignore_errors=True)
-        for left in self.live_dir.glob(".fits-*.json"):
-            left.unlink(missing_ok=True)
+        claim_live_dir(self.live_dir)  # ProtocolError: a link, or a folder not towtank's
+        remove_leftovers(self.live_dir)  # of an earlier watch that was killed
+        self._faults: dict[str, str] = {}  # what could not be written -> its sentence
         self.latest: Verdict | None = None
         self.figures: dict[str, str] = {}
         self.timings: dict[str, float] = {}
@@ -361,14 +383,21 @@ class WatchSession:
         if done == 0:
             return False
         self._fits_job = None
+        code = os.waitstatus_to_exitcode(status)
+        raw = read_regular(listing, MAX_NOTE_BYTES)
         try:
-            drawn = json.loads(listing.read_text(encoding="utf-8"))
-            listing.unlink()
-        except (OSError, ValueError):
+            drawn = json.loads(raw.decode("utf-8")) if raw is not None else None
+        except (ValueError, RecursionError):
             drawn = None
-        if os.waitstatus_to_exitcode(status) != 0 or not isinstance(drawn, dict):
+        if raw is not None:
+            listing.unlink(missing_ok=True)
+        if (number := _storage_errno(code)) is not None:
+            self._failed(FITS, os_error(number))
+            return True
+        if code != 0 or not isinstance(drawn, dict):
             self.say("the live page's fit figures could not be drawn; the last ones stay.")
             return True
+        self._faults.pop(FITS, None)
         figs = {k: v for k, v in self.figures.items() if k not in ("damping", "added_mass")}
         self.figures = {**figs, **{str(k): str(v) for k, v in drawn.items()}}
         self.publish()
@@ -542,15 +571,19 @@ class WatchSession:
             return False
         self._job = None
         if os.waitstatus_to_exitcode(status) == 0 and (folder / "done").is_file():
+            self._faults.pop(REPORT, None)
             old, self._staged = self._staged, folder
             self.pdf_runs, self.pdf_iso = runs, iso
             self.write()
             if old is not None:
                 shutil.rmtree(old, ignore_errors=True)
             self.publish()
+        elif (number := _storage_errno(os.waitstatus_to_exitcode(status))) is not None:
+            self._failed(REPORT, os_error(number))
+            shutil.rmtree(folder, ignore_errors=True)
         else:
-            error = folder / "error.txt"
-            reason = error.read_text(encoding="utf-8").strip() if error.is_file() else \
+            error = read_regular(folder / "error.txt", MAX_NOTE_BYTES)
+            reason = error.decode("utf-8", "replace").strip() if error is not None else \
                 f"its process ended with status {os.waitstatus_to_exitcode(status)}"
             self.say(f"report.pdf and figures/ of runs {_span(runs)} could not be drawn "
                      f"({reason}); the previous ones are kept.", once=False)
@@ -619,9 +652,9 @@ class WatchSession:
         """The live state (docs/formats.md, "towtank watch")."""
         coefficients: list[dict[str, Any]] = []
         columns: list[str] = []
-        path = self.out / "coefficients.csv"
-        if path.is_file():
-            table = pd.read_csv(path)
+        raw = read_regular(self.out / "coefficients.csv", MAX_TABLE_BYTES)
+        if raw is not None:
+            table = pd.read_csv(io.BytesIO(raw))
             columns = [str(c) for c in table.columns]
             coefficients = table.astype(object).where(table.notna(), None).to_dict("records")
         latest = None
@@ -669,7 +702,22 @@ class WatchSession:
 
     def publish(self, *, latest: bool = False, fits: bool = False) -> None:
         """Write state.json (its version one up), after drawing the latest run's figure
-        (``latest``) and the fits' figures (``fits``); the others stay as they were."""
+        (``latest``) and the fits' figures (``fits``); the others stay as they were. A
+        failure of the storage or a link in the live folder is one sentence
+        (:meth:`_failed`), not the end of the watch."""
+        try:
+            self._publish(latest=latest, fits=fits)
+        except ProtocolError as exc:
+            self._failed(PAGE, exc)
+        except Exception as exc:
+            full = storage_error(exc, self.live_dir)
+            if full is None:
+                raise
+            self._failed(PAGE, full)
+        else:
+            self._faults.pop(PAGE, None)
+
+    def _publish(self, *, latest: bool, fits: bool) -> None:
         if self.live_figures and self.day is not None:
             t0 = time.perf_counter()
             figs = dict(self.figures)
@@ -685,6 +733,22 @@ class WatchSession:
             self.timings["figures_s"] = time.perf_counter() - t0
         self.version += 1
         write_state(self.live_dir, self.state())
+
+    def _failed(self, what: str, exc: BaseException) -> None:
+        """One sentence for ``what`` (:data:`PAGE`, :data:`FITS`, :data:`REPORT`) that could
+        not be written into the live folder (a full disk, a link put there meanwhile), said
+        once until ``what`` is written again; the verdicts go on and the files there stay whole
+        (each is replaced whole or not at all)."""
+        if isinstance(exc, ProtocolError):
+            sentence = f"{_strip_dot(str(exc))}; the verdicts go on without {what}."
+        else:
+            code = exc.errno if isinstance(exc, OSError) and exc.errno else None
+            sentence = (f"{what} could not be written in {self.live_dir} "
+                        f"({os.strerror(code) if code else exc}); the verdicts go on, and it is "
+                        "written again at the next run.")
+        if self._faults.get(what) != sentence:
+            self._faults[what] = sentence
+            self.say(sentence, once=False)
 
     def _draw_latest(self) -> dict[str, str]:
         """The latest verdict's run: its traces and phases, or its raw traces when it could
@@ -790,8 +854,8 @@ def _draw_fits_child(day: DayResult | None, live_dir: Path, listing: Path) -> in
         drawn = _fit_figures(day, live_dir)
         listing.write_text(json.dumps(drawn), encoding="utf-8")
         return 0
-    except BaseException:  # noqa: BLE001 - the parent says it in one sentence
-        return 1
+    except BaseException as exc:  # noqa: BLE001 - the parent says it in one sentence
+        return _failed_code(exc, live_dir)
 
 
 def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
@@ -845,7 +909,23 @@ def _draw_report(day: DayResult, folder: Path) -> int:
             (folder / "error.txt").write_text(f"{type(exc).__name__}: {exc}", encoding="utf-8")
         except OSError:
             pass
-        return 1
+        return _failed_code(exc, folder)
+
+
+def _failed_code(exc: BaseException, folder: Path) -> int:
+    """The exit code of a forked drawing that failed with ``exc`` writing into ``folder``:
+    :data:`STORAGE_EXIT` plus the errno for a failure of the storage, else 1."""
+    full = storage_error(exc, folder)
+    if full is not None and full.errno is not None and full.errno < 256 - STORAGE_EXIT:
+        return STORAGE_EXIT + full.errno
+    return 1
+
+
+def _storage_errno(code: int) -> int | None:
+    """The errno a forked drawing's exit code ``code`` carries (:func:`_failed_code`), or
+    None."""
+    number = code - STORAGE_EXIT
+    return number if number in STORAGE_ERRNOS else None
 
 
 def _link_new(src: str, dst: str) -> None:
