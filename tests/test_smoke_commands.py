@@ -82,7 +82,7 @@ def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
     on .ci/run's minimum versions): a run file written into the watched folder gets its
     verdict line, the page server on 127.0.0.1 serves the state holding it, Ctrl-C is 130."""
     from towtank.testing import synthetic as syn
-    from towtank.testing.bench_watch import labview_write
+    from towtank.testing.bench_watch import labview_write, start_watch
     from towtank.testing.browser import free_port
     from towtank.testing.days import RunSpec
 
@@ -94,12 +94,7 @@ def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
     protocol = syn.write_protocol(tmp_path / "p.toml", **syn.hull_protocol_sections(
         "day", "out", sheet_format="csv"))
     port = free_port()
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])])}
-    proc = subprocess.Popen([sys.executable, "-m", "towtank", "watch", str(protocol),
-                             "--no-browser", "--no-report", "--port", str(port)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)
+    proc = start_watch(protocol, "--no-report", "--port", str(port))
     said: list[str] = []
     threading.Thread(target=lambda: said.extend(proc.stdout or ()), daemon=True).start()
 

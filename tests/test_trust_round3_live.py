@@ -36,11 +36,11 @@ from typing import Any
 import pytest
 
 from towtank.commands import cli
-from towtank.ingest.protocol import load_protocol, with_output_dir
 from towtank.live import session as live_session
 from towtank.live import state as live_state
 from towtank.live.session import WatchSession
 from towtank.testing import synthetic as syn
+from towtank.testing.bench_watch import start_watch, watch_session
 from towtank.testing.browser import free_port
 from towtank.testing.days import RunSpec
 
@@ -218,12 +218,8 @@ def test_a_live_folder_of_an_earlier_watch_is_taken_and_only_its_leftovers_remov
 
 # --------------------------------------------------------------------- 8. a full disk
 def session_of(protocol: Path, **kw: Any) -> tuple[WatchSession, list[str]]:
-    p = load_protocol(protocol)
-    p, out = with_output_dir(p, p.campaign.output_dir)
-    lines: list[str] = []
-    kw.setdefault("report", False)
-    kw.setdefault("live_figures", True)
-    return WatchSession(p, out, jobs=1, echo=lines.append, **kw), lines
+    """The session of ``protocol`` in this process, drawing the live page's figures."""
+    return watch_session(protocol, **{"live_figures": True, **kw})
 
 
 def arrive(s: WatchSession, root: Path, run: int) -> list:
@@ -301,13 +297,7 @@ def test_a_port_in_use_is_refused_before_the_url_and_before_anything_is_written(
 
 
 def _start_watch(tmp_path: Path, port: int) -> tuple[subprocess.Popen[str], list[str]]:
-    protocol = make_day(tmp_path)
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
-    proc = subprocess.Popen([sys.executable, "-m", "towtank", "watch", str(protocol),
-                             "--no-browser", "--no-report", "--port", str(port)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)
+    proc = start_watch(make_day(tmp_path), "--no-report", "--port", str(port))
     lines: queue.Queue[str | None] = queue.Queue()
 
     def pump() -> None:

@@ -26,7 +26,6 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from towtank.ingest.protocol import load_protocol, with_output_dir
 from towtank.live.session import WatchSession
 from towtank.pipeline import process_day
 from towtank.report.tables import write_tables
@@ -34,6 +33,7 @@ from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import sha256_regular
 from towtank.testing import synthetic as syn
 from towtank.testing.bench_watch import labview_write as write_in_blocks
+from towtank.testing.bench_watch import watch_session as session_of
 from towtank.testing.days import RunSpec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,15 +63,6 @@ def make_day(root: Path, plan: list[RunSpec], *, watch: dict | None = None,
     if vehicle is not None:
         sections["vehicle"] = vehicle
     return syn.write_protocol(root / "p.toml", **sections)
-
-
-def session_of(protocol: Path, **kw) -> tuple[WatchSession, list[str]]:
-    p = load_protocol(protocol)
-    p, out = with_output_dir(p, p.campaign.output_dir)
-    lines: list[str] = []
-    kw.setdefault("report", False)
-    kw.setdefault("live_figures", False)
-    return WatchSession(p, out, jobs=1, echo=lines.append, **kw), lines
 
 
 def labview_write(src: Path, dst: Path) -> None:

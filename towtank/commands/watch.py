@@ -23,6 +23,7 @@ import sys
 import threading
 import webbrowser
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -55,26 +56,33 @@ class Stopped(BaseException):
         self.signum = signum
 
 
+@dataclass
+class EndSignals:
+    """The SIGTERM and SIGHUP that came (``came``); ``ending``: watch is ending already."""
+
+    came: list[int] = field(default_factory=list)
+    ending: bool = False
+
+
 @contextlib.contextmanager
-def ending_on_signals() -> Iterator[list[int]]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`Stopped` in the main thread (the
-    first only: watch is ending), so that the page server and the drawings are stopped and
-    the lock let go as after Ctrl-C; the signal is also put in the list yielded (watchfiles
-    turns any exception a signal handler raises into KeyboardInterrupt). Outside the main
-    thread nothing changes."""
-    came: list[int] = []
+def ending_on_signals() -> Iterator[EndSignals]:
+    """Within the block, SIGTERM and SIGHUP raise :class:`Stopped` in the main thread until
+    watch is ending (``ending``), so that the page server and the drawings are stopped and
+    the lock let go as after Ctrl-C; each is also recorded (watchfiles turns any exception a
+    signal handler raises into KeyboardInterrupt). Outside the main thread nothing changes."""
+    got = EndSignals()
     if threading.current_thread() is not threading.main_thread():
-        yield came
+        yield got
         return
 
     def handler(signum: int, frame: object) -> None:
-        if not came:
-            came.append(signum)
+        got.came.append(signum)
+        if not got.ending:
             raise Stopped(signum)
 
     previous = {sig: signal.signal(sig, handler) for sig in END_SIGNALS}
     try:
-        yield came
+        yield got
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old)
@@ -140,8 +148,10 @@ def hold_watch_lock(live_dir: Path) -> TextIO:
         raise
     fh = os.fdopen(fd, "r+", encoding="utf-8", errors="replace")
     try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise ProtocolError(refusal(path, "not a regular file"))
         held = fh.read(64).strip()
-        if not stat.S_ISREG(os.fstat(fd).st_mode) or not (held.isdigit() or not held):
+        if held and not held.isdigit():
             raise ProtocolError(refusal(path, "not the lock file towtank watch writes"))
         if not try_lock(fd):
             raise ProtocolError(
@@ -196,16 +206,18 @@ def watch_command(args: argparse.Namespace) -> int:
         _err(str(exc) if isinstance(exc, ProtocolError) else
              f"the output folder {out} cannot be written ({exc.strerror or exc}).")
         return EXIT_UNUSABLE
-    with ending_on_signals() as came:
+    with ending_on_signals() as signals:
         try:
             return _watch(args, protocol, out, jobs, sock)
         except (Stopped, KeyboardInterrupt):
-            if not came:
+            if not signals.came:
                 raise  # Ctrl-C: the command line's sentence and exit 130
+            signals.ending = True
             parallel.end_forkserver()
-            _err(f"stopped by {signal.Signals(came[0]).name}; the output folder holds the "
+            first = signals.came[0]
+            _err(f"stopped by {signal.Signals(first).name}; the output folder holds the "
                  "outputs of the last complete run (or none), never a part of one.")
-            return 128 + came[0]
+            return 128 + first
         finally:
             lock.close()  # the next watch of this folder may start
 

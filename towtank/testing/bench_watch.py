@@ -38,6 +38,36 @@ from towtank.testing.days import RunSpec, hull_day_plan
 BLOCKS = 10
 BLOCK_PAUSE_S = 0.1
 TIMEOUT_S = 60.0
+#: The checkout this module is in: the code a watch of :func:`start_watch` runs.
+CHECKOUT = Path(__file__).resolve().parents[2]
+
+
+def start_watch(protocol: Path, *options: str,
+                stderr: int = subprocess.PIPE) -> subprocess.Popen[str]:
+    """``towtank watch PROTOCOL --no-browser OPTIONS`` of this checkout as a process of its
+    own, in a session of its own (its process group, page server included, can be ended at
+    once); stdout (and ``stderr``) piped as text."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(CHECKOUT), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    return subprocess.Popen([sys.executable, "-m", "towtank", "watch", str(protocol),
+                             "--no-browser", *options], stdout=subprocess.PIPE, stderr=stderr,
+                            text=True, env=env, start_new_session=True)
+
+
+def watch_session(protocol: Path, **kw: Any) -> tuple[Any, list[str]]:
+    """A :class:`towtank.live.session.WatchSession` of ``protocol`` in this process (one
+    worker; no report and no live figures unless ``kw`` asks for them), and the list its
+    lines go to."""
+    # start-up saving: the benchmark's own process never holds a session
+    from towtank.ingest.protocol import load_protocol, with_output_dir
+    from towtank.live.session import WatchSession
+
+    p = load_protocol(protocol)
+    p, out = with_output_dir(p, p.campaign.output_dir)
+    lines: list[str] = []
+    kw.setdefault("report", False)
+    kw.setdefault("live_figures", False)
+    return WatchSession(p, out, jobs=1, echo=lines.append, **kw), lines
 
 
 def plan_of(n: int) -> list[RunSpec]:
@@ -154,10 +184,7 @@ def bench(runs: int, gap_s: float, fs: float, folder: Path,
     sections: Any = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     protocol = syn.write_protocol(folder / "p.toml", **sections)
     port = free_port()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "towtank", "watch", str(protocol), "--no-browser", "--port",
-         str(port)],
-        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, start_new_session=True)
+    proc = start_watch(protocol, "--port", str(port), stderr=subprocess.DEVNULL)
     q: queue.Queue = queue.Queue()
     threading.Thread(target=_reader, args=(proc.stdout, q), daemon=True).start()
     state = folder / "out" / ".live" / "state.json"
