@@ -215,7 +215,6 @@ class WatchSession:
         self._fits_job: tuple[int, Path] | None = None  # (process id, its listing)
         claim_live_dir(self.live_dir)  # ProtocolError: a link, or a folder not towtank's
         remove_leftovers(self.live_dir)  # of an earlier watch that was killed
-        self._faults: dict[str, str] = {}  # what could not be written -> its sentence
         self.latest: Verdict | None = None
         self.figures: dict[str, str] = {}
         self.timings: dict[str, float] = {}
@@ -397,7 +396,6 @@ class WatchSession:
         if code != 0 or not isinstance(drawn, dict):
             self.say("the live page's fit figures could not be drawn; the last ones stay.")
             return True
-        self._faults.pop(FITS, None)
         figs = {k: v for k, v in self.figures.items() if k not in ("damping", "added_mass")}
         self.figures = {**figs, **{str(k): str(v) for k, v in drawn.items()}}
         self.publish()
@@ -571,7 +569,6 @@ class WatchSession:
             return False
         self._job = None
         if os.waitstatus_to_exitcode(status) == 0 and (folder / "done").is_file():
-            self._faults.pop(REPORT, None)
             old, self._staged = self._staged, folder
             self.pdf_runs, self.pdf_iso = runs, iso
             self.write()
@@ -714,8 +711,6 @@ class WatchSession:
             if full is None:
                 raise
             self._failed(PAGE, full)
-        else:
-            self._faults.pop(PAGE, None)
 
     def _publish(self, *, latest: bool, fits: bool) -> None:
         if self.live_figures and self.day is not None:
@@ -737,8 +732,9 @@ class WatchSession:
     def _failed(self, what: str, exc: BaseException) -> None:
         """One sentence for ``what`` (:data:`PAGE`, :data:`FITS`, :data:`REPORT`) that could
         not be written into the live folder (a full disk, a link put there meanwhile), said
-        once until ``what`` is written again; the verdicts go on and the files there stay whole
-        (each is replaced whole or not at all)."""
+        once in the session (a disk that fills and empties would otherwise repeat it at every
+        run); the verdicts go on and the files there stay whole (each is replaced whole or not
+        at all)."""
         if isinstance(exc, ProtocolError):
             sentence = f"{_strip_dot(str(exc))}; the verdicts go on without {what}."
         else:
@@ -746,9 +742,7 @@ class WatchSession:
             sentence = (f"{what} could not be written in {self.live_dir} "
                         f"({os.strerror(code) if code else exc}); the verdicts go on, and it is "
                         "written again at the next run.")
-        if self._faults.get(what) != sentence:
-            self._faults[what] = sentence
-            self.say(sentence, once=False)
+        self.say(sentence)
 
     def _draw_latest(self) -> dict[str, str]:
         """The latest verdict's run: its traces and phases, or its raw traces when it could
