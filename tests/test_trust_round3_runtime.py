@@ -83,6 +83,19 @@ def _copy(processed, tmp_path_factory, name: str) -> tuple[Path, Path, dict[str,
     return protocol, copy, fresh
 
 
+@pytest.fixture(scope="module")
+def own_copy(processed, tmp_path_factory) -> Callable[[str], tuple[Path, Path, dict]]:
+    """``own_copy(name)``: :func:`_copy` made once per name, kept across a property test's
+    examples."""
+    copies: dict[str, tuple[Path, Path, dict]] = {}
+
+    def get(name: str) -> tuple[Path, Path, dict]:
+        if name not in copies:
+            copies[name] = _copy(processed, tmp_path_factory, name)
+        return copies[name]
+    return get
+
+
 # ---------------------------------------- 2. a file the protocol names, wherever it lives
 @pytest.mark.parametrize("name", [
     "/run/media/lab/STICK/tare.csv", "/run/user/1000/gvfs/smb-share/day3/hull.csv",
@@ -506,15 +519,10 @@ def _plant(cache: Path, changes: dict[str, Change]) -> None:
     (cache / "day.json").unlink(missing_ok=True)
 
 
-@pytest.fixture(scope="module")
-def planted_cache(processed, tmp_path_factory) -> tuple[Path, Path, dict[str, bytes]]:
-    return _copy(processed, tmp_path_factory, "planted_cache")
-
-
 @DAY_EXAMPLES
 @given(data=st.data())
-def test_planted_insane_records_are_reduced_again(planted_cache, data):
-    protocol, out, fresh = planted_cache
+def test_planted_insane_records_are_reduced_again(own_copy, data):
+    protocol, out, fresh = own_copy("planted_cache")
     cache = out / ".cache"
     names = data.draw(st.lists(st.sampled_from(sorted(_entries(cache))), min_size=1,
                                max_size=4, unique=True))
@@ -573,15 +581,10 @@ def planted_manifest(draw, out: Path, victim: Path) -> tuple[dict, bool]:
             "files": files}, spoiled
 
 
-@pytest.fixture(scope="module")
-def planted_manifest_out(processed, tmp_path_factory) -> tuple[Path, Path, dict[str, bytes]]:
-    return _copy(processed, tmp_path_factory, "planted_manifest")
-
-
 @DAY_EXAMPLES
 @given(data=st.data())
-def test_a_planted_manifest_neither_crashes_nor_reaches_outside(planted_manifest_out, data):
-    protocol, out, fresh = planted_manifest_out
+def test_a_planted_manifest_neither_crashes_nor_reaches_outside(own_copy, data):
+    protocol, out, fresh = own_copy("planted_manifest")
     victim = _victim(out.parent)
     before = (victim.read_bytes(), victim.stat().st_mtime_ns)
     (out / "notes.txt").write_text("mine")  # the folder is then updated entry by entry
