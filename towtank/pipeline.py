@@ -45,6 +45,7 @@ from towtank.reduce.run import (
     crashed_record,
     reduce_record,
 )
+from towtank.reduce.sanity import sane_reduction
 from towtank.reduce.tare import TareModel, fit_tare_group, table_tare
 from towtank.reference.sets import BUILTIN_REFERENCES
 from towtank.results import (
@@ -60,7 +61,6 @@ from towtank.results import (
 from towtank.runtime import parallel
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
 from towtank.runtime.pause import pause_at
-from towtank.runtime.records import same_lengths
 from towtank.vehicle.compare import day_vehicle
 
 __all__ = ["DayResult", "FinResult", "HullResult", "ScalingResult", "VehicleResult",
@@ -378,7 +378,7 @@ def reduce_runs(
     if warnings_out is None:
         warnings_out = []
     reductions: dict[int, RunReduction] = {}
-    cache = RunCache(cache_dir, RunReduction, _sound_reduction) if cache_dir is not None \
+    cache = RunCache(cache_dir, RunReduction, sane_reduction) if cache_dir is not None \
         else None
     if cache is not None and cache.problem:
         warnings_out.append(cache.problem)
@@ -433,15 +433,6 @@ def reduce_runs(
     # keep the sheet's order whatever the order of cache hits and fresh reductions
     order = {int(r): k for k, r in enumerate(sheet["run"])}
     return dict(sorted(reductions.items(), key=lambda kv: order[kv[0]])), previews
-
-
-def _sound_reduction(red: RunReduction) -> bool:
-    """Whether a reduction read back from the cache is whole: its sample tables' columns of
-    one length, finite sample rate and sample count, known phase windows."""
-    tables = [red.samples, red.thumb] + ([red.series] if red.series is not None else [])
-    return (all(same_lengths(t) for t in tables) and math.isfinite(red.fs) and red.fs > 0
-            and red.n_samples >= 0
-            and all(w is None or (len(w) == 2 and w[0] <= w[1]) for w in red.windows.values()))
 
 
 def apply_tares(

@@ -472,7 +472,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
     try:
         # the lock spans the write and its record: another writer can neither mix its files
         # with these nor have its outputs recorded as this day's
-        with output_lock(Path(out).resolve()):
+        with output_lock(out):
             write_outputs(day, out, report=not args.no_report,
                           export=tuple(args.export or ()))
             text = _summary(day, Path(out))

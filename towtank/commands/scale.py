@@ -12,6 +12,7 @@ from towtank.analysis import similarity
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import Prototype, Water, load_protocol
 from towtank.pipeline import process_day
+from towtank.runtime.manifest import output_lock
 
 
 def scale_command(
@@ -54,11 +55,15 @@ def scale_command(
         raise ProtocolError(f"{where} cannot be scaled: {exc}") from None
     protocol = replace(protocol, prototype=proto)
     out_dir = out if out is not None else protocol.campaign.output_dir
-    # the cache of an earlier `process` into that folder is used; a folder that does not
-    # exist is not created (scale prints, it writes nothing)
+    # the cache of an earlier `process` into that folder is used (and added to); a folder
+    # that does not exist is not created (scale prints, it writes no output)
     cache = Path(out_dir) / ".cache"
-    day = process_day(protocol_path, protocol=protocol,
-                      cache_dir=cache if cache.is_dir() else None)
+    if cache.is_dir():
+        # the reduction may add to the folder's cache: one writer at a time
+        with output_lock(out_dir):
+            day = process_day(protocol_path, protocol=protocol, cache_dir=cache)
+    else:
+        day = process_day(protocol_path, protocol=protocol, cache_dir=None)
     if day.scaling_result is None:
         said = [str(n) for n in day.warnings if n.stage == "scaling"]
         print("no scaling table: " + " ".join(said[-1:]))

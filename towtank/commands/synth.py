@@ -7,7 +7,6 @@ The only production module that imports the test tooling: the generator stays ou
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shutil
 import sys
@@ -41,6 +40,13 @@ def synth_command(args: argparse.Namespace) -> int:
                        "--force to replace an earlier synthetic day there (files synth did "
                        "not write are never replaced).")
     out.parent.mkdir(parents=True, exist_ok=True)
+    with manifest.output_lock(out):  # one writer of the folder at a time
+        return _write_day(args, out)
+
+
+def _write_day(args: argparse.Namespace, out: Path) -> int:
+    """Make the day in a temporary folder beside ``out`` and move it in, never over a file
+    synth did not write; the exit status."""
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.synth-", dir=out.parent))
     try:
         text = _generate(args, tmp, out)
@@ -70,12 +76,10 @@ def _refuse(sentence: str) -> int:
 
 
 def _synth_files(out: Path) -> dict:
-    """The files an earlier synth run wrote in ``out`` (from its manifest)."""
-    try:
-        data = json.loads((out / SYNTH_MANIFEST).read_text(encoding="utf-8"))
-        return dict(data["files"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return {}
+    """The files an earlier synth run wrote in ``out`` (from its manifest, checked as the
+    outputs' manifest is: :func:`towtank.runtime.manifest.read_manifest`)."""
+    data = manifest.read_manifest(out, SYNTH_MANIFEST)
+    return dict(data["files"]) if data else {}
 
 
 def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:

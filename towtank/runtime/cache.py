@@ -14,7 +14,9 @@ Layout, built for campaigns of thousands of runs:
 * ``runs/pack-*.bin`` -- reductions back to back, each an uncompressed npz archive
   (:mod:`towtank.runtime.records`): nothing read back from the cache is ever unpickled, so a
   planted entry cannot run code, and every entry is checked field by field against the
-  reduction's type before it is used. New entries are gathered in memory and
+  reduction's type, then its values against what a reduction can hold (the ``check`` given,
+  :func:`towtank.reduce.sanity.sane_reduction`), before it is used; one that fails is a miss
+  and the run's fresh reduction takes its place. New entries are gathered in memory and
   written as one pack (with the index) at :meth:`flush` and, while runs are being reduced, every
   :data:`PACK_SECONDS` seconds (at least :data:`PACK_ENTRIES` entries), instead of one file
   each; at most :data:`MAX_PACKS` packs are kept, beyond that they are merged into one.
@@ -155,7 +157,9 @@ class RunCache:
         read back is checked against its fields' types (:func:`towtank.runtime.records.
         from_bytes`).
     check : callable, optional
-        A further check of an entry read back (e.g. its arrays' lengths); False is a miss.
+        A further check of an entry read back, of its values (finite means, sample tables of
+        float64 columns of one length...: :func:`towtank.reduce.sanity.sane_reduction`);
+        False is a miss, and the entry put for the same run then replaces it.
     """
 
     def __init__(self, directory: str | Path, kind: type[Any], check: Any = None):
@@ -378,6 +382,8 @@ class RunCache:
 
 # ================================================================================ the day
 DAY_FORMAT = 2  # 2: outputs by their stat, inputs as every file the day opened
+#: The exit statuses a completed day records and replays: every run used (0), some rejected (1).
+REPLAY_CODES = (0, 1)
 
 
 def _stamp(path: Path) -> tuple[int, int, int, int] | None:
@@ -506,7 +512,8 @@ class DayStamp:
             outputs, inputs = rec.get("outputs"), rec.get("inputs")
             code, summary = rec.get("exit_code"), rec.get("summary")
             if (not isinstance(outputs, dict) or not outputs or not isinstance(inputs, dict)
-                    or type(code) is not int or not isinstance(summary, str)):
+                    or type(code) is not int or code not in REPLAY_CODES
+                    or not isinstance(summary, str)):
                 return None
             if outputs != self._outputs():
                 return None
@@ -526,6 +533,9 @@ class DayStamp:
         returned sentence says why) when the protocol, the sheet, the data folder or one of
         ``inputs`` changed while the day was processed: the next run then processes it again.
         """
+        if exit_code not in REPLAY_CODES:
+            self.forget()
+            return None
         fresh = DayStamp(self.path.parent, self._protocol, self.out_dir, self._options).key
         changed = [p for p, st in (inputs or {}).items() if st is None or _stamp(Path(p)) != st]
         if fresh != self.key or changed:

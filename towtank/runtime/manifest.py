@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
+import re
 import shutil
 import stat
 import sys
@@ -34,7 +36,8 @@ from towtank.runtime.safefile import read_regular, sha256_regular
 
 __all__ = ["MANIFEST", "INCOMPLETE", "describe", "read_manifest", "write_manifest",
            "foreign_outputs", "refuse_foreign", "known", "recover_outputs",
-           "atomic_write_text", "folder_mode", "unwritable", "writing_outputs"]
+           "atomic_write_text", "folder_mode", "unwritable", "writing_outputs",
+           "inside_name", "lock_target", "lock_path", "output_lock"]
 
 MANIFEST = ".towtank-outputs.json"
 INCOMPLETE = "OUTPUTS-INCOMPLETE.txt"
@@ -65,22 +68,51 @@ def describe(folder: Path, names: set[str] | frozenset[str]) -> dict[str, list[d
 MAX_MANIFEST_BYTES = 64 << 20
 
 
+#: A file's digest as the manifest records it (sha256, lowercase hex).
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
 def _entries(value: Any) -> list[dict[str, Any]]:
-    """A manifest's list of versions of one file, with every malformed one dropped."""
+    """A manifest's list of versions of one file, with every malformed one dropped: a
+    version is {size (an int >= 0) [bytes], mtime_ns (an int) [ns], sha256 (64 hex digits)}."""
     if not isinstance(value, list):
         return []
     return [e for e in value if isinstance(e, dict) and type(e.get("size")) is int
-            and type(e.get("mtime_ns")) is int and isinstance(e.get("sha256"), str)]
+            and e["size"] >= 0 and type(e.get("mtime_ns")) is int
+            and isinstance(e.get("sha256"), str) and _SHA256.fullmatch(e["sha256"])]
 
 
-def read_manifest(folder: Path) -> dict[str, Any] | None:
-    """The manifest of ``folder``, or None when it has none (or one that is not towtank's).
+def inside_name(rel: Any) -> bool:
+    """Whether ``rel`` names an entry inside a folder as the manifest writes names: a
+    relative ``/``-separated path with no empty, ``.`` or ``..`` part, no backslash and no
+    NUL (never an absolute path nor one that climbs out of the folder)."""
+    if not isinstance(rel, str) or not rel or "\0" in rel or "\\" in rel:
+        return False
+    return all(part not in ("", ".", "..") for part in rel.split("/"))
+
+
+def _seconds(value: Any) -> float:
+    """``value`` as a time [s]: a finite number >= 0, else 0."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return 0.0
+    try:
+        seconds = float(value)
+    except OverflowError:  # an integer beyond any float
+        return 0.0
+    return seconds if math.isfinite(seconds) and seconds >= 0 else 0.0
+
+
+def read_manifest(folder: Path, name: str = MANIFEST) -> dict[str, Any] | None:
+    """The manifest ``name`` of ``folder``, or None when it has none (or one that is not
+    towtank's).
 
     Nothing in it is trusted: it is read only if it is a regular file (not a link, FIFO or
-    folder) of at most :data:`MAX_MANIFEST_BYTES`, and an entry that is not a list of
-    {size, mtime_ns, sha256} records is dropped (the file it names then counts as not
-    towtank's)."""
-    raw = read_regular(folder / MANIFEST, MAX_MANIFEST_BYTES)
+    folder) of at most :data:`MAX_MANIFEST_BYTES`; an entry whose name is not a path inside
+    the folder (:func:`inside_name`) or that is not a list of {size, mtime_ns, sha256}
+    records (:func:`_entries`) is dropped (the file it names then counts as not towtank's);
+    ``written`` that is not a finite time >= 0 [s] reads as 0 and ``complete`` as False
+    unless it is true."""
+    raw = read_regular(folder / name, MAX_MANIFEST_BYTES)
     if raw is None:
         return None
     try:
@@ -90,10 +122,9 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
     if not isinstance(data, dict) or data.get("kind") != _KIND or \
             not isinstance(data.get("files"), dict):
         return None
-    files = {k: _entries(v) for k, v in data["files"].items() if isinstance(k, str)}
+    files = {k: _entries(v) for k, v in data["files"].items() if inside_name(k)}
     data["files"] = {k: v for k, v in files.items() if v}
-    if not isinstance(data.get("written"), int | float) or isinstance(data["written"], bool):
-        data["written"] = 0.0
+    data["written"] = _seconds(data.get("written"))
     data["complete"] = data.get("complete") is True
     return data
 
@@ -195,9 +226,8 @@ def recover_outputs(out_dir: Path) -> str | None:
     for pattern in (f".{out_dir.name}.old-*", f".{out_dir.name}.tmp-*"):
         for cand in out_dir.parent.glob(pattern):
             data = read_manifest(cand) if cand.is_dir() else None
-            if data and data.get("complete") and isinstance(data.get("written"), int | float):
-                if best is None or data["written"] > best[0]:
-                    best = (float(data["written"]), cand)
+            if data and data["complete"] and (best is None or data["written"] > best[0]):
+                best = (data["written"], cand)
     if best is None:
         return None
     try:
@@ -278,14 +308,21 @@ LOCK_TEXT = "towtank output lock: the process writing into the folder beside thi
 #: How long a second writer waits for the first to finish before it gives up [s].
 LOCK_WAIT_S = 60.0
 
-_held_lock = __import__("threading").Lock()
+_held_lock = threading.Lock()
 _held: dict[str, list[Any]] = {}  # folder -> [thread ident, depth, fd]
 
 
-def lock_path(out_dir: Path) -> Path:
-    """The lock file of output folder ``out_dir``: ``.NAME.towtank-lock`` beside it (not in
-    it: the folder itself is replaced by a rename)."""
-    out_dir = Path(out_dir).absolute()
+def lock_target(out_dir: str | Path) -> Path:
+    """The output folder ``out_dir`` as its lock names it: its real path (a link to it
+    followed, a relative path made absolute), so that every name of one folder takes the one
+    lock (``--out olink`` where olink -> o locks o)."""
+    return Path(out_dir).resolve()
+
+
+def lock_path(out_dir: str | Path) -> Path:
+    """The lock file of output folder ``out_dir``: ``.NAME.towtank-lock`` beside its real
+    path (:func:`lock_target`; not in it: the folder itself is replaced by a rename)."""
+    out_dir = lock_target(out_dir)
     return out_dir.parent / f".{out_dir.name}.towtank-lock"
 
 
@@ -321,18 +358,22 @@ def _holder(fd: int) -> str:
 
 
 @contextlib.contextmanager
-def output_lock(out_dir: Path, wait_s: float = LOCK_WAIT_S) -> Iterator[None]:
+def output_lock(out_dir: str | Path, wait_s: float | None = None) -> Iterator[None]:
     """Hold the exclusive lock of output folder ``out_dir`` while the block runs.
 
-    Every command that writes into an output folder (process, predict, simulate, scale) holds
-    it for the whole write, so two writers (two processes, or two threads of a notebook)
-    never mix their files: the second waits up to ``wait_s`` [s] for the first, then stops
-    (ProtocolError) with a sentence naming the holder's process id. The lock is an advisory
-    lock (``flock``) on ``.NAME.towtank-lock`` beside the folder, which holds the pid: the
-    system releases it when its holder ends, however it ends, so a lock left by a killed run
-    is no obstacle. Re-entrant within one thread.
+    The one way a command takes an output folder's lock: every command that writes into one
+    (process, watch, predict, simulate, steady, identify, scale's cache, synth) holds it for
+    the whole write, so two writers (two processes, or two threads of a notebook) never mix
+    their files: the second waits up to ``wait_s`` [s] (default :data:`LOCK_WAIT_S`) for the
+    first, then stops (ProtocolError) with a sentence naming the holder's process id. The
+    folder is named by its real path (:func:`lock_target`): a link to it takes the same lock.
+    The lock is an advisory lock (``flock``) on ``.NAME.towtank-lock`` beside the folder,
+    which holds the pid: the system releases it when its holder ends, however it ends, so a
+    lock left by a killed run is no obstacle. Re-entrant within one thread.
     """
-    out_dir = Path(out_dir).absolute()
+    out_dir = lock_target(out_dir)
+    if wait_s is None:
+        wait_s = LOCK_WAIT_S
     key = str(out_dir)
     me = threading.get_ident()
     with _held_lock:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
-__all__ = ["RecordError", "to_bytes", "from_bytes", "check_value"]
+__all__ = ["RecordError", "to_bytes", "from_bytes", "check_value", "table_length"]
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
@@ -210,7 +210,22 @@ def check_value(value: Any, tp: Any, where: str = "value") -> Any:
     raise RecordError(f"{where}: {type(value).__name__} is not {tp}")
 
 
-def same_lengths(arrays: dict[str, np.ndarray]) -> bool:
-    """Whether every array of ``arrays`` has the same length (a record's sample table)."""
-    return len({a.shape[0] for a in arrays.values()}) <= 1
+def table_length(table: Any, floats: tuple[str, ...], ints: tuple[str, ...] = ()) -> int | None:
+    """The length of ``table`` when it is a sample table of a record, else None.
+
+    A sample table maps exactly the column names ``floats`` to 1-D float64 arrays and ``ints``
+    to 1-D arrays of a signed integer type, all of one length > 0 (what a record may hold
+    otherwise, a bool or integer array where floats belong, an empty or a ragged table, is
+    not one).
+    """
+    if not isinstance(table, dict) or set(table) != set(floats) | set(ints):
+        return None
+    arrays = list(table.values())
+    if not all(isinstance(a, np.ndarray) and a.ndim == 1 for a in arrays):
+        return None
+    if not (all(table[k].dtype == np.float64 for k in floats)
+            and all(table[k].dtype.kind == "i" for k in ints)):
+        return None
+    lengths = {a.shape[0] for a in arrays}
+    return lengths.pop() if len(lengths) == 1 and 0 not in lengths else None
 
