@@ -284,14 +284,15 @@ def noise_sd(log: ManoeuvreLog) -> np.ndarray:
     return out
 
 
-def noise_entry(state: str, value: Any, positive: bool = True) -> tuple[str, float]:
+def noise_entry(state: Any, value: Any, positive: bool = True) -> tuple[str, float]:
     """One ``state=sd`` of ``--noise``: the state's column and the standard deviation [the
     column's unit: m, deg, m/s, deg/s].
 
     Parameters
     ----------
     state : str
-        A short name (``u``, ``psi``) or a column (``u_m_s``)
+        A short name (``u``, ``psi``) or a column (``u_m_s``); anything else is read as its
+        text
     value : str or float
         The standard deviation
     positive : bool
@@ -302,16 +303,17 @@ def noise_entry(state: str, value: Any, positive: bool = True) -> tuple[str, flo
     ValueError
         An unknown state or a value that is not a finite number in range (one sentence).
     """
-    col = SHORT_NAMES.get(state.strip(), state.strip())
+    state = str(state).strip()
+    col = SHORT_NAMES.get(state, state)
     if col not in STATE_COLUMNS:
-        raise ValueError(f"--noise: {state.strip()!r} is not a state (states: "
+        raise ValueError(f"--noise: {state!r} is not a state (states: "
                          f"{', '.join(SHORT_NAMES)}, or their columns such as u_m_s).")
     try:
         sd = float(value)
     except (TypeError, ValueError):
         sd = math.nan
     if not (math.isfinite(sd) and (sd > 0 if positive else sd >= 0)):
-        raise ValueError(f"--noise: the standard deviation of {state.strip()} must be a finite "
+        raise ValueError(f"--noise: the standard deviation of {state} must be a finite "
                          f"number {'> 0' if positive else '>= 0'}, not "
                          f"{str(value).strip()!r}.")
     return col, sd
