@@ -7,9 +7,9 @@ depend on the machine. Run it alone to see them::
     PYTHONPATH=. python tests/benchmarks/test_bench_identify.py
 
 which prints the wall and CPU time and writes nothing; with record lengths [s] as arguments
-(``... test_bench_identify.py 120 600 2000``: 2,401, 12,001 and 40,001 rows) it measures each
-and the rate per row, from which identify's row limit
-(:data:`towtank.vehicle.identify_log.MAX_ROWS`) is set.
+(``... test_bench_identify.py 120 600 1999.95``: 2,401, 12,001 and 40,000 rows) it measures
+each and the time per row, from which identify's row limit
+(:data:`towtank.vehicle.identify_log.MAX_ROWS`, docs/formats.md "Why 30 000 rows") is set.
 """
 
 from __future__ import annotations

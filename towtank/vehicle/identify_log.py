@@ -32,10 +32,11 @@ SHORT_NAMES = {c.split("_", 1)[0]: c for c in STATE_COLUMNS}
 _TO_SI = tuple(math.pi / 180.0 if c.endswith(("_deg", "_deg_s")) else 1.0
                for c in STATE_COLUMNS)
 #: Most rows towtank identifies from (a longer record: resample it, 20 Hz is plenty).
-MAX_ROWS = 40_000
-#: About how long identify takes on :data:`MAX_ROWS` rows [min]: three coefficients, the
-#: unscented filter and the least-squares cross-check on a two-core machine
-#: (tests/benchmarks/test_bench_identify.py).
+MAX_ROWS = 30_000
+#: About how long identify takes at most on :data:`MAX_ROWS` rows [min]: three coefficients,
+#: the unscented filter and the least-squares cross-check on a two-core machine
+#: (tests/benchmarks/test_bench_identify.py: 40 000 rows took 424 s of CPU with 2 of the
+#: filter's 4 passes; docs/formats.md, "Why 30 000 rows").
 MAX_ROWS_MINUTES = 10
 #: Fewest rows with a measured state.
 MIN_ROWS = 20
