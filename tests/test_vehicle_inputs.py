@@ -14,15 +14,14 @@ import errno
 import json
 import math
 import os
-import signal
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from towtank.commands.cli import main
+from towtank.testing.hang import hang_bound as bound
 from towtank.vehicle import schema
 from towtank.vehicle.model import G, read_model
 
@@ -56,23 +55,9 @@ def good_model(**changes):
     return model
 
 
-class Hang(BaseException):
-    """A command that did not answer within its bound (not an Exception: main() would turn
-    one into exit 3)."""
-
-
-@contextmanager
 def hang_bound(seconds: float = HANG_S):
-    def alarm(signum, frame):  # noqa: ANN001
-        raise Hang(f"no answer within {seconds:g} s")
-
-    before = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, before)
+    """:func:`towtank.testing.hang.hang_bound` with this file's bound."""
+    return bound(seconds)
 
 
 def write_json(path: Path, model) -> Path:

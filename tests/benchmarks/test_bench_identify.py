@@ -6,7 +6,10 @@ depend on the machine. Run it alone to see them::
 
     PYTHONPATH=. python tests/benchmarks/test_bench_identify.py
 
-which prints the wall and CPU time and writes nothing.
+which prints the wall and CPU time and writes nothing; with record lengths [s] as arguments
+(``... test_bench_identify.py 120 600 1999.95``: 2,401, 12,001 and 40,000 rows) it measures
+each and the time per row, from which identify's row limit
+(:data:`towtank.vehicle.identify_log.MAX_ROWS`, docs/formats.md "Why 30 000 rows") is set.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ def bench(tmp: Path, duration_s: float = 120.0, rate_hz: float = 20.0) -> dict:
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     truth = np.array([model["coefficients"][s] for s in PAPER])
     return {"samples": len(log.t), "wall_s": wall, "cpu_s": cpu, "target_s": TARGET_S,
+            "ms_per_row": 1e3 * wall / len(log.t),
             "relative_error": (res.value / truth - 1.0).tolist(), "notes": res.notes}
 
 
@@ -64,7 +68,9 @@ def test_bench_identify_runs_and_reports(tmp_path: Path) -> None:
 
 
 if __name__ == "__main__":
+    import sys
     import tempfile
 
     with tempfile.TemporaryDirectory() as d:
-        print(json.dumps(bench(Path(d)), indent=1))
+        for duration in [float(a) for a in sys.argv[1:]] or [120.0]:
+            print(json.dumps(bench(Path(d), duration_s=duration)), flush=True)

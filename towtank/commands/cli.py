@@ -253,8 +253,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="starting values: the model's (default) or zero")
     idn.add_argument("--protocol", type=Path, metavar="TOML",
                      help="a protocol whose [channels] maps the record's column names")
-    idn.add_argument("--noise", metavar="STATE=SD,...",
-                     help="measurement noise per state (default: estimated from the record)")
+    idn.add_argument("--noise", metavar="STATE=SD,...", type=_noise_option,
+                     help="measurement noise per state, each named once with a standard "
+                     "deviation > 0 (default: estimated from the record)")
+    idn.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     idn.add_argument("--out", type=Path, metavar="DIR",
                      help="output folder (default: ./identify)")
     idn.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
@@ -604,7 +606,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     return identify_command(args.model, args.log, args.estimate, method=args.method,
                             start=args.start, out=args.out, protocol=args.protocol,
-                            noise=args.noise)
+                            noise=args.noise, quiet=args.quiet)
+
+
+def _noise_option(text: str) -> dict[str, float]:
+    """identify's --noise, read by the parser (its error the parser's usage line)."""
+    # start-up saving: identify's modules are loaded only when the option is given
+    from towtank.commands.identify import noise_option
+
+    return noise_option(text)
 
 
 def cmd_watch(args: argparse.Namespace) -> int:

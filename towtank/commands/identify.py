@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
-import math
+import argparse
+import sys
 import tomllib
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -13,8 +16,8 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.identify_figure import save_identify_figure
 from towtank.vehicle import schema
-from towtank.vehicle.identify import identify
-from towtank.vehicle.identify_log import STATE_COLUMNS, LogError, read_log
+from towtank.vehicle.identify import Progress, identify
+from towtank.vehicle.identify_log import SHORT_NAMES, LogError, noise_entry, read_log
 from towtank.vehicle.model import read_model, write_model
 
 #: The files ``identify`` writes.
@@ -39,38 +42,83 @@ def _channels(protocol: Path | None) -> dict[str, Any] | None:
     return table
 
 
-def parse_noise(text: str | None) -> dict[str, float]:
+def parse_noise(text: str | None, positive: bool = False) -> dict[str, float]:
     """``--noise u=0.01,r=0.2,psi=0.5``: standard deviation per state, in the state's column
-    unit (m, deg, m/s, deg/s); short names (``u``, ``psi``) or the columns (``u_m_s``)."""
+    unit (m, deg, m/s, deg/s); short names (``u``, ``psi``) or the columns (``u_m_s``), each
+    state once; ``positive``: every value above 0, else 0 allowed
+    (:func:`towtank.vehicle.identify_log.noise_entry`).
+
+    Raises
+    ------
+    ProtocolError
+        One sentence naming the part that is wrong.
+    """
     out: dict[str, float] = {}
-    if not text:
-        return out
-    short = {c.split("_", 1)[0]: c for c in STATE_COLUMNS}
-    for part in text.split(","):
+    for part in (text or "").split(","):
         if not part.strip():
             continue
         key, sep, val = part.partition("=")
-        key = key.strip()
-        col = short.get(key, key)
-        if not sep or col not in STATE_COLUMNS:
+        if not sep:
             raise ProtocolError(f"--noise: {part.strip()!r} is not state=sd (states: "
-                                f"{', '.join(short)}).")
+                                f"{', '.join(SHORT_NAMES)}).")
         try:
-            sd = float(val)
-        except ValueError:
-            sd = float("nan")
-        if not (math.isfinite(sd) and sd >= 0):
-            raise ProtocolError(f"--noise: the standard deviation of {key} must be a number "
-                                f">= 0, not {val.strip()!r}.")
+            col, sd = noise_entry(key, val, positive)
+        except ValueError as exc:
+            raise ProtocolError(str(exc)) from None
+        if col in out:
+            raise ProtocolError(f"--noise names the state {col} twice ({text!r}); give "
+                                "each state once.")
         out[col] = sd
     return out
 
 
+def noise_option(text: str) -> dict[str, float]:
+    """The argparse type of identify's ``--noise``: :func:`parse_noise` with every standard
+    deviation above 0; its sentence as the parser's error (usage line, exit 2)."""
+    try:
+        return parse_noise(text, positive=True)
+    except ProtocolError as exc:
+        # argparse starts the sentence with "argument --noise: "
+        raise argparse.ArgumentTypeError(
+            str(exc).removeprefix("--noise: ").removeprefix("--noise ")) from None
+
+
+@contextmanager
+def progress_bar(show: bool) -> Iterator[Progress | None]:
+    """A progress bar on stderr (tqdm) that shows each stage of the identification in turn
+    (:data:`towtank.vehicle.identify.Progress`); None when not ``show``."""
+    if not show:
+        yield None
+        return
+    # start-up saving: tqdm (~0.12 s) only for a progress bar on a terminal
+    from tqdm import tqdm
+
+    tqdm.monitor_interval = 0  # no monitor thread, as for process
+    bars: list[Any] = []  # the bar, made at the first stage
+
+    def progress(stage: str, done: int, total: int) -> None:
+        if not bars:
+            bars.append(tqdm(total=total, desc=stage, file=sys.stderr, leave=False))
+        bar = bars[0]
+        if bar.desc != stage or bar.total != total:
+            bar.set_description_str(stage, refresh=False)
+            bar.reset(total=total)  # redrawn with the new stage
+        bar.update(done - bar.n)
+
+    try:
+        yield progress
+    finally:
+        for bar in bars:
+            bar.close()
+
+
 def identify_command(model_path: Path, log_path: Path, estimate: str, *, method: str = "ukf",
                      start: str = "model", out: Path | None = None,
-                     protocol: Path | None = None, noise: str | None = None) -> int:
+                     protocol: Path | None = None,
+                     noise: str | Mapping[str, float] | None = None, quiet: bool = False) -> int:
     """Identify, write identified.csv, model.json and identify.png; print one verdict line per
-    coefficient."""
+    coefficient. ``noise``: the text of ``--noise`` or what :func:`noise_option` made of it;
+    a progress bar on stderr when it is a terminal, unless ``quiet``."""
     name = Path(model_path).name
     try:
         model = read_model(model_path)
@@ -85,9 +133,12 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         log = read_log(log_path, _channels(protocol))
     except LogError as exc:
         raise ProtocolError(str(exc)) from None
+    if isinstance(noise, str):
+        noise = parse_noise(noise, positive=True)
     try:
-        result = identify(model, log, symbols, method=method, start=start,
-                          noise=parse_noise(noise) or None)
+        with progress_bar(not quiet and sys.stderr.isatty()) as progress:
+            result = identify(model, log, symbols, method=method, start=start,
+                              noise=dict(noise or {}) or None, progress=progress)
     except ValueError as exc:
         raise ProtocolError(f"{Path(log_path).name}: {exc}") from None
     table = result.table()

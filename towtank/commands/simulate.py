@@ -16,7 +16,10 @@ from towtank.errors import ProtocolError
 from towtank.report.manoeuvre_figure import save_manoeuvre_figure
 from towtank.vehicle import schema
 from towtank.vehicle.glider import glide_table
-from towtank.vehicle.glider_controls import glider_problems, roll_mass_angle_for_static_roll_deg
+from towtank.vehicle.glider_controls import (
+    model_glider_problems,
+    roll_mass_angle_for_static_roll_deg,
+)
 from towtank.vehicle.model import read_model
 from towtank.vehicle.simulate import (
     manoeuvre_metrics,
@@ -82,7 +85,7 @@ def _check_roll(model: dict | None, manoeuvre: str, roll: float | None, name: st
     give that roll at rest."""
     glider = None if model is None else model.get("glider")
     if model is not None and glider is not None:  # its wings enter every simulation
-        problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
+        problems = model_glider_problems(model, name)
         if problems:
             return problems
     if roll is None:

@@ -15,7 +15,7 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.steady_figure import save_steady_figure
 from towtank.vehicle import schema
-from towtank.vehicle.glider_controls import glider_problems
+from towtank.vehicle.glider_controls import model_glider_problems
 from towtank.vehicle.model import read_model
 from towtank.vehicle.spiral import steady_table
 
@@ -68,7 +68,7 @@ def _check(model: dict[str, Any], name: str, ballasts: list[float], pitches: lis
     if glider is None:
         return [f"{name}: the model has no 'glider' block (ballast, moving mass, wings); give "
                 "the protocol a [vehicle.glider] section and run 'towtank predict' again."]
-    problems = glider_problems(glider, f"{name}: 'glider'", float(model["mass_kg"]))
+    problems = model_glider_problems(model, name)
     if problems:
         return problems
     lo, hi = glider["ballast_cc"]

@@ -30,10 +30,16 @@ from typing import Any
 
 import numpy as np
 
-from towtank.ingest.glider_inputs import GLIDER_KEYS, glider_problems, parse_glider
+from towtank.ingest.glider_inputs import (
+    GLIDER_KEYS,
+    glider_problems,
+    model_glider_problems,
+    parse_glider,
+)
 from towtank.reference.constants import STANDARD_GRAVITY as G
 
-__all__ = ["GLIDER_KEYS", "glider_problems", "parse_glider", "ballast_model",
+__all__ = ["GLIDER_KEYS", "glider_problems", "model_glider_problems", "parse_glider",
+           "ballast_model",
            "cg_with_controls", "net_buoyancy", "static_pitch_deg", "travel_for_static_pitch_mm",
            "static_roll_deg", "roll_mass_angle_for_static_roll_deg", "G"]
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,14 +47,24 @@ from towtank.vehicle.fossen import (
     added_mass_matrix,
     rigid_body_mass_matrix,
 )
-from towtank.vehicle.identify_log import STATE_COLUMNS, ManoeuvreLog, noise_sd
+from towtank.vehicle.identify_log import (
+    MAX_GAP_S,
+    STATE_COLUMNS,
+    ManoeuvreLog,
+    noise_entry,
+    noise_sd,
+)
 from towtank.vehicle.predict import coefficient_unit
 
-__all__ = ["MAX_STEP_S", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel", "IdentifyResult",
-           "identify", "rts_smooth", "coefficient_unit", "least_squares_fit", "kalman_fit"]
+__all__ = ["MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
+           "IdentifyResult", "Progress", "identify", "rts_smooth", "coefficient_unit",
+           "least_squares_fit", "kalman_fit"]
 
 #: Largest Runge-Kutta step of the process model [s].
 MAX_STEP_S = 0.05
+#: Most Runge-Kutta steps from one sample to the next: the longest step of the time a record
+#: may have (:data:`towtank.vehicle.identify_log.MAX_GAP_S`) in steps of :data:`MAX_STEP_S`.
+MAX_SUBSTEPS = math.ceil(MAX_GAP_S / MAX_STEP_S)
 METHODS = ("ukf", "ekf", "ls")
 #: A coefficient is identifiable when its standard deviation after the record is below this
 #: fraction of its prior standard deviation (the record removed >= 99.75 % of the variance;
@@ -76,6 +87,14 @@ PASS_PRIOR = 10.0
 PASS_TOL = 0.2
 #: Fractions of the record least squares alone fits one after the other from zero starts.
 LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
+#: Most evaluations of the residuals (each a simulation along the record) of one least-squares
+#: fit.
+LS_MAX_NFEV = 60
+#: Rows of the record between two calls of the progress callback of :func:`identify`.
+PROGRESS_ROWS = 100
+
+#: ``progress(stage, done, total)``: what :func:`identify` has done of its current stage.
+Progress = Callable[[str, int, int], None]
 #: Spread of the sigma points (van der Merwe 2004) [-].
 ALPHA = 0.1
 #: In the filter's process model an estimated diagonal added-mass derivative (X_udot, Y_vdot,
@@ -120,6 +139,8 @@ class BatchModel:
                 self.mb.append(added_mass_matrix(base | {s: 1.0}) - self.ma0)
                 self.dot_index.append(j)
         self.m_rb = m_rb
+        self.mb_stack = np.array(self.mb).reshape(len(self.mb), 6, 6)
+        self.io_diag = np.diag(self.io)
         self.minv0 = np.linalg.inv(m_rb + self.ma0)
         # upper bound of each estimated coefficient in the filter's process model: a diagonal
         # added-mass derivative (X_udot ... N_rdot) at most half the diagonal of M_RB + M_A0,
@@ -176,7 +197,7 @@ class BatchModel:
             tau += phi @ self.est_e
         x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
         tau[:, 0] += -x_uu * self.u0 * np.abs(self.u0)
-        m, rg, io = self.mass, self.rg, np.diag(self.io)
+        m, rg, io = self.mass, self.rg, self.io_diag
         u, v, w_, p, q, r = nu.T  # rows: contiguous work on the few sigma points
         v1, v2 = (u, v, w_), (p, q, r)
         c21 = _cross3(v2, v1)
@@ -185,8 +206,7 @@ class BatchModel:
                                             _cross3((io[0] * p, io[1] * q, io[2] * r), v2),
                                             strict=True)]
         if self.dot_index:
-            ma = self.ma0 + np.einsum("nj,jab->nab", beta[:, self.dot_index],
-                                      np.array(self.mb))
+            ma = self.ma0 + np.einsum("nj,jab->nab", beta[:, self.dot_index], self.mb_stack)
             ab = np.einsum("nab,nb->an", ma, nu)
         else:
             ma = None
@@ -227,9 +247,19 @@ class BatchModel:
     def step(self, aug: np.ndarray, dt: float, c0: tuple[float, float],
              c1: tuple[float, float]) -> np.ndarray:
         """The augmented states (N, 12 + k) after ``dt`` [s]: RK4 in steps of at most
-        :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``."""
+        :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``.
+
+        Raises
+        ------
+        ValueError
+            ``dt`` not finite, or longer than :data:`MAX_SUBSTEPS` steps (one sentence).
+        """
         s, beta = aug[:, :12], aug[:, 12:]
-        nsub = max(1, math.ceil(dt / MAX_STEP_S - 1e-9))
+        nsub = max(1, math.ceil(dt / MAX_STEP_S - 1e-9)) if math.isfinite(dt) else 0
+        if not 0 < nsub <= MAX_SUBSTEPS:
+            raise ValueError(f"a time step of {dt:g} s would take more than the {MAX_SUBSTEPS} "
+                             f"Runge-Kutta steps of {MAX_STEP_S:g} s identify takes from one "
+                             f"sample to the next (at most {MAX_GAP_S:g} s between samples).")
         h = dt / nsub
         for i in range(nsub):
             def ctl(f: float) -> tuple[float, float]:
@@ -433,7 +463,8 @@ def _start_speed(log: ManoeuvreLog, s0: np.ndarray) -> float:
 
 def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                start: np.ndarray, prior_sd: np.ndarray, sd: np.ndarray,
-               method: str = "ukf") -> dict[str, Any]:
+               method: str = "ukf", progress: Progress | None = None,
+               stage: str = "filter") -> dict[str, Any]:
     """Augmented-state UKF or EKF (filterpy) and the RTS smoother over the record.
 
     Parameters
@@ -448,6 +479,8 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     sd : ndarray
         Measurement noise standard deviation of each state [SI] (NaN: not measured)
     method : {"ukf", "ekf"}
+    progress : callable, optional
+        Called as ``progress(stage, rows done, rows)`` every :data:`PROGRESS_ROWS` rows
 
     Returns
     -------
@@ -481,9 +514,6 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     def controls(j: int) -> tuple[float, float]:
         return (float(log.rudder[j]), float(log.sternplane[j]))
 
-    def residual_z(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return a - b
-
     x0 = np.concatenate((s0, start, [dyn.u0] if thrust else []))
 
     def step(aug: np.ndarray, dt: float, c0: tuple[float, float],
@@ -507,8 +537,13 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                 self.sigmas_f = step(sig, dt, controls(j - 1), controls(j))
                 self._chi_f = self.sigmas_f.copy()
 
+            def cross_variance(self, x: np.ndarray, z: np.ndarray, sigmas_f: np.ndarray,
+                               sigmas_h: np.ndarray) -> np.ndarray:
+                # filterpy's sum of weighted outer products, as one product of matrices
+                return (self.Wc[:, None] * (sigmas_f - x)).T @ (sigmas_h - z)
+
         f: Any = _Batch(dim_x=dim, dim_z=1, dt=0.05, hx=lambda x: x[:1], fx=lambda x, dt: x,
-                        points=points, residual_z=residual_z)
+                        points=points, residual_z=np.subtract)  # filterpy's matrix path
     else:
         f = ExtendedKalmanFilter(dim_x=dim, dim_z=1)
     f.x = x0.copy()
@@ -555,10 +590,14 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                                      "state is no longer finite); try --start model, fewer "
                                      "coefficients or --method ls.")
                 xs[j], ps[j] = f.x, f.P
+                if progress is not None and (j + 1) % PROGRESS_ROWS == 0:
+                    progress(stage, j + 1, n)
     except np.linalg.LinAlgError:
         raise ValueError(f"the {method.upper()}'s covariance stopped being positive definite at "
                          f"t = {log.t[j]:.3g} s (the filter diverged); try --start model, fewer "
                          "coefficients or --method ls.") from None
+    if progress is not None:
+        progress(stage, n, n)
     try:
         xs_s, ps_s = rts_smooth(xs, ps, x_prior, p_prior, cross)
     except np.linalg.LinAlgError:
@@ -573,7 +612,8 @@ def _fd_steps(x: np.ndarray) -> np.ndarray:
 
 def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                       start: np.ndarray, sd: np.ndarray,
-                      windows: tuple[float, ...] = (1.0,)) -> dict[str, Any]:
+                      windows: tuple[float, ...] = (1.0,),
+                      progress: Progress | None = None) -> dict[str, Any]:
     """Output-error least squares of the coefficients and the initial measured states.
 
     Minimises ``sum_k sum_i ((y_i(t_k; beta, s0) - z_ik) / sigma_i)^2`` over the measured
@@ -587,6 +627,9 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     too far from the measured one for the fit to find its way; over the first part it is
     not: the usual continuation of output-error fits).
 
+    ``progress``, optional: called as ``progress(stage, evaluations, at most)`` after each
+    evaluation (a simulation along the record), at most :data:`LS_MAX_NFEV` per window.
+
     Returns
     -------
     dict
@@ -596,7 +639,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         n = max(int(frac * len(log.t)), 20)
         sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],
                            sternplane=log.sternplane[:n], measured=log.measured, name=log.name)
-        start = least_squares_fit(model, sub, symbols, start, sd)["value"]
+        start = least_squares_fit(model, sub, symbols, start, sd, progress=_staged(
+            progress, f"least squares, first {frac:.0%} of the record"))["value"]
 
     k = len(symbols)
     s0 = _initial_state(log, model)
@@ -629,6 +673,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         return out
 
     cache: dict[bytes, np.ndarray] = {}
+    evaluations = [0]
+    stage = "least squares" if len(windows) == 1 else "least squares, whole record"
 
     def both(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # the residuals and the forward-difference Jacobian from one batched simulation: on a
@@ -640,6 +686,9 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
             res = residuals_many(pts)
             cache.clear()
             cache[key] = np.vstack([res[0][None, :], ((res[1:] - res[0]) / hstep[:, None])])
+            evaluations[0] += 1
+            if progress is not None:
+                progress(stage, min(evaluations[0], LS_MAX_NFEV), LS_MAX_NFEV)
         out = cache[key]
         return out[0], out[1:].T
 
@@ -650,7 +699,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         return both(theta)[1]
 
     theta0 = np.concatenate((start, s0[meas])) / scale
-    sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=60)
+    sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac",
+                        max_nfev=LS_MAX_NFEV)
     j = jac(sol.x) / scale[None, :]
     m, p = j.shape
     s2 = float(np.sum(sol.fun ** 2)) / max(m - p, 1)
@@ -671,7 +721,8 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
 
 def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
              method: str = "ukf", start: str = "model", noise: dict[str, float] | None = None,
-             prior_sd: dict[str, float] | None = None, check: bool = True) -> IdentifyResult:
+             prior_sd: dict[str, float] | None = None, check: bool = True,
+             progress: Progress | None = None) -> IdentifyResult:
     """Identify coefficients of ``model`` from the manoeuvre record ``log``.
 
     Parameters
@@ -695,6 +746,9 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         ``3 max(|model value|, 1)`` (the study's initial P of 10-100 for values of a few units)
     check : bool
         With a filter, run least squares too as the cross-check
+    progress : callable, optional
+        ``progress(stage, done, total)``: the filter's passes in rows of the record, least
+        squares in evaluations (:data:`LS_MAX_NFEV` at most)
 
     Raises
     ------
@@ -720,9 +774,10 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     psd = np.array([float((prior_sd or {}).get(s, 3.0 * max(abs(v), 1.0)))
                     for s, v in zip(symbols, model_vals, strict=True)])
     sd = noise_sd(log)
-    for col, val in (noise or {}).items():
-        i = STATE_COLUMNS.index(col)
-        sd[i] = float(val) * (math.pi / 180.0 if col.endswith(("_deg", "_deg_s")) else 1.0)
+    for state, val in (noise or {}).items():
+        col, given = noise_entry(state, val)
+        sd[STATE_COLUMNS.index(col)] = given * (math.pi / 180.0 if col.endswith(
+            ("_deg", "_deg_s")) else 1.0)
     notes = list(log.notes)
     hist: dict[str, np.ndarray] = {}
     ls = None
@@ -732,7 +787,8 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         passes = 0
         for npass in range(1, MAX_PASSES + 1):
             passes = npass
-            res = kalman_fit(model, log, symbols, x_start, prior, sd, method)
+            res = kalman_fit(model, log, symbols, x_start, prior, sd, method, progress,
+                             f"{method.upper()} pass {npass} of at most {MAX_PASSES}")
             xk, pk = res["x"], res["P"]
             k = len(symbols)
             value = xk[0, 12:12 + k]
@@ -749,11 +805,12 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
                 "smoothed": xk[:, 12:12 + k]}
         s_init = xk[0, :12]
         if check:
-            ls = least_squares_fit(model, log, symbols, value.copy(), sd)
+            ls = least_squares_fit(model, log, symbols, value.copy(), sd, progress=progress)
             s_init = ls["s0"]  # the initial state that fits the whole record open loop
     else:
         ls = least_squares_fit(model, log, symbols, start_vals, sd,
-                               windows=LS_WINDOWS if start == "zero" else (1.0,))
+                               windows=LS_WINDOWS if start == "zero" else (1.0,),
+                               progress=progress)
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
         s_init = ls["s0"]
         ls = None
@@ -777,6 +834,13 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     result.measured = log.frame()
     result.resimulated = resim.frame()
     return result
+
+
+def _staged(progress: Progress | None, stage: str) -> Progress | None:
+    """``progress`` with its stage replaced by ``stage``."""
+    if progress is None:
+        return None
+    return lambda _, done, total: progress(stage, done, total)
 
 
 def _dot(symbol: str) -> bool:

@@ -19,19 +19,32 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["STATE_COLUMNS", "CONTROL_COLUMNS", "MAX_ROWS", "MIN_ROWS", "LogError",
-           "ManoeuvreLog", "read_log", "log_from_frame", "noise_sd"]
+__all__ = ["STATE_COLUMNS", "CONTROL_COLUMNS", "MAX_ROWS", "MAX_ROWS_MINUTES", "MIN_ROWS",
+           "MAX_GAP_S", "SHORT_NAMES", "LogError", "ManoeuvreLog", "read_log", "log_from_frame",
+           "noise_sd", "noise_entry"]
 
 #: The state columns in the order of the simulation's state vector and their scale to SI.
 STATE_COLUMNS = ("x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
                  "w_m_s", "p_deg_s", "q_deg_s", "r_deg_s")
 CONTROL_COLUMNS = ("rudder_deg", "sternplane_deg")
+#: The states' short names (``u``, ``psi``) -> their columns.
+SHORT_NAMES = {c.split("_", 1)[0]: c for c in STATE_COLUMNS}
 _TO_SI = tuple(math.pi / 180.0 if c.endswith(("_deg", "_deg_s")) else 1.0
                for c in STATE_COLUMNS)
 #: Most rows towtank identifies from (a longer record: resample it, 20 Hz is plenty).
-MAX_ROWS = 200_000
+MAX_ROWS = 30_000
+#: About how long identify takes at most on :data:`MAX_ROWS` rows [min]: three coefficients,
+#: the unscented filter and the least-squares cross-check on a two-core machine
+#: (tests/benchmarks/test_bench_identify.py: 40 000 rows took 424 s of CPU with 2 of the
+#: filter's 4 passes; docs/formats.md, "Why 30 000 rows").
+MAX_ROWS_MINUTES = 10
 #: Fewest rows with a measured state.
 MIN_ROWS = 20
+#: Longest step of the time from one row to the next [s]: the filter predicts across a step
+#: open loop, and a vehicle's sway and yaw settle within about a second (REMUS: Prestero
+#: 2001), so that past a few seconds the record after the gap is another manoeuvre; the work
+#: of the prediction grows with the step (Runge-Kutta steps of at most 0.05 s).
+MAX_GAP_S = 5.0
 
 
 class LogError(ValueError):
@@ -102,9 +115,7 @@ def read_log(path: Any, channels: dict[str, Any] | None = None) -> ManoeuvreLog:
             fh.seek(0)
             lines = sum(1 for _ in fh)
         if lines - 1 > MAX_ROWS:
-            raise LogError(f"{name}: has {lines - 1} rows, more than the {MAX_ROWS} identify "
-                           "reads; resample the record (20 Hz is plenty for a manoeuvre) and "
-                           "try again.")
+            raise LogError(_too_long(name, lines - 1))
         raw = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
     except LogError:
         raise
@@ -115,6 +126,13 @@ def read_log(path: Any, channels: dict[str, Any] | None = None) -> ManoeuvreLog:
         why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise LogError(f"{name}: cannot be read as a CSV manoeuvre record ({why}).") from None
     return log_from_frame(raw, name, channels)
+
+
+def _too_long(name: str, rows: int) -> str:
+    """The sentence of a record longer than :data:`MAX_ROWS`."""
+    return (f"{name}: has {rows} rows, more than the {MAX_ROWS} identify reads (about "
+            f"{MAX_ROWS_MINUTES:g} minutes of work at that length); resample the record (20 Hz "
+            "is plenty for a manoeuvre) and try again.")
 
 
 def csv_error() -> type[Exception]:
@@ -164,8 +182,7 @@ def log_from_frame(raw: pd.DataFrame, name: str = "log",
                        "sternplane_deg).")
     n = len(raw)
     if n > MAX_ROWS:
-        raise LogError(f"{name}: has {n} rows, more than the {MAX_ROWS} identify reads; "
-                       "resample the record (20 Hz is plenty for a manoeuvre) and try again.")
+        raise LogError(_too_long(name, n))
     cols = {k: _column(raw, k, channels.get(k), name)
             for k in ("t_s",) + STATE_COLUMNS + CONTROL_COLUMNS}
     missing = [k for k in ("t_s",) + CONTROL_COLUMNS if cols[k] is None]
@@ -191,6 +208,12 @@ def log_from_frame(raw: pd.DataFrame, name: str = "log",
         raise LogError(f"{name}: the time goes back or repeats at row {keep[i + 1] + 2} "
                        f"({t[i]:g} s then {t[i + 1]:g} s); identify needs a time that "
                        "increases from row to row.")
+    if (dt > MAX_GAP_S).any():
+        i = int(np.nonzero(dt > MAX_GAP_S)[0][0])
+        raise LogError(f"{name}: the time jumps by {dt[i]:.4g} s at row {keep[i + 1] + 2} "
+                       f"({t[i]:g} s then {t[i + 1]:g} s), more than the {MAX_GAP_S:g} s "
+                       "identify predicts across; split the record at the gap and identify "
+                       "from each part.")
     z = np.full((len(t), len(STATE_COLUMNS)), np.nan)
     for i, col in enumerate(STATE_COLUMNS):
         v = cols[col]
@@ -260,3 +283,38 @@ def noise_sd(log: ManoeuvreLog) -> np.ndarray:
         floor = 1e-6 * max(float(np.ptp(y)), 1e-3)
         out[i] = max(1.4826 * mad / math.sqrt(6.0), floor)
     return out
+
+
+def noise_entry(state: Any, value: Any, positive: bool = True) -> tuple[str, float]:
+    """One ``state=sd`` of ``--noise``: the state's column and the standard deviation [the
+    column's unit: m, deg, m/s, deg/s].
+
+    Parameters
+    ----------
+    state : str
+        A short name (``u``, ``psi``) or a column (``u_m_s``); anything else is read as its
+        text
+    value : str or float
+        The standard deviation
+    positive : bool
+        True: it must be above 0 (identify's measurement noise); False: 0 is allowed
+
+    Raises
+    ------
+    ValueError
+        An unknown state or a value that is not a finite number in range (one sentence).
+    """
+    state = str(state).strip()
+    col = SHORT_NAMES.get(state, state)
+    if col not in STATE_COLUMNS:
+        raise ValueError(f"--noise: {state!r} is not a state (states: "
+                         f"{', '.join(SHORT_NAMES)}, or their columns such as u_m_s).")
+    try:
+        sd = float(value)
+    except (TypeError, ValueError):
+        sd = math.nan
+    if not (math.isfinite(sd) and (sd > 0 if positive else sd >= 0)):
+        raise ValueError(f"--noise: the standard deviation of {state} must be a finite "
+                         f"number {'> 0' if positive else '>= 0'}, not "
+                         f"{str(value).strip()!r}.")
+    return col, sd

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from towtank.ingest.glider_inputs import HullBounds, glider_problems
 from towtank.reference import water as water_props
 from towtank.vehicle import model as vmodel
 from towtank.vehicle.hull import HullProfile
@@ -63,10 +64,27 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     if vehicle.fin_limit_deg is not None:
         model["fin_limit_deg"] = float(vehicle.fin_limit_deg)
     if getattr(vehicle, "glider", None) is not None:  # [vehicle.glider] (#26)
+        _check_glider(vehicle, profile, float(model["mass_kg"]))
         model["glider"] = dict(vehicle.glider)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
                              _powering(vehicle, profile, fins, rho, nu),
                              _pressure_hull(vehicle, profile, rho))
+
+
+def _check_glider(vehicle: Any, profile: HullProfile, mass_kg: float) -> None:
+    """``[vehicle.glider]`` against the hull that holds it and the vehicle's mass [kg].
+
+    Raises
+    ------
+    ValueError
+        Its first problem (:func:`towtank.ingest.glider_inputs.glider_problems`).
+    """
+    nose = profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
+    hull = HullBounds(float(profile.length), 0.5 * float(profile.max_diameter),
+                      float(profile.volume), (nose - float(profile.length), nose))
+    problems = glider_problems(vehicle.glider, "[vehicle.glider]", mass_kg, hull)
+    if problems:
+        raise ValueError(problems[0])
 
 
 #: Speeds of powering.csv without ``speeds_m_s``: these fractions of the design speed.
