@@ -84,8 +84,8 @@ def test_lab_columns_without_protocol_are_reduced_with_the_proposed_block(day, t
     parsed = tomllib.loads(block)
     assert parsed["channels"]["drag"] == {"column": "Fx load cell (V)", "gain": 1.0,
                                           "offset": 0.0}
-    # the steady drag inspect prints is in volts: the calibrated one over 20 N/V
-    volts = float(text.split("  drag ")[1].split("N")[0])
+    # the steady drag inspect prints is in volts, and says so: the calibrated one over 20 N/V
+    volts = float(text.split("  drag ")[1].split(" V ")[0])
     ref = io.StringIO()
     assert inspect_run(day / "data" / "run_014.csv.gz", day / "p.toml",
                        png=tmp_path / "y.png", out=ref) == 0

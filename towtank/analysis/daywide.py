@@ -2,7 +2,8 @@
 
 A wrong extension, a missing gain or a misnamed column rejects every run for the same reason;
 listing it 41 times (and drawing 41 empty thumbnails) hides it. A reason is the same for two
-runs when it is word for word the same once each run's own file name and number are taken out.
+runs when it is word for word the same once each run's own file name and number are taken out
+(and, for a rejection, the numbers it quotes: each run's own sample counts and times).
 """
 
 from __future__ import annotations
@@ -79,10 +80,22 @@ def _generic(run: int, file: Any, reason: str) -> str:
     return re.sub(rf"\brun {run}\b", "run \x00n", text)
 
 
+#: A number in a sentence (``3001``, ``-0.144887``, ``1.2e-3``), not part of a name (``Fx1``).
+_NUMBER = re.compile(r"(?<![\w.])[-+−]?\d+(?:[.,]\d+)?(?:[eE][-+]?\d+)?(?![\w])")
+
+
+def _same_fault(run: int, file: Any, reason: str) -> str:
+    """:func:`_generic` with every number replaced by a placeholder: the reasons of one fault
+    that quote each run's own counts and times (``holds 2 segments ... rows 424–3424``)."""
+    return _NUMBER.sub("\x00#", _generic(run, file, reason))
+
+
 def group_rejections(runs: pd.DataFrame, min_group: int = MIN_GROUP) -> list[RejectionGroup]:
     """The rejected runs of ``runs`` (runs.csv's table: run, file, status, reason) grouped by
     reason: a fault shared by at least ``min_group`` runs and half the runs that are not void
-    is one :class:`RejectionGroup`; every other rejected run is its own.
+    is one :class:`RejectionGroup` (its sentence the first run's reason); every other rejected
+    run is its own. Two reasons are one fault when they are word for word the same once each
+    run's file name, run number and the numbers they quote are taken out.
 
     Returns
     -------
@@ -96,7 +109,7 @@ def group_rejections(runs: pd.DataFrame, min_group: int = MIN_GROUP) -> list[Rej
     by_reason: dict[str, list[tuple[int, Any, str]]] = {}
     for r in bad.itertuples():
         reason = str(r.reason) if isinstance(r.reason, str) and r.reason else "no reason given"
-        by_reason.setdefault(_generic(int(r.run), r.file, reason), []).append(
+        by_reason.setdefault(_same_fault(int(r.run), r.file, reason), []).append(
             (int(r.run), r.file, reason))
     groups: list[RejectionGroup] = []
     for members in by_reason.values():

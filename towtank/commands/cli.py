@@ -48,14 +48,16 @@ EPILOG = """\
 examples:
   towtank process protocols/sut2_hull.toml           reduce the sample hull day
   towtank process day3.toml --out reports/day3 -j 2  choose the output folder and cores
-  towtank inspect sample_runs/sut2_hull/data/run_020.csv.gz --protocol protocols/sut2_hull.toml
+  towtank inspect sample_runs/sut2_hull/data/run_005.csv.gz --protocol protocols/sut2_hull.toml
   towtank scale protocols/sut2_hull.toml --speeds 1 2 3
-  towtank watch day3.toml --no-browser                verdict per run while the tank runs
-  towtank synth /tmp/day --day hull                   generate a synthetic test day
-  towtank predict remus.toml --out pred              coefficients of the [vehicle] from geometry
+  towtank watch day3.toml --no-browser               verdict per run while the tank runs
+  towtank synth /tmp/day --day hull                  generate a synthetic test day
+  towtank predict protocols/remus_vehicle.toml --out pred      [vehicle] coefficients, model.json
   towtank simulate pred/model.json --manoeuvre turning --rudder-deg 10
-  towtank steady pred/model.json --ballast-cc -200,-450 --pitch-deg -45:-5:5
+  towtank simulate pred/model.json --manoeuvre sine --rudder-deg 10 --period-s 20 --out sine
   towtank identify pred/model.json sine/manoeuvre.csv --estimate N_ur,N_rdot,N_uudr
+  towtank predict protocols/glider_parametric.toml --out glider  a glider's model.json
+  towtank steady glider/model.json --ballast-cc -200,-450 --pitch-deg -45:-5:5
 
 exit status of 'process': 0 every run usable; 1 finished but some runs were rejected (listed
 in runs.csv); 2 the protocol or run sheet is unusable, or the output folder cannot be written

@@ -18,7 +18,12 @@ from typing import Any, TextIO
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.describe import describe_file, protocol_block
 from towtank.ingest.extensions import EXTENSIONS
-from towtank.ingest.protocol import Processing, load_protocol, read_and_channels
+from towtank.ingest.protocol import (
+    ChannelMap,
+    Processing,
+    load_protocol,
+    read_and_channels,
+)
 from towtank.ingest.runfile import load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
@@ -60,8 +65,12 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 
 
     The phases are given in seconds from the file's first sample; a file whose time channel
     holds clock times (``t0`` [s], e.g. 1716280000.53, seconds since 1970) says so once.
-    ``timing`` says where the time came from (``RawRun.time_source``)."""
+    ``timing`` says where the time came from (``RawRun.time_source``). Forces are in N, or
+    in their file's unit when ``red.units`` says the drag is raw (not calibrated)."""
     shift = t0 if abs(t0) > 1e5 else 0.0
+    unit, source = red.units.get("drag", ("N", ""))
+    force = unit if source == "raw" and unit != "unknown" else "(raw)" if source == "raw" \
+        else "N"
     lines = [
         f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
         + (f"; columns: {', '.join(columns)}" if columns else ""),
@@ -79,17 +88,17 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 
     lines += [
         "steady means (zero and drift removed, no tare):",
         f"  speed  {_fmt(red.speed_mean, 'm/s')}   (s.d. {red.speed_std:.4f} m/s)",
-        f"  drag   {_fmt(red.drag_mean_raw, 'N')}   (s.d. {red.drag_std:.4f} N)",
+        f"  drag   {_fmt(red.drag_mean_raw, force)}   (s.d. {red.drag_std:.4f} {force})",
     ]
     if red.has_lift:
-        lines.append(f"  lift   {_fmt(red.lift_mean_raw, 'N')}")
+        lines.append(f"  lift   {_fmt(red.lift_mean_raw, force)}")
     lines.append(f"acceleration  {_fmt(red.accel_mean, 'm/s²', 3)}   "
                  "(mean over the constant-acceleration window)")
-    zero = f"drag {_fmt(red.zero_drag, 'N')}"
-    drift = f"drag {_fmt(red.drift_drag, 'N')}"
+    zero = f"drag {_fmt(red.zero_drag, force)}"
+    drift = f"drag {_fmt(red.drift_drag, force)}"
     if red.has_lift:
-        zero += f", lift {_fmt(red.zero_lift, 'N')}"
-        drift += f", lift {_fmt(red.drift_lift, 'N')}"
+        zero += f", lift {_fmt(red.zero_lift, force)}"
+        drift += f", lift {_fmt(red.drift_lift, force)}"
     lines += [f"zero          {zero}", f"drift         {drift}   (end minus start)"]
     if red.notes:
         lines.append("notes:")
@@ -149,8 +158,9 @@ def _run_number(runfile: Path) -> int:
 
 def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadOptions | None
     """Print what the file holds and a ``[read]``/``[channels]`` block to paste into a
-    protocol; return the block parsed as a protocol parses it (ReadOptions, channels), or None
-    when the file cannot be described or the block names no channel."""
+    protocol; return the block parsed as a protocol parses it (ReadOptions, channels) and each
+    column's unit in the file, or None when the file cannot be described or the block names no
+    channel."""
     try:
         desc = describe_file(runfile, read)
     except RunError:
@@ -164,7 +174,7 @@ def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadO
         parsed = read_and_channels(tomllib.loads(block), "the proposed block")
     except (tomllib.TOMLDecodeError, ProtocolError):  # pragma: no cover - a bug of the block
         return None
-    return parsed if parsed[1] else None
+    return (*parsed, {name: unit for name, unit, _ in desc.channels}) if parsed[1] else None
 
 
 def _missing_channel(reason: str) -> bool:
@@ -175,8 +185,25 @@ def units_text(units: dict[str, tuple[str, str]]) -> str:
     """``time s (file), drag N (assumed: no unit label)``: each channel's unit in the file and
     where it came from."""
     how = {"assumed": "assumed: no unit label", "protocol": "from the protocol",
-           "file": "from the file", "unknown": "from the file, not converted: taken as SI"}
+           "file": "from the file", "unknown": "from the file, not converted: taken as SI",
+           "raw": "raw: not calibrated without a protocol"}
     return ", ".join(f"{c} {u} ({how.get(src, src)})" for c, (u, src) in units.items())
+
+
+def raw_units(units: dict[str, tuple[str, str]], channels: dict[str, ChannelMap],
+              file_units: dict[str, str]) -> dict[str, tuple[str, str]]:
+    """The units of a run read without a protocol: a channel the proposed block gives a
+    provisional gain is not calibrated, so it stays in its column's unit in the file (``V``),
+    ``unknown`` when the file states none, with the source ``raw``."""
+    out = {}
+    for canon, (unit, source) in units.items():
+        if source == "protocol":
+            cm = channels.get(canon)
+            cols = (cm.columns or (cm.column,)) if cm is not None else ()
+            found = {file_units.get(c, "") for c in cols} - {""}
+            unit, source = (found.pop() if len(found) == 1 else "unknown"), "raw"
+        out[canon] = (unit, source)
+    return out
 
 
 def inspect_run(
@@ -221,6 +248,7 @@ def inspect_run(
     channels, p, read, protocol = _settings(protocol_path)
     raw = None
     proposed = False
+    file_units: dict[str, str] = {}
     window: tuple[float, float] | None = None
 
     def load():  # noqa: ANN202 - RawRun
@@ -275,10 +303,12 @@ def inspect_run(
             if proposal is None:  # nothing recognised: the protocol must name the channels
                 raise
             proposed = True
-            read, channels = proposal
+            read, channels, file_units = proposal
             raw = load()
         red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
         record_units(red, raw)
+        if proposed:
+            red.units = raw_units(red.units, channels, file_units)
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "

@@ -16,7 +16,7 @@ from pathlib import Path
 from towtank.runtime import manifest
 from towtank.testing import synthetic
 from towtank.testing.handsheet import write_hand_typed_sheet
-from towtank.testing.layouts import layout_channels, protocol_sections
+from towtank.testing.layouts import LAYOUTS, layout_channels, protocol_sections
 
 EXIT_OK, EXIT_UNUSABLE = 0, 2
 
@@ -104,9 +104,15 @@ def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
         channels = layout_channels(layout, synthetic.LabChannels())
         sections = synthetic.hull_protocol_sections(".", "out", channels=channels, **sheet)
         sections = protocol_sections(layout, sections)
-    else:
-        synthetic.make_fin_day(tmp, seed=args.seed, **formats)
+    else:  # a lab's layout records the lab's channel names, which [channels] then maps
+        layout = args.file_format if args.file_format in LAYOUTS else ""
+        synthetic.make_fin_day(tmp, seed=args.seed, **formats,
+                               channel_style="lab" if layout else "canonical")
         sections = synthetic.fin_protocol_sections(".", "out", **sheet)
+        if layout:
+            channels = layout_channels(layout, synthetic.LabChannels())
+            sections = protocol_sections(layout, {
+                **sections, "channels": channels.protocol_section()})
     if hand:  # the same runs, typed as a lab types them
         path = Path(tmp) / f"run_sheet.{plain}"
         write_hand_typed_sheet(path, hand, path)

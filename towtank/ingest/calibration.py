@@ -38,7 +38,7 @@ def calibrate(
     for canon, arr in numeric.items():
         cm = full[canon]
         column = used.get(canon, cm.column)
-        in_file = column_unit(column, units) or _cells_unit(cm, units)
+        in_file = column_unit(column, units, canon) or _cells_unit(cm, units)
         stated = cm.unit or in_file
         if cm.unit and in_file and in_file.lower() != cm.unit.lower():
             notes.append(f"{canon}: the file states {in_file}; [channels] unit = "

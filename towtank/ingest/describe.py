@@ -27,6 +27,7 @@ from towtank.ingest.readers import (
     file_format,
     stated_units,
     text_layout,
+    unit_factor,
 )
 from towtank.ingest.runfile import file_bytes, read_columns
 from towtank.ingest.segments import describe_segments, find_segments
@@ -95,16 +96,20 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
              and not (fmt == "tdms" and "/" in c and c.split("/", 1)[1] in cols)]
     desc = FileDescription(name=path.name, format=fmt + (" (gzip)" if gz else ""),
                            layout=text_layout(cols))
-    for c in names:
-        arr = np.asarray(cols[c])
-        desc.channels.append((c, column_unit(c, units) or "", int(arr.size)))
     own = cols[TIME_COLUMN_KEY].item() if TIME_COLUMN_KEY in cols else None
     time_col = own[0] if own is not None and own[0] in cols else \
         next((c for c in names if _guess(c) == "time"), None)
+    for c in names:
+        arr = np.asarray(cols[c])
+        unit = column_unit(c, units, "time" if c == time_col else None)
+        desc.channels.append((c, unit or "", int(arr.size)))
     given = float(getattr(options, "sample_rate_hz", 0.0) or 0.0)
     fs, source = stated_rate(cols, given)
     if time_col is not None:
-        t = np.asarray(cols[time_col], dtype=float)
+        # the time in s: a unit in its name or stated by the file (ms, us) converted
+        unit = column_unit(time_col, units, "time")
+        t = np.asarray(cols[time_col], dtype=float) * unit_factor("time", unit, time_col,
+                                                                  path.name)
         dt = np.diff(t[np.isfinite(t)])
         desc.fs = 1.0 / float(np.median(dt)) if dt.size and np.median(dt) > 0 else float("nan")
         desc.time_column = time_col
@@ -244,8 +249,14 @@ def guess(column: str) -> str | None:
     return _guess(column)
 
 
+#: A time column named ``t`` with its unit: ``t (min)``, ``t [ms]``, ``t_us``.
+_T_WITH_UNIT = re.compile(r"t(\s*[\(\[][^\)\]]*[\)\]]|_[a-zµ]+)")
+
+
 def _guess(column: str) -> str | None:
     low = column.lower()
+    if _T_WITH_UNIT.fullmatch(low.strip()):
+        return "time"
     for canon, words in _GUESSES:
         if any(w in low for w in words):
             return canon

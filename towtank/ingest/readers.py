@@ -762,12 +762,21 @@ def converts(canon: str, unit: str) -> bool:
     return is_volts(unit) or key in {u.lower() for u in known_units(canon)}
 
 
-def column_unit(column: str, stated: dict[str, str]) -> str | None:
-    """The unit of a column: stated by the file, else written in its name ``Speed (mm/s)``."""
+#: A time unit at the end of a time column's name after ``_`` or a blank (``time_us``, ``t ms``).
+_TIME_UNIT_SUFFIX = re.compile(r"[_\s](s|sec|ms|us|µs|min)$", re.IGNORECASE)
+
+
+def column_unit(column: str, stated: dict[str, str], canon: str | None = None) -> str | None:
+    """The unit of a column: stated by the file, else written in its name in brackets
+    (``Speed (mm/s)``, ``t [s]``), else, for the time (``canon = "time"``), a time unit ending
+    its name (``time_us``, ``Time_ms``)."""
     if stated.get(column):
         return stated[column].strip()
     m = _UNIT_IN_NAME.search(column)
-    return m.group(1).strip() if m else None
+    if m:
+        return m.group(1).strip()
+    m = _TIME_UNIT_SUFFIX.search(column.strip()) if canon == "time" else None
+    return m.group(1).lower() if m else None
 
 
 def is_volts(unit: str | None) -> bool:

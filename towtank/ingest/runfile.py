@@ -54,6 +54,10 @@ from towtank.signal.masks import runs_of_true
 from towtank.stats.robust import blocks, quantile, quantiles, robust_scale
 
 REQUIRED_CHANNELS = ("time", "speed", "drag")
+#: What a file without a speed channel needs (docs/formats.md §3.2): its column, a log, or none.
+_NO_SPEED_HINT = ("; map its column in [channels] speed, give the carriage's log in "
+                  "[speed_log], or, with no speed recorded, set [processing] speed_source = "
+                  "\"nominal\" (each run at the run sheet's speed_nominal)")
 OPTIONAL_CHANNELS = ("accel", "lift")
 FORCE_CHANNELS = ("drag", "lift")
 
@@ -542,6 +546,7 @@ def map_channels(
                         "sample_rate_hz")
             raise RunError(
                 f"{name}: the {canon} channel is missing ({how}); columns found: {listed}"
+                + (_NO_SPEED_HINT if canon == "speed" else "")
             )
     return out
 

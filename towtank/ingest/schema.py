@@ -147,6 +147,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
     "tare": {
         "source": ("str", False),
         "table": ("path", False),
+        "columns": ("table", False),
     },
     "balance": {
         "inputs": ("strs", True),

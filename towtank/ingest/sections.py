@@ -28,8 +28,26 @@ from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
 from towtank.ingest.schema import check_keys, check_table_size, checked_section
 from towtank.reference.geometry import displaced_volume
 
-__all__ = ["MASS_RATIO_RANGE", "Balance", "TareSource", "check_mass", "parse_balance",
-           "parse_read_options", "parse_speed_log", "parse_tare", "parse_zero_file"]
+__all__ = ["MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance", "TareSource", "check_mass",
+           "parse_balance", "parse_read_options", "parse_speed_log", "parse_tare",
+           "parse_zero_file"]
+
+#: The tare table's columns (docs/formats.md §3.3): speed [m/s], drag and lift [N].
+TARE_TABLE_COLUMNS = ("speed_m_s", "drag_N", "lift_N")
+
+
+def _tare_columns(data: Any, src: str) -> dict[str, str]:
+    """``[tare] columns``: each table column's name in the lab's table (``{ speed_m_s =
+    "tow_speed", drag_N = "tare_drag" }``), checked; the contract's own names by default."""
+    check_keys(data, TARE_TABLE_COLUMNS, "tare.columns", src)
+    for canon, name in data.items():
+        if not isinstance(name, str) or not name.strip():
+            raise ProtocolError(f"{src}: [tare] columns: '{canon}' must name a column of the "
+                                f"tare table (text), but it is {name!r}.")
+    if len({v.strip().lower() for v in data.values()}) != len(data):
+        raise ProtocolError(f"{src}: [tare] columns maps one column of the tare table twice.")
+    return {c: data.get(c, c) for c in TARE_TABLE_COLUMNS}
+
 
 def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
     """``[tare]``: sting runs, a tare table (read and checked here) or none."""
@@ -40,11 +58,13 @@ def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource
             f"{src}: 'source' in [tare] is {source!r}; it must be 'sting', 'table' or 'none'."
         )
     if source != "table":
-        if "table" in t:
-            raise ProtocolError(f"{src}: 'table' in [tare] needs source = \"table\".")
+        for key in ("table", "columns"):
+            if key in t:
+                raise ProtocolError(f"{src}: '{key}' in [tare] needs source = \"table\".")
         return TareSource(source=source)
     if "table" not in t:
         raise ProtocolError(f"{src}: [tare] source = \"table\" needs 'table' (a CSV file).")
+    names = _tare_columns(t.get("columns", {}), src)
     path = base / t["table"]
     if not check_paths:
         return TareSource(source="table", table=str(path))
@@ -55,16 +75,21 @@ def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource
     except OSError as exc:
         raise ProtocolError(f"{src}: the tare table {path} cannot be read ({exc.strerror}).") \
             from None
-    cols = {k.strip().lower(): k for k in (rows[0] if rows else {})}
-    if "speed_m_s" not in cols or "drag_n" not in cols:
+    header = {k.strip().lower(): k for k in (rows[0] if rows else {}) if k is not None}
+    cols = {c: header.get(names[c].strip().lower()) for c in TARE_TABLE_COLUMNS}
+    if cols["speed_m_s"] is None or cols["drag_N"] is None:
+        given = t.get("columns", {})
+        need = " and ".join(f"'{names[c]}'" + (f" ({c} in [tare] columns)" if c in given else "")
+                            for c in ("speed_m_s", "drag_N"))
         raise ProtocolError(
-            f"{src}: the tare table {path.name} needs columns speed_m_s and drag_N (and "
-            f"optionally lift_N); it has {', '.join(cols) or 'none'}."
+            f"{src}: the tare table {path.name} needs the columns {need} (and optionally "
+            f"'{names['lift_N']}'); it has {', '.join(header) or 'none'}. Name the table's "
+            "own columns in [tare] columns = { speed_m_s = \"...\", drag_N = \"...\" }."
         )
     try:
         u = [float(r[cols["speed_m_s"]]) for r in rows]
-        d = [float(r[cols["drag_n"]]) for r in rows]
-        lift = [float(r[cols["lift_n"]]) for r in rows] if "lift_n" in cols else []
+        d = [float(r[cols["drag_N"]]) for r in rows]
+        lift = [float(r[cols["lift_N"]]) for r in rows] if cols["lift_N"] is not None else []
     except (TypeError, ValueError):
         raise ProtocolError(f"{src}: the tare table {path.name} holds a value that is not a "
                             "number.") from None

@@ -3,7 +3,8 @@
 A hand-typed sheet has a title and a date/operator line above its header, the lab's own
 column names with units (``Run #``, ``Angle (deg)``, ``Speed (mm/s)``, ``Water temp (°C)``),
 its own words for the status (``OK``, ``x``) and the test (``Steady``, ``Accel``), and notes
-typed below the table. ``hand-xlsx`` is an Excel workbook with a notes tab first;
+typed below the table; a layout's own columns (``Segment``, ``Window start (s)``, ``Window
+end (s)``) are typed too. ``hand-xlsx`` is an Excel workbook with a notes tab first;
 ``hand-csv`` is a European Excel export: ``;`` separated, decimal commas, Latin-1 text.
 The runs and their values are those of the plain sheet, so a day read from either must give
 the same coefficients.
@@ -38,6 +39,9 @@ HAND_HEADER = {
     "water_temp_C": "Water temp (°C)",
     "status": "Status",
     "remarks": "Remarks",
+    "window_start_s": "Window start (s)",
+    "window_end_s": "Window end (s)",
+    "segment": "Segment",
     "date": "Date",
 }
 #: Lines typed below the table.
@@ -56,8 +60,10 @@ def _plain_rows(path: Path) -> pd.DataFrame:
 
 
 def _hand_rows(plain: pd.DataFrame, speed_mm: bool) -> tuple[list[str], list[list[Any]]]:
-    cols = [c for c in HAND_HEADER if c in plain.columns]
-    header = [HAND_HEADER[c] for c in cols]
+    """The header and rows as typed: every column of the plain sheet (a layout's own, such as
+    ``segment`` or the steady window, included), named as :data:`HAND_HEADER` says."""
+    cols = list(plain.columns)
+    header = [HAND_HEADER.get(c, c) for c in cols]
     if speed_mm and "speed_nominal" in cols:
         header[cols.index("speed_nominal")] = "Speed (mm/s)"
     rows = []
@@ -71,10 +77,10 @@ def _hand_rows(plain: pd.DataFrame, speed_mm: bool) -> tuple[list[str], list[lis
                 v = _TEST.get(str(v).strip().lower(), v)
             elif c == "speed_nominal" and speed_mm and str(v).strip():
                 v = round(float(v) * 1000.0, 6)
-            elif c in ("run",) and str(v).strip():
+            elif c in ("run", "segment") and str(v).strip():
                 v = int(float(v))
-            elif c in ("angle_deg", "speed_nominal", "accel_nominal", "water_temp_C") and \
-                    str(v).strip():
+            elif c in ("angle_deg", "speed_nominal", "accel_nominal", "water_temp_C",
+                       "window_start_s", "window_end_s") and str(v).strip():
                 v = float(v)
             row.append(v)
         rows.append(row)

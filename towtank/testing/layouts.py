@@ -186,18 +186,33 @@ def write_carriage_log(layout: str, frame: pd.DataFrame, run_path: Path, time_co
 ZERO_FILE_S = 1.5
 
 
+#: The first part of a run file taken as the carriage at rest by :func:`motion_start` [s].
+STILL_REFERENCE_S = 1.0
+
+
+def motion_start(t: np.ndarray, u: np.ndarray) -> float:
+    """When the carriage starts to move [s]: the first time the speed [m/s], averaged over
+    0.1 s (5 or 6 mains periods, so that hum is not taken for motion), leaves its level over
+    the file's first :data:`STILL_REFERENCE_S` by more than six times its scatter there or
+    0.3 % of the top speed. A jerk-limited start (speed ∝ t²) crosses that within about 0.2 s,
+    where a fraction of the top speed (3 %: half a second) would come late, and a zeros file
+    ending before it would hold the model's first inertial force."""
+    k = max(1, int(round(0.1 / float(np.median(np.diff(t))))))
+    smooth = np.convolve(u, np.ones(k) / k, mode="valid")
+    ts = t[k // 2: k // 2 + smooth.size]
+    ref = smooth[ts < t[0] + STILL_REFERENCE_S]
+    level = float(np.mean(ref))
+    threshold = max(6.0 * float(np.std(ref)), 0.003 * float(np.max(np.abs(u))))
+    return float(ts[int(np.argmax(np.abs(smooth - level) > threshold))])
+
+
 def write_zero_file(frame: pd.DataFrame, run_path: Path, time_col: str,
                     speed_col: str) -> Path:
     """The lab's zeros file of a run: the balance at rest just before the carriage moves
     (here :data:`ZERO_FILE_S` of the run's own still start, ending 0.5 s before the motion),
     with the run file's columns."""
     t = _time_column(frame, time_col)
-    u = frame[speed_col].to_numpy(np.float64)
-    # the start of motion on the speed averaged over 0.1 s (5 or 6 mains periods), so that hum
-    # or noise on the recorded speed is not taken for motion
-    k = max(1, int(round(0.1 / float(np.median(np.diff(t))))))
-    u = np.convolve(u, np.ones(k) / k, mode="same")
-    start = t[int(np.argmax(u > 0.03 * np.max(u)))] - 0.5
+    start = motion_start(t, frame[speed_col].to_numpy(np.float64)) - 0.5
     zero = frame[(t >= start - ZERO_FILE_S) & (t < start)]
     path = Path(run_path).with_name(f"{Path(run_path).name.split('.', 1)[0]}_zero.csv")
     path.write_bytes(zero.to_csv(index=False, lineterminator="\n").encode())
