@@ -25,6 +25,7 @@ from towtank.ingest.readers import (
     ReadOptions,
     column_unit,
     file_format,
+    name_list,
     stated_units,
     text_layout,
     unit_factor,
@@ -64,6 +65,8 @@ class FileDescription:
     time_what: str = ""
     #: the rate the block must state in ``[read] sample_rate_hz`` (the protocol's) [Hz], or 0
     stated_rate_hz: float = 0.0
+    #: channels that are digital inputs (:func:`digital_channel`), proposed as no channel
+    digital: list[str] = field(default_factory=list)
 
     def lines(self) -> list[str]:
         """The account printed by ``towtank inspect``."""
@@ -97,8 +100,11 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
     desc = FileDescription(name=path.name, format=fmt + (" (gzip)" if gz else ""),
                            layout=text_layout(cols))
     own = cols[TIME_COLUMN_KEY].item() if TIME_COLUMN_KEY in cols else None
+    is_digital = {c: digital_channel(c, cols[c]) for c in names}
+    desc.digital = [c for c in names if is_digital[c]]
+    analog = [c for c in names if not is_digital[c]]
     time_col = own[0] if own is not None and own[0] in cols else \
-        next((c for c in names if _guess(c) == "time"), None)
+        next((c for c in analog if _guess(c) == "time"), None)
     for c in names:
         arr = np.asarray(cols[c])
         unit = column_unit(c, units, "time" if c == time_col else None)
@@ -140,15 +146,54 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
                        "or map a time column")
     else:
         desc.timing = "none found: give [read] sample_rate_hz or map a time column"
-    desc.parts = force_parts(names)
+    desc.parts = force_parts(analog)
     in_parts = {c for cells in desc.parts.values() for c in cells}
-    for c in names:
+    for c in analog:  # a digital line is proposed as no channel
         canon = next((k for k, cells in desc.parts.items() if c in cells), None)
         if canon is None and c not in in_parts:
             canon = _guess(c)
         if canon and canon not in desc.guesses:
             desc.guesses[canon] = c
     return desc
+
+
+#: A digital input in a channel's name: ``Digital in``, ``TTL``, ``DI3``, ``DIO``,
+#: ``Dev1_port3_line7``, ``Dev1/port0/line2`` (NI-DAQmx's names of a port's lines).
+_DIGITAL_NAME = re.compile(r"(?i)digital|\b(ttl|dio|di\d+)\b|port\s*\d+\W*_?\W*line\s*\d+")
+#: Most different values of a channel read as the states of a digital line or port.
+DIGITAL_STATES = 4
+#: Fewest samples from which a channel's values can say it is digital.
+DIGITAL_MIN_SAMPLES = 8
+
+
+def digital_channel(name: str, values: np.ndarray) -> bool:
+    """Whether a channel is a digital input (a trigger, a switch, one line of a DAQ port)
+    rather than a measured signal: its name says so (:data:`_DIGITAL_NAME`), or it holds
+    booleans, or its values are whole numbers taking 2 to :data:`DIGITAL_STATES` different
+    values (0 and 1, a port's few states) over :data:`DIGITAL_MIN_SAMPLES` samples at least.
+    A constant channel (a speed of 0 all along) is not called digital by its values.
+
+    Parameters
+    ----------
+    name : str
+        The channel's name in the file.
+    values : numpy.ndarray
+        Its values (any units; text is never digital by its values).
+    """
+    if _DIGITAL_NAME.search(name):
+        return True
+    arr = np.asarray(values)
+    if arr.dtype.kind == "b":
+        return arr.size > 0
+    if arr.dtype.kind not in "fiu":
+        return False
+    finite = arr[np.isfinite(arr)] if arr.dtype.kind == "f" else arr
+    if finite.size < DIGITAL_MIN_SAMPLES:
+        return False
+    for part in (finite[:4096], finite):  # most analog channels show it in their first values
+        if not np.array_equal(part, np.round(part)):
+            return False
+    return 2 <= np.unique(finite).size <= DIGITAL_STATES
 
 
 def _segments(cols: dict[str, np.ndarray], t: np.ndarray) -> list[str]:
@@ -309,7 +354,10 @@ def protocol_block(desc: FileDescription) -> str:
         lines.append(f"{canon} = {{ {entry} }}{comment}")
     mapped = {c for canon in desc.guesses for c in desc.parts.get(canon, [])} | set(
         desc.guesses.values())
-    rest = [n for n, _, _ in desc.channels if n not in mapped]
+    digital = set(desc.digital)
+    rest = [n for n, _, _ in desc.channels if n not in mapped and n not in digital]
+    if desc.digital:
+        lines.append("# digital inputs, mapped to no channel: " + name_list(desc.digital))
     if rest:
-        lines.append("# not recognised: " + ", ".join(repr(n) for n in rest))
+        lines.append("# not recognised: " + name_list(rest))
     return "\n".join(lines) + "\n"

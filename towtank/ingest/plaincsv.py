@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.readers import cut_last_line, truncation_error
+from towtank.ingest.readers import block_bytes, cut_last_line, truncation_error
 
 ROWS_KEY = "__rows__"
 INVALID_KEY = "__invalid_rows__"
@@ -107,7 +107,7 @@ def _arrow_table(data: bytes, delim: str, handler, whole: bool = False):  # noqa
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
-    block = max(1 << 22, len(data) + 1) if whole else 1 << 22
+    block = max(block_bytes(data), len(data) + 1) if whole else block_bytes(data)
     return pacsv.read_csv(
         pa.BufferReader(data),
         read_options=pacsv.ReadOptions(block_size=block),

@@ -37,7 +37,10 @@ from __future__ import annotations
 import io
 import logging
 import re
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -142,6 +145,34 @@ def file_format(path: Path, data: bytes, options: ReadOptions | None = None) -> 
         f"{path.name}: towtank does not know the format of a '{suffix or 'no extension'}' file "
         f"(it reads {known}); name the format with [read] format"
     )
+
+
+#: Most names a message lists (columns, groups, variables); the rest are counted.
+NAMES_SHOWN = 6
+
+
+def name_list(names: Iterable[str], limit: int = NAMES_SHOWN, *, quoted: bool = True) -> str:
+    """Names for a sentence: the first ``limit`` and the count of the rest.
+
+    ``"'c1', 'c2', 'c3' and 39,997 more"`` (``limit=3``); every name when there are no more
+    than ``limit``; ``"none"`` for none. ``quoted`` writes each name as Python's ``repr``
+    (quoted, a line break or control character escaped: the sentence stays one line).
+
+    Parameters
+    ----------
+    names : iterable of str
+        The names, in the order to list them.
+    limit : int
+        Most names written out.
+    quoted : bool
+        Quote each name.
+    """
+    every = [str(n) for n in names]
+    shown = [repr(n) if quoted else n for n in every[:limit]]
+    rest = len(every) - len(shown)
+    if not shown:
+        return "none"
+    return ", ".join(shown) + (f" and {rest:,} more" if rest > 0 else "")
 
 
 def units_entry(units: dict[str, str]) -> np.ndarray:
@@ -427,15 +458,24 @@ def _numeric_body(body: bytes, header: list[str], delim: str,
     try:
         table = pacsv.read_csv(
             io.BytesIO(body),
-            read_options=pacsv.ReadOptions(column_names=header),
+            read_options=pacsv.ReadOptions(column_names=header, block_size=block_bytes(body)),
             parse_options=pacsv.ParseOptions(delimiter=delim),
             convert_options=pacsv.ConvertOptions(
                 column_types={h: pa.float64() for h in header}, strings_can_be_null=True),
         )
     except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
         return None
-    return {h: table.column(h).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
-            for h in header}
+    return {h: table.column(j).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
+            for j, h in enumerate(header)}
+
+
+def block_bytes(body: bytes) -> int:
+    """pyarrow's CSV block size [bytes] for a table of text: 4 MiB, or 1024 of its lines when
+    they are longer (pyarrow's work per block grows with the number of columns, so a file of
+    very many columns read in small blocks would take time growing as their square)."""
+    first = body.find(b"\n")
+    line = len(body) + 1 if first < 0 else first + 1
+    return int(min(max(1 << 22, 1024 * line), 1 << 30))
 
 
 def _text_result(cols: dict[str, np.ndarray], units: dict[str, str], delim: str, decimal: str,
@@ -547,8 +587,8 @@ def read_lvm_columns(
     if not segments:
         raise RunError(f"{name} holds no data rows")
     names = [c for c in segments[0] if c not in (UNITS_KEY, ROWS_KEY)]
-    cols = {c: np.concatenate([np.asarray(s.get(c, np.full(_seg_len(s), np.nan)))
-                               for s in segments]) for c in names}
+    lengths = [_seg_len(s) for s in segments]
+    cols = {c: _joined(segments, lengths, c) for c in names}
     if "X_Value" in cols and "time" not in {c.lower() for c in cols}:
         how = ("LabVIEW's X_Value, computed from the segment headers' X0 and Delta_X: the "
                "column holds no times" if computed else "LabVIEW's X_Value, the time of the "
@@ -560,7 +600,7 @@ def read_lvm_columns(
     if all(ROWS_KEY in s for s in segments):  # the file's line of each row (messages)
         cols[ROWS_KEY] = np.concatenate([s[ROWS_KEY] for s in segments])
     if len(segments) > 1:  # where each LVM segment header starts new rows (sample indices)
-        cols[LVM_HEADERS_KEY] = np.cumsum([_seg_len(s) for s in segments[:-1]]).astype(np.int64)
+        cols[LVM_HEADERS_KEY] = np.cumsum(lengths[:-1]).astype(np.int64)
     notes = [f"{len(segments)} LVM segments joined"] if len(segments) > 1 else []
     return cols, notes
 
@@ -612,18 +652,18 @@ def _lvm_block(block: list[str], names: list[str], sep: str,
     cols = [f"c{j}" for j in range(width)]
     if any(j >= width for j in keep):
         return None
-    try:
+    numeric = set(keep)
+    try:  # every column typed (none inferred, none left out by name: both cost columns²)
         table = pacsv.read_csv(
             io.BytesIO(body),
-            read_options=pacsv.ReadOptions(column_names=cols),
+            read_options=pacsv.ReadOptions(column_names=cols, block_size=block_bytes(body)),
             parse_options=pacsv.ParseOptions(delimiter=sep),
-            convert_options=pacsv.ConvertOptions(
-                column_types={cols[j]: pa.float64() for j in keep},
-                include_columns=[cols[j] for j in keep]),
+            convert_options=pacsv.ConvertOptions(column_types={
+                c: pa.float64() if j in numeric else pa.string() for j, c in enumerate(cols)}),
         )
     except (pa.ArrowInvalid, pa.ArrowTypeError, ValueError):
         return None
-    return ({names[j]: table.column(cols[j]).to_numpy(zero_copy_only=False).astype(np.float64)
+    return ({names[j]: table.column(j).to_numpy(zero_copy_only=False).astype(np.float64)
              for j in keep}, table.num_rows)
 
 
@@ -639,6 +679,13 @@ def _seg_len(seg: dict[str, np.ndarray]) -> int:
     return max((v.size for k, v in seg.items() if k not in (UNITS_KEY, ROWS_KEY)), default=0)
 
 
+def _joined(segments: list[dict[str, np.ndarray]], lengths: list[int], col: str) -> np.ndarray:
+    """Column ``col`` of every segment one after another (NaN where a segment lacks it);
+    ``lengths`` holds each segment's rows (:func:`_seg_len`, computed once per segment)."""
+    return np.concatenate([np.asarray(s[col]) if col in s else np.full(n, np.nan)
+                           for s, n in zip(segments, lengths, strict=True)])
+
+
 def _first_float(values: list[str] | None) -> float | None:
     for v in values or []:
         try:
@@ -649,6 +696,74 @@ def _first_float(values: list[str] | None) -> float | None:
 
 
 # ------------------------------------------------------------------------------------- TDMS
+#: npTDMS warnings (how the message starts) after which the values read are not the whole
+#: recording: the file ends inside a segment (:func:`read_tdms_columns` rejects the run).
+_TDMS_CUT = ("Last segment", "Data size", "Cropping data")
+#: npTDMS warning after which a channel's raw DAQmx values are left unscaled.
+_TDMS_UNSCALED = "Unsupported scale type"
+#: Longest npTDMS message quoted in a sentence [characters].
+_TDMS_QUOTED = 160
+
+
+@dataclass
+class TdmsLog:
+    """npTDMS's warnings during one read: the first few messages, and how many there were."""
+
+    messages: list[str] = field(default_factory=list)
+    count: int = 0
+
+    def add(self, text: str) -> None:
+        self.count += 1
+        if len(self.messages) < 3:
+            self.messages.append(text if len(text) <= _TDMS_QUOTED else
+                                 text[: _TDMS_QUOTED - 1] + "…")
+
+    def first(self, starts: tuple[str, ...] | str = "") -> str | None:
+        """The first message starting with one of ``starts`` (any message for "")."""
+        return next((m for m in self.messages if m.startswith(starts)), None)
+
+    def said(self, message: str) -> str:
+        """``npTDMS: 'message'`` and the count of the others, for a sentence."""
+        more = self.count - 1
+        return f"npTDMS: {message!r}" + (f" and {more:,} more warning{'s' * (more > 1)}"
+                                          if more > 0 else "")
+
+
+_TDMS_LOG: ContextVar[TdmsLog | None] = ContextVar("towtank_tdms_log", default=None)
+
+
+class _TdmsLogFilter(logging.Filter):
+    """On each npTDMS logger: a record logged while towtank reads a TDMS file (in this thread
+    or task) is kept in that read's :class:`TdmsLog` and goes to no handler; other records
+    pass."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        caught = _TDMS_LOG.get()
+        if caught is None:
+            return True
+        caught.add(record.getMessage())
+        return False
+
+
+_TDMS_FILTER = _TdmsLogFilter()
+
+
+@contextmanager
+def nptdms_quiet() -> Iterator[TdmsLog]:
+    """npTDMS's log records kept, not written, while the block runs (npTDMS writes each
+    warning to stderr: a damaged file of many segments gives one line per segment)."""
+    for logger_name, logger in list(logging.root.manager.loggerDict.items()):
+        if logger_name.split(".")[0] == "nptdms" and isinstance(logger, logging.Logger) \
+                and _TDMS_FILTER not in logger.filters:
+            logger.addFilter(_TDMS_FILTER)
+    caught = TdmsLog()
+    token = _TDMS_LOG.set(caught)
+    try:
+        yield caught
+    finally:
+        _TDMS_LOG.reset(token)
+
+
 def read_tdms_columns(
     data: bytes, name: str, options: ReadOptions | None = None
 ) -> tuple[dict[str, np.ndarray], list[str]]:
@@ -661,49 +776,69 @@ def read_tdms_columns(
     # start-up saving: npTDMS (~0.12 s) only for a TDMS file
     from nptdms import TdmsFile
 
-    # nptdms logs what it finds odd in a damaged file; the run's one sentence says it instead
-    logging.getLogger("nptdms").setLevel(logging.ERROR)
     opts = options or ReadOptions()
     if not data:
         raise RunError(f"{name} is empty (0 bytes)")
     cols: dict[str, np.ndarray] = {}
     units: dict[str, str] = {}
     wf: tuple[float, float, int] | None = None
-    try:
-        tdms = TdmsFile.read(io.BytesIO(data))
-        groups = tdms.groups()
-        if opts.group:
-            groups = [g for g in groups if g.name == opts.group]
-            if not groups:
-                found = ", ".join(f"'{g.name}'" for g in tdms.groups()) or "none"
-                raise RunError(f"{name} has no TDMS group '{opts.group}' (groups: {found})")
-        for group in groups:
-            for channel in group.channels():
-                arr = np.asarray(channel[:])
-                if arr.dtype.kind not in "fiu":
-                    continue
-                with np.errstate(invalid="ignore", over="ignore"):
-                    arr = arr.astype(np.float64, copy=False)
-                cols.setdefault(channel.name, arr)
-                cols[f"{group.name}/{channel.name}"] = arr
-                props = channel.properties
-                if "unit_string" in props:
-                    units.setdefault(channel.name, str(props["unit_string"]))
-                inc = props.get("wf_increment")
-                if wf is None and inc:
-                    wf = (float(props.get("wf_start_offset", 0.0) or 0.0), float(inc), arr.size)
-    except RunError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
-        reason = f"{type(exc).__name__}: {exc}"
-        raise RunError(f"{name} is not a readable TDMS file ({reason})") from None
+    with nptdms_quiet() as caught:
+        try:
+            wf = _tdms_channels(TdmsFile.read(io.BytesIO(data)), name, opts, cols, units)
+        except RunError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
+            reason = f"{type(exc).__name__}: {exc}"
+            first = caught.first()
+            also = f"; {caught.said(first)}" if first else ""
+            raise RunError(f"{name} is not a readable TDMS file ({reason}{also})") from None
+    cut = caught.first(_TDMS_CUT)
+    if cut is not None:
+        raise RunError(f"{name} is cut short inside a TDMS segment ({caught.said(cut)}; a "
+                       "truncated or damaged file): was it copied before the recording "
+                       "finished?")
+    unscaled = caught.first(_TDMS_UNSCALED)
+    if unscaled is not None:
+        raise RunError(f"{name}: npTDMS cannot scale its raw DAQmx values "
+                       f"({caught.said(unscaled)}), so they would be read unscaled")
     if not cols:
         raise RunError(f"{name} holds no numeric channels")
     if wf is not None:
         cols[WF_TIME_KEY] = wf[0] + wf[1] * np.arange(wf[2], dtype=np.float64)
     cols[UNITS_KEY] = units_entry(units)
     cols[LABEL_KEY] = np.array([], dtype=float)
-    return cols, []
+    first = caught.first()
+    return cols, [caught.said(first)] if first else []
+
+
+def _tdms_channels(tdms: Any, name: str, opts: ReadOptions, cols: dict[str, np.ndarray],
+                   units: dict[str, str]) -> tuple[float, float, int] | None:
+    """The numeric channels of an open :class:`nptdms.TdmsFile` into ``cols`` (by name and
+    ``group/channel``), their ``unit_string`` into ``units``; returns the first channel's
+    waveform timing (start [s], increment [s], samples), or None."""
+    wf: tuple[float, float, int] | None = None
+    groups = tdms.groups()
+    if opts.group:
+        groups = [g for g in groups if g.name == opts.group]
+        if not groups:
+            found = name_list(g.name for g in tdms.groups())
+            raise RunError(f"{name} has no TDMS group '{opts.group}' (groups: {found})")
+    for group in groups:
+        for channel in group.channels():
+            arr = np.asarray(channel[:])
+            if arr.dtype.kind not in "fiu":
+                continue
+            with np.errstate(invalid="ignore", over="ignore"):
+                arr = arr.astype(np.float64, copy=False)
+            cols.setdefault(channel.name, arr)
+            cols[f"{group.name}/{channel.name}"] = arr
+            props = channel.properties
+            if "unit_string" in props:
+                units.setdefault(channel.name, str(props["unit_string"]))
+            inc = props.get("wf_increment")
+            if wf is None and inc:
+                wf = (float(props.get("wf_start_offset", 0.0) or 0.0), float(inc), arr.size)
+    return wf
 
 
 def plain_csv(data: bytes) -> bool:

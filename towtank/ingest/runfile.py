@@ -45,6 +45,7 @@ from towtank.ingest.readers import (  # noqa: F401 - MAX_RUN_FILE_BYTES: importa
     TIME_COLUMN_KEY,
     WF_TIME_KEY,
     ReadOptions,
+    name_list,
     stated_units,
 )
 from towtank.ingest.segments import find_segments, human_duration, segment_error
@@ -490,7 +491,7 @@ def map_channels(
     def column(col: str, canon: str) -> np.ndarray:
         key = col if col in cols else stripped.get(col.strip())
         if key is None:
-            listed = ", ".join(f"'{c}'" for c in found) or "none"
+            listed = name_list(found)
             raise RunError(f"{name}: the column '{col}' of the {canon} channel is missing; "
                            f"columns found: {listed}")
         arr, _ = _to_float_array(np.asarray(cols[key]))
@@ -534,7 +535,7 @@ def map_channels(
                 if canon in mapping
                 else f"expected as the column '{canon}' (no [channels] mapping)"
             )
-            listed = ", ".join(f"'{c}'" for c in found) or "none"
+            listed = name_list(found)
             if canon == "time" and "time" not in mapping and FS_ERROR_KEY in cols:
                 raise RunError(
                     f"{name} has no time column, and {cols[FS_ERROR_KEY].item()}, so the time "

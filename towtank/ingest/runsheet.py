@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import ProtocolError
-from towtank.ingest.readers import EXTENSIONS
+from towtank.ingest.readers import EXTENSIONS, name_list
 from towtank.ingest.sheetlayout import (
     STATUS_WORDS,
     TEST_WORDS,
@@ -55,6 +55,9 @@ KNOWN = REQUIRED + (
     "segment",
 )
 DEFAULT_TARE_GROUP = "default"
+#: Most column names a run-sheet message lists (a sheet holds every known column, 14, and a
+#: few of the lab's own); the rest are counted.
+SHEET_COLUMNS_SHOWN = 16
 
 
 def _read_table(path: Path, options: SheetOptions | None = None,
@@ -396,8 +399,9 @@ def _run_worksheet(wb: Any, src: str, opts: SheetOptions, warnings: list[str] | 
         return {_norm(c) for c in REQUIRED} <= {_norm(str(n)) for n in names if n}
 
     def listed(sheets: list[Any]) -> str:
-        return ", ".join(repr(ws.title) + ("" if _state(ws) == "visible" else
-                                           f" ({_state(ws)})") for ws in sheets)
+        return name_list((repr(ws.title) + ("" if _state(ws) == "visible" else
+                                            f" ({_state(ws)})") for ws in sheets),
+                         SHEET_COLUMNS_SHOWN, quoted=False)
 
     sheets = list(wb.worksheets)
     if opts.name:
@@ -406,7 +410,7 @@ def _run_worksheet(wb: Any, src: str, opts: SheetOptions, warnings: list[str] | 
         if len(named) != 1:
             raise ProtocolError(
                 f"{src}: [sheet] name = {opts.name!r}, but the workbook has no worksheet of that "
-                f"name (worksheets: {listed(sheets) or 'none'})."
+                f"name (worksheets: {listed(sheets)})."
             )
         return named[0]  # its columns are checked with the rest of the sheet
     visible = [ws for ws in sheets if _state(ws) == "visible"]
@@ -427,7 +431,8 @@ def _run_worksheet(wb: Any, src: str, opts: SheetOptions, warnings: list[str] | 
         raise ProtocolError(
             f"{src}: no worksheet has the required columns {', '.join(REQUIRED)} in a "
             f"header row (within its first 30 rows); the first, {name}, lacks "
-            f"{', '.join(missing)} (columns found: {', '.join(found) or 'none'}; worksheets: "
+            f"{', '.join(missing)} (columns found: "
+            f"{name_list(found, SHEET_COLUMNS_SHOWN, quoted=False)}; worksheets: "
             f"{listed(sheets)}; the lab's own column names can be mapped in [sheet] columns)."
         )
     active = wb.active
@@ -558,7 +563,7 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     raw, lines, units, notes = _read_table(path, options, warnings)
     missing = [c for c in REQUIRED if c not in raw.columns]
     if missing:
-        found = ", ".join(raw.columns) or "none"
+        found = name_list(map(str, raw.columns), SHEET_COLUMNS_SHOWN, quoted=False)
         raise ProtocolError(
             f"{src}: the run sheet lacks the required column(s) {', '.join(missing)} "
             f"(columns found: {found})."

@@ -33,6 +33,7 @@ from towtank.ingest.readers import (
     FS_ERROR_KEY,
     TIME_COLUMN_KEY,
     column_unit,
+    name_list,
     stated_units,
     unit_factor,
 )
@@ -73,7 +74,7 @@ def read_speed_log(path: Path, spec: SpeedLog, data: bytes) -> tuple[np.ndarray,
         if key is None and column.strip() == "time" and TIME_COLUMN_KEY in cols:
             key = cols[TIME_COLUMN_KEY].item()[0]  # the file's own time (LVM X_Value)
         if key is None:
-            listed = ", ".join(f"'{c}'" for c in found) or "none"
+            listed = name_list(found)
             raise RunError(f"the speed log {name} has no column '{column}' ({canon}); columns "
                            f"found: {listed}")
         raw = np.asarray(cols[key])

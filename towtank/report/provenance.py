@@ -20,6 +20,7 @@ import scipy
 from nptdms import TdmsFile
 
 from towtank import __version__
+from towtank.ingest.readers import nptdms_quiet
 from towtank.pipeline import geometry_used
 from towtank.reduce.tare import tare_table
 from towtank.reference.sets import reference_name
@@ -159,7 +160,8 @@ def _gzip_mtime(path: Path) -> str | None:
 def _tdms_date(path: Path) -> str | None:
     """The newest datetime property (e.g. wf_start_time) in a TDMS file's metadata."""
     try:
-        meta = TdmsFile.read_metadata(str(path))
+        with nptdms_quiet():  # npTDMS's warnings about a damaged file: no date, no stderr
+            meta = TdmsFile.read_metadata(str(path))
         objs = [meta] + list(meta.groups())
         objs += [c for g in meta.groups() for c in g.channels()]
     except Exception:  # noqa: BLE001 - a date is optional; a damaged file just has none
