@@ -6,10 +6,10 @@ these controls into buoyancy, centre of gravity, pitch and roll are in
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.schema import finite_number
 
 __all__ = ["GLIDER_KEYS", "glider_problems", "parse_glider"]
 
@@ -37,13 +37,6 @@ GLIDER_KEYS: dict[str, tuple[str, bool, float, float, str]] = {
 _WING = ("wing_area_m2", "wing_span_m", "wing_x_m")
 
 
-def _number(value: Any) -> float | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    v = float(value)
-    return v if math.isfinite(v) else None
-
-
 def glider_problems(raw: Any, label: str, mass_kg: float | None = None) -> list[str]:
     """The problems of a ``[vehicle.glider]`` table or a model.json ``glider`` block, one
     sentence each naming the key (``label`` names the table; ``mass_kg`` [kg], when known,
@@ -62,12 +55,12 @@ def glider_problems(raw: Any, label: str, mass_kg: float | None = None) -> list[
         value = raw[key]
         size = {"pair": 2, "triple": 3}.get(kind)
         if size is None:
-            v = _number(value)
+            v = finite_number(value)
             if v is None or not low < v <= high:
                 problems.append(f"'{key}' in {label} must be a number above {low:g} and at most "
                                 f"{high:g} ({what}), not {value!r}.")
             continue
-        vals = [_number(x) for x in value] if isinstance(value, list) else []
+        vals = [finite_number(x) for x in value] if isinstance(value, list) else []
         if len(vals) != size or any(x is None or not low <= x <= high for x in vals):
             problems.append(f"'{key}' in {label} must be {size} finite numbers ({what}), "
                             f"not {value!r}.")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import sys
 import tomllib
 import warnings as _warnings
 from collections.abc import Iterable
@@ -78,6 +79,7 @@ from towtank.reference.sets import BUILTIN_REFERENCES, read_reference_csv
 from towtank.reference.water import temperature_problem
 from towtank.runtime import outfolder
 from towtank.runtime.outfolder import OUTPUT_NAMES  # noqa: F401 - public here too
+from towtank.runtime.pathcheck import FILE, FOLDER, MISSING, OTHER, is_regular_file, path_kind
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
@@ -280,6 +282,10 @@ def load_protocol(
     except RecursionError:
         raise ProtocolError(f"{src}: its tables or lists are nested too deeply to be a "
                             "protocol.") from None
+    except ValueError:  # Python's bound on the digits of an integer it converts from text
+        raise ProtocolError(f"{src}: {_long_integer_key(text)} is an integer of more than "
+                            f"{sys.get_int_max_str_digits()} digits, not a number a protocol "
+                            "can hold.") from None
 
     for key in data:
         if key not in TOP_LEVEL:
@@ -299,6 +305,14 @@ def load_protocol(
         return _build(path, src, data, check_paths)
     except (OSError, ValueError) as exc:  # an unusable path on this file system
         raise ProtocolError(f"{src}: a path in the protocol cannot be used ({exc}).") from None
+
+
+def _long_integer_key(text: str) -> str:
+    """The key (``'mass_kg'``) holding the first integer of more digits than Python converts
+    from text, in a protocol's text; ``a value`` when it cannot be told."""
+    digits = re.search(rf"[0-9_]{{{max(sys.get_int_max_str_digits(), 1) + 1},}}", text)
+    keys = re.findall(r"([A-Za-z0-9_-]+)[\"']?\s*=", text[: digits.start()]) if digits else []
+    return f"'{keys[-1]}'" if keys else "a value"
 
 
 def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Protocol:
@@ -372,7 +386,7 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     reference = camp.get("reference", "remus")
     if reference not in BUILTIN_REFERENCES:
         ref_path = base / reference
-        if check_paths and not ref_path.is_file():
+        if check_paths and not is_regular_file(ref_path):
             raise ProtocolError(
                 f"{src}: the reference '{reference}' in [campaign] is neither a built-in "
                 f"set ({', '.join(BUILTIN_REFERENCES)}) nor an existing CSV file ({ref_path})."
@@ -389,10 +403,10 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
         test_date=camp.get("test_date"),
     )
     if check_paths:
-        if not campaign.run_sheet.is_file():
-            what = ("is a folder" if campaign.run_sheet.is_dir() else
-                    "is not a regular file (a pipe or a device)" if campaign.run_sheet.exists()
-                    else "does not exist")
+        kind = path_kind(campaign.run_sheet)
+        if kind != FILE:
+            what = {FOLDER: "is a folder", OTHER: "is not a regular file (a pipe or a device)",
+                    MISSING: "does not exist"}.get(kind, f"cannot be opened ({kind})")
             raise ProtocolError(
                 f"{src}: the run sheet '{camp['run_sheet']}' in [campaign] {what} "
                 f"({campaign.run_sheet})."
@@ -401,9 +415,12 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
             raise ProtocolError(
                 f"{src}: the run sheet '{camp['run_sheet']}' must be a .csv or .xlsx file."
             )
-        if not campaign.data_dir.is_dir():
+        kind = path_kind(campaign.data_dir)
+        if kind != FOLDER:
+            what = {FILE: "is a file, not a folder", OTHER: "is not a folder",
+                    MISSING: "does not exist"}.get(kind, f"cannot be opened ({kind})")
             raise ProtocolError(
-                f"{src}: the data folder '{camp['data_dir']}' in [campaign] does not exist "
+                f"{src}: the data folder '{camp['data_dir']}' in [campaign] {what} "
                 f"({campaign.data_dir})."
             )
     return campaign

@@ -7,6 +7,7 @@ import datetime as dt
 import difflib
 import math
 import re
+import sys
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -223,9 +224,34 @@ def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
     return value
 
 
+def finite_number(value: Any) -> float | None:
+    """A TOML number as a finite float; None for anything else (text, true/false, inf, nan, an
+    integer too large for a float, such as one of 400 digits)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        out = float(value)
+    except OverflowError:
+        return None
+    return out if math.isfinite(out) else None
+
+
+def shown(value: Any) -> str:
+    """``value`` for a message: its repr, shortened when long (an integer of more than 20
+    digits as ``999999…, an integer of 310 digits``)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**20:
+        try:
+            digits = str(abs(value))
+        except ValueError:  # more digits than Python converts to text
+            return f"an integer of more than {sys.get_int_max_str_digits()} digits"
+        return f"{'-' if value < 0 else ''}{digits[:6]}…, an integer of {len(digits)} digits"
+    text = repr(value)
+    return text if len(text) <= 80 else f"{text[:40]}… ({len(text)} characters)"
+
+
 def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
-        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
+        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {shown(value)}."
     )
     if kind in ("str", "path"):
         if not isinstance(value, str) or not value.strip():
@@ -237,11 +263,10 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind == "date":
         return _date_text(value, bad, where, src)
     if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        number = finite_number(value)
+        if number is None:
             raise bad
-        if not math.isfinite(value):
-            raise bad
-        return float(value)
+        return number
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise bad
@@ -253,12 +278,10 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind == "floats":
         if not isinstance(value, list) or not value:
             raise bad
-        out = []
-        for v in value:
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise bad
-            out.append(float(v))
-        return tuple(out)
+        numbers = [finite_number(v) for v in value]
+        if any(v is None for v in numbers):
+            raise bad
+        return tuple(numbers)
     if kind == "table":
         if not isinstance(value, dict):
             raise bad

@@ -19,6 +19,7 @@ from towtank.ingest.glider_inputs import parse_glider
 from towtank.ingest.schema import SCHEMA, coerce, suggest
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.reference.series58 import SERIES58_PARENT, check_series58
+from towtank.runtime.pathcheck import is_regular_file
 
 HULLS = ("myring", "suboff", "series58", "table")
 FIN_PLANES = ("rudder", "sternplane")
@@ -233,7 +234,7 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
             raise ProtocolError(f"{src}: [vehicle] hull = \"table\" needs 'hull_table', a CSV "
                                 "with the columns x_m, r_m.")
         table = (base / v.pop("hull_table")).resolve()
-        if check_paths and not table.is_file():
+        if check_paths and not is_regular_file(table):
             raise ProtocolError(f"{src}: the hull table in [vehicle] does not exist ({table}).")
     else:
         v.pop("hull_table", None)
