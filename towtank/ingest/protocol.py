@@ -79,7 +79,15 @@ from towtank.reference.sets import BUILTIN_REFERENCES, read_reference_csv
 from towtank.reference.water import temperature_problem
 from towtank.runtime import outfolder
 from towtank.runtime.outfolder import OUTPUT_NAMES  # noqa: F401 - public here too
-from towtank.runtime.pathcheck import FILE, FOLDER, MISSING, OTHER, is_regular_file, path_kind
+from towtank.runtime.pathcheck import (
+    FILE,
+    FOLDER,
+    MISSING,
+    OTHER,
+    is_regular_file,
+    path_kind,
+    resolved,
+)
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
@@ -96,6 +104,11 @@ WATER_TYPES = ("fresh", "sea", "air")
 #: Keys of [water] that only air takes.
 AIR_KEYS = ("pressure_Pa", "relative_humidity_pct")
 FIN_MOUNTINGS = ("free", "wall")
+
+
+#: Largest salinity a protocol may give [g/kg]: the upper end of IAPWS-08's range of validity
+#: (sea water is 35 g/kg; the properties are extrapolated from 42 g/kg on, with a warning).
+MAX_SALINITY_G_KG = 120.0
 
 
 def _water(values: dict[str, Any], label: str, src: str) -> Water:
@@ -122,6 +135,11 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
     if salinity is not None and salinity < 0:
         raise ProtocolError(
             f"{src}: 'salinity_g_kg' in [{label}] must not be negative, but it is {salinity:g}."
+        )
+    if salinity is not None and salinity > MAX_SALINITY_G_KG:
+        raise ProtocolError(
+            f"{src}: 'salinity_g_kg' in [{label}] is {salinity:g}, but the sea-water properties "
+            f"(IAPWS-08) hold up to {MAX_SALINITY_G_KG:g} g/kg: was it given in mg/kg or ppm?"
         )
     problem = temperature_problem(values["temperature_C"])
     if problem is not None:
@@ -396,9 +414,9 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
             read_reference_csv(ref_path)  # a bad reference stops here, before any work
     campaign = Campaign(
         name=camp["name"],
-        run_sheet=(base / camp["run_sheet"]).resolve(),
-        data_dir=(base / camp["data_dir"]).resolve(),
-        output_dir=output_dir.resolve(),
+        run_sheet=_resolved(base, camp["run_sheet"], "run_sheet", src),
+        data_dir=_resolved(base, camp["data_dir"], "data_dir", src),
+        output_dir=_resolved(base, output_dir, "output_dir", src),
         reference=reference,
         test_date=camp.get("test_date"),
     )
@@ -424,6 +442,15 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
                 f"({campaign.data_dir})."
             )
     return campaign
+
+
+def _resolved(base: Path, given: str | Path, key: str, src: str) -> Path:
+    """The path ``given`` for ``key`` in [campaign] (relative to ``base``), absolute with its
+    links resolved; a ProtocolError when it cannot be (a symlink loop, a name too long)."""
+    out = resolved(base / given)
+    if isinstance(out, str):
+        raise ProtocolError(f"{src}: the {key} '{given}' in [campaign] cannot be opened ({out}).")
+    return out
 
 
 def _model(data: Any, src: str, water: Water | None = None) -> Model:
@@ -615,7 +642,7 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
         g = geometry.myring_geometry(
             my.a, my.b, my.c, my.n, my.theta_deg, my.d, a_offset=my.a_offset, c_offset=my.c_offset
         )
-    except ValueError as exc:
+    except (ValueError, ArithmeticError) as exc:  # a division by a length of 1e-300 m
         raise ProtocolError(f"{src}: [model.myring] does not describe a hull ({exc}).") from None
     if abs(g.length - model.length_m) > 0.01 * model.length_m:
         raise ProtocolError(

@@ -224,6 +224,11 @@ def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
     return value
 
 
+#: Largest magnitude of a number in the protocol: every key is a quantity in SI units, none of
+#: which comes near it in a towing tank; a larger one is a mistake that would only overflow.
+MAX_MAGNITUDE = 1e12
+
+
 def finite_number(value: Any) -> float | None:
     """A TOML number as a finite float; None for anything else (text, true/false, inf, nan, an
     integer too large for a float, such as one of 400 digits)."""
@@ -249,6 +254,13 @@ def shown(value: Any) -> str:
     return text if len(text) <= 80 else f"{text[:40]}… ({len(text)} characters)"
 
 
+def _bounded(number: float, where: str, src: str) -> float:
+    if abs(number) > MAX_MAGNITUDE:
+        raise ProtocolError(f"{src}: {where} is {number:g}, beyond the {MAX_MAGNITUDE:g} in "
+                            "magnitude any quantity of a protocol (in SI units) stays within.")
+    return number
+
+
 def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
         f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {shown(value)}."
@@ -266,7 +278,7 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
         number = finite_number(value)
         if number is None:
             raise bad
-        return number
+        return _bounded(number, where, src)
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise bad
@@ -279,9 +291,11 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
         if not isinstance(value, list) or not value:
             raise bad
         numbers = [finite_number(v) for v in value]
-        if any(v is None for v in numbers):
-            raise bad
-        return tuple(numbers)
+        if None in numbers:
+            held = shown(value[numbers.index(None)])
+            raise ProtocolError(f"{src}: {where} must be {_KIND_WORDS[kind]}, but it holds "
+                                f"{held}.")
+        return tuple(_bounded(v, where, src) for v in numbers if v is not None)
     if kind == "table":
         if not isinstance(value, dict):
             raise bad
