@@ -349,6 +349,23 @@ def test_a_number_too_large_for_a_float_in_the_sheet_rejects_its_run(sheet, tmp_
     assert (runs.drop(index=run)["status"] == "ok").all()
 
 
+@pytest.mark.parametrize(("section", "key", "value", "said"), [
+    ("model", "wetted_area_m2", 1.1235582092889474e307, "beyond the 1e+12 in magnitude"),
+    ("prototype", "water", {"type": "sea", "temperature_C": 15.0, "salinity_g_kg": 1000.0},
+     "grams of salt in a kilogram of sea water, below 1000"),
+    ("model", "myring", {**syn.hull_protocol_sections()["model"]["myring"], "c": 1e-300},
+     "[model.myring] does not describe a hull (float division by zero)")])
+def test_numbers_that_overflowed_downstream_are_exit_2(section, key, value, said, tmp_path,
+                                                       capsys):
+    """Found by the property below: each was exit 3 (an overflow or a division by zero in the
+    scaling, IAPWS-08 or the Myring geometry)."""
+    protocol = _day(tmp_path, **{section: {key: value}})
+    assert main(["process", str(protocol), "-q", "--no-report"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert said in err and err.count("\n") == 0, err
+    assert not (tmp_path / "out").exists()
+
+
 #: Every numeric key of the sections the day's protocol has, as (section path, key).
 NUMERIC_KEYS = sorted(
     (section, key)

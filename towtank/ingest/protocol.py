@@ -53,6 +53,7 @@ from towtank.ingest.schema import (  # noqa: F401 - SCHEMA, TOP_LEVEL: public he
     ReportOptions,
     WatchOptions,
     check_keys,
+    check_magnitudes,
     check_positive,
     checked_section,
     suggest,
@@ -106,9 +107,10 @@ AIR_KEYS = ("pressure_Pa", "relative_humidity_pct")
 FIN_MOUNTINGS = ("free", "wall")
 
 
-#: Largest salinity a protocol may give [g/kg]: the upper end of IAPWS-08's range of validity
-#: (sea water is 35 g/kg; the properties are extrapolated from 42 g/kg on, with a warning).
-MAX_SALINITY_G_KG = 120.0
+#: The salinity a protocol gives must stay below it [g/kg]: a kilogram of sea water holds less
+#: than a kilogram of salt (sea water is 35 g/kg; from 42 g/kg on the properties are
+#: extrapolated, with a warning).
+SALT_PER_KG_LIMIT = 1000.0
 
 
 def _water(values: dict[str, Any], label: str, src: str) -> Water:
@@ -136,10 +138,11 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
         raise ProtocolError(
             f"{src}: 'salinity_g_kg' in [{label}] must not be negative, but it is {salinity:g}."
         )
-    if salinity is not None and salinity > MAX_SALINITY_G_KG:
+    if salinity is not None and salinity >= SALT_PER_KG_LIMIT:
         raise ProtocolError(
-            f"{src}: 'salinity_g_kg' in [{label}] is {salinity:g}, but the sea-water properties "
-            f"(IAPWS-08) hold up to {MAX_SALINITY_G_KG:g} g/kg: was it given in mg/kg or ppm?"
+            f"{src}: 'salinity_g_kg' in [{label}] is {salinity:g}, but a salinity is grams of "
+            f"salt in a kilogram of sea water, below {SALT_PER_KG_LIMIT:g}: was it given in "
+            "mg/kg or ppm?"
         )
     problem = temperature_problem(values["temperature_C"])
     if problem is not None:
@@ -320,9 +323,15 @@ def load_protocol(
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
 
     try:
-        return _build(path, src, data, check_paths)
+        protocol = _build(path, src, data, check_paths)
     except (OSError, ValueError) as exc:  # an unusable path on this file system
         raise ProtocolError(f"{src}: a path in the protocol cannot be used ({exc}).") from None
+    except ArithmeticError:  # an overflow from a number far too large: name it
+        check_magnitudes(data, src)
+        raise
+    # [vehicle]'s numbers are checked against the vehicle they describe by the vehicle stage
+    check_magnitudes({k: v for k, v in data.items() if k != "vehicle"}, src)
+    return protocol
 
 
 def _long_integer_key(text: str) -> str:

@@ -254,13 +254,6 @@ def shown(value: Any) -> str:
     return text if len(text) <= 80 else f"{text[:40]}… ({len(text)} characters)"
 
 
-def _bounded(number: float, where: str, src: str) -> float:
-    if abs(number) > MAX_MAGNITUDE:
-        raise ProtocolError(f"{src}: {where} is {number:g}, beyond the {MAX_MAGNITUDE:g} in "
-                            "magnitude any quantity of a protocol (in SI units) stays within.")
-    return number
-
-
 def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
         f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {shown(value)}."
@@ -278,7 +271,7 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
         number = finite_number(value)
         if number is None:
             raise bad
-        return _bounded(number, where, src)
+        return number
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise bad
@@ -295,7 +288,7 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
             held = shown(value[numbers.index(None)])
             raise ProtocolError(f"{src}: {where} must be {_KIND_WORDS[kind]}, but it holds "
                                 f"{held}.")
-        return tuple(_bounded(v, where, src) for v in numbers if v is not None)
+        return tuple(v for v in numbers if v is not None)
     if kind == "table":
         if not isinstance(value, dict):
             raise bad
@@ -310,6 +303,23 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
             raise bad
         return tuple(coerce(row, "floats", where, src) for row in value)
     raise AssertionError(kind)
+
+
+def check_magnitudes(data: Any, src: str, path: tuple[str, ...] = ()) -> None:
+    """A ProtocolError naming the first number of a parsed protocol (tables, lists, lists of
+    tables) beyond :data:`MAX_MAGNITUDE`. Run after the keys' own checks, which say more: it
+    catches what would only overflow further on."""
+    if isinstance(data, dict):
+        for key, value in data.items():
+            check_magnitudes(value, src, (*path, str(key)))
+    elif isinstance(data, list):
+        for value in data:  # a list's numbers are its key's
+            check_magnitudes(value, src, path)
+    elif isinstance(data, int | float) and not isinstance(data, bool) \
+            and abs(data) > MAX_MAGNITUDE:
+        raise ProtocolError(f"{src}: '{path[-1]}' in [{'.'.join(path[:-1])}] is {shown(data)}, "
+                            f"beyond the {MAX_MAGNITUDE:g} in magnitude any quantity of a "
+                            "protocol (in SI units) stays within.")
 
 
 def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: str) -> None:
