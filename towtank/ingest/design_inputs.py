@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from towtank.errors import ProtocolError
-from towtank.ingest.schema import finite_number, shown
+from towtank.ingest.values import finite_number, shown
 
 __all__ = ["PROPELLER_KEYS", "PRESSURE_HULL_KEYS", "parse_propeller", "parse_pressure_hull"]
 

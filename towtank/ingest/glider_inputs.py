@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from towtank.errors import ProtocolError
-from towtank.ingest.schema import finite_number
+from towtank.ingest.values import finite_number
 
 __all__ = ["GLIDER_KEYS", "glider_problems", "parse_glider"]
 

@@ -24,7 +24,6 @@ import pandas as pd
 
 from towtank.errors import ProtocolError
 from towtank.ingest.readers import EXTENSIONS
-from towtank.ingest.schema import shown
 from towtank.ingest.sheetlayout import (
     STATUS_WORDS,
     TEST_WORDS,
@@ -32,6 +31,7 @@ from towtank.ingest.sheetlayout import (
     header_names,
     words,
 )
+from towtank.ingest.values import shown
 from towtank.reference.air import AIR_TEMPERATURE_RANGE_C
 from towtank.reference.water import temperature_problem
 from towtank.runtime.pathcheck import is_regular_file

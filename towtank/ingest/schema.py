@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import datetime as dt
 import difflib
-import math
 import re
-import sys
 from dataclasses import dataclass, fields
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.values import finite_number, shown
 from towtank.runtime.safefile import MAX_TABLE_BYTES, check_table_size  # noqa: F401 - here too
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
@@ -227,31 +226,6 @@ def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
 #: Largest magnitude of a number in the protocol: every key is a quantity in SI units, none of
 #: which comes near it in a towing tank; a larger one is a mistake that would only overflow.
 MAX_MAGNITUDE = 1e12
-
-
-def finite_number(value: Any) -> float | None:
-    """A TOML number as a finite float; None for anything else (text, true/false, inf, nan, an
-    integer too large for a float, such as one of 400 digits)."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return None
-    try:
-        out = float(value)
-    except OverflowError:
-        return None
-    return out if math.isfinite(out) else None
-
-
-def shown(value: Any) -> str:
-    """``value`` for a message: its repr, shortened when long (an integer of more than 20
-    digits as ``999999…, an integer of 310 digits``)."""
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**20:
-        try:
-            digits = str(abs(value))
-        except ValueError:  # more digits than Python converts to text
-            return f"an integer of more than {sys.get_int_max_str_digits()} digits"
-        return f"{'-' if value < 0 else ''}{digits[:6]}…, an integer of {len(digits)} digits"
-    text = repr(value)
-    return text if len(text) <= 80 else f"{text[:40]}… ({len(text)} characters)"
 
 
 def coerce(value: Any, kind: str, where: str, src: str) -> Any:

@@ -25,13 +25,8 @@ from towtank.ingest.protocol_types import (
     ZeroFile,
 )
 from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
-from towtank.ingest.schema import (
-    check_keys,
-    check_table_size,
-    checked_section,
-    finite_number,
-    shown,
-)
+from towtank.ingest.schema import check_keys, check_table_size, checked_section
+from towtank.ingest.values import finite_number, shown
 from towtank.reference.geometry import displaced_volume
 
 __all__ = ["MASS_RATIO_RANGE", "Balance", "TareSource", "check_mass", "parse_balance",

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from towtank.ingest.schema import finite_number
+from towtank.ingest.values import finite_number
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.fossen import (
     REQUIRED_KEYS,
