@@ -60,6 +60,7 @@ from towtank.results import (
 )
 from towtank.runtime import parallel
 from towtank.runtime.cache import RunCache, protocol_settings, settings_key
+from towtank.runtime.pathcheck import is_regular_file, resolved
 from towtank.runtime.pause import pause_at
 from towtank.vehicle.compare import day_vehicle
 
@@ -342,12 +343,10 @@ def runs_to_reduce(protocol: Protocol, sheet: pd.DataFrame) -> tuple[
         if rec["sheet_error"]:
             rejected[int(rec["run"])] = f"run {rec['run']}: {rec['sheet_error']}"
             continue
-        try:
-            path = (protocol.campaign.data_dir / str(rec["file"])).resolve()
-        except (OSError, RuntimeError) as exc:  # a symlink loop; a name too long
-            reason = "a symlink loop" if isinstance(exc, RuntimeError) else exc.strerror or exc
+        path = resolved(protocol.campaign.data_dir / str(rec["file"]))
+        if isinstance(path, str):  # a loop of symbolic links; a name too long
             rejected[int(rec["run"])] = (
-                f"run {rec['run']}: {rec['file']} cannot be opened ({reason}).")
+                f"run {rec['run']}: {rec['file']} cannot be opened ({path}).")
             continue
         if path in first_run_of:  # one recording cannot be two runs: a copy-paste in the sheet
             rejected[int(rec["run"])] = (
@@ -474,12 +473,12 @@ def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
         path = protocol.campaign.data_dir / str(file)
         if str(file) in shas:
             inputs[str(path)] = shas[str(file)]
-        elif str(file) and path.is_file():
+        elif str(file) and is_regular_file(path):
             inputs[str(path)] = _sha(path)
     for spec in _side_files(protocol):  # the carriage logs and zeros files are inputs too
         for run, file in zip(sheet["run"], sheet["file"], strict=True):
             log = log_path(spec, protocol.campaign.data_dir, str(file), int(run))
-            if log.is_file():
+            if is_regular_file(log):
                 inputs[str(log)] = _sha(log)
     return inputs
 

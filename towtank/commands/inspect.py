@@ -29,6 +29,7 @@ from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 from towtank.reduce.run import RunReduction, record_units, reduce_run, run_preview, sheet_segment
 from towtank.report import style
+from towtank.runtime.pathcheck import resolved
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
 
@@ -128,9 +129,10 @@ def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
     except (ProtocolError, OSError) as exc:
         raise RunError(f"speed_source = \"nominal\" takes the speed from the run sheet, which "
                        f"cannot be read ({exc})") from None
-    here = runfile.resolve()
+    here = resolved(runfile)
     rows = sheet.to_dict("records")
-    for match in (lambda r: (protocol.campaign.data_dir / str(r["file"])).resolve() == here,
+    for match in (lambda r: isinstance(here, Path)
+                  and resolved(protocol.campaign.data_dir / str(r["file"])) == here,
                   lambda r: Path(str(r["file"])).name == runfile.name):
         found = [r for r in rows if match(r)]
         if found:

@@ -109,8 +109,47 @@ def read_columns(
     """Read a run file's columns (raw units) from its bytes, in the format of ``[read]``.
 
     Plain CSV goes through pyarrow (:func:`read_csv_columns`); other text, LVM, TDMS, MATLAB
-    and HDF5 through :mod:`towtank.ingest.readers`.
+    and HDF5 through :mod:`towtank.ingest.readers`. A file holding more rows or values than a
+    run may (:func:`towtank.ingest.readers.check_run_size`) is a RunError: text before it is
+    parsed (a gzip-compressed one while it is decompressed), every format once read.
     """
+    cols, notes = _read_columns(path, data, options)
+    arrays = {id(v): v for k, v in cols.items() if not k.startswith("__")}.values()
+    rows = max((np.asarray(v).shape[0] if np.ndim(v) else 1 for v in arrays), default=0)
+    readers.check_run_size(path.name, rows, len(arrays))
+    return cols, notes
+
+
+def gunzip(data: bytes, name: str) -> bytes:
+    """The text of a gzip-compressed run file, decompressed 4 MiB at a time: a RunError once
+    more than :data:`~towtank.ingest.readers.MAX_RUN_FILE_BYTES` bytes or more lines than a run
+    may hold have come out, before the memory for the rest is spent."""
+    if not data:
+        raise RunError(f"{name} is empty (0 bytes)")
+    max_lines = readers.MAX_RUN_ROWS + readers.TEXT_LINE_SLACK
+    chunks, size, lines = [], 0, 0
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(data)) as gzf:
+            while block := gzf.read(1 << 22):
+                size += len(block)
+                lines += block.count(b"\n")
+                if size > readers.MAX_RUN_FILE_BYTES:
+                    raise RunError(_too_large(name, "decompressed, it is"))
+                if lines > max_lines:
+                    readers.check_run_size(name, lines, exact=False)
+                chunks.append(block)
+    except EOFError:
+        raise RunError(
+            f"{name} cannot be decompressed: the gzip stream ends early (truncated file)"
+        ) from None
+    except (OSError, zlib.error) as exc:
+        raise RunError(f"{name} cannot be decompressed ({exc})") from None
+    return b"".join(chunks)
+
+
+def _read_columns(
+    path: Path, data: bytes | None = None, options: ReadOptions | None = None
+) -> tuple[dict[str, np.ndarray], list[str]]:
     if data is None:
         data = file_bytes(path)
     fmt, gz = file_format(path, data, options)
@@ -121,19 +160,7 @@ def read_columns(
     if fmt == "hdf5":
         return read_hdf5_columns(data, path.name, options)
     if gz:
-        if not data:
-            raise RunError(f"{path.name} is empty (0 bytes)")
-        try:
-            with gzip.GzipFile(fileobj=io.BytesIO(data)) as gzf:
-                data = gzf.read(readers.MAX_RUN_FILE_BYTES + 1)
-            if len(data) > readers.MAX_RUN_FILE_BYTES:
-                raise RunError(_too_large(path.name, "decompressed, it is"))
-        except EOFError:
-            raise RunError(
-                f"{path.name} cannot be decompressed: the gzip stream ends early (truncated file)"
-            ) from None
-        except (OSError, zlib.error) as exc:
-            raise RunError(f"{path.name} cannot be decompressed ({exc})") from None
+        data = gunzip(data, path.name)
     elif data[:2] == b"\x1f\x8b":
         raise RunError(
             f"{path.name} is gzip-compressed although its name does not end in .gz "
@@ -145,6 +172,9 @@ def read_columns(
             f"{path.name} is not a text file: it holds NUL bytes (the first at byte {nul}), "
             "as a file the DAQ never finished writing does"
         )
+    max_lines = readers.MAX_RUN_ROWS + readers.TEXT_LINE_SLACK
+    if len(data) > max_lines and data.count(b"\n") > max_lines:  # too many lines to parse
+        readers.check_run_size(path.name, data.count(b"\n"), exact=False)
     if fmt == "lvm":
         return read_lvm_columns(data, path.name, options)
     opts = options or ReadOptions()

@@ -8,10 +8,10 @@ by ``towtank predict`` (docs/formats.md §6).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.values import finite_number, shown
 
 __all__ = ["PROPELLER_KEYS", "PRESSURE_HULL_KEYS", "parse_propeller", "parse_pressure_hull"]
 
@@ -60,12 +60,13 @@ def _parse(raw: Any, keys: dict, label: str, src: str) -> dict[str, Any]:
             values = [None]
         nums = []
         for v in values:
-            ok = isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            if not ok or not (low <= v <= high):
+            number = finite_number(v)
+            if number is None or not (low <= number <= high):
                 raise ProtocolError(f"{src}: '{key}' in [{label}] must be "
                                     f"{'a list of numbers' if key == 'speeds_m_s' else 'a number'}"
-                                    f" from {low:g} to {high:g} ({what}), but it is {value!r}.")
-            nums.append(float(v))
+                                    f" from {low:g} to {high:g} ({what}), but it is "
+                                    f"{shown(value)}.")
+            nums.append(number)
         out[key] = nums if key == "speeds_m_s" else nums[0]
     return out
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.values import finite_number
 
 __all__ = ["GLIDER_KEYS", "HullBounds", "glider_problems", "hull_bounds_of_model",
            "model_glider_problems", "parse_glider"]
@@ -147,12 +148,12 @@ def glider_problems(raw: Any, label: str, mass_kg: float | None = None,
         value = raw[key]
         size = {"pair": 2, "triple": 3}.get(kind)
         if size is None:
-            v = _number(value)
+            v = finite_number(value)
             if v is None or not low < v <= high:
                 problems.append(f"'{key}' in {label} must be a number above {low:g} and at most "
                                 f"{high:g} ({what}), not {value!r}.")
             continue
-        vals = [_number(x) for x in value] if isinstance(value, list) else []
+        vals = [finite_number(x) for x in value] if isinstance(value, list) else []
         if len(vals) != size or any(x is None or not low <= x <= high for x in vals):
             problems.append(f"'{key}' in {label} must be {size} finite numbers ({what}), "
                             f"not {value!r}.")

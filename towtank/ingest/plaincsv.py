@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.readers import block_bytes, cut_last_line, truncation_error
+from towtank.ingest.readers import block_bytes, check_run_size, cut_last_line, truncation_error
 
 ROWS_KEY = "__rows__"
 INVALID_KEY = "__invalid_rows__"
@@ -96,9 +96,6 @@ def _truncated_tail(data: bytes, delim: str, n_header: int,
     return truncation_error(name, data.count(b"\n") + 1, cut[0], n_header, cut[1])
 
 
-def _count_byte(data: bytes, byte: int) -> int:
-    """How many times ``byte`` occurs in ``data`` (a line count for ``byte`` 10)."""
-    return int(np.count_nonzero(np.frombuffer(data, dtype=np.uint8) == byte))
 
 
 def _arrow_table(data: bytes, delim: str, handler, whole: bool = False):  # noqa: ANN001
@@ -171,6 +168,8 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
     cut = _truncated_tail(data, delim, n_header, name)
     if cut is not None:
         raise cut
+    n_lines = data.count(b"\n") + (not data.endswith(b"\n"))
+    check_run_size(name, n_lines - 1, n_header)  # before pyarrow holds the values
 
     notes: list[str] = []
     n_invalid = [0]
@@ -197,9 +196,7 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
     rows = np.arange(table.num_rows) + 2
     invalid_rows = np.array([], dtype=int)
     # blank lines shift the rows: more line breaks than header + rows + skipped rows tells
-    # (counting the byte with numpy is ~7x faster than bytes.count, ~15x than searching for
-    # b"\n\n" and b"\n\r\n")
-    n_lines = _count_byte(data, 10) + (not data.endswith(b"\n"))
+    # (faster than searching for b"\n\n" and b"\n\r\n")
     if n_invalid[0] or n_lines > table.num_rows + 1 or data.startswith((b"\n", b"\r")):
         numbers, nfields, empty, header = _line_table(data, delim)
         body = np.arange(numbers.size) > header

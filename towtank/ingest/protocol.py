@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import sys
 import tomllib
 import warnings as _warnings
 from collections.abc import Iterable
@@ -52,6 +53,7 @@ from towtank.ingest.schema import (  # noqa: F401 - SCHEMA, TOP_LEVEL: public he
     ReportOptions,
     WatchOptions,
     check_keys,
+    check_magnitudes,
     check_positive,
     checked_section,
     suggest,
@@ -78,6 +80,15 @@ from towtank.reference.sets import BUILTIN_REFERENCES, read_reference_csv
 from towtank.reference.water import temperature_problem
 from towtank.runtime import outfolder
 from towtank.runtime.outfolder import OUTPUT_NAMES  # noqa: F401 - public here too
+from towtank.runtime.pathcheck import (
+    FILE,
+    FOLDER,
+    MISSING,
+    OTHER,
+    is_regular_file,
+    path_kind,
+    resolved,
+)
 
 #: Largest |ΔC_F| accepted: five times the ITTC-78 roughness allowance of a full-size hull
 #: (about 4e-4); anything larger is a unit or typing mistake.
@@ -94,6 +105,12 @@ WATER_TYPES = ("fresh", "sea", "air")
 #: Keys of [water] that only air takes.
 AIR_KEYS = ("pressure_Pa", "relative_humidity_pct")
 FIN_MOUNTINGS = ("free", "wall")
+
+
+#: The salinity a protocol gives must stay below it [g/kg]: a kilogram of sea water holds less
+#: than a kilogram of salt (sea water is 35 g/kg; from 42 g/kg on the properties are
+#: extrapolated, with a warning).
+SALT_PER_KG_LIMIT = 1000.0
 
 
 def _water(values: dict[str, Any], label: str, src: str) -> Water:
@@ -120,6 +137,12 @@ def _water(values: dict[str, Any], label: str, src: str) -> Water:
     if salinity is not None and salinity < 0:
         raise ProtocolError(
             f"{src}: 'salinity_g_kg' in [{label}] must not be negative, but it is {salinity:g}."
+        )
+    if salinity is not None and salinity >= SALT_PER_KG_LIMIT:
+        raise ProtocolError(
+            f"{src}: 'salinity_g_kg' in [{label}] is {salinity:g}, but a salinity is grams of "
+            f"salt in a kilogram of sea water, below {SALT_PER_KG_LIMIT:g}: was it given in "
+            "mg/kg or ppm?"
         )
     problem = temperature_problem(values["temperature_C"])
     if problem is not None:
@@ -280,6 +303,10 @@ def load_protocol(
     except RecursionError:
         raise ProtocolError(f"{src}: its tables or lists are nested too deeply to be a "
                             "protocol.") from None
+    except ValueError:  # Python's bound on the digits of an integer it converts from text
+        raise ProtocolError(f"{src}: {_long_integer_key(text)} is an integer of more than "
+                            f"{sys.get_int_max_str_digits()} digits, not a number a protocol "
+                            "can hold.") from None
 
     for key in data:
         if key not in TOP_LEVEL:
@@ -296,9 +323,23 @@ def load_protocol(
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
 
     try:
-        return _build(path, src, data, check_paths)
+        protocol = _build(path, src, data, check_paths)
     except (OSError, ValueError) as exc:  # an unusable path on this file system
         raise ProtocolError(f"{src}: a path in the protocol cannot be used ({exc}).") from None
+    except ArithmeticError:  # an overflow from a number far too large: name it
+        check_magnitudes(data, src)
+        raise
+    # [vehicle]'s numbers are checked against the vehicle they describe by the vehicle stage
+    check_magnitudes({k: v for k, v in data.items() if k != "vehicle"}, src)
+    return protocol
+
+
+def _long_integer_key(text: str) -> str:
+    """The key (``'mass_kg'``) holding the first integer of more digits than Python converts
+    from text, in a protocol's text; ``a value`` when it cannot be told."""
+    digits = re.search(rf"[0-9_]{{{max(sys.get_int_max_str_digits(), 1) + 1},}}", text)
+    keys = re.findall(r"([A-Za-z0-9_-]+)[\"']?\s*=", text[: digits.start()]) if digits else []
+    return f"'{keys[-1]}'" if keys else "a value"
 
 
 def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Protocol:
@@ -372,7 +413,7 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     reference = camp.get("reference", "remus")
     if reference not in BUILTIN_REFERENCES:
         ref_path = base / reference
-        if check_paths and not ref_path.is_file():
+        if check_paths and not is_regular_file(ref_path):
             raise ProtocolError(
                 f"{src}: the reference '{reference}' in [campaign] is neither a built-in "
                 f"set ({', '.join(BUILTIN_REFERENCES)}) nor an existing CSV file ({ref_path})."
@@ -382,17 +423,17 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
             read_reference_csv(ref_path)  # a bad reference stops here, before any work
     campaign = Campaign(
         name=camp["name"],
-        run_sheet=(base / camp["run_sheet"]).resolve(),
-        data_dir=(base / camp["data_dir"]).resolve(),
-        output_dir=output_dir.resolve(),
+        run_sheet=_resolved(base, camp["run_sheet"], "run_sheet", src),
+        data_dir=_resolved(base, camp["data_dir"], "data_dir", src),
+        output_dir=_resolved(base, output_dir, "output_dir", src),
         reference=reference,
         test_date=camp.get("test_date"),
     )
     if check_paths:
-        if not campaign.run_sheet.is_file():
-            what = ("is a folder" if campaign.run_sheet.is_dir() else
-                    "is not a regular file (a pipe or a device)" if campaign.run_sheet.exists()
-                    else "does not exist")
+        kind = path_kind(campaign.run_sheet)
+        if kind != FILE:
+            what = {FOLDER: "is a folder", OTHER: "is not a regular file (a pipe or a device)",
+                    MISSING: "does not exist"}.get(kind, f"cannot be opened ({kind})")
             raise ProtocolError(
                 f"{src}: the run sheet '{camp['run_sheet']}' in [campaign] {what} "
                 f"({campaign.run_sheet})."
@@ -401,12 +442,24 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
             raise ProtocolError(
                 f"{src}: the run sheet '{camp['run_sheet']}' must be a .csv or .xlsx file."
             )
-        if not campaign.data_dir.is_dir():
+        kind = path_kind(campaign.data_dir)
+        if kind != FOLDER:
+            what = {FILE: "is a file, not a folder", OTHER: "is not a folder",
+                    MISSING: "does not exist"}.get(kind, f"cannot be opened ({kind})")
             raise ProtocolError(
-                f"{src}: the data folder '{camp['data_dir']}' in [campaign] does not exist "
+                f"{src}: the data folder '{camp['data_dir']}' in [campaign] {what} "
                 f"({campaign.data_dir})."
             )
     return campaign
+
+
+def _resolved(base: Path, given: str | Path, key: str, src: str) -> Path:
+    """The path ``given`` for ``key`` in [campaign] (relative to ``base``), absolute with its
+    links resolved; a ProtocolError when it cannot be (a symlink loop, a name too long)."""
+    out = resolved(base / given)
+    if isinstance(out, str):
+        raise ProtocolError(f"{src}: the {key} '{given}' in [campaign] cannot be opened ({out}).")
+    return out
 
 
 def _model(data: Any, src: str, water: Water | None = None) -> Model:
@@ -598,7 +651,7 @@ def _with_myring_geometry(model: Model, src: str) -> Model:
         g = geometry.myring_geometry(
             my.a, my.b, my.c, my.n, my.theta_deg, my.d, a_offset=my.a_offset, c_offset=my.c_offset
         )
-    except ValueError as exc:
+    except (ValueError, ArithmeticError) as exc:  # a division by a length of 1e-300 m
         raise ProtocolError(f"{src}: [model.myring] does not describe a hull ({exc}).") from None
     if abs(g.length - model.length_m) > 0.01 * model.length_m:
         raise ProtocolError(

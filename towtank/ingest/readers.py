@@ -69,6 +69,19 @@ TIME_COLUMN_KEY = "__time_column__"
 #: over while it is reduced; a larger file is rejected with one sentence, not left to the
 #: out-of-memory killer.
 MAX_RUN_FILE_BYTES = 1 << 30
+#: Most rows one run file may hold: 5 000 000, 83 minutes at 1 kHz or 8 at 10 kHz (a tow run
+#: lasts minutes). The reduction holds each channel it uses several times over as float64,
+#: about 320 bytes a row for four channels, so a run at the cap takes about 1.6 GB; a longer
+#: file is rejected with one sentence before it is parsed, not left to the out-of-memory
+#: killer. The same for every format (:func:`check_run_size`).
+MAX_RUN_ROWS = 5_000_000
+#: Most values (rows × columns, every column of the file counted) one run file may hold:
+#: 40 000 000, the row cap at 8 columns, or 32 channels for 20 minutes at 1 kHz (320 MB as
+#: float64; a run at both caps takes about 2.3 GB while it is read and reduced).
+MAX_RUN_VALUES = 40_000_000
+#: Lines a text run file may hold beyond :data:`MAX_RUN_ROWS` (header, units row, preamble,
+#: blank lines, LVM segment headers) before it is rejected unparsed.
+TEXT_LINE_SLACK = 10_000
 
 FORMATS = ("auto", "csv", "text", "tdms", "lvm", "mat", "hdf5")
 DELIMITERS = {"auto": None, ",": ",", ";": ";", "\t": "\t", "tab": "\t",
@@ -115,6 +128,24 @@ class ReadOptions:
     group: str = ""
     sample_rate_hz: float = 0.0
     segment: int = 0
+
+
+def check_run_size(name: str, rows: int, columns: int = 1, *, exact: bool = True) -> None:
+    """Raise the one sentence of a run file holding more than :data:`MAX_RUN_ROWS` rows or
+    :data:`MAX_RUN_VALUES` values (``rows`` × ``columns``); ``exact`` False when ``rows`` is a
+    count of lines read so far (the file holds at least that many)."""
+    if rows > MAX_RUN_ROWS:
+        held = f"{rows:,} rows" if exact else f"more than {MAX_RUN_ROWS:,} rows"
+    elif rows * columns > MAX_RUN_VALUES:
+        held = f"{rows * columns:,} values ({rows:,} rows of {columns} columns)"
+    else:
+        return
+    raise RunError(
+        f"{name} is too long for one run: it holds {held}, and towtank reads at most "
+        f"{MAX_RUN_ROWS:,} rows ({MAX_RUN_ROWS / 60e3:.0f} min at 1 kHz) and {MAX_RUN_VALUES:,} "
+        "values from one run file, to bound the memory a run takes: split the recording into "
+        "its runs"
+    )
 
 
 def file_format(path: Path, data: bytes, options: ReadOptions | None = None) -> tuple[str, bool]:
@@ -784,6 +815,12 @@ def read_tdms_columns(
     wf: tuple[float, float, int] | None = None
     with nptdms_quiet() as caught:
         try:
+            # the channels' lengths from the metadata: a file holding more than a run may is
+            # rejected before its values are read (a 2-byte integer is held as 8)
+            lengths = [len(channel)
+                       for group in TdmsFile.read_metadata(io.BytesIO(data)).groups()
+                       for channel in group.channels()]
+            check_run_size(name, max(lengths, default=0), len(lengths))
             wf = _tdms_channels(TdmsFile.read(io.BytesIO(data)), name, opts, cols, units)
         except RunError:
             raise

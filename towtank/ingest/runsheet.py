@@ -31,8 +31,10 @@ from towtank.ingest.sheetlayout import (
     header_names,
     words,
 )
+from towtank.ingest.values import shown
 from towtank.reference.air import AIR_TEMPERATURE_RANGE_C
 from towtank.reference.water import temperature_problem
+from towtank.runtime.pathcheck import is_regular_file
 
 REQUIRED = ("run", "file", "config", "angle_deg")
 CONFIGS = ("hull", "fin", "sting")
@@ -506,13 +508,20 @@ def _is_blank(v: object) -> bool:
 
 
 def _as_float(v: object) -> float:
+    """A sheet cell as a number, NaN when blank; ValueError for anything else: text, true/false,
+    an infinite number or one too large for a float (a 310-digit integer)."""
     if _is_blank(v):
         return float("nan")
     if isinstance(v, bool):
         raise ValueError(v)
-    if isinstance(v, int | float | np.integer | np.floating):
-        return float(v)
-    return float(str(v).strip())
+    try:
+        out = float(v) if isinstance(v, int | float | np.integer | np.floating) else \
+            float(str(v).strip())
+    except OverflowError:
+        raise ValueError(v) from None
+    if math.isinf(out):
+        raise ValueError(v)
+    return out
 
 
 def _as_text(v: object) -> str:
@@ -605,13 +614,13 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
             if math.isnan(out["angle_deg"]):
                 raise ValueError
         except ValueError:
-            errors.append(f"angle_deg {_as_text(rec['angle_deg'])!r} is not a number")
+            errors.append(f"angle_deg {shown(_as_text(rec['angle_deg']))} is not a number")
             out["angle_deg"] = float("nan")
         for col in NUMERIC:
             try:
                 out[col] = _converted(_as_float(rec.get(col)), units.get(col))
             except ValueError:
-                errors.append(f"{col} {_as_text(rec.get(col))!r} is not a number")
+                errors.append(f"{col} {shown(_as_text(rec.get(col)))} is not a number")
                 out[col] = float("nan")
         if math.isnan(out["water_temp_C"]):
             out["water_temp_C"] = float(default_temperature_C)
@@ -691,7 +700,7 @@ def unlisted_files(sheet: pd.DataFrame, data_dir: Path) -> list[str]:
     named = {Path(f).as_posix() for f in sheet["file"]}
     out = []
     for p in sorted(data_dir.rglob("*")):
-        if not p.is_file() or p.name.startswith("."):
+        if not is_regular_file(p) or p.name.startswith("."):
             continue
         if not p.name.lower().endswith(suffixes):
             continue

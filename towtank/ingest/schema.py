@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import datetime as dt
 import difflib
-import math
 import re
 from dataclasses import dataclass, fields
 from typing import Any
 
 from towtank.errors import ProtocolError
+from towtank.ingest.values import finite_number, shown
 from towtank.runtime.safefile import MAX_TABLE_BYTES, check_table_size  # noqa: F401 - here too
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
@@ -224,9 +224,14 @@ def _date_text(value: Any, bad: ProtocolError, where: str, src: str) -> str:
     return value
 
 
+#: Largest magnitude of a number in the protocol: every key is a quantity in SI units, none of
+#: which comes near it in a towing tank; a larger one is a mistake that would only overflow.
+MAX_MAGNITUDE = 1e12
+
+
 def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     bad = ProtocolError(
-        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {value!r}."
+        f"{src}: {where} must be {_KIND_WORDS[kind]}, but it is {shown(value)}."
     )
     if kind in ("str", "path"):
         if not isinstance(value, str) or not value.strip():
@@ -238,11 +243,10 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind == "date":
         return _date_text(value, bad, where, src)
     if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        number = finite_number(value)
+        if number is None:
             raise bad
-        if not math.isfinite(value):
-            raise bad
-        return float(value)
+        return number
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise bad
@@ -254,12 +258,12 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
     if kind == "floats":
         if not isinstance(value, list) or not value:
             raise bad
-        out = []
-        for v in value:
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise bad
-            out.append(float(v))
-        return tuple(out)
+        numbers = [finite_number(v) for v in value]
+        if None in numbers:
+            held = shown(value[numbers.index(None)])
+            raise ProtocolError(f"{src}: {where} must be {_KIND_WORDS[kind]}, but it holds "
+                                f"{held}.")
+        return tuple(v for v in numbers if v is not None)
     if kind == "table":
         if not isinstance(value, dict):
             raise bad
@@ -274,6 +278,23 @@ def coerce(value: Any, kind: str, where: str, src: str) -> Any:
             raise bad
         return tuple(coerce(row, "floats", where, src) for row in value)
     raise AssertionError(kind)
+
+
+def check_magnitudes(data: Any, src: str, path: tuple[str, ...] = ()) -> None:
+    """A ProtocolError naming the first number of a parsed protocol (tables, lists, lists of
+    tables) beyond :data:`MAX_MAGNITUDE`. Run after the keys' own checks, which say more: it
+    catches what would only overflow further on."""
+    if isinstance(data, dict):
+        for key, value in data.items():
+            check_magnitudes(value, src, (*path, str(key)))
+    elif isinstance(data, list):
+        for value in data:  # a list's numbers are its key's
+            check_magnitudes(value, src, path)
+    elif isinstance(data, int | float) and not isinstance(data, bool) \
+            and abs(data) > MAX_MAGNITUDE:
+        raise ProtocolError(f"{src}: '{path[-1]}' in [{'.'.join(path[:-1])}] is {shown(data)}, "
+                            f"beyond the {MAX_MAGNITUDE:g} in magnitude any quantity of a "
+                            "protocol (in SI units) stays within.")
 
 
 def check_keys(data: Any, keys: list[str] | tuple[str, ...], label: str, src: str) -> None:

@@ -26,6 +26,7 @@ from towtank.ingest.protocol_types import (
 )
 from towtank.ingest.readers import DELIMITERS, FORMATS, ReadOptions
 from towtank.ingest.schema import check_keys, check_table_size, checked_section
+from towtank.ingest.values import finite_number, shown
 from towtank.reference.geometry import displaced_volume
 
 __all__ = ["MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance", "TareSource", "check_mass",
@@ -192,9 +193,11 @@ def _log_column(value: Any, key: str, src: str) -> tuple[str, float, float]:
     out = []
     for k, default in (("gain", 1.0), ("offset", 0.0)):
         v = value.get(k, default)
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-            raise ProtocolError(f"{src}: '{k}' of {where} must be a number, but it is {v!r}.")
-        out.append(float(v))
+        number = finite_number(v)
+        if number is None:
+            raise ProtocolError(f"{src}: '{k}' of {where} must be a number, but it is "
+                                f"{shown(v)}.")
+        out.append(number)
     if out[0] == 0.0:
         raise ProtocolError(f"{src}: the gain of {where} is 0.")
     return value["column"], out[0], out[1]
@@ -224,17 +227,16 @@ def parse_speed_log(data: Any, src: str) -> SpeedLog | None:
     if ("speed" in data) == ("position" in data):
         raise ProtocolError(f"{src}: [speed_log] needs either 'speed' or 'position' (one of "
                             "them).")
-    offset = data.get("offset_s", 0.0)
-    if isinstance(offset, bool) or not isinstance(offset, int | float) \
-            or not math.isfinite(offset) or abs(offset) > 3600.0:
+    offset = finite_number(data.get("offset_s", 0.0))
+    if offset is None or abs(offset) > 3600.0:
         raise ProtocolError(f"{src}: 'offset_s' in [speed_log] must be a number of seconds "
-                            f"(within ±3600), but it is {offset!r}.")
+                            f"(within ±3600), but it is {shown(data.get('offset_s'))}.")
     return SpeedLog(
         file=pattern,
         time=_log_column(data["time"], "time", src) if "time" in data else None,
         speed=_log_column(data["speed"], "speed", src) if "speed" in data else None,
         position=_log_column(data["position"], "position", src) if "position" in data else None,
-        offset_s=float(offset),
+        offset_s=offset,
     )
 
 

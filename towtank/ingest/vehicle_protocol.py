@@ -19,6 +19,7 @@ from towtank.ingest.glider_inputs import parse_glider
 from towtank.ingest.schema import SCHEMA, coerce, suggest
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.reference.series58 import SERIES58_PARENT, check_series58
+from towtank.runtime.pathcheck import is_regular_file, resolved
 
 HULLS = ("myring", "suboff", "series58", "table")
 FIN_PLANES = ("rudder", "sternplane")
@@ -227,13 +228,18 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         raise ProtocolError(f"{src}: [vehicle] hull = \"myring\" needs a [vehicle.myring] or "
                             "[model.myring] description.")
     series58 = _series58(v.pop("series58", None), v["hull"], src)
-    table = None
+    table: Path | None = None
     if v["hull"] == "table":
         if "hull_table" not in v:
             raise ProtocolError(f"{src}: [vehicle] hull = \"table\" needs 'hull_table', a CSV "
                                 "with the columns x_m, r_m.")
-        table = (base / v.pop("hull_table")).resolve()
-        if check_paths and not table.is_file():
+        given = base / v.pop("hull_table")
+        found = resolved(given)
+        if isinstance(found, str):
+            raise ProtocolError(f"{src}: the hull table in [vehicle] cannot be opened ({found}: "
+                                f"{given}).")
+        table = found
+        if check_paths and not is_regular_file(table):
             raise ProtocolError(f"{src}: the hull table in [vehicle] does not exist ({table}).")
     else:
         v.pop("hull_table", None)

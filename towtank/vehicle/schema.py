@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from towtank.ingest.values import finite_number
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.fossen import (
     REQUIRED_KEYS,
@@ -136,18 +137,6 @@ def _kind(value: Any) -> str:
             type(None): "null"}.get(type(value), "a number")
 
 
-def _number(value: Any) -> float | None:
-    """``value`` as a finite float, None for anything else (text, true/false, NaN, a 400-digit
-    integer...)."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return None
-    try:
-        out = float(value)
-    except OverflowError:
-        return None
-    return out if math.isfinite(out) else None
-
-
 def _times(weight: float) -> str:
     """The largest net buoyancy in words: "the weight_N (298.9 N)" or "0.5 times ..."."""
     limit = MAX_NET_BUOYANCY_RATIO * weight
@@ -237,7 +226,7 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
                low_open: bool = True) -> float | None:
         if key not in model:
             return None
-        value = _number(model[key])
+        value = finite_number(model[key])
         inside = value is not None and (value > low if low_open else value >= low) \
             and value <= high
         if not inside:
@@ -265,7 +254,7 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
         if key not in model:
             continue
         value = model[key]
-        raw = [_number(v) for v in value] if isinstance(value, list) else []
+        raw = [finite_number(v) for v in value] if isinstance(value, list) else []
         nums = [n for n in raw if n is not None]
         if len(raw) != 3 or len(nums) != 3:
             problems.append(f"{name}: '{key}' must be a list of three numbers [{labels}], "
@@ -292,7 +281,7 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
                 bad = _symbol_problem(sym, name)
                 if bad:
                     problems.append(bad)
-                elif _number(val) is None:
+                elif finite_number(val) is None:
                     problems.append(f"{name}: the coefficient {sym} is not a finite number "
                                     f"but {_show(val)}.")
     for key, kind, test in (("name", "text", lambda v: isinstance(v, str)),
@@ -376,7 +365,7 @@ def check_covariance(covariance: Any, name: str = "model.json") -> list[str]:
         problems.append(f"{where} 'matrix' must be a {n} x {n} list of lists, one row per "
                         f"symbol, not {_show(matrix)}.")
         return problems
-    values = [[_number(v) for v in row] for row in rows]
+    values = [[finite_number(v) for v in row] for row in rows]
     if any(v is None for row in values for v in row):
         bad = next(rows[i][j] for i, row in enumerate(values) for j, v in enumerate(row)
                    if v is None)
@@ -437,17 +426,17 @@ def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s:
     """
     problems = []
     for opt, value in (("--rudder-deg", rudder_deg), ("--sternplane-deg", sternplane_deg)):
-        v = _number(value)
+        v = finite_number(value)
         if v is None or abs(v) > MAX_CONTROL_DEG:
             problems.append(f"{opt} must lie within ±{MAX_CONTROL_DEG:g} degrees, not "
                             f"{_show(value)}.")
-    speed = _number(speed_m_s)
+    speed = finite_number(speed_m_s)
     if speed is None or not 0.0 < speed <= MAX_SPEED_M_S:
         problems.append(f"--speed must be a speed > 0 and at most {MAX_SPEED_M_S:g} m/s, not "
                         f"{_show(speed_m_s)}.")
         speed = None
     if duration_s is not None:
-        d = _number(duration_s)
+        d = finite_number(duration_s)
         if d is None or not 0.0 < d <= MAX_DURATION_S:
             problems.append(f"--duration-s must be a simulated time > 0 and at most "
                             f"{MAX_DURATION_S:g} s (the longest towtank simulates), not "
@@ -469,9 +458,9 @@ def check_simulation(model: dict[str, Any] | None, manoeuvre: str, *, speed_m_s:
                             "--samples needs a model written by 'towtank process' with "
                             "measured values.")
     if net_buoyancy_n is not None:
-        net = _number(net_buoyancy_n)
-        weight = None if model is None else _number(model.get("weight_N"))
-        buoyancy = None if model is None else _number(model.get("buoyancy_N"))
+        net = finite_number(net_buoyancy_n)
+        weight = None if model is None else finite_number(model.get("weight_N"))
+        buoyancy = None if model is None else finite_number(model.get("buoyancy_N"))
         if net is None:
             problems.append(f"--net-buoyancy-N must be a finite force [N], not "
                             f"{_show(net_buoyancy_n)}.")
