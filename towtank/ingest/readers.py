@@ -817,11 +817,11 @@ def read_tdms_columns(
         try:
             # the channels' lengths from the metadata: a file holding more than a run may is
             # rejected before its values are read (a 2-byte integer is held as 8)
-            lengths = [len(channel)
-                       for group in TdmsFile.read_metadata(io.BytesIO(data)).groups()
-                       for channel in group.channels()]
-            check_run_size(name, max(lengths, default=0), len(lengths))
-            wf = _tdms_channels(TdmsFile.read(io.BytesIO(data)), name, opts, cols, units)
+            with TdmsFile.open(io.BytesIO(data)) as tdms:
+                lengths = [len(channel) for group in tdms.groups()
+                           for channel in group.channels()]
+                check_run_size(name, max(lengths, default=0), len(lengths))
+                wf = _tdms_channels(tdms, name, opts, cols, units)
         except RunError:
             raise
         except Exception as exc:  # noqa: BLE001 - nptdms raises many types for damaged files
