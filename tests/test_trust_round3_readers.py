@@ -543,3 +543,15 @@ def test_the_real_digital_input_file_proposes_no_speed():
     desc = describe_file(DIGITAL_TDMS)
     assert "speed" not in desc.guesses and len(desc.digital) == 4
     assert "speed =" not in protocol_block(desc)
+
+
+def test_inspect_of_a_wide_file_prints_a_bounded_account(tmp_path, capsys):
+    """inspect of a 2,000-column file: its channel listing and its summary stop after a few
+    dozen names and count the rest; no line of what it prints carries the whole list."""
+    path = tmp_path / "wide.lvm"
+    path.write_bytes(wide_lvm(2000, 50))
+    main(["inspect", str(path), "--png", str(tmp_path / "wide.png")])
+    out = capsys.readouterr()
+    text = out.out + out.err
+    assert "and 1,936 more channels (not listed)" in text
+    assert len(text.splitlines()) < 120 and max(len(ln) for ln in text.splitlines()) < 700

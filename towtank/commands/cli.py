@@ -63,6 +63,7 @@ exit status of 'process': 0 every run usable; 1 finished but some runs were reje
 in runs.csv); 2 the protocol or run sheet is unusable, or the output folder cannot be written
 (nothing written, previous outputs untouched); 3 internal error; 130 interrupted (Ctrl-C).
 The other commands: 0 done, 2 unusable input or output folder, 3 internal error, 130.
+'watch' stopped by SIGTERM or SIGHUP: 143 or 129 (its page server stops with it).
 """
 
 
@@ -108,8 +109,8 @@ def _parser() -> argparse.ArgumentParser:
         "file gets its verdict once its writer has closed it (or it has not changed for "
         "[watch] settle_s), and the outputs of 'process' are brought up to date (the PDF and "
         "figures at most every [watch] pdf_interval_s). The live state for the browser page "
-        "is in DIR/.live/. Ctrl-C stops it (exit 130); the output folder then holds the last "
-        "complete set.",
+        "is in DIR/.live/. Ctrl-C stops it (exit 130; SIGTERM 143, SIGHUP 129); the output "
+        "folder then holds the last complete set.",
     )
     wa.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
     wa.add_argument("--port", type=_port, default=8050, metavar="N",

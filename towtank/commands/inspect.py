@@ -24,6 +24,7 @@ from towtank.ingest.protocol import (
     load_protocol,
     read_and_channels,
 )
+from towtank.ingest.readers import name_list
 from towtank.ingest.runfile import load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
@@ -60,6 +61,10 @@ def _fmt(x: float, unit: str, digits: int = 4) -> str:
     return "–" if x != x else f"{x:+.{digits}f} {unit}".replace("+", " ", 1)
 
 
+#: Most channel names the summary line writes out (then the count of the rest).
+COLUMNS_SHOWN = 24
+
+
 def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 0.0,
                   timing: str = "") -> list[str]:
     """The printed account of one reduced run (phases, means, acceleration, zero, drift).
@@ -74,7 +79,7 @@ def summary_lines(red: RunReduction, columns: tuple[str, ...] = (), t0: float = 
         else "N"
     lines = [
         f"{red.file}: {red.n_samples} samples at {red.fs:g} Hz ({red.duration_s:.2f} s)"
-        + (f"; columns: {', '.join(columns)}" if columns else ""),
+        + (f"; columns: {name_list(columns, COLUMNS_SHOWN, quoted=False)}" if columns else ""),
         *([f"timing: {timing}"] if timing else []),
         *([f"units: {units_text(red.units)}"] if red.units else []),
         "phases [s]:" if not shift else

@@ -44,6 +44,10 @@ _GUESSES = (
 )
 
 
+#: Most channels ``towtank inspect`` lists one a line (then the count of the rest).
+CHANNELS_LISTED = 64
+
+
 @dataclass
 class FileDescription:
     """What :func:`describe_file` found in one run file."""
@@ -83,9 +87,12 @@ class FileDescription:
                        "the run):")
             out += [f"    {line}" for line in self.segments]
         out.append("  channels:")
-        for name, unit, n in self.channels:
+        for name, unit, n in self.channels[:CHANNELS_LISTED]:
             what = "   <- the time" if name == self.time_column and self.time_what else ""
             out.append(f"    {name!r:<40s} {unit or '(no unit)':<10s} {n} samples{what}")
+        rest = len(self.channels) - CHANNELS_LISTED
+        if rest > 0:
+            out.append(f"    ... and {rest:,} more channels (not listed)")
         return out
 
 
