@@ -374,7 +374,6 @@ def test_the_page_server_stops_when_watch_is_ended_by_a_signal(tmp_path, how, co
 
 
 # --------------------------------------------------------------------- 10. what the server reads
-starlette = pytest.importorskip("starlette")
 with warnings.catch_warnings():  # starlette 1.x prefers httpx2; httpx works the same here
     warnings.simplefilter("ignore")
     from starlette.testclient import TestClient  # noqa: E402
