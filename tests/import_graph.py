@@ -10,7 +10,7 @@ imports and every cross-module use of a ``_private`` name.
 Every ``import`` and ``from ... import`` counts, at the top of a module, under ``if
 TYPE_CHECKING:`` or inside a function. ``from towtank.report import figures`` is an import of
 the module ``towtank.report.figures`` (and of the package ``towtank.report``). A function-local
-import marked as a start-up saving (a comment holding :data:`STARTUP_MARK` on the import's line,
+import marked as loaded on use (a comment holding :data:`STARTUP_MARK` on the import's line,
 or on a comment line just above it or above the run of imports it belongs to) is kept out of the
 circle check: the lazy imports that keep
 pandas, scipy or matplotlib out of ``towtank inspect`` and ``--help``.
@@ -23,8 +23,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-#: The comment that marks a function-local import as a measured start-up saving.
-STARTUP_MARK = "start-up saving"
+#: The comment that marks a function-local import as a measured loaded on use.
+STARTUP_MARK = "loaded on use"
 
 
 @dataclass(frozen=True)
@@ -239,7 +239,7 @@ def report(package_dir: Path) -> str:
                  f"({len(inner)} of the package's own modules; {len(marked)} marked "
                  f"'{STARTUP_MARK}')")
     for title, g in (
-        ("circles, every import (start-up savings left out)", graph(edges, known)),
+        ("circles, every import (loaded-on-use imports left out)", graph(edges, known)),
         ("circles, top-level imports only", graph(edges, known, only_top=True)),
     ):
         found = circles(g)

@@ -8,7 +8,7 @@ nothing below it imports it, except the one command that writes synthetic days
 ``TYPE_CHECKING`` included, so that the structure cannot erode silently.
 
 No module takes part in an import circle (:func:`import_graph.circles`: a top-level import, or
-a function-local one that is not marked as a start-up saving, closing a loop), and no module
+a function-local one that is not marked as loaded on use, closing a loop), and no module
 imports another module's ``_private`` name: a name two modules share is public in its one home.
 Each checker is first shown to catch a planted violation in a small package of its own.
 """
@@ -52,7 +52,6 @@ LAYERS: list[tuple[str, ...]] = [
     ("results",),
     ("pipeline",),
     ("report",),
-    ("live",),
     ("api",),
     ("live",),
     ("commands", "__main__", "__init__"),
@@ -156,7 +155,7 @@ def test_nothing_in_production_imports_the_test_tooling():
 
 def test_no_import_circle_anywhere():
     """In any subpackage or across them; a function-local import counts unless it is marked
-    as a start-up saving."""
+    as loaded on use."""
     problems = unexpected_circles(PACKAGE, ALLOWED_CIRCLES)
     assert not problems, "\n".join(problems)
 
@@ -168,7 +167,7 @@ def test_no_module_imports_another_modules_private_name():
 
 def test_function_local_imports_are_marked_start_up_savings():
     """Every function-local import in the package, of towtank's own modules or a library's,
-    is a measured start-up saving, marked so (issue #24); all others are at the top."""
+    is loaded on use, marked so; all others are at the top."""
     unmarked = sorted({
         f"{e.module}:{e.line} imports {e.target}" for e in all_imports(PACKAGE)
         if e.local and not e.startup

@@ -24,7 +24,16 @@ from hypothesis import strategies as st
 from pypdf import PdfReader
 
 from towtank.pipeline import process_day
-from towtank.report import figure_base, figures, pdf, provenance, style, workbook, write_outputs
+from towtank.report import (
+    figure_base,
+    figures,
+    pdf,
+    provenance,
+    quality,
+    style,
+    workbook,
+    write_outputs,
+)
 from towtank.testing import synthetic
 
 REPORT_DATE = "2024-05-21"
@@ -193,7 +202,7 @@ def test_workbook_provenance_lists_inputs_with_sha256(days):
 # ------------------------------------------------------------------------------------ PDF
 def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
-    n_quality = len(pdf._paginate(pdf.quality_flow(day), pdf.QUALITY_HEIGHT_IN))
+    n_quality = len(quality.paginate(quality.quality_flow(day), quality.QUALITY_HEIGHT_IN))
     n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
     if day.fin_result is not None and not pdf.fin_runs_fit(day.fin_result):
         n_runs += math.ceil(len(day.fin_result.table) / pdf.RUNS_PER_PAGE)
@@ -461,7 +470,7 @@ def test_the_hull_lift_slope_says_it_is_a_check_and_what_it_would_give(days):
     # with lift it is several times the measured Y_uv (the drag's side component alone)
     y_uv = float(day.hull.coefficients.set_index("symbol").loc["Y_uv", "value"])
     assert expected / y_uv > 5
-    lines = " ".join(t for _, t in pdf.quality_flow(day).items)
+    lines = " ".join(t for _, t in quality.quality_flow(day).items)
     assert text in lines
 
 

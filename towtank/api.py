@@ -115,7 +115,7 @@ def process_day(
     ProtocolError
         The protocol, the run sheet or the output folder is unusable; nothing was written.
     """
-    # start-up saving: the pipeline loads every stage (0.1-0.9 s measured), which
+    # loaded on use: the pipeline loads every stage, which
     # load_protocol, read_run and reduce_run do not need
     from towtank.pipeline import process_day as _process
 
@@ -132,7 +132,7 @@ def process_day(
     if date is not None:
         day = replace(day, report_date=date)
     if out_dir is not None:
-        # start-up saving: the writers (pandas, provenance: 0.24 s measured) load only here
+        # loaded on use: the writers (pandas, provenance) load only here
         from towtank.report import write_outputs
 
         with_output_dir(loaded, out_dir, day.inputs)
@@ -271,7 +271,7 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
         ``conf_int(alpha)``, ``summary()``, ``table()``, ``verdicts()``.
     """
 
-    # start-up saving: the identification (filterpy, scipy.stats: 0.3-0.7 s measured) loads
+    # loaded on use: the identification (filterpy, scipy.stats) loads
     # only for identify
     from towtank.vehicle.identify import identify as _identify
     from towtank.vehicle.identify_log import log_from_frame, read_log

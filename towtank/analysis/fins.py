@@ -560,7 +560,7 @@ def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tup
     non-zero), C_L = a·α through the origin, which the symmetric section justifies, so that two
     angles (e.g. 2.5° and 5°) still give a slope and an interval from their repeats and speeds.
     """
-    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+    # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     ok = np.isfinite(alpha_rad) & np.isfinite(y)

@@ -81,7 +81,7 @@ def form_factor_trend(
     ValueError
         The arrays differ in length, or ``confidence`` is not in (0, 1).
     """
-    # start-up saving: scipy.stats loads while the workers reduce the runs (pipeline preload)
+    # loaded on use: scipy.stats loads while the workers reduce the runs (pipeline preload)
     from scipy import stats
 
     x = np.atleast_1d(np.asarray(reynolds, dtype=float)).ravel()

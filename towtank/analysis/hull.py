@@ -348,7 +348,7 @@ def joint_regression(
     ClusteredOLS
         params (k2 [N s²/m²], k1 [N s/m], M [kg]), their covariance and its degrees of freedom.
     """
-    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+    # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     x = np.column_stack([speed * np.abs(speed), speed, accel])
@@ -528,7 +528,7 @@ def curve_difference(
 # -------------------------------------------------------------------------------- damping
 def fit_cd_alpha(alpha_rad: np.ndarray, cd: np.ndarray):
     """OLS of C_D(α) = a·α² + b·α + c (report eq. 13); statsmodels results."""
-    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+    # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     x = np.column_stack([alpha_rad**2, alpha_rad, np.ones_like(alpha_rad)])
@@ -689,7 +689,7 @@ def fit_transverse(
     tares: dict[str, TareModel] | None = None,
 ) -> tuple[Estimate | None, float, float, pd.DataFrame | None, list[str]]:
     """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|."""
-    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+    # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     tr = select_runs(runs, 90.0)
@@ -862,7 +862,7 @@ def fit_hull(
     lift_slope = None
     small = hull_ok[np.abs(hull_ok["angle_deg"]) <= alpha_max_deg]
     if small["cl"].notna().sum() >= 3 and small["angle_deg"].nunique() >= 2:
-        # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+        # loaded on use: statsmodels loads while the workers reduce the runs
         from statsmodels.regression.linear_model import OLS
 
         a = np.radians(small["angle_deg"].to_numpy(float))

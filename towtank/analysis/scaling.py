@@ -141,7 +141,7 @@ def scale_to_prototype(
     (ScalingResult or None, list of str)
         None when fewer than two straight runs give the resistance curve.
     """
-    # start-up saving: statsmodels (1.4 s measured) loads while the workers reduce the runs
+    # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
     warn: list[str] = []

@@ -370,7 +370,7 @@ def cmd_process(args: argparse.Namespace) -> int:
 
 
 def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
-    # start-up saving: the protocol's checks (numpy and the water properties: ~1 s) only for towtank
+    # loaded on use: the protocol's checks (numpy and the water properties) only for towtank
     # process
     from towtank.ingest.protocol import load_protocol, with_output_dir
 
@@ -390,7 +390,7 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
     opened.skip.extend([Path(out).resolve() / ".cache", Path(out).resolve() / MANIFEST])
     stamp = None
     if not args.no_cache:
-        # start-up saving: the cache (numpy, ~0.25 s) only for towtank process
+        # loaded on use: the cache (numpy) only for towtank process
         from towtank.runtime.cache import DayStamp
 
         stamp = DayStamp(Path(out) / ".cache", protocol, Path(out),
@@ -402,7 +402,7 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
             if not args.quiet:
                 print(text.rstrip("\n"))
             return code
-    # start-up saving: multiprocessing's pools (~50 ms) only for towtank process
+    # loaded on use: multiprocessing's pools only for towtank process
     from towtank.runtime import parallel
 
     # --jobs, else the protocol's [processing] jobs, else every core
@@ -428,7 +428,7 @@ def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
 
 def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
              opened: Recorder) -> int:
-    # start-up saving: the day's stages and writers (numpy, pandas, scipy, matplotlib: seconds) only
+    # loaded on use: the day's stages and writers (numpy, pandas, scipy, matplotlib) only
     # for towtank process
     from towtank.ingest.protocol import with_output_dir
     from towtank.pipeline import process_day
@@ -437,7 +437,7 @@ def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
     show = not args.quiet and sys.stderr.isatty()
     bar = None
     if show:
-        # start-up saving: tqdm (~0.12 s) only for a progress bar on a terminal
+        # loaded on use: tqdm only for a progress bar on a terminal
         from tqdm import tqdm
 
         # no monitor thread: the report's writers fork, which is only safe with one thread
@@ -542,7 +542,7 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
         f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
         f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
     ]
-    # start-up saving: pandas (~0.27 s) only when runs were rejected
+    # loaded on use: pandas only when runs were rejected
     from towtank.analysis.daywide import group_rejections
 
     lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs)]
@@ -553,35 +553,35 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help starts in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.inspect import inspect_run
 
     return inspect_run(args.runfile, protocol_path=args.protocol, png=args.png)
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help starts in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.scale import scale_command
 
     return scale_command(args.protocol, speeds=args.speeds, out=args.out)
 
 
 def cmd_synth(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help starts in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.synth import synth_command
 
     return synth_command(args)
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help starts in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.predict import predict_command
 
     return predict_command(args.protocol, out=args.out)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs, so that towtank --help and the
+    # loaded on use: a command's modules are loaded when it runs, so that towtank --help and the
     # other commands start in ~50 ms
     from towtank.commands.simulate import simulate_command
 
@@ -595,7 +595,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_steady(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.steady import steady_command
 
     return steady_command(args.model, args.ballast_cc, args.pitch_deg, args.roll_deg,
@@ -604,7 +604,7 @@ def cmd_steady(args: argparse.Namespace) -> int:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.identify import identify_command
 
     return identify_command(args.model, args.log, args.estimate, method=args.method,
@@ -614,14 +614,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
 def _noise_option(text: str) -> dict[str, float]:
     """identify's --noise, read by the parser (its error the parser's usage line)."""
-    # start-up saving: identify's modules are loaded only when the option is given
+    # loaded on use: identify's modules are loaded only when the option is given
     from towtank.commands.identify import noise_option
 
     return noise_option(text)
 
 
 def cmd_watch(args: argparse.Namespace) -> int:
-    # start-up saving: a command's modules are loaded when it runs (towtank --help in ~50 ms)
+    # loaded on use: a command's modules are loaded when it runs (towtank --help loads none of them)
     from towtank.commands.watch import watch_command
 
     return watch_command(args)

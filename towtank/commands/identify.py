@@ -90,7 +90,7 @@ def progress_bar(show: bool) -> Iterator[Progress | None]:
     if not show:
         yield None
         return
-    # start-up saving: tqdm (~0.12 s) only for a progress bar on a terminal
+    # loaded on use: tqdm only for a progress bar on a terminal
     from tqdm import tqdm
 
     tqdm.monitor_interval = 0  # no monitor thread, as for process

@@ -124,7 +124,7 @@ def _settings(protocol_path: str | Path | None):  # noqa: ANN202 - channels, Pro
 def _sheet_row(protocol, runfile: Path) -> dict:  # noqa: ANN001 - a Protocol
     """The run sheet's row of ``runfile`` (matched by path under the data folder, else by
     name), for a protocol whose speed comes from the sheet (``speed_source = "nominal"``)."""
-    # start-up saving: the run sheet's reader loads pandas (~0.27 s), which towtank inspect needs
+    # loaded on use: the run sheet's reader loads pandas, which towtank inspect needs
     # only for a speed from the sheet
     from towtank.ingest.runsheet import read_run_sheet
 
@@ -359,7 +359,7 @@ PNG_KEY = "towtank inspect"
 def _png_source(path: Path) -> str | None:
     """The run file an existing inspect plot shows, or None for any other file."""
     try:
-        # start-up saving: Pillow (~20 ms) only when a PNG of that name exists
+        # loaded on use: Pillow only when a PNG of that name exists
         from PIL import Image, PngImagePlugin
 
         with Image.open(path) as im:
@@ -399,7 +399,7 @@ def _target(runfile: Path, png: str | Path | None, err: TextIO, out: TextIO
 
 
 def _save(fig, path: Path, runfile: str) -> None:  # noqa: ANN001 - a matplotlib Figure
-    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
+    # loaded on use: matplotlib only when the plot is drawn
     import matplotlib as mpl
 
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -410,7 +410,7 @@ def _save(fig, path: Path, runfile: str) -> None:  # noqa: ANN001 - a matplotlib
 
 
 def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa: ANN001
-    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
+    # loaded on use: matplotlib only when the plot is drawn
     from towtank.report.figures import fig_preview
 
     fig = fig_preview(run_preview(raw),
@@ -421,7 +421,7 @@ def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa
 def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
                runfile: str | Path | None = None, settings: str | None = None) -> Path:
     """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
-    # start-up saving: matplotlib (~0.36 s) only when the plot is drawn
+    # loaded on use: matplotlib only when the plot is drawn
     from towtank.report.figures import fig_run
 
     title = f"{red.file}: speed and forces (zero and drift removed, no tare)"

@@ -444,7 +444,7 @@ def read_mat_columns(
     """
     if data[512:520] == HDF5_SIGNATURE or data[:8] == HDF5_SIGNATURE:
         return read_hdf5_columns(data, name, options, matlab=True)
-    # start-up saving: scipy.io (~0.46 s) only for a MATLAB file
+    # loaded on use: scipy.io only for a MATLAB file
     import scipy.io
 
     opts = options or ReadOptions()
@@ -484,7 +484,7 @@ def _h5_members(group: Any, name: str) -> dict[str, Any]:
     """The objects a group's links lead to, without following a link out of the file: an
     external link (it names another file) and a soft link to nothing are left out; a soft
     link that leads back into itself rejects the run."""
-    # start-up saving: h5py (~90 ms) only for an HDF5 file
+    # loaded on use: h5py only for an HDF5 file
     import h5py
 
     out = {}
@@ -509,7 +509,7 @@ def _values_elsewhere(dataset: Any, name: str) -> RunError | None:
     """The run's rejection when an HDF5 dataset keeps its values in other files (external
     raw storage, or a virtual dataset mapping other datasets), else None. Read from the
     dataset's creation property list: nothing of its values, nor of those files, is read."""
-    # start-up saving: h5py (~90 ms) only for an HDF5 file
+    # loaded on use: h5py only for an HDF5 file
     import h5py
 
     plist = dataset.id.get_create_plist()
@@ -554,7 +554,7 @@ def read_hdf5_columns(  # noqa: C901 - one pass over the file's groups and attri
     run-file cap as float64 numbers. External links are not followed; a loop of soft links
     rejects the run.
     """
-    # start-up saving: h5py (~90 ms) only for an HDF5 file
+    # loaded on use: h5py only for an HDF5 file
     import h5py
 
     opts = options or ReadOptions()

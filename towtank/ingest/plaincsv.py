@@ -99,7 +99,7 @@ def _truncated_tail(data: bytes, delim: str, n_header: int,
 
 
 def _arrow_table(data: bytes, delim: str, handler, whole: bool = False):  # noqa: ANN001
-    # start-up saving: pyarrow (~70 ms) only when a CSV is read: not for towtank predict, simulate
+    # loaded on use: pyarrow only when a CSV is read: not for towtank predict, simulate
     # or a protocol's check
     import pyarrow as pa
     import pyarrow.csv as pacsv
@@ -147,7 +147,7 @@ def read_csv_columns(data: bytes, name: str) -> tuple[dict[str, np.ndarray], lis
     A UTF-8 byte-order mark, Windows line ends and blank lines are accepted. A last line cut
     short is a RunError naming its row (:func:`towtank.ingest.readers.truncation_error`).
     """
-    # start-up saving: pyarrow (~70 ms) only when a CSV is read: not for towtank predict, simulate
+    # loaded on use: pyarrow only when a CSV is read: not for towtank predict, simulate
     # or a protocol's check
     import pyarrow as pa
 

@@ -390,7 +390,7 @@ def read_text_columns(
     a units row under the header. Values that are not numbers are kept as text (the run's
     checks count and drop such rows).
     """
-    # start-up saving: pandas (~0.27 s) for a text column only: the reduction's workers and towtank
+    # loaded on use: pandas for a text column only: the reduction's workers and towtank
     # inspect never load it
     import pandas as pd
 
@@ -479,7 +479,7 @@ def _numeric_body(body: bytes, header: list[str], delim: str,
     to points first: the separator is then not a comma); None sends it to the general path."""
     if delim == "whitespace" or len(set(header)) != len(header) or not body.strip():
         return None
-    # start-up saving: pyarrow (~80 ms) only when a text file is read: not for towtank predict,
+    # loaded on use: pyarrow only when a text file is read: not for towtank predict,
     # simulate or a protocol's check
     import pyarrow as pa
     from pyarrow import csv as pacsv
@@ -668,7 +668,7 @@ def _lvm_block(block: list[str], names: list[str], sep: str,
                dec: str) -> tuple[dict[str, np.ndarray], int] | None:
     """A segment's data lines through pyarrow when every named cell is a number (the comment
     column aside); None sends the segment to the line-by-line reader."""
-    # start-up saving: pyarrow (~80 ms) only when a text file is read: not for towtank predict,
+    # loaded on use: pyarrow only when a text file is read: not for towtank predict,
     # simulate or a protocol's check
     import pyarrow as pa
     from pyarrow import csv as pacsv
@@ -804,7 +804,7 @@ def read_tdms_columns(
     when a channel carries it; ``unit_string`` properties give the units. With several groups
     the channels of ``[read] group`` (or of every group) are listed.
     """
-    # start-up saving: npTDMS (~0.12 s) only for a TDMS file
+    # loaded on use: npTDMS only for a TDMS file
     from nptdms import TdmsFile
 
     opts = options or ReadOptions()

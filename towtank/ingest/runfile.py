@@ -140,7 +140,7 @@ def _to_float_array(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Float64 array and a mask of entries that hold text that is not a number."""
     if values.dtype.kind in "fiub":
         return values.astype(np.float64, copy=False), np.zeros(values.size, dtype=bool)
-    # start-up saving: pandas (~0.27 s) for text in a numeric column only: the reduction's workers
+    # loaded on use: pandas for text in a numeric column only: the reduction's workers
     # never load it
     import pandas as pd
 
@@ -359,7 +359,7 @@ def despike(
     cand[-2:] = big[-2:]
     if not cand.any():
         return x, 0
-    # start-up saving: scipy.ndimage (~0.5 s) only when a channel holds spikes to replace
+    # loaded on use: scipy.ndimage only when a channel holds spikes to replace
     from scipy.ndimage import median_filter
 
     med = median_filter(x, size=window, mode="nearest")

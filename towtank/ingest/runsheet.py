@@ -352,7 +352,7 @@ def _read_xlsx(path: Path, opts: SheetOptions | None = None,
         or a formula has no saved value at all (a workbook written by a program and never
         saved by Excel), which would read as an empty cell.
     """
-    # start-up saving: openpyxl (~0.3 s) only for an .xlsx sheet
+    # loaded on use: openpyxl only for an .xlsx sheet
     import openpyxl
 
     opts = opts or SheetOptions()

@@ -214,7 +214,7 @@ class LoopbackHostOnly:
         self.app = app
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        from starlette.responses import PlainTextResponse  # start-up saving: watch's port check
+        from starlette.responses import PlainTextResponse  # loaded on use: watch's port check
 
         if scope["type"] == "http":
             host = ""
@@ -243,8 +243,8 @@ def create_app(state_dir: str | Path, *, poll_s: float = POLL_S,
     keepalive_s : float
         Seconds between two keep-alive comments on an idle event stream [s].
     """
-    # start-up saving: towtank watch takes the port check and stop_with from this module
-    # without the web framework (starlette: 0.05 s measured)
+    # loaded on use: towtank watch takes the port check and stop_with from this module
+    # without the web framework (starlette)
     from starlette.applications import Starlette
     from starlette.responses import (
         FileResponse,
@@ -253,8 +253,8 @@ def create_app(state_dir: str | Path, *, poll_s: float = POLL_S,
         Response,
         StreamingResponse,
     )
-    from starlette.routing import Mount, Route  # start-up saving: as above
-    from starlette.staticfiles import StaticFiles  # start-up saving: as above
+    from starlette.routing import Mount, Route  # loaded on use: as above
+    from starlette.staticfiles import StaticFiles  # loaded on use: as above
 
     folder = StateFolder(Path(state_dir))
 
@@ -405,7 +405,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.fd is not None:
             return _fail(f"--fd {args.fd} is not a listening socket ({exc.strerror or exc}).")
         return _fail(port_problem(args.host, args.port, exc))
-    # start-up saving: uvicorn (~0.11 s measured) only once the host and port are usable, so
+    # loaded on use: uvicorn only once the host and port are usable, so
     # that a refusal is said at once
     import uvicorn
 

@@ -239,7 +239,7 @@ def tare_table(tares: dict[str, TareModel]) -> Any:
     standard deviation [N], the samples and runs it was fitted on, and the steady speeds [m/s]
     and accelerations [m/s²] it covers.
     """
-    # start-up saving: pandas (~0.27 s) for the tare table only: the reduction's workers never
+    # loaded on use: pandas for the tare table only: the reduction's workers never
     # load it
     import pandas as pd
 

@@ -60,7 +60,7 @@ def reference_name(reference: str) -> str:
 
 def reference_table(name: str) -> pd.DataFrame:
     """The packaged CSV of the built-in set ``name`` (comments dropped)."""
-    # start-up saving: pandas (~0.27 s) only for the tables: towtank.ingest.protocol imports this
+    # loaded on use: pandas only for the tables: towtank.ingest.protocol imports this
     # module
     import pandas as pd
 
@@ -82,7 +82,7 @@ def design_tool_table1() -> pd.DataFrame:
     Columns: printed_exp, printed_value (the two numbers as printed, SI), error_pct_printed (the
     tool's error [%]) and prestero2001 (Prestero's 2001 value where the row has one, SI).
     """
-    # start-up saving: pandas (~0.27 s) only for the tables: towtank.ingest.protocol imports this
+    # loaded on use: pandas only for the tables: towtank.ingest.protocol imports this
     # module
     import pandas as pd
 

@@ -18,7 +18,7 @@ __all__ = ["write_outputs"]
 
 def __getattr__(name: str) -> Any:
     if name == "write_outputs":
-        # start-up saving: `towtank inspect` loads this package (report.style) and never the
+        # loaded on use: `towtank inspect` loads this package (report.style) and never the
         # writers; report.outputs loads pandas (+0.17 s measured after the inspect command)
         from towtank.report.outputs import write_outputs
 

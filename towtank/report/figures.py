@@ -459,8 +459,8 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
 def _section_curves(alpha: np.ndarray, re: float, aspect_ratio: float,
                     e: float) -> tuple[np.ndarray, ...]:
     """Sandia 2-D and lifting-line curves of one Re on an angle grid (evaluation only)."""
-    # start-up saving: `towtank inspect --png` draws a run with this module and never a fin
-    # figure; analysis.fins and reference.sandia load pandas (+0.2 s measured)
+    # loaded on use: `towtank inspect --png` draws a run with this module and never a fin
+    # figure; analysis.fins and reference.sandia load pandas
     from towtank.analysis import fins
     from towtank.reference import sandia
 

@@ -21,12 +21,12 @@ _LABELS = {"x_m": "x [m]", "y_m": "y [m]", "z_m": "z [m]", "phi_deg": "roll φ [
 
 def identify_figure(result: Any, name: str = "model") -> Any:
     """The figure of one identification (:class:`towtank.vehicle.identify.IdentifyResult`)."""
-    # start-up saving: `towtank identify` imports this module at start and draws the figure
+    # loaded on use: `towtank identify` imports this module at start and draws the figure
     # last; matplotlib costs 0.24 s (measured after the identify command's imports)
     import matplotlib
 
     matplotlib.use("Agg")
-    from matplotlib.figure import Figure  # start-up saving, as matplotlib above
+    from matplotlib.figure import Figure  # loaded on use, as matplotlib above
 
     k = len(result.symbols)
     meas = result.measured

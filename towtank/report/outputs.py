@@ -210,7 +210,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
     manifest.folder_mode(tmp, out_dir if out_dir.is_dir() else None)
     try:
         if export:  # first: a run that cannot be exported is a warning of the report
-            # start-up saving: towtank.results loads the analysis stages, which a day's
+            # loaded on use: towtank.results loads the analysis stages, which a day's
             # writing without an export never needs here
             from towtank.results import notices
 
@@ -218,7 +218,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
                                                    "export") if n not in day.warnings)
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
-            # start-up saving: report.vehicle loads matplotlib (+0.32 s measured), which
+            # loaded on use: report.vehicle loads matplotlib, which
             # a day written without its report (report=False) never needs
             from towtank.report.vehicle import write_vehicle
 
@@ -284,8 +284,8 @@ def _report_writers() -> list[Writer]:
     The protocol's [report] table may turn the PDF (``pdf = false``) or the PNG figures
     (``figures = false``) off; the workbook is always written.
     """
-    # start-up saving: the report's writers load matplotlib and openpyxl (+0.5 s measured
-    # after report.outputs), which a day written without its report never needs
+    # loaded on use: the report's writers load matplotlib and openpyxl, which a day written
+    # without its report never needs
     from towtank.report.figures import write_figures
     from towtank.report.pdf import write_pdf
     from towtank.report.workbook import write_workbook

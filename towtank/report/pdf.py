@@ -43,7 +43,6 @@ from matplotlib.transforms import Bbox
 from pypdf import PdfWriter
 
 import towtank.report.figures as figures
-import towtank.report.quality as _quality
 import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections
@@ -59,6 +58,14 @@ from towtank.report.figure_base import (
     true_minus,
 )
 from towtank.report.provenance import creation_date, report_date
+from towtank.report.quality import (
+    LINE_IN,
+    QUALITY_HEIGHT_IN,
+    fmt_num,
+    paginate,
+    quality_flow,
+    short_reason,
+)
 from towtank.report.tables import missing_accel_note
 from towtank.report.vehicle import fig_predicted, predicted_rows
 from towtank.results import require
@@ -88,22 +95,6 @@ class Page:
     payload: Any = None
     subtitle: str = ""
     number: str = ""  # section number: 1, 2, ... in order of appearance; "A" the appendix
-
-
-# the quality section's flow (towtank.report.quality), also reached as pdf.<name>
-Flow = _quality.Flow
-LINE_IN = _quality.LINE_IN
-WRAP = _quality.WRAP
-_flow_groups = _quality._flow_groups
-_height = _quality._height
-_paginate = _quality._paginate
-QUALITY_HEIGHT_IN = _quality.QUALITY_HEIGHT_IN
-quality_flow = _quality.quality_flow
-_diagnostics_flow = _quality._diagnostics_flow
-_budget_flow = _quality._budget_flow
-_dof = _quality._dof
-short_reason = _quality.short_reason
-_num = _quality._num
 
 
 def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
@@ -156,7 +147,7 @@ def page_plan(day: DayResult) -> list[Page]:
         chunk = ids[k:k + RUNS_PER_PAGE]
         pages.append(Page("runs", "Runs", chunk,
                           subtitle=f"runs {chunk[0]}–{chunk[-1]}" if len(chunk) > 1 else ""))
-    q = _paginate(quality_flow(day), QUALITY_HEIGHT_IN)
+    q = paginate(quality_flow(day), QUALITY_HEIGHT_IN)
     for i, part in enumerate(q):
         pages.append(Page("quality", "Quality", part,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
@@ -253,9 +244,9 @@ def geometry_text(day: DayResult) -> str | None:
         if g["value"] is None:
             parts.append(f"{g['symbol']} not known")
         elif g["symbol"] == "S_p":
-            parts.append(f"prototype S_p = λ²·S_m = {_num(g['value'])} {g['unit']}")
+            parts.append(f"prototype S_p = λ²·S_m = {fmt_num(g['value'])} {g['unit']}")
         else:
-            parts.append(f"{g['symbol']} = {_num(g['value'])} {g['unit']} ({source})")
+            parts.append(f"{g['symbol']} = {fmt_num(g['value'])} {g['unit']} ({source})")
     return "; ".join(parts) + "." if parts else None
 
 
@@ -627,7 +618,7 @@ def _scaling_table(fig: Figure, y: float, sr: ScalingResult, *,
     used = _table(fig, y, header, rows, [0.5, 0.65, 0.4, 0.9, 1.05, 1.75, 1.55], highlight=hl,
                   fontsize=7.0)
     ff = sr.form_factor
-    area = (f"on the prototype's wetted area S_p = λ²·S_m = {_num(sr.wetted_area_prototype)} m²"
+    area = (f"on the prototype's wetted area S_p = λ²·S_m = {fmt_num(sr.wetted_area_prototype)} m²"
             if sr.wetted_area_prototype is not None else "not computed: no wetted area known")
     dcf = f" + ΔC_F = {sr.delta_cf:g}" if sr.delta_cf else ""
     lo, hi = sr.tested_speed_range
@@ -664,7 +655,7 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
 def _thumb_title(row: dict[str, Any]) -> str:
     test = str(row.get("test") or "").strip()
     kind = f" {test}" if test in ("steady", "accel") else ""
-    head = f"run {int(row['run'])} · {row['config']}{kind} · α = {_num(row['angle_deg'], 3)}°"
+    head = f"run {int(row['run'])} · {row['config']}{kind} · α = {fmt_num(row['angle_deg'], 3)}°"
     u = row.get("speed_mean")
     if u is not None and isinstance(u, float) and math.isfinite(u):
         head += f" · {u:.2f} m/s"
@@ -944,6 +935,6 @@ def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: li
 
 
 __all__ = [
-    "page_plan", "quality_flow", "write_pdf",
+    "page_plan", "write_pdf",
 ]
 

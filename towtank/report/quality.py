@@ -1,6 +1,6 @@
 """The report's quality section as a text flow: rejected and void runs, warnings, fit
 diagnostics with the uncertainty budget, and notes on individual runs, laid out top-down over
-as many pages as it needs (:func:`quality_flow`, :func:`_paginate`; drawn by
+as many pages as it needs (:func:`quality_flow`, :func:`paginate`; drawn by
 :mod:`towtank.report.pdf`)."""
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def _height(lines: list[tuple[str, str]]) -> float:
     return sum(LINE_IN[kind] for kind, _ in lines)
 
 
-def _paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
+def paginate(flow: Flow, height_in: float) -> list[list[tuple[str, str]]]:
     """Split the flow into pages of ``height_in``, keeping each group together if it fits."""
     pages: list[list[tuple[str, str]]] = [[]]
     used = 0.0
@@ -123,7 +123,7 @@ def quality_flow(day: DayResult) -> Flow:
             if int(r.run) in grouped:
                 continue
             reason = short_reason(int(r.run), r.file, r.reason)
-            f.li(f"run {int(r.run)} ({r.config}, α = {_num(r.angle_deg)}°, {r.file}): "
+            f.li(f"run {int(r.run)} ({r.config}, α = {fmt_num(r.angle_deg)}°, {r.file}): "
                  f"{r.status} — {reason}")
     else:
         f.p("Every run of the sheet was used.")
@@ -203,7 +203,7 @@ def _diagnostics_flow(f: Flow, hull: HullResult | None, coefficients: pd.DataFra
         resid = ", ".join(f"{r}: {1e3 * v:+.2f}" for r, v in am.residual_by_run.items())
         f.li(f"{sym}: joint regression {est.value:.5g} kg [{est.ci_low:.5g}, {est.ci_high:.5g}] "
              f"over {len(am.runs)} runs (m − {sym} = {am.M:.5g} ± {am.M_se:.2g} kg); curve "
-             f"difference {_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
+             f"difference {fmt_num(est.alt_value, 5)} kg: {est.agreement or 'not available'}. "
              f"Mean residual of the joint regression by run [mN]: {resid}.")
         levels = am.curve_difference.levels
         if levels:
@@ -293,7 +293,7 @@ def _dof(nu: float) -> str:
 short_reason = own_reason  # a run's reason without the "run N: file:" prefix
 
 
-def _num(x: Any, digits: int = 4) -> str:
+def fmt_num(x: Any, digits: int = 4) -> str:
     try:
         v = float(x)
     except (TypeError, ValueError):

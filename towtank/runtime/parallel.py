@@ -231,7 +231,7 @@ def _worker_init(parent_pid: int | None = None) -> None:
     if parent_pid is not None:
         _die_with(parent_pid)
     try:
-        # start-up saving: pyarrow (~70 ms) is loaded in the workers only, not in every
+        # loaded on use: pyarrow is loaded in the workers only, not in every
         # process that imports this module (the command line's, towtank inspect's)
         import pyarrow
 

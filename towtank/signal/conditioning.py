@@ -28,7 +28,7 @@ def butter_sos(cutoff_hz: float, fs: float, order: int = 4) -> np.ndarray:
     order : int
         Filter order of one pass (the zero-phase filter has twice this order).
     """
-    # start-up saving: scipy.signal (~1.6 s) only to design a filter
+    # loaded on use: scipy.signal only to design a filter
     from scipy.signal import butter
 
     nyq = 0.5 * fs
@@ -58,7 +58,7 @@ def lowpass(x: np.ndarray, fs: float, cutoff_hz: float, order: int = 4) -> np.nd
         Process. 44(4), "Determining the initial states in forward-backward filtering").
 
     """
-    # start-up saving: scipy.signal (~1.6 s) only when the fast filter cannot be used (another
+    # loaded on use: scipy.signal only when the fast filter cannot be used (another
     # dtype), never in a reduction worker
     from scipy.signal import sosfiltfilt
 

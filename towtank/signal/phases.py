@@ -364,7 +364,7 @@ def force_plateau(
     RunError
         The force shows no plateau long enough (give the window in the run sheet).
     """
-    # start-up saving: scipy.ndimage (~0.5 s) only for this run-window search, not on import
+    # loaded on use: scipy.ndimage only for this run-window search, not on import
     from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
     x = np.asarray(force, dtype=float) - zero

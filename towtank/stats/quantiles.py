@@ -32,7 +32,7 @@ def normal_quantile(alpha: float = ALPHA) -> float:
     float
         The coverage factor [-].
     """
-    # start-up saving: scipy.stats (~1.0 s measured, after numpy) only when an interval is
+    # loaded on use: scipy.stats only when an interval is
     # computed; modules that `towtank inspect` loads import this one
     from scipy.stats import norm
 
@@ -55,7 +55,7 @@ def t_quantile(dof: float, alpha: float = ALPHA) -> float:
     float
         The coverage factor [-] (GUM G.3.2).
     """
-    # start-up saving: scipy.stats (~1.0 s measured), as above
+    # loaded on use: scipy.stats, as above
     from scipy.stats import t
 
     a = _check_alpha(alpha)

@@ -172,7 +172,7 @@ def run_wide(workdir: Path, n_columns: int, n_rows: int = 200, *, repeat: int = 
 def _wide_day(root: Path, wide: Path) -> dict[str, float]:
     """The LVM hull day (41 runs) in ``root``, plus the wide file as run 42, processed in this
     process (one job): seconds, runs, and the size of runs.csv [bytes]."""
-    # start-up saving: the command line (the whole pipeline) only for --wide-day
+    # loaded on use: the command line (the whole pipeline) only for --wide-day
     from towtank.commands.cli import main
 
     proto = _write(root, "lvm", 3)

@@ -58,7 +58,7 @@ def watch_session(protocol: Path, **kw: Any) -> tuple[Any, list[str]]:
     """A :class:`towtank.live.session.WatchSession` of ``protocol`` in this process (one
     worker; no report and no live figures unless ``kw`` asks for them), and the list its
     lines go to."""
-    # start-up saving: the benchmark's own process never holds a session
+    # loaded on use: the benchmark's own process never holds a session
     from towtank.ingest.protocol import load_protocol, with_output_dir
     from towtank.live.session import WatchSession
 
@@ -159,7 +159,7 @@ def _wait_event(events: list[tuple[float, int]], version: int) -> float:
 
 def _wait_shown(driver: Any, run: int) -> float:
     """The time the page in ``driver`` first shows ``run``'s verdict."""
-    from selenium.common.exceptions import WebDriverException  # start-up saving: --browser only
+    from selenium.common.exceptions import WebDriverException  # loaded on use: --browser only
     from selenium.webdriver.common.by import By
 
     end = time.monotonic() + TIMEOUT_S

@@ -26,7 +26,7 @@ def free_port() -> int:
 def browser_missing() -> str | None:
     """Why the browser cannot be started here (one sentence), or None when it can."""
     try:
-        import selenium  # noqa: F401  (start-up saving: only browser tests need selenium)
+        import selenium  # noqa: F401  (loaded on use: only browser tests need selenium)
     except ImportError:
         return "selenium is not installed (pip install '.[test]')"
     for path, what in ((CHROMIUM, "chromium"), (CHROMEDRIVER, "chromedriver")):
@@ -37,7 +37,7 @@ def browser_missing() -> str | None:
 
 def start_chromium(profile: Path) -> Any:
     """A headless Chromium driven by selenium, its profile in ``profile``, loopback only."""
-    from selenium import webdriver  # start-up saving: only browser tests need selenium
+    from selenium import webdriver  # loaded on use: only browser tests need selenium
     from selenium.webdriver.chrome.service import Service
 
     closed = free_port()  # nothing listens there: any request that escapes the rules fails
