@@ -3,9 +3,12 @@
 Both sample days (``protocols/sut2_hull.toml``, the SUT-2 hull day, and
 ``protocols/naca0015_fin.toml``, the NACA 0015 fin day, whose run files ship in
 ``sample_runs/``) are processed and every CSV output, model.json, provenance.json, the cell
-values of report.xlsx and the day's warnings are hashed and compared with
-``tests/golden/sample_days.json``. Only what legitimately varies is normalised: the checkout's
-absolute path, towtank's, Python's and the libraries' versions.
+values of report.xlsx, the day's warnings and the pixels of every PDF page and PNG figure are
+hashed and compared with ``tests/golden/sample_days.json``. Only what legitimately varies is
+normalised: the checkout's absolute path, towtank's, Python's and the libraries' versions. The
+pixels depend on the drawing and rendering libraries too (matplotlib, FreeType through it, PDFium):
+they are compared when those are the versions the golden set was recorded with (stored beside it),
+and a changed version is said in a warning rather than failing the refactor's check.
 
 To record a new golden set after an intended change of the outputs::
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 GOLDEN = ROOT / "tests" / "golden" / "sample_days.json"
 DAYS = ("sut2_hull", "naca0015_fin")
 VARYING = ("version", "python", "libraries")  # provenance.json keys that legitimately vary
+PIXELS = "pixels"  # the digest entries that depend on the renderer's versions
 
 
 def _normalise(text: str) -> str:
@@ -52,10 +57,43 @@ def _workbook_cells(path: Path) -> str:
     return _normalise("\n".join(lines))
 
 
+def renderer() -> str:
+    """The versions the pixels depend on: matplotlib (it draws and embeds the fonts), PDFium."""
+    from importlib.metadata import version
+
+    import matplotlib
+
+    return f"matplotlib {matplotlib.__version__}, pypdfium2 {version('pypdfium2')}"
+
+
+def _pdf_pixels(path: Path) -> str:
+    """sha256 of every page of a PDF rendered at 80 dpi (RGB), page after page."""
+    import pypdfium2
+
+    h = hashlib.sha256()
+    pdf = pypdfium2.PdfDocument(path)
+    try:
+        for page in pdf:
+            bitmap = page.render(scale=80 / 72)
+            h.update(bitmap.to_pil().convert("RGB").tobytes())
+            page.close()
+    finally:
+        pdf.close()
+    return h.hexdigest()
+
+
+def _png_pixels(path: Path) -> str:
+    """sha256 of a PNG's decoded pixels (its metadata, e.g. matplotlib's version, left out)."""
+    from PIL import Image
+
+    with Image.open(path) as image:
+        return hashlib.sha256(image.convert("RGBA").tobytes()).hexdigest()
+
+
 def day_digest(name: str, out: Path) -> dict[str, str]:
     """sha256 of every normalised output of one sample day, by file name."""
     day = towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out, jobs=2,
-                              report=False, cache=False)
+                              report=True, cache=False)
     digest: dict[str, str] = {}
     for path in sorted(out.iterdir()):
         if path.suffix == ".csv" or path.name == "model.json":
@@ -68,6 +106,9 @@ def day_digest(name: str, out: Path) -> dict[str, str]:
     book.mkdir()
     digest["report.xlsx (cells)"] = _sha(_workbook_cells(write_workbook(day, book)))
     digest["warnings"] = _sha(_normalise("\n".join(str(n) for n in day.warnings)))
+    digest[f"report.pdf ({PIXELS})"] = _pdf_pixels(out / "report.pdf")
+    for png in sorted((out / "figures").glob("*.png")):
+        digest[f"figures/{png.name} ({PIXELS})"] = _png_pixels(png)
     return digest
 
 
@@ -77,7 +118,14 @@ def test_sample_day_outputs_match_golden(name: str, tmp_path: Path) -> None:
     if os.environ.get("TOWTANK_WRITE_GOLDEN"):
         stored = json.loads(GOLDEN.read_text()) if GOLDEN.is_file() else {}
         stored[name] = got
+        stored["renderer"] = renderer()
         GOLDEN.write_text(json.dumps(stored, indent=2, sort_keys=True) + "\n")
-    want = json.loads(GOLDEN.read_text())[name]
+    stored = json.loads(GOLDEN.read_text())
+    want = stored[name]
+    if stored.get("renderer") != renderer():
+        warnings.warn(f"pixels not compared: recorded with {stored.get('renderer')}, drawn "
+                      f"with {renderer()}", stacklevel=1)
+        want = {k: v for k, v in want.items() if PIXELS not in k}
+        got = {k: v for k, v in got.items() if PIXELS not in k}
     changed = sorted(k for k in set(want) | set(got) if want.get(k) != got.get(k))
     assert not changed, f"{name}: outputs differ from tests/golden: {changed}"
