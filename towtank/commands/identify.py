@@ -1,4 +1,4 @@
-"""``towtank identify``: coefficients of a model.json from a manoeuvre record (issue #25)."""
+"""``towtank identify``: coefficients of a model.json from a manoeuvre record."""
 
 from __future__ import annotations
 
