@@ -19,7 +19,7 @@ __all__ = ["write_outputs"]
 def __getattr__(name: str) -> Any:
     if name == "write_outputs":
         # loaded on use: `towtank inspect` loads this package (report.style) and never the
-        # writers; report.outputs loads pandas (+0.17 s measured after the inspect command)
+        # writers; report.outputs loads pandas
         from towtank.report.outputs import write_outputs
 
         return write_outputs
