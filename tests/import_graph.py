@@ -196,33 +196,59 @@ def private_uses(edges: list[Import], known: set[str]) -> list[Import]:
     return out
 
 
+def _module_names(tree: ast.AST, module: str, package: str, known: set[str]) -> dict[str, str]:
+    """Local name -> the package's module it is bound to, for every import in ``tree``:
+    ``import a.b as x`` (x), ``import a.b`` (a, the top package) and ``from a import b as x``
+    where ``a.b`` is a module."""
+    out = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.asname:
+                    out[a.asname] = a.name
+                else:
+                    out[a.name.split(".")[0]] = a.name.split(".")[0]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")
+                anchor = anchor[: len(anchor) - (node.level - 1)]
+                base = ".".join(anchor + ([base] if base else []))
+            for a in node.names:
+                if f"{base}.{a.name}" in known:
+                    out[a.asname or a.name] = f"{base}.{a.name}"
+    return {name: target for name, target in out.items() if target in known}
+
+
+def _dotted(node: ast.expr, names: dict[str, str]) -> str | None:
+    """The dotted name ``node`` reads (``q``, ``towtank.report.quality``) with its first part
+    replaced by the module it is bound to; None for anything else."""
+    if isinstance(node, ast.Name):
+        return names.get(node.id)
+    if isinstance(node, ast.Attribute):
+        base = _dotted(node.value, names)
+        return None if base is None else f"{base}.{node.attr}"
+    return None
+
+
 def private_attribute_uses(package_dir: Path) -> list[tuple[str, int, str]]:
-    """``alias._name`` where ``alias`` is a module of the package imported by name."""
+    """``alias._name``: a ``_private`` name read as an attribute of another module of the
+    package (``import pkg.a as q; q._x``, ``from pkg import a; y = a._x``,
+    ``pkg.a._x``): (importer, line, ``module._name``)."""
     mods = modules(package_dir)
     known = set(mods)
     out = []
     for m, p in mods.items():
-        aliases: set[str] = set()
         tree = ast.parse(p.read_text(encoding="utf-8"))
+        package = m if p.name == "__init__.py" else m.rpartition(".")[0]
+        names = _module_names(tree, m, package, known)
         for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom):
-                for a in node.names:
-                    aliases.add(a.asname or a.name)
-            elif isinstance(node, ast.Import):
-                for a in node.names:
-                    if a.name.split(".")[0] == package_dir.name:
-                        aliases.add(a.asname or a.name)
-        # only aliases that are package modules
-        mod_aliases = set()
-        for e in imports(p, m, known):
-            if e.target in known and e.target != m:
-                mod_aliases.add(e.target.rpartition(".")[2])
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Attribute) and _private(node.attr) \
-                    and isinstance(node.value, ast.Name) and node.value.id in mod_aliases \
-                    and node.value.id in aliases:
-                out.append((m, node.lineno, f"{node.value.id}.{node.attr}"))
-    return out
+            if not (isinstance(node, ast.Attribute) and _private(node.attr)):
+                continue
+            owner = _dotted(node.value, names)
+            if owner in known and owner != m:
+                out.append((m, node.lineno, f"{owner}.{node.attr}"))
+    return sorted(set(out))
 
 
 def report(package_dir: Path) -> str:

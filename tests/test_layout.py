@@ -20,7 +20,15 @@ from pathlib import Path
 
 import import_graph
 import pytest
-from import_graph import STARTUP_MARK, Import, circles, graph, modules, private_uses
+from import_graph import (
+    STARTUP_MARK,
+    Import,
+    circles,
+    graph,
+    modules,
+    private_attribute_uses,
+    private_uses,
+)
 
 PACKAGE = Path(__file__).resolve().parents[1] / "towtank"
 
@@ -165,6 +173,13 @@ def test_no_module_imports_another_modules_private_name():
     assert not problems, "\n".join(problems)
 
 
+def test_no_module_reads_another_modules_private_name_as_an_attribute():
+    """``q._name`` of a module ``q`` of the package (an alias, ``import ... as q``, or the
+    module's dotted name) borrows a private name as much as ``from q import _name`` does."""
+    found = [f"{m}:{line} reads {name}" for m, line, name in private_attribute_uses(PACKAGE)]
+    assert not found, "\n".join(found)
+
+
 def test_function_local_imports_are_marked_start_up_savings():
     """Every function-local import in the package, of towtank's own modules or a library's,
     is loaded on use, marked so; all others are at the top."""
@@ -233,6 +248,26 @@ def test_a_planted_private_import_is_found(tmp_path):
                                               "pkg.c imports _secret from pkg.a"]
     assert unexpected_private(pkg, {("pkg.b", "pkg.a", "_secret"),
                                     ("pkg.c", "pkg.a", "_secret")}) == []
+
+
+def test_a_planted_private_attribute_of_a_module_is_found(tmp_path):
+    pkg = _package(tmp_path, {
+        "sub/__init__.py": "",
+        "sub/quality.py": "_num = 1\npublic = 2\n\n\ndef f():\n    return _num\n",
+        "alias.py": "from pkg.sub import quality as _quality\n_num = _quality._num\n",
+        "as_name.py": "import pkg.sub.quality as q\n\n\ndef g():\n    return q._num(1)\n",
+        "dotted.py": "import pkg.sub.quality\nx = pkg.sub.quality._num\n",
+        "relative.py": "from .sub import quality\ny = quality._num\n",
+        "fine.py": "from pkg.sub import quality\nz = quality.public\n",
+        "own.py": "import os\n_own = 1\n\n\nclass A:\n    _x = 1\n\n\n"
+                  "def h(a):\n    return a._x, os._exit\n",
+    })
+    assert private_attribute_uses(pkg) == [
+        ("pkg.alias", 2, "pkg.sub.quality._num"),
+        ("pkg.as_name", 5, "pkg.sub.quality._num"),
+        ("pkg.dotted", 2, "pkg.sub.quality._num"),
+        ("pkg.relative", 2, "pkg.sub.quality._num"),
+    ]
 
 
 def test_a_planted_upward_import_is_found(tmp_path):
