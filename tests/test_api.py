@@ -80,8 +80,8 @@ def test_process_day_in_process_returns_the_day(cli_coefficients):
     _same(day.coefficients.pipe(lambda d: pd.read_csv(
         pd.io.common.StringIO(d.to_csv(index=False)))), cli_coefficients)
     assert set(day.runs["status"]) == {"ok", "void"}
-    assert list(day.fins.columns)[:2] == ["run", "angle_deg"] and day.fins.empty
-    assert len(day.scaling) == 4 and "drag_ittc57" in day.scaling
+    assert day.fins is None and list(day.table("fins").columns)[:2] == ["run", "angle_deg"]
+    assert len(day.scaling.table) == 4 and "drag_ittc57" in day.scaling.table
     assert isinstance(day.warnings, list)
 
 
@@ -217,20 +217,20 @@ def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
     """A day without hull coefficients: its summary is the runs by configuration and status,
     its FinResult prints in one line and gives fins.csv; nothing raises for the absent stages."""
     day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
-    assert day.hull is None and day.fin_result is not None
+    assert day.hull is None and day.fins is not None
     text = str(day.summary())
     assert "fin" in text and "ok" in text and len(repr(day)) < 5000
     assert "stages: fins" in repr(day)
-    assert repr(day.fin_result).startswith("FinResult(") and "\n" not in repr(day.fin_result)
-    pd.testing.assert_frame_equal(day.fin_result.to_frame(), day.fins)
+    assert repr(day.fins).startswith("FinResult(") and "\n" not in repr(day.fins)
+    pd.testing.assert_frame_equal(day.fins.to_frame(), day.table("fins"))
     assert day.coefficients.empty and list(day.coefficients.columns)[:2] == ["symbol", "value"]
-    assert isinstance(day.fin_result, towtank.FinResult)
+    assert isinstance(day.fins, towtank.FinResult)
     assert "<table" in day._repr_html_() and "<table" in day.tare._repr_html_()
     from towtank.report import figures
 
-    fig = figures.fig_fin_coefficients(day.fin_result)  # the result drawn, not the day
+    fig = figures.fig_fin_coefficients(day.fins)  # the result drawn, not the day
     assert fig is not None and len(fig.axes) == 2
-    assert len(figures.fig_fin_forces(day.fin_result).axes) == len(
+    assert len(figures.fig_fin_forces(day.fins).axes) == len(
         figures.fig_fin_forces(day).axes)
 
 

@@ -46,12 +46,12 @@ def test_every_fin_run_is_reduced(fin_day):
     runs = day.runs
     assert (runs["status"] == "ok").all(), runs.loc[runs["status"] != "ok", "reason"].tolist()
     n_fin = sum(1 for r in truth["runs"].values() if r["config"] == "fin")
-    assert len(day.fin_result.table) == n_fin
+    assert len(day.fins.table) == n_fin
 
 
 def test_cl_cd_recovered_up_to_25_deg(fin_day):
     _, truth, day = fin_day
-    t = day.fin_result.table
+    t = day.fins.table
     t = t[t["angle_deg"] <= 25.0]
     assert len(t) >= 16
     for row in t.itertuples():
@@ -62,7 +62,7 @@ def test_cl_cd_recovered_up_to_25_deg(fin_day):
 
 def test_fins_csv_carries_sandia_at_run_re(fin_day):
     _, _, day = fin_day
-    t = day.fin_result.table
+    t = day.fins.table
     assert list(t.columns[: len(FINS_COLUMNS)]) == FINS_COLUMNS
     cl, cd = sandia.section_coefficients(t["angle_deg"].to_numpy(), t["re"].to_numpy())
     np.testing.assert_allclose(t["cl_sandia"], cl, rtol=0, atol=1e-12)
@@ -78,7 +78,7 @@ def test_fins_csv_carries_sandia_at_run_re(fin_day):
 def test_generated_truth_is_the_sandia_section(fin_day):
     """The comparison is meaningful: the measured C_L tracks the 2-D data, not the 3-D one."""
     _, _, day = fin_day
-    t = day.fin_result.table
+    t = day.fins.table
     small = t[t["angle_deg"] <= 10]
     assert np.all(np.abs(small["cl"] - small["cl_sandia"]) < 0.01)
     # the finite-span expectation of this low-aspect-ratio fin is far lower (away from 0 deg)
@@ -94,7 +94,7 @@ def test_stall_found_at_the_last_angle_before_the_fall(fin_day):
     the zero-lift runs.
     """
     _, _, day = fin_day
-    curves = day.fin_result.curves
+    curves = day.fins.curves
     assert curves["stall_reached"].all()
     assert curves["stall_angle_deg"].tolist() == [7.5, 10.0, 10.0, 10.0]
     assert (curves["cd_min_angle_deg"] == 0.0).all()
@@ -107,7 +107,7 @@ def test_lift_slope_interval_contains_sandia_slope(fin_day):
     """The slope comes from the linear range, below each speed's stall: at 1.0 m/s 0-5 deg, at
     the others 0-7.5 deg; three or more angles, so an intercept and a finite interval."""
     _, _, day = fin_day
-    curves = day.fin_result.curves
+    curves = day.fins.curves
     assert curves["slope_angles_deg"].tolist() == ["0 2.5 5"] + ["0 2.5 5 7.5"] * 3
     for row in curves.itertuples():
         assert row.lift_slope_ci_low <= row.lift_slope_sandia_2d <= row.lift_slope_ci_high
@@ -131,7 +131,7 @@ def test_low_reynolds_runs_are_warned(tmp_path):
     sections = fin_protocol_sections(".", "out")
     write_protocol(tmp_path / "p.toml", **sections)
     day = process_day(tmp_path / "p.toml", jobs=1)
-    t = day.fin_result.table
+    t = day.fins.table
     low = t[t["re"] < 1e5]
     assert len(low) == len(t) == 12
     warned = [w for w in map(str, day.warnings) if "below 1e5" in w]
@@ -140,7 +140,7 @@ def test_low_reynolds_runs_are_warned(tmp_path):
         mine = [w for w in warned if w.startswith(f"run {run}: Re = ")]
         assert len(mine) == 1, (run, warned)
         assert f"Re = {re:.1e}".replace("e+0", "e") in mine[0]
-    assert warned == day.fin_result.warnings[: len(warned)]
+    assert warned == list(day.fins.warnings[: len(warned)])
 
 
 def test_sandia_re_clamp_reaches_the_day_warnings():
@@ -177,13 +177,13 @@ def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
     sections["fin"]["mounting"] = "wall"
     write_protocol(tmp_path / "wall.toml", **sections)
     wall = process_day(tmp_path / "wall.toml", jobs=1)
-    assert wall.fin_result.aspect_ratio == pytest.approx(2 * day.fin_result.aspect_ratio)
+    assert wall.fins.aspect_ratio == pytest.approx(2 * day.fins.aspect_ratio)
     # in the attached-flow range a larger effective aspect ratio lifts the finite-span
     # expectation toward the 2-D data (past stall the effective angle decides, not the slope);
     # at 0 deg both are zero
-    angle = day.fin_result.table["angle_deg"]
+    angle = day.fins.table["angle_deg"]
     attached = (angle > 0.0) & (angle <= 5.0)
-    w, f = wall.fin_result.table[attached], day.fin_result.table[attached]
+    w, f = wall.fins.table[attached], day.fins.table[attached]
     assert np.all(w["cl_3d"] > f["cl_3d"])
     assert np.all(w["cl_3d"] < w["cl_sandia"])
 
@@ -191,10 +191,10 @@ def test_wall_mounting_doubles_the_aspect_ratio(fin_day, tmp_path):
 def test_control_derivatives_follow_the_measured_slope(fin_day):
     """c_La is the mean of the per-speed linear-range slopes, and the table says so."""
     _, _, day = fin_day
-    ctrl = day.fin_result.control.set_index("symbol")
+    ctrl = day.fins.control.set_index("symbol")
     fin = day.protocol.fin
     rho = day.runs.loc[day.runs["config"] == "fin", "rho"].mean()
-    slope = float(np.nanmean(day.fin_result.curves["lift_slope"]))
+    slope = float(np.nanmean(day.fins.curves["lift_slope"]))
     np.testing.assert_allclose(ctrl["lift_slope"], slope, rtol=1e-12)
     assert ctrl["lift_slope_source"].str.startswith(
         "mean of the measured linear-range lift slopes (|α| ≤ 10°, below stall) of the speed "
@@ -282,7 +282,7 @@ def test_protocol_linear_max_deg_sets_the_linear_range(fin_day, tmp_path):
     write_protocol(tmp_path / "five.toml", **sections)
     five = process_day(tmp_path / "five.toml", jobs=1)
     assert five.protocol.fin.linear_max_deg == 5.0
-    assert five.fin_result.curves["slope_angles_deg"].tolist() == ["0 2.5 5"] * 4
-    assert "(|α| ≤ 5°, below stall)" in five.fin_result.control["lift_slope_source"].iloc[0]
+    assert five.fins.curves["slope_angles_deg"].tolist() == ["0 2.5 5"] * 4
+    assert "(|α| ≤ 5°, below stall)" in five.fins.control["lift_slope_source"].iloc[0]
     # 0-5 deg is the straight part of the section at every speed: close to its 0.11/deg
-    assert five.fin_result.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)
+    assert five.fins.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)

@@ -204,8 +204,8 @@ def _expected_pages(day) -> int:
     n_figs = len(figures.available_figures(day))
     n_quality = len(quality.paginate(quality.quality_flow(day), quality.QUALITY_HEIGHT_IN))
     n_runs = math.ceil(len(day.runs) / pdf.RUNS_PER_PAGE)
-    if day.fin_result is not None and not pdf.fin_runs_fit(day.fin_result):
-        n_runs += math.ceil(len(day.fin_result.table) / pdf.RUNS_PER_PAGE)
+    if day.fins is not None and not pdf.fin_runs_fit(day.fins):
+        n_runs += math.ceil(len(day.fins.table) / pdf.RUNS_PER_PAGE)
     n_figs += len(pdf.vehicle_pages(day))  # with a [vehicle]: measured beside predicted
     return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
 

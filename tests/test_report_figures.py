@@ -111,8 +111,8 @@ def test_scaling_legend_names_the_recommended_resistance(hull_day):
     # the sample hull day ran at 5 D: ITTC-57 is the prototype resistance, the Froude-scaled
     # total resistance a comparison (scaling.csv's `recommended`)
     day = hull_day.result
-    assert set(day.scaling_result.table["recommended"]) == {"drag_ittc57"}
-    fig = figures.fig_scaling(day.scaling_result, day.runs, day.protocol, page=True)
+    assert set(day.scaling.table["recommended"]) == {"drag_ittc57"}
+    fig = figures.fig_scaling(day.scaling, day.runs, day.protocol, page=True)
     texts = _legend_texts(fig.axes[1])
     assert any("ITTC-57" in t and "(recommended)" in t for t in texts), texts
     assert any("Froude" in t and "comparison only" in t for t in texts), texts

@@ -266,17 +266,17 @@ def test_myring_geometry_is_used_and_documented(tmp_path, cache):
     rho_m, nu_m = float(zero.rho.mean()), float(zero.nu.mean())
     ff = similarity.form_factor(zero.drag_mean, zero.speed_mean, g.wetted_area, rho_m, nu_m,
                                 0.353)
-    assert day.scaling_result.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
+    assert day.scaling.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
     given = similarity.form_factor(zero.drag_mean, zero.speed_mean, 0.0472, rho_m, nu_m, 0.353)
     assert abs(ff.one_plus_k - given.one_plus_k) > 0.02  # the area matters to 1 + k
     sea = water_properties(15.0, "sea")
-    up = day.scaling_result.table["speed_prototype"].to_numpy()
+    up = day.scaling.table["speed_prototype"].to_numpy()
     cf = 0.075 / (np.log10(up * 1.412 / sea.nu) - 2) ** 2
     s_p = 16 * g.wetted_area
     expected = 0.5 * sea.rho * s_p * up**2 * (ff.one_plus_k * cf + 0.0004)
-    np.testing.assert_allclose(day.scaling_result.table["drag_ittc57"], expected, rtol=1e-9)
-    assert day.scaling_result.wetted_area_prototype == pytest.approx(s_p, rel=1e-12)
-    assert "Re = 2e+05" in day.scaling_result.statement  # the form factor's laminar threshold
+    np.testing.assert_allclose(day.scaling.table["drag_ittc57"], expected, rtol=1e-9)
+    assert day.scaling.wetted_area_prototype == pytest.approx(s_p, rel=1e-12)
+    assert "Re = 2e+05" in day.scaling.statement  # the form factor's laminar threshold
 
     write_workbook(day, tmp_path)
     rows = [r[:5] for r in openpyxl.load_workbook(tmp_path / "report.xlsx")["Summary"]
@@ -303,14 +303,14 @@ def test_roughness_allowance_adds_its_term_exactly(tmp_path, cache):
     rough = process_day(_variant(tmp_path, prototype={"delta_cf": "0.0004"}), cache_dir=cache)
     assert rough.protocol.prototype.delta_cf == 0.0004
     sea = water_properties(15.0, "sea")
-    up = base.scaling_result.table["speed_prototype"].to_numpy()
+    up = base.scaling.table["speed_prototype"].to_numpy()
     rise = 0.5 * sea.rho * up**2 * (16 * 0.0472) * 0.0004
     np.testing.assert_allclose(
-        rough.scaling["drag_ittc57"] - base.scaling["drag_ittc57"], rise, rtol=1e-9
+        rough.scaling.table["drag_ittc57"] - base.scaling.table["drag_ittc57"], rise, rtol=1e-9
     )
-    assert rough.scaling_result.form_factor.one_plus_k == base.scaling_result.form_factor.one_plus_k
-    pd.testing.assert_series_equal(rough.scaling_result.table["drag_froude"],
-                                   base.scaling_result.table["drag_froude"])
+    assert rough.scaling.form_factor.one_plus_k == base.scaling.form_factor.one_plus_k
+    pd.testing.assert_series_equal(rough.scaling.table["drag_froude"],
+                                   base.scaling.table["drag_froude"])
 
 
 def test_hot_prototype_water_is_a_day_warning(tmp_path, cache):
@@ -367,7 +367,7 @@ def test_form_factor_trend_of_the_sample_day_is_named(outputs):
     """The sample day's 1 + k rises from 1.37 at 0.8 m/s to 1.70 at 2 m/s: a significant trend
     with Re, which the scaling result states with what was used."""
     day = process_day(PROTOCOL, jobs=1, cache_dir=outputs / ".cache")
-    sr = day.scaling_result
+    sr = day.scaling
     trend = sr.form_factor_trend
     assert trend.significant and trend.slope > 0
     assert trend.first[1] == pytest.approx(1.365, abs=0.005)

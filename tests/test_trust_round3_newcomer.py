@@ -81,8 +81,8 @@ def _check_matrix(plain_days, tmp_path, day: str, layout: str, sheet: str) -> No
     assert not got.rejected, got.rejected
     assert list(got.runs["status"]) == list(ref.runs["status"])
     fins = day == "fin"
-    gaps = layout_gaps(layout, got.fins if fins else got.coefficients,
-                       ref.fins if fins else ref.coefficients, fins=fins)
+    gaps = layout_gaps(layout, got.table("fins") if fins else got.coefficients,
+                       ref.table("fins") if fins else ref.coefficients, fins=fins)
     assert gaps and max(gaps.values()) <= 1.0, {k: v for k, v in gaps.items() if v > 1.0}
 
 

@@ -6,7 +6,7 @@ These are the command line's own steps, callable one by one::
 
     day = towtank.process_day("protocols/sut2_hull.toml", out="reports/day1")
     day.coefficients          # coefficients.csv as a DataFrame
-    day.runs, day.fins, day.scaling, day.warnings, day.rejected
+    day.runs, day.table("fins"), day.table("scaling"), day.warnings, day.rejected
 
     protocol = towtank.load_protocol("protocols/sut2_hull.toml")
     raw = towtank.read_run("sample_runs/sut2_hull/data/run_020.csv.gz", protocol)
@@ -103,8 +103,9 @@ def process_day(
     Returns
     -------
     DayResult
-        ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.fins`` (fins.csv),
-        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (list of
+        ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.table("fins")``
+        (fins.csv), ``.table("scaling")`` (scaling.csv) as DataFrames; ``.hull``, ``.fins``,
+        ``.scaling``, ``.vehicle`` the stages' results (None when not run); ``.warnings`` (list of
         :class:`~towtank.results.Notice`: ``str()`` the sentence, ``.stage``, ``.run``,
         ``.file``);
         ``.rejected`` (run number -> sentence); ``.reductions`` (run number ->
@@ -256,30 +257,38 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     ----------
     model : path or dict
         model.json (read and checked) or the model as a dict
-    log : path or DataFrame
-        The record in simulate's columns (``t_s``, states, ``rudder_deg``, ``sternplane_deg``)
+    log : path, DataFrame or ManoeuvreLog
+        The record in simulate's columns (``t_s``, states, ``rudder_deg``, ``sternplane_deg``),
+        or as read (:class:`towtank.vehicle.identify_log.ManoeuvreLog`)
     estimate : list of str
         model.json symbols to identify (e.g. ``["N_ur", "N_rdot", "N_uudr"]``)
     method : {"ukf", "ekf", "ls"}
     start : {"model", "zero"}
     **kwargs
-        ``noise``, ``prior_sd``, ``check`` of :func:`towtank.vehicle.identify.identify`
+        ``noise``, ``prior_sd``, ``check``, ``progress`` of
+        :func:`towtank.vehicle.identify.identify`
 
     Returns
     -------
-    towtank.vehicle.identify.IdentifyResult
-        ``conf_int(alpha)``, ``summary()``, ``table()``, ``verdicts()``.
+    towtank.results.IdentifyResult
+        ``params``, ``bse``, ``conf_int(alpha)`` (columns ``lower``, ``upper``),
+        ``summary()``, ``to_frame()`` / ``table()`` (identified.csv), ``verdicts()``.
     """
 
     # loaded on use: the identification (filterpy, scipy.stats) loads
     # only for identify
+    from towtank.results import IdentifyResult, from_fit
     from towtank.vehicle.identify import identify as _identify
-    from towtank.vehicle.identify_log import log_from_frame, read_log
+    from towtank.vehicle.identify_log import ManoeuvreLog, log_from_frame, read_log
     from towtank.vehicle.model import read_model
 
     mdl = model if isinstance(model, dict) else read_model(model)
-    rec = log_from_frame(log, "log") if isinstance(log, pd.DataFrame) else read_log(log)
-    return _identify(mdl, rec, list(estimate), method=method, start=start, **kwargs)
+    if isinstance(log, pd.DataFrame):
+        rec = log_from_frame(log, "log")
+    else:
+        rec = log if isinstance(log, ManoeuvreLog) else read_log(log)
+    fit = _identify(mdl, rec, list(estimate), method=method, start=start, **kwargs)
+    return from_fit(IdentifyResult, fit)
 
 
 __all__ = ["ProtocolError", "identify", "load_protocol", "process_day", "read_run",

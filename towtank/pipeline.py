@@ -56,6 +56,7 @@ from towtank.results import (
     ScalingResult,
     Stage,
     VehicleResult,
+    from_fit,
     notices,
 )
 from towtank.runtime import parallel
@@ -150,7 +151,7 @@ def geometry_used(day: DayResult) -> list[dict[str, Any]]:
     model = day.protocol.model
     if model is None:
         return []
-    sr = day.scaling_result
+    sr = day.scaling
     scale = sr.scale if sr is not None else model_scale(day.protocol)
     return model_geometry(model, scale)
 
@@ -524,7 +525,7 @@ def analyse(day: DayResult) -> DayResult:
         warns += notices(vehicle.warnings, "vehicle") if vehicle is not None else []
     except TowtankError as exc:
         failed(exc, "vehicle")
-    return replace(day, warnings=warns, hull=hull, fin_result=fin, scaling_result=scaling,
+    return replace(day, warnings=warns, hull=hull, fins=fin, scaling=scaling,
                    vehicle=vehicle, prototype_values=prototype)
 
 
@@ -580,7 +581,8 @@ def fin_stage(protocol: Protocol, runs: pd.DataFrame) -> tuple[FinResult | None,
     (:func:`towtank.analysis.fin_analysis.analyse_fins`); (None, []) without a [fin]."""
     if protocol.fin is None:
         return None, []
-    return analyse_fins(runs, protocol.fin)
+    fins, warns = analyse_fins(runs, protocol.fin)
+    return (from_fit(FinResult, fins) if fins is not None else None), warns
 
 
 def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | None
@@ -603,4 +605,4 @@ def scaling_stage(protocol: Protocol, runs: pd.DataFrame, hull: HullResult | Non
         damping_alpha_max_deg=protocol.processing.damping_alpha_max_deg,
         free_surface=not protocol.water.is_air,
     )
-    return result, values, warns
+    return (from_fit(ScalingResult, result) if result is not None else None), values, warns

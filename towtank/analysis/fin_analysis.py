@@ -9,7 +9,6 @@ with the sentences the day's report carries.
 
 from __future__ import annotations
 
-import html
 import warnings
 from dataclasses import dataclass, field
 from typing import Literal
@@ -22,9 +21,10 @@ from towtank.ingest.protocol import Fin
 from towtank.reference import sandia
 
 
-@dataclass(frozen=True, repr=False)
-class FinResult:
-    """The fins of the day against the Sandia NACA 0015 section data."""
+@dataclass(frozen=True)
+class FinFit:
+    """The fins of the day against the Sandia NACA 0015 section data (the day's result,
+    :class:`towtank.results.FinResult`, is built from it)."""
 
     table: pd.DataFrame  # fins.csv
     curves: pd.DataFrame  # fin_curves.csv
@@ -32,21 +32,12 @@ class FinResult:
     aspect_ratio: float  # effective aspect ratio [-]
     oswald_e: float  # [-]
     control: pd.DataFrame | None  # fin_control.csv
-    warnings: list[str] = field(default_factory=list)
-
-    def to_frame(self) -> pd.DataFrame:
-        """fins.csv: one row per fin run."""
-        return self.table.copy()
-
-    def __repr__(self) -> str:
-        return (f"FinResult({len(self.table)} fin runs, {len(self.curves)} speed groups, "
-                f"AR_eff = {self.aspect_ratio:.4g}, e = {self.oswald_e:g})")
-
-    def _repr_html_(self) -> str:
-        return f"<p><b>{html.escape(repr(self))}</b></p>" + self.curves.to_html(index=False)
+    #: the lift slope of every speed group (:func:`towtank.analysis.fins.lift_slope_estimates`)
+    slopes: pd.DataFrame = field(default_factory=pd.DataFrame)
+    warnings: tuple[str, ...] = ()
 
 
-def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinResult | None, list[str]]:
+def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinFit | None, list[str]]:
     """The fin analysis of a day and its warnings; None without usable fin runs.
 
     Parameters
@@ -61,7 +52,7 @@ def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinResult | None, list[s
 
     Returns
     -------
-    (FinResult or None, list of str)
+    (FinFit or None, list of str)
         A run beyond ±180° (the section data's range) is left out with a sentence; Sandia's Re
         clamp is said once; any other Python warning goes on as a warning.
     """
@@ -103,8 +94,9 @@ def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinResult | None, list[s
             control = fins.control_derivatives(slope, fin.area, fin.x_m, rho, source)
         else:
             warn.append(f"fin control derivatives: {source}; fin_control.csv is not written.")
-    result = FinResult(
+    result = FinFit(
         table=table, curves=curves, force_vs_speed=fins.force_vs_speed(table),
-        aspect_ratio=ar, oswald_e=fin.oswald_e, control=control, warnings=list(warn),
+        aspect_ratio=ar, oswald_e=fin.oswald_e, control=control,
+        slopes=fins.lift_slope_estimates(table, linear_max), warnings=tuple(warn),
     )
     return result, warn

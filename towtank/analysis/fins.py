@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -43,6 +43,7 @@ __all__ = [
     "effective_aspect_ratio",
     "fin_curves",
     "fin_table",
+    "lift_slope_estimates",
     "finite_span_coefficients",
     "finite_span_slope",
     "force_vs_speed",
@@ -552,8 +553,19 @@ def _with_intercept(alpha_rad: np.ndarray) -> bool:
     return bool(np.unique(alpha_rad).size >= 3)
 
 
-def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tuple[float, ...]:
-    """OLS slope of C_L on α: (a, ci_low, ci_high); NaN where the data cannot tell.
+class SlopeFit(NamedTuple):
+    """An OLS lift slope: value, its interval, standard error and residual degrees of freedom
+    [1/rad, 1/rad, 1/rad, 1/rad, -]; NaN where the data cannot tell."""
+
+    value: float
+    ci_low: float
+    ci_high: float
+    std_error: float
+    dof: float
+
+
+def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> SlopeFit:
+    """OLS slope of C_L on α with its ``level`` interval; NaN where the data cannot tell.
 
     NaN unless two or more distinct non-zero angles. With three or more distinct angles the line
     C_L = a·α + c0 is fitted (c0 absorbs a small misalignment of the fin); with two (both
@@ -566,7 +578,7 @@ def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tup
     ok = np.isfinite(alpha_rad) & np.isfinite(y)
     x, y = alpha_rad[ok], y[ok]
     if not _enough_angles(x):
-        return np.nan, np.nan, np.nan
+        return SlopeFit(np.nan, np.nan, np.nan, np.nan, np.nan)
     if _with_intercept(x):
         fit = OLS(y, np.column_stack([np.ones_like(x), x])).fit()
         k = 1
@@ -575,9 +587,9 @@ def _ols_slope(alpha_rad: np.ndarray, y: np.ndarray, level: float = 0.95) -> tup
         k = 0
     a = float(fit.params[k])
     if fit.df_resid < 1:
-        return a, np.nan, np.nan
+        return SlopeFit(a, np.nan, np.nan, np.nan, float(fit.df_resid))
     low, high = fit.conf_int(alpha=1.0 - level)[k]
-    return a, float(low), float(high)
+    return SlopeFit(a, float(low), float(high), float(fit.bse[k]), float(fit.df_resid))
 
 
 def _ls_slope(alpha_rad: np.ndarray, y: np.ndarray) -> float:
@@ -683,12 +695,9 @@ def fin_curves(
         cl = group["cl"].to_numpy(dtype=float)
         re_mean = float(np.nanmean(group["re"].to_numpy(dtype=float)))
         stall_angle, cl_max, reached = _stall(angle, cl)
-
-        linear = np.isfinite(angle) & np.isfinite(cl) & (np.abs(angle) <= linear_max_deg)
-        if reached is True:
-            linear &= np.abs(angle) < stall_angle
+        linear = _linear_range(angle, cl, linear_max_deg)
         fit_angles = angle[linear]
-        a, low, high = _ols_slope(np.deg2rad(fit_angles), cl[linear], level)
+        a, low, high, _, _ = _ols_slope(np.deg2rad(fit_angles), cl[linear], level)
         slope_2d = slope_3d = np.nan
         if np.isfinite(re_mean) and _enough_angles(fit_angles):
             re_fit = np.full(fit_angles.shape, re_mean)
@@ -730,6 +739,47 @@ def fin_curves(
     out["stall_reached"] = out["stall_reached"].astype("boolean")
     out["slope_angles_deg"] = out["slope_angles_deg"].astype(object)
     return out
+
+
+def _linear_range(angle: np.ndarray, cl: np.ndarray, linear_max_deg: float) -> np.ndarray:
+    """The runs of one speed group in the linear range: finite, |α| ≤ ``linear_max_deg`` and,
+    when the group stalls, below its stall angle (a mask)."""
+    stall_angle, _, reached = _stall(angle, cl)
+    linear = np.isfinite(angle) & np.isfinite(cl) & (np.abs(angle) <= linear_max_deg)
+    if reached is True:
+        linear &= np.abs(angle) < stall_angle
+    return linear
+
+
+def lift_slope_estimates(fin_df: pd.DataFrame, linear_max_deg: float = 10.0) -> pd.DataFrame:
+    """The measured linear-range lift slope of every speed group as an estimate.
+
+    The same OLS fit as :func:`fin_curves`' ``lift_slope`` (its ci_low, ci_high are the 95 %
+    intervals of these), with its standard error and residual degrees of freedom.
+
+    Parameters
+    ----------
+    fin_df : pandas.DataFrame
+        Output of :func:`fin_table` (angle_deg [deg], cl [-], speed_group [m/s]).
+    linear_max_deg : float, default 10.0
+        Largest |α| of the linear range [deg].
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns speed_group [m/s], value, std_error [1/rad] and dof [-], one row per speed
+        group, sorted by speed group.
+    """
+    _require(fin_df, ("angle_deg", "cl", "speed_group"), "The fin table")
+    rows = []
+    for label, group in fin_df.groupby("speed_group", sort=True):
+        angle = group["angle_deg"].to_numpy(dtype=float)
+        cl = group["cl"].to_numpy(dtype=float)
+        linear = _linear_range(angle, cl, linear_max_deg)
+        fit = _ols_slope(np.deg2rad(angle[linear]), cl[linear])
+        rows.append({"speed_group": float(label), "value": fit.value,
+                     "std_error": fit.std_error, "dof": fit.dof})
+    return pd.DataFrame(rows, columns=["speed_group", "value", "std_error", "dof"])
 
 
 def _deg_list(text: str) -> list[str]:

@@ -11,7 +11,6 @@ and every hull coefficient gets its prototype value, prime × ½ρ_p·L_p^k
 
 from __future__ import annotations
 
-import html
 import math
 from dataclasses import dataclass, replace
 
@@ -26,9 +25,10 @@ from towtank.ingest.protocol import Model, Prototype
 STRAIGHT_TOL_DEG = 0.5
 
 
-@dataclass(frozen=True, repr=False)
-class ScalingResult:
-    """Scaling of the day to the prototype (scaling.csv and its constants)."""
+@dataclass(frozen=True)
+class ScalingFit:
+    """Scaling of the day to the prototype (scaling.csv and its constants; the day's result,
+    :class:`towtank.results.ScalingResult`, is built from it)."""
 
     table: pd.DataFrame  # scaling.csv
     resistance: tuple[float, float]  # k2 [N s²/m²], k1 [N s/m] of R = k2·U|U| + k1·U
@@ -51,24 +51,9 @@ class ScalingResult:
     #: the warning that prototype speeds give Re below [processing] laminar_re (their ITTC-57
     #: drag indicative only); "" when none does
     laminar_note: str = ""
-
-    def to_frame(self) -> pd.DataFrame:
-        """scaling.csv: one row per prototype speed."""
-        return self.table.copy()
-
-    def __repr__(self) -> str:
-        k2, k1 = self.resistance
-        ff = (f", 1 + k = {self.form_factor.one_plus_k:.4g}" if self.form_factor is not None
-              else "")
-        return (f"ScalingResult(λ = {self.scale:g}, {len(self.table)} prototype speeds, "
-                f"R = {k2:.4g}·U|U| {k1:+.4g}·U{ff})")
-
-    def _repr_html_(self) -> str:
-        return f"<p><b>{_html(repr(self))}</b></p>" + self.table.to_html(max_rows=20)
-
-
-def _html(text: str) -> str:
-    return html.escape(text)
+    #: standard errors of k2, k1 [N s²/m², N s/m] and their residual degrees of freedom [-]
+    resistance_se: tuple[float, float] = (math.nan, math.nan)
+    resistance_dof: float = math.nan
 
 
 def prototype_values(coefficients: pd.DataFrame, rho_p: float, length_p: float) -> pd.DataFrame:
@@ -108,7 +93,7 @@ def scale_to_prototype(
     laminar_re: float,
     damping_alpha_max_deg: float,
     free_surface: bool = True,
-) -> tuple[ScalingResult | None, list[str]]:
+) -> tuple[ScalingFit | None, list[str]]:
     """Scale the day's hull resistance to the prototype; the result and its warnings.
 
     The model resistance R(U) = k2·U|U| + k1·U is fitted by OLS to the steady hull runs at
@@ -138,7 +123,7 @@ def scale_to_prototype(
 
     Returns
     -------
-    (ScalingResult or None, list of str)
+    (ScalingFit or None, list of str)
         None when fewer than two straight runs give the resistance curve.
     """
     # loaded on use: statsmodels loads while the workers reduce the runs
@@ -208,7 +193,7 @@ def scale_to_prototype(
     if ff is not None:
         trend = similarity.form_factor_trend(ff.speed_reynolds, ff.speed_values)
         trend_text = similarity.form_factor_trend_statement(trend, ff.one_plus_k)
-    result = ScalingResult(
+    result = ScalingFit(
         recommendation=recommendation, form_factor_trend=trend,
         form_factor_trend_text=trend_text,
         table=table, resistance=(k2, k1), tested_speed_range=(float(u.min()), float(u.max())),
@@ -217,6 +202,7 @@ def scale_to_prototype(
         wetted_area_prototype=(model.wetted_area_m2 * scale**2
                                if model.wetted_area_m2 is not None else None),
         delta_cf=prototype.delta_cf,
+        resistance_se=(float(res.bse[0]), float(res.bse[1])), resistance_dof=float(res.df_resid),
     )
     outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
     deep = air or (depth is not None and model.diameter_m is not None

@@ -137,10 +137,14 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         noise = parse_noise(noise, positive=True)
     try:
         with progress_bar(not quiet and sys.stderr.isatty()) as progress:
-            result = identify(model, log, symbols, method=method, start=start,
-                              noise=dict(noise or {}) or None, progress=progress)
+            fit = identify(model, log, symbols, method=method, start=start,
+                           noise=dict(noise or {}) or None, progress=progress)
     except ValueError as exc:
         raise ProtocolError(f"{Path(log_path).name}: {exc}") from None
+    # loaded on use: the results package loads the day's stages, which identify needs only here
+    from towtank.results import IdentifyResult, from_fit
+
+    result = from_fit(IdentifyResult, fit)
     table = result.table()
     updated = dict(model)
     coef = dict(model.get("coefficients") or {})

@@ -64,11 +64,11 @@ def scale_command(
             day = process_day(protocol_path, protocol=protocol, cache_dir=cache)
     else:
         day = process_day(protocol_path, protocol=protocol, cache_dir=None)
-    if day.scaling_result is None:
+    if day.scaling is None:
         said = [str(n) for n in day.warnings if n.stage == "scaling"]
         print("no scaling table: " + " ".join(said[-1:]))
         return 1
-    sc = day.scaling_result
+    sc = day.scaling
     table = sc.table
     rec = sc.recommendation.column if sc.recommendation is not None else "none"
     ittc = "R_p ITTC-57 [N]" + (", recommended" if rec == "drag_ittc57" else "")

@@ -399,9 +399,9 @@ def _transverse_panel(ax: Axes, dm: Any, estimate: Any = None) -> None:
 
 # ----------------------------------------------------------------------------- (c,d) fins
 def _fin_result(fins: FinResult | DayResult | None) -> FinResult | None:
-    """The fin result of ``fins``: itself, or a day's ``fin_result``."""
-    if hasattr(fins, "fin_result"):  # a DayResult (not imported here: it loads pandas)
-        return cast("DayResult", fins).fin_result
+    """The fin result of ``fins``: itself, or a day's ``fins``."""
+    if hasattr(fins, "reductions"):  # a DayResult (not imported here: it loads pandas)
+        return cast("DayResult", fins).fins
     return fins
 
 
@@ -413,7 +413,7 @@ def fig_fin_forces(fins: FinResult | DayResult | None, *, page: bool = False
     Parameters
     ----------
     fins : FinResult or DayResult
-        The fin result drawn (``day.fin_result``), or the day whose it is.
+        The fin result drawn (``day.fins``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
@@ -488,7 +488,7 @@ def fig_fin_coefficients(fins: FinResult | DayResult | None, *, page: bool = Fal
     Parameters
     ----------
     fins : FinResult or DayResult
-        The fin result drawn (``day.fin_result``), or the day whose it is.
+        The fin result drawn (``day.fins``), or the day whose it is.
     page : bool
         Lay the figure out as an A4 report page.
     """
@@ -582,7 +582,7 @@ def fig_scaling(scaling: ScalingResult | None, runs: pd.DataFrame, protocol: Pro
     Parameters
     ----------
     scaling : ScalingResult
-        The scaling result drawn (``day.scaling_result``).
+        The scaling result drawn (``day.scaling``).
     runs : DataFrame
         runs.csv's table (``day.runs``): the steady zero-angle hull runs are drawn with the
         resistance curve, and the Re range of the hull runs.
@@ -915,9 +915,9 @@ def _figure_arguments(name: str, day: DayResult) -> tuple[Any, ...]:
         "tare": lambda: (day.tare, day.runs),
         "added_mass": lambda: (day.hull, day.reductions),
         "damping": lambda: (day.hull, p.processing.damping_alpha_max_deg),
-        "fin_forces": lambda: (day.fin_result,),
-        "fin_coefficients": lambda: (day.fin_result,),
-        "scaling": lambda: (day.scaling_result, day.runs, p),
+        "fin_forces": lambda: (day.fins,),
+        "fin_coefficients": lambda: (day.fins,),
+        "scaling": lambda: (day.scaling, day.runs, p),
     }[name]()
 
 
@@ -929,9 +929,9 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
         "tare": bool(getattr(day, "tares", None)),
         "added_mass": hf is not None and bool(hf.added_mass),
         "damping": hf is not None and hf.damping is not None,
-        "fin_forces": day.fin_result is not None and len(day.fin_result.force_vs_speed) > 0,
-        "fin_coefficients": day.fin_result is not None and len(day.fin_result.table) > 0,
-        "scaling": day.scaling_result is not None,
+        "fin_forces": day.fins is not None and len(day.fins.force_vs_speed) > 0,
+        "fin_coefficients": day.fins is not None and len(day.fins.table) > 0,
+        "scaling": day.scaling is not None,
     }
     return [(name, section, partial(func, *_figure_arguments(name, day)))
             for name, section, func in FIGURES if has[name]]

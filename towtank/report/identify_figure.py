@@ -20,7 +20,7 @@ _LABELS = {"x_m": "x [m]", "y_m": "y [m]", "z_m": "z [m]", "phi_deg": "roll φ [
 
 
 def identify_figure(result: Any, name: str = "model") -> Any:
-    """The figure of one identification (:class:`towtank.vehicle.identify.IdentifyResult`)."""
+    """The figure of one identification (:class:`towtank.results.IdentifyResult`)."""
     # loaded on use: `towtank identify` imports this module at start and draws the figure
     # last, so matplotlib is loaded only when the figure is drawn
     import matplotlib

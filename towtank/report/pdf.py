@@ -135,7 +135,7 @@ def page_plan(day: DayResult) -> list[Page]:
     for name, section, func in figures.available_figures(day):
         pages.append(Page("figure", section, (name, func)))
     pages += vehicle_pages(day)
-    fr = day.fin_result
+    fr = day.fins
     if fr is not None and len(fr.table) and not fin_runs_fit(fr):
         fin_ids = [int(r) for r in fr.table["run"]]
         for k in range(0, len(fin_ids), RUNS_PER_PAGE):
@@ -274,7 +274,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
              va="top")
     rows = [
         ("Model", _model_text(proto.model) if proto.model is not None else None),
-        ("Fin", _fin_text(proto.fin, day.fin_result)),
+        ("Fin", _fin_text(proto.fin, day.fins)),
         (_medium_label(proto.water), _water_text(proto.water, day.runs)),
         ("Test date", date or "not given"),
         ("Runs", _counts(day.runs)),
@@ -441,7 +441,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     proto = day.protocol
     facts = [("Campaign", proto.name),
              ("Model", _model_text(proto.model) if has_model else None),
-             ("Fin", _fin_text(proto.fin, day.fin_result)),
+             ("Fin", _fin_text(proto.fin, day.fins)),
              (_medium_label(proto.water), _water_text(proto.water, day.runs)),
              ("Test date", date or "not given"), ("Runs", _counts(day.runs)),
              ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
@@ -489,7 +489,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
                          "(see the quality section).", fontsize=8.5) + 0.2
-    fr, sr = day.fin_result, day.scaling_result
+    fr, sr = day.fins, day.scaling
     if fr is not None and len(fr.curves):
         y += _heading(fig, y, "Fin: lift slope, stall and minimum drag per speed")
         y += _fin_table(fig, y, fr) + 0.2
@@ -498,7 +498,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     if sr is not None:
         y += _heading(fig, y, "Prototype resistance")
         y += _scaling_table(fig, y, sr, similarity_section=day.protocol.model is not None)
-    if day.hull is None and day.fin_result is None and day.protocol.model is None:
+    if day.hull is None and day.fins is None and day.protocol.model is None:
         _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
                     fontsize=9)
 
@@ -562,7 +562,7 @@ def fin_runs_fit(fins: FinResult, top_in: float = FIN_TABLE_TOP_IN) -> bool:
     Parameters
     ----------
     fins : FinResult
-        The day's fin result (``day.fin_result``): one table row per fin run.
+        The day's fin result (``day.fins``): one table row per fin run.
     top_in : float
         Where the table starts, from the top of the page [in].
     """
@@ -873,7 +873,7 @@ def _render(
     elif page.kind == "runs":
         _draw_runs(fig, day.runs, day.protocol, page.payload)
     elif page.kind == "fin_runs":
-        _draw_fin_runs(fig, require(day.fin_result, "fin"), page.payload)
+        _draw_fin_runs(fig, require(day.fins, "fin"), page.payload)
     return fig
 
 

@@ -42,8 +42,8 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
         extra = {"geometry": {"geometry_source": p.model.geometry_source,
                               "quantities": geometry_used(day)},
                  **(extra or {})}
-    if day.scaling_result is not None:
-        extra = {"scaling": _scaling_provenance(day.scaling_result, p.prototype),
+    if day.scaling is not None:
+        extra = {"scaling": _scaling_provenance(day.scaling, p.prototype),
                  **(extra or {})}
     settings = {
         "processing": asdict(p.processing),

@@ -40,12 +40,12 @@ def write_tables(day: DayResult, out: Path) -> None:
     """
     write_csv(day.runs, out / "runs.csv")
     write_csv(day.coefficients, out / "coefficients.csv")
-    write_csv(day.fins, out / "fins.csv")
-    if day.fin_result is not None:
-        write_csv(day.fin_result.curves, out / "fin_curves.csv")
-        if day.fin_result.control is not None:
-            write_csv(day.fin_result.control, out / "fin_control.csv")
-    write_csv(day.scaling, out / "scaling.csv")
+    write_csv(day.table("fins"), out / "fins.csv")
+    if day.fins is not None:
+        write_csv(day.fins.curves, out / "fin_curves.csv")
+        if day.fins.control is not None:
+            write_csv(day.fins.control, out / "fin_control.csv")
+    write_csv(day.table("scaling"), out / "scaling.csv")
     write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")
 
 

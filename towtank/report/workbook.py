@@ -65,7 +65,7 @@ SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin 
 def sheet_names(day: DayResult) -> list[str]:
     """The workbook's sheets, one table each: :data:`SHEETS` without the fin and scaling
     detail sheets a day has no data for."""
-    fr, sr = day.fin_result, day.scaling_result
+    fr, sr = day.fins, day.scaling
     has = {"Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
            "Fin control": _has_control(fr),
            "Scaling constants": sr is not None,
@@ -392,16 +392,16 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
         w.table(day.coefficients, columns=cols, row_fill=_fill_for_diff)
     else:
         w.note("No hull coefficients: " + _why_no_hull(day.protocol))
-    if day.fin_result is not None and len(day.fin_result.curves):
+    if day.fins is not None and len(day.fins.curves):
         w.gap()
         w.title("Fin: lift slope and stall per speed group")
         cols = ["speed_group", "re_mean", "lift_slope", "lift_slope_ci_low",
                 "lift_slope_ci_high", "stall_angle_deg", "cl_max", "cd_min"]
-        w.table(day.fin_result.curves, columns=[c for c in cols if c in day.fin_result.curves])
-    if day.scaling_result is not None:
+        w.table(day.fins.curves, columns=[c for c in cols if c in day.fins.curves])
+    if day.scaling is not None:
         w.gap()
         w.title("Prototype resistance")
-        sr = day.scaling_result
+        sr = day.scaling
         cols = [c for c in ("speed_prototype", "drag_recommended", "recommended",
                             "drag_ittc57", "drag_froude") if c in sr.table]
         w.table(sr.table, columns=cols)
@@ -713,13 +713,13 @@ WRITERS: dict[str, Callable[[SheetWriter, DayResult], None]] = {
     "Coefficients": lambda w, day: _coefficients(w, day.hull, day.coefficients, day.protocol),
     "Runs": lambda w, day: _runs(w, day.runs, day.protocol.processing),
     "Tare": lambda w, day: _tare(w, day.tare),
-    "Fins": lambda w, day: _fins(w, day.fin_result, day.protocol),
-    "Fin curves": lambda w, day: _fin_curves(w, require(day.fin_result, "fin")),
-    "Fin control": lambda w, day: _fin_control(w, require(day.fin_result, "fin")),
-    "Scaling": lambda w, day: _scaling(w, day.scaling_result, day.protocol),
+    "Fins": lambda w, day: _fins(w, day.fins, day.protocol),
+    "Fin curves": lambda w, day: _fin_curves(w, require(day.fins, "fin")),
+    "Fin control": lambda w, day: _fin_control(w, require(day.fins, "fin")),
+    "Scaling": lambda w, day: _scaling(w, day.scaling, day.protocol),
     "Scaling constants": lambda w, day: _scaling_constants(
-        w, require(day.scaling_result, "scaling"), day.protocol),
-    "Form factor": lambda w, day: _form_factor(w, require(day.scaling_result, "scaling")),
+        w, require(day.scaling, "scaling"), day.protocol),
+    "Form factor": lambda w, day: _form_factor(w, require(day.scaling, "scaling")),
     "Quality": _quality,
     "Provenance": _provenance,
 }

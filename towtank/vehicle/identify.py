@@ -37,7 +37,6 @@ import numpy as np
 import pandas as pd
 from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
 from filterpy.kalman import UnscentedKalmanFilter as UKF
-from scipy import stats
 from scipy.optimize import least_squares
 
 from towtank.vehicle.fossen import (
@@ -57,7 +56,7 @@ from towtank.vehicle.identify_log import (
 from towtank.vehicle.predict import coefficient_unit
 
 __all__ = ["MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
-           "IdentifyResult", "Progress", "identify", "rts_smooth", "coefficient_unit",
+           "IdentifyFit", "Progress", "identify", "rts_smooth", "coefficient_unit",
            "least_squares_fit", "kalman_fit"]
 
 #: Largest Runge-Kutta step of the process model [s].
@@ -319,9 +318,10 @@ def rts_smooth(xs: np.ndarray, ps: np.ndarray, x_prior: np.ndarray, p_prior: np.
     return xs_s, ps_s
 
 
-@dataclass
-class IdentifyResult:
-    """What :func:`identify` found.
+@dataclass(frozen=True)
+class IdentifyFit:
+    """What :func:`identify` found (the result, :class:`towtank.results.IdentifyResult`, is
+    built from it).
 
     Attributes
     ----------
@@ -340,7 +340,7 @@ class IdentifyResult:
         The record and the model with the estimates simulated along it (manoeuvre.csv columns)
     covariance : ndarray
         Covariance of the estimates (k, k)
-    notes : list of str
+    notes : tuple of str
     """
 
     symbols: list[str]
@@ -354,86 +354,7 @@ class IdentifyResult:
     history: dict[str, np.ndarray] = field(default_factory=dict)
     measured: pd.DataFrame | None = None
     resimulated: pd.DataFrame | None = None
-    notes: list[str] = field(default_factory=list)
-
-    def conf_int(self, alpha: float = 0.05, method: str | None = None) -> pd.DataFrame:
-        """Two-sided ``1 - alpha`` intervals (normal): columns ci_low, ci_high, by symbol."""
-        z = stats.norm.ppf(1.0 - alpha / 2.0)
-        val, sd = self._pair(method)
-        return pd.DataFrame({"ci_low": val - z * sd, "ci_high": val + z * sd},
-                            index=pd.Index(self.symbols, name="symbol"))
-
-    def _pair(self, method: str | None) -> tuple[np.ndarray, np.ndarray]:
-        if method in (None, self.method):
-            return self.value, self.sd
-        if method == "ls" and self.check is not None:
-            return self.check["value"], self.check["sd"]
-        raise ValueError(f"no {method} estimates in this result.")
-
-    def identifiable(self, method: str | None = None) -> np.ndarray:
-        """True where the record constrains the coefficient: sd below
-        :data:`IDENTIFIABLE_RATIO` of its prior sd (and finite)."""
-        _, sd = self._pair(method)
-        return np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
-
-    def agree(self, alpha: float = 0.05) -> np.ndarray | None:
-        """Filter and least squares agree where their difference is within its interval:
-        ``|a - b| <= z sqrt(sd_a^2 + sd_b^2)``; None without the cross-check."""
-        if self.check is None:
-            return None
-        z = stats.norm.ppf(1.0 - alpha / 2.0)
-        diff = np.abs(self.value - self.check["value"])
-        return diff <= z * np.hypot(self.sd, self.check["sd"])
-
-    def table(self, alpha: float = 0.05) -> pd.DataFrame:
-        """identified.csv: symbol, start, value, ci_low, ci_high, method, unit, verdict, agree
-        (the primary method's rows, then the cross-check's)."""
-        rows = []
-        agree = self.agree(alpha)
-        methods = [self.method] + (["ls"] if self.check is not None else [])
-        for m in methods:
-            val, _ = self._pair(m)
-            ci = self.conf_int(alpha, m)
-            ok = self.identifiable(m)
-            for j, s in enumerate(self.symbols):
-                rows.append({
-                    "symbol": s, "start": self.start[j], "value": val[j],
-                    "ci_low": ci["ci_low"].iloc[j], "ci_high": ci["ci_high"].iloc[j],
-                    "method": m, "unit": coefficient_unit(s),
-                    "verdict": "identifiable" if ok[j] else "not identifiable",
-                    "agree": "" if agree is None else ("yes" if agree[j] else "no")})
-        return pd.DataFrame(rows)
-
-    def verdicts(self, alpha: float = 0.05) -> list[str]:
-        """One line per coefficient for the terminal."""
-        lines = []
-        ci = self.conf_int(alpha)
-        ok = self.identifiable()
-        agree = self.agree(alpha)
-        pct = round(100 * (1 - alpha))
-        for j, s in enumerate(self.symbols):
-            lo, hi = ci["ci_low"].iloc[j], ci["ci_high"].iloc[j]
-            if ok[j]:
-                line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
-                        f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
-            else:
-                line = (f"{s}: NOT identifiable from this record: {pct} % interval {lo:.4g} "
-                        f"to {hi:.4g}, its sd {self.sd[j]:.3g} still "
-                        f"{self.sd[j] / self.prior_sd[j]:.0%} of the prior's "
-                        f"{self.prior_sd[j]:.3g} (identifiable below "
-                        f"{IDENTIFIABLE_RATIO:.0%}); the manoeuvre does not excite it enough")
-            if agree is not None and self.check is not None:
-                lv = self.check["value"][j]
-                line += ("; least squares agrees" if agree[j] else
-                         "; least squares DISAGREES") + f" ({lv:.4g})"
-            lines.append(line)
-        return lines
-
-    def summary(self, alpha: float = 0.05) -> str:
-        """The table and the verdicts as text."""
-        with pd.option_context("display.width", 140, "display.max_columns", 20):
-            return self.table(alpha).to_string(index=False) + "\n" + "\n".join(
-                self.verdicts(alpha))
+    notes: tuple[str, ...] = ()
 
 
 def _initial_state(log: ManoeuvreLog, model: dict[str, Any]) -> np.ndarray:
@@ -722,7 +643,7 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
 def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
              method: str = "ukf", start: str = "model", noise: dict[str, float] | None = None,
              prior_sd: dict[str, float] | None = None, check: bool = True,
-             progress: Progress | None = None) -> IdentifyResult:
+             progress: Progress | None = None) -> IdentifyFit:
     """Identify coefficients of ``model`` from the manoeuvre record ``log``.
 
     Parameters
@@ -814,10 +735,6 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
         s_init = ls["s0"]
         ls = None
-    result = IdentifyResult(symbols=symbols, start=start_vals, value=np.asarray(value),
-                            sd=np.asarray(sdv), prior_sd=psd, method=method,
-                            covariance=np.asarray(cov), history=hist, notes=notes,
-                            check=None if ls is None else {"value": ls["value"], "sd": ls["sd"]})
     fitted = dict(model)
     fitted["coefficients"] = dict(coef) | {s: float(v) for s, v in zip(symbols, value,
                                                                        strict=True)}
@@ -831,9 +748,11 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     sim = dyn.run(s0[None, :], np.zeros((1, 0)), log)[:, 0, :]
     resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
                          measured=list(range(12)), name="resimulated")
-    result.measured = log.frame()
-    result.resimulated = resim.frame()
-    return result
+    return IdentifyFit(symbols=symbols, start=start_vals, value=np.asarray(value),
+                       sd=np.asarray(sdv), prior_sd=psd, method=method,
+                       covariance=np.asarray(cov), history=hist, notes=tuple(notes),
+                       check=None if ls is None else {"value": ls["value"], "sd": ls["sd"]},
+                       measured=log.frame(), resimulated=resim.frame())
 
 
 def _staged(progress: Progress | None, stage: str) -> Progress | None:

@@ -1,0 +1,226 @@
+"""The results of a day and of ``towtank identify``: typed, frozen, printable; one vocabulary.
+
+``towtank.process_day`` returns a :class:`DayResult`; its fields are the results of the stages,
+each a frozen dataclass with ``to_frame()`` (the DataFrame its CSV is written from), a short
+``repr`` and an HTML form for notebooks::
+
+    day.tare       TareResult      the sting tare of every group (tare.csv)
+    day.hull       HullResult      hull coefficients (coefficients.csv)
+    day.fins       FinResult       fins against Sandia (day.fins.table: fins.csv; fin_curves.csv)
+    day.scaling    ScalingResult   the prototype (day.scaling.table: scaling.csv)
+    day.vehicle    VehicleResult   the [vehicle] prediction (predicted.csv, model.json)
+
+``towtank.identify`` returns an :class:`IdentifyResult`. Every result with estimates
+(:class:`HullResult`, :class:`FinResult`, :class:`ScalingResult`, :class:`IdentifyResult`)
+speaks one vocabulary (:mod:`towtank.results.summary`), like a statsmodels fit: ``params`` and
+``bse`` (Series by symbol), ``conf_int(alpha=0.05)`` (a DataFrame by symbol with columns
+``lower`` and ``upper``), ``summary(alpha=0.05)`` (a :class:`Summary`) and ``to_frame()``.
+
+The package sits above the stages (``vehicle``) and below ``pipeline``: the stages return
+their fits (:class:`~towtank.analysis.hull.HullFit`, :class:`~towtank.analysis.fin_analysis.FinFit`,
+:class:`~towtank.analysis.scaling.ScalingFit`, :class:`~towtank.vehicle.identify.IdentifyFit`,
+:class:`~towtank.vehicle.stage.VehiclePrediction`) and the wiring builds the results from them
+(:func:`towtank.results.summary.from_fit`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings as _warnings
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Literal, TypeVar, get_args
+
+import numpy as np
+import pandas as pd
+
+from towtank.analysis.fins import FIN_TABLE_COLUMNS
+from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS, Estimate
+from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
+from towtank.ingest.protocol import Protocol
+from towtank.reduce.run import RunReduction
+from towtank.reduce.tare import TareModel
+from towtank.results.identify import IdentifyResult
+from towtank.results.stages import (
+    FinResult,
+    HullResult,
+    ScalingResult,
+    TareResult,
+    VehicleResult,
+)
+from towtank.results.summary import Estimates, Summary, from_fit
+
+R = TypeVar("R")
+
+__all__ = [
+    "DayResult", "Estimate", "Estimates", "FinResult", "HullResult", "IdentifyResult", "Notice",
+    "STAGES", "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult", "from_fit",
+    "notices",
+]
+
+#: The step of the day a warning comes from.
+Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "vehicle",
+                "export"]
+#: Every :data:`Stage`, in the order of the pipeline.
+STAGES: tuple[str, ...] = get_args(Stage)
+
+
+def require(result: R | None, stage: str) -> R:
+    """``result``, which the caller only reaches when its stage ran (a report page or sheet
+    listed for it); ValueError naming the stage otherwise."""
+    if result is None:
+        raise ValueError(f"the day has no {stage} result")
+    return result
+
+
+@dataclass(frozen=True)
+class Notice:
+    """One warning of the day: a sentence and where it comes from.
+
+    ``str(notice)`` is the sentence, as ``towtank process`` prints it and the report and the
+    workbook list it; the fields say where it comes from, so that a program picks warnings by
+    stage, run or file and never by their words.
+
+    Attributes
+    ----------
+    text : str
+        The sentence
+    stage : Stage
+        The step it comes from: ``"protocol"``, ``"sheet"``, ``"reduce"``, ``"tare"``,
+        ``"hull"``, ``"fins"``, ``"scaling"``, ``"vehicle"`` or ``"export"``
+    run : int or None
+        The run it is about; None for the day or several runs
+    file : str or None
+        The file it is about (as the sheet names it); None for none or several
+    """
+
+    text: str
+    stage: Stage
+    run: int | None = None
+    file: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.stage not in STAGES:
+            raise ValueError(f"a notice's stage is one of {', '.join(STAGES)}, not "
+                             f"{self.stage!r}")
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def notices(texts: Iterable[str], stage: Stage, run: int | None = None,
+            file: str | None = None) -> list[Notice]:
+    """The sentences ``texts`` of one stage (and run, file) as :class:`Notice` objects."""
+    return [Notice(str(t), stage, run, file) for t in texts]
+
+
+@dataclass(frozen=True, repr=False)
+class DayResult:
+    """Everything computed for a day; the report stage only formats it.
+
+    Tables are pandas DataFrames, numbers SI. ``hull``, ``fins``, ``scaling`` and ``vehicle``
+    are the stages' results (None where the stage did not run): ``day.fins.table`` is
+    fins.csv, ``day.scaling.table`` scaling.csv. ``coefficients`` and :meth:`table` give the
+    day's CSV tables with their headers also when the stage did not run.
+    """
+
+    protocol: Protocol
+    sheet: pd.DataFrame
+    reductions: dict[int, RunReduction]
+    rejected: dict[int, str]
+    tares: dict[str, TareModel]
+    runs: pd.DataFrame
+    #: the day's warnings, in the order of the stages (``str()`` of each is its sentence)
+    warnings: list[Notice] = field(default_factory=list)
+    hull: HullResult | None = None
+    fins: FinResult | None = None
+    scaling: ScalingResult | None = None
+    inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
+    report_date: str | None = None
+    # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
+    previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
+    vehicle: VehicleResult | None = None
+    #: symbol, prototype_value: the hull coefficients at prototype scale (scaling stage)
+    prototype_values: pd.DataFrame | None = None
+
+    @property
+    def n_rejected(self) -> int:
+        """Number of rejected runs."""
+        return len(self.rejected)
+
+    @property
+    def tare(self) -> TareResult:
+        """The sting tare of every group (tare.csv: ``day.tare.to_frame()``)."""
+        return TareResult(dict(self.tares))
+
+    def table(self, name: Literal["fins", "scaling"]) -> pd.DataFrame:
+        """The CSV table ``name`` of the day, with its header when the stage did not run:
+        ``"fins"`` fins.csv (one row per fin run, ``day.fins.table``), ``"scaling"``
+        scaling.csv (one row per prototype speed, ``day.scaling.table``)."""
+        if name == "fins":
+            if self.fins is not None:
+                return self.fins.table
+            return pd.DataFrame(columns=list(FIN_TABLE_COLUMNS))
+        if name == "scaling":
+            if self.scaling is not None:
+                return self.scaling.table
+            return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
+        raise ValueError(f"a day's table is 'fins' or 'scaling', not {name!r}")
+
+    @property
+    def fin_result(self) -> FinResult | None:
+        """Deprecated: ``day.fins``."""
+        _warnings.warn("DayResult.fin_result is deprecated: use DayResult.fins (its table: "
+                       "day.fins.table)", DeprecationWarning, stacklevel=2)
+        return self.fins
+
+    @property
+    def scaling_result(self) -> ScalingResult | None:
+        """Deprecated: ``day.scaling``."""
+        _warnings.warn("DayResult.scaling_result is deprecated: use DayResult.scaling (its "
+                       "table: day.scaling.table)", DeprecationWarning, stacklevel=2)
+        return self.scaling
+
+    @property
+    def coefficients(self) -> pd.DataFrame:
+        """coefficients.csv of the day: the hull's coefficients with their prototype values
+        and, with a [vehicle], the predicted beside them (empty without hull runs)."""
+        if self.hull is None:
+            return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
+        base = self.hull.coefficients
+        if self.vehicle is not None and self.vehicle.coefficients is not None:
+            base = self.vehicle.coefficients
+        if self.prototype_values is None:
+            return base
+        out = base.copy()
+        values = dict(zip(self.prototype_values["symbol"],
+                          self.prototype_values["prototype_value"], strict=True))
+        out["prototype_value"] = [values.get(s, math.nan) for s in out["symbol"]]
+        return out
+
+    def summary(self, alpha: float = 0.05) -> Summary:
+        """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,
+        without hull coefficients, the runs by configuration and status."""
+        if self.hull is not None:
+            s = self.hull.summary(alpha)
+            return Summary(title=f"{self.protocol.name}: {s.title}", table=s.table,
+                           notes=(*s.notes, self._counts()))
+        table = (self.runs.groupby(["config", "status"]).size().rename("runs").reset_index()
+                 if len(self.runs) else pd.DataFrame(columns=["config", "status", "runs"]))
+        return Summary(title=f"{self.protocol.name}: runs", table=table,
+                       notes=(self._counts(),))
+
+    def _counts(self) -> str:
+        stages = [name for name, r in (("hull", self.hull), ("fins", self.fins),
+                                       ("scaling", self.scaling),
+                                       ("vehicle", self.vehicle)) if r is not None]
+        n = len(self.warnings)
+        return (f"{len(self.runs)} runs, {len(self.reductions)} reduced, {self.n_rejected} "
+                f"rejected; {n} warning{'' if n == 1 else 's'}; stages: "
+                f"{', '.join(stages) or 'none'}.")
+
+    def __repr__(self) -> str:
+        return f"DayResult({self.protocol.name!r}: {self._counts()})"
+
+    def _repr_html_(self) -> str:
+        return self.summary()._repr_html_()

@@ -1,0 +1,130 @@
+"""The result of ``towtank identify``: the coefficients a manoeuvre record gives.
+
+:func:`towtank.vehicle.identify.identify` returns an
+:class:`~towtank.vehicle.identify.IdentifyFit`; ``from_fit(IdentifyResult, fit)`` adds the
+results vocabulary (``params``, ``bse``, ``conf_int``, ``summary``, ``to_frame``), the
+identifiability verdicts and identified.csv.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from towtank.results.summary import CONF_INT_COLUMNS, Estimates, Summary, estimate_frame
+from towtank.stats.quantiles import normal_quantile
+from towtank.vehicle.identify import IDENTIFIABLE_RATIO, IdentifyFit
+from towtank.vehicle.predict import coefficient_unit
+
+__all__ = ["IdentifyResult"]
+
+
+@dataclass(frozen=True, repr=False)
+class IdentifyResult(IdentifyFit, Estimates):
+    """What :func:`towtank.identify` found: the :class:`~towtank.vehicle.identify.IdentifyFit`
+    (``symbols``, ``value``, ``sd``, ``covariance``, ``check``, ``history``, ``measured``,
+    ``resimulated``, ``notes``) with its estimates by symbol (normal intervals: the filter's
+    and least squares' standard deviations have no degrees of freedom)."""
+
+    def estimate_frame(self, method: str | None = None) -> pd.DataFrame:
+        """The estimates of ``method`` (None: the primary one; ``"ls"``: the cross-check)
+        [each its unit] with their standard deviations (dof = ∞)."""
+        val, sd = self._pair(method)
+        return estimate_frame(self.symbols, val, sd, np.full(len(self.symbols), np.inf),
+                              [coefficient_unit(s) for s in self.symbols])
+
+    def conf_int(self, alpha: float = 0.05, method: str | None = None) -> pd.DataFrame:
+        """Two-sided normal intervals of level 1 − ``alpha`` of ``method``'s estimates
+        (None: the primary method's) [each its unit]: value ∓ z₁₋α/₂·sd.
+
+        Returns
+        -------
+        DataFrame
+            Indexed by symbol, columns ``lower`` and ``upper``.
+        """
+        z = normal_quantile(alpha)
+        val, sd = self._pair(method)
+        return pd.DataFrame(np.column_stack([val - z * sd, val + z * sd]),
+                            index=pd.Index(self.symbols, name="symbol"),
+                            columns=CONF_INT_COLUMNS)
+
+    def _pair(self, method: str | None) -> tuple[np.ndarray, np.ndarray]:
+        if method in (None, self.method):
+            return self.value, self.sd
+        if method == "ls" and self.check is not None:
+            return self.check["value"], self.check["sd"]
+        raise ValueError(f"no {method} estimates in this result.")
+
+    def identifiable(self, method: str | None = None) -> np.ndarray:
+        """True where the record constrains the coefficient: sd below
+        :data:`~towtank.vehicle.identify.IDENTIFIABLE_RATIO` of its prior sd (and finite)."""
+        _, sd = self._pair(method)
+        return np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
+
+    def agree(self, alpha: float = 0.05) -> np.ndarray | None:
+        """Filter and least squares agree where their difference is within its interval:
+        ``|a - b| <= z sqrt(sd_a^2 + sd_b^2)``; None without the cross-check."""
+        if self.check is None:
+            return None
+        z = normal_quantile(alpha)
+        diff = np.abs(self.value - self.check["value"])
+        return diff <= z * np.hypot(self.sd, self.check["sd"])
+
+    def table(self, alpha: float = 0.05) -> pd.DataFrame:
+        """identified.csv: symbol, start, value, ci_low, ci_high, method, unit, verdict, agree
+        (the primary method's rows, then the cross-check's)."""
+        rows = []
+        agree = self.agree(alpha)
+        methods = [self.method] + (["ls"] if self.check is not None else [])
+        for m in methods:
+            val, _ = self._pair(m)
+            ci = self.conf_int(alpha, m)
+            ok = self.identifiable(m)
+            for j, s in enumerate(self.symbols):
+                rows.append({
+                    "symbol": s, "start": self.start[j], "value": val[j],
+                    "ci_low": ci["lower"].iloc[j], "ci_high": ci["upper"].iloc[j],
+                    "method": m, "unit": coefficient_unit(s),
+                    "verdict": "identifiable" if ok[j] else "not identifiable",
+                    "agree": "" if agree is None else ("yes" if agree[j] else "no")})
+        return pd.DataFrame(rows)
+
+    def to_frame(self) -> pd.DataFrame:
+        """identified.csv (:meth:`table` at 95 %)."""
+        return self.table()
+
+    def verdicts(self, alpha: float = 0.05) -> list[str]:
+        """One line per coefficient for the terminal."""
+        lines = []
+        ci = self.conf_int(alpha)
+        ok = self.identifiable()
+        agree = self.agree(alpha)
+        pct = round(100 * (1 - alpha))
+        for j, s in enumerate(self.symbols):
+            lo, hi = ci["lower"].iloc[j], ci["upper"].iloc[j]
+            if ok[j]:
+                line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
+                        f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
+            else:
+                line = (f"{s}: NOT identifiable from this record: {pct} % interval {lo:.4g} "
+                        f"to {hi:.4g}, its sd {self.sd[j]:.3g} still "
+                        f"{self.sd[j] / self.prior_sd[j]:.0%} of the prior's "
+                        f"{self.prior_sd[j]:.3g} (identifiable below "
+                        f"{IDENTIFIABLE_RATIO:.0%}); the manoeuvre does not excite it enough")
+            if agree is not None and self.check is not None:
+                lv = self.check["value"][j]
+                line += ("; least squares agrees" if agree[j] else
+                         "; least squares DISAGREES") + f" ({lv:.4g})"
+            lines.append(line)
+        return lines
+
+    def summary(self, alpha: float = 0.05) -> Summary:
+        """The identified coefficients (identified.csv's rows) with the verdicts as notes."""
+        return Summary(title=f"Identified coefficients ({self.method}, "
+                             f"{len(self.symbols)} estimates)",
+                       table=self.table(alpha), notes=tuple(self.verdicts(alpha)))
+
+    def __repr__(self) -> str:
+        return f"IdentifyResult({', '.join(self.symbols)} by {self.method})"
