@@ -6,7 +6,9 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pytest
@@ -249,3 +251,85 @@ def test_a_notice_is_its_sentence_with_its_stage():
     with pytest.raises(AttributeError):
         n.text = "other"  # type: ignore[misc]
 
+
+
+# ------------------------------------------------------------ one vocabulary of the results
+@pytest.fixture(scope="session")
+def sample_hull_day():
+    """The sample hull day, processed once (no output written)."""
+    return towtank.process_day(HULL, jobs=2)
+
+
+@pytest.fixture(scope="session")
+def sample_fin_day():
+    """The sample fin day, processed once (no output written)."""
+    return towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
+
+
+@pytest.fixture(scope="session")
+def short_identification(tmp_path_factory):
+    """N_ur and N_uudr of REMUS by the filter from a 20 s noisy rudder sine (about 1 s)."""
+    import contextlib
+    import io
+    import json
+
+    import numpy as np
+
+    from towtank.commands.cli import main
+    from towtank.vehicle.simulate import simulate
+
+    out = tmp_path_factory.mktemp("remus")
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["predict", str(ROOT / "protocols" / "remus_vehicle.toml"), "--out",
+                     str(out)]) == 0
+    model = json.loads((out / "model.json").read_text())
+    model["buoyancy_N"] = model["weight_N"]
+    record = simulate(model, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=20.0,
+                      sample_hz=10.0)
+    record = record[["t_s", "x_m", "y_m", "psi_deg", "u_m_s", "v_m_s", "r_deg_s",
+                     "rudder_deg", "sternplane_deg"]].copy()
+    rng = np.random.default_rng(1)
+    for column, sd in {"u_m_s": 0.01, "v_m_s": 0.01, "r_deg_s": 0.2, "psi_deg": 0.5}.items():
+        record[column] += rng.normal(0.0, sd, len(record))
+    return towtank.identify(model, record, ["N_ur", "N_uudr"], check=False)
+
+
+#: Every result with estimates: (class name, a factory of one from the test's request). A new
+#: result with estimates (the captive-model result) joins here.
+RESULTS_WITH_ESTIMATES: tuple[tuple[str, Callable[[pytest.FixtureRequest], Any]], ...] = (
+    ("HullResult", lambda request: request.getfixturevalue("sample_hull_day").hull),
+    ("FinResult", lambda request: request.getfixturevalue("sample_fin_day").fins),
+    ("ScalingResult", lambda request: request.getfixturevalue("sample_hull_day").scaling),
+    ("IdentifyResult", lambda request: request.getfixturevalue("short_identification")),
+)
+
+
+@pytest.mark.parametrize(("name", "factory"), RESULTS_WITH_ESTIMATES,
+                         ids=[n for n, _ in RESULTS_WITH_ESTIMATES])
+def test_every_result_with_estimates_speaks_one_vocabulary(name, factory, request):
+    """params and bse are Series by symbol, conf_int has the columns lower and upper at every
+    level (the 90 % interval inside the 95 % one), summary() is a Summary, to_frame() a
+    DataFrame."""
+    from towtank.results import Summary
+
+    result = factory(request)
+    assert type(result).__name__ == name and type(result).__module__.startswith(
+        "towtank.results")
+    params, bse = result.params, result.bse
+    for series in (params, bse):
+        assert isinstance(series, pd.Series) and series.index.name == "symbol"
+        assert len(series) > 0 and series.index.is_unique
+    assert list(bse.index) == list(params.index)
+    wide, narrow = result.conf_int(0.05), result.conf_int(0.10)
+    assert list(wide.columns) == list(narrow.columns) == ["lower", "upper"]
+    assert list(wide.index) == list(narrow.index) == list(params.index)
+    known = wide.notna().all(axis=1) & narrow.notna().all(axis=1)
+    assert known.any()
+    assert (wide.loc[known, "lower"] <= narrow.loc[known, "lower"]).all()
+    assert (narrow.loc[known, "upper"] <= wide.loc[known, "upper"]).all()
+    assert (narrow.loc[known, "lower"] <= params[known]).all()
+    assert (params[known] <= narrow.loc[known, "upper"]).all()
+    pd.testing.assert_frame_equal(result.conf_int(), wide)
+    for summary in (result.summary(), result.summary(0.10)):
+        assert isinstance(summary, Summary) and list(params.index)[0] in str(summary)
+    assert isinstance(result.to_frame(), pd.DataFrame) and len(result.to_frame()) > 0

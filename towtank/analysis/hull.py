@@ -39,7 +39,7 @@ from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY, RunReduction
 from towtank.reduce.tare import TareModel, tare_design
 from towtank.reference.sets import BUILTIN_REFERENCES, builtin_reference
 from towtank.stats.intervals import bm_dof, cr2_covariance, welch_satterthwaite
-from towtank.stats.quantiles import interval, normal_quantile, t95
+from towtank.stats.quantiles import ALPHA, interval, normal_quantile, t95
 
 SYMBOLS = (
     "X_udot", "Y_vdot", "Z_wdot", "X_u|u|", "X_uv", "X_uw", "X_v|v|", "X_w|w|",
@@ -113,9 +113,9 @@ class Estimate:
     def conf_int(self, alpha: float = 0.05) -> tuple[float, float]:
         """(lower, upper): the two-sided interval of level 1 − ``alpha`` [the value's unit].
 
-        With the default ``alpha`` = 0.05 these are ``ci_low`` and ``ci_high``.
+        With ``alpha`` = 0.05 (to within rounding) these are ``ci_low`` and ``ci_high``.
         """
-        if alpha == 0.05 or not math.isfinite(self.std_error):
+        if math.isclose(alpha, ALPHA, rel_tol=1e-9) or not math.isfinite(self.std_error):
             return self.ci_low, self.ci_high
         return interval(self.value, self.std_error, self.dof, alpha)
 
