@@ -38,6 +38,7 @@ from towtank.results import (
     VehicleResult,
     from_fit,
 )
+from towtank.results.stages import FromPrediction
 from towtank.vehicle.identify import IdentifyFit
 
 
@@ -168,11 +169,15 @@ def test_the_vehicle_result_gives_the_prediction_by_typed_properties_only():
     assert vr.model == {"a": 1} and vr.rho == 1025.0 and vr.predicted is prediction.predicted
     with pytest.raises(AttributeError):
         vr.something_else  # noqa: B018  (nothing is forwarded that is not declared)
+    assert "__getattr__" not in vars(VehicleResult)
     for name in ("predicted", "model", "profile", "masses", "rho", "nu", "powering",
                  "pressure_hull"):
-        prop = inspect.getattr_static(VehicleResult, name)
-        assert isinstance(prop, property), name
-        assert typing.get_type_hints(prop.fget)["return"] is not typing.Any, name
+        field = inspect.getattr_static(VehicleResult, name)
+        assert isinstance(field, FromPrediction), name
+        assert typing.get_args(field.__orig_class__)[0] is not typing.Any, name
+        assert getattr(vr, name) is getattr(prediction, name)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        vr.rho = 1.0  # type: ignore[misc]
 
 
 # ------------------------------------------------------------------------------ the day's names

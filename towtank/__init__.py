@@ -8,11 +8,12 @@ The subpackages are the stages of the data's path, in order::
     analysis   hull coefficients with intervals, fins against Sandia, scaling to the prototype
     report     CSV tables, workbook, PDF and figures
 
-with ``pipeline`` wiring them for a day into the typed results of ``results`` (``DayResult``
-and one result per stage), ``reference`` (water, Sandia, hull geometry,
-reference coefficient sets), ``stats`` (robust and interval statistics) and ``runtime`` (cache,
-workers) beneath them, ``commands`` (the ``towtank`` command line) above, and ``testing`` (the
-synthetic-day generator) beside, never used by the others.
+with ``pipeline`` wiring them for a day into the typed results of ``results`` (``DayResult``,
+one result per stage and ``IdentifyResult``, all with one vocabulary), ``reference`` (water,
+Sandia, hull geometry, reference coefficient sets), ``stats`` (robust and interval
+statistics) and ``runtime`` (cache, workers) beneath them, ``commands`` (the ``towtank``
+command line) above, and ``testing`` (the synthetic-day generator) beside, never used by the
+others.
 
 The public API, for scripts and notebooks (see docs/api.md)::
 
@@ -34,6 +35,7 @@ __all__ = [
     "Estimate",
     "FinResult",
     "HullResult",
+    "IdentifyResult",
     "ProtocolError",
     "RunError",
     "ScalingResult",
@@ -56,6 +58,7 @@ _API = {
     "Estimate": "towtank.results",
     "FinResult": "towtank.results",
     "HullResult": "towtank.results",
+    "IdentifyResult": "towtank.results",
     "ScalingResult": "towtank.results",
     "TareResult": "towtank.results",
     "VehicleResult": "towtank.results",

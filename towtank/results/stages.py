@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import pandas as pd
 
@@ -32,7 +32,10 @@ from towtank.results.summary import (
 from towtank.vehicle.hull import HullProfile
 from towtank.vehicle.stage import VehiclePrediction
 
-__all__ = ["FinResult", "HullResult", "ScalingResult", "TareResult", "VehicleResult"]
+__all__ = ["FinResult", "FromPrediction", "HullResult", "ScalingResult", "TareResult",
+           "VehicleResult"]
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, repr=False)
@@ -202,54 +205,42 @@ class ScalingResult(ScalingFit, Estimates):
         return f"<p><b>{esc(repr(self))}</b></p>" + self.table.to_html(max_rows=20)
 
 
+class FromPrediction(Generic[T]):
+    """A field of the :class:`~towtank.vehicle.stage.VehiclePrediction`, read through the
+    :class:`VehicleResult` (typed ``T``, read only)."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, result: VehicleResult | None, owner: type | None = None) -> T:
+        if result is None:
+            raise AttributeError(self.name)
+        value: T = getattr(result.prediction, self.name)
+        return value
+
+
 @dataclass(frozen=True, repr=False)
 class VehicleResult:
     """The [vehicle] stage: the prediction (:class:`towtank.vehicle.stage.VehiclePrediction`)
-    and the hull coefficients with the predicted beside the measured."""
+    and the hull coefficients with the predicted beside the measured.
+
+    The prediction's fields read through it: ``predicted`` (predicted.csv), ``model``
+    (model.json), ``profile`` (the hull), ``masses``, ``rho`` [kg/m³], ``nu`` [m²/s],
+    ``powering`` (powering.csv or None) and ``pressure_hull`` (pressure_hull.csv or None).
+    """
 
     prediction: VehiclePrediction
     coefficients: pd.DataFrame | None = None
     warnings: tuple[str, ...] = ()
 
-    @property
-    def predicted(self) -> pd.DataFrame:
-        """predicted.csv: one row per predicted coefficient."""
-        return self.prediction.predicted
-
-    @property
-    def model(self) -> dict[str, Any]:
-        """The vehicle's model (model.json)."""
-        return self.prediction.model
-
-    @property
-    def profile(self) -> HullProfile:
-        """The hull's profile from the [vehicle] geometry."""
-        return self.prediction.profile
-
-    @property
-    def masses(self) -> dict[str, Any]:
-        """The mass properties of the vehicle."""
-        return self.prediction.masses
-
-    @property
-    def rho(self) -> float:
-        """The water's density [kg/m³]."""
-        return self.prediction.rho
-
-    @property
-    def nu(self) -> float:
-        """The water's kinematic viscosity [m²/s]."""
-        return self.prediction.nu
-
-    @property
-    def powering(self) -> pd.DataFrame | None:
-        """powering.csv, with [vehicle.propeller]; None without."""
-        return self.prediction.powering
-
-    @property
-    def pressure_hull(self) -> pd.DataFrame | None:
-        """pressure_hull.csv, with [vehicle.pressure_hull]; None without."""
-        return self.prediction.pressure_hull
+    predicted = FromPrediction[pd.DataFrame]()
+    model = FromPrediction[dict[str, Any]]()
+    profile = FromPrediction[HullProfile]()
+    masses = FromPrediction[dict[str, Any]]()
+    rho = FromPrediction[float]()
+    nu = FromPrediction[float]()
+    powering = FromPrediction["pd.DataFrame | None"]()
+    pressure_hull = FromPrediction["pd.DataFrame | None"]()
 
     def to_frame(self) -> pd.DataFrame:
         """predicted.csv: one row per predicted coefficient."""
