@@ -300,6 +300,7 @@ RESULTS_WITH_ESTIMATES: tuple[tuple[str, Callable[[pytest.FixtureRequest], Any]]
     ("HullResult", lambda request: request.getfixturevalue("sample_hull_day").hull),
     ("FinResult", lambda request: request.getfixturevalue("sample_fin_day").fins),
     ("ScalingResult", lambda request: request.getfixturevalue("sample_hull_day").scaling),
+    ("TareResult", lambda request: request.getfixturevalue("sample_hull_day").tare),
     ("IdentifyResult", lambda request: request.getfixturevalue("short_identification")),
 )
 

@@ -64,7 +64,7 @@ def test_every_result_class_lives_in_the_results_package():
     for cls in (DayResult, HullResult, FinResult, ScalingResult, TareResult, VehicleResult,
                 IdentifyResult, Summary):
         assert cls.__module__.split(".")[:2] == ["towtank", "results"], cls
-    for cls in (HullResult, FinResult, ScalingResult, IdentifyResult):
+    for cls in (HullResult, FinResult, ScalingResult, TareResult, IdentifyResult):
         assert issubclass(cls, Estimates)
     import towtank
 
@@ -207,3 +207,24 @@ def test_the_former_names_of_the_stage_results_still_work_and_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert day.fins is None and day.scaling is None  # the new names say nothing
+
+
+# ----------------------------------------------------------------------------------------- tare
+def test_the_tare_coefficients_are_the_estimates_of_the_tare_and_give_tare_csv():
+    from towtank.reduce.tare import TareFit, TareModel
+
+    drag = TareFit(coef=np.array([0.5, 0.1, 0.2]), cov=np.diag([1e-4, 4e-4, 9e-4]),
+                   residual_std=0.01, n_samples=400, dof=4.0)
+    lift = TareFit(coef=np.array([0.05, 0.0, 0.0]), cov=np.diag([1e-6, 0.0, 1e-6]),
+                   residual_std=0.01, n_samples=400)
+    tare = TareResult({"A": TareModel("A", (1, 2), drag, lift, (0.5, 2.0), (0.0, 0.3))})
+    assert list(tare.params.index) == ["A.drag.t2", "A.drag.t1", "A.drag.m_t", "A.lift.t2",
+                                       "A.lift.t1", "A.lift.m_t"]
+    assert tare.bse["A.drag.t1"] == pytest.approx(0.02)
+    ci, csv = tare.conf_int(), tare.to_frame().set_index("channel")
+    for channel in ("drag", "lift"):
+        for term in ("t2", "t1", "m_t"):
+            assert ci.loc[f"A.{channel}.{term}"].tolist() == pytest.approx(
+                [csv.loc[channel, f"{term}_ci_low"], csv.loc[channel, f"{term}_ci_high"]],
+                rel=1e-12), (channel, term)
+    assert tare.summary().table["unit"].tolist()[:3] == ["N s²/m²", "N s/m", "kg"]

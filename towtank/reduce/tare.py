@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from towtank.stats.intervals import cr2_covariance
-from towtank.stats.quantiles import normal_quantile, t95
+from towtank.stats.quantiles import t95
 
 TARE_TERMS = ("t2", "t1", "m_t")
 
@@ -69,6 +69,17 @@ class TareFit:
 
     def __call__(self, speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
         return tare_force(self.coef, speed, accel)
+
+    @property
+    def std_errors(self) -> np.ndarray:
+        """Standard errors of t2, t1, m_t [N s²/m², N s/m, kg]."""
+        return np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
+
+    @property
+    def interval_dof(self) -> float:
+        """Degrees of freedom of the coefficients' intervals: ``dof``, or ∞ (a normal
+        interval) when it is not a positive number [-]."""
+        return self.dof if math.isfinite(self.dof) and self.dof > 0 else math.inf
 
     def std_error(self, speed: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Standard error of the fitted tare at (U, a) [N]."""
@@ -249,8 +260,7 @@ def tare_table(tares: dict[str, TareModel]) -> Any:
         for channel, fit in (("drag", model.drag), ("lift", model.lift)):
             if fit is None:
                 continue
-            q = t95(fit.dof) if math.isfinite(fit.dof) and fit.dof > 0 else normal_quantile()
-            se = np.sqrt(np.clip(np.diag(fit.cov), 0.0, None))
+            q, se = t95(fit.interval_dof), fit.std_errors
             row: dict[str, object] = {"tare_group": group, "channel": channel,
                                       "runs": " ".join(str(r) for r in model.runs)}
             for name, value, s in zip(("t2", "t1", "m_t"), fit.coef, se, strict=True):

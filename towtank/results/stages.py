@@ -19,7 +19,7 @@ import pandas as pd
 from towtank.analysis.fin_analysis import FinFit
 from towtank.analysis.hull import SYMBOLS, UNIT, Estimate, HullFit
 from towtank.analysis.scaling import ScalingFit
-from towtank.reduce.tare import TareModel, tare_table
+from towtank.reduce.tare import TARE_TERMS, TareModel, tare_table
 from towtank.results.summary import (
     CONF_INT_COLUMNS,
     Estimates,
@@ -38,12 +38,35 @@ __all__ = ["FinResult", "FromPrediction", "HullResult", "ScalingResult", "TareRe
 T = TypeVar("T")
 
 
+#: The units of the coefficients of a tare fit T = t2·U|U| + t1·U + m_t·a (TARE_TERMS).
+TARE_UNITS = ("N s²/m²", "N s/m", "kg")
+
+
 @dataclass(frozen=True, repr=False)
-class TareResult:
+class TareResult(Estimates):
     """The sting tare of the day: one :class:`towtank.reduce.tare.TareModel` per tare group
-    (T = t2·U|U| + t1·U + m_t·a for drag and lift)."""
+    (T = t2·U|U| + t1·U + m_t·a for drag and lift). Its estimates are the coefficients of
+    every fit, symbol ``<group>.<channel>.<term>`` (``A.drag.t2``)."""
 
     models: dict[str, TareModel] = field(default_factory=dict)
+
+    def estimate_frame(self) -> pd.DataFrame:
+        """t2 [N s²/m²], t1 [N s/m], m_t [kg] of every group and channel with their standard
+        errors (clustered by sting run) and degrees of freedom (∞: a normal interval)."""
+        rows = []
+        for group in sorted(self.models):
+            model = self.models[group]
+            for channel, fit in (("drag", model.drag), ("lift", model.lift)):
+                if fit is None:
+                    continue
+                rows += [(f"{group}.{channel}.{term}", float(v), float(s), fit.interval_dof, unit)
+                         for term, unit, v, s in zip(TARE_TERMS, TARE_UNITS, fit.coef,
+                                                     fit.std_errors, strict=True)]
+        return estimate_frame(*zip(*rows, strict=True)) if rows else estimate_frame(
+            [], [], [], [], [])
+
+    def summary_title(self) -> str:
+        return f"Sting tare ({', '.join(sorted(self.models)) or 'no tare groups'})"
 
     def to_frame(self) -> pd.DataFrame:
         """tare.csv: one row per tare group and channel, with 95 % intervals."""
