@@ -13,6 +13,8 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
+import subprocess
+import sys
 import typing
 import warnings
 from types import SimpleNamespace
@@ -69,6 +71,18 @@ def test_every_result_class_lives_in_the_results_package():
     import towtank
 
     assert towtank.FinResult is FinResult and towtank.ScalingResult is ScalingResult
+    assert towtank.IdentifyResult is IdentifyResult
+
+
+def test_the_results_of_a_day_load_no_identification():
+    """IdentifyResult comes with the package's names, but the identification's filter loads
+    only when it is asked for (a fresh interpreter: what an import loads is the point)."""
+    code = ("import sys, towtank.results, towtank.pipeline\n"
+            "assert 'filterpy' not in sys.modules, 'filterpy'\n"
+            "assert 'towtank.vehicle.identify' not in sys.modules\n"
+            "from towtank.results import IdentifyResult\n"
+            "assert 'filterpy' in sys.modules\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
 
 
 # -------------------------------------------------------------------------------- the estimate

@@ -277,7 +277,8 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
 
     # loaded on use: the identification (filterpy, scipy.stats) loads
     # only for identify
-    from towtank.results import IdentifyResult, from_fit
+    from towtank.results.identify import IdentifyResult
+    from towtank.results.summary import from_fit
     from towtank.vehicle.identify import identify as _identify
     from towtank.vehicle.identify_log import ManoeuvreLog, log_from_frame, read_log
     from towtank.vehicle.model import read_model

@@ -142,7 +142,8 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
     except ValueError as exc:
         raise ProtocolError(f"{Path(log_path).name}: {exc}") from None
     # loaded on use: the results package loads the day's stages, which identify needs only here
-    from towtank.results import IdentifyResult, from_fit
+    from towtank.results.identify import IdentifyResult
+    from towtank.results.summary import from_fit
 
     result = from_fit(IdentifyResult, fit)
     table = result.table()

@@ -29,7 +29,7 @@ import math
 import warnings as _warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Literal, TypeVar, get_args
+from typing import TYPE_CHECKING, Literal, TypeVar, get_args
 
 import numpy as np
 import pandas as pd
@@ -40,7 +40,6 @@ from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COL
 from towtank.ingest.protocol import Protocol
 from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel
-from towtank.results.identify import IdentifyResult
 from towtank.results.stages import (
     FinResult,
     HullResult,
@@ -49,6 +48,9 @@ from towtank.results.stages import (
     VehicleResult,
 )
 from towtank.results.summary import Estimates, Summary, from_fit
+
+if TYPE_CHECKING:
+    from towtank.results.identify import IdentifyResult
 
 R = TypeVar("R")
 
@@ -224,3 +226,14 @@ class DayResult:
 
     def _repr_html_(self) -> str:
         return self.summary()._repr_html_()
+
+
+def __getattr__(name: str) -> object:
+    """:class:`~towtank.results.identify.IdentifyResult`, imported on first use (PEP 562): it
+    loads the identification's filter, which a day never needs."""
+    if name == "IdentifyResult":
+        # loaded on use: filterpy and the identification only for identify's result
+        from towtank.results.identify import IdentifyResult
+
+        return IdentifyResult
+    raise AttributeError(f"module 'towtank.results' has no attribute {name!r}")
