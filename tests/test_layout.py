@@ -41,6 +41,7 @@ def all_imports(package_dir: Path) -> list[Import]:
 #: the package's ``__init__`` (the public API, loaded lazily) at the top with the commands.
 LAYERS: list[tuple[str, ...]] = [
     ("errors",),
+    ("messages",),
     ("runtime",),
     ("stats",),
     ("reference",),

@@ -244,8 +244,7 @@ def reduce_run(
     processing = Processing() if protocol is None else _protocol(protocol).processing
     red = _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
                   speed_nominal=speed_nominal, accel_nominal=accel_nominal)
-    record_units(red, raw)
-    return red
+    return record_units(red, raw)
 
 
 def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str], *,

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import html
 import math
-from collections.abc import Iterable
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal, TypeVar, get_args
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -38,6 +38,7 @@ from towtank.analysis.hull import (
 from towtank.analysis.scaling import ScalingResult
 from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 from towtank.ingest.protocol import Protocol
+from towtank.messages import STAGES, Notice, Rejection, Stage, notices
 from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel, tare_table
 from towtank.vehicle.stage import VehiclePrediction
@@ -45,16 +46,9 @@ from towtank.vehicle.stage import VehiclePrediction
 R = TypeVar("R")
 
 __all__ = [
-    "DayResult", "Estimate", "FinResult", "HullResult", "Notice", "STAGES", "ScalingResult",
-    "Stage", "Summary", "TareResult", "VehicleResult", "notices",
+    "DayResult", "Estimate", "FinResult", "HullResult", "Notice", "Rejection", "STAGES",
+    "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult", "notices",
 ]
-
-#: The step of the day a warning comes from.
-Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "vehicle",
-                "export"]
-#: Every :data:`Stage`, in the order of the pipeline.
-STAGES: tuple[str, ...] = get_args(Stage)
-
 
 def require(result: R | None, stage: str) -> R:
     """``result``, which the caller only reaches when its stage ran (a report page or sheet
@@ -70,47 +64,6 @@ def _esc(text: object) -> str:
 
 def _level(alpha: float) -> str:
     return f"{100.0 * (1.0 - alpha):g} %"
-
-
-@dataclass(frozen=True)
-class Notice:
-    """One warning of the day: a sentence and where it comes from.
-
-    ``str(notice)`` is the sentence, as ``towtank process`` prints it and the report and the
-    workbook list it; the fields say where it comes from, so that a program picks warnings by
-    stage, run or file and never by their words.
-
-    Attributes
-    ----------
-    text : str
-        The sentence
-    stage : Stage
-        The step it comes from: ``"protocol"``, ``"sheet"``, ``"reduce"``, ``"tare"``,
-        ``"hull"``, ``"fins"``, ``"scaling"``, ``"vehicle"`` or ``"export"``
-    run : int or None
-        The run it is about; None for the day or several runs
-    file : str or None
-        The file it is about (as the sheet names it); None for none or several
-    """
-
-    text: str
-    stage: Stage
-    run: int | None = None
-    file: str | None = None
-
-    def __post_init__(self) -> None:
-        if self.stage not in STAGES:
-            raise ValueError(f"a notice's stage is one of {', '.join(STAGES)}, not "
-                             f"{self.stage!r}")
-
-    def __str__(self) -> str:
-        return self.text
-
-
-def notices(texts: Iterable[str], stage: Stage, run: int | None = None,
-            file: str | None = None) -> list[Notice]:
-    """The sentences ``texts`` of one stage (and run, file) as :class:`Notice` objects."""
-    return [Notice(str(t), stage, run, file) for t in texts]
 
 
 @dataclass(frozen=True)
@@ -276,15 +229,17 @@ class DayResult:
     protocol: Protocol
     sheet: pd.DataFrame
     reductions: dict[int, RunReduction]
-    rejected: dict[int, str]
+    #: run number -> why it is not used (``str()`` of each is runs.csv's ``reason``)
+    rejected: Mapping[int, Rejection]
     tares: dict[str, TareModel]
     runs: pd.DataFrame
     #: the day's warnings, in the order of the stages (``str()`` of each is its sentence)
-    warnings: list[Notice] = field(default_factory=list)
+    warnings: tuple[Notice, ...] = ()
     hull: HullResult | None = None
     fin_result: FinResult | None = None
     scaling_result: ScalingResult | None = None
-    inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
+    #: path -> sha256 of every input of the day (a mapping no code changes once made)
+    inputs: Mapping[str, str] = field(default_factory=dict)
     report_date: str | None = None
     # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
     previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
