@@ -117,16 +117,16 @@ class Rejection:
                              f"not {self.kind!r}")
 
     @classmethod
-    def of_run_error(cls, run: int, file: str, text: str) -> Rejection:
+    def of_run_error(cls, run: int, file: str, sentence: str) -> Rejection:
         """The rejection of a run whose data cannot be reduced, from the one sentence the
         reading or reduction gave (:class:`towtank.errors.RunError`): ``file:`` is put
         before it unless it names the file already, and a leading ``file:`` of its own
         becomes the prefix."""
-        # parses the raise site's sentence once, here, where the rejection is made
-        if text.startswith(f"{file}:"):  # message-text: the sentence of a RunError
-            return cls(run, file, "reduce", text[len(file) + 1:].lstrip(), "run_error")
-        named = file in text or PurePath(file).name in text  # message-text: as above
-        return cls(run, file, "reduce", text, "run_error", file_prefix=not named)
+        # the raise site's sentence is read once, here, where the rejection is made
+        if sentence.startswith(f"{file}:"):
+            return cls(run, file, "reduce", sentence[len(file) + 1:].lstrip(), "run_error")
+        named = file in sentence or PurePath(file).name in sentence
+        return cls(run, file, "reduce", sentence, "run_error", file_prefix=not named)
 
     @property
     def detail(self) -> str:

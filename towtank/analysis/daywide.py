@@ -65,11 +65,11 @@ def run_ranges(runs: list[int]) -> str:
 
 def own_reason(run: Any, file: Any, reason: Any) -> str:
     """The reason without the ``run N:`` and ``file:`` prefixes the pipeline puts in front."""
-    text = str(reason).strip() if isinstance(reason, str) and reason else "no reason given"
+    sentence = str(reason).strip() if isinstance(reason, str) and reason else "no reason given"
     for prefix in (f"run {run}:", f"{file}:"):
-        if text.startswith(prefix):
-            text = text[len(prefix):].strip()
-    return text
+        if sentence.startswith(prefix):
+            sentence = sentence[len(prefix):].strip()
+    return sentence
 
 
 def _placeholders(run: int | str, file: Any, text: str) -> str:

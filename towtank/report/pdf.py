@@ -25,7 +25,6 @@ CreationDate is fixed from the report date so the same day gives the same file.
 from __future__ import annotations
 
 import math
-import re
 import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -46,6 +45,7 @@ import towtank.report.figures as figures
 import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections, run_reason
+from towtank.analysis.hull import mirrored
 from towtank.messages import Rejection
 from towtank.pipeline import geometry_used
 from towtank.reference.sets import reference_name
@@ -399,11 +399,11 @@ def coefficient_rows(coef: pd.DataFrame) -> tuple[list[str], list[list[str]], li
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
     rows, hl = [], {}
+    mirrors = mirrored(coef["symbol"])
     for i, r in enumerate(coef.to_dict("records")):
         m = str(r.get("method", ""))
-        mirror = re.match(r"(?:=|same as)\s*(\S+)", m)
-        if mirror:
-            ref = "= " + math_symbol(mirror.group(1))
+        if r["symbol"] in mirrors:
+            ref = "= " + math_symbol(mirrors[r["symbol"]])
         else:
             if m not in methods:
                 methods.append(m)
@@ -478,10 +478,11 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
+        mirrors = mirrored(day.coefficients["symbol"])
         for r in day.coefficients.to_dict("records"):
             method = str(r.get("method", ""))
             # the method footnote states the second estimate already (fit.fit_added_mass)
-            if (r.get("agreement") and not method.startswith(("=", "same as"))
+            if (r.get("agreement") and r["symbol"] not in mirrors
                     and "second estimate" not in method):
                 y += _text_block(fig, y, (
                     f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "

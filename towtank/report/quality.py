@@ -14,6 +14,7 @@ import numpy as np
 
 import towtank.report.style as style
 from towtank.analysis.daywide import group_rejections, grouped_warnings, run_ranges, run_reason
+from towtank.analysis.hull import mirrored
 from towtank.reduce.run import units_notes
 from towtank.report.figure_base import PAGE_FOOTER_IN, PAGE_HEADER_IN
 
@@ -271,8 +272,9 @@ def lift_slope_text(hf: Any, coefficients: Any = None) -> str:
 
 def _budget_flow(f: Flow, hf: Any) -> None:
     """The uncertainty budget behind each interval (coefficients.csv's u_* columns)."""
+    mirrors = mirrored(hf.estimates)
     rows = [e for sym, e in hf.estimates.items()
-            if not e.method.startswith("same as") and math.isfinite(e.u_regression)]
+            if sym not in mirrors and math.isfinite(e.u_regression)]
     if not rows:
         return
     f.li("Uncertainty budget: standard uncertainties of each coefficient's parts, in its own "
