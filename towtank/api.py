@@ -104,10 +104,10 @@ def process_day(
     -------
     DayResult
         ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.fins`` (fins.csv),
-        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (list of
+        ``.scaling`` (scaling.csv) as DataFrames; ``.warnings`` (tuple of
         :class:`~towtank.results.Notice`: ``str()`` the sentence, ``.stage``, ``.run``,
         ``.file``);
-        ``.rejected`` (run number -> sentence); ``.reductions`` (run number ->
+        ``.rejected`` (run number -> Rejection); ``.reductions`` (run number ->
         :class:`~towtank.reduce.run.RunReduction`); ``.tares``; ``.protocol``.
 
     Raises

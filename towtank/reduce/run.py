@@ -41,10 +41,6 @@ from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
 from towtank.signal.drift import drift_verdict
 
-#: The repair of the ingest that the engineer is told of on the terminal (the others, gaps
-#: interpolated and spikes removed, are listed in runs.csv's notes and the report).
-WARNED_REPAIRS = "non-numeric row(s) dropped"
-
 PHASE_STEADY = 0
 PHASE_ACCEL = 1
 THUMB_HZ = 10.0
@@ -263,7 +259,7 @@ def reduce_run(
                             speed_nominal=speed_nominal, accel_nominal=accel_nominal)
     notes += checks.notes
     warn = (
-        [n for n in raw.notes if WARNED_REPAIRS in n]  # dropped rows: said, not only noted
+        list(raw.warnings)  # dropped rows: said, not only noted
         + manual_warnings
         + drift_warnings
         + list(checks.warnings)

@@ -478,16 +478,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
-        mirrors = mirrored(day.coefficients["symbol"])
-        for r in day.coefficients.to_dict("records"):
-            method = str(r.get("method", ""))
-            # the method footnote states the second estimate already (fit.fit_added_mass)
-            if (r.get("agreement") and r["symbol"] not in mirrors
-                    and "second estimate" not in method):
-                y += _text_block(fig, y, (
-                    f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
-                    f"{str(r['alt_method']).split(' (')[0]}; {r['agreement']}."), width=125,
-                    fontsize=7)
+        # an added mass's second estimate and its agreement are in its method's footnote
+        # (towtank.analysis.hull.fit_added_mass)
         y += 0.2
     elif day.protocol.model is not None:
         y += _heading(fig, y, "Hull coefficients")
