@@ -311,26 +311,51 @@ ALLOWED_TEXT_READS: set[tuple[str, str]] = {
     ("towtank.commands.inspect", "_missing_channel"),
     ("towtank.commands.inspect", "inspect_run.load"),
     ("towtank.commands.inspect", "inspect_run"),
+    # npTDMS's own warnings while it reads a file: the library says what it found only in
+    # their words (input text, like the file's)
+    ("towtank.ingest.readers", "TdmsLog.first"),
 }
 
 
-def _message_named(node: ast.AST) -> bool:
+def _message_named(node: ast.AST, aliases: frozenset[str] = frozenset()) -> bool:
     """An expression that names a message: ``reason``, ``red.notes``, ``rejection.reason``,
-    ``notice.text``, ``warnings[0]``, ``str(rejection)``."""
+    ``notice.text``, ``warnings[0]``, ``str(rejection)``, or a name in ``aliases``."""
     if isinstance(node, ast.Subscript):
-        return _message_named(node.value)
+        return _message_named(node.value, aliases)
+    if isinstance(node, ast.IfExp):
+        return _message_named(node.body, aliases) or _message_named(node.orelse, aliases)
     if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and \
             node.func.id == "str" and node.args:
-        return _message_named(node.args[0])
+        return _message_named(node.args[0], aliases)
     if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
             node.func.attr in ("strip", "lower", "rstrip", "lstrip"):
-        return _message_named(node.func.value)
+        return _message_named(node.func.value, aliases)
     if isinstance(node, ast.Name):
-        return bool(MESSAGE_NAME.search(node.id))
+        return node.id in aliases or bool(MESSAGE_NAME.search(node.id))
     if isinstance(node, ast.Attribute):
         return bool(MESSAGE_NAME.search(node.attr)) or (
-            node.attr in MESSAGE_FIELDS and _message_named(node.value))
+            node.attr in MESSAGE_FIELDS and _message_named(node.value, aliases))
     return False
+
+
+def _aliases(scope: ast.AST) -> frozenset[str]:
+    """Names that hold a message in ``scope``: ``n`` of ``for n in red.notes``, ``text`` of
+    ``text = str(reason).strip()``."""
+    names: set[str] = set()
+    grew = True
+    while grew:
+        grew = False
+        for node in ast.walk(scope):
+            target, value = None, None
+            if isinstance(node, ast.comprehension | ast.For):
+                target, value = node.target, node.iter
+            elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+                target, value = node.targets[0], node.value
+            if isinstance(target, ast.Name) and target.id not in names and \
+                    _message_named(value, frozenset(names)):
+                names.add(target.id)
+                grew = True
+    return frozenset(names)
 
 
 def _plural(node: ast.AST) -> bool:
@@ -347,32 +372,35 @@ def _text_reads(tree: ast.AST) -> list[tuple[int, str]]:
     ``x in`` it."""
     found: list[tuple[int, str]] = []
 
-    def visit(node: ast.AST, where: str) -> None:
+    def visit(node: ast.AST, where: str, aliases: frozenset[str]) -> None:
         for child in ast.iter_child_nodes(node):
-            inner = where
+            inner, names = where, aliases
             if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
                 inner = f"{where}.{child.name}" if where else child.name
+                names = aliases | _aliases(child)
             hit = False
             if isinstance(child, ast.Call) and isinstance(child.func, ast.Attribute):
                 attr, target = child.func.attr, child.func.value
                 if attr in TEXT_METHODS:
-                    hit = _message_named(target)
+                    hit = _message_named(target, names)
                 elif isinstance(target, ast.Name) and target.id == "re":
                     k = RE_TEXT_ARG.get(attr)
-                    hit = k is not None and len(child.args) > k and _message_named(child.args[k])
+                    hit = k is not None and len(child.args) > k and \
+                        _message_named(child.args[k], names)
                 else:
                     k = PATTERN_TEXT_ARG.get(attr)
-                    hit = k is not None and len(child.args) > k and _message_named(child.args[k])
+                    hit = k is not None and len(child.args) > k and \
+                        _message_named(child.args[k], names)
             elif isinstance(child, ast.Compare):  # "x" in reason; "x" in notes (a list)
                 lefts = [child.left, *child.comparators[:-1]]
-                hit = any(isinstance(op, ast.In | ast.NotIn) and _message_named(right) and (
+                hit = any(isinstance(op, ast.In | ast.NotIn) and _message_named(right, names) and (
                     not _plural(right) or isinstance(left, ast.Constant | ast.JoinedStr))
                     for op, left, right in zip(child.ops, lefts, child.comparators, strict=True))
             if hit:
                 found.append((child.lineno, where))
-            visit(child, inner)
+            visit(child, inner, names)
 
-    visit(tree, "")
+    visit(tree, "", frozenset())
     return found
 
 
@@ -410,9 +438,14 @@ def test_a_planted_test_of_a_reason_is_found(tmp_path):
                  "        return 2\n"
                  "    if re.match('run', str(rejection)):\n"
                  "        return 3\n"
+                 "    if [n for n in red.warnings if n.endswith('.')]:\n"
+                 "        return 4\n"
+                 "    if red in day.rejections or 'x' in line:\n"
+                 "        return 5\n"
                  "    return line.startswith('#')\n"),
     })
     assert message_text_reads(pkg, set()) == ["pkg.a:3 (f) reads a message's text",
                                              "pkg.a:5 (f) reads a message's text",
-                                             "pkg.a:7 (f) reads a message's text"]
+                                             "pkg.a:7 (f) reads a message's text",
+                                             "pkg.a:9 (f) reads a message's text"]
     assert message_text_reads(pkg, {("pkg.a", "f")}) == []

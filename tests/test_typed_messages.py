@@ -168,3 +168,14 @@ def test_the_days_warnings_and_inputs_are_not_lists_to_append_to(bad_day):
     assert all(isinstance(n, Notice) for n in bad_day.warnings)
     protocol = load_protocol(Path(bad_day.protocol.path))
     assert str(protocol.path) in bad_day.inputs
+
+
+def test_the_layout_check_catches_a_reason_read_by_its_words(tmp_path):
+    from test_layout import message_text_reads
+
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("", encoding="utf-8")
+    (pkg / "a.py").write_text('def f(rejection):\n    if rejection.reason.startswith("x"):\n'
+                              '        return 1\n', encoding="utf-8")
+    assert message_text_reads(pkg, set()) == ["pkg.a:2 (f) reads a message's text"]
