@@ -179,3 +179,19 @@ def test_the_layout_check_catches_a_reason_read_by_its_words(tmp_path):
     (pkg / "a.py").write_text('def f(rejection):\n    if rejection.reason.startswith("x"):\n'
                               '        return 1\n', encoding="utf-8")
     assert message_text_reads(pkg, set()) == ["pkg.a:2 (f) reads a message's text"]
+
+
+def test_the_prototype_values_are_joined_once(bad_day):
+    """With a [vehicle], coefficients.csv is the vehicle stage's table, made from the hull's
+    with the prototype values already; they are not joined to it a second time."""
+    hull = pd.DataFrame({"symbol": ["X_udot", "Y_vdot"], "prime": [0.1, 0.2],
+                         "prototype_value": [float("nan")] * 2})
+    joined = hull.assign(prototype_value=[1.0, 2.0], predicted=[0.1, 0.2])
+    day = dataclasses.replace(
+        bad_day, hull=SimpleNamespace(coefficients=hull),
+        vehicle=SimpleNamespace(coefficients=joined),
+        prototype_values=pd.DataFrame({"symbol": ["X_udot"], "prototype_value": [9.0]}))
+    assert day.coefficients is joined
+    alone = dataclasses.replace(day, vehicle=None)
+    assert alone.coefficients["prototype_value"].tolist()[0] == 9.0
+    assert hull["prototype_value"].isna().all()  # the hull's table as it was

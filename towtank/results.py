@@ -35,7 +35,7 @@ from towtank.analysis.hull import (
     Estimate,
     HullFit,
 )
-from towtank.analysis.scaling import ScalingResult
+from towtank.analysis.scaling import ScalingResult, with_prototype_values
 from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 from towtank.ingest.protocol import Protocol
 from towtank.messages import STAGES, Notice, Rejection, Stage, notices
@@ -277,16 +277,9 @@ class DayResult:
         and, with a [vehicle], the predicted beside them (empty without hull runs)."""
         if self.hull is None:
             return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
-        base = self.hull.coefficients
         if self.vehicle is not None and self.vehicle.coefficients is not None:
-            base = self.vehicle.coefficients
-        if self.prototype_values is None:
-            return base
-        out = base.copy()
-        values = dict(zip(self.prototype_values["symbol"],
-                          self.prototype_values["prototype_value"], strict=True))
-        out["prototype_value"] = [values.get(s, math.nan) for s in out["symbol"]]
-        return out
+            return self.vehicle.coefficients  # made from the hull's with the prototype values
+        return with_prototype_values(self.hull.coefficients, self.prototype_values)
 
     def summary(self, alpha: float = 0.05) -> Summary:
         """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,
