@@ -5,7 +5,10 @@ fields, never its words; a run's reduction is made whole and never changed after
 from __future__ import annotations
 
 import dataclasses
+import io
+import json
 import os
+import zipfile
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -18,8 +21,9 @@ from towtank.ingest.protocol import load_protocol
 from towtank.live.session import WatchSession
 from towtank.messages import REJECTION_KINDS, Notice, Rejection
 from towtank.reduce import run as reduce_mod
-from towtank.reduce.run import crashed_record, record_units, reduce_record
+from towtank.reduce.run import RunReduction, crashed_record, record_units, reduce_record
 from towtank.reduce.tare_policy import apply_tares
+from towtank.runtime import records
 from towtank.testing import damage
 from towtank.testing import synthetic as syn
 
@@ -195,3 +199,23 @@ def test_the_prototype_values_are_joined_once(bad_day):
     alone = dataclasses.replace(day, vehicle=None)
     assert alone.coefficients["prototype_value"].tolist()[0] == 9.0
     assert hull["prototype_value"].isna().all()  # the hull's table as it was
+
+
+def test_a_cached_reduction_of_the_earlier_layout_is_a_clean_miss(bad_day):
+    """Notes and warnings stored as JSON lists come back as tuples; an entry without the
+    field saying which note is the missing acceleration (written before it) is a miss."""
+    red = bad_day.reductions[5]
+    blob = records.to_bytes(red)
+    assert records.from_bytes(blob, RunReduction).notes == red.notes
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(blob)) as old, \
+            zipfile.ZipFile(out, "w", compression=zipfile.ZIP_STORED) as new:
+        for info in old.infolist():
+            data = old.read(info)
+            if info.filename == records.HEADER:
+                header = json.loads(data)
+                del header["accel_missing"]
+                data = json.dumps(header).encode()
+            new.writestr(info.filename, data)
+    with pytest.raises(records.RecordError):
+        records.from_bytes(out.getvalue(), RunReduction)
