@@ -84,7 +84,7 @@ def test_process_day_in_process_returns_the_day(cli_coefficients):
     assert set(day.runs["status"]) == {"ok", "void"}
     assert day.fins is None and list(day.table("fins").columns)[:2] == ["run", "angle_deg"]
     assert len(day.scaling.table) == 4 and "drag_ittc57" in day.scaling.table
-    assert isinstance(day.warnings, list)
+    assert isinstance(day.warnings, tuple)
 
 
 def test_process_day_writes_what_the_cli_writes(tmp_path, cli_coefficients):

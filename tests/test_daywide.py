@@ -9,6 +9,7 @@ import pytest
 
 from towtank.analysis.daywide import group_rejections, run_ranges
 from towtank.commands.cli import main
+from towtank.messages import Rejection
 from towtank.testing import synthetic as syn
 
 
@@ -22,12 +23,25 @@ def _runs(n: int, bad: dict[int, str], void: tuple[int, ...] = ()) -> pd.DataFra
     return pd.DataFrame(rows)
 
 
+def rejections_of(runs: pd.DataFrame) -> dict[int, Rejection]:
+    """The Rejection objects whose sentences are the ``reason`` of the rejected rows."""
+    out = {}
+    for r in runs[runs["status"] == "rejected"].itertuples():
+        detail = r.reason.removeprefix(f"run {r.run}: ")
+        prefixed = detail.startswith(f"{r.file}: ")
+        out[int(r.run)] = Rejection(int(r.run), r.file, "reduce",
+                                    detail.removeprefix(f"{r.file}: "), "run_error",
+                                    file_prefix=prefixed)
+        assert str(out[int(r.run)]) == r.reason
+    return out
+
+
 GAIN = "run {run}: {file}: the drag column 'Fx (V)' is recorded in V: give its calibration"
 
 
 def test_one_fault_in_every_run_is_one_group():
     runs = _runs(42, {r: GAIN for r in range(1, 43) if r != 20}, void=(20,))
-    groups = group_rejections(runs)
+    groups = group_rejections(runs, rejections_of(runs))
     assert len(groups) == 1 and groups[0].day_wide
     assert groups[0].runs == [r for r in range(1, 43) if r != 20]
     assert "every run that is not void (runs 1–19, 21–42)" in groups[0].sentence
@@ -37,7 +51,7 @@ def test_one_fault_in_every_run_is_one_group():
 def test_a_few_bad_files_are_named_one_by_one():
     missing = "run {run}: the data file {file} is not found in /data"
     runs = _runs(40, {3: missing, 9: missing, 17: missing, 30: GAIN})
-    groups = group_rejections(runs)
+    groups = group_rejections(runs, rejections_of(runs))
     assert [g.runs for g in groups] == [[3], [9], [17], [30]]
     assert not any(g.day_wide for g in groups)
     assert groups[0].sentence == "run 3: the data file run_003.csv is not found in /data"
@@ -46,7 +60,7 @@ def test_a_few_bad_files_are_named_one_by_one():
 def test_different_reasons_are_not_merged():
     runs = _runs(6, {1: GAIN, 2: GAIN, 3: GAIN, 4: "run {run}: {file}: too short",
                      5: "run {run}: {file}: too short", 6: "run {run}: {file}: too short"})
-    groups = group_rejections(runs)
+    groups = group_rejections(runs, rejections_of(runs))
     assert [g.runs for g in groups] == [[1, 2, 3], [4, 5, 6]]
     assert all(g.day_wide for g in groups)
 

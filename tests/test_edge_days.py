@@ -97,7 +97,7 @@ def test_plateau_too_short_to_detect_is_rejected_without_a_hand_window(tmp_path)
     protocol = write_hull_protocol(tmp_path, sheet_format="csv", channel_style="canonical")
     result = process(protocol)
     assert SHORT_RUN in result.rejected
-    assert "plateau" in result.rejected[SHORT_RUN]
+    assert "plateau" in str(result.rejected[SHORT_RUN])
     # the run was read: its traces are kept for the report's appendix, at 10 Hz
     preview = result.previews[SHORT_RUN]
     truth = syn.load_truth(tmp_path)["runs"][str(SHORT_RUN)]
@@ -129,7 +129,7 @@ def test_hand_window_rescues_a_run_the_detection_cannot_use(edge_day: Day):
 def test_hand_window_spanning_the_acceleration_is_rejected(edge_day: Day):
     """A window from the middle of the acceleration to the plateau's end: its speed varies by
     ~0.6 m/s, twenty plateau bands; used, it would bias the steady drag. The run is rejected."""
-    reason = edge_day.result.rejected[OVERLAP_RUN]
+    reason = str(edge_day.result.rejected[OVERLAP_RUN])
     assert reason.startswith(f"run {OVERLAP_RUN}: run_{OVERLAP_RUN:03d}.csv: the speed varies by")
     assert reason.endswith("the window is not steady")
 
@@ -140,7 +140,7 @@ def test_hand_window_spanning_the_acceleration_is_rejected(edge_day: Day):
     (STING_WINDOW_RUN, "the window is not steady"),
 ])
 def test_hand_windows_that_cannot_be_steady_reject_their_run(edge_day: Day, run, words):
-    assert words in edge_day.result.rejected[run]
+    assert words in str(edge_day.result.rejected[run])
     assert STING_WINDOW_RUN not in edge_day.result.tares["A"].runs  # it feeds no tare
 
 
@@ -327,7 +327,7 @@ def test_cutoff_above_nyquist_rejects_each_run_with_that_reason(tmp_path):
     result = process(protocol)
     assert set(result.rejected) == {1, 2}
     for reason in result.rejected.values():
-        assert "cutoff_hz = 150 Hz is not below half the file's sample rate" in reason
+        assert "cutoff_hz = 150 Hz is not below half the file's sample rate" in str(reason)
 
 
 def test_output_folder_with_the_users_files_keeps_them(tmp_path):

@@ -15,7 +15,9 @@ Each checker is first shown to catch a planted violation in a small package of i
 
 from __future__ import annotations
 
+import ast
 import functools
+import re
 from pathlib import Path
 
 import import_graph
@@ -49,6 +51,7 @@ def all_imports(package_dir: Path) -> list[Import]:
 #: the package's ``__init__`` (the public API, loaded lazily) at the top with the commands.
 LAYERS: list[tuple[str, ...]] = [
     ("errors",),
+    ("messages",),
     ("runtime",),
     ("stats",),
     ("reference",),
@@ -316,3 +319,168 @@ def test_the_readers_depend_on_the_protocol_types_not_on_its_parsers():
         and e.target.startswith("towtank.ingest.")
     })
     assert not wrong, "\n".join(wrong)
+
+
+# ------------------------------------------------------------------ messages are read by field
+#: Names of a message (a warning, a note, a rejection's reason, a sentence) in the code.
+MESSAGE_NAME = re.compile(
+    r"(?:^|_)(?:reason|reasons|note|notes|warning|warnings|message|messages|sentence|"
+    r"sentences|notice|notices|rejection|rejections|said|detail)$")
+#: The text fields of a Notice or a Rejection.
+MESSAGE_FIELDS = {"text", "reason", "detail"}
+#: Text tests of a str method and of the ``re`` functions (the argument holding the text).
+TEXT_METHODS = {"startswith", "endswith"}
+RE_TEXT_ARG = {"match": 1, "search": 1, "fullmatch": 1, "sub": 2, "subn": 2, "findall": 1}
+PATTERN_TEXT_ARG = {"match": 0, "search": 0, "fullmatch": 0, "sub": 1, "subn": 1, "findall": 0}
+
+#: Functions that read message text on purpose, each (module, function), with why:
+ALLOWED_TEXT_READS: set[tuple[str, str]] = {
+    # the one place a RunError's sentence (raised deep in the readers, with no kind) is split
+    # into a Rejection's reason and whether the file goes before it
+    ("towtank.messages", "Rejection.of_run_error"),
+    # the day-wide grouping of the reductions' per-run warnings (plain sentences that the
+    # worker processes return), compared word for word without their run and file prefixes
+    ("towtank.analysis.daywide", "own_reason"),
+    # `towtank inspect` on one file: the hint it adds to a RunError's sentence (a missing
+    # channel, a segment) and the sentence's own punctuation
+    ("towtank.commands.inspect", "_missing_channel"),
+    ("towtank.commands.inspect", "inspect_run.load"),
+    ("towtank.commands.inspect", "inspect_run"),
+    # npTDMS's own warnings while it reads a file: the library says what it found only in
+    # their words (input text, like the file's)
+    ("towtank.ingest.readers", "TdmsLog.first"),
+}
+
+
+def _message_named(node: ast.AST, aliases: frozenset[str] = frozenset()) -> bool:
+    """An expression that names a message: ``reason``, ``red.notes``, ``rejection.reason``,
+    ``notice.text``, ``warnings[0]``, ``str(rejection)``, or a name in ``aliases``."""
+    if isinstance(node, ast.Subscript):
+        return _message_named(node.value, aliases)
+    if isinstance(node, ast.IfExp):
+        return _message_named(node.body, aliases) or _message_named(node.orelse, aliases)
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and \
+            node.func.id == "str" and node.args:
+        return _message_named(node.args[0], aliases)
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
+            node.func.attr in ("strip", "lower", "rstrip", "lstrip"):
+        return _message_named(node.func.value, aliases)
+    if isinstance(node, ast.Name):
+        return node.id in aliases or bool(MESSAGE_NAME.search(node.id))
+    if isinstance(node, ast.Attribute):
+        return bool(MESSAGE_NAME.search(node.attr)) or (
+            node.attr in MESSAGE_FIELDS and _message_named(node.value, aliases))
+    return False
+
+
+def _aliases(scope: ast.AST) -> frozenset[str]:
+    """Names that hold a message in ``scope``: ``n`` of ``for n in red.notes``, ``text`` of
+    ``text = str(reason).strip()``."""
+    names: set[str] = set()
+    grew = True
+    while grew:
+        grew = False
+        for node in ast.walk(scope):
+            target, value = None, None
+            if isinstance(node, ast.comprehension | ast.For):
+                target, value = node.target, node.iter
+            elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+                target, value = node.targets[0], node.value
+            if isinstance(target, ast.Name) and target.id not in names and \
+                    _message_named(value, frozenset(names)):
+                names.add(target.id)
+                grew = True
+    return frozenset(names)
+
+
+def _plural(node: ast.AST) -> bool:
+    """A name of several messages (``notes``, ``day.warnings``): ``notice in warnings`` asks
+    whether an object is among them, not what their words say."""
+    name = node.id if isinstance(node, ast.Name) else \
+        node.attr if isinstance(node, ast.Attribute) else ""
+    return name.endswith("s") and name not in MESSAGE_FIELDS
+
+
+def _text_reads(tree: ast.AST) -> list[tuple[int, str]]:
+    """(line, function) of every test of a message's text in ``tree``: ``.startswith`` or
+    ``.endswith`` on it, ``re.match``/``re.sub``/... (or a compiled pattern's) on it, or
+    ``x in`` it."""
+    found: list[tuple[int, str]] = []
+
+    def visit(node: ast.AST, where: str, aliases: frozenset[str]) -> None:
+        for child in ast.iter_child_nodes(node):
+            inner, names = where, aliases
+            if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+                inner = f"{where}.{child.name}" if where else child.name
+                names = aliases | _aliases(child)
+            hit = False
+            if isinstance(child, ast.Call) and isinstance(child.func, ast.Attribute):
+                attr, target = child.func.attr, child.func.value
+                if attr in TEXT_METHODS:
+                    hit = _message_named(target, names)
+                elif isinstance(target, ast.Name) and target.id == "re":
+                    k = RE_TEXT_ARG.get(attr)
+                    hit = k is not None and len(child.args) > k and \
+                        _message_named(child.args[k], names)
+                else:
+                    k = PATTERN_TEXT_ARG.get(attr)
+                    hit = k is not None and len(child.args) > k and \
+                        _message_named(child.args[k], names)
+            elif isinstance(child, ast.Compare):  # "x" in reason; "x" in notes (a list)
+                lefts = [child.left, *child.comparators[:-1]]
+                hit = any(isinstance(op, ast.In | ast.NotIn) and _message_named(right, names) and (
+                    not _plural(right) or isinstance(left, ast.Constant | ast.JoinedStr))
+                    for op, left, right in zip(child.ops, lefts, child.comparators, strict=True))
+            if hit:
+                found.append((child.lineno, where))
+            visit(child, inner, names)
+
+    visit(tree, "", frozenset())
+    return found
+
+
+def message_text_reads(package_dir: Path, allowed: set[tuple[str, str]]) -> list[str]:
+    """Every test of a message's text in the package, outside the ``allowed``
+    (module, function) pairs; and allowed pairs no longer found."""
+    root = package_dir.name
+    out, seen = [], set()
+    for path in sorted(package_dir.rglob("*.py")):
+        rel = path.relative_to(package_dir).with_suffix("")
+        module = ".".join((root, *rel.parts)).removesuffix(".__init__")
+        for line, function in _text_reads(ast.parse(path.read_text(encoding="utf-8"))):
+            if (module, function) in allowed:
+                seen.add((module, function))
+                continue
+            out.append(f"{module}:{line} ({function or 'module'}) reads a message's text")
+    out += [f"allowed text read gone, update ALLOWED_TEXT_READS: {a}"
+            for a in sorted(allowed - seen)]
+    return out
+
+
+def test_no_message_is_parsed_by_its_text():
+    """A program decides by a message's fields (stage, run, kind), never by its words."""
+    problems = message_text_reads(PACKAGE, ALLOWED_TEXT_READS)
+    assert not problems, "\n".join(problems)
+
+
+def test_a_planted_test_of_a_reason_is_found(tmp_path):
+    pkg = _package(tmp_path, {
+        "a.py": ("import re\n"
+                 "def f(rejection, red, line):\n"
+                 "    if rejection.reason.startswith('x'):\n"
+                 "        return 1\n"
+                 "    if 'usable' in red.notes[0]:\n"
+                 "        return 2\n"
+                 "    if re.match('run', str(rejection)):\n"
+                 "        return 3\n"
+                 "    if [n for n in red.warnings if n.endswith('.')]:\n"
+                 "        return 4\n"
+                 "    if red in day.rejections or 'x' in line:\n"
+                 "        return 5\n"
+                 "    return line.startswith('#')\n"),
+    })
+    assert message_text_reads(pkg, set()) == ["pkg.a:3 (f) reads a message's text",
+                                             "pkg.a:5 (f) reads a message's text",
+                                             "pkg.a:7 (f) reads a message's text",
+                                             "pkg.a:9 (f) reads a message's text"]
+    assert message_text_reads(pkg, {("pkg.a", "f")}) == []

@@ -121,7 +121,7 @@ def test_a_run_without_set_speed_is_rejected_in_one_sentence(tmp_path):
     sheet.loc[sheet["run"] == 14, "speed_nominal"] = np.nan
     sheet.to_csv(tmp_path / "run_sheet.csv", index=False)
     day = towtank.process_day(protocol, jobs=1, report=False)
-    assert "has no speed_nominal" in day.rejected[14]
+    assert "has no speed_nominal" in str(day.rejected[14])
 
 
 def test_force_plateau_without_one_says_so():

@@ -188,7 +188,8 @@ def test_thumbnails_label_both_axes_and_share_the_zero_line(hull_day):
     assert "[m/s]" in ax.get_ylabel() and "[N]" in twin.get_ylabel()
     assert figure_base.zero_fraction(ax) == pytest.approx(figure_base.zero_fraction(twin))
     grid = pdf.ThumbGrid()
-    runs = pdf.thumbnail_runs(day.runs, day.reductions, day.previews)[:pdf.THUMBS_PER_PAGE]
+    runs = pdf.thumbnail_runs(day.runs, day.reductions, day.previews,
+                              day.rejected)[:pdf.THUMBS_PER_PAGE]
     grid.draw(day, runs)
     drawn = 0
     for ax, twin in grid.cells:

@@ -78,6 +78,7 @@ def test_without_a_choice_the_run_is_rejected_in_one_sentence(day):
     row = {k: v for k, v in row.items() if k != "segment"}
     run, red, reason, _ = reduce_record(protocol, row)
     assert red is None
+    reason = str(reason)
     fs = truth["fs"]
     n1 = int(round(APPENDED_FIRST_S * fs))
     n2 = truth["runs"][str(run)]["n_samples"]
@@ -95,7 +96,7 @@ def test_without_a_choice_the_run_is_rejected_in_one_sentence(day):
     )
     # a segment the file does not have names how many it has
     _, red, reason, _ = reduce_record(protocol, {**row, "segment": 3})
-    assert red is None and "segment 3 is chosen, but the file holds 2 segments" in reason
+    assert red is None and "segment 3 is chosen, but the file holds 2 segments" in str(reason)
 
 
 def test_read_segment_is_the_default_and_the_sheet_overrides_it(day, tmp_path):

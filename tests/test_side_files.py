@@ -56,7 +56,7 @@ def test_the_log_is_put_on_the_run_files_clock(tmp_path):
 def test_a_wrong_offset_rejects_the_runs_with_a_sentence(tmp_path):
     day = towtank.process_day(_day(tmp_path, offset_s=-200.0), jobs=1, report=False)
     assert day.rejected
-    reason = next(iter(day.rejected.values()))
+    reason = str(next(iter(day.rejected.values())))
     assert "speed log" in reason and "offset_s" in reason and "\n" not in reason
 
 
@@ -65,7 +65,7 @@ def test_a_missing_log_rejects_its_run_only(tmp_path):
     (tmp_path / "data" / "run_007_carriage.csv").unlink()
     day = towtank.process_day(protocol, jobs=1, report=False)
     assert set(day.rejected) == {7}
-    assert "run_007_carriage.csv" in day.rejected[7] and "speed log" in day.rejected[7]
+    assert "run_007_carriage.csv" in str(day.rejected[7]) and "speed log" in str(day.rejected[7])
     assert len(day.reductions) == 40
 
 
@@ -172,7 +172,7 @@ def test_a_missing_zeros_file_rejects_its_run_only(tmp_path):
     (tmp_path / "data" / "run_009_zero.csv").unlink()
     day = towtank.process_day(protocol, jobs=1, report=False)
     assert set(day.rejected) == {9}
-    assert "zeros file" in day.rejected[9] and "run_009_zero.csv" in day.rejected[9]
+    assert "zeros file" in str(day.rejected[9]) and "run_009_zero.csv" in str(day.rejected[9])
 
 
 @pytest.mark.parametrize("section, match", [

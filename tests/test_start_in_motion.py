@@ -80,7 +80,7 @@ def test_without_a_zero_source_a_run_in_motion_is_rejected_in_one_sentence(cut_d
                               report=False)
     usable = {int(k) for k, r in truth["runs"].items() if r["status"] != "void"}
     assert set(day.rejected) == usable
-    reason = day.rejected[4]
+    reason = str(day.rejected[4])
     assert "there is no still window before the carriage moves" in reason
     assert "[zeros]" in reason and "file_start" in reason
 

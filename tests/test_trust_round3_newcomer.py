@@ -24,6 +24,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_daywide import rejections_of
 
 import towtank
 from towtank.analysis.daywide import group_rejections
@@ -126,7 +127,8 @@ def test_numbers_do_not_split_a_fault_but_other_words_do():
              "reason": f"run {r}: run_{r:03d}.lvm holds 2 segments: rows 424–{3000 + 7 * r}, "
                        f"{2577 + 7 * r} samples, {12.9 + 0.035 * r:.4g} s"} for r in range(1, 7)]
     rows[5]["reason"] = "run 6: run_006.lvm: the channel 'Fx1' is missing"
-    groups = group_rejections(pd.DataFrame(rows))
+    runs = pd.DataFrame(rows)
+    groups = group_rejections(runs, rejections_of(runs))
     assert [g.runs for g in groups] == [[1, 2, 3, 4, 5], [6]]
     assert groups[0].day_wide and "runs 1–5" in groups[0].sentence
     assert "shown for run_001.lvm" in groups[0].sentence and "rows 424–3007" in \

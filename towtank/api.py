@@ -105,10 +105,10 @@ def process_day(
     DayResult
         ``.runs`` (runs.csv), ``.coefficients`` (coefficients.csv), ``.table("fins")``
         (fins.csv), ``.table("scaling")`` (scaling.csv) as DataFrames; ``.hull``, ``.fins``,
-        ``.scaling``, ``.vehicle`` the stages' results (None when not run); ``.warnings`` (list of
+        ``.scaling``, ``.vehicle`` the stages' results (None when not run); ``.warnings`` (tuple of
         :class:`~towtank.results.Notice`: ``str()`` the sentence, ``.stage``, ``.run``,
         ``.file``);
-        ``.rejected`` (run number -> sentence); ``.reductions`` (run number ->
+        ``.rejected`` (run number -> Rejection); ``.reductions`` (run number ->
         :class:`~towtank.reduce.run.RunReduction`); ``.tares``; ``.protocol``.
 
     Raises
@@ -245,8 +245,7 @@ def reduce_run(
     processing = Processing() if protocol is None else _protocol(protocol).processing
     red = _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
                   speed_nominal=speed_nominal, accel_nominal=accel_nominal)
-    record_units(red, raw)
-    return red
+    return record_units(red, raw)
 
 
 def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str], *,

@@ -9,6 +9,7 @@ runs when it is word for word the same once each run's own file name and number 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import PurePath
 from typing import Any
@@ -16,11 +17,12 @@ from typing import Any
 import pandas as pd
 
 from towtank.ingest.calibration import UNITS
+from towtank.messages import Rejection
 
 __all__ = ["RejectionGroup", "group_rejections", "group_run_warnings", "grouped_warnings",
            "run_warning_lines", "unit_label_sentences", "sheet_note_sentences",
            "temperature_sentences", "temperature_problems",
-           "run_ranges", "own_reason", "and_list", "MIN_GROUP"]
+           "run_ranges", "run_reason", "own_reason", "and_list", "MIN_GROUP"]
 
 #: Fewest runs a day-wide fault groups; it must also be at least half the day's runs that are
 #: not void (a fault in 3 of 40 files is those files' own, and is listed run by run).
@@ -63,16 +65,15 @@ def run_ranges(runs: list[int]) -> str:
 
 def own_reason(run: Any, file: Any, reason: Any) -> str:
     """The reason without the ``run N:`` and ``file:`` prefixes the pipeline puts in front."""
-    text = str(reason).strip() if isinstance(reason, str) and reason else "no reason given"
+    sentence = str(reason).strip() if isinstance(reason, str) and reason else "no reason given"
     for prefix in (f"run {run}:", f"{file}:"):
-        if text.startswith(prefix):
-            text = text[len(prefix):].strip()
-    return text
+        if sentence.startswith(prefix):
+            sentence = sentence[len(prefix):].strip()
+    return sentence
 
 
-def _generic(run: int, file: Any, reason: str) -> str:
-    """The reason with this run's file name, stem and number replaced by placeholders."""
-    text = own_reason(run, file, reason)
+def _placeholders(run: int | str, file: Any, text: str) -> str:
+    """``text`` with this run's file name, stem and number replaced by placeholders."""
     name = str(file) if isinstance(file, str) else ""
     for part in sorted({name, PurePath(name).name, PurePath(name).stem} - {""}, key=len,
                        reverse=True):
@@ -80,52 +81,67 @@ def _generic(run: int, file: Any, reason: str) -> str:
     return re.sub(rf"\brun {run}\b", "run \x00n", text)
 
 
+def _generic(run: int, file: Any, warning: str) -> str:
+    """A per-run warning without its ``run N:`` and ``file:`` prefixes and with this run's
+    file name, stem and number replaced by placeholders."""
+    return _placeholders(run, file, own_reason(run, file, warning))
+
+
 #: A number in a sentence (``3001``, ``-0.144887``, ``1.2e-3``), not part of a name (``Fx1``).
 _NUMBER = re.compile(r"(?<![\w.])[-+−]?\d+(?:[.,]\d+)?(?:[eE][-+]?\d+)?(?![\w])")
 
 
-def _same_fault(run: int, file: Any, reason: str) -> str:
-    """:func:`_generic` with every number replaced by a placeholder: the reasons of one fault
-    that quote each run's own counts and times (``holds 2 segments ... rows 424–3424``)."""
-    return _NUMBER.sub("\x00#", _generic(run, file, reason))
+def _same_rejection(rejection: Rejection) -> tuple[str, str]:
+    """A rejection's kind and its reason with the run's own file name, run number and the
+    numbers it quotes replaced by placeholders: equal for the runs of one fault."""
+    return rejection.kind, _NUMBER.sub("\x00#", _placeholders(rejection.run, rejection.file,
+                                                                rejection.reason))
 
 
-def group_rejections(runs: pd.DataFrame, min_group: int = MIN_GROUP) -> list[RejectionGroup]:
-    """The rejected runs of ``runs`` (runs.csv's table: run, file, status, reason) grouped by
-    reason: a fault shared by at least ``min_group`` runs and half the runs that are not void
-    is one :class:`RejectionGroup` (its sentence the first run's reason); every other rejected
-    run is its own. Two reasons are one fault when they are word for word the same once each
-    run's file name, run number and the numbers they quote are taken out.
+def group_rejections(runs: pd.DataFrame, rejected: Mapping[int, Rejection],
+                     min_group: int = MIN_GROUP) -> list[RejectionGroup]:
+    """The rejected runs (``rejected``, of the day whose runs.csv table is ``runs``) grouped
+    by kind and reason: a fault shared by at least ``min_group`` runs and half the runs that
+    are not void is one :class:`RejectionGroup` (its sentence the first run's reason); every
+    other rejected run is its own. Two rejections are one fault when they are of one kind and
+    their reasons are word for word the same once each run's file name, run number and the
+    numbers they quote are taken out.
 
     Returns
     -------
     list of RejectionGroup
         In order of each group's first run.
     """
-    bad = runs[runs["status"] == "rejected"]
-    if bad.empty:
+    if not rejected:
         return []
     n_used = int((runs["status"] != "void").sum())
-    by_reason: dict[str, list[tuple[int, Any, str]]] = {}
-    for r in bad.itertuples():
-        reason = str(r.reason) if isinstance(r.reason, str) and r.reason else "no reason given"
-        by_reason.setdefault(_same_fault(int(r.run), r.file, reason), []).append(
-            (int(r.run), r.file, reason))
+    by_reason: dict[tuple[str, str], list[Rejection]] = {}
+    for run in sorted(rejected):
+        by_reason.setdefault(_same_rejection(rejected[run]), []).append(rejected[run])
     groups: list[RejectionGroup] = []
     for members in by_reason.values():
         if len(members) >= min_group and 2 * len(members) >= n_used:
-            numbers = [m[0] for m in members]
-            run, file, reason = members[0]
+            numbers = [m.run for m in members]
+            first = members[0]
             every = "every run that is not void" if len(members) == n_used else \
                 f"{len(members)} of the {n_used} runs that are not void"
             groups.append(RejectionGroup(
                 numbers,
                 f"one fault rejected {every} (runs {run_ranges(numbers)}), shown for "
-                f"{file}: {own_reason(run, file, reason)}",
+                f"{first.file}: {first.reason}",
                 True))
         else:
-            groups += [RejectionGroup([m[0]], m[2], False) for m in members]
+            groups += [RejectionGroup([m.run], str(m), False) for m in members]
     return sorted(groups, key=lambda g: g.runs[0])
+
+
+def run_reason(run: int, remarks: Any, rejected: Mapping[int, Rejection]) -> str:
+    """Why a run is not used, as the report lists it: a rejected run's own reason (without
+    its run number and file), a void run's remarks, "no reason given" for none."""
+    if run in rejected:
+        return rejected[run].reason
+    return remarks.strip() if isinstance(remarks, str) and remarks.strip() else \
+        "no reason given"
 
 
 def _files(members: list[tuple[int, Any]]) -> str:

@@ -28,6 +28,7 @@ missing; nothing is ever extrapolated into a value.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Literal
 
@@ -49,6 +50,13 @@ KIND = {s: ("added_mass" if s.endswith("dot") else "damping") for s in SYMBOLS}
 UNIT = {s: ("kg" if KIND[s] == "added_mass" else "kg/m") for s in SYMBOLS}
 MIRROR = {"Z_wdot": "Y_vdot", "X_uw": "X_uv", "X_w|w|": "X_v|v|", "Z_uw": "Y_uv",
           "Z_w|w|": "Y_v|v|"}
+
+
+def mirrored(symbols: Iterable[str]) -> dict[str, str]:
+    """The coefficients among ``symbols`` that repeat another's estimate on an axisymmetric
+    hull (:data:`MIRROR`), each with the symbol it repeats (also among ``symbols``)."""
+    have = set(symbols)
+    return {t: s for t, s in MIRROR.items() if t in have and s in have}
 ANGLE_TOL_DEG = 0.5
 
 

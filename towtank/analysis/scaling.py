@@ -80,6 +80,19 @@ def prototype_values(coefficients: pd.DataFrame, rho_p: float, length_p: float) 
     return pd.DataFrame({"symbol": coefficients["symbol"].to_numpy(), "prototype_value": values})
 
 
+def with_prototype_values(coefficients: pd.DataFrame, values: pd.DataFrame | None
+                          ) -> pd.DataFrame:
+    """coefficients.csv with the ``prototype_value`` of each symbol from ``values``
+    (:func:`prototype_values`; NaN for a symbol it lacks); ``coefficients`` itself when
+    ``values`` is None. A new table: ``coefficients`` is not changed."""
+    if values is None:
+        return coefficients
+    by_symbol = dict(zip(values["symbol"], values["prototype_value"], strict=True))
+    out = coefficients.copy()
+    out["prototype_value"] = [by_symbol.get(s, math.nan) for s in out["symbol"]]
+    return out
+
+
 def scale_to_prototype(
     runs: pd.DataFrame,
     model: Model,

@@ -24,7 +24,8 @@ from towtank.analysis.form_factor_trend import (  # noqa: F401  (re-exported)
 )
 
 #: Standard acceleration of gravity [m/s^2].
-from towtank.ingest.protocol_types import Water
+from towtank.errors import ProtocolError
+from towtank.ingest.protocol_types import Protocol, Water
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.reference.water import water_at
 from towtank.stats.grouping import speed_groups  # noqa: F401  (re-exported)
@@ -613,6 +614,26 @@ def prime_value(value: ArrayLike, rho: float, length: float, kind: str) -> float
         Prime coefficient [-]
     """
     return np.asarray(value, dtype=float) / _prime_factor(rho, length, kind)
+
+
+def check_protocol_speeds(protocol: Protocol) -> None:
+    """Raise ProtocolError unless every [prototype] speed of ``protocol`` is finite, > 0 and
+    gives Re_p >= 1e3 (:func:`check_prototype_speeds`); nothing without a [model] and a
+    [prototype].
+
+    Needs the prototype water's viscosity, so it runs once the analysis libraries are loaded
+    (after the reductions), not in :func:`towtank.ingest.protocol.load_protocol`.
+    """
+    proto = protocol.prototype
+    if protocol.model is None or proto is None:
+        return
+    _, nu_p = medium_at(proto.water)
+    try:
+        check_prototype_speeds(proto.speeds_m_s, proto.length_m, nu_p)
+    except ValueError as exc:
+        raise ProtocolError(
+            f"{protocol.path.name}: 'speeds_m_s' in [prototype] cannot be scaled: {exc}"
+        ) from None
 
 
 def check_prototype_speeds(

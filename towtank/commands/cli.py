@@ -545,7 +545,7 @@ def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazil
     # loaded on use: pandas only when runs were rejected
     from towtank.analysis.daywide import group_rejections
 
-    lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs)]
+    lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs, day.rejected)]
     lines += [f"  warning: {w}" for w in day.warnings]
     lines.append(f"outputs in {out}")
     # no escape sequence from a file reaches the terminal

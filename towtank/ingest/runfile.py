@@ -87,6 +87,8 @@ class RawRun:
     sha256: str = ""
     columns: tuple[str, ...] = ()
     notes: list[str] = field(default_factory=list)
+    #: the notes (among ``notes``) the engineer must also see: non-numeric rows dropped
+    warnings: tuple[str, ...] = ()
     #: drag and lift zeros [N] from the run's zeros file (``[zeros]``), else None
     zero_levels: dict[str, float] | None = None
     #: the run sheet's set speed [m/s] of a run without a measured speed (``speed_source =
@@ -666,8 +668,10 @@ def _load_run(
     where = _Where(rows, label)
     header_rows = rows[headers[headers < n_rows]] if headers is not None else None
 
+    n_notes = len(notes)
     numeric, where = _drop_bad_rows(chans, rows, invalid, where, name, max_bad_row_fraction,
                                     notes)
+    dropped = tuple(notes[n_notes:])  # rows dropped: said to the engineer, not only noted
 
     units: dict[str, tuple[str, str]] = {}
     numeric = calibrate(numeric, full, used, stated_units(cols), name, notes, units)
@@ -710,6 +714,7 @@ def _load_run(
         sha256=digest,
         columns=tuple(c for c in cols if not c.startswith("__")),
         notes=notes,
+        warnings=dropped,
         speed_nominal=float(speed_nominal) if speed_nominal is not None else math.nan,
         time_source=time_source,
         units=units,

@@ -26,7 +26,6 @@ import io
 import json
 import math
 import os
-import re
 import shutil
 import signal
 import time
@@ -124,9 +123,6 @@ def _num(value: Any) -> float | None:
     return v if math.isfinite(v) else None
 
 
-_RUN_PREFIX = re.compile(r"^run \d+: ")
-
-
 def verdict_line(run: int, test: str, angle_deg: float | None, speed_m_s: float | None,
                  speed_set: bool, drag_N: float | None, status: str,
                  reason: str | None) -> str:
@@ -139,7 +135,7 @@ def verdict_line(run: int, test: str, angle_deg: float | None, speed_m_s: float 
     d = f"drag {drag_N:.2f} N" if drag_N is not None else "drag –"
     line = f"run {run}  {test}  {alpha}  {u}  {d}  {status}"
     if reason:
-        line += ": " + _RUN_PREFIX.sub("", reason.strip())
+        line += ": " + reason.strip()
     return line
 
 
@@ -452,7 +448,10 @@ class WatchSession:
             sha = red.sha256 if red is not None else ""
             if red is not None and (run, str(row["file"]), sha) not in self.reduced:
                 self.reduced.append((run, str(row["file"]), sha))
-            status, reason = str(row["status"]), (str(row["reason"]) or None)
+            status = str(row["status"])
+            rejection = day.rejected.get(run)
+            # a rejected run: its sentence without the run number the line starts with
+            reason = rejection.detail if rejection is not None else None
             if status == "ok" and red is not None and red.warnings:
                 status = "suspicious"
                 reason = red.warnings[0] + (f" (and {len(red.warnings) - 1} more warnings)"

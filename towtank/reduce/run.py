@@ -36,22 +36,20 @@ from towtank.ingest.protocol import Processing, Protocol, channel_map
 from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+from towtank.messages import Rejection
 from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
 from towtank.signal.drift import drift_verdict
-
-#: The repair of the ingest that the engineer is told of on the terminal (the others, gaps
-#: interpolated and spikes removed, are listed in runs.csv's notes and the report).
-WARNED_REPAIRS = "non-numeric row(s) dropped"
 
 PHASE_STEADY = 0
 PHASE_ACCEL = 1
 THUMB_HZ = 10.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class RunReduction:
-    """Everything the later stages need from one run (before tare)."""
+    """Everything the later stages need from one run (before tare); made whole, never
+    changed after (:func:`apply_tare`, :func:`with_units` return a new one)."""
 
     run: int
     file: str
@@ -76,8 +74,8 @@ class RunReduction:
     samples: dict[str, np.ndarray]  # phase, t, U, a, drag, lift (decimated fit samples)
     thumb: dict[str, np.ndarray]  # t, U, drag, lift of the whole run (zeroed, filtered)
     has_lift: bool
-    notes: list[str] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)  # the notes the engineer must see
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()  # the notes the engineer must see
     # set by apply_tare
     tare_drag: float = 0.0
     tare_lift: float = 0.0
@@ -99,6 +97,10 @@ class RunReduction:
     #: per channel read from the file: (its unit, where that came from: "file", "protocol",
     #: "assumed" or "unknown"), see :func:`towtank.ingest.calibration.unit_source`
     units: dict[str, tuple[str, str]] = field(default_factory=dict)
+    #: the note (one of ``notes``) that the constant-acceleration stretch the sheet sets was
+    #: not found, "" when none: a warning for a run made for its acceleration, nothing for
+    #: one made for its plateau
+    accel_missing: str = ""
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -253,13 +255,14 @@ def reduce_run(
     accel_mean = math.nan
     if ph.accel is not None:
         accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
-    nominal_warnings = nominal_checks(speed_mean, accel_mean, ph, p, notes,
-                                      speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+    checks = nominal_checks(speed_mean, accel_mean, ph, p,
+                            speed_nominal=speed_nominal, accel_nominal=accel_nominal)
+    notes += checks.notes
     warn = (
-        [n for n in raw.notes if WARNED_REPAIRS in n]  # dropped rows: said, not only noted
+        list(raw.warnings)  # dropped rows: said, not only noted
         + manual_warnings
         + drift_warnings
-        + nominal_warnings
+        + list(checks.warnings)
     )
     a_s = accel_f[s0:s1]
     return RunReduction(
@@ -290,8 +293,9 @@ def reduce_run(
         samples=fit_samples(t, speed_f, accel_f, drag_f, lift_f, steady, ph, accel_mean, fs, p),
         thumb=thumbnail(t, speed_f, accel_f, drag_f, lift_f, fs),
         has_lift=raw.lift is not None,
-        notes=notes,
-        warnings=warn,
+        notes=tuple(notes),
+        warnings=tuple(warn),
+        accel_missing=checks.accel_missing,
         series=(series_of(t, speed_f, accel_f, drag_f, lift_f, ph, steady)
                 if keep_series else None),
     )
@@ -420,7 +424,7 @@ def reduce_nominal(
         steady_regressors=(u_set * u_set, u_set, 0.0),
         samples=fit_samples(t, speed, accel, drag_f, lift_f, steady, ph, math.nan, fs, p),
         thumb=thumbnail(t, speed, accel, drag_f, lift_f, fs),
-        has_lift=has_lift, notes=notes, warnings=warnings,
+        has_lift=has_lift, notes=tuple(notes), warnings=tuple(warnings),
         series=series_of(t, speed, accel, drag_f, lift_f, ph, steady) if keep_series else None,
         speed_source="nominal", speed_u=u_u,
     )
@@ -594,39 +598,54 @@ def zero_forces(
     return out[0], out[1], (zeros[0], zeros[1], zeros[2], zeros[3]), warnings
 
 
+@dataclass(frozen=True)
+class NominalChecks:
+    """What :func:`nominal_checks` found: every note in order, the warnings among them
+    (the sheet or the carriage is off) and the note of a missing acceleration stretch ("" for
+    none; one of ``notes``, a warning only for a run made for its acceleration)."""
+
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    accel_missing: str = ""
+
+
 def nominal_checks(
     speed_mean: float,
     accel_mean: float,
     ph: phases.Phases,
     p: Processing,
-    notes: list[str],
     *,
     speed_nominal: float,
     accel_nominal: float,
-) -> list[str]:
-    """Cross-checks against the sheet's set values: notes (appended) and the warnings among
-    them (the sheet or the carriage is off)."""
-    n_notes = len(notes)
+) -> NominalChecks:
+    """Cross-checks of the measured plateau speed [m/s] and acceleration [m/s²] against
+    the sheet's set values."""
+    notes: list[str] = []
+    warnings: list[str] = []
+    accel_missing = ""
     tol = p.nominal_tolerance
     if math.isfinite(speed_nominal) and speed_nominal > 0:
         if abs(speed_mean - speed_nominal) > tol * speed_nominal:
-            notes.append(
+            warnings.append(
                 f"measured plateau speed {speed_mean:.3f} m/s differs from the set "
                 f"{speed_nominal:g} m/s by more than {100 * tol:g} %"
             )
+            notes.append(warnings[-1])
     if math.isfinite(accel_nominal) and accel_nominal > 0:
         if ph.accel is None:
-            notes.append(
+            accel_missing = (
                 f"no usable constant-acceleration stretch although the sheet sets "
                 f"{accel_nominal:g} m/s² (absent, or shorter than {p.min_accel_s:g} s after "
                 f"trimming {p.trim:.2f} s at each end); the run is used for its steady phase"
             )
+            notes.append(accel_missing)
         elif abs(accel_mean - accel_nominal) > 2 * tol * accel_nominal:
-            notes.append(
+            warnings.append(
                 f"measured acceleration {accel_mean:.3f} m/s² differs from the set "
                 f"{accel_nominal:g} m/s² by more than {200 * tol:g} %"
             )
-    return [n for n in notes[n_notes:] if "differs from the set" in n]
+            notes.append(warnings[-1])
+    return NominalChecks(tuple(notes), tuple(warnings), accel_missing)
 
 
 #: A force channel whose filtered signal varies by less than this while the carriage moves at
@@ -760,8 +779,8 @@ def apply_tare(red: RunReduction, tare: TareModel | None) -> RunReduction:
         tare_group=tare.group,
         drag_mean=red.drag_mean_raw - tare_d,
         lift_mean=(red.lift_mean_raw - tare_l) if red.has_lift else math.nan,
-        notes=notes,
-        warnings=warn,
+        notes=tuple(notes),
+        warnings=tuple(warn),
     )
 
 
@@ -805,7 +824,7 @@ def run_preview(raw: RawRun) -> dict[str, np.ndarray]:
     }
 
 
-Record = tuple[int, RunReduction | None, str | None, dict[str, np.ndarray] | None]
+Record = tuple[int, RunReduction | None, Rejection | None, dict[str, np.ndarray] | None]
 
 
 def sheet_segment(row: dict[str, Any]) -> int | None:
@@ -823,8 +842,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
                   keep_series: bool = False) -> Record:
     """Read and reduce the run of one run-sheet row; never raises for a data problem.
 
-    Returns (run, reduction, None, None), or (run, None, reason, preview) where ``reason`` is
-    one sentence naming the run, its file and what is wrong, and ``preview`` is
+    Returns (run, reduction, None, None), or (run, None, rejection, preview) where
+    ``rejection`` (:class:`towtank.messages.Rejection`) says what is wrong, and ``preview`` is
     :func:`run_preview` of a run that was read but could not be reduced (None when it could
     not be read). An unexpected error (a bug) is reported the same way, or raised with
     ``debug``.
@@ -876,27 +895,24 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             keep_series=keep_series,
         )
-        for w in unmapped_force_warnings(protocol, raw.columns, file):
-            red.notes.append(w)
-            red.warnings.append(w)
-        record_units(red, raw)
+        unmapped = tuple(unmapped_force_warnings(protocol, raw.columns, file))
+        notes = (*red.notes, *unmapped, *units_notes(raw.units))
+        warnings = (*red.warnings, *unmapped)
         test = str(row.get("test", "")).strip().lower()
-        if test == "accel" and red.windows["accel"] is None:
+        if red.accel_missing and test == "accel" and red.windows["accel"] is None:
             # a run made for its acceleration without one: the engineer must hear of it
-            red.warnings.extend(n for n in red.notes if n.startswith("no usable constant-acc"))
-        elif test == "steady":  # made for its plateau: a missing stretch is no news
-            red.notes = [n for n in red.notes if not n.startswith("no usable constant-acc")]
-        red.file_stamp = stamp
-        return run, red, None, None
+            warnings = (*warnings, red.accel_missing)
+        elif red.accel_missing and test == "steady":  # made for its plateau: no news
+            notes = tuple(n for n in notes if n != red.accel_missing)
+        return run, replace(red, notes=notes, warnings=warnings, units=dict(raw.units),
+                            file_stamp=stamp), None, None
     except RunError as exc:
-        reason = exc.reason
-        if file not in reason and Path(file).name not in reason:
-            reason = f"{file}: {reason}"
-        return run, None, f"run {run}: {reason}", _safe_preview(raw)
+        return run, None, Rejection.of_run_error(run, file, exc.reason), _safe_preview(raw)
     except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
         if debug:
             raise
-        return run, None, f"run {run}: {file}: {_internal_error_sentence(exc)}", None
+        return run, None, Rejection(run, file, "reduce", _internal_error_sentence(exc),
+                                    "internal_error"), None
 
 
 def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: str
@@ -921,11 +937,11 @@ def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: 
     return out
 
 
-def record_units(red: RunReduction, raw: RawRun) -> None:
-    """Keep the run's units and their sources (``raw.units``) on ``red``, with notes (in
-    runs.csv) naming the channels whose unit was assumed (:func:`units_notes`)."""
-    red.units = dict(raw.units)
-    red.notes.extend(units_notes(red.units))
+def record_units(red: RunReduction, raw: RawRun) -> RunReduction:
+    """``red`` with the run's units and their sources (``raw.units``) and notes (in
+    runs.csv) naming the channels whose unit was assumed (:func:`units_notes`): a new
+    reduction, ``red`` is not changed."""
+    return replace(red, units=dict(raw.units), notes=(*red.notes, *units_notes(raw.units)))
 
 
 def units_notes(units: dict[str, tuple[str, str]]) -> list[str]:
@@ -965,7 +981,7 @@ def _safe_preview(raw: RawRun | None) -> dict[str, np.ndarray] | None:
 def crashed_record(row: dict[str, Any]) -> Record:
     """The rejection of a run whose worker process died while reducing it."""
     run, file = int(row["run"]), str(row["file"])
-    return run, None, (
-        f"run {run}: {file}: the process reducing it stopped abruptly (killed, out of memory, "
-        "or a crash inside a reading library); the file is left as it is"
-    ), None
+    return run, None, Rejection(
+        run, file, "reduce",
+        "the process reducing it stopped abruptly (killed, out of memory, or a crash inside "
+        "a reading library); the file is left as it is", "crashed"), None

@@ -9,6 +9,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -214,8 +215,9 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             # writing without an export never needs here
             from towtank.results import notices
 
-            day.warnings.extend(n for n in notices(export_runs(day, tmp, tuple(export)),
-                                                   "export") if n not in day.warnings)
+            said = notices(export_runs(day, tmp, tuple(export)), "export")
+            day = replace(day, warnings=(*day.warnings,
+                                         *(n for n in said if n not in day.warnings)))
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
             # loaded on use: report.vehicle loads matplotlib, which

@@ -25,7 +25,6 @@ CreationDate is fixed from the report date so the same day gives the same file.
 from __future__ import annotations
 
 import math
-import re
 import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -45,7 +44,9 @@ from pypdf import PdfWriter
 import towtank.report.figures as figures
 import towtank.report.style as style
 from towtank import __version__
-from towtank.analysis.daywide import group_rejections
+from towtank.analysis.daywide import group_rejections, run_reason
+from towtank.analysis.hull import mirrored
+from towtank.messages import Rejection
 from towtank.pipeline import geometry_used
 from towtank.reference.sets import reference_name
 from towtank.report.figure_base import (
@@ -64,7 +65,6 @@ from towtank.report.quality import (
     fmt_num,
     paginate,
     quality_flow,
-    short_reason,
 )
 from towtank.report.tables import missing_accel_note
 from towtank.report.vehicle import fig_predicted, predicted_rows
@@ -98,7 +98,8 @@ class Page:
 
 
 def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
-                   previews: Mapping[int, Any]) -> list[int]:
+                   previews: Mapping[int, Any], rejected: Mapping[int, Rejection]
+                   ) -> list[int]:
     """The runs the appendix draws: all but those a day-wide fault rejected before anything
     was read (their thumbnails would be empty; the quality page says the fault once).
 
@@ -109,8 +110,10 @@ def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
     reductions, previews : mapping of int
         The reduced runs and the previews of rejected runs that were read, by run number
         (``day.reductions``, ``day.previews``).
+    rejected : mapping of int to Rejection
+        The day's rejections (``day.rejected``).
     """
-    skip = {r for g in group_rejections(runs) if g.day_wide for r in g.runs
+    skip = {r for g in group_rejections(runs, rejected) if g.day_wide for r in g.runs
             if previews.get(r) is None}
     drawn = [r for r in runs["run"].astype(int) if r not in skip]
     if skip and not any(r in reductions or previews.get(r) is not None for r in drawn):
@@ -151,7 +154,7 @@ def page_plan(day: DayResult) -> list[Page]:
     for i, part in enumerate(q):
         pages.append(Page("quality", "Quality", part,
                           subtitle=f"continued ({i + 1} of {len(q)})" if i else ""))
-    runs = thumbnail_runs(day.runs, day.reductions, day.previews)
+    runs = thumbnail_runs(day.runs, day.reductions, day.previews, day.rejected)
     for k in range(0, len(runs), THUMBS_PER_PAGE):
         chunk = runs[k:k + THUMBS_PER_PAGE]
         pages.append(Page("thumbs", "Appendix", chunk,
@@ -396,11 +399,11 @@ def coefficient_rows(coef: pd.DataFrame) -> tuple[list[str], list[list[str]], li
               "diff %", "prototype¹", "method"]
     methods: list[str] = []
     rows, hl = [], {}
+    mirrors = mirrored(coef["symbol"])
     for i, r in enumerate(coef.to_dict("records")):
         m = str(r.get("method", ""))
-        mirror = re.match(r"(?:=|same as)\s*(\S+)", m)
-        if mirror:
-            ref = "= " + math_symbol(mirror.group(1))
+        if r["symbol"] in mirrors:
+            ref = "= " + math_symbol(mirrors[r["symbol"]])
         else:
             if m not in methods:
                 methods.append(m)
@@ -475,15 +478,8 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "× ½ρ_p·L_p² (kg/m).")
         for n in notes:
             y += _text_block(fig, y, n, width=125, fontsize=7)
-        for r in day.coefficients.to_dict("records"):
-            method = str(r.get("method", ""))
-            # the method footnote states the second estimate already (fit.fit_added_mass)
-            if (r.get("agreement") and not method.startswith(("=", "same as"))
-                    and "second estimate" not in method):
-                y += _text_block(fig, y, (
-                    f"{r['symbol']}: second estimate {_v(r['alt_value'])} kg by the "
-                    f"{str(r['alt_method']).split(' (')[0]}; {r['agreement']}."), width=125,
-                    fontsize=7)
+        # an added mass's second estimate and its agreement are in its method's footnote
+        # (towtank.analysis.hull.fit_added_mass)
         y += 0.2
     elif day.protocol.model is not None:
         y += _heading(fig, y, "Hull coefficients")
@@ -718,7 +714,7 @@ class ThumbGrid:
             red = day.reductions.get(run)
             title = _thumb_title(row)
             if red is None or row["status"] != "ok":
-                reason = short_reason(run, row.get("file"), row.get("reason"))
+                reason = run_reason(run, row.get("reason"), day.rejected)
                 preview = day.previews.get(run) if row["status"] == "rejected" else None
                 ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds

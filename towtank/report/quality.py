@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import towtank.report.style as style
-from towtank.analysis.daywide import group_rejections, grouped_warnings, own_reason, run_ranges
+from towtank.analysis.daywide import group_rejections, grouped_warnings, run_ranges, run_reason
+from towtank.analysis.hull import mirrored
 from towtank.reduce.run import units_notes
 from towtank.report.figure_base import PAGE_FOOTER_IN, PAGE_HEADER_IN
 
@@ -115,14 +116,14 @@ def quality_flow(day: DayResult) -> Flow:
         f"{int(counts.get('void', 0))} voided by the operator.")
     bad = runs[runs["status"] != "ok"]
     if len(bad):
-        day_wide = [g for g in group_rejections(runs) if g.day_wide]
+        day_wide = [g for g in group_rejections(runs, day.rejected) if g.day_wide]
         for g in day_wide:
             f.li(f"rejected — {g.sentence}")
         grouped = {r for g in day_wide for r in g.runs}
         for r in bad.itertuples():
             if int(r.run) in grouped:
                 continue
-            reason = short_reason(int(r.run), r.file, r.reason)
+            reason = run_reason(int(r.run), r.reason, day.rejected)
             f.li(f"run {int(r.run)} ({r.config}, α = {fmt_num(r.angle_deg)}°, {r.file}): "
                  f"{r.status} — {reason}")
     else:
@@ -271,8 +272,9 @@ def lift_slope_text(hf: Any, coefficients: Any = None) -> str:
 
 def _budget_flow(f: Flow, hf: Any) -> None:
     """The uncertainty budget behind each interval (coefficients.csv's u_* columns)."""
+    mirrors = mirrored(hf.estimates)
     rows = [e for sym, e in hf.estimates.items()
-            if not e.method.startswith("same as") and math.isfinite(e.u_regression)]
+            if sym not in mirrors and math.isfinite(e.u_regression)]
     if not rows:
         return
     f.li("Uncertainty budget: standard uncertainties of each coefficient's parts, in its own "
@@ -288,9 +290,6 @@ def _budget_flow(f: Flow, hf: Any) -> None:
 
 def _dof(nu: float) -> str:
     return "∞" if not math.isfinite(nu) or nu > 1e6 else f"{nu:.1f}"
-
-
-short_reason = own_reason  # a run's reason without the "run N: file:" prefix
 
 
 def fmt_num(x: Any, digits: int = 4) -> str:

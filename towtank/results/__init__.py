@@ -25,19 +25,20 @@ their fits (:class:`~towtank.analysis.hull.HullFit`, :class:`~towtank.analysis.f
 
 from __future__ import annotations
 
-import math
 import warnings as _warnings
-from collections.abc import Iterable
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, TypeVar, get_args
+from typing import TYPE_CHECKING, Literal, TypeVar
 
 import numpy as np
 import pandas as pd
 
 from towtank.analysis.fins import FIN_TABLE_COLUMNS
 from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS, Estimate
+from towtank.analysis.scaling import with_prototype_values
 from towtank.analysis.similarity import SCALING_COLUMNS, SCALING_RECOMMENDED_COLUMNS
 from towtank.ingest.protocol import Protocol
+from towtank.messages import STAGES, Notice, Rejection, Stage, notices
 from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel
 from towtank.results.stages import (
@@ -56,16 +57,9 @@ R = TypeVar("R")
 
 __all__ = [
     "DayResult", "Estimate", "Estimates", "FinResult", "HullResult", "IdentifyResult", "Notice",
-    "STAGES", "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult", "from_fit",
-    "notices",
+    "Rejection", "STAGES", "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult",
+    "from_fit", "notices",
 ]
-
-#: The step of the day a warning comes from.
-Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "vehicle",
-                "export"]
-#: Every :data:`Stage`, in the order of the pipeline.
-STAGES: tuple[str, ...] = get_args(Stage)
-
 
 def require(result: R | None, stage: str) -> R:
     """``result``, which the caller only reaches when its stage ran (a report page or sheet
@@ -73,47 +67,6 @@ def require(result: R | None, stage: str) -> R:
     if result is None:
         raise ValueError(f"the day has no {stage} result")
     return result
-
-
-@dataclass(frozen=True)
-class Notice:
-    """One warning of the day: a sentence and where it comes from.
-
-    ``str(notice)`` is the sentence, as ``towtank process`` prints it and the report and the
-    workbook list it; the fields say where it comes from, so that a program picks warnings by
-    stage, run or file and never by their words.
-
-    Attributes
-    ----------
-    text : str
-        The sentence
-    stage : Stage
-        The step it comes from: ``"protocol"``, ``"sheet"``, ``"reduce"``, ``"tare"``,
-        ``"hull"``, ``"fins"``, ``"scaling"``, ``"vehicle"`` or ``"export"``
-    run : int or None
-        The run it is about; None for the day or several runs
-    file : str or None
-        The file it is about (as the sheet names it); None for none or several
-    """
-
-    text: str
-    stage: Stage
-    run: int | None = None
-    file: str | None = None
-
-    def __post_init__(self) -> None:
-        if self.stage not in STAGES:
-            raise ValueError(f"a notice's stage is one of {', '.join(STAGES)}, not "
-                             f"{self.stage!r}")
-
-    def __str__(self) -> str:
-        return self.text
-
-
-def notices(texts: Iterable[str], stage: Stage, run: int | None = None,
-            file: str | None = None) -> list[Notice]:
-    """The sentences ``texts`` of one stage (and run, file) as :class:`Notice` objects."""
-    return [Notice(str(t), stage, run, file) for t in texts]
 
 
 @dataclass(frozen=True, repr=False)
@@ -129,15 +82,17 @@ class DayResult:
     protocol: Protocol
     sheet: pd.DataFrame
     reductions: dict[int, RunReduction]
-    rejected: dict[int, str]
+    #: run number -> why it is not used (``str()`` of each is runs.csv's ``reason``)
+    rejected: Mapping[int, Rejection]
     tares: dict[str, TareModel]
     runs: pd.DataFrame
     #: the day's warnings, in the order of the stages (``str()`` of each is its sentence)
-    warnings: list[Notice] = field(default_factory=list)
+    warnings: tuple[Notice, ...] = ()
     hull: HullResult | None = None
     fins: FinResult | None = None
     scaling: ScalingResult | None = None
-    inputs: dict[str, str] = field(default_factory=dict)  # path -> sha256
+    #: path -> sha256 of every input of the day (a mapping no code changes once made)
+    inputs: Mapping[str, str] = field(default_factory=dict)
     report_date: str | None = None
     # rejected runs that were read: calibrated speed and forces at 10 Hz, for the report
     previews: dict[int, dict[str, np.ndarray]] = field(default_factory=dict)
@@ -189,16 +144,9 @@ class DayResult:
         and, with a [vehicle], the predicted beside them (empty without hull runs)."""
         if self.hull is None:
             return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
-        base = self.hull.coefficients
         if self.vehicle is not None and self.vehicle.coefficients is not None:
-            base = self.vehicle.coefficients
-        if self.prototype_values is None:
-            return base
-        out = base.copy()
-        values = dict(zip(self.prototype_values["symbol"],
-                          self.prototype_values["prototype_value"], strict=True))
-        out["prototype_value"] = [values.get(s, math.nan) for s in out["symbol"]]
-        return out
+            return self.vehicle.coefficients  # made from the hull's with the prototype values
+        return with_prototype_values(self.hull.coefficients, self.prototype_values)
 
     def summary(self, alpha: float = 0.05) -> Summary:
         """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,

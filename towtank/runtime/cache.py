@@ -41,7 +41,7 @@ import sys
 import tempfile
 import time
 import zlib
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -83,7 +83,8 @@ def protocol_settings(protocol: Any) -> dict[str, Any]:
 
 
 def settings_key(
-    protocol: Any, row: dict[str, Any], common: dict[str, Any] | None = None
+    protocol: Any, row: dict[str, Any], common: dict[str, Any] | None = None,
+    side_sha: str = "",
 ) -> str:
     """Hash of everything besides the file's bytes that changes a run's reduction.
 
@@ -91,7 +92,8 @@ def settings_key(
     version, processing settings, channel mapping (:func:`protocol_settings`, which may be
     given as ``common`` when the keys of many runs are made), file name, manual window, set
     values, the run's purpose (``test``, which decides which notes are warnings) and, when the
-    sheet gives one, the run's ``segment``.
+    sheet gives one, the run's ``segment``; and the sha256 of the run's side files
+    (``side_sha``, or the row's ``side_files_sha``: its carriage log and zeros file).
     """
     payload = dict(protocol_settings(protocol) if common is None else common)
     payload.update({
@@ -106,8 +108,9 @@ def settings_key(
         segment = math.nan
     if math.isfinite(segment):
         payload["segment"] = int(segment)
-    if row.get("side_files_sha"):  # its carriage log and zeros file are read with the run
-        payload["side_files"] = row["side_files_sha"]
+    side = side_sha or row.get("side_files_sha")
+    if side:  # its carriage log and zeros file are read with the run
+        payload["side_files"] = side
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -231,6 +234,24 @@ class RunCache:
         if rec and (rec[0], rec[1], rec[3], rec[4]) == stamp:
             return str(rec[2]), stamp
         return None
+
+    def hit(self, path: Path, file: str, key: str, run: int) -> Any | None:
+        """The reduction cached for the run file at ``path`` (named ``file`` in the sheet)
+        under settings key ``key``, as run ``run`` with the file's stamp as it was read; None
+        for a miss: the file not known as it is now, no entry, or an entry that is not this
+        file's (another sha256 or file name).
+
+        The entries are dataclasses with fields ``run``, ``file``, ``sha256`` and
+        ``file_stamp`` (:class:`towtank.reduce.run.RunReduction`).
+        """
+        known = self.known_file(path)
+        if known is None:
+            return None
+        sha, stamp = known
+        entry = self.get(sha, key)
+        if entry is None or entry.sha256 != sha or entry.file != file:
+            return None
+        return replace(entry, run=run, file_stamp=stamp)
 
     def known_sha(self, path: Path) -> str | None:
         """The file's sha256 if :meth:`known_file` knows the file as it is."""
