@@ -52,6 +52,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("results",),
     ("pipeline",),
     ("report",),
+    ("runner",),
     ("api",),
     ("live",),
     ("commands", "__main__", "__init__"),

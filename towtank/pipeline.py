@@ -27,6 +27,7 @@ from towtank.analysis.daywide import (
 from towtank.analysis.fin_analysis import analyse_fins
 from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
 from towtank.analysis.run_coefficients import run_coefficients
+from towtank.analysis.scaling import geometry_used, model_scale  # noqa: F401 - re-exported
 from towtank.analysis.similarity import medium_at
 from towtank.errors import ProtocolError, TowtankError
 from towtank.ingest.protocol import (
@@ -34,7 +35,6 @@ from towtank.ingest.protocol import (
     SpeedLog,
     ZeroFile,
     load_protocol,
-    model_geometry,
 )
 from towtank.ingest.runfile import sha256_bytes
 from towtank.ingest.runsheet import read_run_sheet, unlisted_files
@@ -129,30 +129,6 @@ def tare_models(
             )
         return out
     return fit_tares(sheet, reductions)
-
-
-def model_scale(protocol: Protocol) -> float | None:
-    """λ = L_p / L_m: [model] scale, else [prototype] length_m / [model] length_m, else None."""
-    model, proto = protocol.model, protocol.prototype
-    if model is None:
-        return None
-    if model.scale is not None:
-        return model.scale
-    return proto.length_m / model.length_m if proto is not None else None
-
-
-def geometry_used(day: DayResult) -> list[dict[str, Any]]:
-    """The day's hull geometry with where each quantity came from; empty without a [model].
-
-    See :func:`towtank.ingest.protocol.model_geometry`; the prototype's wetted area λ²·S_m is listed
-    when the scale ratio is known.
-    """
-    model = day.protocol.model
-    if model is None:
-        return []
-    sr = day.scaling_result
-    scale = sr.scale if sr is not None else model_scale(day.protocol)
-    return model_geometry(model, scale)
 
 
 def check_prototype_speeds(protocol: Protocol) -> None:

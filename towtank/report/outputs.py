@@ -9,6 +9,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -193,6 +194,25 @@ def write_outputs(
         the temporary folder is gone.
     """
     out_dir = Path(out_dir).resolve()
+    write_day_outputs(day, out_dir, report=report, writers=writers, keep=keep, export=export,
+                      provenance_extra=provenance_extra)
+    return out_dir
+
+
+def write_day_outputs(
+    day: DayResult,
+    out_dir: str | Path,
+    *,
+    report: bool = True,
+    writers: list[Writer] | None = None,
+    keep: tuple[str, ...] = KEPT,
+    export: tuple[str, ...] | list[str] = (),
+    provenance_extra: dict[str, Any] | None = None,
+) -> DayResult:
+    """:func:`write_outputs`, returning the day as written: ``day`` itself, or with
+    ``export`` a new DayResult whose warnings add the runs that could not be exported (the
+    given day is not changed)."""
+    out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     with manifest.output_lock(out_dir):  # two writers never mix their files
         return _write_outputs(day, out_dir, report=report, writers=writers, keep=keep,
@@ -202,7 +222,7 @@ def write_outputs(
 def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
                    writers: list[Writer] | None, keep: tuple[str, ...],
                    export: tuple[str, ...] | list[str],
-                   provenance_extra: dict[str, Any] | None = None) -> Path:
+                   provenance_extra: dict[str, Any] | None = None) -> DayResult:
     manifest.recover_outputs(out_dir)
     refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)
@@ -214,8 +234,9 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             # writing without an export never needs here
             from towtank.results import notices
 
-            day.warnings.extend(n for n in notices(export_runs(day, tmp, tuple(export)),
-                                                   "export") if n not in day.warnings)
+            said = notices(export_runs(day, tmp, tuple(export)), "export")
+            day = replace(day, warnings=[*day.warnings,
+                                         *(n for n in said if n not in day.warnings)])
         tables.write_tables(day, tmp)
         if getattr(day, "vehicle", None) is not None:  # predicted.csv, model.json
             # loaded on use: report.vehicle loads matplotlib, which
@@ -237,7 +258,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             # a folder with the user's own files in it: replace our entries one by one and
             # leave everything else (and the kept cache) where it is
             _replace_entries(tmp, out_dir)
-            return out_dir
+            return day
         moved = []
         for name in keep:  # carried over by a rename, not a copy: the cache can be large
             src = out_dir / name
@@ -258,7 +279,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
         if full is not None and full is not exc:
             raise full from exc
         raise
-    return out_dir
+    return day
 
 
 def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
