@@ -99,17 +99,13 @@ class Plan:
     out: Path | None  # the output folder, resolved; None: nothing is written
     options: Options
     jobs: int | None  # settled (:func:`settle_jobs`)
+    cache_dir: Path | None = None  # the run cache's folder, or None without one
     stamp: DayStamp | None = None
     #: (exit status, summary) of the last complete run when nothing changed since
     replay: tuple[int, str] | None = None
     #: every file opened while preparing (the protocol and what it names), with its stat
     read: Mapping[str, Stamp] = field(default_factory=lambda: _NOTHING)
     notes: tuple[str, ...] = ()  # sentences for the terminal
-
-    @property
-    def cache_dir(self) -> Path | None:
-        """The run cache's folder, or None without one."""
-        return self.out / ".cache" if self.out is not None and self.options.cache else None
 
 
 @dataclass(frozen=True)
@@ -230,15 +226,17 @@ def prepare(protocol: str | Path | Protocol, out: str | Path | None = None,
     jobs, note = settle_jobs(options.jobs, loaded)
     if note is not None and not options.quiet and replay is None:
         notes.append(note)
+    cache = folder / ".cache" if folder is not None and options.cache else None
     return Plan(path=Path(loaded.path), protocol=loaded, out=folder, options=options,
-                jobs=jobs, stamp=stamp if options.record else None, replay=replay,
+                jobs=jobs, cache_dir=cache, stamp=stamp if options.record else None,
+                replay=replay,
                 read=MappingProxyType(dict(opened.files)), notes=tuple(notes))
 
 
 def reduce_day(plan: Plan, sheet: pd.DataFrame | None = None, *, jobs: int | None = None,
                unlisted: list[Notice] | None = None) -> Reduced:
-    """Step 2: the day reduced and analysed, its report date set, its inputs checked against
-    the output folder and completed with every file it opened.
+    """Step 2: the day reduced and analysed, its report date set and its inputs completed
+    with every file it opened.
 
     Parameters
     ----------
@@ -254,11 +252,10 @@ def reduce_day(plan: Plan, sheet: pd.DataFrame | None = None, *, jobs: int | Non
     Raises
     ------
     ProtocolError
-        The run sheet is unusable, or it names a file an output would replace.
+        The run sheet is unusable.
     """
     # loaded on use: the pipeline loads every stage
     from towtank import pipeline
-    from towtank.ingest.protocol import with_output_dir
 
     options = plan.options
     jobs = plan.jobs if jobs is None else jobs
@@ -273,8 +270,6 @@ def reduce_day(plan: Plan, sheet: pd.DataFrame | None = None, *, jobs: int | Non
                                          cache_dir=plan.cache_dir, unlisted=unlisted)
     if options.date:
         day = replace(day, report_date=options.date)
-    if plan.out is not None:  # the sheet may name run files anywhere: none may be a target
-        with_output_dir(plan.protocol, plan.out, day.inputs)
     read = dict(plan.read)
     for path, stat in opened.files.items():
         read.setdefault(path, stat)
@@ -298,9 +293,10 @@ def with_opened(day: DayResult, opened: Iterable[str], out: Path | None) -> DayR
 def write_day(plan: Plan, reduced: Reduced, *, writers: list[Writer] | None = None,
               keep: tuple[str, ...] | None = None,
               provenance_extra: dict[str, Any] | None = None) -> DayRun:
-    """Step 3: the outputs written (:func:`towtank.report.outputs.write_day_outputs`), the
-    summary made and, with the plan's stamp, the run recorded for the next one's replay; the
-    lock spans the write and its record, so that another writer can neither mix its files
+    """Step 3: no input of the day may be an output's target (the sheet may name run files
+    anywhere), then the outputs written (:func:`towtank.report.outputs.write_day_outputs`),
+    the summary made and, with the plan's stamp, the run recorded for the next one's replay;
+    the lock spans the write and its record, so that another writer can neither mix its files
     with these nor have its outputs recorded as this day's.
 
     ``writers``, ``keep`` and ``provenance_extra`` as for
@@ -311,9 +307,11 @@ def write_day(plan: Plan, reduced: Reduced, *, writers: list[Writer] | None = No
     OutputsNotWritten
         The storage refused the outputs.
     DayStopped
-        The output folder holds a file with an output's name that towtank did not write.
+        An input of the day is an output's target, or the output folder holds a file with
+        an output's name that towtank did not write.
     """
     # loaded on use: the writers (pandas, provenance)
+    from towtank.ingest.protocol import with_output_dir
     from towtank.report.outputs import KEPT, write_day_outputs
 
     out, options = plan.out, plan.options
@@ -322,6 +320,7 @@ def write_day(plan: Plan, reduced: Reduced, *, writers: list[Writer] | None = No
     code = EXIT_REJECTED if reduced.day.rejected else EXIT_OK
     notes = list(plan.notes)
     try:
+        with_output_dir(plan.protocol, out, reduced.day.inputs)
         with output_lock(out):
             day = write_day_outputs(reduced.day, out, report=options.report,
                                     writers=writers, keep=KEPT if keep is None else keep,

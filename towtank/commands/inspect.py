@@ -12,6 +12,7 @@ import math
 import re
 import sys
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -315,7 +316,7 @@ def inspect_run(
         red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
         record_units(red, raw)
         if proposed:
-            red.units = raw_units(red.units, channels, file_units)
+            red = replace(red, units=raw_units(red.units, channels, file_units))
     except RunError as exc:
         reason = exc.reason.rstrip(".")
         head = "" if runfile.name in reason else f"{runfile.name}: "

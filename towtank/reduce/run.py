@@ -892,23 +892,18 @@ def load_record(protocol: Protocol | None, folder: Path, file: str, run: int, *,
     """
     path = folder / file
     data, stamp = file_bytes_stamped(path)
-    if protocol is None:
-        p = Processing()
-        return load_run(path, channel_map({}), max_nan_gap_s=p.max_nan_gap_s,
-                        max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                        data=data, speed_nominal=speed_nominal, segment=segment), stamp
-    p = protocol.processing
+    p = Processing() if protocol is None else protocol.processing
     log = (run_speed_log(protocol.speed_log, folder, file, run)
-           if speed_nominal is None else None)
+           if protocol is not None and speed_nominal is None else None)
     raw = load_run(
         path,
-        protocol.channels,
+        channel_map({}) if protocol is None else protocol.channels,
         max_nan_gap_s=p.max_nan_gap_s,
         max_bad_row_fraction=p.max_bad_row_fraction,
         do_despike=p.despike,
         data=data,
-        options=protocol.read,
-        balance=protocol.balance,
+        options=None if protocol is None else protocol.read,
+        balance=None if protocol is None else protocol.balance,
         speed_log=log,
         speed_nominal=speed_nominal,
         segment=segment,

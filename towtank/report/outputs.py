@@ -156,47 +156,12 @@ def refuse_foreign_outputs(out_dir: Path) -> None:
 Writer = Callable[["DayResult", Path], object]  # what a writer returns is not used
 
 
-def write_outputs(
-    day: DayResult,
-    out_dir: str | Path,
-    *,
-    report: bool = True,
-    writers: list[Writer] | None = None,
-    keep: tuple[str, ...] = KEPT,
-    export: tuple[str, ...] | list[str] = (),
-    provenance_extra: dict[str, Any] | None = None,
-) -> Path:
-    """Write every output of the day into ``out_dir``, replacing the previous outputs.
-
-    Parameters
-    ----------
-    day : DayResult
-        The processed day.
-    out_dir : path
-        Output folder; created if needed. Nothing is written there before the new set is
-        complete in a temporary folder beside it. A folder holding only towtank's outputs is
-        then replaced as a whole by one rename (entries named in ``keep``, e.g. the cache, are
-        carried over); in a folder that also holds other files, each output is replaced by its
-        own rename and the other files are left untouched.
-    report : bool
-        Also write the workbook, the PDF and the figures.
-    export : sequence of str
-        Also write every usable run's reduced time series in these formats ("mat", "hdf5",
-        "parquet") into ``export/`` (:mod:`towtank.report.export`).
-    provenance_extra : dict, optional
-        More entries for provenance.json (``towtank watch``: which runs the PDF covers).
-
-    Raises
-    ------
-    OSError
-        When the storage fails (a full disk, a quota...), with its errno, whatever library met
-        it (:func:`towtank.runtime.storage.storage_error`); ``out_dir`` is then as it was and
-        the temporary folder is gone.
+def write_outputs(day: DayResult, out_dir: str | Path, **options: Any) -> Path:
+    """Write every output of the day into ``out_dir``, replacing the previous outputs;
+    ``options`` and the errors as for :func:`write_day_outputs`. Returns the folder, resolved.
     """
-    out_dir = Path(out_dir).resolve()
-    write_day_outputs(day, out_dir, report=report, writers=writers, keep=keep, export=export,
-                      provenance_extra=provenance_extra)
-    return out_dir
+    write_day_outputs(day, out_dir, **options)
+    return Path(out_dir).resolve()
 
 
 def write_day_outputs(
@@ -209,9 +174,45 @@ def write_day_outputs(
     export: tuple[str, ...] | list[str] = (),
     provenance_extra: dict[str, Any] | None = None,
 ) -> DayResult:
-    """:func:`write_outputs`, returning the day as written: ``day`` itself, or with
-    ``export`` a new DayResult whose warnings add the runs that could not be exported (the
-    given day is not changed)."""
+    """Write every output of the day into ``out_dir``, replacing the previous outputs, and
+    return the day as written.
+
+    Parameters
+    ----------
+    day : DayResult
+        The processed day; it is not changed.
+    out_dir : path
+        Output folder; created if needed. Nothing is written there before the new set is
+        complete in a temporary folder beside it. A folder holding only towtank's outputs is
+        then replaced as a whole by one rename (entries named in ``keep``, e.g. the cache, are
+        carried over); in a folder that also holds other files, each output is replaced by its
+        own rename and the other files are left untouched.
+    report : bool
+        Also write the workbook, the PDF and the figures.
+    writers : list, optional
+        The report's writers, each called with the day and the folder (default: the
+        workbook, the PDF and the figures).
+    keep : tuple of str
+        Entries of ``out_dir`` carried over into the new set (default :data:`KEPT`).
+    export : sequence of str
+        Also write every usable run's reduced time series in these formats ("mat", "hdf5",
+        "parquet") into ``export/`` (:mod:`towtank.report.export`).
+    provenance_extra : dict, optional
+        More entries for provenance.json (``towtank watch``: which runs the PDF covers).
+
+    Returns
+    -------
+    DayResult
+        ``day``, or with ``export`` a new DayResult whose warnings add the runs that could not
+        be exported.
+
+    Raises
+    ------
+    OSError
+        When the storage fails (a full disk, a quota...), with its errno, whatever library met
+        it (:func:`towtank.runtime.storage.storage_error`); ``out_dir`` is then as it was and
+        the temporary folder is gone.
+    """
     out_dir = Path(out_dir).resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     with manifest.output_lock(out_dir):  # two writers never mix their files
