@@ -71,10 +71,10 @@ def _seed_cache(src: Path, dst: Path) -> None:
     shutil.copytree(src / ".cache", dst / ".cache", ignore=shutil.ignore_patterns("day.json"))
 
 
-def _watch(protocol: Path, out: Path) -> None:
+def _watch(protocol: Path, out: Path, *, report: bool = True) -> None:
     """``towtank watch`` of a day whose files are all there, until its outputs and report
     cover every run of the sheet."""
-    plan = prepare(protocol, out, watch_options())
+    plan = prepare(protocol, out, watch_options(report=report))
     lines: list[str] = []
     session = WatchSession(plan, echo=lines.append, live_figures=False)
     try:
@@ -90,18 +90,22 @@ def _watch(protocol: Path, out: Path) -> None:
     assert not session.pdf_stale
 
 
-@pytest.mark.parametrize("name", SAMPLE_DAYS)
-def test_process_the_api_and_watch_write_the_same_files(name, tmp_path, capsys):
-    protocol = ROOT / "protocols" / name
-    cli, api, watched = tmp_path / "cli", tmp_path / "api", tmp_path / "watch"
-    assert main(["process", str(protocol), "--out", str(cli), "-q"]) in (0, 1)
+def _three_front_doors(protocol: Path, root: Path, *, report: bool = True) -> dict[str, Path]:
+    """The day written by ``towtank process``, :func:`towtank.process_day` and the watch."""
+    cli, api, watched = root / "cli", root / "api", root / "watch"
+    flags = [] if report else ["--no-report"]
+    assert main(["process", str(protocol), "--out", str(cli), "-q", *flags]) in (0, 1)
     _seed_cache(cli, api)
-    towtank.process_day(protocol, out=api)
+    towtank.process_day(protocol, out=api, report=report)
     _seed_cache(cli, watched)
-    _watch(protocol, watched)
+    _watch(protocol, watched, report=report)
+    return {"cli": cli, "api": api, "watch": watched}
 
+
+def _assert_the_same_files(cli: Path, api: Path, watched: Path) -> None:
+    """Every file of the three output folders the same, byte for byte, but for what is set
+    aside by name (the module's text)."""
     want = _files(cli)
-    assert {"report.pdf", "report.xlsx", "provenance.json", MANIFEST} <= set(want)
     for out in (api, watched):
         got = _files(out)
         assert sorted(got) == sorted(want), out.name
@@ -115,10 +119,36 @@ def test_process_the_api_and_watch_write_the_same_files(name, tmp_path, capsys):
                 assert _without_times(listed) == _without_times(wanted), out.name
             elif rel == "provenance.json" and out is watched:
                 entries = json.loads(got[rel])
-                assert entries.pop(WATCH_ENTRY)["pdf_current"] is True  # the PDF: every run
+                entry = entries.pop(WATCH_ENTRY)
+                assert entry["pdf_current"] is ("report.pdf" in want)  # the PDF: every run
                 assert entries == json.loads(data)
             else:
                 assert got[rel] == data, f"{out.name}/{rel}"
+
+
+@pytest.mark.parametrize("name", SAMPLE_DAYS)
+def test_process_the_api_and_watch_write_the_same_files(name, tmp_path, capsys):
+    outs = _three_front_doors(ROOT / "protocols" / name, tmp_path)
+    assert {"report.pdf", "report.xlsx", "provenance.json", MANIFEST} <= set(_files(outs["cli"]))
+    _assert_the_same_files(outs["cli"], outs["api"], outs["watch"])
+
+
+def test_every_front_door_records_a_file_only_the_protocol_names(tmp_path, capsys):
+    """A tare table ([tare] source = "table"): read when the protocol is loaded, named by no
+    run; it is an input of the day in provenance.json whichever front door ran the day."""
+    syn.make_hull_day(tmp_path, seed=3, file_format="csv", sheet_format="csv")
+    u = np.linspace(0.2, 2.2, 6)
+    (tmp_path / "tare.csv").write_text("speed_m_s,drag_N\n" + "".join(
+        f"{x},{0.02 * x * x + 0.01 * x}\n" for x in u))
+    protocol = syn.write_protocol(tmp_path / "p.toml", **syn.hull_protocol_sections(
+        ".", "out", sheet_format="csv"))
+    protocol.write_text(protocol.read_text() + '\n[tare]\nsource = "table"\n'
+                        'table = "tare.csv"\n')
+    outs = _three_front_doors(protocol, tmp_path / "outs", report=False)
+    for name, out in outs.items():
+        inputs = json.loads((out / "provenance.json").read_text())["inputs"]
+        assert str(tmp_path / "tare.csv") in [i["path"] for i in inputs], name
+    _assert_the_same_files(outs["cli"], outs["api"], outs["watch"])
 
 
 # ------------------------------------------------------------------ one run, as the day
