@@ -6,10 +6,10 @@
    (:class:`towtank.runtime.cache.DayStamp`) and the number of worker processes settled;
 2. :func:`reduce_day`: the day (or the rows of a run sheet) reduced and analysed
    (:func:`towtank.pipeline.process_day`, :func:`~towtank.pipeline.process_sheet`), the
-   report's date set, no input allowed to be an output's target, and every file the day
-   opened, whatever named it, among the day's inputs (:mod:`towtank.runtime.reads`);
-3. :func:`write_day`: the outputs written under the folder's lock, the summary, and the
-   replay record.
+   report's date set, and every file the day opened, whatever named it, among the day's
+   inputs (:mod:`towtank.runtime.reads`);
+3. :func:`write_day`: no input allowed to be an output's target, the outputs written under
+   the folder's lock, the summary, and the replay record.
 
 :func:`run_day` does the three in order, or replays the last run when nothing changed since.
 Nothing here prints: the caller gets a :class:`DayRun` (the day, the exit status, the
