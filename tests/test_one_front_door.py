@@ -224,3 +224,20 @@ def test_the_run_number_comes_from_the_sheet_not_the_file_name(tmp_path):
     red = towtank.reduce_run(raw, protocol, run=5)
     _assert_same_reduction(red, day_red)
     assert math.isfinite(red.speed_mean) and np.isfinite(raw.speed).all()
+
+
+# ------------------------------------------------------------------ nothing changes a result
+def test_writing_with_an_export_leaves_the_given_day_as_it_was(tmp_path, monkeypatch):
+    """A run that cannot be exported is a warning of the day as written (its summary says
+    it), on a new DayResult: the day given to the writers is not changed."""
+    from towtank.report import outputs
+    from towtank.runner import summary
+
+    day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=1)
+    before = [str(w) for w in day.warnings]
+    planted = "run 3: run_003.csv: could not be exported (planted)"
+    monkeypatch.setattr(outputs, "export_runs", lambda d, folder, formats: [planted])
+    written = outputs.write_day_outputs(day, tmp_path / "out", report=False, export=("mat",))
+    assert [str(w) for w in day.warnings] == before
+    assert [str(w) for w in written.warnings] == [*before, planted]
+    assert f"warning: {planted}" in summary(written, tmp_path / "out")
