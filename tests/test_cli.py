@@ -74,13 +74,13 @@ def test_the_progress_bar_leaves_no_thread_behind(tmp_path, capsys, monkeypatch)
     assert main(["synth", str(day), "--day", "fin", "--seed", "2"]) == 0
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)  # a terminal: the bar is shown
     seen = []
-    real = outputs.write_outputs
+    real = outputs.write_day_outputs
 
     def spy(*args, **kwargs):
         seen.append([t.name for t in threading.enumerate()])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(outputs, "write_outputs", spy)
+    monkeypatch.setattr(outputs, "write_day_outputs", spy)
     assert main(["process", str(day / "protocol.toml"), "--no-report"]) == 0
     assert seen == [["MainThread"]]
 

@@ -63,6 +63,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("results",),
     ("pipeline",),
     ("report",),
+    ("runner",),
     ("api",),
     ("live",),
     ("commands", "__main__", "__init__"),
@@ -484,3 +485,174 @@ def test_a_planted_test_of_a_reason_is_found(tmp_path):
                                              "pkg.a:7 (f) reads a message's text",
                                              "pkg.a:9 (f) reads a message's text"]
     assert message_text_reads(pkg, {("pkg.a", "f")}) == []
+
+
+# ------------------------------------------------------------- one front door, results fixed
+#: The runner of a day (towtank.runner): the one module that calls the pipeline's
+#: process_day / process_sheet (the pipeline itself and the test tooling aside).
+RUNNER = "runner"
+DAY_PROCESSORS = ("process_day", "process_sheet")
+
+#: The types of the results a stage returns: a value annotated with one, or named as the
+#: results are (``day``, ``red``), is never changed after it is made.
+RESULT_TYPES = frozenset({"DayResult", "RunReduction", "HullResult", "FinResult",
+                          "ScalingResult", "VehicleResult", "TareResult", "IdentifyResult",
+                          "Reduced", "DayRun"})
+RESULT_NAMES = frozenset({"day", "red"})
+MUTATORS = frozenset({"append", "extend", "insert", "update", "pop", "clear", "setdefault",
+                      "remove"})
+
+#: Mutations of a result still there, each as (module, function, the code); none.
+ALLOWED_MUTATIONS: set[tuple[str, str, str]] = set()
+
+
+def pipeline_importers(edges: list[Import], root: str, unit: str) -> list[str]:
+    """The modules of the layer ``unit`` that import the pipeline."""
+    pipeline = f"{root}.pipeline"
+    return sorted({f"{e.module} (line {e.line})" for e in edges if unit_of(e.module) == unit
+                   and (e.target == pipeline or e.target.startswith(pipeline + "."))})
+
+
+def day_processors(package_dir: Path) -> list[str]:
+    """Modules other than the runner, the pipeline and the test tooling that call (or import)
+    the pipeline's process_day or process_sheet."""
+    root = package_dir.name
+    out = []
+    for module, path in modules(package_dir).items():
+        if unit_of(module) in (RUNNER, "pipeline", "testing"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("pipeline") \
+                    and (node.module or "").split(".")[0] in (root, ""):
+                names = [a.name for a in node.names if a.name in DAY_PROCESSORS]
+                out += [f"{module} (line {node.lineno}) imports {n}" for n in names]
+            elif isinstance(node, ast.Attribute) and node.attr in DAY_PROCESSORS \
+                    and isinstance(node.value, (ast.Name, ast.Attribute)) \
+                    and ast.unparse(node.value).rpartition(".")[2] == "pipeline":
+                out.append(f"{module} (line {node.lineno}) calls {ast.unparse(node)}")
+    return sorted(out)
+
+
+def _is_result(annotation: ast.expr | None) -> bool:
+    """Whether an annotation is a result type (``DayResult``, ``"DayResult | None"``); a
+    container of results (``dict[int, RunReduction]``) is not one."""
+    if isinstance(annotation, ast.Constant) and isinstance(annotation.value, str):
+        try:
+            return _is_result(ast.parse(annotation.value, mode="eval").body)
+        except SyntaxError:
+            return False
+    if isinstance(annotation, ast.BinOp) and isinstance(annotation.op, ast.BitOr):
+        return _is_result(annotation.left) or _is_result(annotation.right)
+    if isinstance(annotation, ast.Attribute):
+        return annotation.attr in RESULT_TYPES
+    return isinstance(annotation, ast.Name) and annotation.id in RESULT_TYPES
+
+
+def _annotated(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> set[str]:
+    """Names of ``fn`` (arguments and annotated locals) annotated with a result type."""
+    is_result = _is_result
+    args = fn.args
+    names = {a.arg for a in [*args.posonlyargs, *args.args, *args.kwonlyargs]
+             if is_result(a.annotation)}
+    names |= {n.target.id for n in ast.walk(fn) if isinstance(n, ast.AnnAssign)
+              and isinstance(n.target, ast.Name) and is_result(n.annotation)}
+    return names
+
+
+def _result_attribute(node: ast.expr, results: set[str]) -> bool:
+    """Whether ``node`` is ``x.attr`` (or deeper) of a result-like name ``x``."""
+    while isinstance(node, ast.Attribute | ast.Subscript):
+        node = node.value
+        if isinstance(node, ast.Name):
+            return node.id in results
+    return False
+
+
+def result_mutations(package_dir: Path) -> set[tuple[str, str, str]]:
+    """Every place a production module changes a result after it is made: a mutating call
+    on one of its attributes (``day.warnings.append(...)``), an item or attribute assigned or
+    deleted (``day.inputs[k] = v``, ``red.notes = [...]``), as (module, function, code)."""
+    found = set()
+    for module, path in modules(package_dir).items():
+        if unit_of(module) == "testing":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for fn in ast.walk(tree):
+            if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            results = set(RESULT_NAMES) | _annotated(fn)
+            for node in ast.walk(fn):
+                code = None
+                if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                        and node.func.attr in MUTATORS \
+                        and _result_attribute(node.func.value, results) \
+                        and isinstance(node.func.value, ast.Attribute | ast.Subscript):
+                    code = f"{ast.unparse(node.func)}(...)"
+                elif isinstance(node, ast.Assign | ast.AugAssign | ast.AnnAssign | ast.Delete):
+                    targets = node.targets if isinstance(node, ast.Assign | ast.Delete) \
+                        else [node.target]
+                    code = next((f"{ast.unparse(t)} = ..." for t in targets
+                                 if isinstance(t, ast.Attribute | ast.Subscript)
+                                 and _result_attribute(t, results)), None)
+                if code is not None:
+                    found.add((module, fn.name, code))
+    return found
+
+
+def test_no_report_module_imports_the_pipeline():
+    wrong = pipeline_importers(all_imports(PACKAGE), "towtank", "report")
+    assert not wrong, "the report imports the pipeline:\n" + "\n".join(wrong)
+
+
+def test_only_the_runner_processes_a_day():
+    wrong = day_processors(PACKAGE)
+    assert not wrong, "a day processed beside towtank.runner:\n" + "\n".join(wrong)
+
+
+def test_no_result_is_changed_after_it_is_made():
+    found = result_mutations(PACKAGE)
+    wrong = sorted(found - ALLOWED_MUTATIONS)
+    gone = sorted(ALLOWED_MUTATIONS - found)
+    assert not wrong, "a result changed after it was made:\n" + "\n".join(map(str, wrong))
+    assert not gone, f"fixed: take these out of ALLOWED_MUTATIONS: {gone}"
+
+
+def test_a_planted_pipeline_import_and_day_processing_are_found(tmp_path):
+    pkg = _package(tmp_path, {
+        "pipeline.py": "def process_day(p):\n    return p\n",
+        "runner.py": "from pkg.pipeline import process_day\n",
+        "report/__init__.py": "",
+        "report/pdf.py": "from pkg.pipeline import process_day\n",
+        "live/__init__.py": "",
+        "live/session.py": "def batch(s):\n    from pkg import pipeline\n"
+                           "    return pipeline.process_sheet(s)\n",
+        "report/fine.py": "from pkg.runner import process_day\n",
+    })
+    assert pipeline_importers(all_imports(pkg), "pkg", "report") == ["pkg.report.pdf (line 1)"]
+    assert day_processors(pkg) == [
+        "pkg.live.session (line 3) calls pipeline.process_sheet",
+        "pkg.report.pdf (line 1) imports process_day"]
+
+
+def test_a_planted_mutation_of_a_result_is_found(tmp_path):
+    pkg = _package(tmp_path, {
+        "report/__init__.py": "",
+        "report/outputs.py": (
+            "from dataclasses import replace\n\n"
+            "def write(day, more):\n"
+            "    day.warnings.append(more)\n"
+            "    return replace(day, warnings=[*day.warnings, more])\n\n"
+            "def add(result: 'DayResult', path, sha):\n"
+            "    result.inputs[path] = sha\n"
+            "    result.report_date = None\n\n"
+            "def fine(day, rows):\n"
+            "    rows.append(day.warnings[0])\n"
+            "    warnings = list(day.warnings)\n"
+            "    warnings.extend(rows)\n"
+            "    return warnings\n"),
+    })
+    assert result_mutations(pkg) == {
+        ("pkg.report.outputs", "write", "day.warnings.append(...)"),
+        ("pkg.report.outputs", "add", "result.inputs[path] = ..."),
+        ("pkg.report.outputs", "add", "result.report_date = ..."),
+    }

@@ -229,8 +229,10 @@ def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path):
 def test_the_api_reads_a_run_at_its_set_speed(tmp_path):
     protocol, truth = _day(tmp_path, windows=True)
     path = tmp_path / "data" / "run_016.csv.gz"
+    elsewhere = tmp_path / "elsewhere.csv.gz"  # a file no row of the run sheet names
+    elsewhere.write_bytes(path.read_bytes())
     with pytest.raises(RunError, match="speed_nominal=U"):
-        towtank.read_run(path, protocol)
+        towtank.read_run(elsewhere, protocol)
     raw = towtank.read_run(path, protocol, speed_nominal=2.0)
     run = truth["runs"]["16"]
     red = towtank.reduce_run(raw, protocol, run=16, file=path.name,

@@ -24,20 +24,24 @@ for an unusable protocol or run sheet (what the command line turns into exit sta
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from towtank.errors import ProtocolError, RunError
-from towtank.ingest.protocol import Processing, Protocol, channel_map, with_output_dir
+from towtank.ingest.protocol import Protocol
 from towtank.ingest.protocol import load_protocol as _load
-from towtank.ingest.runfile import RawRun, file_bytes, load_run
-from towtank.ingest.speedlog import run_speed_log
-from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
-from towtank.reduce.run import RunReduction, record_units
-from towtank.reduce.run import reduce_run as _reduce
+from towtank.ingest.runfile import RawRun
+from towtank.ingest.runsheet import read_run_sheet
+from towtank.reduce.run import (
+    RunReduction,
+    load_record,
+    reduce_read,
+    sheet_segment,
+    zeroed_record,
+)
 
 if TYPE_CHECKING:
     from towtank.results import DayResult
@@ -115,49 +119,54 @@ def process_day(
     ------
     ProtocolError
         The protocol, the run sheet or the output folder is unusable; nothing was written.
+
+    Notes
+    -----
+    The day runs as ``towtank process`` runs it (:func:`towtank.runner.run_day`), and with
+    ``out`` writes the same files, byte for byte: every file the day opened (a tare table,
+    a hull table, ...) is among ``.inputs`` and in provenance.json, and the run is recorded
+    in ``out/.cache`` so that a later ``towtank process`` of the unchanged day replays it.
+    A day is never replayed here: it is always processed (the cached runs are reused). What
+    the command line says on its error stream (outputs of an interrupted run put back, an
+    input changed while the day was processed) comes as a :class:`UserWarning`.
     """
-    # loaded on use: the pipeline loads every stage, which
-    # load_protocol, read_run and reduce_run do not need
-    from towtank.pipeline import process_day as _process
+    # loaded on use: the runner loads the pipeline's stages, which load_protocol, read_run
+    # and reduce_run do not need
+    from towtank.runner import Options, run_day
 
-    path = protocol if isinstance(protocol, str | Path) else protocol.path
-    loaded = _protocol(protocol)
-    out_dir = None
-    if out is not None:
-        # the folder's note (outputs put back after an interrupted run) joins day.warnings
-        loaded, out_dir = with_output_dir(loaded, Path(out))
-    day = _process(
-        path, protocol=loaded, jobs=jobs,
-        cache_dir=Path(out_dir) / ".cache" if out_dir is not None and cache else None,
-    )
-    if date is not None:
-        day = replace(day, report_date=date)
-    if out_dir is not None:
-        # loaded on use: the writers (pandas, provenance) load only here
-        from towtank.report import write_outputs
-
-        with_output_dir(loaded, out_dir, day.inputs)
-        write_outputs(day, out_dir, report=report)
-    return day
+    options = Options(report=report, date=date, cache=cache, jobs=jobs, replay=False,
+                      quiet=True)
+    run = run_day(protocol, out, options, write=out is not None)
+    for note in run.notes:  # outputs put back, an input changed while the day was processed
+        warnings.warn(note, UserWarning, stacklevel=2)
+    assert run.day is not None  # never replayed
+    return run.day
 
 
 def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
-             speed_nominal: float | None = None, segment: int | None = None) -> RawRun:
-    """Read one run file as the day would: calibrated channels in SI units, checked.
+             speed_nominal: float | None = None, segment: int | None = None,
+             run: int | None = None) -> RawRun:
+    """Read one run file as the day reads it: calibrated channels in SI units, checked.
 
     Parameters
     ----------
     file : str or Path
         The run file (.csv, .csv.gz, .tdms and the other formats of docs/formats.md).
     protocol : str, Path or Protocol, optional
-        Whose ``[channels]`` map the lab's columns and ``[processing]`` set the checks; default
-        the canonical channel names (time, speed, drag[, lift, accel]) in SI units.
+        Whose ``[channels]`` map the lab's columns, ``[processing]`` set the checks, and whose
+        ``[speed_log]`` and ``[zeros]`` files go with the run; default the canonical channel
+        names (time, speed, drag[, lift, accel]) in SI units.
     speed_nominal : float, optional
-        The run's set speed [m/s], required when the protocol's ``[processing] speed_source``
-        is ``"nominal"`` (no measured speed; ``.speed_nominal`` of the result, ``.speed`` 0).
+        The run's set speed [m/s], needed when the protocol's ``[processing] speed_source``
+        is ``"nominal"`` (no measured speed; ``.speed_nominal`` of the result, ``.speed`` 0);
+        default the run sheet's.
     segment : int, optional
         Which acquisition of a file holding several one after another is the run, counted
-        from 1 (the run sheet's ``segment``); default the protocol's ``[read] segment``.
+        from 1; default the run sheet's ``segment``, else the protocol's ``[read] segment``.
+    run : int, optional
+        The run number, which names the run's carriage log and zeros file; default the run
+        of the protocol's run sheet that names this file (the row with ``segment`` when
+        several do), else 0. Never taken from the file's name.
 
     Returns
     -------
@@ -170,33 +179,57 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
     towtank.errors.RunError
         The file cannot be used; ``.reason`` is one sentence saying why.
     """
-    read = None
-    if protocol is None:
-        channels, p = channel_map({}), Processing()
-    else:
-        loaded = _protocol(protocol)
-        channels, p, read = loaded.channels, loaded.processing, loaded.read
     path = Path(file)
-    log = None
-    if protocol is not None and loaded.speed_log is not None:
-        digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
-        log = run_speed_log(loaded.speed_log, path.parent, path.name, int(digits or 0))
-    if p.speed_source == "nominal" and not (speed_nominal is not None and speed_nominal > 0):
-        raise RunError(f"{path.name}: the protocol's speed_source = \"nominal\" takes the speed "
-                       "from the run sheet: give read_run(..., speed_nominal=U) [m/s]")
-    raw = load_run(path, channels, max_nan_gap_s=p.max_nan_gap_s,
-                   max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
-                   data=file_bytes(path), options=read,
-                   balance=None if protocol is None else loaded.balance, speed_log=log,
-                   speed_nominal=speed_nominal if p.speed_source == "nominal" else None,
-                   segment=segment)
-    if protocol is not None and loaded.zeros is not None:
-        digits = "".join(c for c in path.name.split(".")[0] if c.isdigit())
-        zeros = run_zero_levels(loaded.zeros, path.parent, path.name, int(digits or 0),
-                                channels, read, loaded.balance, fs=raw.fs, taper_s=p.trim)
-        assert zeros is not None
-        raw = with_zero_levels(raw, *zeros)
-    return raw
+    loaded = None if protocol is None else _protocol(protocol)
+    row = None if loaded is None else _sheet_row(loaded, path, run=run, segment=segment)
+    folder, name = path.parent, path.name
+    if loaded is not None and row is not None:
+        if _names(loaded, row, path):  # found as the day finds it
+            folder, name = Path(loaded.campaign.data_dir), str(row["file"])
+        else:  # the sheet's run of that number is another file's
+            row = None
+    number = run if run is not None else int(row["run"]) if row is not None else 0
+    if segment is None and row is not None:
+        segment = sheet_segment(row)
+    nominal = None
+    if loaded is not None and loaded.processing.speed_source == "nominal":
+        if speed_nominal is None and row is not None:
+            speed_nominal = float(row.get("speed_nominal", math.nan))
+        if not (speed_nominal is not None and speed_nominal > 0):
+            raise RunError(f"{path.name}: the protocol's speed_source = \"nominal\" takes the "
+                           "speed from the run sheet: give read_run(..., speed_nominal=U) "
+                           "[m/s]")
+        nominal = speed_nominal
+    raw, _stamp = load_record(loaded, folder, name, number, speed_nominal=nominal,
+                              segment=segment)
+    return zeroed_record(loaded, raw, folder, name, number)
+
+
+def _sheet_row(protocol: Protocol, path: Path | None = None, *, run: int | None = None,
+               segment: int | None = None) -> dict[str, Any] | None:
+    """The protocol's run sheet row of the run: the row ``run`` when given, else the row that
+    names ``path`` (with ``segment`` when given); None when there is none, or the sheet
+    cannot be read."""
+    try:
+        sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
+                               protocol.sheet, air=protocol.water.is_air)
+    except ProtocolError:
+        return None
+    for row in sheet.to_dict("records"):
+        if run is not None:
+            if int(row["run"]) == run:
+                return row
+            continue
+        if path is not None and _names(protocol, row, path) and (
+                segment is None or sheet_segment(row) == segment):
+            return row
+    return None
+
+
+def _names(protocol: Protocol, row: dict[str, Any], path: Path) -> bool:
+    """Whether the sheet's ``row`` names the file ``path``."""
+    file = str(row["file"]).strip()
+    return bool(file) and (Path(protocol.campaign.data_dir) / file).resolve() == path.resolve()
 
 
 def reduce_run(
@@ -206,27 +239,35 @@ def reduce_run(
     run: int = 0,
     file: str = "",
     window_s: tuple[float, float] | None = None,
-    speed_nominal: float = math.nan,
-    accel_nominal: float = math.nan,
+    speed_nominal: float | None = None,
+    accel_nominal: float | None = None,
+    test: str | None = None,
 ) -> RunReduction:
-    """Reduce one run read by :func:`read_run` (before the tare is subtracted).
+    """Reduce one run read by :func:`read_run` as the day reduces it (before the tare is
+    subtracted).
 
     Parameters
     ----------
     raw : RawRun
         The run's channels.
     protocol : str, Path or Protocol, optional
-        Whose ``[processing]`` settings apply (filter, trims, bands); default settings without.
+        Whose ``[processing]`` settings apply (filter, trims, bands) and whose ``[channels]``
+        say which force channels are used; default settings without.
     run : int
-        Run number, for the sentences of its notes.
+        Run number, for the sentences of its notes; with a protocol whose run sheet has this
+        run, the defaults of the arguments below are that row's.
     file : str
-        File name, for the same.
+        File name, for the same (default the sheet's, else "run").
     window_s : (float, float), optional
-        A hand-set steady window [s] (the run sheet's window_start_s, window_end_s).
-    speed_nominal : float
-        Set speed [m/s] of the run sheet, cross-checked against the measured plateau.
-    accel_nominal : float
+        A hand-set steady window [s] (default the sheet's window_start_s, window_end_s).
+    speed_nominal : float, optional
+        Set speed [m/s], cross-checked against the measured plateau (default the sheet's,
+        else none).
+    accel_nominal : float, optional
         Set acceleration [m/s²], cross-checked likewise.
+    test : str, optional
+        The sheet's test ("steady", "accel"): an accel run without a usable
+        constant-acceleration stretch is warned of, a steady run not noted for it.
 
     Returns
     -------
@@ -242,10 +283,23 @@ def reduce_run(
     towtank.errors.RunError
         The run cannot be reduced; ``.reason`` is one sentence saying why.
     """
-    processing = Processing() if protocol is None else _protocol(protocol).processing
-    red = _reduce(raw, processing, run=run, file=file or "run", window_s=window_s,
-                  speed_nominal=speed_nominal, accel_nominal=accel_nominal)
-    return record_units(red, raw)
+    loaded = None if protocol is None else _protocol(protocol)
+    row = None if loaded is None else _sheet_row(loaded, run=run)
+    sheet = row if row is not None else {}
+    if window_s is None:
+        ws, we = sheet.get("window_start_s", math.nan), sheet.get("window_end_s", math.nan)
+        if math.isfinite(ws) and math.isfinite(we):
+            window_s = (float(ws), float(we))
+    return reduce_read(
+        loaded, raw, run=run, file=file or str(sheet.get("file", "")) or "run",
+        window_s=window_s,
+        speed_nominal=_given(speed_nominal, sheet.get("speed_nominal", math.nan)),
+        accel_nominal=_given(accel_nominal, sheet.get("accel_nominal", math.nan)),
+        test=test if test is not None else str(sheet.get("test", "")))
+
+
+def _given(value: float | None, default: float) -> float:
+    return float(default) if value is None else value
 
 
 def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str], *,

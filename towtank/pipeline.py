@@ -26,10 +26,11 @@ from towtank.analysis.daywide import (
 from towtank.analysis.fin_analysis import analyse_fins
 from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
 from towtank.analysis.run_table import run_table
+from towtank.analysis.scaling import model_scale
 from towtank.analysis.similarity import check_protocol_speeds, medium_at
 from towtank.errors import TowtankError
 from towtank.ingest.inputs import day_inputs, runs_to_reduce, side_files_sha, unlisted_warnings
-from towtank.ingest.protocol import Protocol, load_protocol, model_geometry
+from towtank.ingest.protocol import Protocol, load_protocol
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.messages import Notice, Rejection, Stage, notices
 from towtank.reduce.run import RunReduction, crashed_record, reduce_record
@@ -64,30 +65,6 @@ ANALYSIS_MODULES = (
     "towtank.reference.water",
     "towtank.reference.air",
 )
-
-
-def model_scale(protocol: Protocol) -> float | None:
-    """λ = L_p / L_m: [model] scale, else [prototype] length_m / [model] length_m, else None."""
-    model, proto = protocol.model, protocol.prototype
-    if model is None:
-        return None
-    if model.scale is not None:
-        return model.scale
-    return proto.length_m / model.length_m if proto is not None else None
-
-
-def geometry_used(day: DayResult) -> list[dict[str, Any]]:
-    """The day's hull geometry with where each quantity came from; empty without a [model].
-
-    See :func:`towtank.ingest.protocol.model_geometry`; the prototype's wetted area λ²·S_m is listed
-    when the scale ratio is known.
-    """
-    model = day.protocol.model
-    if model is None:
-        return []
-    sr = day.scaling
-    scale = sr.scale if sr is not None else model_scale(day.protocol)
-    return model_geometry(model, scale)
 
 
 def process_day(

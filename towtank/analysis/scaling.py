@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from towtank.analysis import similarity
 from towtank.analysis.similarity import FormFactor, FormFactorTrend, ResistanceRecommendation
-from towtank.ingest.protocol import Model, Prototype
+from towtank.ingest.protocol import Model, Protocol, Prototype, model_geometry
 
 #: A hull run within this of α = 0 is a straight tow of the resistance curve [deg].
 STRAIGHT_TOL_DEG = 0.5
@@ -236,3 +237,27 @@ def scale_to_prototype(
         warn.append(note)
         result = replace(result, laminar_note=note)
     return result, warn
+
+
+def model_scale(protocol: Protocol) -> float | None:
+    """λ = L_p / L_m: [model] scale, else [prototype] length_m / [model] length_m, else None."""
+    model, proto = protocol.model, protocol.prototype
+    if model is None:
+        return None
+    if model.scale is not None:
+        return model.scale
+    return proto.length_m / model.length_m if proto is not None else None
+
+
+def geometry_used(protocol: Protocol, scaling: ScalingFit | None) -> list[dict[str, Any]]:
+    """The day's hull geometry with where each quantity came from; empty without a [model].
+
+    ``scaling`` is the day's scaling result (its scale ratio), else the protocol's
+    (:func:`model_scale`). See :func:`towtank.ingest.protocol.model_geometry`; the prototype's
+    wetted area λ²·S_m is listed when the scale ratio is known.
+    """
+    model = protocol.model
+    if model is None:
+        return []
+    scale = scaling.scale if scaling is not None else model_scale(protocol)
+    return model_geometry(model, scale)

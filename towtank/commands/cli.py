@@ -7,7 +7,6 @@ Imports of the heavy libraries are deferred to the sub-command that needs them, 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import datetime as dt
 import gc
 import os
@@ -16,21 +15,14 @@ import signal
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 from towtank import __version__
-from towtank.errors import ProtocolError, TowtankError
+from towtank.errors import TowtankError
 from towtank.ingest.extensions import extensions_text
 from towtank.report.safetext import clean_text
 from towtank.runtime.interrupt import handled, watching
-from towtank.runtime.manifest import MANIFEST, output_lock, recover_outputs
 from towtank.runtime.pause import pause_at
-from towtank.runtime.reads import recording
-from towtank.runtime.safefile import sha256_regular
-from towtank.runtime.storage import STORAGE_ERRNOS
-
-if TYPE_CHECKING:
-    from towtank.runtime.reads import Recorder
 
 EXIT_OK, EXIT_REJECTED, EXIT_UNUSABLE, EXIT_BUG = 0, 1, 2, 3
 
@@ -359,197 +351,46 @@ def _err(msg: str) -> None:
 
 
 def cmd_process(args: argparse.Namespace) -> int:
+    """``towtank process``: the day run by :func:`towtank.runner.run_day`, its notes on the
+    error stream and its summary on the output."""
+    # loaded on use: the runner loads the protocol's checks and, when the day runs, every stage
+    from towtank.runner import DayStopped, Options, run_day
 
-    if args.out is not None:  # a set an interrupted run left aside is put back first
-        recovered = recover_outputs(Path(args.out).resolve())
-        if recovered:
-            _err(recovered)
-    # every file the day opens, whatever section names it, goes into the replay's record
-    with recording() as opened:
-        return _process_recorded(args, opened)
-
-
-def _process_recorded(args: argparse.Namespace, opened: Recorder) -> int:
-    # loaded on use: the protocol's checks (numpy and the water properties) only for towtank
-    # process
-    from towtank.ingest.protocol import load_protocol, with_output_dir
-
-    try:
-        protocol = load_protocol(args.protocol)
-    except ProtocolError as exc:
-        _err(str(exc))
-        return EXIT_UNUSABLE
-    try:
-        protocol, out = with_output_dir(
-            protocol, args.out if args.out is not None else protocol.campaign.output_dir
-        )
-    except ProtocolError as exc:
-        _err(str(exc))
-        return EXIT_UNUSABLE
-    # towtank's own bookkeeping in the output folder is not an input of the day
-    opened.skip.extend([Path(out).resolve() / ".cache", Path(out).resolve() / MANIFEST])
-    stamp = None
-    if not args.no_cache:
-        # loaded on use: the cache (numpy) only for towtank process
-        from towtank.runtime.cache import DayStamp
-
-        stamp = DayStamp(Path(out) / ".cache", protocol, Path(out),
-                         {"report": not args.no_report, "date": args.date,
-                          "export": sorted(set(args.export or ()))})
-        replay = stamp.replay()
-        if replay is not None:  # nothing changed since the last run: its outputs stand
-            code, text = replay
-            if not args.quiet:
-                print(text.rstrip("\n"))
-            return code
-    # loaded on use: multiprocessing's pools only for towtank process
-    from towtank.runtime import parallel
-
-    # --jobs, else the protocol's [processing] jobs, else every core
-    if args.jobs is None:
-        args.jobs = protocol.processing.jobs
-    if args.jobs is not None and args.jobs > parallel.default_jobs():
-        if not args.quiet:
-            _err(f"note: {args.jobs} jobs asked for, but this machine gives towtank "
-                 f"{parallel.default_jobs()} cores: {parallel.default_jobs()} jobs are used.")
-        args.jobs = parallel.default_jobs()
-    # the workers load the reduction's libraries while this process loads pandas and the sheet
-    parallel.prestart(args.jobs)
-    try:
-        pause_at("preload")
-        return _process(args, protocol, out, stamp, opened)
-    except KeyboardInterrupt:  # the workers and the fork server ignore Ctrl-C: ended here
-        parallel.discard_prestarted(interrupted=True)
-        parallel.end_forkserver()
-        raise
-    finally:
-        parallel.discard_prestarted()  # when the day stopped before any run was reduced
-
-
-def _process(args: argparse.Namespace, protocol, out, stamp,  # noqa: ANN001
-             opened: Recorder) -> int:
-    # loaded on use: the day's stages and writers (numpy, pandas, scipy, matplotlib) only
-    # for towtank process
-    from towtank.ingest.protocol import with_output_dir
-    from towtank.pipeline import process_day
-    from towtank.report import write_outputs
-
-    show = not args.quiet and sys.stderr.isatty()
-    bar = None
-    if show:
-        # loaded on use: tqdm only for a progress bar on a terminal
-        from tqdm import tqdm
-
-        # no monitor thread: the report's writers fork, which is only safe with one thread
-        tqdm.monitor_interval = 0
-        bar = tqdm(total=0, unit="run", desc="reducing", file=sys.stderr, leave=False)
+    bar = _progress_bar() if not args.quiet and sys.stderr.isatty() else None
 
     def progress(done: int, total: int) -> None:
         if bar is not None:
             bar.total = total
             bar.update(done - bar.n)
 
+    options = Options(report=not args.no_report, export=tuple(args.export or ()),
+                      date=args.date, cache=not args.no_cache, jobs=args.jobs,
+                      debug=args.debug, quiet=args.quiet, progress=progress)
     try:
-        day = process_day(
-            args.protocol,
-            protocol=protocol,
-            jobs=args.jobs,
-            progress=progress,
-            debug=args.debug,
-            cache_dir=None if args.no_cache else Path(out) / ".cache",
-        )
-    except ProtocolError as exc:
+        run = run_day(args.protocol, args.out, options)
+    except DayStopped as exc:
+        for note in exc.notes:
+            _err(note)
         _err(str(exc))
         return EXIT_UNUSABLE
     finally:
         if bar is not None:
             bar.close()
-        opened.stop()  # what the day read; the writing reads its own files
-    if args.date:
-        day = dataclasses.replace(day, report_date=args.date)
-    try:  # the sheet may name run files anywhere: none of them may be an output's target
-        with_output_dir(protocol, out, day.inputs)
-    except ProtocolError as exc:
-        _err(str(exc))
-        return EXIT_UNUSABLE
-    code = EXIT_REJECTED if day.rejected else EXIT_OK
-    _add_opened(day, opened, Path(out))
-    try:
-        # the lock spans the write and its record: another writer can neither mix its files
-        # with these nor have its outputs recorded as this day's
-        with output_lock(out):
-            write_outputs(day, out, report=not args.no_report,
-                          export=tuple(args.export or ()))
-            text = _summary(day, Path(out))
-            if stamp is not None:
-                changed = stamp.record(code, text, {**opened.files, **_read_stamps(day)})
-                if changed:
-                    _err(f"warning: {changed}")
-    except ProtocolError as exc:
-        _err(str(exc))
-        return EXIT_UNUSABLE
-    except OSError as exc:
-        if exc.errno is None or exc.errno not in _STORAGE_ERRNOS:
-            raise
-        # the system's own words for the errno: a library's strerror may be a paragraph
-        # (h5py's names its driver, the time and the buffer's address)
-        _err(f"the outputs could not be written to {out} ({os.strerror(exc.errno)}); the "
-             "folder is as it was before this run.")
-        return EXIT_UNUSABLE
+    for note in run.notes:
+        _err(note)
     if not args.quiet:
-        print(text, end="")
-    return code
+        print(run.summary.rstrip("\n"))
+    return run.code
 
 
-def _add_opened(day, opened: Recorder, out: Path) -> None:  # noqa: ANN001
-    """Every file the day opened (tare table, hull table, ...) among its inputs, with its
-    sha256, for provenance.json: the files in the output folder aside."""
-    root = str(out.resolve()) + os.sep
-    for path in opened.files:
-        if path not in day.inputs and not path.startswith(root):
-            sha = sha256_regular(path)
-            if sha is not None:
-                day.inputs[path] = sha
+def _progress_bar() -> Any:
+    """The progress bar of the runs reduced, on the terminal's error stream."""
+    # loaded on use: tqdm only for a progress bar on a terminal
+    from tqdm import tqdm
 
-
-def _read_stamps(day) -> dict[str, tuple[int, int, int, int] | None]:  # noqa: ANN001
-    """Every input file of the day with its (size, mtime_ns, ctime_ns, inode): the run files
-    as their bytes were read, the other inputs as they are now."""
-    out: dict[str, tuple[int, int, int, int] | None] = {}
-    for path in day.inputs:
-        try:
-            st = os.stat(path)
-            out[str(path)] = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
-        except OSError:
-            continue  # a file that could not be read: its run was rejected
-    data_dir = day.protocol.campaign.data_dir
-    for red in day.reductions.values():
-        path = str(data_dir / red.file)
-        if path in out:
-            out[path] = getattr(red, "file_stamp", None)
-    return out
-
-
-#: Errors of the storage, not of towtank: a full disk or quota, a read-only or failing file
-#: system, no permission (:data:`towtank.runtime.storage.STORAGE_ERRNOS`).
-_STORAGE_ERRNOS = STORAGE_ERRNOS
-
-
-def _summary(day, out: Path) -> str:  # noqa: ANN001 - DayResult, imported lazily
-    runs = day.runs
-    counts = runs["status"].value_counts()
-    lines = [
-        f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
-        f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
-    ]
-    # loaded on use: pandas only when runs were rejected
-    from towtank.analysis.daywide import group_rejections
-
-    lines += [f"  rejected: {g.sentence}" for g in group_rejections(runs, day.rejected)]
-    lines += [f"  warning: {w}" for w in day.warnings]
-    lines.append(f"outputs in {out}")
-    # no escape sequence from a file reaches the terminal
-    return "\n".join(clean_text(line) for line in lines) + "\n"
+    # no monitor thread: the report's writers fork, which is only safe with one thread
+    tqdm.monitor_interval = 0
+    return tqdm(total=0, unit="run", desc="reducing", file=sys.stderr, leave=False)
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:

@@ -11,7 +11,7 @@ import pandas as pd
 from towtank.analysis import similarity
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import Prototype, Water, load_protocol
-from towtank.pipeline import process_day
+from towtank.runner import Options, Plan, reduce_day
 from towtank.runtime.manifest import output_lock
 
 
@@ -58,12 +58,15 @@ def scale_command(
     # the cache of an earlier `process` into that folder is used (and added to); a folder
     # that does not exist is not created (scale prints, it writes no output)
     cache = Path(out_dir) / ".cache"
-    if cache.is_dir():
+    plan = Plan(path=Path(protocol_path), protocol=protocol, out=None,
+                options=Options(replay=False, record=False), jobs=protocol.processing.jobs,
+                cache_dir=cache if cache.is_dir() else None)
+    if plan.cache_dir is not None:
         # the reduction may add to the folder's cache: one writer at a time
         with output_lock(out_dir):
-            day = process_day(protocol_path, protocol=protocol, cache_dir=cache)
+            day = reduce_day(plan).day
     else:
-        day = process_day(protocol_path, protocol=protocol, cache_dir=None)
+        day = reduce_day(plan).day
     if day.scaling is None:
         said = [str(n) for n in day.warnings if n.stage == "scaling"]
         print("no scaling table: " + " ".join(said[-1:]))

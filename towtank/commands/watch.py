@@ -25,19 +25,16 @@ import webbrowser
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TextIO
 
 from towtank.errors import ProtocolError
-from towtank.ingest.protocol import load_protocol, with_output_dir
 from towtank.live.server import listening_socket, port_problem
-from towtank.live.session import WatchSession
+from towtank.live.session import WatchSession, watch_options
 from towtank.live.state import LIVE_DIR, WATCH_LOCK, claim_live_dir, refusal
 from towtank.report.safetext import clean_text
+from towtank.runner import DayStopped, Plan, prepare
 from towtank.runtime import parallel
-from towtank.runtime.manifest import recover_outputs, try_lock
-
-if TYPE_CHECKING:
-    from towtank.ingest.protocol import Protocol
+from towtank.runtime.manifest import try_lock
 
 EXIT_UNUSABLE = 2
 SERVER_MODULE = "towtank.live.server"
@@ -179,36 +176,33 @@ def listen(port: int) -> socket.socket:
 
 def watch_command(args: argparse.Namespace) -> int:
     """The ``watch`` sub-command; returns the exit status (KeyboardInterrupt goes up)."""
-    if args.out is not None:
-        recovered = recover_outputs(Path(args.out).resolve())
-        if recovered:
-            _err(recovered)
-    try:
-        protocol = load_protocol(args.protocol)
-        protocol, out = with_output_dir(
-            protocol, args.out if args.out is not None else protocol.campaign.output_dir)
-    except ProtocolError as exc:
+    try:  # the protocol loaded and the output folder checked as towtank process does
+        plan = prepare(args.protocol, args.out, watch_options(
+            jobs=args.jobs, report=not args.no_report, date=args.date))
+    except DayStopped as exc:
+        for note in exc.notes:
+            _err(note)
         _err(str(exc))
         return EXIT_UNUSABLE
-    jobs = args.jobs if args.jobs is not None else protocol.processing.jobs
-    if jobs is not None and jobs > parallel.default_jobs():
-        jobs = parallel.default_jobs()
+    for note in plan.notes:  # outputs an interrupted run left aside, put back
+        _err(note)
+    assert plan.out is not None
     try:  # the port first: a port in use stops watch before anything is written
         sock = None if args.no_server else listen(args.port)
     except ProtocolError as exc:
         _err(str(exc))
         return EXIT_UNUSABLE
     try:  # one watcher per output folder: two would write over each other's live state
-        lock = hold_watch_lock(Path(out).resolve() / LIVE_DIR)
+        lock = hold_watch_lock(plan.out / LIVE_DIR)
     except (ProtocolError, OSError) as exc:
         if sock is not None:
             sock.close()
         _err(str(exc) if isinstance(exc, ProtocolError) else
-             f"the output folder {out} cannot be written ({exc.strerror or exc}).")
+             f"the output folder {plan.out} cannot be written ({exc.strerror or exc}).")
         return EXIT_UNUSABLE
     with ending_on_signals() as signals:
         try:
-            return _watch(args, protocol, out, jobs, sock)
+            return _watch(args, plan, sock)
         except (Stopped, KeyboardInterrupt):
             if not signals.came:
                 raise  # Ctrl-C: the command line's sentence and exit 130
@@ -222,17 +216,16 @@ def watch_command(args: argparse.Namespace) -> int:
             lock.close()  # the next watch of this folder may start
 
 
-def _watch(args: argparse.Namespace, protocol: Protocol, out: Path, jobs: int | None,
-           sock: socket.socket | None) -> int:
+def _watch(args: argparse.Namespace, plan: Plan, sock: socket.socket | None) -> int:
     """Watch with the lock held: the session, the page server (on ``sock``), the loop."""
-    server = None if sock is None else start_server(Path(out).resolve() / LIVE_DIR, sock)
+    assert plan.out is not None
+    server = None if sock is None else start_server(plan.out / LIVE_DIR, sock)
     session = None
     try:
-        session = WatchSession(protocol, out, jobs=jobs, report=not args.no_report,
-                               date=args.date, echo=_say)
+        session = WatchSession(plan, echo=_say)
         out = session.out
         if not args.quiet:
-            _say(f"{protocol.name}: watching {session.data_dir} and "
+            _say(f"{plan.protocol.name}: watching {session.data_dir} and "
                  f"{session.sheet_path.name}; outputs in {out}. Ctrl-C to stop.")
         try:
             session.step()  # the runs already there: their verdicts, the outputs

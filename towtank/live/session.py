@@ -21,7 +21,6 @@ The process stays single-threaded: the report writers fork.
 
 from __future__ import annotations
 
-import dataclasses
 import io
 import json
 import math
@@ -39,6 +38,7 @@ from watchfiles import watch
 
 from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
+from towtank.ingest.inputs import unlisted_warnings
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.live import arrival
 from towtank.live.state import (
@@ -49,14 +49,22 @@ from towtank.live.state import (
     save_figure,
     write_state,
 )
-from towtank.pipeline import process_sheet, unlisted_warnings
 from towtank.report import figures as rf
 from towtank.report.figures import write_figures
-from towtank.report.outputs import write_outputs
 from towtank.report.pdf import write_pdf
 from towtank.report.safetext import clean_text
 from towtank.report.workbook import write_workbook
 from towtank.results import Notice
+from towtank.runner import (
+    DayStopped,
+    Options,
+    OutputsNotWritten,
+    Plan,
+    Reduced,
+    prepare,
+    reduce_day,
+    write_day,
+)
 from towtank.runtime.safefile import read_regular
 from towtank.runtime.storage import STORAGE_ERRNOS, os_error, storage_error
 
@@ -150,12 +158,19 @@ class _Said:
 class WatchSession:
     """A watched day (see the module's text).
 
+    Every batch is run by :mod:`towtank.runner` as ``towtank process`` runs a day
+    (:func:`~towtank.runner.reduce_day`, :func:`~towtank.runner.write_day`), on the rows of
+    the runs so far, with watch's own writers and provenance entry.
+
     Parameters
     ----------
-    protocol : Protocol
-        The day's protocol, its output folder set (``with_output_dir``).
-    out : path
-        The output folder; ``.cache/`` and ``.live/`` are kept in it.
+    protocol : Protocol or towtank.runner.Plan
+        The day's protocol, or the runner's plan of the day (:func:`towtank.runner.prepare`:
+        its output folder, jobs, report and date are then the plan's, and the files read
+        when its protocol was loaded are among the day's inputs).
+    out : path, optional
+        The output folder (default the protocol's ``output_dir``); ``.cache/`` and
+        ``.live/`` are kept in it.
     jobs : int, optional
         Worker processes for a batch of several runs (default: the protocol's, else all).
     report : bool
@@ -170,27 +185,29 @@ class WatchSession:
         The time [s since the epoch] (a test may pass its own).
     """
 
-    def __init__(self, protocol: Protocol, out: str | Path, *, jobs: int | None = None,
-                 report: bool = True, date: str | None = None,
+    def __init__(self, protocol: Protocol | Plan, out: str | Path | None = None, *,
+                 jobs: int | None = None, report: bool = True, date: str | None = None,
                  echo: Callable[[str], None] | None = None, live_figures: bool = True,
                  clock: Callable[[], float] = time.time) -> None:
-        self.protocol = protocol
-        self.out = Path(out).resolve()
+        plan = protocol if isinstance(protocol, Plan) else prepare(
+            protocol, out, watch_options(jobs=jobs, report=report, date=date))
+        assert plan.out is not None
+        self.plan = plan
+        self.protocol = plan.protocol
+        self.out = plan.out
         self.live_dir = self.out / LIVE_DIR
-        self.cache_dir = self.out / ".cache"
-        self.jobs = jobs if jobs is not None else protocol.processing.jobs
-        self.report = report
-        self.date = date
+        self.jobs = plan.jobs
+        self.report = plan.options.report
         self.echo = echo if echo is not None else _print
         self.live_figures = live_figures
         self.clock = clock
-        w = protocol.watch
+        w = self.protocol.watch
         self.tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
         self.sheet_tracker = arrival.ArrivalTracker(w.settle_s, w.never_stops_s)
-        self.sheet_path = Path(protocol.campaign.run_sheet)
-        self.data_dir = Path(protocol.campaign.data_dir)
+        self.sheet_path = Path(self.protocol.campaign.run_sheet)
+        self.data_dir = Path(self.protocol.campaign.data_dir)
         self.sheet: pd.DataFrame | None = None  # the last good sheet
-        self.day: DayResult | None = None
+        self.batch: Reduced | None = None  # the last batch, reduced
         self.verdicts: list[Verdict] = []
         self.given: dict[int, tuple[str, str | None, str]] = {}
         self.said = _Said()
@@ -218,6 +235,11 @@ class WatchSession:
         self._unlisted: list[Notice] = []
         self.next_runs: list[dict[str, Any]] = []
         arrival.ignore_lease_breaks()
+
+    @property
+    def day(self) -> DayResult | None:
+        """The day of the runs so far (the last batch), or None before the first."""
+        return self.batch.day if self.batch is not None else None
 
     # ------------------------------------------------------------------ sentences
     def say(self, sentence: str, *, once: bool = True) -> None:
@@ -405,12 +427,10 @@ class WatchSession:
         sub = self.runs_so_far()
         new_rows = sum(1 for r in sub["run"] if int(r) not in self.given)
         jobs = 1 if new_rows <= 1 else self.jobs
-        day = process_sheet(self.protocol, sub, jobs=jobs, cache_dir=self.cache_dir,
-                            unlisted=[w for w in self._unlisted
-                                      if not _inside(self.out, self.data_dir, w.file)])
-        if self.date:
-            day = dataclasses.replace(day, report_date=self.date)
-        self.day = day
+        self.batch = reduce_day(self.plan, sub, jobs=jobs,
+                                unlisted=[w for w in self._unlisted
+                                          if not _inside(self.out, self.data_dir, w.file)])
+        day = self.batch.day
         self.batches += 1
         verdicts = self._verdicts(day)
         self.timings["reduce_s"] = time.perf_counter() - t0
@@ -497,10 +517,9 @@ class WatchSession:
         """The outputs of the runs so far (``towtank process``'s writers, manifest and swap);
         without ``pdf`` the last report.pdf and figures/ drawn (by :meth:`_start_report`, or
         already in the folder) are carried over unchanged."""
-        day = self.day
-        if day is None:
+        if self.batch is None:
             return
-        runs = [int(r) for r in day.runs["run"]]
+        runs = [int(r) for r in self.batch.day.runs["run"]]
         pdf_iso: str | None
         pdf_runs: list[int] | None
         if pdf:
@@ -512,18 +531,15 @@ class WatchSession:
         extra = {"watch": {"pdf_runs": pdf_runs, "pdf_written": pdf_iso,
                            "pdf_current": pdf_runs == runs, "runs": runs}}
         try:
-            write_outputs(day, self.out, report=self.report, writers=writers,
-                          provenance_extra=extra)
-        except ProtocolError as exc:  # a file of the user's with an output's name
-            self.say(f"{_strip_dot(str(exc))}; the verdicts go on, the outputs are written "
-                     "again at the next run.")
-            return
-        except OSError as exc:
-            if exc.errno is None or exc.errno not in STORAGE_ERRNOS:
-                raise
+            write_day(self.plan, self.batch, writers=writers, provenance_extra=extra)
+        except OutputsNotWritten as exc:
             self.say(f"the outputs could not be written to {self.out} "
                      f"({os.strerror(exc.errno)}); the folder holds the last complete set, "
                      "and they are written again at the next run.")
+            return
+        except DayStopped as exc:  # a file of the user's with an output's name
+            self.say(f"{_strip_dot(str(exc))}; the verdicts go on, the outputs are written "
+                     "again at the next run.")
             return
         self.writes += 1
         if self.report and pdf:
@@ -789,6 +805,15 @@ class WatchSession:
                 return
             if timeout_s is not None and time.monotonic() - start > timeout_s:
                 return
+
+
+def watch_options(*, jobs: int | None = None, report: bool = True,
+                  date: str | None = None) -> Options:
+    """The runner's options of a watched day: the run cache kept, no replay and no replay
+    record (the outputs change run by run), the workers started per batch, nothing said
+    about the jobs."""
+    return Options(report=report, date=date, jobs=jobs, replay=False, record=False,
+                   prestart=False, quiet=True)
 
 
 def _print(line: str) -> None:

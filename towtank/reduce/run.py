@@ -850,62 +850,34 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
     """
     run = int(row["run"])
     file = str(row["file"])
-    path = protocol.campaign.data_dir / file
     raw = None
     try:
         p = protocol.processing
-        data, stamp = file_bytes_stamped(path)
         nominal = None
         if p.speed_source == "nominal":  # no measured speed: the sheet's set speed
             nominal = float(row.get("speed_nominal", math.nan))
             if not (math.isfinite(nominal) and nominal > 0):
                 raise RunError("[processing] speed_source = \"nominal\" takes the speed from "
                                "the run sheet, and the run has no speed_nominal there")
-        log = (run_speed_log(protocol.speed_log, protocol.campaign.data_dir, file, run)
-               if nominal is None else None)
-        raw = load_run(
-            path,
-            protocol.channels,
-            max_nan_gap_s=p.max_nan_gap_s,
-            max_bad_row_fraction=p.max_bad_row_fraction,
-            do_despike=p.despike,
-            data=data,
-            options=protocol.read,
-            balance=protocol.balance,
-            speed_log=log,
-            speed_nominal=nominal,
-            segment=sheet_segment(row),
-        )
-        # the zeros file at the run file's rate (one acquisition), tapered over the run's trim
-        zeros = run_zero_levels(protocol.zeros, protocol.campaign.data_dir, file, run,
-                                protocol.channels, protocol.read, protocol.balance,
-                                fs=raw.fs, taper_s=p.trim)
-        if zeros is not None:
-            raw = with_zero_levels(raw, *zeros)
+        folder = protocol.campaign.data_dir
+        raw, stamp = load_record(protocol, folder, file, run, speed_nominal=nominal,
+                                 segment=sheet_segment(row))
+        raw = zeroed_record(protocol, raw, folder, file, run)
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)
         window = (float(ws), float(we)) if math.isfinite(ws) and math.isfinite(we) else None
-        red = reduce_run(
+        red = reduce_read(
+            protocol,
             raw,
-            p,
             run=run,
             file=file,
             window_s=window,
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
+            test=str(row.get("test", "")),
             keep_series=keep_series,
         )
-        unmapped = tuple(unmapped_force_warnings(protocol, raw.columns, file))
-        notes = (*red.notes, *unmapped, *units_notes(raw.units))
-        warnings = (*red.warnings, *unmapped)
-        test = str(row.get("test", "")).strip().lower()
-        if red.accel_missing and test == "accel" and red.windows["accel"] is None:
-            # a run made for its acceleration without one: the engineer must hear of it
-            warnings = (*warnings, red.accel_missing)
-        elif red.accel_missing and test == "steady":  # made for its plateau: no news
-            notes = tuple(n for n in notes if n != red.accel_missing)
-        return run, replace(red, notes=notes, warnings=warnings, units=dict(raw.units),
-                            file_stamp=stamp), None, None
+        return run, replace(red, file_stamp=stamp), None, None
     except RunError as exc:
         return run, None, Rejection.of_run_error(run, file, exc.reason), _safe_preview(raw)
     except Exception as exc:  # noqa: BLE001 - a bug must not stop the day
@@ -913,6 +885,84 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             raise
         return run, None, Rejection(run, file, "reduce", _internal_error_sentence(exc),
                                     "internal_error"), None
+
+
+Stamp = tuple[int, int, int, int]  # (size, mtime_ns, ctime_ns, inode)
+
+def load_record(protocol: Protocol | None, folder: Path, file: str, run: int, *,
+                speed_nominal: float | None = None, segment: int | None = None
+                ) -> tuple[RawRun, Stamp | None]:
+    """Load one run's file as the day does, zeros aside (:func:`zeroed_record`).
+
+    ``folder / file`` is the file: the data folder and the run sheet's name for it (the
+    carriage log of ``[speed_log]`` is found from both and the run number ``run``).
+    ``protocol``: its ``[channels]``, ``[read]``, ``[balance]`` and ``[processing]`` checks;
+    None: the canonical channel names in SI units and the default checks.
+    ``speed_nominal``: the set speed [m/s] of a run without a measured speed
+    (``speed_source = "nominal"``; no carriage log then). ``segment``: the acquisition of a
+    file holding several, counted from 1. Returns the run and the file's (size, mtime_ns,
+    ctime_ns, inode) as its bytes were read (None when it changed meanwhile).
+    """
+    path = folder / file
+    data, stamp = file_bytes_stamped(path)
+    p = Processing() if protocol is None else protocol.processing
+    log = (run_speed_log(protocol.speed_log, folder, file, run)
+           if protocol is not None and speed_nominal is None else None)
+    raw = load_run(
+        path,
+        channel_map({}) if protocol is None else protocol.channels,
+        max_nan_gap_s=p.max_nan_gap_s,
+        max_bad_row_fraction=p.max_bad_row_fraction,
+        do_despike=p.despike,
+        data=data,
+        options=None if protocol is None else protocol.read,
+        balance=None if protocol is None else protocol.balance,
+        speed_log=log,
+        speed_nominal=speed_nominal,
+        segment=segment,
+    )
+    return raw, stamp
+
+
+def zeroed_record(protocol: Protocol | None, raw: RawRun, folder: Path, file: str,
+                  run: int) -> RawRun:
+    """The run with the zeros of the protocol's ``[zeros]`` file (at the run file's rate,
+    tapered over the run's trim); the run as it is without ``[zeros]``."""
+    if protocol is None:
+        return raw
+    zeros = run_zero_levels(protocol.zeros, folder, file, run, protocol.channels,
+                            protocol.read, protocol.balance, fs=raw.fs,
+                            taper_s=protocol.processing.trim)
+    return with_zero_levels(raw, *zeros) if zeros is not None else raw
+
+
+def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
+                window_s: tuple[float, float] | None = None,
+                speed_nominal: float = math.nan, accel_nominal: float = math.nan,
+                test: str = "", keep_series: bool = False) -> RunReduction:
+    """Reduce a run read by :func:`load_record` as the day does (before tare).
+
+    :func:`reduce_run` with the protocol's ``[processing]``, then: a note and a warning per
+    channel that looks like a force and that no ``[channels]`` entry uses
+    (:func:`unmapped_force_warnings`), the channels' units with their notes
+    (:func:`units_notes`), and by the sheet's ``test``: an ``accel`` run without a usable
+    constant-acceleration stretch is warned of, a ``steady`` run is not noted for it.
+    ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²]: the sheet's.
+    """
+    red = reduce_run(raw, Processing() if protocol is None else protocol.processing,
+                     run=run, file=file, window_s=window_s, speed_nominal=speed_nominal,
+                     accel_nominal=accel_nominal, keep_series=keep_series)
+    unmapped = (() if protocol is None
+                else tuple(unmapped_force_warnings(protocol, raw.columns, file)))
+    notes = (*red.notes, *unmapped, *units_notes(raw.units))
+    warnings = (*red.warnings, *unmapped)
+    kind = test.strip().lower()
+    if red.accel_missing and kind == "accel" and red.windows["accel"] is None:
+        # a run made for its acceleration without one: the engineer must hear of it
+        warnings = (*warnings, red.accel_missing)
+    elif red.accel_missing and kind == "steady":  # made for its plateau: no news
+        notes = tuple(n for n in notes if n != red.accel_missing)
+    return replace(red, notes=notes, warnings=warnings, units=dict(raw.units))
 
 
 def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: str

@@ -156,7 +156,15 @@ def refuse_foreign_outputs(out_dir: Path) -> None:
 Writer = Callable[["DayResult", Path], object]  # what a writer returns is not used
 
 
-def write_outputs(
+def write_outputs(day: DayResult, out_dir: str | Path, **options: Any) -> Path:
+    """Write every output of the day into ``out_dir``, replacing the previous outputs;
+    ``options`` and the errors as for :func:`write_day_outputs`. Returns the folder, resolved.
+    """
+    write_day_outputs(day, out_dir, **options)
+    return Path(out_dir).resolve()
+
+
+def write_day_outputs(
     day: DayResult,
     out_dir: str | Path,
     *,
@@ -165,13 +173,14 @@ def write_outputs(
     keep: tuple[str, ...] = KEPT,
     export: tuple[str, ...] | list[str] = (),
     provenance_extra: dict[str, Any] | None = None,
-) -> Path:
-    """Write every output of the day into ``out_dir``, replacing the previous outputs.
+) -> DayResult:
+    """Write every output of the day into ``out_dir``, replacing the previous outputs, and
+    return the day as written.
 
     Parameters
     ----------
     day : DayResult
-        The processed day.
+        The processed day; it is not changed.
     out_dir : path
         Output folder; created if needed. Nothing is written there before the new set is
         complete in a temporary folder beside it. A folder holding only towtank's outputs is
@@ -180,11 +189,22 @@ def write_outputs(
         own rename and the other files are left untouched.
     report : bool
         Also write the workbook, the PDF and the figures.
+    writers : list, optional
+        The report's writers, each called with the day and the folder (default: the
+        workbook, the PDF and the figures).
+    keep : tuple of str
+        Entries of ``out_dir`` carried over into the new set (default :data:`KEPT`).
     export : sequence of str
         Also write every usable run's reduced time series in these formats ("mat", "hdf5",
         "parquet") into ``export/`` (:mod:`towtank.report.export`).
     provenance_extra : dict, optional
         More entries for provenance.json (``towtank watch``: which runs the PDF covers).
+
+    Returns
+    -------
+    DayResult
+        ``day``, or with ``export`` a new DayResult whose warnings add the runs that could not
+        be exported.
 
     Raises
     ------
@@ -203,7 +223,7 @@ def write_outputs(
 def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
                    writers: list[Writer] | None, keep: tuple[str, ...],
                    export: tuple[str, ...] | list[str],
-                   provenance_extra: dict[str, Any] | None = None) -> Path:
+                   provenance_extra: dict[str, Any] | None = None) -> DayResult:
     manifest.recover_outputs(out_dir)
     refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)
@@ -239,7 +259,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
             # a folder with the user's own files in it: replace our entries one by one and
             # leave everything else (and the kept cache) where it is
             _replace_entries(tmp, out_dir)
-            return out_dir
+            return day
         moved = []
         for name in keep:  # carried over by a rename, not a copy: the cache can be large
             src = out_dir / name
@@ -260,7 +280,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
         if full is not None and full is not exc:
             raise full from exc
         raise
-    return out_dir
+    return day
 
 
 def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:

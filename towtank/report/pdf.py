@@ -46,8 +46,8 @@ import towtank.report.style as style
 from towtank import __version__
 from towtank.analysis.daywide import group_rejections, run_reason
 from towtank.analysis.hull import mirrored
+from towtank.analysis.scaling import geometry_used
 from towtank.messages import Rejection
-from towtank.pipeline import geometry_used
 from towtank.reference.sets import reference_name
 from towtank.report.figure_base import (
     PAGE_FOOTER_IN,
@@ -240,7 +240,7 @@ def geometry_text(day: DayResult) -> str | None:
              "L·D from length_m and diameter_m (default)": "L·D, the default",
              "computed from the [model.myring] Myring description": "Myring description"}
     parts = []
-    for g in geometry_used(day):
+    for g in geometry_used(day.protocol, day.scaling):
         source = short.get(g["source"], g["source"])
         if source.startswith("given in the protocol ("):
             source = "given as " + source.removeprefix("given in the protocol (").rstrip(")")

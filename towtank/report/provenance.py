@@ -20,8 +20,8 @@ import scipy
 from nptdms import TdmsFile
 
 from towtank import __version__
+from towtank.analysis.scaling import geometry_used
 from towtank.ingest.readers import nptdms_quiet
-from towtank.pipeline import geometry_used
 from towtank.reduce.tare import tare_table
 from towtank.reference.sets import reference_name
 
@@ -40,7 +40,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     p = day.protocol
     if p.model is not None:
         extra = {"geometry": {"geometry_source": p.model.geometry_source,
-                              "quantities": geometry_used(day)},
+                              "quantities": geometry_used(day.protocol, day.scaling)},
                  **(extra or {})}
     if day.scaling is not None:
         extra = {"scaling": _scaling_provenance(day.scaling, p.prototype),

@@ -43,7 +43,7 @@ from openpyxl.utils import get_column_letter
 
 import towtank.report.style as style
 from towtank import __version__
-from towtank.pipeline import geometry_used
+from towtank.analysis.scaling import geometry_used
 from towtank.reduce.tare import tare_table
 from towtank.reference.sets import reference_name
 from towtank.report.provenance import creation_date, provenance, report_date
@@ -381,7 +381,7 @@ def _summary(w: SheetWriter, day: DayResult) -> None:
     if m is not None:
         w.gap()
         w.title("Geometry used")
-        w.table(pd.DataFrame(geometry_used(day)),
+        w.table(pd.DataFrame(geometry_used(day.protocol, day.scaling)),
                 columns=["quantity", "symbol", "value", "unit", "source"], units={})
         w.note(f"geometry_source: {m.geometry_source}")
     w.gap()
