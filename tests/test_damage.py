@@ -283,5 +283,7 @@ def test_a_run_whose_worker_dies_is_rejected_in_one_sentence():
 
     run, red, reason, preview = crashed_record({"run": 30, "file": "run_030.csv"})
     assert (run, red, preview) == (30, None, None)
-    assert reason.startswith("run 30: run_030.csv: the process reducing it stopped abruptly")
-    assert reason.count(". ") == 0 and "\n" not in reason
+    assert reason.kind == "crashed" and (reason.run, reason.file) == (30, "run_030.csv")
+    sentence = str(reason)
+    assert sentence.startswith("run 30: run_030.csv: the process reducing it stopped abruptly")
+    assert sentence.count(". ") == 0 and "\n" not in sentence

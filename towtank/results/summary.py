@@ -45,7 +45,8 @@ def level_text(alpha: float) -> str:
 
 
 def bounds_text(alpha: float) -> tuple[str, str]:
-    """The column names of the interval's ends in a summary: ``[0.025`` and ``0.975]``."""
+    """The column names of the interval's ends in a summary: ``[α/2`` and ``1 − α/2]`` with
+    ``alpha`` written as a number."""
     return f"[{alpha / 2:g}", f"{1 - alpha / 2:g}]"
 
 
