@@ -422,7 +422,7 @@ def test_runs_table_gives_each_run_its_test_area_coefficient(days):
     assert np.allclose(side.ref_area_m2, day.protocol.model.lateral_area)
     cd90 = day.hull.fit.damping.cd90
     assert np.allclose(side.cd_ref, cd90, rtol=0.01)
-    assert (side.cd > 3 * cd90).all()  # the frontal-area value the table no longer shows
+    assert (side.cd > 3 * cd90).all()  # the frontal-area value, which the table does not show
     assert runs.loc[runs.config == "sting", "cd_ref"].isna().all()
     text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
                 if "tare [N]" in p.extract_text())

@@ -48,7 +48,7 @@ def test_remus_protocol_carries_prestero_weight_buoyancy_and_centres(remus):
 
 
 def test_a_given_zero_cb_is_used_and_computed_values_say_so(tmp_path):
-    """``cb_m = [0, 0, 0]`` used to be replaced by the hull's centre of buoyancy in silence;
+    """``cb_m = [0, 0, 0]`` is used as given, not replaced by the hull's centre of buoyancy;
     what is computed from the hull says so in ``sources``."""
     text = REMUS.read_text(encoding="utf-8")
     text = text.replace("origin_m = 0.611", "origin_m = 0.6")  # the hull's CB: 0.6058 m
@@ -220,7 +220,7 @@ def test_circle_fit_is_exact_on_an_arc():
 
 def test_a_looping_dive_reports_no_steady_pitch_and_says_why(tmp_path, remus):
     """REMUS with -5 deg of stern plane pitches up over the vertical (theta from 0 past 360
-    deg) and used to report steady_pitch_deg = 384.4."""
+    deg): no steady_pitch_deg (such as 384.4) is reported, and the metrics say why."""
     import pandas as pd
 
     from towtank.commands.cli import main
