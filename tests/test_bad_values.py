@@ -1,8 +1,8 @@
 """Issue 14, items 8-14 and 16: one bad value (a damaged file, a typo, an impossible setting,
 Ctrl-C, a killed parent) never takes the day down with exit 3, and never leaves workers behind.
 
-Each test builds its case on an unchanged synthetic day and would fail against the code
-before the fix (exit 3, a traceback, a hang or a raw library message).
+Each test builds its case on an unchanged synthetic day and fails on any of exit 3, a
+traceback, a hang or a raw library message.
 """
 
 from __future__ import annotations

@@ -92,8 +92,9 @@ def test_contradictory_or_impossible_mass_properties_are_refused(tmp_path, capsy
 
 
 def test_remus_without_net_buoyancy_holds_depth_and_pitch_with_zero_controls(remus):
-    """Zero controls and --net-buoyancy-N 0: the old model (CB replaced by the hull's, 5 mm
-    ahead of the CG) climbed at 14.7 deg of pitch; CG below CB holds depth and pitch."""
+    """Zero controls and --net-buoyancy-N 0: CG below CB holds depth and pitch (with the CB
+    replaced by the hull's, 5 mm ahead of the CG, the model would climb at 14.7 deg of
+    pitch)."""
     from towtank.vehicle.simulate import simulate
 
     ts = simulate(remus, "dive", 1.5, sternplane_deg=0.0, net_buoyancy_n=0.0, duration_s=60.0)
@@ -257,8 +258,8 @@ def _series(theta_deg, manoeuvre="glide", t_end=200.0):
 
 
 def test_an_oscillating_glider_gets_no_steady_pitch():
-    """A glider whose pitch swings between -33 and -6 deg: the old mean over the last fifth
-    (-19.5 deg) was reported as its steady pitch."""
+    """A glider whose pitch swings between -33 and -6 deg has no steady pitch (not the mean
+    over the last fifth, -19.5 deg)."""
     from towtank.vehicle.simulate import manoeuvre_metrics
 
     t = np.linspace(0.0, 200.0, 4001)
