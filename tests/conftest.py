@@ -21,7 +21,11 @@ from hypothesis import settings
 
 from towtank.testing import synthetic as syn
 
-JOBS = 2  # the CI machine has two cores
+#: Worker processes for the days the fixtures process: none. The suite runs on two pytest-xdist
+#: workers on two cores, so a pool of workers per day only adds its start-up; the tests that are
+#: about worker pools ask for them (``--jobs 2``, ``jobs=2``).
+JOBS = 1
+ROOT = Path(__file__).resolve().parents[1]
 
 # No per-example deadline in any property test: a deadline is a timing bound, and on a loaded
 # two-core CI machine one slow example (a garbage collection, the other worker) would fail a
@@ -175,6 +179,35 @@ def fin_day(tmp_path_factory) -> Day:
     syn.make_fin_day(d, seed=5)
     protocol = syn.write_protocol(d / "p.toml", **syn.fin_protocol_sections(".", "out"))
     return Day(d, protocol, syn.load_truth(d), process(protocol))
+
+
+# ------------------------------------------------------------------------- the sample days
+@dataclass(frozen=True)
+class SampleOutputs:
+    """A shipped sample day processed by ``towtank process --no-report -q``."""
+
+    code: int  # the command's exit status
+    out: Path  # its output folder (with the run cache, .cache)
+
+
+@pytest.fixture(scope="session")
+def sample_outputs(tmp_path_factory) -> Callable[[str], SampleOutputs]:
+    """``sample_outputs(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
+    once per session (per xdist worker) into a session folder. The folder is shared: tests only
+    read it (a test that writes there copies it first)."""
+    done: dict[str, SampleOutputs] = {}
+
+    def get(name: str) -> SampleOutputs:
+        if name not in done:
+            from towtank.commands.cli import main
+
+            out = tmp_path_factory.mktemp(f"sample_{name}") / "out"
+            code = main(["process", str(ROOT / "protocols" / f"{name}.toml"), "--no-report",
+                         "--out", str(out), "-q", "--jobs", str(JOBS)])
+            done[name] = SampleOutputs(code, out)
+        return done[name]
+
+    return get
 
 
 # ------------------------------------------------------------------------- many-seed results
