@@ -8,8 +8,11 @@ then compare the pipeline's numbers with the per-run truth of ``truth.json``.
 
 from __future__ import annotations
 
+import atexit
+import copy
 import os
 import shutil
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +22,7 @@ import pandas as pd
 import pytest
 from hypothesis import settings
 
+from towtank.testing import days as syn_days
 from towtank.testing import synthetic as syn
 
 #: Worker processes for the days the fixtures process: none. The suite runs on two pytest-xdist
@@ -32,6 +36,44 @@ ROOT = Path(__file__).resolve().parents[1]
 # correct test as "Flaky". Speed is measured by the benchmarks, not here.
 settings.register_profile("towtank", deadline=None)
 settings.load_profile("towtank")
+
+
+# ------------------------------------------------------------------ generated days, once each
+_real_make_hull_day = syn_days.make_hull_day
+_TEMPLATES: dict[Any, tuple[Path, Any]] = {}  # the arguments -> (template folder, truth)
+_TEMPLATE_ROOT = Path(tempfile.mkdtemp(prefix="towtank-test-days-"))
+atexit.register(shutil.rmtree, _TEMPLATE_ROOT, ignore_errors=True)
+
+
+def _hashable(value: Any) -> Any:
+    """``value`` as a key (lists and dicts as tuples); TypeError where it has none."""
+    if isinstance(value, list | tuple):
+        return tuple(_hashable(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((k, _hashable(v)) for k, v in value.items()))
+    hash(value)
+    return value
+
+
+def make_hull_day_once(out_dir: str | Path, **kw: Any) -> Any:
+    """:func:`towtank.testing.days.make_hull_day`, each distinct day generated once per session
+    (per xdist worker) and copied into ``out_dir`` with fresh modification times. The generator
+    is seeded, so the copy is the day it would write: the same files and the same truth (a copy
+    of it, which the caller may change)."""
+    try:
+        key = _hashable(kw)
+    except TypeError:  # an argument without a value to compare (an array): generated anew
+        return _real_make_hull_day(out_dir, **kw)
+    if key not in _TEMPLATES:
+        template = Path(tempfile.mkdtemp(dir=_TEMPLATE_ROOT))
+        _TEMPLATES[key] = (template, _real_make_hull_day(template, **kw))
+    template, truth = _TEMPLATES[key]
+    shutil.copytree(template, out_dir, copy_function=shutil.copyfile, dirs_exist_ok=True)
+    return copy.deepcopy(truth)
+
+
+# the tests, towtank.testing's helpers and `towtank synth` run in this process use it
+syn_days.make_hull_day = syn.make_hull_day = make_hull_day_once  # type: ignore[assignment]
 
 
 @dataclass
