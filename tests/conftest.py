@@ -8,8 +8,11 @@ then compare the pipeline's numbers with the per-run truth of ``truth.json``.
 
 from __future__ import annotations
 
+import atexit
+import copy
 import os
 import shutil
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,15 +22,58 @@ import pandas as pd
 import pytest
 from hypothesis import settings
 
+from towtank.testing import days as syn_days
 from towtank.testing import synthetic as syn
 
-JOBS = 2  # the CI machine has two cores
+#: Worker processes for the days the fixtures process: none. The suite runs on two pytest-xdist
+#: workers on two cores, so a pool of workers per day only adds its start-up; the tests that are
+#: about worker pools ask for them (``--jobs 2``, ``jobs=2``).
+JOBS = 1
+ROOT = Path(__file__).resolve().parents[1]
 
 # No per-example deadline in any property test: a deadline is a timing bound, and on a loaded
 # two-core CI machine one slow example (a garbage collection, the other worker) would fail a
 # correct test as "Flaky". Speed is measured by the benchmarks, not here.
 settings.register_profile("towtank", deadline=None)
 settings.load_profile("towtank")
+
+
+# ------------------------------------------------------------------ generated days, once each
+_real_make_hull_day = syn_days.make_hull_day
+_TEMPLATES: dict[Any, tuple[Path, Any]] = {}  # the arguments -> (template folder, truth)
+_TEMPLATE_ROOT = Path(tempfile.mkdtemp(prefix="towtank-test-days-"))
+atexit.register(shutil.rmtree, _TEMPLATE_ROOT, ignore_errors=True)
+
+
+def _hashable(value: Any) -> Any:
+    """``value`` as a key (lists and dicts as tuples); TypeError where it has none."""
+    if isinstance(value, list | tuple):
+        return tuple(_hashable(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((k, _hashable(v)) for k, v in value.items()))
+    hash(value)
+    return value
+
+
+def make_hull_day_once(out_dir: str | Path, **kw: Any) -> Any:
+    """:func:`towtank.testing.days.make_hull_day`, each distinct day generated once per session
+    (per xdist worker) and copied into ``out_dir`` with fresh modification times. The generator
+    is seeded, so the copy is the day it would write: the same files and the same truth (a copy
+    of it, which the caller may change)."""
+    try:
+        key = _hashable(kw)
+    except TypeError:  # an argument without a value to compare (an array): generated anew
+        return _real_make_hull_day(out_dir, **kw)
+    if key not in _TEMPLATES:
+        template = Path(tempfile.mkdtemp(dir=_TEMPLATE_ROOT))
+        _TEMPLATES[key] = (template, _real_make_hull_day(template, **kw))
+    template, truth = _TEMPLATES[key]
+    shutil.copytree(template, out_dir, copy_function=shutil.copyfile, dirs_exist_ok=True)
+    return copy.deepcopy(truth)
+
+
+# the tests, towtank.testing's helpers and `towtank synth` run in this process use it
+syn_days.make_hull_day = syn.make_hull_day = make_hull_day_once  # type: ignore[assignment]
 
 
 @dataclass
@@ -177,6 +223,35 @@ def fin_day(tmp_path_factory) -> Day:
     return Day(d, protocol, syn.load_truth(d), process(protocol))
 
 
+# ------------------------------------------------------------------------- the sample days
+@dataclass(frozen=True)
+class SampleOutputs:
+    """A shipped sample day processed by ``towtank process --no-report -q``."""
+
+    code: int  # the command's exit status
+    out: Path  # its output folder (with the run cache, .cache)
+
+
+@pytest.fixture(scope="session")
+def sample_outputs(tmp_path_factory) -> Callable[[str], SampleOutputs]:
+    """``sample_outputs(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
+    once per session (per xdist worker) into a session folder. The folder is shared: tests only
+    read it (a test that writes there copies it first)."""
+    done: dict[str, SampleOutputs] = {}
+
+    def get(name: str) -> SampleOutputs:
+        if name not in done:
+            from towtank.commands.cli import main
+
+            out = tmp_path_factory.mktemp(f"sample_{name}") / "out"
+            code = main(["process", str(ROOT / "protocols" / f"{name}.toml"), "--no-report",
+                         "--out", str(out), "-q", "--jobs", str(JOBS)])
+            done[name] = SampleOutputs(code, out)
+        return done[name]
+
+    return get
+
+
 # ------------------------------------------------------------------------- many-seed results
 @dataclass
 class SeedResult:
@@ -195,15 +270,17 @@ class SeedResult:
 @pytest.fixture(scope="session")
 def seed_result(tmp_path_factory) -> Callable[..., SeedResult]:
     """``seed_result(seed, fs=200.0)``: a realistic-noise SUT-2 day with that seed, processed;
-    computed once per (seed, fs) for the whole session, its files deleted afterwards."""
+    computed once per (seed, fs) for the whole session, its files deleted afterwards. Plain CSV
+    run files and sheet: the same numbers as gzip and .xlsx, without their writing and
+    reading."""
     cache: dict[tuple[int, float], SeedResult] = {}
 
     def get(seed: int, fs: float = 200.0) -> SeedResult:
         key = (int(seed), float(fs))
         if key not in cache:
             d = tmp_path_factory.mktemp(f"seed{seed}_{int(fs)}hz")
-            truth = syn.make_hull_day(d, seed=seed, fs=fs)
-            day = process(write_hull_protocol(d))
+            truth = syn.make_hull_day(d, seed=seed, fs=fs, file_format="csv", sheet_format="csv")
+            day = process(write_hull_protocol(d, sheet_format="csv"))
             assert day.hull is not None, day.warnings
             cache[key] = SeedResult(
                 seed=int(seed),

@@ -2,7 +2,7 @@
 
 The CIPM-2007 density and Sutherland viscosity against published values; the protocol keys
 (pressure_Pa, relative_humidity_pct) and their nonsense stopped with one sentence; a 1 kg model
-in air no longer stopped by the water-only mass check; a synthetic day in air (forces made at
+in air not stopped by the water-only mass check; a synthetic day in air (forces made at
 the air's density) processed with exit 0 and its truth recovered; the report and workbook name
 the medium.
 """

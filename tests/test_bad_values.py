@@ -1,8 +1,8 @@
 """Issue 14, items 8-14 and 16: one bad value (a damaged file, a typo, an impossible setting,
 Ctrl-C, a killed parent) never takes the day down with exit 3, and never leaves workers behind.
 
-Each test builds its case on an unchanged synthetic day and would fail against the code
-before the fix (exit 3, a traceback, a hang or a raw library message).
+Each test builds its case on an unchanged synthetic day and fails on any of exit 3, a
+traceback, a hang or a raw library message.
 """
 
 from __future__ import annotations
@@ -366,9 +366,9 @@ def _wait_for_pause(proc: subprocess.Popen, marker: Path, stage: str,
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_ctrl_c_is_exit_130_in_one_line_and_the_old_outputs_stay(tmp_path):
-    """Issue 22: the signal used to be sent once the process had three descendants; on a
-    loaded machine the day could end before it was sent (Popen.send_signal then does nothing:
-    exit 0). The process now holds in the middle of the reduction until the signal comes."""
+    """Ctrl-C in the middle of the reduction: exit 130, one line, the old outputs kept. The
+    process holds in the reduction (TOWTANK_TEST_PAUSE_AT) until the signal comes, so the signal
+    always lands mid-day, however loaded the machine."""
     protocol = _day(tmp_path)
     out = tmp_path / "out"
     assert main(["process", str(protocol), "--out", str(out), "-q", "--no-report"]) == 0
@@ -497,7 +497,8 @@ def test_a_file_changed_after_it_was_read_is_not_cached_as_the_new_one(tmp_path,
 
 
 def test_scale_into_a_folder_that_does_not_exist_creates_nothing(tmp_path):
-    """Issue 16: `towtank scale --out /nonexistent` made the folder and a 620 kB .cache."""
+    """`towtank scale --out` into a folder that does not exist makes neither the folder nor a
+    .cache in it."""
     protocol = _day(tmp_path)
     target = tmp_path / "nowhere" / "out"
     assert main(["scale", str(protocol), "--out", str(target)]) == 0

@@ -93,10 +93,10 @@ def written(tmp_path_factory):
     root = tmp_path_factory.mktemp("full_disk")
     protocol = _make_day(root)
     out = root / "out"
-    rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "2",
+    rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "1",
                          *[a for f in ALL for a in ("--export", f)])
     assert rc in (0, 1), err
-    return protocol, out, process_day(protocol, jobs=2)
+    return protocol, out, process_day(protocol, jobs=1)
 
 
 # ------------------------------------------------------------------ item 6: run by run
@@ -118,8 +118,8 @@ def _disk_fills_after(monkeypatch, nbytes: int) -> None:
 
 def test_the_export_holds_one_run_at_a_time(written, tmp_path):
     """The Python and numpy memory live at once while the day is exported (all three
-    formats) stays within a few runs' series, far below the day's: the old export reduced
-    every run first and held them all (8 MB for this day's 6.5 MB of series).
+    formats) stays within a few runs' series, far below the day's (an export that reduced
+    every run first and held them all would hold 8 MB for this day's 6.5 MB of series).
 
     Plain CSV run files: reading a .csv.gz asks Python's gzip for up to 1 GiB at once, which
     tracemalloc counts although the pages are never touched."""
@@ -169,8 +169,8 @@ _PEAK_SCRIPT = textwrap.dedent("""
 @pytest.mark.skipif(not Path("/proc/self/clear_refs").exists(), reason="Linux /proc only")
 def test_the_peak_memory_of_an_export_is_one_runs_worth(tmp_path):
     """A process exporting a 5 kHz day (41 runs, 160 MB of series) grows its resident memory
-    by a few runs' worth and the libraries' caches, not by the day: the old export grew it by
-    more than the whole day (~210 MB)."""
+    by a few runs' worth and the libraries' caches, not by the day (an export holding every
+    run would grow it by more than the whole day, ~210 MB)."""
     _make_day(tmp_path, fs=5000.0, file_format="tdms")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-c", _PEAK_SCRIPT, str(tmp_path)], env=env,
@@ -370,13 +370,15 @@ def _towtank(*args: str) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("size, extra", [("2m", ("--no-report", "--export", "hdf5")),
                                          ("300k", ())], ids=["hdf5", "report"])
 def test_a_real_full_disk_is_exit_2_and_the_folder_stays(tmp_path, small_disk, size, extra):
-    """On a tmpfs too small for the new outputs: ``--export hdf5`` ended in a segmentation
-    fault (exit 139) after a thousand lines of h5py tracebacks, the report in exit 3
-    (zlib.error from the PDF)."""
+    """On a tmpfs too small for the new outputs, ``--export hdf5`` and the report end in exit 2
+    with one sentence, the folder as it was: not a segmentation fault (exit 139) after h5py's
+    tracebacks, not exit 3 from the PDF's zlib.error. A process of its own, since a segmentation
+    fault would end the test run."""
     protocol = _make_day(tmp_path / "day")
     out = small_disk(size) / "out"
-    first = _towtank(str(protocol), "--out", str(out), "-q", "--no-report", "--no-cache")
-    assert first.returncode in (0, 1), first.stderr
+    rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "--no-report", "--no-cache",
+                         "-j", "1")
+    assert rc in (0, 1), err
     before = fingerprint(out)
     done = _towtank(str(protocol), "--out", str(out), "-q", "--no-cache", "-j", "2", *extra)
     assert_full_disk_reported(done.returncode, done.stderr, out, before)
@@ -385,8 +387,8 @@ def test_a_real_full_disk_is_exit_2_and_the_folder_stays(tmp_path, small_disk, s
 # ------------------------------------------------------------------ item 11: NUL in text
 def test_a_nul_in_the_run_sheet_is_exported_as_the_nul_symbol(tmp_path):
     """A NUL in a text cell that reaches ``meta`` (the tare group is free text; so is the
-    campaign's name) and in a remark: exit 0 or 1 (it was exit 3, "VLEN strings do not
-    support embedded NULLs"), and the three formats carry U+2400 in its place."""
+    campaign's name) and in a remark: exit 0 or 1 (not exit 3 from h5py's "VLEN strings do
+    not support embedded NULLs"), and the three formats carry U+2400 in its place."""
     protocol = _make_day(tmp_path)
     sheet = pd.read_csv(tmp_path / "run_sheet.csv", dtype=str, keep_default_na=False)
     sheet["tare_group"] = sheet["tare_group"].replace({"A": "A\x00lab"})

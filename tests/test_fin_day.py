@@ -16,7 +16,6 @@ import pandas as pd
 import pytest
 
 from towtank.analysis import fins
-from towtank.commands.cli import main
 from towtank.pipeline import process_day
 from towtank.reference import sandia
 from towtank.testing.synthetic import (
@@ -206,21 +205,17 @@ def test_control_derivatives_follow_the_measured_slope(fin_day):
     assert ctrl.loc["M_uuds", "value"] < 0  # fins aft of the centre
 
 
-def test_sample_fin_day_cli(tmp_path):
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    code = main(["process", str(root / "protocols" / "naca0015_fin.toml"), "--no-report",
-                 "--out", str(tmp_path / "out"), "-q"])
+def test_sample_fin_day_cli(sample_outputs):
+    code, out = sample_outputs("naca0015_fin").code, sample_outputs("naca0015_fin").out
     assert code == 0
-    t = pd.read_csv(tmp_path / "out" / "fins.csv")
+    t = pd.read_csv(out / "fins.csv")
     assert list(t.columns[: len(FINS_COLUMNS)]) == FINS_COLUMNS
     # one row per fin run of the plan: 10 angles (0, 2.5, 5, 7.5, then 10-35 deg) x 4 speeds;
     # the 5 post (sting) tares are not fin runs
     n_fin = sum(spec.config == "fin" for spec in fin_day_plan())
     assert len(t) == n_fin == 40
     assert np.all(np.abs(t["cl"] - t["cl_sandia"]) < 0.01)
-    curves = pd.read_csv(tmp_path / "out" / "fin_curves.csv")
+    curves = pd.read_csv(out / "fin_curves.csv")
     assert len(curves) == 4 and (curves["n_runs"] == 10).all()
     # every speed resolves the slope: >= 3 angles below its stall, a finite interval
     assert curves[["lift_slope", "lift_slope_ci_low", "lift_slope_ci_high"]].notna().all().all()

@@ -116,11 +116,11 @@ def test_added_mass_interval_coverage_without_mass_uncertainty(seed_result):
     alone; over the 30 cached days of test_interval_coverage they still hold the truth in
     85-100 % of the days, and so does the tare's own interval for m_t.
 
-    The default 0.5 g of the weighed mass dominates X_udot's interval and used to hide that the
-    regression-only interval was too narrow (coverage 88.5 % over 200 days at 100 Hz, |error|/
-    standard error spread 1.44): the tare fit treated its samples as independent, so the
-    standard error of m_t, which goes one-for-one into X_udot and Y_vdot, was 1.8 times too
-    small (m_t coverage 70 %). With the tare and the joint regression clustered by run (CR2,
+    The default 0.5 g of the weighed mass dominates X_udot's interval and would hide a
+    regression-only interval that is too narrow: a tare fit that treats its samples as
+    independent gives a standard error of m_t, which goes one-for-one into X_udot and Y_vdot,
+    1.8 times too small (m_t coverage 70 %; X_udot 88.5 % over 200 days at 100 Hz, |error|/
+    standard error spread 1.44). With the tare and the joint regression clustered by run (CR2,
     towtank.stats.intervals) and t at the Welch-Satterthwaite degrees of freedom, 200 days at 100 Hz
     give 94.5 % for X_udot, 95.0 % for Y_vdot and 94.5 % for m_t (100 days at 200 Hz: 97 %,
     96 %). These 30 seeds are unluckier than that: 93 % for X_udot, 87 % for Y_vdot and m_t.
@@ -229,10 +229,9 @@ def test_primes_do_not_depend_on_water_density_of_run_groups():
     than the angled runs, as happens when they are towed late in the day; C_D(α) and C_D,90
     are properties of the hull, so every prime must equal HullTruth.primes exactly.
 
-    A regression test: fit.fit_transverse used to report Y_v|v| = -K (K from R = K·U|U|, i.e.
-    at the transverse runs' density) while coefficients_table divides it by ½ρL² with ρ the
-    mean density of all hull runs, so the prime was off by ρ_90/ρ_mean. It now fits each run's
-    R/(½ρ_run·A_lat), so C_D,90 is density-free and the prime exact.
+    fit.fit_transverse fits each run's R/(½ρ_run·A_lat), so C_D,90 is density-free and the
+    prime exact; a Y_v|v| = -K taken from R = K·U|U| (at the transverse runs' density) and
+    divided by ½ρL² with ρ the mean density of all hull runs would be off by ρ_90/ρ_mean.
     """
     truth = syn.sut2_hull_truth(1000.0)
     rho_angled, rho_transverse = 1010.0, 990.0

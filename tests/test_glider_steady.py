@@ -49,7 +49,7 @@ def test_roll_zero_is_the_existing_glide(model):
         assert x[0] == pytest.approx(ref["u_m_s"], rel=1e-9)
         assert x[2] == pytest.approx(ref["w_m_s"], rel=1e-7, abs=1e-12)
         assert x[1] == 0.0 and x[3] == 0.0 and x[5] == 0.0
-        # the moving mass supplies the moment the old solver reported as trim_moment_Nm
+        # the moving mass supplies the moment given as trim_moment_Nm in the reference
         mp = model["glider"]["moving_mass_kg"]
         moment = mp * gc.G * x[4] * math.cos(math.radians(pitch))
         assert moment == pytest.approx(-ref["trim_moment_Nm"], rel=1e-6)

@@ -1,12 +1,11 @@
 """Mains hum leaves no bias (issue 23 item 10): 0.05 N of 50 Hz hum on the forces and
 0.005 m/s on the speed, a zero-mean disturbance, must not move any run's zeroed force.
 
-Where it did: the zero taken from the plain mean of a zeros file (``[zeros]``) that is not a
-whole number of hum periods long kept part of a period (up to 0.2 mN), the same for every run
-sharing the file; and a still window at the file's start (``zero_at = "file_start"``, or a short
-still start) sat in the filter's start-up, where the mirrored padding turns hum into a
-transient (up to 0.2 mN). Each test compares the same seeds with and without hum, so that
-everything but the hum cancels.
+Where it could: the plain mean of a zeros file (``[zeros]``) that is not a whole number of hum
+periods long keeps part of a period (up to 0.2 mN), the same for every run sharing the file;
+and a still window at the file's start (``zero_at = "file_start"``, or a short still start) sits
+in the filter's start-up, where the mirrored padding turns hum into a transient (up to 0.2 mN).
+Each test compares the same seeds with and without hum, so that everything but the hum cancels.
 """
 
 from __future__ import annotations
@@ -29,8 +28,8 @@ from towtank.testing.layouts import protocol_sections
 
 HUM_N = 0.05  # [N] on drag and lift
 SPEED_HUM = 0.005  # [m/s]
-#: Largest change of a zero or a steady force that hum may make [N]: 0.005 mN, against up to
-#: 0.2 mN before (issue 23 item 10).
+#: Largest change of a zero or a steady force that hum may make [N]: 0.005 mN (a plain window
+#: mean lets hum move it by up to 0.2 mN).
 BOUND_N = 5e-6
 
 

@@ -183,11 +183,11 @@ def test_the_extended_filter_from_zero(remus, sine_clean):
 
 @pytest.mark.parametrize("seed", [1034, 1050])
 def test_seed_1034_from_zero_converges_with_the_added_mass_bound(remus, sine_clean, seed):
-    """Issue #25 follow-up: on record 1034 the UKF from zero used to stop at t = 0.2 s (a
-    sigma point of N_rdot at +3.4 kg m^2 against I_zz = 3.45 kg m^2: a singular mass matrix).
-    With the added mass bounded to the physical side in the process model (DOT_BOUND) it
-    converges, within 5 % of the truth and inside the 95 % intervals. On record 1050 the bound
-    without the projection of the estimate left N_rdot stuck at +27.5 kg m^2."""
+    """Records 1034 and 1050 from zero converge, within 5 % of the truth and inside the 95 %
+    intervals. On 1034 an unbounded UKF stops at t = 0.2 s (a sigma point of N_rdot at
+    +3.4 kg m^2 against I_zz = 3.45 kg m^2: a singular mass matrix), so the added mass is bounded
+    to the physical side in the process model (DOT_BOUND); on 1050 the bound without the
+    projection of the estimate leaves N_rdot stuck at +27.5 kg m^2."""
     from towtank.vehicle.identify import DOT_BOUND
 
     dyn = BatchModel(remus, PAPER, 1.5)

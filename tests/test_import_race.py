@@ -1,13 +1,13 @@
 """No module is imported by the main thread while the background import thread imports.
 
-About one day in 500 ended in exit 3 with "module 'scipy' has no attribute '_lib'": the
-reduction in this process imported scipy.signal while the thread that preloads the fitting
-libraries imported scipy.stats, and one of them saw scipy half-initialised. The import thread
-now runs only while worker processes do the reducing and this process waits, and is joined
-before anything else runs here. The test records every import (a finder in front of
+Two threads importing one package at once can see it half-initialised (exit 3 with "module
+'scipy' has no attribute '_lib'" about one day in 500, when the reduction in this process
+imports scipy.signal while the thread that preloads the fitting libraries imports scipy.stats).
+The import thread runs only while worker processes do the reducing and this process waits, and
+is joined before anything else runs here. The test records every import (a finder in front of
 sys.meta_path) in a fresh interpreter, where nothing is imported yet, and checks that the main
-thread imports nothing while the thread is alive: with in-process reduction (jobs=1, where the
-old code raced on every day) and with worker processes.
+thread imports nothing while the thread is alive: with in-process reduction (jobs=1, where a
+preloading thread would race on every day) and with worker processes.
 """
 
 from __future__ import annotations

@@ -223,7 +223,8 @@ def test_inspect_into_a_closed_pipe_ends_quietly(day, tmp_path):
 
 
 def test_inspect_help_names_every_format_the_readers_accept(capsys):
-    """Issue 22: `inspect --help` named .csv, .csv.gz and .tdms where every reader works."""
+    """`inspect --help` names every extension a reader accepts, not only .csv, .csv.gz and
+    .tdms."""
     from towtank.ingest.readers import EXTENSIONS, file_format
 
     with pytest.raises(SystemExit):

@@ -352,14 +352,17 @@ def _line(run: int, test: str, angle: float, speed: float, drag: float, status: 
 
 @pytest.fixture(scope="module")
 def sample_day(tmp_path_factory) -> dict[str, Any]:
-    """The sample SUT-2 day processed once: its outputs, runs and per-run trace figures."""
+    """The sample SUT-2 day processed once: its tables, figures and per-run trace figures (the
+    page shows no PDF or workbook: none is written)."""
     import pandas as pd
 
     from towtank.api import process_day
     from towtank.commands.inspect import write_plot
+    from towtank.report.figures import write_figures
 
     out = tmp_path_factory.mktemp("live_day") / "out"
-    day = process_day(SAMPLE, out=out, jobs=1)
+    day = process_day(SAMPLE, out=out, jobs=1, report=False)
+    write_figures(day, out)
     figures = out / "run_figures"
     figures.mkdir()
     for run in (29, 30, 31):

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import JOBS, MANUAL_OFFSETS, MANUAL_RUN, Day, process, write_hull_protocol
+from conftest import MANUAL_OFFSETS, MANUAL_RUN, Day, process, write_hull_protocol
 
 from towtank.commands import cli
 from towtank.testing import synthetic as syn
@@ -276,7 +276,7 @@ def cli_outputs(hull_day: Day, tmp_path_factory):
     with jobs=1 without the cache."""
     root = tmp_path_factory.mktemp("cli")
     a, b = root / "a", root / "b"
-    code_a = _cli(hull_day.protocol, a, "--jobs", str(JOBS))
+    code_a = _cli(hull_day.protocol, a, "--jobs", "2")
     code_b = _cli(hull_day.protocol, b, "--jobs", "1", "--no-cache")
     return {"a": a, "b": b, "code_a": code_a, "code_b": code_b, "csv_a": _csvs(a)}
 

@@ -53,11 +53,31 @@ def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
     fin = root / "fin"
     synthetic.make_fin_day(fin, seed=4)
     synthetic.write_protocol(fin / "p.toml", **synthetic.fin_protocol_sections(".", "out"))
-    for name, folder, date in (("hull", hull, REPORT_DATE), ("fin", fin, None)):
-        day = process_day(folder / "p.toml", jobs=1)
-        day = replace(day, report_date=date)
-        out[name] = (day, write_outputs(day, folder / "out"))
+    processed = {name: (folder, replace(process_day(folder / "p.toml", jobs=1), report_date=date))
+                 for name, folder, date in (("hull", hull, REPORT_DATE), ("fin", fin, None))}
+    with pytest.MonkeyPatch.context() as mp:
+        _forbid_fitting(mp)  # test_report_stage_does_not_refit: the writers fit nothing
+        for name, (folder, day) in processed.items():
+            out[name] = (day, write_outputs(day, folder / "out"))
     return out
+
+
+def _forbid_fitting(mp: pytest.MonkeyPatch) -> None:
+    """Replace every fitting function the report could call by one that fails the test."""
+    import statsmodels.api as sm
+
+    from towtank.analysis import fins, similarity
+    from towtank.analysis import hull as fit
+
+    def boom(*args, **kwargs):
+        raise AssertionError("the report stage must not fit anything")
+
+    for mod, name in ((fit, "fit_cd_alpha"), (fit, "joint_regression"), (fit, "fit_hull"),
+                      (fit, "curve_difference"), (fit, "fit_added_mass"), (sm, "OLS"),
+                      (sm, "WLS"), (np, "polyfit"), (np.linalg, "lstsq"),
+                      (fins, "fin_curves"), (fins, "fin_table"), (similarity, "form_factor"),
+                      (similarity, "scaling_table")):
+        mp.setattr(mod, name, boom)
 
 
 def _header_map(ws) -> dict[str, int]:
@@ -313,24 +333,12 @@ def test_damping_figure_draws_the_stored_fit(days):
     np.testing.assert_allclose(line2.get_ydata(), line.get_ydata() + 0.01)
 
 
-def test_report_stage_does_not_refit(days, tmp_path, monkeypatch):
-    import statsmodels.api as sm
-
-    from towtank.analysis import fins, similarity
-    from towtank.analysis import hull as fit
-
-    def boom(*args, **kwargs):
-        raise AssertionError("the report stage must not fit anything")
-
-    for mod, name in ((fit, "fit_cd_alpha"), (fit, "joint_regression"), (fit, "fit_hull"),
-                      (fit, "curve_difference"), (fit, "fit_added_mass"), (sm, "OLS"),
-                      (sm, "WLS"), (np, "polyfit"), (np.linalg, "lstsq"),
-                      (fins, "fin_curves"), (fins, "fin_table"), (similarity, "form_factor"),
-                      (similarity, "scaling_table")):
-        monkeypatch.setattr(mod, name, boom)
+def test_report_stage_does_not_refit(days):
+    """Both days' outputs are written (the ``days`` fixture) with every fitting function
+    replaced by one that fails (:func:`_forbid_fitting`): the report and the workbook are
+    written all the same."""
     for name in ("hull", "fin"):
-        day, _ = days[name]
-        out = write_outputs(day, tmp_path / name)
+        _, out = days[name]
         assert (out / "report.pdf").stat().st_size > 10_000
         assert (out / "report.xlsx").exists()
 
@@ -422,7 +430,7 @@ def test_runs_table_gives_each_run_its_test_area_coefficient(days):
     assert np.allclose(side.ref_area_m2, day.protocol.model.lateral_area)
     cd90 = day.hull.fit.damping.cd90
     assert np.allclose(side.cd_ref, cd90, rtol=0.01)
-    assert (side.cd > 3 * cd90).all()  # the frontal-area value the table no longer shows
+    assert (side.cd > 3 * cd90).all()  # the frontal-area value, which the table does not show
     assert runs.loc[runs.config == "sting", "cd_ref"].isna().all()
     text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
                 if "tare [N]" in p.extract_text())

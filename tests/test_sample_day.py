@@ -14,8 +14,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from towtank.commands.cli import main
-
 ROOT = Path(__file__).resolve().parents[1]
 TOLERANCE_PCT = {"X_udot": 5, "Y_vdot": 2, "Z_wdot": 2, "X_u|u|": 1, "Y_uv": 1, "Z_uw": 1,
                  "Y_v|v|": 1.5, "Z_w|w|": 1.5, "X_uv": 20, "X_uw": 20, "X_v|v|": 35,
@@ -23,10 +21,8 @@ TOLERANCE_PCT = {"X_udot": 5, "Y_vdot": 2, "Z_wdot": 2, "X_u|u|": 1, "Y_uv": 1, 
 
 
 @pytest.fixture(scope="module")
-def sample(tmp_path_factory):
-    out = tmp_path_factory.mktemp("sample") / "out"
-    code = main(["process", str(ROOT / "protocols" / "sut2_hull.toml"), "--no-report", "--out",
-                 str(out), "-q"])
+def sample(sample_outputs):
+    code, out = sample_outputs("sut2_hull").code, sample_outputs("sut2_hull").out
     coef = pd.read_csv(out / "coefficients.csv").set_index("symbol")
     runs = pd.read_csv(out / "runs.csv")
     with resources.files("towtank.reference").joinpath("data", "sut2_table4.csv").open() as fh:
@@ -67,10 +63,12 @@ def test_diff_pct_against_remus_as_printed(sample):
 
 # --------------------------------------------------------------------- diagnostics, README
 @pytest.fixture(scope="module")
-def sample_day():
+def sample_day(sample_outputs):
+    """The sample day's result, its runs read from the run cache of ``sample_outputs``."""
     from conftest import process
 
-    return process(ROOT / "protocols" / "sut2_hull.toml")
+    return process(ROOT / "protocols" / "sut2_hull.toml",
+                   cache_dir=sample_outputs("sut2_hull").out / ".cache")
 
 
 def test_repeat_groups_of_the_sample_day(sample_day):

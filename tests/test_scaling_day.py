@@ -32,11 +32,11 @@ SCALING_COLUMNS = ["speed_prototype", "re_prototype", "fn_prototype", "speed_mod
 
 
 @pytest.fixture(scope="module")
-def outputs(tmp_path_factory):
-    out = tmp_path_factory.mktemp("sut2") / "out"
-    code = main(["process", str(PROTOCOL), "--no-report", "--out", str(out), "-q"])
-    assert code == 0
-    return out
+def outputs(sample_outputs):
+    """The sample day's output folder (shared: read only)."""
+    done = sample_outputs("sut2_hull")
+    assert done.code == 0
+    return done.out
 
 
 @pytest.fixture(scope="module")

@@ -357,8 +357,8 @@ def test_a_number_too_large_for_a_float_in_the_sheet_rejects_its_run(sheet, tmp_
      "[model.myring] does not describe a hull (float division by zero)")])
 def test_numbers_that_overflowed_downstream_are_exit_2(section, key, value, said, tmp_path,
                                                        capsys):
-    """Found by the property below: each was exit 3 (an overflow or a division by zero in the
-    scaling, IAPWS-08 or the Myring geometry)."""
+    """Numbers that overflow or divide by zero downstream (in the scaling, IAPWS-08 or the
+    Myring geometry; found by the property below) are exit 2 with one sentence, not exit 3."""
     protocol = _day(tmp_path, **{section: {key: value}})
     assert main(["process", str(protocol), "-q", "--no-report"]) == 2
     err = capsys.readouterr().err.strip()

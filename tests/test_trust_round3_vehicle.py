@@ -1,10 +1,10 @@
 """Issue 33, "Trust, third round", items 7 and 15: identify's time gaps, its bounded work,
 progress and row limit; the glider's plausibility checks and identify's ``--noise`` parser.
 
-Each test fails against the code before the fix: a gap of 1e7 s hung identify in its
-Runge-Kutta sub-steps, the integrator took any number of them, there was no progress, a
-moving-mass travel of +-40 m on a 1.65 m hull was accepted by predict and steady, and
-``--noise u=0`` or ``u=1,u=2`` passed the parser.
+The cases: a gap of 1e7 s in a record (Runge-Kutta sub-steps without a bound would hang
+identify), a bound on the integrator's sub-steps, progress while identify works, a moving-mass
+travel of +-40 m on a 1.65 m hull refused by predict and steady, and ``--noise u=0`` or
+``u=1,u=2`` refused by the parser.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ REPO = Path(__file__).resolve().parents[1]
 GLIDER = REPO / "protocols" / "glider_parametric.toml"
 KEEP = ["t_s", "x_m", "y_m", "psi_deg", "u_m_s", "v_m_s", "r_deg_s", "rudder_deg",
         "sternplane_deg"]
-#: Bound of a call that must answer at once (the gap took the code before the fix hours) [s];
+#: Bound of a call that must answer at once (an unbounded gap takes hours) [s];
 #: a bound on hangs, not on speed.
 HANG_S = 60.0
 

@@ -1,10 +1,10 @@
 """Issue 20, items 7 and 10: the vehicle stage checks its inputs.
 
-``towtank simulate`` used to hang (NaN or inf in model.json, --duration-s 1e6, NaN covariance),
-crash with exit 3 (coefficients as a list, a speed as text, deep nesting, --samples 1e9) or
-accept what no vehicle is (mass 0, negative density, zero inertia, a covariance that is not
-one); ``towtank predict`` crashed on a hull table of 1e300 or 1e-300. Every case here must end
-with exit 2 and one sentence per problem, within a hang bound (an alarm turns a hang into a
+``towtank simulate`` is given inputs that could hang it (NaN or inf in model.json, --duration-s
+1e6, NaN covariance), crash it (coefficients as a list, a speed as text, deep nesting, --samples
+1e9) or pass for a vehicle when no vehicle is so (mass 0, negative density, zero inertia, a
+covariance that is not one); ``towtank predict`` a hull table of 1e300 or 1e-300. Every case here
+must end with exit 2 and one sentence per problem, within a hang bound (an alarm turns a hang into a
 failure; the bounds say nothing about speed).
 """
 
@@ -102,7 +102,7 @@ def test_the_good_model_simulates(tmp_path, run):
 
 
 # ---------------------------------------------------------------------------------------------
-# simulate: what used to hang
+# simulate: inputs that could make the integration run for ever
 
 
 @pytest.mark.parametrize("key,value", [
@@ -194,7 +194,7 @@ def test_a_nan_in_the_dynamics_stops_at_once_not_for_ever():
 
 
 # ---------------------------------------------------------------------------------------------
-# simulate: what used to be exit 3
+# simulate: inputs of the wrong type or size (refused, not an internal error)
 
 
 @pytest.mark.parametrize("change,words", [
@@ -246,7 +246,7 @@ def test_samples_without_a_covariance_are_refused_before_simulating(tmp_path, ru
 
 
 # ---------------------------------------------------------------------------------------------
-# simulate: what used to be accepted
+# simulate: values no vehicle has
 
 
 @pytest.mark.parametrize("change,words", [
@@ -315,7 +315,7 @@ def test_every_problem_is_listed_one_sentence_each(tmp_path, run):
 
 def test_only_a_regular_file_is_read(tmp_path, run):
     fifo = tmp_path / "model.json"
-    os.mkfifo(fifo)  # open() of a pipe without a writer used to block for ever
+    os.mkfifo(fifo)  # open() of a pipe without a writer would block for ever
     code, err = run(simulate_args(fifo, tmp_path / "out"))
     refused(code, err, tmp_path / "out", "not a regular file")
     code, err = run(simulate_args(tmp_path, tmp_path / "out"))

@@ -368,8 +368,8 @@ def test_y_uv_measured_as_the_drag_side_component_is_explained_not_doubted():
 
 
 def test_a_term_zero_by_symmetry_is_written_as_zero(tmp_path):
-    """Y_rdot of the sample hull came out as -1.39e-17 kg m (round-off of the quadratures
-    beside Y_vdot ~ 0.6 kg): written as the exact 0 it is (issue 22)."""
+    """Y_rdot of the sample hull, zero by symmetry, is written as the exact 0 it is, not as
+    the round-off of the quadratures (-1.39e-17 kg m beside Y_vdot ~ 0.6 kg)."""
     from pathlib import Path
 
     from towtank.commands.cli import main

@@ -48,7 +48,7 @@ def test_remus_protocol_carries_prestero_weight_buoyancy_and_centres(remus):
 
 
 def test_a_given_zero_cb_is_used_and_computed_values_say_so(tmp_path):
-    """``cb_m = [0, 0, 0]`` used to be replaced by the hull's centre of buoyancy in silence;
+    """``cb_m = [0, 0, 0]`` is used as given, not replaced by the hull's centre of buoyancy;
     what is computed from the hull says so in ``sources``."""
     text = REMUS.read_text(encoding="utf-8")
     text = text.replace("origin_m = 0.611", "origin_m = 0.6")  # the hull's CB: 0.6058 m
@@ -92,8 +92,9 @@ def test_contradictory_or_impossible_mass_properties_are_refused(tmp_path, capsy
 
 
 def test_remus_without_net_buoyancy_holds_depth_and_pitch_with_zero_controls(remus):
-    """Zero controls and --net-buoyancy-N 0: the old model (CB replaced by the hull's, 5 mm
-    ahead of the CG) climbed at 14.7 deg of pitch; CG below CB holds depth and pitch."""
+    """Zero controls and --net-buoyancy-N 0: CG below CB holds depth and pitch (with the CB
+    replaced by the hull's, 5 mm ahead of the CG, the model would climb at 14.7 deg of
+    pitch)."""
     from towtank.vehicle.simulate import simulate
 
     ts = simulate(remus, "dive", 1.5, sternplane_deg=0.0, net_buoyancy_n=0.0, duration_s=60.0)
@@ -220,7 +221,7 @@ def test_circle_fit_is_exact_on_an_arc():
 
 def test_a_looping_dive_reports_no_steady_pitch_and_says_why(tmp_path, remus):
     """REMUS with -5 deg of stern plane pitches up over the vertical (theta from 0 past 360
-    deg) and used to report steady_pitch_deg = 384.4."""
+    deg): no steady_pitch_deg (such as 384.4) is reported, and the metrics say why."""
     import pandas as pd
 
     from towtank.commands.cli import main
@@ -257,8 +258,8 @@ def _series(theta_deg, manoeuvre="glide", t_end=200.0):
 
 
 def test_an_oscillating_glider_gets_no_steady_pitch():
-    """A glider whose pitch swings between -33 and -6 deg: the old mean over the last fifth
-    (-19.5 deg) was reported as its steady pitch."""
+    """A glider whose pitch swings between -33 and -6 deg has no steady pitch (not the mean
+    over the last fifth, -19.5 deg)."""
     from towtank.vehicle.simulate import manoeuvre_metrics
 
     t = np.linspace(0.0, 200.0, 4001)
