@@ -10,6 +10,7 @@ files: :func:`side_files`).
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,6 @@ from typing import Any
 import pandas as pd
 
 from towtank.ingest.protocol_types import Protocol, SpeedLog, ZeroFile
-from towtank.ingest.runfile import sha256_bytes
 from towtank.ingest.runsheet import unlisted_files
 from towtank.ingest.speedlog import log_path, log_sha
 from towtank.messages import Notice, Rejection
@@ -105,8 +105,10 @@ def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
 
 
 def file_sha(path: Path) -> str:
-    """sha256 of a file, or "" when it cannot be read (its run is rejected anyway)."""
+    """sha256 of a file read in blocks (a file of any size in little memory), or "" when it
+    cannot be read (its run is rejected anyway)."""
     try:
-        return sha256_bytes(path.read_bytes())
+        with open(path, "rb") as f:
+            return hashlib.file_digest(f, "sha256").hexdigest()
     except OSError:
         return ""

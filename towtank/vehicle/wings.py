@@ -84,11 +84,12 @@ class Wings:
         """The wings' force and moment [N, N m] in body axes at velocities ``nu``
         (u, v, w [m/s], p, q, r [rad/s])."""
         tau = np.zeros(6)
-        omega = nu[3:]
+        u, _, w, p, q, r = (float(x) for x in nu[:6])  # the sections see u and w only
         for side in (1.0, -1.0):
-            r = np.array([self.x, side * self.span / 4.0, 0.0])
-            vel = nu[:3] + np.cross(omega, r)
-            ul, wl = float(vel[0]), float(vel[2])
+            # a wing's point (x, y, 0), y = ±span/4: its velocity nu[:3] + omega × (x, y, 0)
+            y = side * self.span / 4.0
+            ul = u - r * y
+            wl = w + p * y - q * self.x
             q2 = ul * ul + wl * wl
             if q2 == 0.0:
                 continue
@@ -96,8 +97,12 @@ class Wings:
             cl, cd = wing_coefficients(alpha, self.ar, self.sweep, self.cd0)
             half = 0.5 * self.rho * q2 * 0.5 * self.area
             ca, sa = math.cos(alpha), math.sin(alpha)
-            f = np.array([half * (float(cl) * sa - float(cd) * ca), 0.0,
-                          half * (-float(cl) * ca - float(cd) * sa)])
-            tau[:3] += f
-            tau[3:] += np.cross(r, f)
+            fx = half * (float(cl) * sa - float(cd) * ca)
+            fz = half * (-float(cl) * ca - float(cd) * sa)
+            # force (fx, 0, fz) at (x, y, 0): moment (x, y, 0) × (fx, 0, fz)
+            tau[0] += fx
+            tau[2] += fz
+            tau[3] += y * fz
+            tau[4] -= self.x * fz
+            tau[5] -= y * fx
         return tau
