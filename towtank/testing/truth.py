@@ -83,10 +83,10 @@ class HullTruth:
         Body-lift slope on the frontal area [1/rad].
     length, diameter : float
         Overall length L [m] and diameter D [m].
-    frontal_area : float, optional
-        Frontal area A [m^2]; left out (NaN), pi D^2 / 4.
     lateral_area : float, default 0.0152
         Projected side area for transverse tows [m^2].
+
+    Its ``frontal_area`` [m^2] is pi D^2 / 4 of its diameter.
     """
 
     m: float
@@ -99,12 +99,12 @@ class HullTruth:
     cl_alpha: float = 2.0
     length: float = 0.353
     diameter: float = 0.05
-    frontal_area: float = math.nan
     lateral_area: float = 0.0152
 
-    def __post_init__(self) -> None:
-        if self.frontal_area is None or math.isnan(self.frontal_area):
-            object.__setattr__(self, "frontal_area", math.pi * self.diameter**2 / 4.0)
+    @property
+    def frontal_area(self) -> float:
+        """The hull's frontal area π·D²/4 [m²]."""
+        return math.pi * self.diameter**2 / 4.0
 
     def cd(self, alpha_deg: Any) -> np.ndarray:
         """C_D(alpha) on the frontal area [-] for |alpha| <= 30 deg (``alpha_deg`` [deg])."""
@@ -128,7 +128,6 @@ class HullTruth:
         rho : float
             Water density [kg/m^3] used to turn C_D into dimensional damping.
         """
-        assert self.frontal_area is not None  # set by __post_init__
         q = 0.5 * rho * self.frontal_area
         q_lat = 0.5 * rho * self.lateral_area
         x_uu = -q * self.c0
@@ -219,7 +218,6 @@ def sut2_hull_truth(
         cl_alpha=cl_alpha,
         length=length,
         diameter=diameter,
-        frontal_area=frontal,
         lateral_area=lateral_area,
     )
 
