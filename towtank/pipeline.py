@@ -219,8 +219,9 @@ def analyse(day: DayResult) -> DayResult:
     warning of the day. Returns the day with the results (the given day is not changed)."""
     pause_at("fits")  # a test hook (towtank.runtime.pause); returns at once otherwise
     warns = list(day.warnings)
-    p, runs = day.protocol, day.runs
-    hull = fin = scaling = vehicle = None
+    p = day.protocol
+    runs = tow_runs(day.runs)  # the captive runs have a stage of their own
+    hull = fin = scaling = vehicle = captive = None
     prototype = None
 
     def failed(exc: TowtankError, stage: Stage) -> None:
@@ -242,12 +243,53 @@ def analyse(day: DayResult) -> DayResult:
     except TowtankError as exc:
         failed(exc, "scaling")
     try:
-        vehicle = vehicle_stage(p, hull, prototype)
+        captive, more = captive_stage(p, day.runs, day.reductions)
+        warns += notices(more, "captive")
+    except TowtankError as exc:
+        failed(exc, "captive")
+    try:
+        vehicle = vehicle_stage(p, hull, prototype, captive)
         warns += notices(vehicle.warnings, "vehicle") if vehicle is not None else []
     except TowtankError as exc:
         failed(exc, "vehicle")
     return replace(day, warnings=tuple(warns), hull=hull, fins=fin, scaling=scaling,
-                   vehicle=vehicle, prototype_values=prototype)
+                   vehicle=vehicle, prototype_values=prototype, captive=captive)
+
+
+def tow_runs(runs: pd.DataFrame) -> pd.DataFrame:
+    """runs.csv's rows without the captive runs (``test`` one of
+    :data:`towtank.ingest.runsheet.CAPTIVE_TESTS`): the rows the hull, fin and scaling stages
+    take."""
+    if "test" not in runs.columns:
+        return runs
+    return runs[~runs["test"].isin(CAPTIVE_TESTS)]
+
+
+def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction]
+                  ) -> tuple[CaptiveResult | None, list[str]]:
+    """The captive derivatives (:func:`towtank.analysis.captive.fit_captive`) of the day's
+    usable captive runs and, with ``[captive] means``, of the lab's table of means; (None, [])
+    with neither."""
+    model = protocol.model
+    ok = set(runs.loc[runs["status"] == "ok", "run"].astype(int)) if len(runs) else set()
+    caps = [CaptiveRun.from_arrays(r.run, r.file, r.captive)
+            for run, r in reductions.items() if r.captive and run in ok]
+    warns: list[str] = []
+    options = getattr(protocol, "captive", None)
+    if options is not None and getattr(options, "means", None):
+        table, said = read_means(options)
+        warns += said
+        caps += captive_runs_from_means(table, rho=medium_at(protocol.water)[0],
+                                        length_m=model.length_m,
+                                        balance_x_m=model.balance_x_m,
+                                        means_prime=options.means_prime, model=model)
+    if model is None or not caps:
+        return None, warns
+    fitted = fit_captive(caps, rho=medium_at(protocol.water)[0], length_m=model.length_m,
+                         draught_m=getattr(model, "draught_m", None),
+                         roll_deg=getattr(options, "roll_deg", 90.0))
+    result = CaptiveResult.of(fitted)
+    return result, [*warns, *result.warnings]
 
 
 def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction],
@@ -283,13 +325,18 @@ def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, Run
 
 
 def vehicle_stage(protocol: Protocol, hull: HullResult | None,
-                  prototype_values: pd.DataFrame | None = None) -> VehicleResult | None:
-    """Prediction and model of the protocol's [vehicle]; predicted beside measured."""
+                  prototype_values: pd.DataFrame | None = None,
+                  captive: CaptiveResult | None = None) -> VehicleResult | None:
+    """Prediction and model of the protocol's [vehicle]; predicted beside measured (the
+    hull's coefficients and the captive derivatives)."""
     if getattr(protocol, "vehicle", None) is None:
         return None
     # coefficients.csv as the scaling stage leaves it
-    measured = (scaling.with_prototype_values(hull.coefficients, prototype_values)
-                if hull is not None else None)
+    tables = [scaling.with_prototype_values(hull.coefficients, prototype_values)
+              if hull is not None else None,
+              captive.coefficients if captive is not None else None]
+    present = [t for t in tables if t is not None]
+    measured = pd.concat(present, ignore_index=True) if present else None
     prediction, table, warns = day_vehicle(protocol, measured)
     return VehicleResult(prediction=prediction, coefficients=table, warnings=tuple(warns))
 

@@ -17,9 +17,14 @@ from towtank.analysis.run_coefficients import run_coefficients
 from towtank.analysis.similarity import medium_at
 from towtank.ingest.protocol_types import Protocol
 from towtank.messages import Rejection
+from towtank.reduce.captive import CaptiveRun
 from towtank.reduce.run import RunReduction
 
-__all__ = ["EXTRA_COLUMNS", "RUN_COLUMNS", "run_table"]
+__all__ = ["CAPTIVE_COLUMNS", "EXTRA_COLUMNS", "RUN_COLUMNS", "captive_columns", "run_table"]
+
+#: runs.csv columns of a captive run: its hydrodynamic loads (inertia removed, the moment about
+#: O) as the steady mean (static tests) or the cycle mean (PMM), and the PMM cycles used.
+CAPTIVE_COLUMNS = ["captive_X_N", "captive_Y_N", "captive_N_Nm", "pmm_cycles"]
 
 RUN_COLUMNS = [
     "run", "file", "config", "angle_deg", "status", "reason", "speed_mean", "accel_mean",
@@ -33,6 +38,15 @@ EXTRA_COLUMNS = [
     "steady_start_s", "steady_end_s", "decel_start_s", "decel_end_s", "window_source",
     "fs_hz", "n_samples", "sha256", "notes", "remarks",
 ]
+
+
+def captive_columns(red: RunReduction) -> dict[str, float]:
+    """runs.csv's :data:`CAPTIVE_COLUMNS` of a captive run's reduction (docs/formats.md)."""
+    cr = CaptiveRun.from_arrays(red.run, red.file, red.captive)
+    mean = cr.rows[cr.rows["component"] == "mean"].iloc[0]
+    return {"captive_X_N": float(mean["X"]), "captive_Y_N": float(mean["Y"]),
+            "captive_N_Nm": float(mean["N"]),
+            "pmm_cycles": float(cr.cycles_used) if cr.cycles_used else math.nan}
 
 
 def run_table(
@@ -53,6 +67,7 @@ def run_table(
         if run in rejected:
             status, reason = "rejected", str(rejected[run])
         row: dict[str, Any] = {c: math.nan for c in RUN_COLUMNS + EXTRA_COLUMNS}
+        row.update(dict.fromkeys(CAPTIVE_COLUMNS, math.nan))
         row.update(
             run=run, file=rec["file"], config=rec["config"], angle_deg=rec["angle_deg"],
             status=status, reason=reason, test=rec["test"], tare_group=rec["tare_group"],
@@ -77,10 +92,16 @@ def run_table(
                 w = red.windows.get(name)
                 if w is not None:
                     row[f"{name}_start_s"], row[f"{name}_end_s"] = w
-            row.update(run_coefficients(str(rec["config"]), float(rec["angle_deg"]),
-                                        red.drag_mean, red.lift_mean, u, rho, nu, model, fin))
+            if red.captive:  # its loads are in the captive stage's tables, not a C_D
+                row.update(captive_columns(red))
+            else:
+                row.update(run_coefficients(str(rec["config"]), float(rec["angle_deg"]),
+                                            red.drag_mean, red.lift_mean, u, rho, nu, model,
+                                            fin))
         rows.append(row)
-    df = pd.DataFrame(rows, columns=RUN_COLUMNS + EXTRA_COLUMNS)
+    captive = any(r.captive for r in reductions.values())
+    columns = RUN_COLUMNS + EXTRA_COLUMNS + (CAPTIVE_COLUMNS if captive else [])
+    df = pd.DataFrame(rows, columns=columns)
     extra = [c for c in sheet.columns if c not in df.columns and c not in ("sheet_row",
                                                                            "sheet_error",
                                                                            "window_start_s",

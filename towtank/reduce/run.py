@@ -34,12 +34,14 @@ from towtank.ingest.calibration import UNITS
 from towtank.ingest.describe import force_parts, unmapped_forces
 from towtank.ingest.protocol import Processing, Protocol, channel_map
 from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
+from towtank.ingest.runsheet import CAPTIVE_TESTS
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 from towtank.messages import Rejection
+from towtank.reduce.captive_record import reduce_captive_record
 from towtank.reduce.tare import TareModel
 from towtank.signal import conditioning, phases
-from towtank.signal.drift import drift_verdict
+from towtank.signal.drift import check_drift
 
 PHASE_STEADY = 0
 PHASE_ACCEL = 1
@@ -101,6 +103,9 @@ class RunReduction:
     #: not found, "" when none: a warning for a run made for its acceleration, nothing for
     #: one made for its plateau
     accel_missing: str = ""
+    #: a captive run's reduction (:meth:`towtank.reduce.captive.CaptiveRun.to_arrays`), else
+    #: empty
+    captive: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
@@ -108,19 +113,6 @@ class RunReduction:
 MANUAL_SPREAD_REJECT = 5.0
 #: ... nor one whose mean speed is below this fraction of the run's peak speed (still water).
 MANUAL_MIN_SPEED_FRACTION = 0.2
-
-
-def _check_drift(t: np.ndarray, force: np.ndarray, pre: tuple[int, int] | None,
-                 post: tuple[int, int], steady_force: float, name: str, level: float | None,
-                 notes: list[str], warnings: list[str]) -> None:
-    """The drift check of one force channel (:func:`drift_verdict`): a reject raises RunError,
-    a warning is added to the run's ``notes`` and ``warnings``."""
-    verdict = drift_verdict(t, force, pre, post, steady_force, name, level=level)
-    if verdict.reject is not None:
-        raise RunError(verdict.reject)
-    if verdict.warning is not None:
-        notes.append(verdict.warning)
-        warnings.append(verdict.warning)
 
 
 def manual_window_checks(
@@ -386,7 +378,7 @@ def reduce_nominal(
     for i, name in enumerate(names):
         w = None if name in levels else pre
         if post is not None:
-            _check_drift(t, filt[:, i], w, post, steady_force, name, levels.get(name), notes,
+            check_drift(t, filt[:, i], w, post, steady_force, name, levels.get(name), notes,
                          warnings)
         line, _, drift = conditioning.zero_line(t, filt[:, i], w, post, level=levels.get(name))
         zeroed.append(filt[:, i] - line)
@@ -587,7 +579,7 @@ def zero_forces(
             zeros += [z, 0.0]
             continue
         if post is not None and post[1] - post[0] >= 2:
-            _check_drift(t, force, pre, post, steady_force, name, levels.get(name), notes,
+            check_drift(t, force, pre, post, steady_force, name, levels.get(name), notes,
                          warnings)
         zero, z, drift = conditioning.zero_line(t, force, pre, post, level=levels.get(name))
         out.append(force - zero)
@@ -877,6 +869,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             test=str(row.get("test", "")),
             keep_series=keep_series,
         )
+        if str(row.get("test", "")) in CAPTIVE_TESTS:
+            red = reduce_captive_record(protocol, raw, red, row)
         return run, replace(red, file_stamp=stamp), None, None
     except RunError as exc:
         return run, None, Rejection.of_run_error(run, file, exc.reason), _safe_preview(raw)

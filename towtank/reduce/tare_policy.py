@@ -86,7 +86,8 @@ def apply_tares(
     tared: dict[int, RunReduction] = {}
     rejected: dict[int, Rejection] = {}
     for run, red in reductions.items():
-        if config_of[run] == "sting" or protocol.tare.source == "none":
+        if config_of[run] == "sting" or protocol.tare.source == "none" or red.captive:
+            # a captive balance carries the model alone: its mounting's load is in the zero
             tared[run] = apply_tare(red, None)
             continue
         tare = tares.get(group_of[run])

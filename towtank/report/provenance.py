@@ -45,6 +45,8 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     if day.scaling is not None:
         extra = {"scaling": _scaling_provenance(day.scaling, p.prototype),
                  **(extra or {})}
+    if getattr(day, "captive", None) is not None:
+        extra = {"captive": captive_provenance(day), **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
@@ -231,3 +233,30 @@ def creation_date(date: str | None) -> dt.datetime | None:
     if iso is None:
         return None
     return dt.datetime.strptime(iso, "%Y-%m-%d").replace(tzinfo=dt.UTC)
+
+
+def captive_provenance(day: DayResult) -> dict[str, Any]:
+    """The options a captive day was reduced with, as ITTC 7.5-02-06-02 asks them stated: the
+    moment reference, the rigid-body terms removed (mass, inertia, x_G), the PMM cycles kept
+    of each run, the plane's mapping, and where the static means came from."""
+    p, captive = day.protocol, day.captive
+    assert captive is not None and p.model is not None
+    m = p.model
+    options = getattr(p, "captive", None)
+    cycles = {str(int(r["run"])): int(r["cycles_used"])
+              for _, r in captive.pmm_table.iterrows()} if len(captive.pmm_table) else {}
+    return {
+        "moment_reference": getattr(options, "moment_ref", "origin"),
+        "moment_transfer": "N_O = mz + balance_x_m * fy",
+        "balance_x_m": getattr(m, "balance_x_m", None),
+        "inertia_removed": {"mass_kg": m.mass_kg, "izz_kg_m2": getattr(m, "izz_kg_m2", None),
+                            "iyy_kg_m2": getattr(m, "iyy_kg_m2", None),
+                            "xg_m": getattr(m, "xg_m", None)},
+        "pmm_cycles_used": cycles,
+        "pmm_cycle_rule": "whole cycles inside the steady window, sway amplitude within 5 % "
+                          "of the median cycle's; ramp-in and ramp-out cycles dropped",
+        "roll_deg_vertical": getattr(options, "roll_deg", 90.0),
+        "means": str(getattr(options, "means", "") or ""),
+        "means_prime": bool(getattr(options, "means_prime", False)),
+        "fit": captive.method_note,
+    }

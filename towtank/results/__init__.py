@@ -99,6 +99,8 @@ class DayResult:
     vehicle: VehicleResult | None = None
     #: symbol, prototype_value: the hull coefficients at prototype scale (scaling stage)
     prototype_values: pd.DataFrame | None = None
+    #: the captive derivatives (static drift, rudder, rotating arm, PMM, a lab's means)
+    captive: CaptiveResult | None = None
 
     @property
     def n_rejected(self) -> int:
@@ -142,11 +144,16 @@ class DayResult:
     def coefficients(self) -> pd.DataFrame:
         """coefficients.csv of the day: the hull's coefficients with their prototype values
         and, with a [vehicle], the predicted beside them (empty without hull runs)."""
-        if self.hull is None:
-            return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
         if self.vehicle is not None and self.vehicle.coefficients is not None:
-            return self.vehicle.coefficients  # made from the hull's with the prototype values
-        return with_prototype_values(self.hull.coefficients, self.prototype_values)
+            return self.vehicle.coefficients  # made from the measured with prototype values
+        hull = (with_prototype_values(self.hull.coefficients, self.prototype_values)
+                if self.hull is not None else None)
+        if self.captive is None:
+            return hull if hull is not None else pd.DataFrame(
+                columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
+        if hull is None:
+            return self.captive.coefficients
+        return pd.concat([hull, self.captive.coefficients], ignore_index=True)
 
     def summary(self, alpha: float = 0.05) -> Summary:
         """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,

@@ -61,6 +61,15 @@ MAX_INDEX_BYTES = 256 << 20  # a larger files.json is not read (a campaign's is 
 MAX_PACK_BYTES = 2 << 30  # nor a larger pack
 _PACK_NAME = re.compile(r"pack-[0-9a-f]{1,32}-[0-9]{1,10}\.bin")
 
+#: The run-sheet values and [model] keys a captive run's reduction depends on (its test's
+#: names as :data:`towtank.ingest.runsheet.CAPTIVE_TESTS`, repeated here: the runtime layer
+#: sits below ingest).
+CAPTIVE_TEST_NAMES = ("drift", "rudder", "arm", "sway", "yaw", "yaw_drift")
+CAPTIVE_ROW_KEYS = ("plane", "drift_deg", "rudder_deg", "radius_m", "pmm_amplitude_m",
+                    "pmm_frequency_hz")
+CAPTIVE_MODEL_KEYS = ("mass_kg", "length_m", "izz_kg_m2", "iyy_kg_m2", "xg_m", "balance_x_m")
+
+
 def _num(x: Any) -> Any:
     return None if isinstance(x, float) and math.isnan(x) else x
 
@@ -108,6 +117,11 @@ def settings_key(
         segment = math.nan
     if math.isfinite(segment):
         payload["segment"] = int(segment)
+    captive = {k: _num(row.get(k)) for k in CAPTIVE_ROW_KEYS if k in row}
+    if payload["test"] in CAPTIVE_TEST_NAMES:  # the sheet's settings and the model's inertia
+        model = getattr(protocol, "model", None)
+        payload["captive"] = {**captive, "model": {k: getattr(model, k, None)
+                                                   for k in CAPTIVE_MODEL_KEYS}}
     side = side_sha or row.get("side_files_sha")
     if side:  # its carriage log and zeros file are read with the run
         payload["side_files"] = side

@@ -22,7 +22,7 @@ __all__ = ["OUTPUT_NAMES", "OutputFolder", "check_output_dir"]
 OUTPUT_NAMES = frozenset({
     "runs.csv", "coefficients.csv", "fins.csv", "fin_curves.csv", "fin_control.csv",
     "scaling.csv", "tare.csv", "report.xlsx", "report.pdf", "figures", "provenance.json",
-    "predicted.csv", "model.json", "export",
+    "predicted.csv", "model.json", "export", "pmm.csv",
 })
 
 

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from towtank.errors import RunError
+
 #: A drift above this fraction of the run's steady force is a warning naming it [-].
 DRIFT_WARN_FRACTION = 0.10
 #: A drift above this fraction of the steady force, with the balance still moving after the
@@ -128,3 +130,16 @@ def drift_verdict(
     elif big and fraction > DRIFT_WARN_FRACTION:
         warning = f"{what}: a large balance drift, removed linearly; check the balance"
     return DriftVerdict(drift, fraction, unsettled, settled, warning, reject)
+
+
+def check_drift(t: np.ndarray, force: np.ndarray, pre: tuple[int, int] | None,
+                 post: tuple[int, int], steady_force: float, name: str, level: float | None,
+                 notes: list[str], warnings: list[str]) -> None:
+    """The drift check of one force channel (:func:`drift_verdict`): a reject raises RunError,
+    a warning is added to the run's ``notes`` and ``warnings``."""
+    verdict = drift_verdict(t, force, pre, post, steady_force, name, level=level)
+    if verdict.reject is not None:
+        raise RunError(verdict.reject)
+    if verdict.warning is not None:
+        notes.append(verdict.warning)
+        warnings.append(verdict.warning)

@@ -1,0 +1,118 @@
+"""A captive run's channels as the day reduces them (docs/formats.md, "Captive manoeuvring tests").
+
+The run has been reduced as any run first (:func:`towtank.reduce.run.reduce_read`: its phases,
+steady window and the zero of its drag channel); this module conditions its captive channels the
+same way and hands them to :func:`towtank.reduce.captive.reduce_captive`:
+
+* every channel low-passed by the day's one zero-phase filter ([processing] cutoff_hz);
+* the forces fx, fy [N] and the moment mz [N m] (or a drift run's drag and lift) zeroed as the
+  drag is: the mean of the still window before the carriage moves, with the linear drift to the
+  still window after it stops ([processing] drift), and the same drift check;
+* the PMM's sway [m] and yaw [deg → rad] are positions, not loads: filtered, never zeroed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from towtank.errors import RunError
+from towtank.ingest.protocol_types import Processing, Protocol
+from towtank.ingest.runfile import RawRun
+from towtank.reduce.captive import CaptiveRun, reduce_captive
+from towtank.signal import conditioning
+from towtank.signal.drift import check_drift
+
+if TYPE_CHECKING:
+    from towtank.reduce.run import RunReduction
+
+__all__ = ["CAPTIVE_LOADS", "captive_channels", "reduce_captive_record"]
+
+#: The balance's load channels of a captive run, and the drag/lift pair a drift run may have.
+CAPTIVE_LOADS = ("fx", "fy", "mz")
+#: A PMM frequency closer than this factor to the low-pass cut-off loses its third harmonic.
+PMM_CUTOFF_FACTOR = 3.0
+
+
+def _index_window(t: np.ndarray, window: tuple[float, float] | None) -> tuple[int, int] | None:
+    """The index range [i0, i1) of a window given in seconds (as ``RunReduction.windows``)."""
+    if window is None:
+        return None
+    i0 = int(np.searchsorted(t, window[0], side="left"))
+    i1 = int(np.searchsorted(t, window[1], side="right"))
+    return (i0, i1) if i1 - i0 >= 1 else None
+
+
+def captive_channels(raw: RawRun, red: RunReduction, p: Processing,
+                     notes: list[str], warnings: list[str]) -> dict[str, np.ndarray]:
+    """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows the
+    run's reduction ``red`` found: ``t`` [s], ``U`` [m/s], ``fx``, ``fy`` [N], ``mz`` [N m]
+    (or ``drag``, ``lift`` [N] for a drift run recorded in carriage axes), ``sway`` [m], ``yaw``
+    [rad]. A drift too large for the run raises RunError (:func:`check_drift`), a large one
+    is added to ``notes`` and ``warnings``."""
+    t = raw.time
+    extra = dict(getattr(raw, "extra", None) or {})
+    loads = {k: extra[k] for k in CAPTIVE_LOADS if k in extra}
+    if "fy" not in loads:
+        if raw.lift is None:
+            raise RunError("a captive run needs the balance's side force fy and yaw moment mz "
+                           "(or a drift run's drag and lift); the file has neither fy nor lift")
+        loads = {"drag": raw.drag, "lift": raw.lift}
+    positions = {k: extra[k] for k in ("sway", "yaw") if k in extra}
+    names = list(loads) + list(positions)
+    stack = np.column_stack([raw.speed] + [loads[k] for k in loads]
+                            + [positions[k] for k in positions])
+    filt = conditioning.lowpass(stack, raw.fs, p.cutoff_hz, p.filter_order)
+    out: dict[str, np.ndarray] = {"t": t, "U": filt[:, 0]}
+    pre = _index_window(t, red.windows.get("still_pre"))
+    post = _index_window(t, red.windows.get("still_post")) if p.drift == "linear" else None
+    steady = _index_window(t, red.windows.get("steady"))
+    if pre is None:
+        raise RunError("a captive run needs the still window before the carriage moves for "
+                       "the zero of its balance channels")
+    assert steady is not None  # a reduced run has its steady window
+    for k, name in enumerate(names, start=1):
+        x = filt[:, k]
+        if name in positions:
+            out[name] = np.radians(x) if name == "yaw" else x
+            continue
+        if post is not None and post[1] - post[0] >= 2:
+            base = float(np.mean(x[pre[0]:pre[1]]))
+            load = abs(float(np.mean(x[steady[0]:steady[1]])) - base)
+            check_drift(t, x, pre, post, load, name, None, notes, warnings)
+        zero, _, _ = conditioning.zero_line(t, x, pre, post)
+        out[name] = x - zero
+    return out
+
+
+def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
+                          row: dict[str, Any]) -> RunReduction:
+    """``red`` with the captive reduction of its run (``RunReduction.captive``, the arrays of
+    :meth:`towtank.reduce.captive.CaptiveRun.to_arrays`) and its notes and warnings.
+
+    ``row`` is the run sheet's row (test, plane, drift_deg, rudder_deg, radius_m,
+    pmm_amplitude_m, pmm_frequency_hz). Raises RunError with one sentence for a run that
+    cannot give captive loads."""
+    model = protocol.model
+    if model is None:
+        raise RunError("a captive run needs the protocol's [model] (mass_kg, izz_kg_m2, xg_m, "
+                       "balance_x_m)")
+    p = protocol.processing
+    notes: list[str] = []
+    warnings: list[str] = []
+    freq = float(row.get("pmm_frequency_hz", math.nan))
+    if math.isfinite(freq) and p.cutoff_hz < PMM_CUTOFF_FACTOR * freq:
+        raise RunError(
+            f"the low-pass cut-off [processing] cutoff_hz = {p.cutoff_hz:g} Hz is less than "
+            f"{PMM_CUTOFF_FACTOR:g} times the PMM frequency {freq:g} Hz, so it would cut the "
+            "loads' harmonics; raise cutoff_hz")
+    chans = captive_channels(raw, red, p, notes, warnings)
+    steady = _index_window(raw.time, red.windows.get("steady"))
+    assert steady is not None
+    cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
+                                    run=red.run, file=red.file)
+    return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *notes, *cr.notes),
+                   warnings=(*red.warnings, *warnings))
