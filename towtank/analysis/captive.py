@@ -33,7 +33,11 @@ from towtank.reduce.captive import (
     ROW_COLUMNS,
     VERTICAL_REGRESSORS,
     CaptiveRun,
+    arm_kinematics,
+    body_kinematics,
+    hydrodynamic_loads,
 )
+from towtank.reduce.captive import regressors as make_regressors
 from towtank.stats.quantiles import t_quantile
 
 #: Each regressor's power k of L in its prime (value / (1/2 rho L^k)) for the force and the
@@ -163,8 +167,8 @@ def mapped_rows(run: CaptiveRun, roll_deg: float = 90.0) -> pd.DataFrame:
         out[new] = sign * rows[q]
         out[f"{new}_se"] = rows[f"{q}_se"]
     for k, kv in zip(REGRESSORS, VERTICAL_REGRESSORS, strict=True):
-        sign = _VERTICAL_SIGN[k]
-        out[kv] = rows[k] * (1.0 if sign is None else sign * s)
+        k_sign = _VERTICAL_SIGN[k]
+        out[kv] = rows[k] * (1.0 if k_sign is None else k_sign * s)
     return out
 
 
@@ -182,10 +186,15 @@ def _design(runs: Sequence[CaptiveRun], plane: str, roll_deg: float
     return rows, rows[list(regs)].to_numpy(dtype=float), rows["run_index"].to_numpy()
 
 
+#: A regressor whose largest component is below this fraction of the largest regressor's
+#: is not excited by the runs (measurement noise of the motion, not a test of it).
+EXCITED_FRACTION = 1e-3
+
+
 def _excited(X: np.ndarray) -> np.ndarray:
-    """Columns that carry information: not all (relatively) zero."""
+    """Columns that carry information (see :data:`EXCITED_FRACTION`)."""
     scale = np.max(np.abs(X), axis=0)
-    return scale > 1e-9 * max(1.0, float(np.max(scale)) if scale.size else 1.0)
+    return scale > EXCITED_FRACTION * (float(np.max(scale)) if scale.size else 1.0)
 
 
 def _independent(X: np.ndarray, cols: list[int]) -> tuple[list[int], list[int]]:
@@ -229,6 +238,7 @@ def fit_captive(
     alpha : float
         Significance of the intervals.
     """
+    # loaded on use: statsmodels only for the fit
     import statsmodels.api as sm
 
     runs = tuple(r for r in runs if r.plane == plane)
@@ -295,7 +305,7 @@ def fit_captive(
                          "intervals widened by its square root (model error beyond the "
                          "runs' scatter)")
     by_run, agreement = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
-                                            length_m)
+                                            length_m, chi2)
     notes += agreement
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
@@ -307,15 +317,18 @@ def fit_captive(
 def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
+    chi2_reduced: dict[str, float] | None = None,
 ) -> tuple[pd.DataFrame, list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
     component row where its regressor is largest, the other terms held at the joint fit,
-    its standard error the row's over the regressor; then a chi^2 homogeneity test across the
+    its standard error the row's over the regressor (widened as the joint fit's by the
+    square root of its reduced chi^2 where that exceeds 1); then a chi^2 homogeneity test across the
     runs (chi^2 = sum ((d_i - d_w)/u_i)^2 on runs - 1 dof, d_w the weighted mean) and one
     sentence per derivative.
     """
+    # loaded on use: scipy.stats only for the test
     from scipy.stats import chi2 as chi2_dist
 
     (eq_f, eq_m), regs = plane_names(plane)
@@ -337,13 +350,14 @@ def frequency_agreement(
                 continue
             for eq in (eq_f, eq_m):
                 b = params[eq]
+                widen = math.sqrt(max(1.0, (chi2_reduced or {}).get(eq, 1.0)))
                 others = float(X[best, keep] @ b) - b[j] * xk
                 records.append({
                     "run": run.run, "test": run.test,
                     "omega_prime": run.omega_prime(length_m), "amplitude_m": run.amplitude_m,
                     "symbol": f"{eq}_{regs[k]}",
                     "value": (float(rows.at[best, eq]) - others) / xk,
-                    "std_error": float(rows.at[best, f"{eq}_se"]) / abs(xk)})
+                    "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
     by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
     notes = []
     for sym, g in by_run.groupby("symbol", sort=False):
@@ -382,10 +396,7 @@ def captive_runs_from_means(
     with a finite non-zero radius is an arm run, with a rudder angle a rudder run, else a
     drift run; standard errors are NaN (the fit then works on primes).
     """
-    from towtank.reduce.captive import arm_kinematics, body_kinematics, hydrodynamic_loads
-    from towtank.reduce.captive import regressors as make_regressors
-
-    out = []
+    out: list[CaptiveRun] = []
     for rec in table.to_dict("records"):
         U = float(rec["speed"])
         beta = math.radians(float(rec.get("drift_deg", 0.0) or 0.0))

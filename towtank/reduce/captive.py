@@ -31,6 +31,7 @@ from towtank.errors import RunError
 from towtank.signal import conditioning
 
 if TYPE_CHECKING:
+    # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
 #: The regressors of the horizontal-plane model, in this order (Y = sum Y_k * regressor_k).
@@ -230,6 +231,7 @@ class CaptiveRun:
     @classmethod
     def from_arrays(cls, run: int, file: str, arrays: Mapping[str, np.ndarray]) -> CaptiveRun:
         """The run :meth:`to_arrays` gave; ValueError on anything malformed."""
+        # loaded on use: pandas only for the tables (the workers start light)
         import pandas as pd
 
         try:
@@ -298,12 +300,14 @@ def _code(x: float, names: tuple[str, ...], what: str) -> str:
 
 
 def _rows_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
     return pd.DataFrame(rows, columns=list(ROW_COLUMNS))
 
 
 def _empty(columns: tuple[str, ...]) -> pd.DataFrame:
+    # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
     return pd.DataFrame({c: np.array([], dtype=int if c == "cycle" else float)
@@ -513,7 +517,8 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
 
     t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
     crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
-    (half the peak-to-peak) is within :data:`CYCLE_AMPLITUDE_TOLERANCE` of the median cycle's.
+    (half the peak-to-peak) is within :data:`CYCLE_AMPLITUDE_TOLERANCE` of the median of the
+    full-amplitude cycles (those within 10 % of the largest), the longest unbroken sequence.
     RunError when fewer than :data:`MIN_CYCLES` remain.
     """
     i0, i1 = steady
@@ -524,8 +529,12 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
     amps = np.array([
         0.5 * float(np.ptp(ys[(ts >= a) & (ts < b)])) for a, b in zip(cross[:-1], cross[1:],
                                                                       strict=True)])
-    keep = (np.abs(amps - np.median(amps)) <= CYCLE_AMPLITUDE_TOLERANCE * np.median(amps)
-            if amps.size else np.zeros(0, dtype=bool))
+    keep = np.zeros(amps.size, dtype=bool)
+    if amps.size:
+        # the median of the full-amplitude cycles: the median cycle's when most cycles are
+        # steady, and still the steady cycles' when ramp cycles outnumber them
+        ref = float(np.median(amps[amps >= 0.9 * np.max(amps)]))
+        keep = np.abs(amps - ref) <= CYCLE_AMPLITUDE_TOLERANCE * ref
     idx = np.flatnonzero(keep)
     if idx.size:  # the longest run of consecutive kept cycles
         breaks = np.flatnonzero(np.diff(idx) > 1)
@@ -577,6 +586,7 @@ def pmm_run(
     length_m : float
         L [m], for the omega' of the note (optional).
     """
+    # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
     cyc = pmm_cycles(t, sway, steady)
@@ -595,21 +605,28 @@ def pmm_run(
                        f"sheet's pmm_amplitude_m {y_set:g} m")
     beta, delta = math.radians(setting.drift_deg), math.radians(setting.rudder_deg)
     yaw_rad = np.radians(yaw[sel]) if yaw is not None else np.zeros(ts.size)
-    p_coef = harmonic_fit(ts, yaw_rad, omega)
     U = float(np.mean(speed[steady[0]:steady[1]]))
-    psi = beta + harmonic_eval(p_coef, ts, omega)
-    kin = body_kinematics(
-        U, psi, psi_dot=harmonic_eval(p_coef, ts, omega, 1),
-        psi_ddot=harmonic_eval(p_coef, ts, omega, 2),
-        y_dot=harmonic_eval(y_coef, ts, omega, 1), y_ddot=harmonic_eval(y_coef, ts, omega, 2))
-    X, Y, N = inertia.loads(fx[sel], fy[sel], mz[sel], kin)
-    series = {"X": X, "Y": Y, "N": N, **regressors(kin, delta)}
     edges = np.append(cyc.starts, cyc.t_end) - cyc.starts[0]
-    per_cycle = {k: [] for k in series}  # type: dict[str, list[tuple[float, float, float]]]
+    per_cycle: dict[str, list[tuple[float, float, float]]] = {}
+    whole: dict[str, list[np.ndarray]] = {}
     for a, b in zip(edges[:-1], edges[1:], strict=True):
         m = (ts >= a) & (ts < b)
+        tc = ts[m] - a
+        # the cycle's own motion fit: noise of the motion channels varies from cycle to cycle
+        # and so enters the components' standard errors
+        y_c = harmonic_fit(tc, sway[sel][m], omega)
+        p_c = harmonic_fit(tc, yaw_rad[m], omega)
+        psi = beta + harmonic_eval(p_c, tc, omega)
+        kin = body_kinematics(
+            U, psi, psi_dot=harmonic_eval(p_c, tc, omega, 1),
+            psi_ddot=harmonic_eval(p_c, tc, omega, 2),
+            y_dot=harmonic_eval(y_c, tc, omega, 1), y_ddot=harmonic_eval(y_c, tc, omega, 2))
+        X, Y, N = inertia.loads(fx[sel][m], fy[sel][m], mz[sel][m], kin)
+        series = {"X": X, "Y": Y, "N": N, **regressors(kin, delta)}
         for k, x in series.items():
-            per_cycle[k].append(first_harmonic(ts[m] - a, x[m], omega))
+            per_cycle.setdefault(k, []).append(first_harmonic(tc, x, omega))
+        for k, x in {**series, "y": harmonic_eval(y_c, tc, omega), "psi": psi, **kin}.items():
+            whole.setdefault(k, []).append(np.asarray(x))
     comp = {k: np.array(v) for k, v in per_cycle.items()}  # (cycles, 3)
     n_c = cyc.starts.size
     rows = []
@@ -625,8 +642,9 @@ def pmm_run(
         "Y_in": comp["Y"][:, 1], "Y_quad": comp["Y"][:, 2],
         "N_in": comp["N"][:, 1], "N_quad": comp["N"][:, 2],
         "Y_0": comp["Y"][:, 0], "N_0": comp["N"][:, 0]}, columns=list(CYCLE_COLUMNS))
-    period = cycle_average(ts, f, {"X": X, "Y": Y, "N": N,
-                                   "y": harmonic_eval(y_coef, ts, omega), "psi": psi, **kin})
+    t_kept = np.concatenate([ts[(ts >= a) & (ts < b)] for a, b in zip(edges[:-1], edges[1:],
+                                                                       strict=True)])
+    period = cycle_average(t_kept, f, {k: np.concatenate(v) for k, v in whole.items()})
     more = [f"{n_c} whole steady PMM cycles kept, {cyc.dropped} dropped (ramp-in, ramp-out or "
             "outside the steady window)"]
     if math.isfinite(length_m):
@@ -643,6 +661,7 @@ def cycle_average(ts: np.ndarray, frequency_hz: float, series: Mapping[str, np.n
                   bins: int = PERIOD_BINS) -> pd.DataFrame:
     """The cycle-averaged period: each series averaged in ``bins`` phase bins of the cycles
     starting at ts = 0 (:data:`PERIOD_COLUMNS`; ``t`` [s] the bins' centres)."""
+    # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
     phase = np.mod(ts * frequency_hz, 1.0)

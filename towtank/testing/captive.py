@@ -15,21 +15,30 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from towtank.analysis.captive import fit_captive
+from towtank.ingest.schema import Processing
 from towtank.reduce.captive import (
     PMM_TESTS,
     REGRESSORS,
     VERTICAL_REGRESSORS,
     body_kinematics,
+    condition_captive,
+    reduce_captive,
     regressors,
 )
+from towtank.reduce.run import find_phases
 from towtank.reference.sets import reference_table
+from towtank.results.stages import CaptiveResult
+from towtank.results.summary import from_fit
+from towtank.signal import conditioning
 from towtank.testing.days import write_protocol, write_run_sheet
-from towtank.testing.instruments import Noise, _draw_imperfections, _recorded_channels
+from towtank.testing.instruments import Noise, draw_imperfections, recorded_channels
 from towtank.testing.layouts import write_layout
 from towtank.testing.profiles import plan_profile, sample_times
 
@@ -251,10 +260,10 @@ def simulate_captive_run(
         kin = body_kinematics(U, beta, speed_dot=a)
     X, Y, N = truth_loads(kin, truth, delta, omega_prime)
     fx, fy, mz = balance_readings(X, Y, N, kin, truth)
-    first = _recorded_channels(t, U, a, fx, fy, noise, _draw_imperfections(noise, t.size, rng,
-                                                                          False), fs)
-    second = _recorded_channels(t, U, a, mz, np.zeros_like(t), noise,
-                                _draw_imperfections(noise, t.size, rng, False), fs)
+    first = recorded_channels(t, U, a, fx, fy, noise, draw_imperfections(noise, t.size, rng,
+                                                                        False), fs)
+    second = recorded_channels(t, U, a, mz, np.zeros_like(t), noise,
+                               draw_imperfections(noise, t.size, rng, False), fs)
     out = {"time": t, "speed": first["speed"].to_numpy(), "fx": first["drag"].to_numpy(),
            "fy": first["lift"].to_numpy(), "mz": second["drag"].to_numpy()}
     if pmm:
@@ -359,3 +368,49 @@ def make_captive_day(
         water={"type": "fresh", "temperature_C": 18.0}, model=model, captive=captive)
     return {"derivatives": dict(truth.derivatives), "plane": plane, "seed": seed,
             "model": model, "runs": [replace(s).__dict__ for s in plan]}
+
+
+# ====================================================================== in-process reduction
+
+def reduce_simulated(frame: pd.DataFrame, spec: CaptiveRunSpec, truth: CaptiveTruth,
+                     *, fs: float = 100.0) -> Any:
+    """A simulated run reduced in-process as the day's pipeline does: one low-pass, the phases
+    from the speed (:func:`towtank.reduce.run.find_phases`), the zero line between the still
+    windows, then :func:`towtank.reduce.captive.reduce_captive` (RunError as the day's)."""
+    p = Processing()
+    t = frame["time"].to_numpy(dtype=float)
+    channels = {("U" if k == "speed" else k): frame[k].to_numpy(dtype=float)
+                for k in frame.columns if k != "time"}
+    speed_f = conditioning.lowpass(channels["U"], fs, p.cutoff_hz, p.filter_order)
+    ph = find_phases(t, speed_f, conditioning.derivative(speed_f, fs), fs, p,
+                     steady_required=True)
+    assert ph.steady is not None and ph.still_pre is not None
+    cond = condition_captive(t, channels, fs, cutoff_hz=p.cutoff_hz, order=p.filter_order,
+                             still=(ph.still_pre, ph.still_post))
+    model = SimpleNamespace(mass_kg=truth.mass_kg, izz_kg_m2=truth.izz_kg_m2,
+                            iyy_kg_m2=truth.iyy_kg_m2, xg_m=truth.xg_m,
+                            balance_x_m=truth.balance_x_m, length_m=truth.length_m)
+    return reduce_captive(cond, fs, ph.steady, {**spec.sheet_row(), "plane": truth.plane},
+                          model, run=spec.run, file=f"run_{spec.run:03d}")
+
+
+def simulated_runs(truth: CaptiveTruth | None = None, *, seed: int = 0,
+                   plan: Sequence[CaptiveRunSpec] | None = None, noise: Noise | None = None,
+                   fs: float = 100.0) -> list[Any]:
+    """A generated captive day's runs, reduced in-process (no files): list of CaptiveRun."""
+    truth = CaptiveTruth() if truth is None else truth
+    plan = list(plan) if plan is not None else captive_day_plan()
+    streams = np.random.SeedSequence(seed).spawn(len(plan))
+    return [reduce_simulated(simulate_captive_run(spec, truth, noise=noise, fs=fs,
+                                                  rng=np.random.default_rng(stream)),
+                             spec, truth, fs=fs)
+            for spec, stream in zip(plan, streams, strict=True)]
+
+
+def simulated_result(truth: CaptiveTruth | None = None, *, seed: int = 0,
+                     plan: Sequence[CaptiveRunSpec] | None = None) -> Any:
+    """The :class:`towtank.results.stages.CaptiveResult` of a generated day (in-process)."""
+    truth = CaptiveTruth() if truth is None else truth
+    fit = fit_captive(simulated_runs(truth, seed=seed, plan=plan), rho=998.6,
+                      length_m=truth.length_m, plane=truth.plane, roll_deg=truth.roll_deg)
+    return from_fit(CaptiveResult, fit)
