@@ -302,6 +302,7 @@ RESULTS_WITH_ESTIMATES: tuple[tuple[str, Callable[[pytest.FixtureRequest], Any]]
     ("ScalingResult", lambda request: request.getfixturevalue("sample_hull_day").scaling),
     ("TareResult", lambda request: request.getfixturevalue("sample_hull_day").tare),
     ("IdentifyResult", lambda request: request.getfixturevalue("short_identification")),
+    ("CaptiveResult", lambda request: _captive_result(request)),
 )
 
 
@@ -334,3 +335,9 @@ def test_every_result_with_estimates_speaks_one_vocabulary(name, factory, reques
     for summary in (result.summary(), result.summary(0.10)):
         assert isinstance(summary, Summary) and list(params.index)[0] in str(summary)
     assert isinstance(result.to_frame(), pd.DataFrame) and len(result.to_frame()) > 0
+
+
+def _captive_result(request: pytest.FixtureRequest) -> Any:
+    from towtank.testing.captive import simulated_result
+
+    return simulated_result(seed=1)

@@ -16,6 +16,7 @@ from typing import Any, Generic, TypeVar
 
 import pandas as pd
 
+from towtank.analysis.captive import CaptiveFit
 from towtank.analysis.fin_analysis import FinFit
 from towtank.analysis.hull import SYMBOLS, UNIT, Estimate, HullFit
 from towtank.analysis.scaling import ScalingFit
@@ -27,13 +28,14 @@ from towtank.results.summary import (
     bounds_text,
     esc,
     estimate_frame,
+    estimates_summary,
     level_text,
 )
 from towtank.vehicle.hull import HullProfile
 from towtank.vehicle.stage import VehiclePrediction
 
-__all__ = ["FinResult", "FromPrediction", "HullResult", "ScalingResult", "TareResult",
-           "VehicleResult"]
+__all__ = ["CaptiveResult", "FinResult", "FromPrediction", "HullResult", "ScalingResult",
+           "TareResult", "VehicleResult"]
 
 T = TypeVar("T")
 
@@ -277,3 +279,36 @@ class VehicleResult:
         return f"<p><b>{esc(repr(self))}</b></p>" + self.prediction.predicted.to_html(
             index=False, max_rows=30)
 
+
+
+@dataclass(frozen=True, repr=False)
+class CaptiveResult(CaptiveFit, Estimates):
+    """The captive derivatives of a plane (:class:`towtank.analysis.captive.CaptiveFit`):
+    Y_uv, N_uv, ... (Z_uw, M_uw, ... in the vertical plane) with their 95 % intervals on the
+    fit's n - p degrees of freedom; ``to_frame()`` their coefficients.csv rows."""
+
+    def estimate_frame(self) -> pd.DataFrame:
+        """Every derivative [its unit, SI] with its standard error and degrees of freedom."""
+        est = list(self.estimates.values())
+        return estimate_frame([e.symbol for e in est], [e.value for e in est],
+                              [e.std_error for e in est], [e.dof for e in est],
+                              [e.unit for e in est])
+
+    def summary_title(self) -> str:
+        return f"Captive derivatives, {self.plane} plane ({len(self.runs)} runs)"
+
+    def summary(self, alpha: float = 0.05) -> Summary:
+        """The derivatives with their intervals of level 1 − ``alpha`` and the fit's notes."""
+        return estimates_summary(self.summary_title(), self.estimate_frame(),
+                                 self.conf_int(alpha), alpha, self.notes)
+
+    def to_frame(self) -> pd.DataFrame:
+        """coefficients.csv rows of the derivatives (:meth:`CaptiveFit.table`)."""
+        return self.table()
+
+    def __repr__(self) -> str:
+        return f"CaptiveResult({self.plane}: {len(self.estimates)} derivatives, " \
+               f"{len(self.runs)} runs)"
+
+    def _repr_html_(self) -> str:
+        return self.summary()._repr_html_()

@@ -506,3 +506,8 @@ def write_run_file(
     else:
         raise ValueError(f"{path.name}: a run file must be .csv, .csv.gz or .tdms.")
     return path
+
+
+#: The run's random draws and its recorded channels, for the other generators (captive days).
+draw_imperfections = _draw_imperfections
+recorded_channels = _recorded_channels

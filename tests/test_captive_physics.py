@@ -1,0 +1,314 @@
+"""Captive manoeuvring tests (issue #35 items 1-5): loads, inertia removal and moment transfer,
+drag/lift rotation, PMM kinematics, cycles and harmonics, the joint fit of the derivatives with
+their intervals, agreement over omega', the vertical plane and the run result's arrays."""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.stats import binomtest
+
+from towtank.analysis.captive import fit_captive
+from towtank.errors import RunError
+from towtank.reduce.captive import (
+    CaptiveRun,
+    RunSetting,
+    body_kinematics,
+    drag_lift_to_body,
+    hydrodynamic_loads,
+    upward_crossings,
+)
+from towtank.testing.captive import (
+    HORIZONTAL_SYMBOLS,
+    VERTICAL_SYMBOLS,
+    CaptiveRunSpec,
+    CaptiveTruth,
+    captive_day_plan,
+    make_captive_day,
+    reduce_simulated,
+    simulate_captive_run,
+    simulated_runs,
+)
+
+RHO, L = 998.6, 1.33
+
+
+@cache
+def day_fit(seed: int = 1, plane: str = "horizontal", slope: float = 0.0):
+    truth = CaptiveTruth.vertical() if plane == "vertical" else CaptiveTruth(
+        frequency_slope={"Y_vdot": slope} if slope else {})
+    runs = simulated_runs(truth, seed=seed)
+    return truth, runs, fit_captive(runs, rho=RHO, length_m=L, plane=plane,
+                                    draught_m=0.19)
+
+
+# ============================================================================ hand numbers
+
+def test_inertia_removal_and_moment_transfer_by_hand():
+    """m = 30, I_zG = 3, x_G = 0.1, x_B = 0.2; u = 2, v = 0.1, r = 0.5, u' = 0.3, v' = -0.4,
+    r' = 0.6; fx = 1, fy = 2, mz = 3:
+    X = 1 + 30 (0.3 - 0.05 - 0.025) = 7.75;
+    Y = 2 + 30 (-0.4 + 1.0 + 0.06) = 21.8;
+    N = 3 + 0.2*2 + (3 + 0.3) 0.6 + 30*0.1 (-0.4 + 1.0) = 3 + 0.4 + 1.98 + 1.8 = 7.18."""
+    kin = {k: np.array([x]) for k, x in
+           (("u", 2.0), ("v", 0.1), ("r", 0.5), ("udot", 0.3), ("vdot", -0.4), ("rdot", 0.6))}
+    X, Y, N = hydrodynamic_loads(np.array([1.0]), np.array([2.0]), np.array([3.0]), kin,
+                                 mass_kg=30.0, izz_kg_m2=3.0, xg_m=0.1, balance_x_m=0.2)
+    assert X[0] == pytest.approx(7.75) and Y[0] == pytest.approx(21.8)
+    assert N[0] == pytest.approx(7.18)
+
+
+def test_drag_and_lift_rotate_into_body_axes():
+    """At beta = 0 fx = -drag, fy = lift; at 90 deg fx = lift, fy = drag; at 30 deg by hand."""
+    fx, fy = drag_lift_to_body(2.0, 1.0, 0.0)
+    assert (fx, fy) == pytest.approx((-2.0, 1.0))
+    fx, fy = drag_lift_to_body(2.0, 1.0, math.pi / 2)
+    assert (fx, fy) == pytest.approx((1.0, 2.0))
+    fx, fy = drag_lift_to_body(2.0, 1.0, math.radians(30))
+    assert fx == pytest.approx(-2 * math.sqrt(3) / 2 + 0.5)
+    assert fy == pytest.approx(1.0 + math.sqrt(3) / 2)
+
+
+def test_pure_sway_and_pure_yaw_kinematics():
+    """Pure sway: v = y', r = 0, u = U. Pure yaw with tan(psi) = y'/U: v = 0 at O."""
+    t = np.linspace(0, 4, 401)
+    U, y0, w = 1.5, 0.1, 2.0
+    yd, ydd = y0 * w * np.cos(w * t), -y0 * w * w * np.sin(w * t)
+    sway = body_kinematics(U, 0.0, y_dot=yd, y_ddot=ydd)
+    assert np.allclose(sway["v"], yd) and np.allclose(sway["u"], U)
+    assert np.allclose(sway["r"], 0) and np.allclose(sway["vdot"], ydd)
+    psi = np.arctan(yd / U)
+    psid = np.gradient(psi, t)
+    yaw = body_kinematics(U, psi, psi_dot=psid, y_dot=yd, y_ddot=ydd)
+    assert np.max(np.abs(yaw["v"])) < 1e-12
+    assert np.allclose(yaw["r"], psid)
+
+
+# ===================================================================================== PMM
+
+def _sway_run(**kw):
+    spec = CaptiveRunSpec(run=1, test="sway", amplitude_m=0.1, frequency_hz=0.3, **kw)
+    truth = CaptiveTruth()
+    return spec, truth, simulate_captive_run(spec, truth, rng=3)
+
+
+def test_pmm_cycles_drop_the_ramps_and_need_three():
+    """Two ramp-in and two ramp-out cycles around 4 steady ones: the 4 are kept; with 2
+    steady cycles the run is rejected with the shared sentence."""
+    spec, truth, frame = _sway_run(steady_cycles=4, ramp_cycles=2)
+    run = reduce_simulated(frame, spec, truth)
+    assert run.cycles_used == 4 and len(run.cycles) == 4
+    assert run.frequency_hz == pytest.approx(0.3, rel=1e-3)
+    assert run.amplitude_m == pytest.approx(0.1, rel=1e-3)
+    spec, truth, frame = _sway_run(steady_cycles=2, ramp_cycles=2)
+    with pytest.raises(RunError, match=r"has 2 whole steady PMM cycles; at least 3 are needed "
+                                       r"\(ramp-in and ramp-out cycles are dropped\)"):
+        reduce_simulated(frame, spec, truth)
+
+
+@pytest.mark.parametrize(("field", "value", "what"), [
+    ("frequency_hz", 0.33, "frequency"), ("amplitude_m", 0.107, "amplitude")])
+def test_pmm_motion_checked_against_the_sheet(field, value, what):
+    """A run whose sway is 10 % / 7 % off the sheet's frequency / amplitude is rejected naming
+    both values; 3 % off is accepted."""
+    spec, truth, frame = _sway_run()
+    sheet = CaptiveRunSpec(**{**spec.__dict__, field: value})
+    with pytest.raises(RunError, match=what) as err:
+        reduce_simulated(frame, sheet, truth)
+    assert f"{value:g}" in str(err.value)
+    close = CaptiveRunSpec(**{**spec.__dict__, field: getattr(spec, field) * 1.03})
+    assert reduce_simulated(frame, close, truth).cycles_used == 5
+
+
+def test_upward_crossings_ignore_noise_around_zero():
+    t = np.linspace(0, 10, 10001)
+    y = np.sin(2 * np.pi * 0.5 * t) + 0.01 * np.sin(2 * np.pi * 400 * t)
+    c = upward_crossings(t, y, 0.1)
+    assert np.allclose(np.diff(c), 2.0, atol=1e-3) and c.size == 5
+
+
+def test_harmonics_of_a_pure_sway_run_match_the_truth():
+    """Quiet channels: the in-phase Y of pure sway is Y_vdot v' + inertia-free, i.e.
+    -(Y_vdot) y0 omega^2 (plus Y_v|v|'s first harmonic in the quadrature part)."""
+    from towtank.testing.instruments import Noise
+
+    spec = CaptiveRunSpec(run=1, test="sway", amplitude_m=0.1, frequency_hz=0.3)
+    truth = CaptiveTruth()
+    run = reduce_simulated(simulate_captive_run(spec, truth, noise=Noise.quiet()), spec, truth)
+    rows = run.rows.set_index("component")
+    w = 2 * math.pi * 0.3
+    assert rows.at["sin", "Y"] == pytest.approx(-truth.derivatives["Y_vdot"] * 0.1 * w * w,
+                                                rel=1e-4)
+    v0 = 0.1 * w
+    expected_cos = (truth.derivatives["Y_uv"] * 1.5 * v0
+                    + truth.derivatives["Y_v|v|"] * 8 / (3 * math.pi) * v0 * v0)
+    assert rows.at["cos", "Y"] == pytest.approx(expected_cos, rel=1e-3)
+    assert len(run.period) == 72 and run.period["v"].abs().max() == pytest.approx(v0, rel=1e-2)
+
+
+def test_bad_settings_are_one_sentence():
+    for row, match in [({"test": "drift", "drift_deg": 95}, "beyond"),
+                       ({"test": "arm", "radius_m": 0}, "radius"),
+                       ({"test": "sway", "pmm_frequency_hz": 0.3}, "pmm_amplitude_m"),
+                       ({"test": "spin"}, "not a captive test")]:
+        with pytest.raises(RunError, match=match):
+            RunSetting.from_row(row)
+
+
+# ================================================================================ the fit
+
+def test_joint_fit_recovers_remus():
+    """Every one of the 14 derivatives within 1 % of Prestero's REMUS values (Y_r|r|, weakly
+    excited, within 2 %) and inside its 95 % interval."""
+    truth, _, fit = day_fit()
+    for s in HORIZONTAL_SYMBOLS:
+        e, true = fit.estimates[s], truth.derivatives[s]
+        tol = 0.02 if s == "Y_r|r|" else 0.01
+        assert e.value == pytest.approx(true, rel=tol), s
+        assert e.ci_low <= true <= e.ci_high, s
+    table = fit.table()
+    assert {"prime", "prime_LT", "ci_low", "method", "dof", "n_runs"} <= set(table.columns)
+    row = table.set_index("symbol").loc["N_rdot"]
+    assert row["prime"] == pytest.approx(row["value"] / (0.5 * RHO * L**5))
+    assert row["prime_LT"] == pytest.approx(row["value"] / (0.5 * RHO * 0.19 * L**4))
+    assert "pure yaw" in row["method"] and "static drift" not in row["method"]
+    assert table.set_index("symbol").at["Y_uudr", "method"] == "rudder"
+
+
+def test_nonlinear_terms_do_not_leak_into_linear_ones():
+    """Large-amplitude pure sway only (v up to 0.6 m/s, Y_v|v| v|v| a third of Y): Y_uv
+    still comes out right because v|v|'s harmonics are columns of the same fit."""
+    truth = CaptiveTruth()
+    plan = [CaptiveRunSpec(run=i + 1, test="sway", amplitude_m=a, frequency_hz=f)
+            for i, (a, f) in enumerate([(0.3, 0.3), (0.3, 0.2), (0.2, 0.35), (0.1, 0.3)])]
+    runs = simulated_runs(truth, seed=5, plan=plan)
+    fit = fit_captive(runs, rho=RHO, length_m=L)
+    assert fit.estimates["Y_uv"].value == pytest.approx(truth.derivatives["Y_uv"], rel=0.01)
+    assert fit.estimates["Y_v|v|"].value == pytest.approx(truth.derivatives["Y_v|v|"],
+                                                          rel=0.02)
+    assert any("Y_ur" in n and "not excited" in n for n in fit.notes)
+
+
+def test_one_drift_angle_cannot_separate_uv_from_v_abs_v():
+    truth = CaptiveTruth()
+    plan = [CaptiveRunSpec(run=i + 1, test="drift", drift_deg=8) for i in range(3)]
+    fit = fit_captive(simulated_runs(truth, seed=2, plan=plan), rho=RHO, length_m=L)
+    assert any("not separable" in n and "Y_v|v|" in n for n in fit.notes)
+    assert "Y_v|v|" not in fit.estimates
+
+
+def test_frequency_agreement_said():
+    """A frequency-independent truth: the derivatives agree; a Y_vdot that changes by 8 kg
+    per unit omega': Y_vdot differs."""
+    _, _, fit = day_fit()
+    sentence = next(n for n in fit.notes if n.startswith("Y_vdot from"))
+    assert ": agree (chi^2 = " in sentence and "omega'" in sentence and "y0" in sentence
+    _, _, fit = day_fit(slope=8.0)
+    sentence = next(n for n in fit.notes if n.startswith("Y_vdot from"))
+    assert ": differ (" in sentence
+    assert set(fit.by_run["symbol"]) >= {"Y_vdot", "N_vdot", "Y_rdot", "N_rdot"}
+
+
+def test_vertical_plane_gives_prestero_vertical_derivatives():
+    """A REMUS day with the model rolled +90 deg: Z_uw, M_uw, ... with their signs."""
+    truth, _, fit = day_fit(plane="vertical")
+    for s in VERTICAL_SYMBOLS:
+        e, true = fit.estimates[s], truth.derivatives[s]
+        tol = 0.02 if s == "Z_q|q|" else 0.01
+        assert e.value == pytest.approx(true, rel=tol), s
+    assert fit.estimates["Z_uw"].value == pytest.approx(-28.6, rel=0.01)
+    assert fit.estimates["M_uw"].value == pytest.approx(24.0, rel=0.01)
+    assert fit.estimates["Z_uq"].value == pytest.approx(-5.22, rel=0.01)
+
+
+def test_pmm_table():
+    _, runs, fit = day_fit()
+    pmm = fit.pmm_table()
+    assert len(pmm) == sum(r.test in ("sway", "yaw", "yaw_drift") for r in runs)
+    row = pmm.iloc[0]
+    assert row["omega_prime"] == pytest.approx(2 * math.pi * row["frequency_hz"] * L / 1.5,
+                                               rel=1e-3)
+    assert row["cycles_used"] == 5
+
+
+def _coverage(seeds):
+    inside = total = 0
+    for seed in seeds:
+        truth, _, fit = day_fit(seed=seed)
+        for s in HORIZONTAL_SYMBOLS:
+            e = fit.estimates[s]
+            inside += e.ci_low <= truth.derivatives[s] <= e.ci_high
+            total += 1
+    return inside, total
+
+
+def test_coverage_short():
+    """4 generated days x 14 derivatives: most 95 % intervals hold the truth (the long
+    study is test_coverage_study)."""
+    inside, total = _coverage(range(1, 5))
+    assert inside / total >= 0.85
+
+
+@pytest.mark.slow
+def test_coverage_study():
+    """100 generated days: the fraction of 95 % intervals holding the truth, with its
+    Clopper-Pearson interval, overlaps 0.93-0.98."""
+    inside, total = _coverage(range(100, 200))
+    ci = binomtest(inside, total).proportion_ci()
+    assert ci.low <= 0.98 and ci.high >= 0.93, (inside, total)
+
+
+# ============================================================================ arrays, files
+
+def test_from_arrays_round_trips_and_rejects_malformed():
+    _, runs, _ = day_fit()
+    for run in (runs[0], next(r for r in runs if r.test == "yaw")):
+        back = CaptiveRun.from_arrays(run.run, run.file, run.to_arrays())
+        pd.testing.assert_frame_equal(back.rows, run.rows)
+        pd.testing.assert_frame_equal(back.cycles, run.cycles, check_dtype=False)
+        pd.testing.assert_frame_equal(back.period, run.period)
+        assert back.notes == run.notes and back.test == run.test
+    arrays = runs[0].to_arrays()
+    bad = [{**arrays, "rows": arrays["rows"][:, :5]}, {**arrays, "scalars": arrays["scalars"][:3]},
+           {k: v for k, v in arrays.items() if k != "period"},
+           {**arrays, "notes": np.array([300.0])}, {**arrays, "rows": np.array(["x"])}]
+    for a in bad:
+        with pytest.raises(ValueError, match="malformed captive arrays"):
+            CaptiveRun.from_arrays(1, "f", a)
+
+
+@settings(max_examples=40, deadline=None)
+@given(test=st.sampled_from(["drift", "arm"]), speed=st.floats(0.1, 5),
+       values=st.lists(st.floats(-1e6, 1e6), min_size=14, max_size=14),
+       notes=st.lists(st.text(alphabet=st.characters(blacklist_characters="\x00",
+                                                     blacklist_categories=("Cs",))),
+                      max_size=3))
+def test_arrays_round_trip_exactly(test, speed, values, notes):
+    from towtank.reduce.captive import CYCLE_COLUMNS, PERIOD_COLUMNS, ROW_COLUMNS, _empty
+
+    rows = pd.DataFrame([["mean", *values]], columns=list(ROW_COLUMNS))
+    run = CaptiveRun(run=3, file="r.csv", test=test, plane="horizontal", speed=speed,
+                     drift_deg=2.0, rudder_deg=math.nan, radius_m=4.0, frequency_hz=math.nan,
+                     amplitude_m=math.nan, cycles_used=0, rows=rows,
+                     cycles=_empty(CYCLE_COLUMNS), period=_empty(PERIOD_COLUMNS),
+                     notes=tuple(notes))
+    back = CaptiveRun.from_arrays(3, "r.csv", run.to_arrays())
+    pd.testing.assert_frame_equal(back.rows, run.rows)
+    assert back.notes == run.notes and back.speed == speed
+
+
+@pytest.mark.parametrize("layout", ["csv-units", "lvm"])
+def test_make_captive_day_writes_protocol_sheet_and_files(tmp_path, layout):
+    plan = captive_day_plan()[:2]
+    make_captive_day(tmp_path, layout=layout, plan=plan)
+    assert (tmp_path / "protocol.toml").is_file()
+    sheet = pd.read_csv(tmp_path / "run_sheet.csv")
+    assert list(sheet["test"]) == ["drift", "drift"]
+    files = sorted((tmp_path / "data").iterdir())
+    assert len(files) == 2 and all(f.stat().st_size > 1000 for f in files)

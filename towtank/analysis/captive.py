@@ -1,0 +1,432 @@
+"""The joint fit of the captive derivatives (FORMATS section 8; ITTC 7.5-02-06-02).
+
+One weighted least-squares fit per equation (Y and N; Z and M for vertical-plane runs) over
+every run's components at once (:class:`towtank.reduce.captive.CaptiveRun` rows: a static
+run's steady mean, a PMM run's cycle-averaged mean and first harmonics), so the nonlinear
+regressors' harmonics are columns of the same design matrix as the linear ones and a linear
+derivative is never read off a first harmonic that still holds v|v| or r|r|. The unit of
+information is a run's component, never a sample.
+
+Weights: 1/SE^2 where every row has a standard error, the covariance scaled by the reduced
+chi^2 when it exceeds 1 (model error widens an interval, never narrows it); rows without one (a
+lab's table of means) are fitted on the prime scale (each row over 1/2 rho L^2 U^2, L^3 for
+moments) with the residual-based covariance. Intervals: Student's t on n - p degrees of
+freedom.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
+from towtank.reduce.captive import (
+    COMPONENTS,
+    CYCLE_COLUMNS,
+    PERIOD_COLUMNS,
+    PMM_TESTS,
+    REGRESSORS,
+    ROW_COLUMNS,
+    VERTICAL_REGRESSORS,
+    CaptiveRun,
+    arm_kinematics,
+    body_kinematics,
+    hydrodynamic_loads,
+)
+from towtank.reduce.captive import regressors as make_regressors
+from towtank.stats.quantiles import t_quantile
+
+#: Each regressor's power k of L in its prime (value / (1/2 rho L^k)) for the force and the
+#: moment equation.
+PRIME_POWER = {
+    "uv": (2, 3), "v|v|": (2, 3), "ur": (3, 4), "r|r|": (4, 5), "vdot": (3, 4),
+    "rdot": (4, 5), "uudr": (2, 3), "uu": (2, 3),
+}
+#: Units of the derivatives by regressor for the force and the moment equation.
+UNITS = {
+    "uv": ("kg/m", "kg"), "v|v|": ("kg/m", "kg"), "ur": ("kg/rad", "kg*m/rad"),
+    "r|r|": ("kg*m/rad^2", "kg*m^2/rad^2"), "vdot": ("kg", "kg*m"),
+    "rdot": ("kg*m/rad", "kg*m^2/rad"), "uudr": ("kg/m/rad", "kg/rad"), "uu": ("kg/m", "kg"),
+}
+#: The vertical regressor = this sign times the horizontal one of the rig, times s =
+#: sign(roll_deg) where marked 0 -> -s, 1 -> +s, None -> 1 (w = -s v, q = s r).
+_VERTICAL_SIGN = {"uv": -1, "v|v|": -1, "ur": 1, "r|r|": 1, "vdot": -1, "rdot": 1,
+                  "uudr": None, "uu": None}
+TEST_NAMES = {"drift": "static drift", "rudder": "rudder", "arm": "rotating arm",
+              "sway": "pure sway", "yaw": "pure yaw", "yaw_drift": "yaw with drift"}
+#: Agreement across PMM runs: "differ" below this p value of the chi^2 homogeneity test.
+AGREEMENT_P = 0.01
+#: The derivatives whose agreement over omega' and amplitude is tested (acceleration and
+#: velocity derivatives a PMM run measures).
+AGREEMENT_REGRESSORS = ("vdot", "rdot", "uv", "ur")
+PMM_COLUMNS = ("run", "test", "frequency_hz", "amplitude_m", "omega_prime", "cycles_used",
+               "fy_in", "fy_quad", "mz_in", "mz_quad", "fy_in_se", "fy_quad_se", "mz_in_se",
+               "mz_quad_se")
+BY_RUN_COLUMNS = ("run", "test", "omega_prime", "amplitude_m", "symbol", "value", "std_error")
+
+
+def plane_names(plane: str) -> tuple[tuple[str, str], tuple[str, ...]]:
+    """The equations' letters and the regressor names of ``plane``."""
+    if plane == "vertical":
+        return ("Z", "M"), VERTICAL_REGRESSORS
+    return ("Y", "N"), REGRESSORS
+
+
+def symbol(eq: str, k: int, plane: str) -> str:
+    """The symbol of regressor ``k`` (index in :data:`REGRESSORS`) in equation ``eq``."""
+    return f"{eq}_{plane_names(plane)[1][k]}"
+
+
+@dataclass(frozen=True)
+class CaptiveEstimate:
+    """One fitted derivative [SI]: value, standard error, degrees of freedom, 95 % interval,
+    the tests its rows came from and how many runs carry it."""
+
+    symbol: str
+    value: float
+    std_error: float
+    dof: float
+    ci_low: float
+    ci_high: float
+    unit: str
+    prime: float
+    prime_lt: float
+    scale: float
+    scale_lt: float
+    method: str
+    n_runs: int
+
+
+@dataclass(frozen=True)
+class CaptiveFit:
+    """The captive derivatives of a day (:func:`fit_captive`)."""
+
+    plane: str
+    rho: float
+    length_m: float
+    draught_m: float | None
+    estimates: dict[str, CaptiveEstimate]
+    runs: tuple[CaptiveRun, ...]
+    notes: tuple[str, ...] = ()
+    by_run: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(
+        columns=list(BY_RUN_COLUMNS)))
+    chi2_reduced: dict[str, float] = field(default_factory=dict)
+
+    def table(self) -> pd.DataFrame:
+        """coefficients.csv rows: the hull table's columns (NaN where not applicable) and
+        ``prime_LT``."""
+        rows = []
+        for e in self.estimates.values():
+            half = (e.ci_high - e.ci_low) / 2.0
+            rows.append({
+                "symbol": e.symbol, "value": e.value, "unit": e.unit, "prime": e.prime,
+                "ci_low": e.ci_low, "ci_high": e.ci_high, "method": e.method,
+                "reference_prime": math.nan, "diff_pct": math.nan,
+                "prototype_value": math.nan, "std_error": e.std_error,
+                "prime_ci_low": (e.value - half) / e.scale,
+                "prime_ci_high": (e.value + half) / e.scale, "n_runs": e.n_runs,
+                "alt_value": math.nan, "alt_method": "", "agreement": "",
+                "u_regression": e.std_error, "u_tare": math.nan, "u_mass": math.nan,
+                "dof": e.dof, "prime_LT": e.prime_lt,
+            })
+        return pd.DataFrame(rows, columns=[*COEFFICIENT_COLUMNS, *COEFFICIENT_EXTRA_COLUMNS,
+                                           "prime_LT"])
+
+    def pmm_table(self) -> pd.DataFrame:
+        """pmm.csv: one row per PMM run, the first harmonics of Y and N about O."""
+        rows = []
+        for r in self.runs:
+            if r.test not in PMM_TESTS:
+                continue
+            rr = r.rows.set_index("component")
+            rows.append({
+                "run": r.run, "test": r.test, "frequency_hz": r.frequency_hz,
+                "amplitude_m": r.amplitude_m, "omega_prime": r.omega_prime(self.length_m),
+                "cycles_used": r.cycles_used,
+                "fy_in": rr.at["sin", "Y"], "fy_quad": rr.at["cos", "Y"],
+                "mz_in": rr.at["sin", "N"], "mz_quad": rr.at["cos", "N"],
+                "fy_in_se": rr.at["sin", "Y_se"], "fy_quad_se": rr.at["cos", "Y_se"],
+                "mz_in_se": rr.at["sin", "N_se"], "mz_quad_se": rr.at["cos", "N_se"],
+            })
+        return pd.DataFrame(rows, columns=list(PMM_COLUMNS))
+
+
+def mapped_rows(run: CaptiveRun, roll_deg: float = 90.0) -> pd.DataFrame:
+    """The run's component rows in its plane's names: a vertical run's rig Y, N and
+    regressors turned into Z = -s Y, M = s N and w = -s v, q = s r (s = sign(roll_deg))."""
+    rows = run.rows
+    if run.plane != "vertical":
+        return rows
+    s = math.copysign(1.0, roll_deg)
+    out = pd.DataFrame({"component": rows["component"]})
+    for q, new, sign in (("X", "X", 1.0), ("Y", "Z", -s), ("N", "M", s)):
+        out[new] = sign * rows[q]
+        out[f"{new}_se"] = rows[f"{q}_se"]
+    for k, kv in zip(REGRESSORS, VERTICAL_REGRESSORS, strict=True):
+        k_sign = _VERTICAL_SIGN[k]
+        out[kv] = rows[k] * (1.0 if k_sign is None else k_sign * s)
+    return out
+
+
+def _design(runs: Sequence[CaptiveRun], plane: str, roll_deg: float
+            ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
+    """All rows of the runs (with run, test, speed), the run index of each row."""
+    frames = []
+    for i, r in enumerate(runs):
+        m = mapped_rows(r, roll_deg).copy()
+        m["run_index"] = i
+        m["speed"] = r.speed
+        frames.append(m)
+    rows = pd.concat(frames, ignore_index=True)
+    regs = plane_names(plane)[1]
+    return rows, rows[list(regs)].to_numpy(dtype=float), rows["run_index"].to_numpy()
+
+
+#: A regressor whose largest component is below this fraction of the largest regressor's
+#: is not excited by the runs (measurement noise of the motion, not a test of it).
+EXCITED_FRACTION = 1e-3
+
+
+def _excited(X: np.ndarray) -> np.ndarray:
+    """Columns that carry information (see :data:`EXCITED_FRACTION`)."""
+    scale = np.max(np.abs(X), axis=0)
+    return scale > EXCITED_FRACTION * (float(np.max(scale)) if scale.size else 1.0)
+
+
+def _independent(X: np.ndarray, cols: list[int]) -> tuple[list[int], list[int]]:
+    """``cols`` split into those that raise the rank in order and those that do not."""
+    keep: list[int] = []
+    dropped: list[int] = []
+    norm = X / np.maximum(np.max(np.abs(X), axis=0), 1e-300)
+    for c in cols:
+        trial = keep + [c]
+        if np.linalg.matrix_rank(norm[:, trial], tol=1e-8 * math.sqrt(X.shape[0])) == len(
+                trial):
+            keep = trial
+        else:
+            dropped.append(c)
+    return keep, dropped
+
+
+def _and(names: Sequence[str]) -> str:
+    return ", ".join(names)
+
+
+def fit_captive(
+    runs: Sequence[CaptiveRun], *, rho: float, length_m: float, draught_m: float | None = None,
+    plane: str = "horizontal", roll_deg: float = 90.0, alpha: float = 0.05,
+) -> CaptiveFit:
+    """The derivatives of ``plane`` from the captive runs of that plane (see module docstring).
+
+    Parameters
+    ----------
+    runs : sequence of CaptiveRun
+        The day's reduced captive runs (those of the other plane are left out).
+    rho : float
+        Water density [kg/m^3] for the primes.
+    length_m : float
+        L [m].
+    draught_m : float, optional
+        T [m]: the primes on the L*T basis (``prime_LT``).
+    plane : {"horizontal", "vertical"}
+    roll_deg : float
+        The model's roll on the rig for vertical runs [deg] (its sign maps the axes).
+    alpha : float
+        Significance of the intervals.
+    """
+    # loaded on use: statsmodels only for the fit
+    import statsmodels.api as sm
+
+    runs = tuple(r for r in runs if r.plane == plane)
+    (eq_f, eq_m), regs = plane_names(plane)
+    notes: list[str] = []
+    if not runs:
+        return CaptiveFit(plane, rho, length_m, draught_m, {}, (), (f"no {plane} captive runs",))
+    rows, X, run_index = _design(runs, plane, roll_deg)
+    excited = _excited(X)
+    absent = [k for k in range(len(regs)) if not excited[k]]
+    if absent:
+        notes.append(f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in absent])}: not "
+                     "excited by these runs (left out)")
+    keep, dropped = _independent(X, [k for k in range(len(regs)) if excited[k]])
+    if dropped:
+        notes.append(
+            f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in dropped])}: not separable "
+            "from the other terms by these runs (e.g. too few drift angles), left out")
+    estimates: dict[str, CaptiveEstimate] = {}
+    chi2: dict[str, float] = {}
+    params: dict[str, np.ndarray] = {}
+    Xk = X[:, keep]
+    n, p = Xk.shape
+    if n <= p:
+        notes.append(f"{n} run components for {p} derivatives: no interval can be given")
+    tests = [runs[i].test for i in run_index]
+    for eq, moment in ((eq_f, False), (eq_m, True)):
+        y = rows[eq].to_numpy(dtype=float)
+        se = rows[f"{eq}_se"].to_numpy(dtype=float)
+        with_se = bool(np.all(np.isfinite(se) & (se > 0)))
+        if with_se:
+            w = 1.0 / se**2
+        else:
+            U = rows["speed"].to_numpy(dtype=float)
+            w = 1.0 / (0.5 * rho * length_m ** (3 if moment else 2) * U**2) ** 2
+        res = sm.WLS(y, Xk, weights=w).fit()
+        dof = float(n - p)
+        red = float(np.sum(w * res.resid**2) / dof) if dof > 0 else math.nan
+        chi2[eq] = red
+        if with_se:
+            res = sm.WLS(y, Xk, weights=w).fit(cov_type="fixed scale",
+                                                cov_kwds={"scale": max(1.0, red)})
+        coef = np.asarray(res.params)
+        bse = np.asarray(res.bse) if dof > 0 else np.full(p, math.nan)
+        params[eq] = coef
+        tq = t_quantile(dof, alpha)
+        for j, k in enumerate(keep):
+            sym = f"{eq}_{regs[k]}"
+            carrying = sorted({i for i in range(n) if abs(X[i, k]) > 1e-9 * np.max(np.abs(
+                X[:, k]))}, key=int)
+            methods = [TEST_NAMES[t] for t in TEST_NAMES if t in {tests[i] for i in carrying}]
+            power = PRIME_POWER[REGRESSORS[k]][int(moment)]
+            scale = 0.5 * rho * length_m**power
+            scale_lt = (0.5 * rho * draught_m * length_m ** (power - 1)
+                        if draught_m else math.nan)
+            value, s = float(coef[j]), float(bse[j])
+            estimates[sym] = CaptiveEstimate(
+                symbol=sym, value=value, std_error=s, dof=dof, ci_low=value - tq * s,
+                ci_high=value + tq * s, unit=UNITS[REGRESSORS[k]][int(moment)],
+                prime=value / scale, prime_lt=value / scale_lt, scale=scale, scale_lt=scale_lt,
+                method=" + ".join(methods), n_runs=len({int(run_index[i]) for i in carrying}))
+        if with_se and red > 1.0:
+            notes.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
+                         "intervals widened by its square root (model error beyond the "
+                         "runs' scatter)")
+    by_run, agreement = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
+                                            length_m, chi2)
+    notes += agreement
+    order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
+    estimates = {s: estimates[s] for s in order if s in estimates}
+    return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
+                      estimates=estimates, runs=runs, notes=tuple(notes), by_run=by_run,
+                      chi2_reduced=chi2)
+
+
+def frequency_agreement(
+    runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
+    keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
+    chi2_reduced: dict[str, float] | None = None,
+) -> tuple[pd.DataFrame, list[str]]:
+    """Whether the PMM runs' derivatives agree over omega' and amplitude.
+
+    Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
+    component row where its regressor is largest, the other terms held at the joint fit,
+    its standard error the row's over the regressor (widened as the joint fit's by the
+    square root of its reduced chi^2 where that exceeds 1); then a chi^2 homogeneity test across the
+    runs (chi^2 = sum ((d_i - d_w)/u_i)^2 on runs - 1 dof, d_w the weighted mean) and one
+    sentence per derivative.
+    """
+    # loaded on use: scipy.stats only for the test
+    from scipy.stats import chi2 as chi2_dist
+
+    (eq_f, eq_m), regs = plane_names(plane)
+    records = []
+    for k in (REGRESSORS.index(name) for name in AGREEMENT_REGRESSORS):
+        if k not in keep:
+            continue
+        j = keep.index(k)
+        col_max = float(np.max(np.abs(X[:, k])))
+        for i, run in enumerate(runs):
+            if run.test not in PMM_TESTS:
+                continue
+            idx = np.flatnonzero((run_index == i) & (rows["component"] != "mean").to_numpy())
+            if not idx.size:
+                continue
+            best = idx[np.argmax(np.abs(X[idx, k]))]
+            xk = X[best, k]
+            if abs(xk) < 0.05 * col_max:
+                continue
+            for eq in (eq_f, eq_m):
+                b = params[eq]
+                widen = math.sqrt(max(1.0, (chi2_reduced or {}).get(eq, 1.0)))
+                others = float(X[best, keep] @ b) - b[j] * xk
+                records.append({
+                    "run": run.run, "test": run.test,
+                    "omega_prime": run.omega_prime(length_m), "amplitude_m": run.amplitude_m,
+                    "symbol": f"{eq}_{regs[k]}",
+                    "value": (float(rows.at[best, eq]) - others) / xk,
+                    "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
+    by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
+    notes = []
+    for sym, g in by_run.groupby("symbol", sort=False):
+        g = g[np.isfinite(g["std_error"]) & (g["std_error"] > 0)]
+        if len(g) < 2:
+            continue
+        w = 1.0 / g["std_error"].to_numpy() ** 2
+        d = g["value"].to_numpy()
+        mean = float(np.sum(w * d) / np.sum(w))
+        stat = float(np.sum(w * (d - mean) ** 2))
+        dof = len(g) - 1
+        pval = float(chi2_dist.sf(stat, dof))
+        kinds = " and ".join(dict.fromkeys(TEST_NAMES[t].replace(" ", "-") for t in g["test"]))
+        head = (f"{sym} from {len(g)} {kinds} runs, omega' {g['omega_prime'].min():.2g}–"
+                f"{g['omega_prime'].max():.2g}, y0 {g['amplitude_m'].min():.2f}–"
+                f"{g['amplitude_m'].max():.2f} m")
+        test = f"chi^2 = {stat:.3g} on {dof} dof, p = {pval:.2g}"
+        if pval >= AGREEMENT_P:
+            notes.append(f"{head}: agree ({test})")
+        else:
+            notes.append(f"{head}: differ ({test}): the derivative depends on frequency or "
+                         "amplitude; the joint value is an average over the runs")
+    return by_run, notes
+
+
+def captive_runs_from_means(
+    table: pd.DataFrame, *, rho: float, length_m: float, balance_x_m: float,
+    means_prime: bool, mass_kg: float = 0.0, xg_m: float = 0.0, plane: str = "horizontal",
+) -> list[CaptiveRun]:
+    """Static :class:`CaptiveRun` objects from a lab's table of means (FORMATS section 8).
+
+    ``table`` has the canonical columns run, drift_deg, rudder_deg, radius_m, speed [m/s],
+    fx, fy [N], mz [N m about ``balance_x_m``] (over 1/2 rho L^2 U^2 and 1/2 rho L^3 U^2 with
+    ``means_prime``). The moment is moved to O; the inertia is already removed except the
+    rotating arm's centripetal part, added here with ``mass_kg`` [kg] and ``xg_m`` [m]. A row
+    with a finite non-zero radius is an arm run, with a rudder angle a rudder run, else a
+    drift run; standard errors are NaN (the fit then works on primes).
+    """
+    out: list[CaptiveRun] = []
+    for rec in table.to_dict("records"):
+        U = float(rec["speed"])
+        beta = math.radians(float(rec.get("drift_deg", 0.0) or 0.0))
+        delta_deg = float(rec.get("rudder_deg", 0.0) or 0.0)
+        radius = float(rec.get("radius_m", math.nan))
+        radius = math.nan if radius == 0.0 else radius
+        fx, fy, mz = (float(rec[k]) for k in ("fx", "fy", "mz"))
+        if means_prime:
+            q = 0.5 * rho * U**2
+            fx, fy, mz = fx * q * length_m**2, fy * q * length_m**2, mz * q * length_m**3
+        arm = math.isfinite(radius)
+        kin = arm_kinematics(np.array([U]), beta, radius) if arm else body_kinematics(
+            np.array([U]), np.array([beta]))
+        X, Y, N = hydrodynamic_loads(np.array([fx]), np.array([fy]), np.array([mz]), kin,
+                                     mass_kg=mass_kg, izz_kg_m2=0.0, xg_m=xg_m,
+                                     balance_x_m=balance_x_m)
+        reg = make_regressors(kin, math.radians(delta_deg))
+        row = {"component": "mean", "X": float(X[0]), "Y": float(Y[0]), "N": float(N[0]),
+               "X_se": math.nan, "Y_se": math.nan, "N_se": math.nan,
+               **{k: float(v[0]) for k, v in reg.items()}}
+        test = "arm" if arm else ("rudder" if delta_deg != 0.0 else "drift")
+        out.append(CaptiveRun(
+            run=int(rec.get("run", len(out) + 1)), file="", test=test, plane=plane, speed=U,
+            drift_deg=math.degrees(beta), rudder_deg=delta_deg, radius_m=radius,
+            frequency_hz=math.nan, amplitude_m=math.nan, cycles_used=0,
+            rows=pd.DataFrame([row], columns=list(ROW_COLUMNS)),
+            cycles=pd.DataFrame(columns=list(CYCLE_COLUMNS)),
+            period=pd.DataFrame(columns=list(PERIOD_COLUMNS))))
+    return out
+
+
+__all__ = ["COMPONENTS", "CaptiveEstimate", "CaptiveFit", "captive_runs_from_means",
+           "fit_captive", "frequency_agreement", "mapped_rows"]
