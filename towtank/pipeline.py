@@ -25,19 +25,23 @@ from towtank.analysis.daywide import (
 )
 from towtank.analysis.fin_analysis import analyse_fins
 from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
+from towtank.analysis.captive import captive_runs_from_means, fit_captive
 from towtank.analysis.run_table import run_table
 from towtank.analysis.scaling import model_scale
 from towtank.analysis.similarity import check_protocol_speeds, medium_at
 from towtank.errors import TowtankError
 from towtank.ingest.inputs import day_inputs, runs_to_reduce, side_files_sha, unlisted_warnings
 from towtank.ingest.protocol import Protocol, load_protocol
-from towtank.ingest.runsheet import read_run_sheet
+from towtank.ingest.captive_means import read_means_table
+from towtank.ingest.runsheet import CAPTIVE_TESTS, read_run_sheet
 from towtank.messages import Notice, Rejection, Stage, notices
+from towtank.reduce.captive import CaptiveRun
 from towtank.reduce.run import RunReduction, crashed_record, reduce_record
 from towtank.reduce.sanity import sane_reduction
 from towtank.reduce.tare import TareModel
 from towtank.reduce.tare_policy import apply_tares, tare_models
 from towtank.results import (
+    CaptiveResult,
     DayResult,
     FinResult,
     HullResult,
@@ -221,7 +225,7 @@ def analyse(day: DayResult) -> DayResult:
     warns = list(day.warnings)
     p = day.protocol
     runs = tow_runs(day.runs)  # the captive runs have a stage of their own
-    hull = fin = scaling = vehicle = captive = None
+    hull = fin = scaling = vehicle = None
     prototype = None
 
     def failed(exc: TowtankError, stage: Stage) -> None:
@@ -242,18 +246,21 @@ def analyse(day: DayResult) -> DayResult:
         warns += notices(more, "scaling")
     except TowtankError as exc:
         failed(exc, "scaling")
+    captive: dict[str, CaptiveResult] = {}
     try:
         captive, more = captive_stage(p, day.runs, day.reductions)
         warns += notices(more, "captive")
     except TowtankError as exc:
         failed(exc, "captive")
     try:
-        vehicle = vehicle_stage(p, hull, prototype, captive)
+        vehicle = vehicle_stage(p, hull, prototype, tuple(captive.values()))
         warns += notices(vehicle.warnings, "vehicle") if vehicle is not None else []
     except TowtankError as exc:
         failed(exc, "vehicle")
     return replace(day, warnings=tuple(warns), hull=hull, fins=fin, scaling=scaling,
-                   vehicle=vehicle, prototype_values=prototype, captive=captive)
+                   vehicle=vehicle, prototype_values=prototype,
+                   captive=captive.get("horizontal"),
+                   captive_vertical=captive.get("vertical"))
 
 
 def tow_runs(runs: pd.DataFrame) -> pd.DataFrame:
@@ -266,67 +273,42 @@ def tow_runs(runs: pd.DataFrame) -> pd.DataFrame:
 
 
 def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction]
-                  ) -> tuple[CaptiveResult | None, list[str]]:
+                  ) -> tuple[dict[str, CaptiveResult], list[str]]:
     """The captive derivatives (:func:`towtank.analysis.captive.fit_captive`) of the day's
-    usable captive runs and, with ``[captive] means``, of the lab's table of means; (None, [])
-    with neither."""
+    usable captive runs and, with ``[captive] means``, of the lab's table of means, one result
+    per plane (horizontal, vertical) that has runs; ({}, []) with neither."""
     model = protocol.model
     ok = set(runs.loc[runs["status"] == "ok", "run"].astype(int)) if len(runs) else set()
     caps = [CaptiveRun.from_arrays(r.run, r.file, r.captive)
             for run, r in reductions.items() if r.captive and run in ok]
     warns: list[str] = []
-    options = getattr(protocol, "captive", None)
-    if options is not None and getattr(options, "means", None):
-        table, said = read_means(options)
+    options = protocol.captive
+    rho = medium_at(protocol.water)[0]
+    if model is None:
+        return {}, warns
+    if options is not None and options.means is not None:
+        table, said = read_means_table(options.means, options.means_columns,
+                                       src=str(protocol.path))
         warns += said
-        caps += captive_runs_from_means(table, rho=medium_at(protocol.water)[0],
-                                        length_m=model.length_m,
-                                        balance_x_m=model.balance_x_m,
-                                        means_prime=options.means_prime, model=model)
-    if model is None or not caps:
-        return None, warns
-    fitted = fit_captive(caps, rho=medium_at(protocol.water)[0], length_m=model.length_m,
-                         draught_m=getattr(model, "draught_m", None),
-                         roll_deg=getattr(options, "roll_deg", 90.0))
-    result = CaptiveResult.of(fitted)
-    return result, [*warns, *result.warnings]
-
-
-def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction],
-               tares: dict[str, TareModel]) -> tuple[HullResult | None, list[str]]:
-    """The hull coefficients (:func:`towtank.analysis.hull.fit_hull`) and their warnings; None
-    without a [model] or usable hull runs."""
-    model = protocol.model
-    if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
-        return None, []
-    hf = fit.fit_hull(
-        runs,
-        reductions,
-        mass=model.mass_kg,
-        mass_sd=model.mass_uncertainty_kg,
-        length=model.length_m,
-        frontal_area=model.frontal_area,
-        lateral_area=model.lateral_area,
-        alpha_max_deg=protocol.processing.damping_alpha_max_deg,
-        tares=tares,
-        rho=medium_at(protocol.water)[0],
-    )
-    ref = fit.load_reference(protocol.campaign.reference)
-    table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
-    warns = list(hf.messages)
-    warns += plausibility_warnings(
-        table, rho=hf.rho,
-        volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
-        frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
-        added_mass=not protocol.water.is_air,
-    )
-    warns += fit.hull_warnings(hf)
-    return HullResult(fit=hf, coefficients=table, warnings=tuple(warns)), warns
+        caps += captive_runs_from_means(table, rho=rho, length_m=model.length_m,
+                                        balance_x_m=model.balance_x_m or 0.0,
+                                        means_prime=options.means_prime,
+                                        mass_kg=model.mass_kg, xg_m=model.xg_m or 0.0)
+    roll = options.roll_deg if options is not None else 90.0
+    out: dict[str, CaptiveResult] = {}
+    for plane in ("horizontal", "vertical"):
+        these = [c for c in caps if c.plane == plane]
+        if these:
+            fitted = fit_captive(these, rho=rho, length_m=model.length_m,
+                                 draught_m=model.draught_m, plane=plane, roll_deg=roll)
+            out[plane] = from_fit(CaptiveResult, fitted)
+            warns += fitted.notes
+    return out, warns
 
 
 def vehicle_stage(protocol: Protocol, hull: HullResult | None,
                   prototype_values: pd.DataFrame | None = None,
-                  captive: CaptiveResult | None = None) -> VehicleResult | None:
+                  captive: tuple[CaptiveResult, ...] = ()) -> VehicleResult | None:
     """Prediction and model of the protocol's [vehicle]; predicted beside measured (the
     hull's coefficients and the captive derivatives)."""
     if getattr(protocol, "vehicle", None) is None:
@@ -334,7 +316,7 @@ def vehicle_stage(protocol: Protocol, hull: HullResult | None,
     # coefficients.csv as the scaling stage leaves it
     tables = [scaling.with_prototype_values(hull.coefficients, prototype_values)
               if hull is not None else None,
-              captive.coefficients if captive is not None else None]
+              *(c.table() for c in captive)]
     present = [t for t in tables if t is not None]
     measured = pd.concat(present, ignore_index=True) if present else None
     prediction, table, warns = day_vehicle(protocol, measured)

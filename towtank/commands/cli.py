@@ -263,10 +263,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     sy.add_argument("outdir", type=Path,
                     help="folder to write into (created; must be empty unless --force)")
-    sy.add_argument("--day", choices=("hull", "fin", "air", "samples"), default="hull",
+    sy.add_argument("--day", choices=("hull", "fin", "air", "captive", "captive-vertical",
+                                      "samples"), default="hull",
                     help="hull day, fin day, the hull day in air (a wind tunnel at 2-40 m/s, "
-                    "[water] type = \"air\", a 1 kg model), or regenerate both shipped "
-                    "sample days")
+                    "[water] type = \"air\", a 1 kg model), a captive manoeuvring day of "
+                    "REMUS (static drift, rudder, rotating arm, PMM; captive-vertical: the "
+                    "model rolled 90 degrees for the heave-pitch derivatives), or regenerate "
+                    "both shipped sample days")
     sy.add_argument("--seed", type=int, default=1,
                     help="seed of the random noise: the same seed gives the same files "
                     "(default 1)")

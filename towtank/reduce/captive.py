@@ -29,6 +29,7 @@ import numpy as np
 
 from towtank.errors import RunError
 from towtank.signal import conditioning
+from towtank.signal.drift import check_drift
 
 if TYPE_CHECKING:
     # loaded on use: pandas only for the tables (the workers start light)
@@ -770,11 +771,17 @@ def reduce_captive(
 def condition_captive(
     t: np.ndarray, channels: Mapping[str, np.ndarray], fs: float, *,
     cutoff_hz: float = 4.0, order: int = 4, still: tuple[tuple[int, int], tuple[int, int] | None],
+    steady: tuple[int, int] | None = None, said: list[str] | None = None,
 ) -> dict[str, np.ndarray]:
     """The channels low-passed (one zero-phase filter) and the balance channels zeroed: a
     straight line between the still windows before and after the run
     (:func:`towtank.signal.conditioning.zero_line`); ``sway`` and ``yaw`` are filtered only.
-    ``channels`` holds ``U`` and the balance and PMM channels; returns them with ``t``."""
+    ``channels`` holds ``U`` and the balance and PMM channels; returns them with ``t``.
+
+    With the ``steady`` window [i0, i1) and a post-run still window, each balance channel's
+    drift is judged as the drag's is (:func:`towtank.signal.drift.check_drift`): a balance
+    that had not settled raises RunError, a large drift's sentence is appended to ``said``.
+    """
     names = list(channels)
     filt = conditioning.lowpass(np.column_stack([channels[k] for k in names]), fs, cutoff_hz,
                                 order)
@@ -783,6 +790,13 @@ def condition_captive(
     for j, name in enumerate(names):
         x = filt[:, j]
         if name in ("fx", "fy", "mz", "drag", "lift"):
+            if steady is not None and post is not None and post[1] - post[0] >= 2:
+                base = float(np.mean(x[pre[0]:pre[1]]))
+                load = abs(float(np.mean(x[steady[0]:steady[1]])) - base)
+                notes: list[str] = []
+                check_drift(out["t"], x, pre, post, load, name, None, notes, notes)
+                if said is not None:
+                    said += notes[:1]
             zero, _, _ = conditioning.zero_line(t, x, pre, post)
             x = x - zero
         out[name] = x

@@ -22,9 +22,7 @@ import numpy as np
 from towtank.errors import RunError
 from towtank.ingest.protocol_types import Processing, Protocol
 from towtank.ingest.runfile import RawRun
-from towtank.reduce.captive import CaptiveRun, reduce_captive
-from towtank.signal import conditioning
-from towtank.signal.drift import check_drift
+from towtank.reduce.captive import CaptiveRun, condition_captive, reduce_captive
 
 if TYPE_CHECKING:
     from towtank.reduce.run import RunReduction
@@ -46,46 +44,34 @@ def _index_window(t: np.ndarray, window: tuple[float, float] | None) -> tuple[in
     return (i0, i1) if i1 - i0 >= 1 else None
 
 
-def captive_channels(raw: RawRun, red: RunReduction, p: Processing,
-                     notes: list[str], warnings: list[str]) -> dict[str, np.ndarray]:
+def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[str]
+                     ) -> dict[str, np.ndarray]:
     """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows the
-    run's reduction ``red`` found: ``t`` [s], ``U`` [m/s], ``fx``, ``fy`` [N], ``mz`` [N m]
-    (or ``drag``, ``lift`` [N] for a drift run recorded in carriage axes), ``sway`` [m], ``yaw``
-    [rad]. A drift too large for the run raises RunError (:func:`check_drift`), a large one
-    is added to ``notes`` and ``warnings``."""
+    run's reduction ``red`` found (:func:`towtank.reduce.captive.condition_captive`): ``t``
+    [s], ``U`` [m/s], ``fx``, ``fy`` [N], ``mz`` [N m] (or a drift run's ``drag``, ``lift``
+    [N] in carriage axes), ``sway`` [m], ``yaw`` [deg]. A large drift's sentence is appended
+    to ``said``; a balance that had not settled raises RunError."""
     t = raw.time
-    extra = dict(getattr(raw, "extra", None) or {})
+    extra = dict(raw.extra)
     loads = {k: extra[k] for k in CAPTIVE_LOADS if k in extra}
-    if "fy" not in loads:
-        if raw.lift is None:
-            raise RunError("a captive run needs the balance's side force fy and yaw moment mz "
-                           "(or a drift run's drag and lift); the file has neither fy nor lift")
-        loads = {"drag": raw.drag, "lift": raw.lift}
+    if "fy" not in loads and raw.lift is not None:
+        loads = {"drag": raw.drag, "lift": raw.lift, **({"mz": extra["mz"]} if "mz" in extra
+                                                          else {})}
+    if "fy" not in loads and "lift" not in loads:
+        raise RunError("a captive run needs the balance's side force fy (or a drift run's "
+                       "lift) and its yaw moment mz; the file has neither fy nor lift")
+    if "mz" not in loads:
+        raise RunError("a captive run needs the balance's yaw moment mz; the file has none")
     positions = {k: extra[k] for k in ("sway", "yaw") if k in extra}
-    names = list(loads) + list(positions)
-    stack = np.column_stack([raw.speed] + [loads[k] for k in loads]
-                            + [positions[k] for k in positions])
-    filt = conditioning.lowpass(stack, raw.fs, p.cutoff_hz, p.filter_order)
-    out: dict[str, np.ndarray] = {"t": t, "U": filt[:, 0]}
     pre = _index_window(t, red.windows.get("still_pre"))
     post = _index_window(t, red.windows.get("still_post")) if p.drift == "linear" else None
     steady = _index_window(t, red.windows.get("steady"))
     if pre is None:
         raise RunError("a captive run needs the still window before the carriage moves for "
                        "the zero of its balance channels")
-    assert steady is not None  # a reduced run has its steady window
-    for k, name in enumerate(names, start=1):
-        x = filt[:, k]
-        if name in positions:
-            out[name] = np.radians(x) if name == "yaw" else x
-            continue
-        if post is not None and post[1] - post[0] >= 2:
-            base = float(np.mean(x[pre[0]:pre[1]]))
-            load = abs(float(np.mean(x[steady[0]:steady[1]])) - base)
-            check_drift(t, x, pre, post, load, name, None, notes, warnings)
-        zero, _, _ = conditioning.zero_line(t, x, pre, post)
-        out[name] = x - zero
-    return out
+    return condition_captive(t, {"U": raw.speed, **loads, **positions}, raw.fs,
+                             cutoff_hz=p.cutoff_hz, order=p.filter_order, still=(pre, post),
+                             steady=steady, said=said)
 
 
 def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
@@ -101,7 +87,6 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
         raise RunError("a captive run needs the protocol's [model] (mass_kg, izz_kg_m2, xg_m, "
                        "balance_x_m)")
     p = protocol.processing
-    notes: list[str] = []
     warnings: list[str] = []
     freq = float(row.get("pmm_frequency_hz", math.nan))
     if math.isfinite(freq) and p.cutoff_hz < PMM_CUTOFF_FACTOR * freq:
@@ -109,10 +94,10 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
             f"the low-pass cut-off [processing] cutoff_hz = {p.cutoff_hz:g} Hz is less than "
             f"{PMM_CUTOFF_FACTOR:g} times the PMM frequency {freq:g} Hz, so it would cut the "
             "loads' harmonics; raise cutoff_hz")
-    chans = captive_channels(raw, red, p, notes, warnings)
+    chans = captive_channels(raw, red, p, warnings)
     steady = _index_window(raw.time, red.windows.get("steady"))
     assert steady is not None
     cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
                                     run=red.run, file=red.file)
-    return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *notes, *cr.notes),
+    return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *warnings, *cr.notes),
                    warnings=(*red.warnings, *warnings))

@@ -45,7 +45,7 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
     if day.scaling is not None:
         extra = {"scaling": _scaling_provenance(day.scaling, p.prototype),
                  **(extra or {})}
-    if getattr(day, "captive", None) is not None:
+    if day.captive_results:
         extra = {"captive": captive_provenance(day), **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
@@ -238,25 +238,27 @@ def creation_date(date: str | None) -> dt.datetime | None:
 def captive_provenance(day: DayResult) -> dict[str, Any]:
     """The options a captive day was reduced with, as ITTC 7.5-02-06-02 asks them stated: the
     moment reference, the rigid-body terms removed (mass, inertia, x_G), the PMM cycles kept
-    of each run, the plane's mapping, and where the static means came from."""
-    p, captive = day.protocol, day.captive
-    assert captive is not None and p.model is not None
-    m = p.model
-    options = getattr(p, "captive", None)
-    cycles = {str(int(r["run"])): int(r["cycles_used"])
-              for _, r in captive.pmm_table.iterrows()} if len(captive.pmm_table) else {}
+    of each run, the vertical plane's roll, where static means came from and how the fit
+    weighted its rows."""
+    p = day.protocol
+    assert p.model is not None
+    m, options = p.model, p.captive
+    pmm = day.pmm
     return {
-        "moment_reference": getattr(options, "moment_ref", "origin"),
+        "moment_reference": options.moment_ref if options is not None else "origin",
         "moment_transfer": "N_O = mz + balance_x_m * fy",
-        "balance_x_m": getattr(m, "balance_x_m", None),
-        "inertia_removed": {"mass_kg": m.mass_kg, "izz_kg_m2": getattr(m, "izz_kg_m2", None),
-                            "iyy_kg_m2": getattr(m, "iyy_kg_m2", None),
-                            "xg_m": getattr(m, "xg_m", None)},
-        "pmm_cycles_used": cycles,
-        "pmm_cycle_rule": "whole cycles inside the steady window, sway amplitude within 5 % "
-                          "of the median cycle's; ramp-in and ramp-out cycles dropped",
-        "roll_deg_vertical": getattr(options, "roll_deg", 90.0),
-        "means": str(getattr(options, "means", "") or ""),
-        "means_prime": bool(getattr(options, "means_prime", False)),
-        "fit": captive.method_note,
+        "balance_x_m": m.balance_x_m,
+        "inertia_removed": {"mass_kg": m.mass_kg, "izz_kg_m2": m.izz_kg_m2,
+                            "iyy_kg_m2": m.iyy_kg_m2, "xg_m": m.xg_m},
+        "pmm_cycles_used": {str(int(r)): int(c) for r, c in zip(pmm["run"], pmm["cycles_used"],
+                                                                strict=True)},
+        "pmm_cycle_rule": "whole cycles inside the steady window whose sway amplitude is within "
+                          "5 % of the full cycles' median; ramp-in and ramp-out cycles dropped",
+        "roll_deg_vertical": options.roll_deg if options is not None else 90.0,
+        "means": str(options.means) if options is not None and options.means else "",
+        "means_prime": bool(options.means_prime) if options is not None else False,
+        "fit": {c.plane: {"weights": "1/SE^2 (standard errors of the runs' components), "
+                                     "covariance scaled by the reduced chi^2 when above 1",
+                          "reduced_chi2": dict(c.chi2_reduced)}
+                for c in day.captive_results},
     }

@@ -47,8 +47,8 @@ def write_tables(day: DayResult, out: Path) -> None:
             write_csv(day.fins.control, out / "fin_control.csv")
     write_csv(day.table("scaling"), out / "scaling.csv")
     write_csv(tare_table(getattr(day, "tares", None) or {}), out / "tare.csv")
-    if getattr(day, "captive", None) is not None and len(day.captive.pmm_table):
-        write_csv(day.captive.pmm_table, out / "pmm.csv")
+    if day.captive_results:
+        write_csv(day.pmm, out / "pmm.csv")
 
 
 def missing_accel_note(runs: pd.DataFrame, processing: Processing, run_ids: list[int]

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Literal, TypeVar
 import numpy as np
 import pandas as pd
 
+from towtank.analysis.captive import PMM_COLUMNS
 from towtank.analysis.fins import FIN_TABLE_COLUMNS
 from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS, Estimate
 from towtank.analysis.scaling import with_prototype_values
@@ -42,6 +43,7 @@ from towtank.messages import STAGES, Notice, Rejection, Stage, notices
 from towtank.reduce.run import RunReduction
 from towtank.reduce.tare import TareModel
 from towtank.results.stages import (
+    CaptiveResult,
     FinResult,
     HullResult,
     ScalingResult,
@@ -56,7 +58,7 @@ if TYPE_CHECKING:
 R = TypeVar("R")
 
 __all__ = [
-    "DayResult", "Estimate", "Estimates", "FinResult", "HullResult", "IdentifyResult", "Notice",
+    "CaptiveResult", "DayResult", "Estimate", "Estimates", "FinResult", "HullResult", "IdentifyResult", "Notice",
     "Rejection", "STAGES", "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult",
     "from_fit", "notices",
 ]
@@ -99,8 +101,10 @@ class DayResult:
     vehicle: VehicleResult | None = None
     #: symbol, prototype_value: the hull coefficients at prototype scale (scaling stage)
     prototype_values: pd.DataFrame | None = None
-    #: the captive derivatives (static drift, rudder, rotating arm, PMM, a lab's means)
+    #: the captive derivatives of the horizontal plane (static drift, rudder, rotating arm,
+    #: PMM, a lab's means) and of the vertical plane (the model rolled 90°)
     captive: CaptiveResult | None = None
+    captive_vertical: CaptiveResult | None = None
 
     @property
     def n_rejected(self) -> int:
@@ -148,12 +152,22 @@ class DayResult:
             return self.vehicle.coefficients  # made from the measured with prototype values
         hull = (with_prototype_values(self.hull.coefficients, self.prototype_values)
                 if self.hull is not None else None)
-        if self.captive is None:
-            return hull if hull is not None else pd.DataFrame(
-                columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
-        if hull is None:
-            return self.captive.coefficients
-        return pd.concat([hull, self.captive.coefficients], ignore_index=True)
+        tables = [t for t in (hull, *(c.table() for c in self.captive_results)) if t is not None]
+        if not tables:
+            return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
+        return tables[0] if len(tables) == 1 else pd.concat(tables, ignore_index=True)
+
+    @property
+    def captive_results(self) -> tuple[CaptiveResult, ...]:
+        """The captive results of the day, horizontal plane first (empty without)."""
+        return tuple(c for c in (self.captive, self.captive_vertical) if c is not None)
+
+    @property
+    def pmm(self) -> pd.DataFrame:
+        """pmm.csv of the day: one row per PMM run of either plane (empty without)."""
+        tables = [c.pmm_table() for c in self.captive_results]
+        return (pd.concat(tables, ignore_index=True) if tables
+                else pd.DataFrame(columns=list(PMM_COLUMNS)))
 
     def summary(self, alpha: float = 0.05) -> Summary:
         """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,
