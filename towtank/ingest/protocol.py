@@ -480,7 +480,7 @@ def _model(data: Any, src: str, water: Water | None = None) -> Model:
         raise ProtocolError(
             f"{src}: [model] needs 'diameter_m' (or 'frontal_area_m2') for the frontal area."
         )
-    model = Model(**m, myring=myring)
+    model = Model(**{"diameter_m": None, **m}, myring=myring)
     if myring is not None:
         model = _with_myring_geometry(model, src)
     if water is None or not water.is_air:  # in air the displaced mass bounds nothing
@@ -719,8 +719,11 @@ def model_geometry(model: Model, scale: float | None = None) -> list[dict[str, A
     rows = [
         ("frontal area", "A", model.frontal_area, "m²",
          origin("frontal_area_m2", "π D²/4 from diameter_m")),
-        ("lateral area", "A_lat", model.lateral_area, "m²",
-         origin("lateral_area_m2", "L·D from length_m and diameter_m (default)")),
+        ("lateral area", "A_lat", model.lateral_area if model.diameter_m is not None
+         or model.lateral_area_m2 is not None else None, "m²",
+         origin("lateral_area_m2", "L·D from length_m and diameter_m (default)"
+                if model.diameter_m is not None else
+                "not known (no lateral_area_m2, no diameter_m)")),
         ("wetted area", "S_m", model.wetted_area_m2, "m²",
          origin("wetted_area_m2", "not known (no wetted_area_m2, no Myring description)")),
         ("volume", "V", model.volume_m3, "m³",

@@ -211,10 +211,12 @@ class Model:
 
     @property
     def lateral_area(self) -> float:
-        """Projected side area for transverse tows [m²]: given, or L·D."""
+        """Projected side area for transverse tows [m²]: given, or L·D; NaN when neither is
+        known (a ship given by its frontal area: the quantities on it are not computed)."""
         if self.lateral_area_m2 is not None:
             return self.lateral_area_m2
-        assert self.diameter_m is not None
+        if self.diameter_m is None:
+            return math.nan
         return self.length_m * self.diameter_m
 
 
