@@ -5,12 +5,21 @@ static means, and a ship's [model] given by its frontal area (no diameter)."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+import pytest
 from conftest import JOBS
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from towtank.commands import cli
+from towtank.errors import ProtocolError
+from towtank.ingest.captive_means import captive_means, read_means_table
+from towtank.ingest.protocol import Captive, Model, load_protocol
+from towtank.ingest.sections import captive_model_missing
 from towtank.testing import synthetic as syn
 
 # ------------------------------------------------------------------ a ship: no diameter_m
@@ -52,3 +61,166 @@ def test_frontal_area_without_diameter_processes_the_day(tmp_path, capsys):
     assert runs.loc[runs["config"] == "hull", "cd_lateral"].isna().all()
     assert (out / "report.pdf").is_file()
     assert "lateral_area_m2 nor diameter_m" in err
+
+
+# ------------------------------------------------------------------ [model] and [captive]
+def _protocol(tmp_path: Path, model: str = "", captive: str | None = "",
+              campaign: str = 'run_sheet = "sheet.csv"\ndata_dir = "data"') -> Path:
+    (tmp_path / "data").mkdir(exist_ok=True)
+    (tmp_path / "sheet.csv").write_text("run,file,config,angle_deg\n1,a.csv,hull,0\n")
+    text = (f'[campaign]\nname = "c"\n{campaign}\n[water]\ntemperature_C = 15.0\n'
+            f"[model]\nlength_m = 2.0\ndiameter_m = 0.2\nmass_kg = 50.0\n{model}\n")
+    if captive is not None:
+        text += f"[captive]\n{captive}\n"
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    return path
+
+
+CAPTIVE_MODEL = "izz_kg_m2 = 12.0\niyy_kg_m2 = 12.5\nxg_m = -0.02\nbalance_x_m = 0.1\n" \
+    "draught_m = 0.15"
+
+
+def test_model_and_captive_keys_are_read(tmp_path):
+    p = load_protocol(_protocol(tmp_path, CAPTIVE_MODEL, 'moment_ref = "balance"\n'
+                                "roll_deg = -90\nmin_cycles = 4\namplitude_tolerance = 0.03"))
+    m = p.model
+    assert (m.izz_kg_m2, m.iyy_kg_m2, m.xg_m, m.balance_x_m, m.draught_m) == \
+        (12.0, 12.5, -0.02, 0.1, 0.15)
+    assert p.captive == Captive(moment_ref="balance", roll_deg=-90.0, min_cycles=4,
+                                amplitude_tolerance=0.03)
+    assert load_protocol(_protocol(tmp_path, "", "")).captive == Captive()
+    plain = load_protocol(_protocol(tmp_path, "", None))
+    assert plain.captive is None and plain.model.izz_kg_m2 is None
+
+
+@pytest.mark.parametrize(("model", "captive", "said"), [
+    ("izz_kg_m2 = -1.0", "", "'izz_kg_m2' in [model] must be positive"),
+    ("draught_m = 0.0", "", "'draught_m' in [model] must be positive"),
+    ("xg_m = 20.0", "", "'xg_m' in [model] is 20 m from the origin"),
+    ("balance_x_m = -100.0", "", "'balance_x_m' in [model] is -100 m"),
+    ("", 'moment_ref = "cg"', "'moment_ref' in [captive] is 'cg'"),
+    ("", "roll_deg = 45", "'roll_deg' in [captive] is 45"),
+    ("", "min_cycles = 2", "'min_cycles' in [captive] is 2"),
+    ("", "amplitude_tolerance = 5.0", "'amplitude_tolerance' in [captive] is 5"),
+    ("", "cycles = 3", "unknown key 'cycles' in [captive]"),
+    ("", "means_prime = true", "'means_prime' in [captive] describes the means table"),
+    ("", 'means = "none.csv"', "none.csv"),
+])
+def test_bad_captive_keys_are_one_sentence(tmp_path, model, captive, said):
+    with pytest.raises(ProtocolError, match=re.escape(said)):
+        load_protocol(_protocol(tmp_path, model, captive))
+
+
+def test_means_protocol_needs_no_run_sheet_nor_data_folder(tmp_path):
+    (tmp_path / "means.csv").write_text(MEANS_CSV)
+    path = _protocol(tmp_path, "balance_x_m = 0.0", 'means = "means.csv"\nmeans_prime = true',
+                     campaign="")
+    p = load_protocol(path)
+    assert not p.campaign.sheet_given
+    assert p.captive.means == (tmp_path / "means.csv").resolve()
+    assert p.campaign.run_sheet == p.captive.means  # an input no output may replace
+    table, _ = captive_means(p)
+    rho = 999.1026  # fresh water at 15 °C
+    row = table.set_index("run").loc[2]
+    assert row["fy"] == pytest.approx(0.0166 * 0.5 * rho * 2.0**2 * 1.2**2, rel=1e-4)
+    assert row["mz"] == pytest.approx(0.0033 * 0.5 * rho * 2.0**3 * 1.2**2, rel=1e-4)
+    with pytest.raises(ProtocolError, match="needs balance_x_m in \\[model\\]"):
+        load_protocol(_protocol(tmp_path, "", 'means = "means.csv"', campaign=""))
+
+
+def test_captive_runs_name_the_missing_model_keys():
+    model = Model(length_m=2.0, diameter_m=0.2, mass_kg=50.0)
+    assert captive_model_missing(model, None) == ["izz_kg_m2", "xg_m", "balance_x_m"]
+    assert captive_model_missing(model, Captive(moment_ref="balance"), ()) == []
+    vertical = Model(length_m=2.0, diameter_m=0.2, mass_kg=50.0, iyy_kg_m2=3.0, xg_m=0.0,
+                     balance_x_m=0.0)
+    assert captive_model_missing(vertical, None, ("vertical",)) == []
+    assert captive_model_missing(vertical, None, ("horizontal", "vertical")) == ["izz_kg_m2"]
+
+
+# ------------------------------------------------------------------ the means table
+MEANS_CSV = """Run No.,beta(deg),delta(deg),r,Speed(m/s),X',Y',N',test type
+1,0,10,0,1.2,-1.2E-04,5.4E-04,-2.7E-04,rudder angle
+2,30 ,0,0,1.2 ,7.8E-04,1.66E-02,3.3E-03,drift angle
+3,-30,0,0,1.2,8.4E-04,-1.64E-02,-3.2E-03,drift angle
+2,30,0,0,1.2,7.8E-04,1.66E-02,3.3E-03,drift + rudder angle
+"""
+
+
+def test_means_table_reads_the_labs_columns(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text(MEANS_CSV)
+    table, notes = read_means_table(path)
+    assert table["run"].tolist() == [1, 2, 3]
+    assert table.loc[1, "drift_deg"] == 30.0 and table.loc[1, "speed"] == 1.2
+    assert table.loc[1, "test_type"] == "drift angle"
+    assert table["radius_m"].isna().all()
+    assert any("1 run(s) again" in n for n in notes)
+    assert any("column(s) r are not read" in n for n in notes)
+
+
+@pytest.mark.parametrize(("edit", "said"), [
+    (lambda t: t.replace("2,30,0,0,1.2,7.8E-04,1.66E-02", "2,30,0,0,1.2,7.8E-04,1.70E-02"),
+     "run 2 is listed twice in the means table m.csv with different fy (rows 3 and 5)"),
+    (lambda t: t.replace("3,-30,", "3,-130,"), "drift_deg = -130 is beyond ±90°"),
+    (lambda t: t.replace("1,0,10,0,1.2,", "1,0,10,0,120,"), "speed = 120 is not a speed"),
+    (lambda t: t.replace("5.4E-04", "five"), "row 2 of the means table m.csv has 'five'"),
+    (lambda t: t.replace("N'", "moment"), "has no column for mz"),
+])
+def test_bad_means_tables_are_one_sentence(tmp_path, edit, said):
+    path = tmp_path / "m.csv"
+    path.write_text(edit(MEANS_CSV))
+    with pytest.raises(ProtocolError, match=re.escape(said)):
+        read_means_table(path)
+
+
+_value = st.floats(-1e3, 1e3, allow_nan=False).map(lambda v: float(f"{v:.6g}"))
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.tuples(st.floats(-89, 89).map(round), st.floats(-35, 35).map(round),
+                               st.floats(0.1, 5).map(lambda v: round(v, 3)),
+                               _value, _value, _value), min_size=1, max_size=8),
+       pad=st.lists(st.sampled_from(["", " ", "  "]), min_size=7, max_size=7),
+       repeats=st.integers(0, 2), sep=st.sampled_from([",", ";", "\t"]))
+def test_stray_blanks_and_repeated_blocks_read_to_one_table(tmp_path, rows, pad, repeats,
+                                                            sep):
+    def text(blanks: bool, times: int) -> str:
+        def cell(v: object, k: int) -> str:
+            return f"{pad[k]}{v}{pad[k]}" if blanks else str(v)
+
+        head = sep.join(["Run No.", "beta(deg)", "delta(deg)", "Speed(m/s)", "X", "Y", "N"])
+        lines = [sep.join(cell(v, k) for k, v in enumerate((i + 1, *row)))
+                 for i, row in enumerate(rows)]
+        return "\n".join([head, *(lines * times)]) + "\n"
+
+    plain, messy = tmp_path / "plain.csv", tmp_path / "messy.csv"
+    plain.write_text(text(False, 1))
+    messy.write_text(text(True, 1 + repeats))
+    a, _ = read_means_table(plain)
+    b, _ = read_means_table(messy)
+    cols = ["run", "drift_deg", "rudder_deg", "radius_m", "speed", "fx", "fy", "mz"]
+    pd.testing.assert_frame_equal(a[cols], b[cols])
+    assert len(a) == len(rows)
+
+
+KVLCC2 = Path("/work/shared/real/kvlcc2_hmri_captive/captive.csv")
+
+
+@pytest.mark.skipif(not KVLCC2.is_file(), reason="the real KVLCC2 means are not here")
+def test_real_kvlcc2_means():
+    table, notes = read_means_table(KVLCC2)
+    assert len(table) == 63  # 81 rows: 18 drift runs listed again in the other blocks
+    assert table["run"].is_unique
+    drift = table[table["rudder_deg"] == 0]
+    by_beta = drift.groupby("drift_deg")["fy"].first()
+    assert by_beta[30.0] > 0 and by_beta[-30.0] < 0  # Y' with the sign of beta
+    n_by_beta = drift.groupby("drift_deg")["mz"].first()
+    assert n_by_beta[30.0] > 0 and n_by_beta[-30.0] < 0
+    rudder = table[(table["drift_deg"] == 0) & (table["speed"] == 1.1702)]
+    assert (np.sign(rudder["fy"]) == np.sign(rudder["rudder_deg"]))[rudder["rudder_deg"]
+                                                                      .abs() >= 5].all()
+    assert table["speed"].between(0.33, 1.18).all()
+    assert any("18 run(s) again" in n for n in notes)

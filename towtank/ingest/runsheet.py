@@ -78,7 +78,7 @@ def _read_table(path: Path, options: SheetOptions | None = None,
             if opts.name:
                 raise ProtocolError(f"{path.name}: [sheet] name = {opts.name!r} names a "
                                     "worksheet, but the run sheet is a CSV file (it has none).")
-            grid = _read_csv_grid(path, opts)
+            grid = read_csv_grid(path, opts)
         else:
             raise ProtocolError(f"{path.name}: a run sheet must be .csv or .xlsx.")
     except ProtocolError:
@@ -191,7 +191,7 @@ def _bounded_xlsx(path: Path) -> Path | io.BytesIO:
         return buf
 
 
-def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
+def read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
     """A CSV sheet's cells as text, separated by ``,``, ``;`` or tab (found from the lines)."""
     raw = path.read_bytes()
     try:

@@ -103,6 +103,11 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "length_uncertainty_m": (NUM, False),
         "diameter_uncertainty_m": (NUM, False),
         "myring": ("table", False),
+        "izz_kg_m2": (NUM, False),
+        "iyy_kg_m2": (NUM, False),
+        "xg_m": (NUM, False),
+        "balance_x_m": (NUM, False),
+        "draught_m": (NUM, False),
     },
     "model.myring": {
         "a": (NUM, True),
@@ -169,6 +174,15 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "never_stops_s": (NUM, False),
         "pdf_interval_s": (NUM, False),
     },
+    "captive": {
+        "moment_ref": ("str", False),
+        "means": ("path", False),
+        "means_prime": ("bool", False),
+        "means_columns": ("table", False),
+        "roll_deg": (NUM, False),
+        "min_cycles": ("int", False),
+        "amplitude_tolerance": (NUM, False),
+    },
     "read": {
         "format": ("str", False),
         "delimiter": ("str", False),
@@ -181,7 +195,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
              "watch", "read", "vehicle", "balance", "tare", "speed_log",
-             "zeros", "sheet")
+             "zeros", "sheet", "captive")
 
 _KIND_WORDS = {
     "str": "a text string",
