@@ -19,7 +19,8 @@ from towtank.commands import cli
 from towtank.errors import ProtocolError
 from towtank.ingest.captive_means import captive_means, read_means_table
 from towtank.ingest.protocol import Captive, Model, load_protocol
-from towtank.ingest.sections import captive_model_missing
+from towtank.ingest.runsheet import read_run_sheet
+from towtank.ingest.sections import captive_model_missing, check_captive_runs
 from towtank.testing import synthetic as syn
 
 # ------------------------------------------------------------------ a ship: no diameter_m
@@ -224,3 +225,71 @@ def test_real_kvlcc2_means():
                                                                       .abs() >= 5].all()
     assert table["speed"].between(0.33, 1.18).all()
     assert any("18 run(s) again" in n for n in notes)
+
+
+# ------------------------------------------------------------------ the run sheet
+SHEET = """run,file,config,test,angle_deg,drift_deg,rudder_deg,radius_m,pmm_amplitude_m,\
+pmm_frequency_hz,plane
+1,r1.csv,hull,static drift,,10,,,,,
+2,r2.csv,hull,rudder angle,4,,-20,,,,
+3,r3.csv,hull,rotating arm,,0,,-12.5,,,
+4,r4.csv,hull,pure sway,,,,,0.05,0.2,
+5,r5.csv,hull,yaw and drift,,6,,,0.05,0.25,vertical
+6,r6.csv,hull,pure yaw,,,,,,0.2,
+7,r7.csv,hull,arm,,,,0,,,
+8,r8.csv,sting,drift,,10,,,,,
+9,r9.csv,hull,drift,5,10,,,,,
+10,r10.csv,hull,drift,,120,,,,,
+11,r11.csv,hull,sway,,,,,0.05,0.2,sideways
+12,r12.csv,hull,steady,0,,,,,,
+"""
+
+
+def _sheet(tmp_path: Path, text: str = SHEET) -> pd.DataFrame:
+    path = tmp_path / "sheet.csv"
+    path.write_text(text)
+    return read_run_sheet(path, 15.0).set_index("run")
+
+
+def test_captive_rows_are_read(tmp_path):
+    s = _sheet(tmp_path)
+    assert s.loc[[1, 2, 3, 4, 5], "test"].tolist() == ["drift", "rudder", "arm", "sway",
+                                                       "yaw_drift"]
+    assert s.loc[[1, 2, 3, 4, 5], "sheet_error"].eq("").all()
+    assert (s.loc[1, "drift_deg"], s.loc[1, "angle_deg"], s.loc[1, "rudder_deg"]) == \
+        (10.0, 10.0, 0.0)
+    assert (s.loc[2, "drift_deg"], s.loc[2, "rudder_deg"]) == (4.0, -20.0)
+    assert s.loc[3, "radius_m"] == -12.5
+    assert (s.loc[4, "pmm_amplitude_m"], s.loc[4, "pmm_frequency_hz"]) == (0.05, 0.2)
+    assert s.loc[5, "plane"] == "vertical" and s.loc[4, "plane"] == "horizontal"
+    assert s.loc[12, "sheet_error"] == ""
+
+
+@pytest.mark.parametrize(("run", "said"), [
+    (6, "a PMM run (yaw) needs pmm_amplitude_m"),
+    (7, "an arm run needs radius_m"),
+    (8, "test 'drift' is a captive test of the hull, but config is 'sting'"),
+    (9, "drift_deg (10) and angle_deg (5) differ"),
+    (10, "drift_deg 120 is beyond ±90°"),
+    (11, "plane 'sideways' is not one of horizontal, vertical"),
+])
+def test_bad_captive_rows_have_their_sentence(tmp_path, run, said):
+    error = _sheet(tmp_path).loc[run, "sheet_error"]
+    assert error.startswith(f"row {run + 1} of sheet.csv: ") and said in error
+
+
+def test_a_resistance_sheet_gains_no_captive_columns(tmp_path):
+    s = _sheet(tmp_path, "run,file,config,angle_deg\n1,a.csv,hull,0\n")
+    assert "drift_deg" not in s and "plane" not in s
+
+
+def test_captive_runs_without_inertia_stop_the_day(tmp_path):
+    sheet = _sheet(tmp_path).reset_index()
+    model = Model(length_m=2.0, diameter_m=0.2, mass_kg=50.0, balance_x_m=0.0)
+    with pytest.raises(ProtocolError, match=re.escape(
+            "p.toml: the run sheet has 11 captive run(s) (runs 1, 2, 3, 4, 5 and 6 more), "
+            "which need izz_kg_m2 and xg_m in [model]")):
+        check_captive_runs(sheet, model, None, "p.toml")
+    full = Model(length_m=2.0, diameter_m=0.2, mass_kg=50.0, balance_x_m=0.0, xg_m=0.0,
+                 izz_kg_m2=3.0)
+    check_captive_runs(sheet, full, None, "p.toml")

@@ -34,7 +34,8 @@ from towtank.ingest.values import finite_number, shown
 from towtank.reference.geometry import displaced_volume
 
 __all__ = ["CAPTIVE_TESTS", "MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance", "TareSource",
-           "captive_model_missing", "check_mass", "parse_balance", "parse_captive",
+           "captive_model_missing", "check_captive_runs", "check_mass", "parse_balance",
+           "parse_captive",
            "parse_read_options", "parse_speed_log", "parse_tare", "parse_zero_file"]
 
 #: The tare table's columns (docs/formats.md §3.3): speed [m/s], drag and lift [N].
@@ -330,3 +331,26 @@ def captive_model_missing(model: Model | None, captive: Captive | None,
     if (captive is None or captive.moment_ref == "origin") and model.balance_x_m is None:
         out.append("balance_x_m")
     return out
+
+
+def check_captive_runs(sheet: Any, model: Model | None, captive: Captive | None,
+                       src: str) -> None:
+    """Stop a day whose run sheet has captive runs (status ok) that the protocol's [model]
+    cannot reduce: one sentence naming the missing keys (:func:`captive_model_missing`) and
+    the first runs that need them. ``sheet``: :func:`towtank.ingest.runsheet.read_run_sheet`'s
+    table."""
+    rows = sheet[sheet["test"].isin(CAPTIVE_TESTS) & (sheet["status"] == "ok")]
+    if rows.empty:
+        return
+    planes = tuple(sorted(set(rows["plane"]) if "plane" in rows else {"horizontal"}))
+    missing = captive_model_missing(model, captive, planes)
+    if not missing:
+        return
+    runs = [str(r) for r in rows["run"].tolist()]
+    listed = ", ".join(runs[:5]) + (f" and {len(runs) - 5} more" if len(runs) > 5 else "")
+    need = "a [model] section" if model is None else \
+        f"{' and '.join(missing)} in [model]"
+    raise ProtocolError(
+        f"{src}: the run sheet has {len(runs)} captive run(s) (runs {listed}), which need "
+        f"{need} (the model's inertia is removed from the balance's loads and its moment "
+        "transferred to the origin).")
