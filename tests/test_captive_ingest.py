@@ -16,9 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from towtank.commands import cli
-from towtank.errors import ProtocolError
+from towtank.errors import ProtocolError, RunError
 from towtank.ingest.captive_means import captive_means, read_means_table
-from towtank.ingest.protocol import Captive, Model, load_protocol
+from towtank.ingest.protocol import Captive, ChannelMap, Model, load_protocol
+from towtank.ingest.runfile import load_run
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.ingest.sections import captive_model_missing, check_captive_runs
 from towtank.testing import synthetic as syn
@@ -293,3 +294,77 @@ def test_captive_runs_without_inertia_stop_the_day(tmp_path):
     full = Model(length_m=2.0, diameter_m=0.2, mass_kg=50.0, balance_x_m=0.0, xg_m=0.0,
                  izz_kg_m2=3.0)
     check_captive_runs(sheet, full, None, "p.toml")
+
+
+# ------------------------------------------------------------------ captive run files
+def _captive_file(*, drop: tuple[str, ...] = (), spike: bool = False, yaw_rad: bool = False,
+                  fs: float = 100.0) -> bytes:
+    """A PMM yaw run: Fx in kN, Fy in N, Mz in N mm, sway in mm, yaw in deg (or rad)."""
+    t = np.arange(0.0, 20.0, 1.0 / fs)
+    rng = np.random.default_rng(1)
+    w = 2 * np.pi * 0.25
+    cols = {
+        "time": t,
+        "speed": np.clip(t / 2.0, 0.0, 1.0),
+        "Fx (kN)": -0.004 - 1e-5 * rng.standard_normal(t.size),
+        "Fy (N)": 3.0 * np.sin(w * t) + 0.02 * rng.standard_normal(t.size),
+        "Mz (N mm)": 800.0 * np.cos(w * t) + 5.0 * rng.standard_normal(t.size),
+        "sway (mm)": 50.0 * np.sin(w * t),
+        "yaw (rad)" if yaw_rad else "yaw (deg)": (np.radians(5.0) if yaw_rad else 5.0)
+        * np.cos(w * t),
+    }
+    if spike:
+        cols["Fy (N)"][700] += 80.0
+    frame = pd.DataFrame({k: v for k, v in cols.items() if k.split(" ")[0] not in drop})
+    return frame.to_csv(index=False).encode()
+
+
+def _load(data: bytes, test: str = "yaw", mapping: dict | None = None):
+    return load_run(Path("run_007.csv"), mapping or {}, data=data, test=test)
+
+
+def test_captive_channels_are_read_in_si():
+    raw = _load(_captive_file(spike=True))
+    assert sorted(raw.extra) == ["fx", "fy", "mz", "sway", "yaw"]
+    assert np.median(raw.extra["fx"]) == pytest.approx(-4.0, abs=0.05)
+    np.testing.assert_allclose(raw.drag, -raw.extra["fx"])  # drag from fx
+    assert np.max(np.abs(raw.extra["mz"])) == pytest.approx(0.8, abs=0.03)
+    assert np.max(raw.extra["sway"]) == pytest.approx(0.05, rel=1e-3)
+    assert np.max(raw.extra["yaw"]) == pytest.approx(5.0, rel=1e-3)
+    assert abs(raw.extra["fy"][700] - 3.0 * np.sin(2 * np.pi * 0.25 * 7.0)) < 0.2
+    assert "1 spike(s) removed from fy" in raw.notes
+    assert "drag taken as −fx (the file has no drag channel)" in raw.notes
+    assert raw.units["mz"] == ("N mm", "file")
+    rad = _load(_captive_file(yaw_rad=True))
+    assert np.max(rad.extra["yaw"]) == pytest.approx(5.0, rel=1e-3)
+
+
+def test_other_runs_do_not_read_captive_channels():
+    data = _captive_file()
+    raw = load_run(Path("run_007.csv"), {"drag": ChannelMap(column="Fx (kN)")}, data=data)
+    assert raw.extra == {}
+    assert "fy" not in raw.units
+
+
+@pytest.mark.parametrize(("drop", "test", "said"), [
+    (("Mz",), "drift", "the mz channel is missing, which a drift run needs"),
+    (("Fy", "Mz"), "rudder", "the mz and fy channels are missing"),
+    (("sway",), "sway", "the sway channel is missing, which a sway run needs"),
+    (("yaw",), "yaw_drift", "the yaw channel is missing, which a yaw_drift run needs"),
+])
+def test_a_captive_run_without_its_channels_is_rejected(drop, test, said):
+    with pytest.raises(RunError, match=re.escape(said)):
+        _load(_captive_file(drop=drop), test)
+
+
+def test_a_drift_run_may_record_drag_and_lift():
+    data = _captive_file(drop=("Fy", "sway", "yaw"))
+    mapping = {"drag": ChannelMap(column="Fx (kN)"), "lift": ChannelMap(column="Mz (N mm)")}
+    raw = _load(data, "drift", {**mapping, "mz": ChannelMap(column="Mz (N mm)")})
+    assert "fy" not in raw.extra and raw.lift is not None
+
+
+def test_a_sway_channel_in_the_wrong_unit_is_one_sentence():
+    data = _captive_file().replace(b"sway (mm)", b"sway")  # mm read as m
+    with pytest.raises(RunError, match=re.escape("the sway channel reaches 50 m")):
+        _load(data, "sway")

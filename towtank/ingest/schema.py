@@ -14,6 +14,10 @@ from towtank.ingest.values import finite_number, shown
 from towtank.runtime.safefile import MAX_TABLE_BYTES, check_table_size  # noqa: F401 - here too
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
+#: A captive run's channels (docs/formats.md, "Captive manoeuvring tests"): the balance's
+#: body-axis forces fx, fy [N] and yaw moment mz [N m], the PMM's sway [m] and yaw [deg]; read
+#: only for the runs the sheet marks as captive tests.
+CAPTIVE_CHANNELS = ("fx", "fy", "mz", "sway", "yaw")
 
 
 @dataclass(frozen=True)
@@ -141,7 +145,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "pressure_Pa": (NUM, False),
         "relative_humidity_pct": (NUM, False),
     },
-    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
+    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS + CAPTIVE_CHANNELS},
     "channel": {
         "column": ("str", False),
         "columns": ("strs", False),
