@@ -368,3 +368,12 @@ def test_a_sway_channel_in_the_wrong_unit_is_one_sentence():
     data = _captive_file().replace(b"sway (mm)", b"sway")  # mm read as m
     with pytest.raises(RunError, match=re.escape("the sway channel reaches 50 m")):
         _load(data, "sway")
+
+
+def test_the_labs_captive_column_names_are_read(tmp_path):
+    s = _sheet(tmp_path, "Run #,File,Config,Test type,Drift angle (deg),Rudder (rad),"
+                         "PMM amplitude (mm),PMM frequency (Hz)\n"
+                         "1,a.csv,hull,PMM sway,0,0.1,40,0.3\n")
+    assert s.loc[1, "sheet_error"] == ""
+    assert s.loc[1, "rudder_deg"] == pytest.approx(math.degrees(0.1))
+    assert (s.loc[1, "pmm_amplitude_m"], s.loc[1, "pmm_frequency_hz"]) == (0.04, 0.3)

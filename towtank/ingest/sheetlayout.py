@@ -80,8 +80,8 @@ _ALIASES = {
     "drift_deg": ("drift deg", "beta", "drift_deg"),
     "rudder_deg": ("rudder", "rudder angle", "delta", "rudder deg"),
     "radius_m": ("radius", "arm radius", "turning radius"),
-    "pmm_amplitude_m": ("pmm amplitude", "sway amplitude", "amplitude"),
-    "pmm_frequency_hz": ("pmm frequency", "frequency", "freq"),
+    "pmm_amplitude_m": ("pmm amplitude", "sway amplitude", "pmm amplitude m"),
+    "pmm_frequency_hz": ("pmm frequency", "pmm frequency hz", "pmm freq"),
     "plane": ("plane",),
 }
 _BY_ALIAS = {a: canon for canon, names in _ALIASES.items() for a in names}
