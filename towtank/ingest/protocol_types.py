@@ -17,8 +17,9 @@ from pathlib import Path
 from typing import Any, Literal
 
 from towtank.ingest.readers import ReadOptions
-from towtank.ingest.schema import (
+from towtank.ingest.schema import (  # noqa: F401 - CAPTIVE_CHANNELS: the readers take it here
     CANONICAL_CHANNELS,
+    CAPTIVE_CHANNELS,
     Processing,
     ReportOptions,
     WatchOptions,

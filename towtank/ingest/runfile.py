@@ -38,6 +38,7 @@ from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns  # noqa: F401 - importable here too
 from towtank.ingest.protocol_types import (
+    CAPTIVE_CHANNELS,
     CAPTIVE_TESTS,
     PMM_TESTS,
     Balance,
@@ -55,7 +56,6 @@ from towtank.ingest.readers import (  # noqa: F401 - MAX_RUN_FILE_BYTES: importa
     name_list,
     stated_units,
 )
-from towtank.ingest.schema import CAPTIVE_CHANNELS
 from towtank.ingest.segments import find_segments, human_duration, segment_error
 from towtank.ingest.speedlog import speed_on_run_time
 from towtank.ingest.timing import time_source_text, timing_note
@@ -120,7 +120,7 @@ class RawRun:
     #: per channel read: (its unit in the file, where that came from: "file", "protocol",
     #: "assumed" or "unknown", see :func:`towtank.ingest.calibration.unit_source`)
     units: dict[str, tuple[str, str]] = field(default_factory=dict)
-    #: a captive run's channels (:data:`towtank.ingest.schema.CAPTIVE_CHANNELS` found in the
+    #: a captive run's channels (:data:`towtank.ingest.protocol_types.CAPTIVE_CHANNELS` found in the
     #: file): fx, fy [N], mz [N m], sway [m], yaw [deg]; empty for other runs
     extra: dict[str, np.ndarray] = field(default_factory=dict)
 

@@ -42,17 +42,28 @@ __all__ = ["CAPTIVE_TESTS", "MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance",
 TARE_TABLE_COLUMNS = ("speed_m_s", "drag_N", "lift_N")
 
 
+def _table_columns(data: Any, keys: tuple[str, ...], label: str, table: str,
+                   src: str) -> dict[str, str]:
+    """A table of ``canonical = "the lab's column"`` (``[tare] columns``, ``[captive]
+    means_columns``; ``label`` its dotted name, ``table`` the table's name in words), checked:
+    known canonical names, each a non-empty text, no column named twice."""
+    check_keys(data, keys, label, src)
+    section, key = label.split(".")
+    where = f"[{section}] {key}"
+    for canon, name in data.items():
+        if not isinstance(name, str) or not name.strip():
+            raise ProtocolError(f"{src}: {where}: '{canon}' must name a column of the "
+                                f"{table} (text), but it is {name!r}.")
+    if len({v.strip().lower() for v in data.values()}) != len(data):
+        raise ProtocolError(f"{src}: {where} maps one column of the {table} twice.")
+    return dict(data)
+
+
 def _tare_columns(data: Any, src: str) -> dict[str, str]:
     """``[tare] columns``: each table column's name in the lab's table (``{ speed_m_s =
     "tow_speed", drag_N = "tare_drag" }``), checked; the contract's own names by default."""
-    check_keys(data, TARE_TABLE_COLUMNS, "tare.columns", src)
-    for canon, name in data.items():
-        if not isinstance(name, str) or not name.strip():
-            raise ProtocolError(f"{src}: [tare] columns: '{canon}' must name a column of the "
-                                f"tare table (text), but it is {name!r}.")
-    if len({v.strip().lower() for v in data.values()}) != len(data):
-        raise ProtocolError(f"{src}: [tare] columns maps one column of the tare table twice.")
-    return {c: data.get(c, c) for c in TARE_TABLE_COLUMNS}
+    given = _table_columns(data, TARE_TABLE_COLUMNS, "tare.columns", "tare table", src)
+    return {c: given.get(c, c) for c in TARE_TABLE_COLUMNS}
 
 
 def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
@@ -260,15 +271,8 @@ ROLL_TOLERANCE_DEG = 1e-6
 
 def _means_columns(data: Any, src: str) -> dict[str, str]:
     """``[captive] means_columns``: canonical name -> the means table's column, checked."""
-    check_keys(data, MEANS_COLUMNS, "captive.means_columns", src)
-    for canon, name in data.items():
-        if not isinstance(name, str) or not name.strip():
-            raise ProtocolError(f"{src}: [captive] means_columns: '{canon}' must name a column "
-                                f"of the means table (text), but it is {name!r}.")
-    if len({v.strip().lower() for v in data.values()}) != len(data):
-        raise ProtocolError(f"{src}: [captive] means_columns maps one column of the means "
-                            "table twice.")
-    return {k: v.strip() for k, v in data.items()}
+    given = _table_columns(data, MEANS_COLUMNS, "captive.means_columns", "means table", src)
+    return {k: v.strip() for k, v in given.items()}
 
 
 def parse_captive(data: Any, base: Path, src: str, check_paths: bool) -> Captive:
