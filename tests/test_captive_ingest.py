@@ -15,6 +15,7 @@ from conftest import JOBS
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from towtank.analysis.hull import LATERAL_AREA_UNKNOWN, fit_transverse
 from towtank.commands import cli
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.captive_means import captive_means, read_means_table
@@ -51,7 +52,8 @@ def _ship_day(day: Path) -> Path:
 def test_frontal_area_without_diameter_processes_the_day(tmp_path, capsys):
     protocol = _ship_day(tmp_path)
     out = tmp_path / "out"
-    code = cli.main(["process", str(protocol), "--out", str(out), "--jobs", str(JOBS)])
+    code = cli.main(["process", str(protocol), "--out", str(out), "--jobs", str(JOBS),
+                     "--no-report"])
     said = capsys.readouterr()
     err = said.err + said.out
     assert code == 0, err
@@ -61,8 +63,19 @@ def test_frontal_area_without_diameter_processes_the_day(tmp_path, capsys):
     assert math.isfinite(coef.loc["X_u|u|", "value"])
     runs = pd.read_csv(out / "runs.csv")
     assert runs.loc[runs["config"] == "hull", "cd_lateral"].isna().all()
-    assert (out / "report.pdf").is_file()
-    assert "lateral_area_m2 nor diameter_m" in err
+    assert LATERAL_AREA_UNKNOWN in err
+
+
+def test_transverse_tows_without_lateral_area_give_y_vv_and_no_cd90():
+    runs = pd.DataFrame({"run": [1, 2, 3], "status": "ok", "config": "hull",
+                         "angle_deg": 90.0, "speed_mean": [0.5, 0.8, 1.0],
+                         "drag_mean": [2.0, 5.12, 8.0], "rho": 1000.0})
+    known = fit_transverse(runs, 1000.0, 0.02)
+    est, cd90, cd90_se, table, notes = fit_transverse(runs, 1000.0, math.nan)
+    assert est.value == pytest.approx(known[0].value) == pytest.approx(-8.0)
+    assert math.isnan(cd90) and math.isnan(cd90_se)
+    assert table is None  # no C_D,90 panel in the report, no table in the workbook
+    assert notes == [LATERAL_AREA_UNKNOWN]
 
 
 # ------------------------------------------------------------------ [model] and [captive]
