@@ -689,6 +689,15 @@ def _run_tare_cov(
     return tare_covariance(A, rows / denom[:, None], groups, tares)
 
 
+#: The note of a day with transverse tows and no lateral area ([model] without
+#: lateral_area_m2 and diameter_m, such as a ship given by its frontal area).
+LATERAL_AREA_UNKNOWN = (
+    "[model] gives neither lateral_area_m2 nor diameter_m, so the lateral area is unknown: "
+    "C_D,90 and the runs' cd_lateral are not computed (Y_v|v| is, as it does not depend on "
+    "the area); give lateral_area_m2 for them."
+)
+
+
 def fit_transverse(
     runs: pd.DataFrame,
     rho: float,
@@ -696,7 +705,10 @@ def fit_transverse(
     reductions: dict[int, RunReduction] | None = None,
     tares: dict[str, TareModel] | None = None,
 ) -> tuple[Estimate | None, float, float, pd.DataFrame | None, list[str]]:
-    """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|."""
+    """Y_v|v| = −½ρ·A_lat·C_D,90 from the transverse steady runs: OLS of R = K·U|U|.
+
+    ``lateral_area`` [m²] NaN (not known): Y_v|v| all the same, C_D,90 NaN, no run table and
+    the note :data:`LATERAL_AREA_UNKNOWN`."""
     # loaded on use: statsmodels loads while the workers reduce the runs
     from statsmodels.regression.linear_model import OLS
 
@@ -709,6 +721,9 @@ def fit_transverse(
         ]
     u = tr["speed_mean"].to_numpy(float)
     r = tr["drag_mean"].to_numpy(float)
+    # Y_v|v| does not depend on A_lat: without it the fit runs on 1 m² and C_D,90 is unknown
+    known_area = math.isfinite(lateral_area) and lateral_area > 0
+    lateral_area = lateral_area if known_area else 1.0
     # each run at its own water density: R/(½ρ_run·A_lat) = C_D,90·U|U|
     y = r / (0.5 * tr["rho"].to_numpy(float) * lateral_area)
     uu = (u * np.abs(u))[:, None]
@@ -731,6 +746,8 @@ def fit_transverse(
         dof=float(nu),
     )
     # residual of each run's drag [N]: R − ½ρ_run·A_lat·C_D,90·U|U|
+    if not known_area:
+        return est, math.nan, math.nan, None, [LATERAL_AREA_UNKNOWN]
     table = pd.DataFrame({"run": tr["run"].to_numpy(int), "speed": u, "drag": r,
                           "cd90": y / (u * u), "resid": np.asarray(res.resid) * q_run})
     return est, cd90, cd90_se, table, []

@@ -17,7 +17,8 @@ from towtank.ingest.readers import column_unit, converts, is_volts, unit_factor
 __all__ = ["UNITS", "calibrate", "unit_source"]
 
 #: The SI unit of each canonical channel.
-UNITS = {"time": "s", "speed": "m/s", "accel": "m/s²", "drag": "N", "lift": "N"}
+UNITS = {"time": "s", "speed": "m/s", "accel": "m/s²", "drag": "N", "lift": "N",
+         "fx": "N", "fy": "N", "mz": "N m", "sway": "m", "yaw": "deg"}
 
 
 def calibrate(

@@ -28,6 +28,7 @@ from towtank.errors import ProtocolError
 from towtank.ingest.protocol_types import (  # noqa: F401 - the types, importable from here too
     Balance,
     Campaign,
+    Captive,
     ChannelMap,
     Fin,
     Model,
@@ -60,8 +61,10 @@ from towtank.ingest.schema import (  # noqa: F401 - SCHEMA, TOP_LEVEL: public he
 )
 from towtank.ingest.sections import (  # noqa: F401 - MASS_RATIO_RANGE: public here too
     MASS_RATIO_RANGE,
+    captive_model_missing,
     check_mass,
     parse_balance,
+    parse_captive,
     parse_read_options,
     parse_speed_log,
     parse_tare,
@@ -318,6 +321,7 @@ def load_protocol(
             for key in ("run_sheet", "data_dir"):
                 if key not in camp:
                     camp[key], check_paths = ".", False
+    _means_for_runs(data)
     for required in ("campaign", "water"):
         if required not in data:
             raise ProtocolError(f"{src}: the required section [{required}] is missing.")
@@ -332,6 +336,22 @@ def load_protocol(
     # [vehicle]'s numbers are checked against the vehicle they describe by the vehicle stage
     check_magnitudes({k: v for k, v in data.items() if k != "vehicle"}, src)
     return protocol
+
+
+#: Marks a [campaign] whose run_sheet and data_dir stand for the [captive] means table.
+_MEANS_ONLY = "__means_only__"
+
+
+def _means_for_runs(data: dict[str, Any]) -> None:
+    """A protocol with ``[captive] means`` may leave out [campaign] run_sheet and data_dir
+    (both left out): they are set to the table (see :class:`Campaign` ``sheet_given``)."""
+    camp, captive = data.get("campaign"), data.get("captive")
+    if not (isinstance(camp, dict) and isinstance(captive, dict) and
+            isinstance(captive.get("means"), str)):
+        return
+    if "run_sheet" not in camp and "data_dir" not in camp:
+        camp["run_sheet"] = camp["data_dir"] = captive["means"]
+        camp[_MEANS_ONLY] = True
 
 
 def _long_integer_key(text: str) -> str:
@@ -363,6 +383,18 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     if model is None and fin is None and vehicle is None:
         raise ProtocolError(f"{src}: the protocol needs a [model] or a [fin] section.")
 
+    captive = parse_captive(data["captive"], base, src, check_paths) \
+        if "captive" in data else None
+    if captive is not None and captive.means is not None:
+        missing = captive_model_missing(model, captive, ())
+        if model is None:
+            raise ProtocolError(f"{src}: [captive] means needs a [model] section (its length "
+                                "and the origin the table's moments are about).")
+        if missing:
+            raise ProtocolError(
+                f"{src}: [captive] means needs {' and '.join(missing)} in [model]"
+                + (" (the x from the origin O of the point the table's yaw moments are about; "
+                   "0 when they are about O)." if missing == ["balance_x_m"] else "."))
     prototype = _prototype(data["prototype"], model, src) if "prototype" in data else None
     channels = _channels(data["channels"], src) if "channels" in data else {}
     balance = parse_balance(data["balance"], channels, src) if "balance" in data else None
@@ -397,12 +429,14 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
         zeros=parse_zero_file(data.get("zeros"), src),
         sheet=parse_sheet_options(data.get("sheet"), src),
         watch=_watch(data.get("watch", {}), src),
+        captive=captive,
     )
 
 
 def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
     """``[campaign]``: paths resolved, the reference and (with ``check_paths``) the sheet and
     data folder checked."""
+    means_only = bool(data.pop(_MEANS_ONLY, False)) if isinstance(data, dict) else False
     camp = checked_section(data, "campaign", "campaign", src)
 
     output_dir = (
@@ -428,8 +462,9 @@ def _campaign(data: Any, base: Path, src: str, check_paths: bool) -> Campaign:
         output_dir=_resolved(base, output_dir, "output_dir", src),
         reference=reference,
         test_date=camp.get("test_date"),
+        sheet_given=not means_only,
     )
-    if check_paths:
+    if check_paths and campaign.sheet_given:  # [captive] means is checked with [captive]
         kind = path_kind(campaign.run_sheet)
         if kind != FILE:
             what = {FOLDER: "is a folder", OTHER: "is not a regular file (a pipe or a device)",
@@ -462,15 +497,25 @@ def _resolved(base: Path, given: str | Path, key: str, src: str) -> Path:
     return out
 
 
+#: [model] keys that are positions along x from the origin O [m]: any sign, within the length.
+SIGNED_MODEL_KEYS = ("xg_m", "balance_x_m")
+
+
 def _model(data: Any, src: str, water: Water | None = None) -> Model:
     """``[model]`` checked, its Myring geometry filled in and its mass checked."""
     m = checked_section(data, "model", "model", src)
     check_positive(
         m,
-        tuple(k for k, (kind, _) in SCHEMA["model"].items() if kind == NUM),
+        tuple(k for k, (kind, _) in SCHEMA["model"].items()
+              if kind == NUM and k not in SIGNED_MODEL_KEYS),
         "model",
         src,
     )
+    for key in SIGNED_MODEL_KEYS:
+        if key in m and not abs(m[key]) < m["length_m"]:
+            raise ProtocolError(
+                f"{src}: '{key}' in [model] is {m[key]:g} m from the origin, but the model is "
+                f"{m['length_m']:g} m long: was it given in mm or cm?")
     myring = None
     if "myring" in m:
         my = checked_section(m.pop("myring"), "model.myring", "model.myring", src)
@@ -480,7 +525,7 @@ def _model(data: Any, src: str, water: Water | None = None) -> Model:
         raise ProtocolError(
             f"{src}: [model] needs 'diameter_m' (or 'frontal_area_m2') for the frontal area."
         )
-    model = Model(**m, myring=myring)
+    model = Model(**{"diameter_m": None, **m}, myring=myring)
     if myring is not None:
         model = _with_myring_geometry(model, src)
     if water is None or not water.is_air:  # in air the displaced mass bounds nothing
@@ -719,8 +764,11 @@ def model_geometry(model: Model, scale: float | None = None) -> list[dict[str, A
     rows = [
         ("frontal area", "A", model.frontal_area, "m²",
          origin("frontal_area_m2", "π D²/4 from diameter_m")),
-        ("lateral area", "A_lat", model.lateral_area, "m²",
-         origin("lateral_area_m2", "L·D from length_m and diameter_m (default)")),
+        ("lateral area", "A_lat", model.lateral_area if model.diameter_m is not None
+         or model.lateral_area_m2 is not None else None, "m²",
+         origin("lateral_area_m2", "L·D from length_m and diameter_m (default)"
+                if model.diameter_m is not None else
+                "not known (no lateral_area_m2, no diameter_m)")),
         ("wetted area", "S_m", model.wetted_area_m2, "m²",
          origin("wetted_area_m2", "not known (no wetted_area_m2, no Myring description)")),
         ("volume", "V", model.volume_m3, "m³",

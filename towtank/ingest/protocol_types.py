@@ -17,8 +17,9 @@ from pathlib import Path
 from typing import Any, Literal
 
 from towtank.ingest.readers import ReadOptions
-from towtank.ingest.schema import (
+from towtank.ingest.schema import (  # noqa: F401 - CAPTIVE_CHANNELS: the readers take it here
     CANONICAL_CHANNELS,
+    CAPTIVE_CHANNELS,
     Processing,
     ReportOptions,
     WatchOptions,
@@ -26,7 +27,7 @@ from towtank.ingest.schema import (
 from towtank.ingest.sheetlayout import SheetOptions
 from towtank.reference.air import DEFAULT_RELATIVE_HUMIDITY_PCT, STANDARD_PRESSURE_PA
 
-__all__ = ["Balance", "Campaign", "ChannelMap", "Fin", "Model", "Myring", "Protocol",
+__all__ = ["Balance", "Campaign", "Captive", "ChannelMap", "Fin", "Model", "Myring", "Protocol",
            "Prototype", "SpeedLog", "TareSource", "Water", "ZeroFile", "channel_map"]
 
 
@@ -131,6 +132,57 @@ class Campaign:
     output_dir: Path
     reference: str = "remus"
     test_date: str | None = None
+    #: False for a protocol whose ``[captive] means`` table stands in for the runs and that
+    #: leaves out run_sheet and data_dir: both are then the table's path (so that no output
+    #: replaces it), and there is no run sheet to read.
+    sheet_given: bool = True
+
+
+#: The run sheet's captive tests (docs/formats.md, "Captive manoeuvring tests"): static drift,
+#: rudder angle, rotating arm, pure sway, pure yaw and yaw with drift.
+CAPTIVE_TESTS = ("drift", "rudder", "arm", "sway", "yaw", "yaw_drift")
+#: The captive tests on the planar motion mechanism (their runs record sway, and yaw).
+PMM_TESTS = ("sway", "yaw", "yaw_drift")
+#: ``[captive] means_columns``' canonical names: the means table's columns towtank reads.
+MEANS_COLUMNS = ("run", "drift_deg", "rudder_deg", "radius_m", "speed", "fx", "fy", "mz")
+#: ``[captive] moment_ref``: the derivatives refer to the origin O (moments transferred from
+#: balance_x_m), or to the balance's own moment point.
+MOMENT_REFS = ("origin", "balance")
+
+
+@dataclass(frozen=True)
+class Captive:
+    """The protocol's ``[captive]`` (docs/formats.md, "Captive manoeuvring tests").
+
+    Parameters
+    ----------
+    moment_ref : str
+        ``"origin"``: moments transferred to O; ``"balance"``: kept about the balance point
+        (recorded in the provenance).
+    means : Path or None
+        A table of static-test means as a lab delivers them, instead of run files.
+    means_prime : bool
+        The table's forces are over ½ρL²U² and its moments over ½ρL³U².
+    means_columns : dict
+        Canonical name (:data:`MEANS_COLUMNS`) -> the table's column; names not given are
+        guessed from the table's header.
+    roll_deg : float
+        Vertical-plane runs: the roll of the model about its x axis on the rig [deg], +90
+        (starboard side down) or -90.
+    min_cycles : int
+        Fewest whole steady PMM cycles a run needs (3 or more).
+    amplitude_tolerance : float
+        Largest relative departure of a cycle's sway amplitude from the median cycle's, and of
+        the measured frequency and amplitude from the sheet's [-].
+    """
+
+    moment_ref: str = "origin"
+    means: Path | None = None
+    means_prime: bool = False
+    means_columns: dict[str, str] = field(default_factory=dict)
+    roll_deg: float = 90.0
+    min_cycles: int = 3
+    amplitude_tolerance: float = 0.05
 
 
 @dataclass(frozen=True)
@@ -200,6 +252,15 @@ class Model:
     #: Which of frontal_area_m2, lateral_area_m2, wetted_area_m2, volume_m3 the Myring
     #: description supplied (the protocol did not give them).
     myring_computed: tuple[str, ...] = ()
+    #: Captive tests (docs/formats.md, "Captive manoeuvring tests"): the yaw and pitch moments
+    #: of inertia about the CG [kg m²] of everything the balance carries, the CG's x from the
+    #: origin O [m], the x from O of the balance's moment point [m], the draught [m] (ships:
+    #: primes on the L·T basis). None where not given.
+    izz_kg_m2: float | None = None
+    iyy_kg_m2: float | None = None
+    xg_m: float | None = None
+    balance_x_m: float | None = None
+    draught_m: float | None = None
 
     @property
     def frontal_area(self) -> float:
@@ -211,10 +272,12 @@ class Model:
 
     @property
     def lateral_area(self) -> float:
-        """Projected side area for transverse tows [m²]: given, or L·D."""
+        """Projected side area for transverse tows [m²]: given, or L·D; NaN when neither is
+        known (a ship given by its frontal area: the quantities on it are not computed)."""
         if self.lateral_area_m2 is not None:
             return self.lateral_area_m2
-        assert self.diameter_m is not None
+        if self.diameter_m is None:
+            return math.nan
         return self.length_m * self.diameter_m
 
 
@@ -262,6 +325,7 @@ class Protocol:
     zeros: ZeroFile | None = None  # [zeros]: the balance zero from its own file
     sheet: SheetOptions = field(default_factory=SheetOptions)  # [sheet]: a hand-typed sheet
     watch: WatchOptions = field(default_factory=WatchOptions)  # [watch]: towtank watch's timings
+    captive: Captive | None = None  # [captive]: captive manoeuvring tests' options
 
     @property
     def name(self) -> str:

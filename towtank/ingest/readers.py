@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import io
 import logging
+import math
 import re
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -911,19 +912,26 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2},
     "force": {"n": 1.0, "kn": 1e3, "mn": 1e-3, "kgf": STANDARD_GRAVITY, "lbf": 4.4482216152605,
               "gf": STANDARD_GRAVITY * 1e-3},
+    "moment": {"n m": 1.0, "nm": 1.0, "n.m": 1.0, "n·m": 1.0, "n*m": 1.0, "kn m": 1e3,
+               "knm": 1e3, "n mm": 1e-3, "nmm": 1e-3, "n.mm": 1e-3, "kgf m": STANDARD_GRAVITY,
+               "kgfm": STANDARD_GRAVITY, "kgf.m": STANDARD_GRAVITY},
+    "angle": {"deg": 1.0, "°": 1.0, "degree": 1.0, "degrees": 1.0, "rad": 180.0 / math.pi},
 }
 _VOLTS = {"v": 1.0, "mv": 1e-3, "µv": 1e-6, "uv": 1e-6}
 _UNIT_WORDS = {u for table in UNIT_FACTORS.values() for u in table} | set(_VOLTS) | {
     "N", "V", "mV", "kN", "mN", "-", "deg", "°", "rad", "Hz", "%"}
 _UNIT_IN_NAME = re.compile(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]\s*$")
 _QUANTITY = {"time": "time", "speed": "speed", "accel": "accel", "drag": "force",
-             "lift": "force", "position": "length"}
+             "lift": "force", "position": "length", "fx": "force", "fy": "force",
+             "mz": "moment", "sway": "length", "yaw": "angle"}
 
 
 def known_units(canon: str) -> list[str]:
     """The units towtank converts to SI for channel ``canon`` ([] for a channel it does not
     know)."""
-    shown = {"n": "N", "kn": "kN", "mn": "mN"} if _QUANTITY.get(canon) == "force" else {}
+    shown = {"n": "N", "kn": "kN", "mn": "mN"} if _QUANTITY.get(canon) == "force" else \
+        {u: u.replace("n", "N") for u in UNIT_FACTORS["moment"]} \
+        if _QUANTITY.get(canon) == "moment" else {}
     return [shown.get(u, u) for u in UNIT_FACTORS.get(_QUANTITY.get(canon, ""), {})]
 
 

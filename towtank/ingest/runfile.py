@@ -19,6 +19,7 @@ Raw files are only ever opened for reading. Every check is vectorised (no per-sa
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,7 +37,14 @@ from towtank.ingest.columns import (  # noqa: F401 - the file primitives, import
 from towtank.ingest.plaincsv import INVALID_KEY as _INVALID_KEY
 from towtank.ingest.plaincsv import ROWS_KEY as _ROWS_KEY
 from towtank.ingest.plaincsv import read_csv_columns  # noqa: F401 - importable here too
-from towtank.ingest.protocol_types import Balance, ChannelMap, channel_map
+from towtank.ingest.protocol_types import (
+    CAPTIVE_CHANNELS,
+    CAPTIVE_TESTS,
+    PMM_TESTS,
+    Balance,
+    ChannelMap,
+    channel_map,
+)
 from towtank.ingest.readers import (  # noqa: F401 - MAX_RUN_FILE_BYTES: importable here too
     FS_ERROR_KEY,
     FS_KEY,
@@ -61,6 +69,18 @@ _NO_SPEED_HINT = ("; map its column in [channels] speed, give the carriage's log
                   "\"nominal\" (each run at the run sheet's speed_nominal)")
 OPTIONAL_CHANNELS = ("accel", "lift")
 FORCE_CHANNELS = ("drag", "lift")
+
+#: Words in a column's name (lower case, blanks and separators ignored) that name a captive
+#: channel when [channels] does not map it: the channel's own name first.
+CAPTIVE_GUESSES = {
+    "fx": ("fx", "xforce", "forcex", "surgeforce"),
+    "fy": ("fy", "yforce", "forcey", "swayforce", "sideforce"),
+    "mz": ("mz", "nz", "yawmoment", "momentz", "zmoment"),
+    "sway": ("sway", "pmmy", "ypmm", "swayposition", "swaydisplacement"),
+    "yaw": ("yaw", "psi", "pmmyaw", "yawangle", "heading"),
+}
+#: Largest |value| of a captive channel that a rig records (a larger one is another unit).
+CAPTIVE_LIMITS = {"sway": (5.0, "is it in mm?"), "yaw": (90.0, "a wrong unit or gain?")}
 
 MIN_SAMPLES = 10
 MIN_FS_HZ = 10.0  # below this the time channel is not in seconds (ms? sample numbers?)
@@ -100,6 +120,9 @@ class RawRun:
     #: per channel read: (its unit in the file, where that came from: "file", "protocol",
     #: "assumed" or "unknown", see :func:`towtank.ingest.calibration.unit_source`)
     units: dict[str, tuple[str, str]] = field(default_factory=dict)
+    #: a captive run's channels (:data:`towtank.ingest.protocol_types.CAPTIVE_CHANNELS` found in the
+    #: file): fx, fy [N], mz [N m], sway [m], yaw [deg]; empty for other runs
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -449,7 +472,8 @@ def check_clipping(
 
 def _check_range(x: np.ndarray, t: np.ndarray, name: str, file: str, where: _Where) -> None:
     """Reject values no towing tank records: a wrong unit or gain, or corrupted numbers."""
-    limit = {"speed": MAX_SPEED, "time": MAX_TIME}.get(name, MAX_VALUE)
+    limit = {"speed": MAX_SPEED, "time": MAX_TIME,
+             **{k: v[0] for k, v in CAPTIVE_LIMITS.items()}}.get(name, MAX_VALUE)
     big = np.abs(x) > limit
     if not big.any():
         return
@@ -457,6 +481,7 @@ def _check_range(x: np.ndarray, t: np.ndarray, name: str, file: str, where: _Whe
     hint = {
         "speed": "a wrong unit or gain in [channels]?",
         "time": "is time recorded in ms or µs rather than in s?",
+        **{k: v[1] for k, v in CAPTIVE_LIMITS.items()},
     }.get(name, "corrupted numbers?")
     raise RunError(
         f"{file}: the {name} channel reaches {x[i]:.4g} {UNITS.get(name, '')} at {where(i)} "
@@ -465,6 +490,53 @@ def _check_range(x: np.ndarray, t: np.ndarray, name: str, file: str, where: _Whe
 
 
 # ------------------------------------------------------------------------------------ mapping
+def _squeezed(text: str) -> str:
+    """A column's name for guessing: lower case, its unit in brackets and separators gone."""
+    text = re.sub(r"[\(\[][^\)\]]*[\)\]]\s*$", "", text.strip().lower())
+    return re.sub(r"[\s_\-./]+", "", text)
+
+
+def _found(cols: dict[str, np.ndarray], canon: str) -> str | None:
+    """The column named as the canonical channel ``canon`` (blanks and case aside), or None."""
+    names = [c for c in cols if not c.startswith("__")]
+    return next((c for c in names if c.strip() == canon), None)
+
+
+def captive_mapping(cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap], name: str,
+                    test: str) -> dict[str, ChannelMap]:
+    """``mapping`` with a captive run's channels found in the file's columns.
+
+    A channel [channels] does not map is the column of its own name, else the one column whose
+    name holds one of :data:`CAPTIVE_GUESSES` (``Fy (N)``, ``Yaw moment``, ``PMM y``). A
+    captive run needs mz, and fy (or, for a drift run, lift); a PMM run (sway, yaw, yaw_drift)
+    sway; a yaw run (yaw, yaw_drift) yaw; else a RunError in one sentence names the channel.
+    """
+    out = dict(mapping)
+    names = [c for c in cols if not c.startswith("__")]
+    taken = {m.column for m in mapping.values()} | {c for m in mapping.values()
+                                                     for c in m.columns}
+    for canon, words in CAPTIVE_GUESSES.items():
+        if canon in out:
+            continue
+        own = _found(cols, canon)
+        hits = [own] if own is not None else [
+            c for c in names if c not in taken and _squeezed(c) in words]
+        if len(hits) == 1:
+            out[canon] = ChannelMap(column=hits[0])
+            taken.add(hits[0])
+    lift = "lift" in mapping or _found(cols, "lift") is not None
+    need = ["mz"] + ([] if test == "drift" and lift else ["fy"])
+    need += ["sway"] if test in PMM_TESTS else []
+    need += ["yaw"] if test in ("yaw", "yaw_drift") else []
+    missing = [c for c in need if c not in out]
+    if missing:
+        raise RunError(
+            f"{name}: the {' and '.join(missing)} channel{'s are' if len(missing) > 1 else ' is'}"
+            f" missing, which a {test} run needs (map {'them' if len(missing) > 1 else 'it'} "
+            f"in [channels]); columns found: {name_list(names)}")
+    return out
+
+
 def map_channels(
     cols: dict[str, np.ndarray],
     mapping: dict[str, ChannelMap],
@@ -567,6 +639,7 @@ def load_run(
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
     speed_nominal: float | None = None,
     segment: int | None = None,
+    test: str = "",
 ) -> RawRun:
     """Read a run file and return its calibrated, checked channels.
 
@@ -601,6 +674,11 @@ def load_run(
         Which acquisition of a file holding several one after another is the run, counted
         from 1 (the run sheet's ``segment``; default ``[read] segment``, see
         :mod:`towtank.ingest.segments`). A file with several and no choice is a RunError.
+    test : str
+        The run sheet's test. A captive test (:data:`towtank.ingest.protocol_types.
+        CAPTIVE_TESTS`) also reads the balance's and the PMM's channels into
+        ``RawRun.extra`` (:func:`captive_mapping`); its ``drag`` is −fx when the file has fx
+        and no drag.
 
     Raises
     ------
@@ -612,7 +690,7 @@ def load_run(
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _load_run(path, mapping, data, max_nan_gap_s, max_bad_row_fraction, do_despike,
                          options or ReadOptions(), balance, speed_log, speed_nominal,
-                         segment)
+                         segment, test)
 
 
 def _load_run(
@@ -627,6 +705,7 @@ def _load_run(
     speed_log: tuple[np.ndarray, np.ndarray, str] | None = None,
     speed_nominal: float | None = None,
     segment: int | None = None,
+    test: str = "",
 ) -> RawRun:
     """read (:func:`read_columns`) -> map (:func:`map_channels`) -> drop bad rows -> calibrate
     (:func:`calibrate`) -> the run's segment -> time base -> gaps, clipping, spikes,
@@ -640,7 +719,14 @@ def _load_run(
     label = "sample" if cols.pop(_LABEL_KEY, None) is not None else "row"
     used: dict[str, str] = {}
     nominal = speed_nominal is not None
-    external = ("speed",) if speed_log is not None or nominal else ()
+    external: tuple[str, ...] = ("speed",) if speed_log is not None or nominal else ()
+    if test in CAPTIVE_TESTS:
+        mapping = captive_mapping(cols, mapping, name, test)
+        if "drag" not in mapping and _found(cols, "drag") is None and \
+                (balance is None or "drag" not in balance.outputs):
+            external += ("drag",)  # −fx (below)
+    else:
+        external += CAPTIVE_CHANNELS
     chans = map_channels(cols, mapping, name, used=used, balance=balance, external=external,
                          fallback_time=fallback_time(cols, mapping, options.sample_rate_hz))
     full = channel_map(mapping)
@@ -675,6 +761,10 @@ def _load_run(
 
     units: dict[str, tuple[str, str]] = {}
     numeric = calibrate(numeric, full, used, stated_units(cols), name, notes, units)
+    if "drag" not in numeric:  # a captive run's file without drag
+        numeric["drag"] = -numeric["fx"] if "fx" in numeric else np.zeros_like(numeric["time"])
+        notes.append("drag taken as −fx (the file has no drag channel)" if "fx" in numeric
+                     else "no fx nor drag channel: the axial force is not measured")
     if used.get("time", "").startswith("time (from the file") and FS_KEY not in cols and \
             WF_TIME_KEY not in cols:
         units["time"] = ("s", "protocol")  # [read] sample_rate_hz
@@ -718,6 +808,7 @@ def _load_run(
         speed_nominal=float(speed_nominal) if speed_nominal is not None else math.nan,
         time_source=time_source,
         units=units,
+        extra={c: numeric[c] for c in CAPTIVE_CHANNELS if c in numeric},
     )
 
 
@@ -833,7 +924,7 @@ def _repair_and_check(
 ) -> None:
     """Per channel (in ``numeric``): gaps filled, clipping checked, spikes removed, range
     checked; an optional channel without numbers dropped."""
-    for canon in ("speed",) + FORCE_CHANNELS + ("accel",):
+    for canon in ("speed",) + FORCE_CHANNELS + ("accel",) + CAPTIVE_CHANNELS:
         if canon not in numeric:
             continue
         arr = numeric[canon]

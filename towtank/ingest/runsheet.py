@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import ProtocolError
+from towtank.ingest.protocol_types import CAPTIVE_TESTS, PMM_TESTS
 from towtank.ingest.readers import EXTENSIONS, name_list
 from towtank.ingest.sheetlayout import (
     STATUS_WORDS,
@@ -38,13 +39,21 @@ from towtank.runtime.pathcheck import is_regular_file
 
 REQUIRED = ("run", "file", "config", "angle_deg")
 CONFIGS = ("hull", "fin", "sting")
-TESTS = ("steady", "accel")
+TESTS = ("steady", "accel", *CAPTIVE_TESTS)
 STATUSES = ("ok", "void")
+#: The plane of a captive run: the model upright, or rolled onto its side (``[captive]
+#: roll_deg``) for heave and pitch.
+PLANES = ("horizontal", "vertical")
+#: The captive runs' numeric columns (docs/formats.md, "Captive manoeuvring tests").
+CAPTIVE_NUMERIC = ("drift_deg", "rudder_deg", "radius_m", "pmm_amplitude_m", "pmm_frequency_hz")
 #: Largest run number taken (a run number is an identifier, not a quantity).
 MAX_RUN_NUMBER = 999_999_999
 
-NUMERIC = ("speed_nominal", "accel_nominal", "water_temp_C", "window_start_s", "window_end_s")
+NUMERIC = ("speed_nominal", "accel_nominal", "water_temp_C", "window_start_s", "window_end_s",
+           *CAPTIVE_NUMERIC)
 KNOWN = REQUIRED + (
+    "plane",
+    *CAPTIVE_NUMERIC,
     "test",
     "speed_nominal",
     "accel_nominal",
@@ -78,7 +87,7 @@ def _read_table(path: Path, options: SheetOptions | None = None,
             if opts.name:
                 raise ProtocolError(f"{path.name}: [sheet] name = {opts.name!r} names a "
                                     "worksheet, but the run sheet is a CSV file (it has none).")
-            grid = _read_csv_grid(path, opts)
+            grid = read_csv_grid(path, opts)
         else:
             raise ProtocolError(f"{path.name}: a run sheet must be .csv or .xlsx.")
     except ProtocolError:
@@ -191,7 +200,7 @@ def _bounded_xlsx(path: Path) -> Path | io.BytesIO:
         return buf
 
 
-def _read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
+def read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
     """A CSV sheet's cells as text, separated by ``,``, ``;`` or tab (found from the lines)."""
     raw = path.read_bytes()
     try:
@@ -554,7 +563,10 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     pandas.DataFrame
         One row per run in sheet order with typed columns: run (int), file, config, test,
         angle_deg [deg], speed_nominal [m/s], accel_nominal [m/s²], tare_group,
-        water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], segment (the
+        water_temp_C [°C], status, remarks, window_start_s, window_end_s [s], and where the
+        sheet has captive runs or their columns: plane, drift_deg, rudder_deg [deg],
+        radius_m, pmm_amplitude_m [m], pmm_frequency_hz [Hz] (a captive row's angle_deg is
+        its drift angle, its blank rudder_deg 0; NaN where not set), segment (the
         run's acquisition in a file holding several, from 1; NaN = none given), sheet_row
         (1-based row in the sheet, header = row 1), sheet_error (one sentence, or "") and
         every extra column of the sheet, unchanged. ``.attrs["notes"]`` holds the lines of
@@ -570,6 +582,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     src = path.name
     warnings: list[str] = []
     raw, lines, units, notes = _read_table(path, options, warnings)
+    if "angle_deg" not in raw.columns and "drift_deg" in raw.columns:
+        raw["angle_deg"] = None  # a captive sheet: each row's angle is its drift angle
     missing = [c for c in REQUIRED if c not in raw.columns]
     if missing:
         found = name_list(map(str, raw.columns), SHEET_COLUMNS_SHOWN, quoted=False)
@@ -609,9 +623,10 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         if test and test not in TESTS:
             errors.append(f"test {test!r} is not one of {', '.join(TESTS)}")
         out["test"] = test
+        captive = test in CAPTIVE_TESTS
         try:
             out["angle_deg"] = _converted(_as_float(rec["angle_deg"]), units.get("angle_deg"))
-            if math.isnan(out["angle_deg"]):
+            if math.isnan(out["angle_deg"]) and not captive:
                 raise ValueError
         except ValueError:
             errors.append(f"angle_deg {shown(_as_text(rec['angle_deg']))} is not a number")
@@ -622,6 +637,11 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
             except ValueError:
                 errors.append(f"{col} {shown(_as_text(rec.get(col)))} is not a number")
                 out[col] = float("nan")
+        out["plane"] = _as_text(rec.get("plane", "")).lower() or "horizontal"
+        if captive:
+            errors += _captive_row(out, config)
+        elif out["plane"] not in PLANES:
+            errors.append(f"plane {out['plane']!r} is not one of {', '.join(PLANES)}")
         if math.isnan(out["water_temp_C"]):
             out["water_temp_C"] = float(default_temperature_C)
         else:
@@ -654,6 +674,10 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         rows.append(out)
 
     df = pd.DataFrame(rows)
+    captive_columns = ("plane", *CAPTIVE_NUMERIC)
+    if not df["test"].isin(CAPTIVE_TESTS).any() and \
+            not any(c in raw.columns for c in captive_columns):
+        df = df.drop(columns=list(captive_columns))  # a sheet of resistance tests as it was
     dup = df["run"][df["run"].duplicated(keep=False)]
     if not dup.empty:
         numbers = sorted(set(dup.tolist()))
@@ -667,6 +691,40 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
     df.attrs["notes"] = notes
     df.attrs["warnings"] = warnings
     return df
+
+
+#: Largest |drift_deg| and |rudder_deg| of a captive run [deg].
+MAX_CAPTIVE_ANGLE_DEG = 90.0
+
+
+def _captive_row(out: dict[str, Any], config: str) -> list[str]:
+    """A captive row's checks (its problems, one clause each), and its angles settled: the
+    drift angle is ``drift_deg``, else ``angle_deg`` (the two must agree when both are
+    given), else 0; ``angle_deg`` is set to it (runs.csv's angle of a captive run)."""
+    errors = []
+    test = out["test"]
+    if config != "hull":
+        errors.append(f"test {test!r} is a captive test of the hull, but config is {config!r}")
+    drift, angle = out["drift_deg"], out["angle_deg"]
+    if not math.isnan(drift) and not math.isnan(angle) and abs(drift - angle) > 1e-9:
+        errors.append(f"drift_deg ({drift:g}) and angle_deg ({angle:g}) differ; give one")
+    drift = drift if not math.isnan(drift) else angle if not math.isnan(angle) else 0.0
+    out["drift_deg"] = out["angle_deg"] = drift
+    for col in ("drift_deg", "rudder_deg"):
+        if abs(out[col]) > MAX_CAPTIVE_ANGLE_DEG:
+            errors.append(f"{col} {out[col]:g} is beyond ±{MAX_CAPTIVE_ANGLE_DEG:g}° (radians?)")
+    if math.isnan(out["rudder_deg"]):
+        out["rudder_deg"] = 0.0
+    radius = out["radius_m"]
+    if test == "arm" and not (abs(radius) > 0):
+        errors.append("an arm run needs radius_m, the radius of the model's path (not 0)")
+    if test in PMM_TESTS:
+        for col in ("pmm_amplitude_m", "pmm_frequency_hz"):
+            if not out[col] > 0:
+                errors.append(f"a PMM run ({test}) needs {col} (a positive number)")
+    if out["plane"] not in PLANES:
+        errors.append(f"plane {out['plane']!r} is not one of {', '.join(PLANES)}")
+    return errors
 
 
 def _segment(value: Any, errors: list[str]) -> float:

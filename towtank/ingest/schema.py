@@ -14,6 +14,10 @@ from towtank.ingest.values import finite_number, shown
 from towtank.runtime.safefile import MAX_TABLE_BYTES, check_table_size  # noqa: F401 - here too
 
 CANONICAL_CHANNELS = ("time", "speed", "accel", "drag", "lift")
+#: A captive run's channels (docs/formats.md, "Captive manoeuvring tests"): the balance's
+#: body-axis forces fx, fy [N] and yaw moment mz [N m], the PMM's sway [m] and yaw [deg]; read
+#: only for the runs the sheet marks as captive tests.
+CAPTIVE_CHANNELS = ("fx", "fy", "mz", "sway", "yaw")
 
 
 @dataclass(frozen=True)
@@ -103,6 +107,11 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "length_uncertainty_m": (NUM, False),
         "diameter_uncertainty_m": (NUM, False),
         "myring": ("table", False),
+        "izz_kg_m2": (NUM, False),
+        "iyy_kg_m2": (NUM, False),
+        "xg_m": (NUM, False),
+        "balance_x_m": (NUM, False),
+        "draught_m": (NUM, False),
     },
     "model.myring": {
         "a": (NUM, True),
@@ -136,7 +145,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "pressure_Pa": (NUM, False),
         "relative_humidity_pct": (NUM, False),
     },
-    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS},
+    "channels": {name: ("table", False) for name in CANONICAL_CHANNELS + CAPTIVE_CHANNELS},
     "channel": {
         "column": ("str", False),
         "columns": ("strs", False),
@@ -169,6 +178,15 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
         "never_stops_s": (NUM, False),
         "pdf_interval_s": (NUM, False),
     },
+    "captive": {
+        "moment_ref": ("str", False),
+        "means": ("path", False),
+        "means_prime": ("bool", False),
+        "means_columns": ("table", False),
+        "roll_deg": (NUM, False),
+        "min_cycles": ("int", False),
+        "amplitude_tolerance": (NUM, False),
+    },
     "read": {
         "format": ("str", False),
         "delimiter": ("str", False),
@@ -181,7 +199,7 @@ SCHEMA: dict[str, dict[str, tuple[str, bool]]] = {
 }
 TOP_LEVEL = ("campaign", "water", "model", "fin", "prototype", "channels", "processing", "report",
              "watch", "read", "vehicle", "balance", "tare", "speed_log",
-             "zeros", "sheet")
+             "zeros", "sheet", "captive")
 
 _KIND_WORDS = {
     "str": "a text string",

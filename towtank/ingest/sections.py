@@ -17,7 +17,11 @@ from typing import Any
 
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol_types import (
+    CAPTIVE_TESTS,
+    MEANS_COLUMNS,
+    MOMENT_REFS,
     Balance,
+    Captive,
     ChannelMap,
     Model,
     SpeedLog,
@@ -29,25 +33,37 @@ from towtank.ingest.schema import check_keys, check_table_size, checked_section
 from towtank.ingest.values import finite_number, shown
 from towtank.reference.geometry import displaced_volume
 
-__all__ = ["MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance", "TareSource", "check_mass",
-           "parse_balance", "parse_read_options", "parse_speed_log", "parse_tare",
-           "parse_zero_file"]
+__all__ = ["CAPTIVE_TESTS", "MASS_RATIO_RANGE", "TARE_TABLE_COLUMNS", "Balance", "TareSource",
+           "captive_model_missing", "check_captive_runs", "check_mass", "parse_balance",
+           "parse_captive",
+           "parse_read_options", "parse_speed_log", "parse_tare", "parse_zero_file"]
 
 #: The tare table's columns (docs/formats.md §3.3): speed [m/s], drag and lift [N].
 TARE_TABLE_COLUMNS = ("speed_m_s", "drag_N", "lift_N")
 
 
+def _table_columns(data: Any, keys: tuple[str, ...], label: str, table: str,
+                   src: str) -> dict[str, str]:
+    """A table of ``canonical = "the lab's column"`` (``[tare] columns``, ``[captive]
+    means_columns``; ``label`` its dotted name, ``table`` the table's name in words), checked:
+    known canonical names, each a non-empty text, no column named twice."""
+    check_keys(data, keys, label, src)
+    section, key = label.split(".")
+    where = f"[{section}] {key}"
+    for canon, name in data.items():
+        if not isinstance(name, str) or not name.strip():
+            raise ProtocolError(f"{src}: {where}: '{canon}' must name a column of the "
+                                f"{table} (text), but it is {name!r}.")
+    if len({v.strip().lower() for v in data.values()}) != len(data):
+        raise ProtocolError(f"{src}: {where} maps one column of the {table} twice.")
+    return dict(data)
+
+
 def _tare_columns(data: Any, src: str) -> dict[str, str]:
     """``[tare] columns``: each table column's name in the lab's table (``{ speed_m_s =
     "tow_speed", drag_N = "tare_drag" }``), checked; the contract's own names by default."""
-    check_keys(data, TARE_TABLE_COLUMNS, "tare.columns", src)
-    for canon, name in data.items():
-        if not isinstance(name, str) or not name.strip():
-            raise ProtocolError(f"{src}: [tare] columns: '{canon}' must name a column of the "
-                                f"tare table (text), but it is {name!r}.")
-    if len({v.strip().lower() for v in data.values()}) != len(data):
-        raise ProtocolError(f"{src}: [tare] columns maps one column of the tare table twice.")
-    return {c: data.get(c, c) for c in TARE_TABLE_COLUMNS}
+    given = _table_columns(data, TARE_TABLE_COLUMNS, "tare.columns", "tare table", src)
+    return {c: given.get(c, c) for c in TARE_TABLE_COLUMNS}
 
 
 def parse_tare(data: Any, base: Path, src: str, check_paths: bool) -> TareSource:
@@ -247,3 +263,98 @@ def parse_zero_file(data: Any, src: str) -> ZeroFile | None:
     check_keys(data, ("file",), "zeros", src)
     pattern = _file_pattern(data, "zeros", "the zeros file's", "{stem}_zero.csv", src)
     return ZeroFile(file=pattern)
+
+#: Largest |roll_deg| departure from ±90° [deg]: the rig's axes are the model's rolled a
+#: quarter turn, nothing in between.
+ROLL_TOLERANCE_DEG = 1e-6
+
+
+def _means_columns(data: Any, src: str) -> dict[str, str]:
+    """``[captive] means_columns``: canonical name -> the means table's column, checked."""
+    given = _table_columns(data, MEANS_COLUMNS, "captive.means_columns", "means table", src)
+    return {k: v.strip() for k, v in given.items()}
+
+
+def parse_captive(data: Any, base: Path, src: str, check_paths: bool) -> Captive:
+    """``[captive]`` checked; with ``check_paths`` its means table is read once (a bad one
+    stops the protocol: :func:`towtank.ingest.captive_means.read_means_table`)."""
+    c = checked_section(data, "captive", "captive", src)
+    moment_ref = c.get("moment_ref", "origin")
+    if moment_ref not in MOMENT_REFS:
+        raise ProtocolError(f"{src}: 'moment_ref' in [captive] is {moment_ref!r}; it must be "
+                            f"one of {', '.join(MOMENT_REFS)}.")
+    roll = c.get("roll_deg", 90.0)
+    if abs(abs(roll) - 90.0) > ROLL_TOLERANCE_DEG:
+        raise ProtocolError(f"{src}: 'roll_deg' in [captive] is {roll:g}; a model rolled onto "
+                            "its side for the vertical plane is at +90 (starboard side down) "
+                            "or -90.")
+    cycles = c.get("min_cycles", 3)
+    if not 3 <= cycles <= 1000:
+        raise ProtocolError(f"{src}: 'min_cycles' in [captive] is {cycles}; a PMM run needs at "
+                            "least 3 whole steady cycles (3–1000).")
+    tol = c.get("amplitude_tolerance", 0.05)
+    if not 0.0 < tol <= 0.5:
+        raise ProtocolError(f"{src}: 'amplitude_tolerance' in [captive] is {tol:g}; it is a "
+                            "fraction, above 0 and at most 0.5 (0.05 is 5 %).")
+    columns = _means_columns(c.get("means_columns", {}), src)
+    if "means" not in c:
+        for key in ("means_prime", "means_columns"):
+            if key in c:
+                raise ProtocolError(f"{src}: '{key}' in [captive] describes the means table, "
+                                    "but [captive] names none (means = \"...\").")
+    means = base / c["means"] if "means" in c else None
+    if means is not None and check_paths:
+        # loaded on use: the means table's reader (pandas) only for a protocol naming one
+        from towtank.ingest.captive_means import read_means_table
+
+        read_means_table(means, columns, src=src)
+    return Captive(moment_ref=moment_ref, means=means, means_prime=c.get("means_prime", False),
+                   means_columns=columns, roll_deg=float(math.copysign(90.0, roll)),
+                   min_cycles=cycles, amplitude_tolerance=tol)
+
+
+def captive_model_missing(model: Model | None, captive: Captive | None,
+                          planes: tuple[str, ...] = ("horizontal",)) -> list[str]:
+    """The [model] keys captive tests need that the protocol leaves out.
+
+    ``planes``: the planes (``horizontal``, ``vertical``) of the day's captive runs, whose
+    balance loads carry the model's inertia: xg_m, izz_kg_m2 for the horizontal plane and
+    iyy_kg_m2 (or, failing it, izz_kg_m2) for the vertical; () for a means table (inertia
+    already removed). Always, with ``moment_ref = "origin"`` (the default), balance_x_m for
+    the moment's transfer to O.
+    """
+    if model is None:
+        return ["[model]"]
+    out = []
+    horizontal, vertical = "horizontal" in planes, "vertical" in planes
+    if (horizontal or vertical) and model.izz_kg_m2 is None and \
+            (horizontal or model.iyy_kg_m2 is None):
+        out.append("izz_kg_m2" if horizontal or not vertical else "iyy_kg_m2")
+    if (horizontal or vertical) and model.xg_m is None:
+        out.append("xg_m")
+    if (captive is None or captive.moment_ref == "origin") and model.balance_x_m is None:
+        out.append("balance_x_m")
+    return out
+
+
+def check_captive_runs(sheet: Any, model: Model | None, captive: Captive | None,
+                       src: str) -> None:
+    """Stop a day whose run sheet has captive runs (status ok) that the protocol's [model]
+    cannot reduce: one sentence naming the missing keys (:func:`captive_model_missing`) and
+    the first runs that need them. ``sheet``: :func:`towtank.ingest.runsheet.read_run_sheet`'s
+    table."""
+    rows = sheet[sheet["test"].isin(CAPTIVE_TESTS) & (sheet["status"] == "ok")]
+    if rows.empty:
+        return
+    planes = tuple(sorted(set(rows["plane"]) if "plane" in rows else {"horizontal"}))
+    missing = captive_model_missing(model, captive, planes)
+    if not missing:
+        return
+    runs = [str(r) for r in rows["run"].tolist()]
+    listed = ", ".join(runs[:5]) + (f" and {len(runs) - 5} more" if len(runs) > 5 else "")
+    need = "a [model] section" if model is None else \
+        f"{' and '.join(missing)} in [model]"
+    raise ProtocolError(
+        f"{src}: the run sheet has {len(runs)} captive run(s) (runs {listed}), which need "
+        f"{need} (the model's inertia is removed from the balance's loads and its moment "
+        "transferred to the origin).")

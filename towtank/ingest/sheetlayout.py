@@ -28,7 +28,8 @@ __all__ = ["SheetOptions", "parse_sheet_options", "header_names", "STATUS_WORDS"
 #: The contract's sheet columns a [sheet] ``columns`` table may map (and ``date``).
 CONTRACT_COLUMNS = ("run", "file", "config", "test", "angle_deg", "speed_nominal",
                     "accel_nominal", "tare_group", "water_temp_C", "status", "remarks",
-                    "window_start_s", "window_end_s", "date")
+                    "window_start_s", "window_end_s", "date", "drift_deg", "rudder_deg",
+                    "radius_m", "pmm_amplitude_m", "pmm_frequency_hz", "plane")
 
 #: Status words: each means ``ok`` or ``void`` (case-insensitive).
 STATUS_WORDS = {
@@ -39,11 +40,19 @@ STATUS_WORDS = {
     "discard": "void", "discarded": "void", "no": "void", "n": "void", "fail": "void",
     "failed": "void", "aborted": "void",
 }
-#: Test words: each means ``steady`` or ``accel``.
+#: Test words: each means ``steady``, ``accel`` or a captive test (``drift``, ``rudder``,
+#: ``arm``, ``sway``, ``yaw``, ``yaw_drift``).
 TEST_WORDS = {
     "steady": "steady", "steady state": "steady", "steady-state": "steady",
     "constant": "steady", "const": "steady", "resistance": "steady",
     "accel": "accel", "acceleration": "accel", "acc": "accel", "accelerated": "accel",
+    "static drift": "drift", "drift angle": "drift", "oblique tow": "drift",
+    "rudder angle": "rudder", "drift + rudder angle": "rudder", "drift and rudder": "rudder",
+    "rotating arm": "arm", "circular motion": "arm",
+    "pure sway": "sway", "pmm sway": "sway", "pmm pure sway": "sway",
+    "pure yaw": "yaw", "pmm yaw": "yaw", "pmm pure yaw": "yaw",
+    "yaw and drift": "yaw_drift", "yaw with drift": "yaw_drift", "yaw-drift": "yaw_drift",
+    "yaw drift": "yaw_drift", "pure yaw with drift": "yaw_drift", "pmm yaw drift": "yaw_drift",
 }
 
 # the lab's names of each contract column (normalised: lower case, words separated by a blank)
@@ -68,6 +77,12 @@ _ALIASES = {
     "window_start_s": ("window start", "steady start", "window start s"),
     "window_end_s": ("window end", "steady end", "window end s"),
     "date": ("date", "test date"),
+    "drift_deg": ("drift deg", "beta", "drift_deg"),
+    "rudder_deg": ("rudder", "rudder angle", "delta", "rudder deg"),
+    "radius_m": ("radius", "arm radius", "turning radius"),
+    "pmm_amplitude_m": ("pmm amplitude", "sway amplitude", "pmm amplitude m"),
+    "pmm_frequency_hz": ("pmm frequency", "pmm frequency hz", "pmm freq"),
+    "plane": ("plane",),
 }
 _BY_ALIAS = {a: canon for canon, names in _ALIASES.items() for a in names}
 
@@ -84,6 +99,11 @@ _UNITS: dict[str, dict[str, tuple[float, float]]] = {
     "water_temp_C": {"°c": (1.0, 0.0), "c": (1.0, 0.0), "degc": (1.0, 0.0),
                      "deg c": (1.0, 0.0), "celsius": (1.0, 0.0), "k": (1.0, -273.15),
                      "°f": (5 / 9, -32 * 5 / 9), "f": (5 / 9, -32 * 5 / 9)},
+    "drift_deg": {"deg": (1.0, 0.0), "°": (1.0, 0.0), "rad": (57.29577951308232, 0.0)},
+    "rudder_deg": {"deg": (1.0, 0.0), "°": (1.0, 0.0), "rad": (57.29577951308232, 0.0)},
+    "radius_m": {"m": (1.0, 0.0), "mm": (1e-3, 0.0), "cm": (1e-2, 0.0)},
+    "pmm_amplitude_m": {"m": (1.0, 0.0), "mm": (1e-3, 0.0), "cm": (1e-2, 0.0)},
+    "pmm_frequency_hz": {"hz": (1.0, 0.0), "rad/s": (0.15915494309189535, 0.0)},
     "window_start_s": {"s": (1.0, 0.0), "ms": (1e-3, 0.0)},
     "window_end_s": {"s": (1.0, 0.0), "ms": (1e-3, 0.0)},
 }

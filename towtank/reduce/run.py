@@ -884,8 +884,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
 Stamp = tuple[int, int, int, int]  # (size, mtime_ns, ctime_ns, inode)
 
 def load_record(protocol: Protocol | None, folder: Path, file: str, run: int, *,
-                speed_nominal: float | None = None, segment: int | None = None
-                ) -> tuple[RawRun, Stamp | None]:
+                speed_nominal: float | None = None, segment: int | None = None,
+                test: str = "") -> tuple[RawRun, Stamp | None]:
     """Load one run's file as the day does, zeros aside (:func:`zeroed_record`).
 
     ``folder / file`` is the file: the data folder and the run sheet's name for it (the
@@ -894,7 +894,9 @@ def load_record(protocol: Protocol | None, folder: Path, file: str, run: int, *,
     None: the canonical channel names in SI units and the default checks.
     ``speed_nominal``: the set speed [m/s] of a run without a measured speed
     (``speed_source = "nominal"``; no carriage log then). ``segment``: the acquisition of a
-    file holding several, counted from 1. Returns the run and the file's (size, mtime_ns,
+    file holding several, counted from 1. ``test``: the sheet's test (a captive test reads
+    the balance's and the PMM's channels too, :func:`towtank.ingest.runfile.load_run`).
+    Returns the run and the file's (size, mtime_ns,
     ctime_ns, inode) as its bytes were read (None when it changed meanwhile).
     """
     path = folder / file
@@ -914,6 +916,7 @@ def load_record(protocol: Protocol | None, folder: Path, file: str, run: int, *,
         speed_log=log,
         speed_nominal=speed_nominal,
         segment=segment,
+        test=test,
     )
     return raw, stamp
 
