@@ -7,7 +7,8 @@ centripetal terms C_A(nu) are computed from M_A (Fossen eq. 6.43), never folded 
 N_uv and their twins. A coefficient set in Prestero's (2001) lumped form, whose Y_ur, N_uv,
 N_ur... contain the added-mass terms (e.g. N_uv = N_uva + N_uvl + N_uvf with the Munk moment
 N_uva), is converted by :func:`lumped_to_fossen`, which subtracts exactly the bilinear terms
-that C_A(nu) gives.
+that C_A(nu) gives; :func:`totals_to_fossen` does the same for measured captive derivatives
+(totals), with their covariance and a record for model.json's ``conversions``.
 """
 
 from __future__ import annotations
@@ -59,6 +60,8 @@ G = STANDARD_GRAVITY  # [m/s²]
 #: ``"total"`` (what a captive test measures: it holds the added-mass part that C_A(nu) gives,
 #: converted by :func:`totals_to_fossen`) or ``"fossen"`` (without it, taken as given).
 FORMS = ("total", "fossen")
+
+
 def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
     """Prestero-style lumped coefficients to the Fossen-form ones of this model.
 
@@ -68,15 +71,10 @@ def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
     pure added-mass terms (X_vr, X_wq, X_qq, X_rr, Y_wp, Y_pq, Z_vp, Z_rp, M_vp, M_rp, N_wp,
     N_pq) are dropped: C_A(nu) gives them.
     """
-    ma = added_mass_matrix(coefficients)
-    out = {}
     dropped = {"X_vr", "X_wq", "X_qq", "X_rr", "Y_wp", "Y_pq", "Z_vp", "Z_rp", "M_vp", "M_rp",
                "N_wp", "N_pq"}
-    for sym, val in coefficients.items():
-        if sym in dropped:
-            continue
-        out[sym] = float(float(val) - (ca_bilinear(ma, sym) if sym in LUMPED else 0.0))
-    return out
+    kept = {sym: float(val) for sym, val in coefficients.items() if sym not in dropped}
+    return totals_to_fossen(kept, list(LUMPED))[0]
 
 
 def _unit_added_mass(coefficients: dict[str, float], symbol: str) -> np.ndarray:
@@ -142,7 +140,8 @@ def totals_to_fossen(
         for d in used:
             if d in names:
                 jac[names.index(sym), names.index(d)] -= grads[d][sym]
-    return out, (names, jac @ sigma @ jac.T), records
+    cov = jac @ sigma @ jac.T
+    return out, (names, 0.5 * (cov + cov.T)), records
 
 
 def kept_conversions(conversions: dict[str, Any], changed: list[str]) -> dict[str, Any]:
