@@ -18,7 +18,7 @@ from towtank.report.identify_figure import save_identify_figure
 from towtank.vehicle import schema
 from towtank.vehicle.identify import Progress, identify
 from towtank.vehicle.identify_log import SHORT_NAMES, LogError, noise_entry, read_log
-from towtank.vehicle.model import read_model, write_model
+from towtank.vehicle.model import kept_conversions, read_model, write_model
 
 #: The files ``identify`` writes.
 IDENTIFY_OUTPUTS = frozenset({"identified.csv", "model.json", "identify.png"})
@@ -155,6 +155,8 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         sources[s] = "identified"
     updated["coefficients"] = coef
     updated["sources"] = sources
+    if isinstance(model.get("conversions"), dict):  # read_model checked it
+        updated["conversions"] = kept_conversions(model["conversions"], list(result.symbols))
     old = model.get("covariance") or {}
     old_sym = [s for s in (old.get("symbols") or []) if s not in result.symbols]
     syms = old_sym + list(result.symbols)

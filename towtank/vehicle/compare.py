@@ -6,25 +6,57 @@ prototype (``[vehicle] scale``) compares with the model's measurement:
 ``predicted_diff_pct = (prime - predicted_prime) / |predicted_prime| * 100``. The model.json of
 the day takes the measured values (converted through their primes to the vehicle's length and
 the protocol's water) with the covariance of their standard errors, and the prediction for
-every other term.
+every other term. Coefficients measured by captive tests (:data:`CAPTIVE_METHODS`) are totals:
+model.json takes them converted to the Fossen form once
+(:func:`towtank.vehicle.model.totals_to_fossen`), unless ``[captive] form = "fossen"``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from towtank.errors import TowtankError
+from towtank.vehicle.model import FORMS
 from towtank.vehicle.predict import prime_exponent
 from towtank.vehicle.stage import VehiclePrediction, predict_vehicle
 
-__all__ = ["FAR_PCT", "day_vehicle", "drag_side_only", "measured_for_vehicle", "with_predicted"]
+__all__ = ["CAPTIVE_METHODS", "FAR_PCT", "captive_form", "day_vehicle", "drag_side_only",
+           "measured_forms", "measured_for_vehicle", "with_predicted"]
 
 #: A measured prime further than this from its prediction is a warning [%].
 FAR_PCT = 50.0
+#: The captive tests a coefficients.csv ``method`` names (FORMATS section 8): a coefficient
+#: they measured is a total, holding the added-mass part of C_A(nu).
+CAPTIVE_METHODS = ("static drift", "rudder", "rotating arm", "pure sway", "pure yaw",
+                   "yaw and drift", "means table")
+_CAPTIVE_RE = re.compile(r"\b(" + "|".join(CAPTIVE_METHODS) + r")\b", re.IGNORECASE)
+
+
+def captive_form(protocol: Any) -> str:
+    """``[captive] form`` of the protocol: ``"total"`` (default) or ``"fossen"``."""
+    captive = getattr(protocol, "captive", None)
+    form = captive.get("form") if isinstance(captive, dict) else getattr(captive, "form", None)
+    if form is None:
+        return "total"
+    if form not in FORMS:
+        raise TowtankError(f"[captive] form must be one of {', '.join(map(repr, FORMS))}, "
+                           f"not {form!r}.")
+    return str(form)
+
+
+def measured_forms(coefficients: pd.DataFrame, form: str = "total") -> dict[str, str]:
+    """The form of each coefficient a captive test measured: ``form`` for the rows whose
+    ``method`` names a captive test (:data:`CAPTIVE_METHODS`); the others are not listed."""
+    if "method" not in coefficients:
+        return {}
+    return {str(sym): form for sym, method in zip(coefficients["symbol"],
+                                                  coefficients["method"], strict=True)
+            if isinstance(method, str) and _CAPTIVE_RE.search(method)}
 
 
 def measured_for_vehicle(
@@ -111,6 +143,7 @@ def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
             vehicle.myring == {k: float(getattr(model.myring, k)) for k in vehicle.myring}):
         length = None if vehicle.scale == 1.0 else model.length_m * vehicle.scale
     measured, cov = measured_for_vehicle(coefficients, first.rho, length)
-    result = predict_vehicle(protocol, measured, cov)
+    forms = measured_forms(coefficients, captive_form(protocol))
+    result = predict_vehicle(protocol, measured, cov, forms)
     table, warnings = with_predicted(coefficients, result.predicted)
     return result, table, warnings

@@ -30,6 +30,9 @@ __all__ = [
     "rigid_body_mass_matrix",
     "added_mass_matrix",
     "coriolis_added_mass",
+    "LUMPED",
+    "ADDED_MASS_RE",
+    "ca_bilinear",
 ]
 
 #: The forces and moments of the six degrees of freedom, in the order of the state [-].
@@ -39,6 +42,13 @@ VELOCITIES = "uvwpqr"
 #: A hydrodynamic coefficient's symbol: a force or moment and a product of velocities, their
 #: magnitudes and the control angles (``Y_uv``, ``N_r|r|``, ``Y_uudr``).
 SYMBOL_RE = re.compile(r"^[XYZKMN]_(\|[uvwpqr]\||[uvwpqr]|dr|ds)+$")
+#: An added mass's symbol (``Y_vdot``).
+ADDED_MASS_RE = re.compile(r"^[XYZKMN]_[uvwpqr]dot$")
+#: The coefficients of a product of two velocities to which C_A(nu) nu contributes (or, for
+#: Y_uv and Z_uw, could: their part is zero), with that pair of velocities: a measured total
+#: (Prestero's lumped form) holds that part, the Fossen form does not.
+LUMPED = {"Y_ur": ("u", "r"), "Z_uq": ("u", "q"), "N_uv": ("u", "v"), "M_uw": ("u", "w"),
+          "N_ur": ("u", "r"), "M_uq": ("u", "q"), "Y_uv": ("u", "v"), "Z_uw": ("u", "w")}
 #: The keys every model.json holds (docs/formats.md §6).
 REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
                  "inertia_kg_m2", "coefficients")
@@ -113,3 +123,29 @@ def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
     a = ma[:3, :3] @ nu1 + ma[:3, 3:] @ nu2
     b = ma[3:, :3] @ nu1 + ma[3:, 3:] @ nu2
     return np.concatenate((-skew(a) @ nu2, -skew(a) @ nu1 - skew(b) @ nu2))
+
+
+def ca_bilinear(ma: np.ndarray, symbol: str) -> float:
+    """The coefficient of the product of two velocities in the force -C_A(nu) nu (Fossen
+    2011, eq. 6.43): the added-mass part of the :data:`LUMPED` coefficient ``symbol``
+    [its SI unit], e.g. Y_vdot - X_udot for N_uv (the Munk moment), X_udot for Y_ur.
+
+    Linear in ``ma``.
+
+    Parameters
+    ----------
+    ma : numpy.ndarray
+        M_A (6x6) [kg, kg m, kg m^2]
+    symbol : str
+        A key of :data:`LUMPED`
+    """
+    dof = DOF.index(symbol[0])
+    i, j = (VELOCITIES.index(c) for c in LUMPED[symbol])
+
+    def force(x: float, y: float) -> float:
+        nu = np.zeros(6)
+        nu[i] += x
+        nu[j] += y
+        return float(-coriolis_added_mass(ma, nu)[dof])
+
+    return force(1.0, 1.0) - force(1.0, 0.0) - force(0.0, 1.0)

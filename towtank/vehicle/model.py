@@ -7,7 +7,8 @@ centripetal terms C_A(nu) are computed from M_A (Fossen eq. 6.43), never folded 
 N_uv and their twins. A coefficient set in Prestero's (2001) lumped form, whose Y_ur, N_uv,
 N_ur... contain the added-mass terms (e.g. N_uv = N_uva + N_uvl + N_uvf with the Munk moment
 N_uva), is converted by :func:`lumped_to_fossen`, which subtracts exactly the bilinear terms
-that C_A(nu) gives.
+that C_A(nu) gives; :func:`totals_to_fossen` does the same for measured captive derivatives
+(totals), with their covariance and a record for model.json's ``conversions``.
 """
 
 from __future__ import annotations
@@ -27,11 +28,12 @@ from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle import hull as hulls
 from towtank.vehicle import schema
 from towtank.vehicle.fossen import (
-    DOF,
+    ADDED_MASS_RE,
+    LUMPED,
     REQUIRED_KEYS,
     SYMBOL_RE,
-    VELOCITIES,
     added_mass_matrix,
+    ca_bilinear,
     coriolis_added_mass,
 )
 from towtank.vehicle.schema import ModelError, check_hull, joined
@@ -43,6 +45,9 @@ __all__ = [
     "added_mass_matrix",
     "coriolis_added_mass",
     "lumped_to_fossen",
+    "FORMS",
+    "totals_to_fossen",
+    "kept_conversions",
     "vehicle_profile",
     "mass_properties",
     "build_model",
@@ -51,23 +56,10 @@ __all__ = [
 ]
 
 G = STANDARD_GRAVITY  # [m/s²]
-#: Prestero's lumped terms that carry an added-mass part, and the pair of velocities.
-LUMPED = {"Y_ur": ("u", "r"), "Z_uq": ("u", "q"), "N_uv": ("u", "v"), "M_uw": ("u", "w"),
-          "N_ur": ("u", "r"), "M_uq": ("u", "q"), "Y_uv": ("u", "v"), "Z_uw": ("u", "w")}
-
-
-def _ca_bilinear(ma: np.ndarray, symbol: str) -> float:
-    """The coefficient of the product of two velocities in the force -C_A(nu) nu."""
-    dof = DOF.index(symbol[0])
-    i, j = (VELOCITIES.index(c) for c in LUMPED[symbol])
-
-    def force(x: float, y: float) -> float:
-        nu = np.zeros(6)
-        nu[i] += x
-        nu[j] += y
-        return -coriolis_added_mass(ma, nu)[dof]
-
-    return force(1.0, 1.0) - force(1.0, 0.0) - force(0.0, 1.0)
+#: The forms a measured coefficient of :data:`~towtank.vehicle.fossen.LUMPED` comes in:
+#: ``"total"`` (what a captive test measures: it holds the added-mass part that C_A(nu) gives,
+#: converted by :func:`totals_to_fossen`) or ``"fossen"`` (without it, taken as given).
+FORMS = ("total", "fossen")
 
 
 def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
@@ -79,15 +71,85 @@ def lumped_to_fossen(coefficients: dict[str, float]) -> dict[str, float]:
     pure added-mass terms (X_vr, X_wq, X_qq, X_rr, Y_wp, Y_pq, Z_vp, Z_rp, M_vp, M_rp, N_wp,
     N_pq) are dropped: C_A(nu) gives them.
     """
-    ma = added_mass_matrix(coefficients)
-    out = {}
     dropped = {"X_vr", "X_wq", "X_qq", "X_rr", "Y_wp", "Y_pq", "Z_vp", "Z_rp", "M_vp", "M_rp",
                "N_wp", "N_pq"}
-    for sym, val in coefficients.items():
-        if sym in dropped:
-            continue
-        out[sym] = float(float(val) - (_ca_bilinear(ma, sym) if sym in LUMPED else 0.0))
-    return out
+    kept = {sym: float(val) for sym, val in coefficients.items() if sym not in dropped}
+    return totals_to_fossen(kept, list(LUMPED))[0]
+
+
+def _unit_added_mass(coefficients: dict[str, float], symbol: str) -> np.ndarray:
+    """d M_A / d ``symbol``: M_A of the model's added masses all zero but ``symbol`` = 1 (a
+    symmetric pair given both ways is averaged, as :func:`added_mass_matrix` does)."""
+    return added_mass_matrix({s: float(s == symbol) for s in coefficients
+                              if ADDED_MASS_RE.match(s)})
+
+
+def totals_to_fossen(
+    coefficients: dict[str, float], totals: list[str],
+    covariance: tuple[list[str], np.ndarray] | None = None,
+) -> tuple[dict[str, float], tuple[list[str], np.ndarray], dict[str, dict[str, Any]]]:
+    """Measured totals to the Fossen form, with their covariance and a record of each.
+
+    Each symbol of ``totals`` that :data:`~towtank.vehicle.fossen.LUMPED` lists loses the
+    bilinear term that -C_A(nu) nu gives with the model's own added masses (those in
+    ``coefficients``, measured or predicted): value = total - part, part =
+    :func:`~towtank.vehicle.fossen.ca_bilinear` (e.g. N_uv: Y_vdot - X_udot; Y_ur: X_udot;
+    N_ur: Y_rdot, the mean of Y_rdot and N_vdot when both are given). The map is linear,
+    c_F = J c, with J = I less d(part)/d(added mass) in the added masses' columns, so that
+    the covariance becomes J Sigma J^T: a converted symbol's variance gains those of the
+    measured added masses it uses, and it is correlated with them.
+
+    Parameters
+    ----------
+    coefficients : dict
+        The model's coefficients in SI, the totals among them
+    totals : list of str
+        The symbols measured as totals; those outside LUMPED are left as they are
+    covariance : (symbols, matrix), optional
+        Covariance of the measured coefficients [SI^2]; a converted symbol not in it is added
+
+    Returns
+    -------
+    coefficients : dict
+        The same with the totals converted
+    covariance : (symbols, matrix)
+        The propagated covariance
+    records : dict
+        model.json's ``conversions`` entries: {symbol: {"form": "total", "total",
+        "added_mass_part", "added_masses": {symbol: value}}}
+    """
+    symbols, matrix = ([], np.zeros((0, 0))) if covariance is None else covariance
+    matrix = np.asarray(matrix, dtype=float).reshape(len(symbols), len(symbols))
+    ma = added_mass_matrix(coefficients)
+    convert = [s for s in dict.fromkeys(totals) if s in LUMPED and s in coefficients]
+    names = list(symbols) + [s for s in convert if s not in symbols]
+    sigma = np.zeros((len(names), len(names)))
+    sigma[:len(symbols), :len(symbols)] = matrix
+    jac = np.eye(len(names))
+    out = dict(coefficients)
+    records: dict[str, dict[str, Any]] = {}
+    dots = [s for s in coefficients if ADDED_MASS_RE.match(s)]
+    grads = {d: {s: ca_bilinear(_unit_added_mass(coefficients, d), s) for s in convert}
+             for d in dots}
+    for sym in convert:
+        part = ca_bilinear(ma, sym)
+        out[sym] = float(coefficients[sym]) - part
+        used = {d: float(coefficients[d]) for d in dots if grads[d][sym] != 0.0}
+        records[sym] = {"form": "total", "total": float(coefficients[sym]),
+                        "added_mass_part": part, "added_masses": used}
+        for d in used:
+            if d in names:
+                jac[names.index(sym), names.index(d)] -= grads[d][sym]
+    cov = jac @ sigma @ jac.T
+    return out, (names, 0.5 * (cov + cov.T)), records
+
+
+def kept_conversions(conversions: dict[str, Any], changed: list[str]) -> dict[str, Any]:
+    """The ``conversions`` entries that still hold once the coefficients ``changed`` have new
+    values (e.g. identified): an entry goes when its own coefficient or an added mass it used
+    changed."""
+    return {s: e for s, e in conversions.items()
+            if s not in changed and not set(e.get("added_masses", {})) & set(changed)}
 
 
 def vehicle_profile(vehicle: Any) -> hulls.HullProfile:
@@ -193,6 +255,7 @@ def build_model(
     measured: dict[str, float] | None = None,
     covariance: tuple[list[str], np.ndarray] | None = None,
     reference: dict[str, float] | None = None,
+    forms: dict[str, str] | None = None,
 ) -> dict[str, Any]:
     """The model.json dictionary: measured values first, then predicted, then reference.
 
@@ -212,6 +275,11 @@ def build_model(
         Covariance of the measured coefficients [SI^2]
     reference : dict, optional
         Reference values in SI, used where neither measured nor predicted
+    forms : dict, optional
+        The form (:data:`FORMS`) of measured coefficients of
+        :data:`~towtank.vehicle.fossen.LUMPED`: ``"total"`` ones are converted by
+        :func:`totals_to_fossen` with the model's added masses (covariance propagated),
+        ``"fossen"`` ones taken as given; both recorded in ``conversions``
     """
     coefficients: dict[str, float] = {}
     sources: dict[str, str] = {}
@@ -224,7 +292,13 @@ def build_model(
                 coefficients[sym] = float(val)
                 sources[sym] = source
     symbols, matrix = ([], np.zeros((0, 0))) if covariance is None else covariance
-    return {
+    measured_forms = {s: f for s, f in (forms or {}).items()
+                      if s in LUMPED and sources.get(s) == "measured"}
+    coefficients, (symbols, matrix), conversions = totals_to_fossen(
+        coefficients, [s for s, f in measured_forms.items() if f == "total"],
+        (symbols, matrix))
+    conversions |= {s: {"form": "fossen"} for s, f in measured_forms.items() if f == "fossen"}
+    model = {
         "name": name,
         "rho_kg_m3": float(rho),
         **{k: masses[k] for k in ("mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
@@ -241,6 +315,12 @@ def build_model(
             "inertia": masses.get("inertia_source", "given"),
         },
     }
+    if conversions:
+        model["conversions"] = conversions
+        model["notes"]["conversions"] = (
+            "measured totals (captive tests) hold the added-mass part of C_A(nu); it is "
+            "subtracted once, with the model's added masses: value = total - added_mass_part")
+    return model
 
 
 def write_model(model: dict[str, Any], path: str | Path) -> Path:

@@ -28,9 +28,12 @@ import numpy as np
 from towtank.ingest.values import finite_number
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.fossen import (
+    ADDED_MASS_RE,
+    LUMPED,
     REQUIRED_KEYS,
     SYMBOL_RE,
     added_mass_matrix,
+    ca_bilinear,
     rigid_body_mass_matrix,
 )
 
@@ -56,6 +59,8 @@ __all__ = [
     "json_depth",
     "check_model",
     "check_covariance",
+    "check_conversions",
+    "CONVERSION_TOLERANCE",
     "check_simulation",
     "check_hull",
     "default_duration",
@@ -96,12 +101,15 @@ MAX_STEPS = 200_000
 MAX_SAMPLES = 1000
 #: Relative tolerance of the covariance's symmetry and positive semi-definiteness [-].
 COVARIANCE_TOLERANCE = 1e-9
+#: Relative tolerance of a conversion entry's arithmetic (value = total - added_mass_part)
+#: and of its added masses against the model's [-].
+CONVERSION_TOLERANCE = 1e-9
 #: Smallest eigenvalue of the mass matrix relative to its largest [-].
 MASS_MATRIX_TOLERANCE = 1e-10
 
 _G = STANDARD_GRAVITY  # [m/s²]
 _FACTOR = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
-_ADDED_MASS = re.compile(r"^[XYZKMN]_[uvwpqr]dot$")
+_ADDED_MASS = ADDED_MASS_RE
 
 
 class ModelError(ValueError):
@@ -305,6 +313,8 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
     if abs(buoyancy - weight) > MAX_NET_BUOYANCY_RATIO * weight:
         problems.append(f"{name}: 'buoyancy_N' must differ from the weight by at most "
                         f"{_times(weight)}, not {buoyancy:g} N.")
+    if "conversions" in model:
+        problems += check_conversions(model["conversions"], coefficients, name)
     if problems:
         return problems
     return _check_mass_matrix(mass, triples["cg_m"], triples["inertia_kg_m2"], coefficients,
@@ -326,6 +336,75 @@ def _check_mass_matrix(mass: float, cg: list[float], inertia: list[float],
                 f"is {eig[0]:.4g} against a largest of {eig[-1]:.4g}; check the signs of the "
                 "added masses (X_udot, Y_vdot... are negative) and the inertias."]
     return []
+
+
+def _close(a: float, b: float, scale: float) -> bool:
+    return abs(a - b) <= CONVERSION_TOLERANCE * max(scale, abs(a), abs(b), 1e-300)
+
+
+def check_conversions(conversions: Any, coefficients: dict[str, Any],
+                      name: str = "model.json") -> list[str]:
+    """Problems of model.json's ``conversions`` (docs/formats.md §6), one sentence each.
+
+    Each key is a coefficient of :data:`~towtank.vehicle.fossen.LUMPED` that the model
+    holds; its entry is ``{"form": "fossen"}`` (a measured value taken as given) or
+    ``{"form": "total", "total", "added_mass_part", "added_masses"}``: the added masses those
+    of the model, ``added_mass_part`` the bilinear term of -C_A(nu) nu they give
+    (:func:`~towtank.vehicle.fossen.ca_bilinear`) and the coefficient ``total -
+    added_mass_part``, all within :data:`CONVERSION_TOLERANCE`.
+
+    Parameters
+    ----------
+    conversions : object
+        The parsed ``conversions``
+    coefficients : dict
+        The model's coefficients, already checked (known symbols, finite numbers)
+    name : str
+        The file's name, which starts every sentence
+    """
+    if not isinstance(conversions, dict):
+        return [f"{name}: 'conversions' must be an object {{symbol: entry}}, not "
+                f"{_show(conversions)}."]
+    ma = added_mass_matrix(coefficients)
+    problems = []
+    for sym, entry in conversions.items():
+        where = f"{name}: 'conversions' '{sym}'" if isinstance(sym, str) and len(sym) <= 60 \
+            else f"{name}: 'conversions' {_show(sym)}"
+        if sym not in LUMPED:
+            problems.append(f"{where} is not a coefficient with an added-mass part "
+                            f"({', '.join(LUMPED)}).")
+        elif sym not in coefficients:
+            problems.append(f"{where} converts a coefficient the model does not hold.")
+        elif not isinstance(entry, dict) or entry.get("form") not in ("total", "fossen"):
+            problems.append(f"{where} must be an object whose 'form' is 'total' or 'fossen', "
+                            f"not {_show(entry)}.")
+        elif entry["form"] == "total":
+            problems += _total_problems(where, sym, entry, coefficients, ma)
+    return problems
+
+
+def _total_problems(where: str, sym: str, entry: dict[str, Any],
+                    coefficients: dict[str, Any], ma: np.ndarray) -> list[str]:
+    """The problems of one ``{"form": "total"}`` entry of ``conversions``."""
+    total, part = finite_number(entry.get("total")), finite_number(entry.get("added_mass_part"))
+    used = entry.get("added_masses")
+    if total is None or part is None or not isinstance(used, dict):
+        return [f"{where} must hold 'total' and 'added_mass_part' (finite numbers) and "
+                f"'added_masses' (an object), not {_show(entry)}."]
+    problems = [f"{where} used {d} = {_show(v)}, but the model's is "
+                f"{_show(coefficients.get(d))}." for d, v in used.items()
+                if not (isinstance(d, str) and ADDED_MASS_RE.match(d) and d in coefficients
+                        and finite_number(v) is not None
+                        and _close(float(v), float(coefficients[d]), 0.0))]
+    expected = ca_bilinear(ma, sym)
+    if not _close(part, expected, abs(total)):
+        problems.append(f"{where} 'added_mass_part' is {part:.10g}, but the model's added "
+                        f"masses give {expected:.10g} for it.")
+    value = float(coefficients[sym])
+    if not _close(value, total - part, abs(total)):
+        problems.append(f"{where}: the coefficient {sym} = {value:.10g} is not 'total' - "
+                        f"'added_mass_part' = {total - part:.10g}.")
+    return problems
 
 
 def check_covariance(covariance: Any, name: str = "model.json") -> list[str]:

@@ -32,12 +32,15 @@ class VehiclePrediction:
 
 
 def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
-                    covariance: tuple[list[str], np.ndarray] | None = None) -> VehiclePrediction:
+                    covariance: tuple[list[str], np.ndarray] | None = None,
+                    forms: dict[str, str] | None = None) -> VehiclePrediction:
     """Predict the coefficients of the protocol's ``[vehicle]`` and build its model.
 
     The water is the protocol's [water] (ITTC density and viscosity at its temperature).
     ``measured`` (SI values by symbol) and their ``covariance`` take precedence over the
-    prediction in the model (sources "measured").
+    prediction in the model (sources "measured"); ``forms`` says which of them are totals
+    (captive tests) to convert to the Fossen form
+    (:func:`towtank.vehicle.model.build_model`).
     """
     vehicle = protocol.vehicle
     w = protocol.water
@@ -52,7 +55,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
                                      damping=getattr(vehicle, "damping", "towtank"),
                                      fin_lift=getattr(vehicle, "fin_lift", "towtank"))
     masses = vmodel.mass_properties(vehicle, profile, rho)
-    model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance)
+    model = vmodel.build_model(vehicle.name, rho, masses, predicted, measured, covariance,
+                               forms=forms)
     model["design_speed_m_s"] = float(vehicle.speed_m_s)
     model["length_m"] = float(profile.length)
     model["sources"]["hull"] = profile.source
