@@ -18,8 +18,8 @@ __all__ = ["REJECTION_KINDS", "STAGES", "Notice", "Rejection", "RejectionKind", 
            "notices"]
 
 #: The step of the day a message comes from.
-Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "captive", "vehicle",
-                "export"]
+Stage = Literal["protocol", "sheet", "reduce", "tare", "hull", "fins", "scaling", "captive",
+                "vehicle", "export"]
 #: Every :data:`Stage`, in the order of the pipeline.
 STAGES: tuple[str, ...] = get_args(Stage)
 

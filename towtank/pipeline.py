@@ -17,6 +17,7 @@ import pandas as pd
 
 from towtank.analysis import hull as fit
 from towtank.analysis import scaling
+from towtank.analysis.captive import captive_runs_from_means, fit_captive
 from towtank.analysis.daywide import (
     run_warning_lines,
     sheet_note_sentences,
@@ -25,15 +26,14 @@ from towtank.analysis.daywide import (
 )
 from towtank.analysis.fin_analysis import analyse_fins
 from towtank.analysis.plausibility import displaced_volume, plausibility_warnings
-from towtank.analysis.captive import captive_runs_from_means, fit_captive
 from towtank.analysis.run_table import run_table
 from towtank.analysis.scaling import model_scale
 from towtank.analysis.similarity import check_protocol_speeds, medium_at
 from towtank.errors import TowtankError
+from towtank.ingest.captive_means import captive_means
 from towtank.ingest.inputs import day_inputs, runs_to_reduce, side_files_sha, unlisted_warnings
 from towtank.ingest.protocol import Protocol, load_protocol
-from towtank.ingest.captive_means import read_means_table
-from towtank.ingest.runsheet import CAPTIVE_TESTS, read_run_sheet
+from towtank.ingest.runsheet import CAPTIVE_TESTS, day_sheet
 from towtank.messages import Notice, Rejection, Stage, notices
 from towtank.reduce.captive import CaptiveRun
 from towtank.reduce.run import RunReduction, crashed_record, reduce_record
@@ -87,8 +87,7 @@ def process_day(
     """
     if protocol is None:
         protocol = load_protocol(protocol_path)
-    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
-                           protocol.sheet, air=protocol.water.is_air)
+    sheet = day_sheet(protocol)
     return process_sheet(protocol, sheet, jobs=jobs, progress=progress, debug=debug,
                          cache_dir=cache_dir)
 
@@ -287,12 +286,9 @@ def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, 
     if model is None:
         return {}, warns
     if options is not None and options.means is not None:
-        table, said = read_means_table(options.means, options.means_columns,
-                                       src=str(protocol.path))
+        table, said = captive_means(protocol)
         warns += said
-        caps += captive_runs_from_means(table, rho=rho, length_m=model.length_m,
-                                        balance_x_m=model.balance_x_m or 0.0,
-                                        means_prime=options.means_prime,
+        caps += captive_runs_from_means(table, balance_x_m=model.balance_x_m or 0.0,
                                         mass_kg=model.mass_kg, xg_m=model.xg_m or 0.0)
     roll = options.roll_deg if options is not None else 90.0
     out: dict[str, CaptiveResult] = {}
@@ -304,6 +300,38 @@ def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, 
             out[plane] = from_fit(CaptiveResult, fitted)
             warns += fitted.notes
     return out, warns
+
+
+def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, RunReduction],
+               tares: dict[str, TareModel]) -> tuple[HullResult | None, list[str]]:
+    """The hull coefficients (:func:`towtank.analysis.hull.fit_hull`) and their warnings; None
+    without a [model] or usable hull runs."""
+    model = protocol.model
+    if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
+        return None, []
+    hf = fit.fit_hull(
+        runs,
+        reductions,
+        mass=model.mass_kg,
+        mass_sd=model.mass_uncertainty_kg,
+        length=model.length_m,
+        frontal_area=model.frontal_area,
+        lateral_area=model.lateral_area,
+        alpha_max_deg=protocol.processing.damping_alpha_max_deg,
+        tares=tares,
+        rho=medium_at(protocol.water)[0],
+    )
+    ref = fit.load_reference(protocol.campaign.reference)
+    table = fit.coefficients_table(hf, ref, model.length_uncertainty_m)
+    warns = list(hf.messages)
+    warns += plausibility_warnings(
+        table, rho=hf.rho,
+        volume_m3=displaced_volume(model.length_m, model.diameter_m, model.volume_m3),
+        frontal_area_m2=model.frontal_area, lateral_area_m2=model.lateral_area,
+        added_mass=not protocol.water.is_air,
+    )
+    warns += fit.hull_warnings(hf)
+    return HullResult(fit=hf, coefficients=table, warnings=tuple(warns)), warns
 
 
 def vehicle_stage(protocol: Protocol, hull: HullResult | None,

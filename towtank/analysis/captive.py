@@ -384,17 +384,18 @@ def frequency_agreement(
 
 
 def captive_runs_from_means(
-    table: pd.DataFrame, *, rho: float, length_m: float, balance_x_m: float,
-    means_prime: bool, mass_kg: float = 0.0, xg_m: float = 0.0, plane: str = "horizontal",
+    table: pd.DataFrame, *, balance_x_m: float, mass_kg: float = 0.0, xg_m: float = 0.0,
+    plane: str = "horizontal",
 ) -> list[CaptiveRun]:
     """Static :class:`CaptiveRun` objects from a lab's table of means (FORMATS section 8).
 
     ``table`` has the canonical columns run, drift_deg, rudder_deg, radius_m, speed [m/s],
-    fx, fy [N], mz [N m about ``balance_x_m``] (over 1/2 rho L^2 U^2 and 1/2 rho L^3 U^2 with
-    ``means_prime``). The moment is moved to O; the inertia is already removed except the
-    rotating arm's centripetal part, added here with ``mass_kg`` [kg] and ``xg_m`` [m]. A row
-    with a finite non-zero radius is an arm run, with a rudder angle a rudder run, else a
-    drift run; standard errors are NaN (the fit then works on primes).
+    fx, fy [N], mz [N m about ``balance_x_m``] (a table of primes is first turned into SI by
+    :func:`towtank.ingest.captive_means.captive_means`). The moment is moved to O; the
+    inertia is already removed except the rotating arm's centripetal part, added here with
+    ``mass_kg`` [kg] and ``xg_m`` [m]. A row with a finite non-zero radius is an arm run,
+    with a rudder angle a rudder run, else a drift run; standard errors are NaN (the fit then
+    works on primes).
     """
     out: list[CaptiveRun] = []
     for rec in table.to_dict("records"):
@@ -404,9 +405,6 @@ def captive_runs_from_means(
         radius = float(rec.get("radius_m", math.nan))
         radius = math.nan if radius == 0.0 else radius
         fx, fy, mz = (float(rec[k]) for k in ("fx", "fy", "mz"))
-        if means_prime:
-            q = 0.5 * rho * U**2
-            fx, fy, mz = fx * q * length_m**2, fy * q * length_m**2, mz * q * length_m**3
         arm = math.isfinite(radius)
         kin = arm_kinematics(np.array([U]), beta, radius) if arm else body_kinematics(
             np.array([U]), np.array([beta]))

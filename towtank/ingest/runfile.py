@@ -123,6 +123,8 @@ class RawRun:
     #: a captive run's channels (:data:`towtank.ingest.protocol_types.CAPTIVE_CHANNELS` found in the
     #: file): fx, fy [N], mz [N m], sway [m], yaw [deg]; empty for other runs
     extra: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the file's columns that ``extra`` was read from (so no note calls them unmapped)
+    extra_columns: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:
@@ -809,6 +811,8 @@ def _load_run(
         time_source=time_source,
         units=units,
         extra={c: numeric[c] for c in CAPTIVE_CHANNELS if c in numeric},
+        extra_columns=tuple(col for c in CAPTIVE_CHANNELS if c in mapping and c in numeric
+                            for col in (mapping[c].columns or (mapping[c].column,))),
     )
 
 

@@ -39,7 +39,7 @@ from watchfiles import watch
 from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
 from towtank.ingest.inputs import unlisted_warnings
-from towtank.ingest.runsheet import read_run_sheet
+from towtank.ingest.runsheet import day_sheet
 from towtank.live import arrival
 from towtank.live.state import (
     LIVE_DIR,
@@ -257,8 +257,7 @@ class WatchSession:
 
         p = self.protocol
         try:
-            sheet = read_run_sheet(p.campaign.run_sheet, p.water.temperature_C, p.sheet,
-                                   air=p.water.is_air)
+            sheet = day_sheet(p)
         except ProtocolError as exc:
             if self.sheet is None:
                 raise

@@ -853,7 +853,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
                                "the run sheet, and the run has no speed_nominal there")
         folder = protocol.campaign.data_dir
         raw, stamp = load_record(protocol, folder, file, run, speed_nominal=nominal,
-                                 segment=sheet_segment(row))
+                                 segment=sheet_segment(row), test=str(row.get("test", "")))
         raw = zeroed_record(protocol, raw, folder, file, run)
         ws = row.get("window_start_s", math.nan)
         we = row.get("window_end_s", math.nan)
@@ -949,8 +949,9 @@ def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
     red = reduce_run(raw, Processing() if protocol is None else protocol.processing,
                      run=run, file=file, window_s=window_s, speed_nominal=speed_nominal,
                      accel_nominal=accel_nominal, keep_series=keep_series)
+    columns = tuple(c for c in raw.columns if c not in raw.extra_columns)
     unmapped = (() if protocol is None
-                else tuple(unmapped_force_warnings(protocol, raw.columns, file)))
+                else tuple(unmapped_force_warnings(protocol, columns, file)))
     notes = (*red.notes, *unmapped, *units_notes(raw.units))
     warnings = (*red.warnings, *unmapped)
     kind = test.strip().lower()

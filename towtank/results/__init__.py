@@ -58,8 +58,9 @@ if TYPE_CHECKING:
 R = TypeVar("R")
 
 __all__ = [
-    "CaptiveResult", "DayResult", "Estimate", "Estimates", "FinResult", "HullResult", "IdentifyResult", "Notice",
-    "Rejection", "STAGES", "ScalingResult", "Stage", "Summary", "TareResult", "VehicleResult",
+    "CaptiveResult", "DayResult", "Estimate", "Estimates", "FinResult", "HullResult",
+    "IdentifyResult", "Notice", "Rejection", "STAGES", "ScalingResult", "Stage", "Summary",
+    "TareResult", "VehicleResult",
     "from_fit", "notices",
 ]
 

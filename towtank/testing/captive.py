@@ -348,7 +348,8 @@ def make_captive_day(
         name = f"run_{spec.run:03d}.{CAPTIVE_LAYOUTS[layout]}"
         write_captive_file(frame, folder / "data" / name, layout)
         rows.append({"run": spec.run, "file": name, "config": "hull", "plane": plane,
-                     "angle_deg": 0.0, "speed_nominal": spec.speed, "accel_nominal": 0.5,
+                     "angle_deg": spec.drift_deg, "speed_nominal": spec.speed,
+                     "accel_nominal": 0.5,
                      "tare_group": "", "status": "ok", **spec.sheet_row()})
     write_run_sheet(rows, folder / "run_sheet.csv", SHEET_COLUMNS)
     model: dict[str, Any] = {
