@@ -14,8 +14,7 @@ same way and hands them to :func:`towtank.reduce.captive.reduce_captive`:
 from __future__ import annotations
 
 import math
-from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -23,9 +22,6 @@ from towtank.errors import RunError
 from towtank.ingest.protocol_types import Processing, Protocol
 from towtank.ingest.runfile import RawRun
 from towtank.reduce.captive import CaptiveRun, condition_captive, reduce_captive
-
-if TYPE_CHECKING:
-    from towtank.reduce.run import RunReduction
 
 __all__ = ["CAPTIVE_LOADS", "captive_channels", "reduce_captive_record"]
 
@@ -44,13 +40,17 @@ def _index_window(t: np.ndarray, window: tuple[float, float] | None) -> tuple[in
     return (i0, i1) if i1 - i0 >= 1 else None
 
 
-def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[str]
+Windows = dict[str, tuple[float, float] | None]
+
+
+def captive_channels(raw: RawRun, windows: Windows, p: Processing, said: list[str]
                      ) -> dict[str, np.ndarray]:
-    """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows the
-    run's reduction ``red`` found (:func:`towtank.reduce.captive.condition_captive`): ``t``
-    [s], ``U`` [m/s], ``fx``, ``fy`` [N], ``mz`` [N m] (or a drift run's ``drag``, ``lift``
-    [N] in carriage axes), ``sway`` [m], ``yaw`` [deg]. A large drift's sentence is appended
-    to ``said``; a balance that had not settled raises RunError."""
+    """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows [s]
+    the run's reduction found (``RunReduction.windows``;
+    :func:`towtank.reduce.captive.condition_captive`): ``t`` [s], ``U`` [m/s], ``fx``, ``fy``
+    [N], ``mz`` [N m] (or a drift run's ``drag``, ``lift`` [N] in carriage axes), ``sway``
+    [m], ``yaw`` [deg]. A large drift's sentence is appended to ``said``; a balance that had
+    not settled raises RunError."""
     t = raw.time
     extra = dict(raw.extra)
     loads = {k: extra[k] for k in CAPTIVE_LOADS if k in extra}
@@ -62,10 +62,10 @@ def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[s
                        "lift) and its yaw moment mz; the file has neither fy nor lift")
     if "mz" not in loads:
         raise RunError("a captive run needs the balance's yaw moment mz; the file has none")
-    positions = {k: extra[k] for k in ("sway", "yaw") if k in extra}
-    pre = _index_window(t, red.windows.get("still_pre"))
-    post = _index_window(t, red.windows.get("still_post")) if p.drift == "linear" else None
-    steady = _index_window(t, red.windows.get("steady"))
+    positions: dict[str, np.ndarray] = {k: extra[k] for k in ("sway", "yaw") if k in extra}
+    pre = _index_window(t, windows.get("still_pre"))
+    post = _index_window(t, windows.get("still_post")) if p.drift == "linear" else None
+    steady = _index_window(t, windows.get("steady"))
     if pre is None:
         raise RunError("a captive run needs the still window before the carriage moves for "
                        "the zero of its balance channels")
@@ -74,10 +74,12 @@ def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[s
                              steady=steady, said=said)
 
 
-def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
-                          row: dict[str, Any]) -> RunReduction:
-    """``red`` with the captive reduction of its run (``RunReduction.captive``, the arrays of
-    :meth:`towtank.reduce.captive.CaptiveRun.to_arrays`) and its notes and warnings.
+def reduce_captive_record(protocol: Protocol, raw: RawRun, windows: Windows, row: dict[str, Any],
+                          *, run: int, file: str
+                          ) -> tuple[dict[str, np.ndarray], tuple[str, ...], tuple[str, ...]]:
+    """The captive reduction of a run whose reduction found the phase ``windows`` [s]: the
+    arrays of :meth:`towtank.reduce.captive.CaptiveRun.to_arrays` (``RunReduction.captive``),
+    its notes and its warnings (a large balance drift).
 
     ``row`` is the run sheet's row (test, plane, drift_deg, rudder_deg, radius_m,
     pmm_amplitude_m, pmm_frequency_hz). Raises RunError with one sentence for a run that
@@ -94,10 +96,9 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
             f"the low-pass cut-off [processing] cutoff_hz = {p.cutoff_hz:g} Hz is less than "
             f"{PMM_CUTOFF_FACTOR:g} times the PMM frequency {freq:g} Hz, so it would cut the "
             "loads' harmonics; raise cutoff_hz")
-    chans = captive_channels(raw, red, p, warnings)
-    steady = _index_window(raw.time, red.windows.get("steady"))
+    chans = captive_channels(raw, windows, p, warnings)
+    steady = _index_window(raw.time, windows.get("steady"))
     assert steady is not None
     cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
-                                    run=red.run, file=red.file)
-    return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *warnings, *cr.notes),
-                   warnings=(*red.warnings, *warnings))
+                                    run=run, file=file)
+    return cr.to_arrays(), (*warnings, *cr.notes), tuple(warnings)

@@ -870,7 +870,10 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             keep_series=keep_series,
         )
         if str(row.get("test", "")) in CAPTIVE_TESTS:
-            red = reduce_captive_record(protocol, raw, red, row)
+            arrays, notes, warnings = reduce_captive_record(protocol, raw, red.windows, row,
+                                                            run=run, file=file)
+            red = replace(red, captive=arrays, notes=(*red.notes, *notes),
+                          warnings=(*red.warnings, *warnings))
         return run, replace(red, file_stamp=stamp), None, None
     except RunError as exc:
         return run, None, Rejection.of_run_error(run, file, exc.reason), _safe_preview(raw)
