@@ -31,9 +31,15 @@ from towtank.analysis.scaling import model_scale
 from towtank.analysis.similarity import check_protocol_speeds, medium_at
 from towtank.errors import TowtankError
 from towtank.ingest.captive_means import captive_means
-from towtank.ingest.inputs import day_inputs, runs_to_reduce, side_files_sha, unlisted_warnings
+from towtank.ingest.inputs import (
+    day_inputs,
+    day_sheet,
+    runs_to_reduce,
+    side_files_sha,
+    unlisted_warnings,
+)
 from towtank.ingest.protocol import Protocol, load_protocol
-from towtank.ingest.runsheet import CAPTIVE_TESTS, day_sheet
+from towtank.ingest.runsheet import CAPTIVE_TESTS
 from towtank.messages import Notice, Rejection, Stage, notices
 from towtank.reduce.captive import CaptiveRun
 from towtank.reduce.run import RunReduction, crashed_record, reduce_record

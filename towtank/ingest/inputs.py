@@ -18,7 +18,8 @@ from typing import Any
 import pandas as pd
 
 from towtank.ingest.protocol_types import Protocol, SpeedLog, ZeroFile
-from towtank.ingest.runsheet import unlisted_files
+from towtank.ingest.runsheet import NUMERIC, REQUIRED, read_run_sheet, unlisted_files
+from towtank.ingest.sections import check_captive_runs
 from towtank.ingest.speedlog import log_path, log_sha
 from towtank.messages import Notice, Rejection
 from towtank.reference.sets import BUILTIN_REFERENCES
@@ -112,3 +113,23 @@ def file_sha(path: Path) -> str:
             return hashlib.file_digest(f, "sha256").hexdigest()
     except OSError:
         return ""
+
+#: The columns of a day's sheet that has no run (a protocol with ``[captive] means`` alone).
+EMPTY_SHEET_COLUMNS = (*REQUIRED, "test", "speed_nominal", "accel_nominal", "tare_group",
+                       "water_temp_C", "status", "remarks", "window_start_s", "window_end_s",
+                       "sheet_row", "sheet_error")
+
+
+def day_sheet(protocol: Protocol) -> pd.DataFrame:
+    """The protocol's run sheet read (:func:`read_run_sheet`) and its captive runs checked
+    against the [model] (:func:`towtank.ingest.sections.check_captive_runs`); a protocol with
+    ``[captive] means`` and no run sheet has a sheet with no row.
+
+    Raises ProtocolError for a sheet that cannot be used."""
+    if not protocol.campaign.sheet_given:
+        return pd.DataFrame({c: pd.Series(dtype=float if c in NUMERIC or c in (
+            "run", "angle_deg", "sheet_row") else object) for c in EMPTY_SHEET_COLUMNS})
+    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
+                           protocol.sheet, air=protocol.water.is_air)
+    check_captive_runs(sheet, protocol.model, protocol.captive, protocol.path.name)
+    return sheet

@@ -23,9 +23,8 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import ProtocolError
-from towtank.ingest.protocol_types import CAPTIVE_TESTS, PMM_TESTS, Protocol
+from towtank.ingest.protocol_types import CAPTIVE_TESTS, PMM_TESTS
 from towtank.ingest.readers import EXTENSIONS, name_list
-from towtank.ingest.sections import check_captive_runs
 from towtank.ingest.sheetlayout import (
     STATUS_WORDS,
     TEST_WORDS,
@@ -768,23 +767,3 @@ def unlisted_files(sheet: pd.DataFrame, data_dir: Path) -> list[str]:
             out.append(rel)
     return out
 
-
-#: The columns of a day's sheet that has no run (a protocol with ``[captive] means`` alone).
-EMPTY_SHEET_COLUMNS = (*REQUIRED, "test", "speed_nominal", "accel_nominal", "tare_group",
-                       "water_temp_C", "status", "remarks", "window_start_s", "window_end_s",
-                       "sheet_row", "sheet_error")
-
-
-def day_sheet(protocol: Protocol) -> pd.DataFrame:
-    """The protocol's run sheet read (:func:`read_run_sheet`) and its captive runs checked
-    against the [model] (:func:`towtank.ingest.sections.check_captive_runs`); a protocol with
-    ``[captive] means`` and no run sheet has a sheet with no row.
-
-    Raises ProtocolError for a sheet that cannot be used."""
-    if not protocol.campaign.sheet_given:
-        return pd.DataFrame({c: pd.Series(dtype=float if c in NUMERIC or c in (
-            "run", "angle_deg", "sheet_row") else object) for c in EMPTY_SHEET_COLUMNS})
-    sheet = read_run_sheet(protocol.campaign.run_sheet, protocol.water.temperature_C,
-                           protocol.sheet, air=protocol.water.is_air)
-    check_captive_runs(sheet, protocol.model, protocol.captive, protocol.path.name)
-    return sheet

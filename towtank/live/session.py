@@ -38,8 +38,7 @@ from watchfiles import watch
 
 from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
-from towtank.ingest.inputs import unlisted_warnings
-from towtank.ingest.runsheet import day_sheet
+from towtank.ingest.inputs import day_sheet, unlisted_warnings
 from towtank.live import arrival
 from towtank.live.state import (
     LIVE_DIR,
