@@ -7,6 +7,7 @@ a protocol or run-sheet fault stops before anything is written.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -29,7 +30,7 @@ from towtank.analysis.plausibility import displaced_volume, plausibility_warning
 from towtank.analysis.run_table import run_table
 from towtank.analysis.scaling import model_scale
 from towtank.analysis.similarity import check_protocol_speeds, medium_at
-from towtank.errors import TowtankError
+from towtank.errors import ProtocolError, TowtankError
 from towtank.ingest.captive_means import captive_means
 from towtank.ingest.inputs import (
     day_inputs,
@@ -315,6 +316,10 @@ def hull_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, Run
     model = protocol.model
     if model is None or not ((runs["config"] == "hull") & (runs["status"] == "ok")).any():
         return None, []
+    if not math.isfinite(model.frontal_area):
+        raise ProtocolError(
+            f"{protocol.path.name}: the resistance runs' C_D needs the model's frontal area: "
+            "give [model] diameter_m or frontal_area_m2; no hull coefficient was made.")
     hf = fit.fit_hull(
         runs,
         reductions,

@@ -368,7 +368,8 @@ def _build(path: Path, src: str, data: dict[str, Any], check_paths: bool) -> Pro
     campaign = _campaign(data["campaign"], base, src, check_paths)
     water = _water(checked_section(data["water"], "water", "water", src), "water", src)
 
-    model = _model(data["model"], src, water) if "model" in data else None
+    model = _model(data["model"], src, water, captive="captive" in data) \
+        if "model" in data else None
     fin = _fin(data["fin"], src) if "fin" in data else None
 
     vehicle = None
@@ -501,8 +502,10 @@ def _resolved(base: Path, given: str | Path, key: str, src: str) -> Path:
 SIGNED_MODEL_KEYS = ("xg_m", "balance_x_m")
 
 
-def _model(data: Any, src: str, water: Water | None = None) -> Model:
-    """``[model]`` checked, its Myring geometry filled in and its mass checked."""
+def _model(data: Any, src: str, water: Water | None = None, *, captive: bool = False
+           ) -> Model:
+    """``[model]`` checked, its Myring geometry filled in and its mass checked. A model of a
+    protocol with ``[captive]`` (``captive``) may leave out its diameter and frontal area."""
     m = checked_section(data, "model", "model", src)
     check_positive(
         m,
@@ -521,7 +524,7 @@ def _model(data: Any, src: str, water: Water | None = None) -> Model:
         my = checked_section(m.pop("myring"), "model.myring", "model.myring", src)
         check_positive(my, ("a", "b", "c", "n", "d"), "model.myring", src)
         myring = Myring(**my)
-    if "diameter_m" not in m and "frontal_area_m2" not in m and myring is None:
+    if "diameter_m" not in m and "frontal_area_m2" not in m and myring is None and not captive:
         raise ProtocolError(
             f"{src}: [model] needs 'diameter_m' (or 'frontal_area_m2') for the frontal area."
         )

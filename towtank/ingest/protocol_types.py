@@ -264,10 +264,12 @@ class Model:
 
     @property
     def frontal_area(self) -> float:
-        """Frontal area A [m²]: given, or π D²/4."""
+        """Frontal area A [m²]: given, or π D²/4; NaN when neither is known (a captive
+        model's protocol may leave both out: its resistance coefficients are then not made)."""
         if self.frontal_area_m2 is not None:
             return self.frontal_area_m2
-        assert self.diameter_m is not None
+        if self.diameter_m is None:
+            return math.nan
         return math.pi * self.diameter_m**2 / 4.0
 
     @property
