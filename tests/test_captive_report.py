@@ -174,3 +174,69 @@ def test_hull_day_has_no_captive_sheets_or_pages(captive_day):
     plain = replace(day, captive=None, captive_vertical=None)
     assert "Captive" not in sheet_names(plain) and "PMM" not in sheet_names(plain)
     assert not [p for p in page_plan(plain) if p.section.startswith("Captive")]
+
+
+# ------------------------------------------------------------------------ --export simman
+@pytest.fixture(scope="module")
+def simman(captive_day, tmp_path_factory):
+    """The captive day written with ``--export simman`` only: its export/simman folder."""
+    from towtank.report import write_outputs
+
+    day, _ = captive_day
+    out = tmp_path_factory.mktemp("simman") / "out"
+    write_outputs(day, out, report=False, export=("simman",))
+    return day, out / "export" / "simman"
+
+
+def test_simman_export_writes_static_means_periods_and_particulars(simman):
+    day, folder = simman
+    static = pd.read_csv(folder / "static.csv")
+    statics = day.runs[day.runs["test"].isin(["drift", "rudder", "arm"])]
+    assert static["run"].tolist() == statics["run"].tolist()
+    merged = static.merge(day.runs, on="run")
+    assert np.allclose(merged["Y"], merged["captive_Y_N"], rtol=1e-12)
+    assert np.allclose(merged["N"], merged["captive_N_Nm"], rtol=1e-12)
+    part = pd.read_csv(folder / "particulars.csv").set_index("quantity")["value"]
+    model = day.protocol.model
+    assert part["length_m"] == model.length_m and part["izz_kg_m2"] == model.izz_kg_m2
+    assert part["sample_rate_hz"] == pytest.approx(100.0, rel=1e-9)
+    assert part["water_temperature_C"] == pytest.approx(18.0)
+    pmm_runs = day.pmm["run"].tolist()
+    assert sorted(p.name for p in folder.glob("pmm_run_*.csv")) == [
+        f"pmm_run_{r:03d}.csv" for r in pmm_runs]
+
+
+def test_simman_period_and_fourier_agree_with_the_pmm_harmonics(simman):
+    day, folder = simman
+    run = int(day.pmm["run"].iloc[0])
+    period = pd.read_csv(folder / f"pmm_run_{run:03d}.csv")
+    assert list(period.columns) == ["t", "X", "Y", "N", "x", "y", "psi", "u", "v", "r",
+                                    "udot", "vdot", "rdot"]
+    f = float(day.pmm["frequency_hz"].iloc[0])
+    assert period["t"].iloc[-1] < 1.0 / f <= period["t"].iloc[-1] + 2.0 / len(period) / f
+    fourier = pd.read_csv(folder / "pmm_fourier.csv")
+    y = fourier[(fourier["run"] == run) & (fourier["quantity"] == "Y")].iloc[0]
+    row = day.pmm.iloc[0]
+    # the period's first harmonic is the cycles' mean first harmonic (phase bins blur it
+    # by sinc(pi/72), 0.03 %)
+    assert y["sin1"] == pytest.approx(row["fy_in"], rel=2e-3)
+    assert y["cos1"] == pytest.approx(row["fy_quad"], rel=2e-3)
+    assert y["cycle_sin"] == row["fy_in"] and y["cycle_cos_se"] == row["fy_quad_se"]
+
+
+def test_simman_export_of_a_day_without_captive_runs_says_so(captive_day, tmp_path):
+    from dataclasses import replace
+
+    from towtank.report.simman import write_simman
+
+    day, _ = captive_day
+    said = write_simman(replace(day, captive=None, captive_vertical=None), tmp_path)
+    assert said and "no captive results" in said[0]
+    assert not (tmp_path / "export").exists()
+
+
+def test_cli_accepts_export_simman():
+    from towtank.commands.cli import _parser
+
+    args = _parser().parse_args(["process", "p.toml", "--export", "simman"])
+    assert args.export == ["simman"]
