@@ -74,7 +74,8 @@ def _parser() -> argparse.ArgumentParser:
         help="reduce a test day and write its tables and reports",
         description="Reduce every run of the protocol's run sheet and write coefficients.csv, "
         "runs.csv, fins.csv, fin_curves.csv and fin_control.csv (fin days), scaling.csv, "
-        "tare.csv, report.xlsx, report.pdf, figures/ and provenance.json; with a [vehicle] "
+        "tare.csv, pmm.csv (captive days), report.xlsx, report.pdf, figures/ and "
+        "provenance.json; with a [vehicle] "
         "section also predicted.csv and model.json; with --export, export/. The per-run "
         "cache is kept in .cache/ and the manifest of what towtank wrote in "
         ".towtank-outputs.json.",

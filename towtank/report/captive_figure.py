@@ -19,6 +19,7 @@ Nothing is fitted here: curves and bands come from the fit's estimates and covar
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
@@ -165,12 +166,31 @@ def _no_data(ax: Any, text: str) -> None:
     ax.set_yticks([])
 
 
-def _draw_static(ax: Any, pts: pd.DataFrame, x: str, eq: str, label: str) -> None:
+def _draw_static(ax: Any, pts: pd.DataFrame, x: str, eq: str, label: str | None,
+                 color: str) -> None:
     """The runs' primes with their 95 % error bars."""
     half = pts[f"{eq}_half"].to_numpy(dtype=float)
     ax.errorbar(pts[x], pts[eq], yerr=np.where(np.isfinite(half), half, 0.0), fmt="o",
-                ms=3.5, color=style.PALETTE[0], ecolor="#555555", elinewidth=0.8, capsize=2,
+                ms=3.5, color=color, ecolor="#555555", elinewidth=0.8, capsize=2,
                 zorder=3, label=label)
+
+
+def _static_row(fig: Figure, cells: Any, eqs: tuple[tuple[str, bool], ...], empty: bool,
+                empty_text: str, draw: Callable[[Any, str, bool], None], xlabel: str,
+                title: str) -> None:
+    """A row of two panels (force, moment) of static runs: ``draw(ax, eq, moment)`` each, or
+    ``empty_text`` without runs."""
+    sub = cells.subgridspec(1, 2, wspace=0.3)
+    for col, (eq, moment) in enumerate(eqs):
+        ax = fig.add_subplot(sub[0, col])
+        if empty:
+            _no_data(ax, empty_text)
+        else:
+            draw(ax, eq, moment)
+            ax.legend(loc="best", fontsize=6.5)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(_prime_label(eq))
+        ax.set_title(f"{title}: {eq}'", loc="left", fontsize=8.5)
 
 
 def _draw_curve(ax: Any, x: np.ndarray, mean: np.ndarray, half: np.ndarray, color: str,
@@ -225,45 +245,33 @@ def fig_captive(fit: CaptiveFit | None, roll_deg: float = 90.0, *, page: bool = 
     eqs = ((ef, False), (em, True))
     # 1. static drift
     drift = static_points(fit, ("drift",), roll_deg)
-    for col, (eq, moment) in enumerate(eqs):
-        ax = fig.add_subplot(gs[0, col])
-        if drift.empty:
-            _no_data(ax, "no static drift runs")
-        else:
-            b = drift["drift_deg"].to_numpy(dtype=float)
-            pad = max(1.0, 0.05 * float(np.ptp(b)))
-            grid = np.linspace(b.min() - pad, b.max() + pad, CURVE_POINTS)
-            mean, half = drift_curve(fit, grid, roll_deg, eq, moment, fit.runs[0])
-            _draw_curve(ax, grid, mean, half, style.FIT_COLOR, "fit, 95 % band")
-            _draw_static(ax, drift, "drift_deg", eq, "drift runs")
-            ax.legend(loc="best", fontsize=6.5)
-        ax.set_xlabel(r"drift $\beta$ [deg]")
-        ax.set_ylabel(_prime_label(eq))
-        ax.set_title(f"Static drift: {eq}'", loc="left", fontsize=8.5)
+
+    def draw_drift(ax: Any, eq: str, moment: bool) -> None:
+        b = drift["drift_deg"].to_numpy(dtype=float)
+        pad = max(1.0, 0.05 * float(np.ptp(b)))
+        grid = np.linspace(b.min() - pad, b.max() + pad, CURVE_POINTS)
+        mean, half = drift_curve(fit, grid, roll_deg, eq, moment, fit.runs[0])
+        _draw_curve(ax, grid, mean, half, style.FIT_COLOR, "fit, 95 % band")
+        _draw_static(ax, drift, "drift_deg", eq, "drift runs", style.PALETTE[0])
+
+    _static_row(fig, gs[0, :], eqs, drift.empty, "no static drift runs", draw_drift,
+                r"drift $\beta$ [deg]", "Static drift")
     # 2. rotating arm
     arm = static_points(fit, ("arm",), roll_deg)
     if not arm.empty:
         arm["r_prime"] = fit.length_m / arm["radius_m"]
-    for col, (eq, moment) in enumerate(eqs):
-        ax = fig.add_subplot(gs[1, col])
-        if arm.empty:
-            _no_data(ax, "no rotating-arm runs")
-        else:
-            rp = arm["r_prime"].to_numpy(dtype=float)
-            lo, hi = min(0.0, float(rp.min())), max(0.0, float(rp.max()))
-            grid = np.linspace(lo, hi, CURVE_POINTS)
-            for i, (d, grp) in enumerate(arm.groupby(arm["drift_deg"].round(2), sort=True)):
-                color = style.PALETTE[i % len(style.PALETTE)]
-                mean, half = arm_curve(fit, grid, float(d), roll_deg, eq, moment, fit.runs[0])
-                _draw_curve(ax, grid, mean, half, color, f"fit, β = {d:g}°")
-                h = grp[f"{eq}_half"].to_numpy(dtype=float)
-                ax.errorbar(grp["r_prime"], grp[eq], yerr=np.where(np.isfinite(h), h, 0.0),
-                            fmt="o", ms=3.5, color=color, ecolor="#555555", elinewidth=0.8,
-                            capsize=2, zorder=3)
-            ax.legend(loc="best", fontsize=6.5)
-        ax.set_xlabel(r"$r' = rL/U$ [-]")
-        ax.set_ylabel(_prime_label(eq))
-        ax.set_title(f"Rotating arm: {eq}'", loc="left", fontsize=8.5)
+
+    def draw_arm(ax: Any, eq: str, moment: bool) -> None:
+        rp = arm["r_prime"].to_numpy(dtype=float)
+        grid = np.linspace(min(0.0, float(rp.min())), max(0.0, float(rp.max())), CURVE_POINTS)
+        for i, (d, grp) in enumerate(arm.groupby(arm["drift_deg"].round(2), sort=True)):
+            color = style.PALETTE[i % len(style.PALETTE)]
+            mean, half = arm_curve(fit, grid, float(d), roll_deg, eq, moment, fit.runs[0])
+            _draw_curve(ax, grid, mean, half, color, f"fit, β = {d:g}°")
+            _draw_static(ax, grp, "r_prime", eq, None, color)
+
+    _static_row(fig, gs[1, :], eqs, arm.empty, "no rotating-arm runs", draw_arm,
+                r"$r' = rL/U$ [-]", "Rotating arm")
     # 3. one PMM run over a period
     run = shown_pmm_run(fit)
     for col, (eq, moment) in enumerate(eqs):

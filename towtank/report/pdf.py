@@ -441,6 +441,14 @@ def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
     return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
 
 
+def _text_blocks(fig: Figure, top_in: float, texts: Sequence[str]) -> float:
+    """Small paragraphs (footnotes) one under the other; returns the inches used."""
+    used = 0.0
+    for text in texts:
+        used += _text_block(fig, top_in + used, text, width=125, fontsize=7)
+    return used
+
+
 def _heading(fig: Figure, top_in: float, text: str) -> float:
     fig.text(MARGIN_IN / PAGE_W, _y(top_in), text, fontsize=10.5, fontweight="bold", va="top")
     return 0.3
@@ -485,8 +493,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "page 1. "
                      "¹ Prototype, in the row's unit: prime × ½ρ_p·L_p³ (added mass, kg) or "
                      "× ½ρ_p·L_p² (kg/m).")
-        for n in notes:
-            y += _text_block(fig, y, n, width=125, fontsize=7)
+        y += _text_blocks(fig, y, notes)
         # an added mass's second estimate and its agreement are in its method's footnote
         # (towtank.analysis.hull.fit_added_mass)
         y += 0.2
@@ -543,7 +550,7 @@ def captive_fit_text(fit: CaptiveFit) -> list[str]:
     chi2 = "; ".join(f"{eq}: {_v(c, '.3g')}" for eq, c in fit.chi2_reduced.items())
     if chi2:
         out.append(f"Reduced chi^2 of the weighted fit per equation: {chi2}.")
-    out += [n[0].upper() + n[1:] + ("" if n.endswith(".") else ".") for n in fit.notes if n]
+    out += [n for n in fit.notes if n]
     return out
 
 
@@ -568,12 +575,9 @@ def _draw_captive(fig: Figure, fit: CaptiveFit) -> None:
                  "derivatives are totals (the added-mass Coriolis and Munk parts included). "
                  "Intervals: 95 %, Student's t on the fit's degrees of freedom. Offsets _uu: "
                  "the asymmetry and zero residue, never used as derivatives.")
-    for n in notes:
-        y += _text_block(fig, y, n, width=125, fontsize=7)
-    y += 0.15
+    y += _text_blocks(fig, y, notes) + 0.15
     y += _heading(fig, y, "The fit")
-    for n in captive_fit_text(fit):
-        y += _text_block(fig, y, n, width=125, fontsize=7)
+    _text_blocks(fig, y, captive_fit_text(fit))
 
 
 def _fin_table(fig: Figure, y: float, fr: FinResult) -> float:
