@@ -115,6 +115,9 @@ class CaptiveFit:
     by_run: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(
         columns=list(BY_RUN_COLUMNS)))
     chi2_reduced: dict[str, float] = field(default_factory=dict)
+    #: per equation ("Y", "N"; "Z", "M"), the covariance of its derivatives [SI], indexed by
+    #: symbol both ways (what a prediction's band is drawn from)
+    cov: dict[str, pd.DataFrame] = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
         """coefficients.csv rows: the hull table's columns (NaN where not applicable) and
@@ -260,6 +263,7 @@ def fit_captive(
     estimates: dict[str, CaptiveEstimate] = {}
     chi2: dict[str, float] = {}
     params: dict[str, np.ndarray] = {}
+    cov: dict[str, pd.DataFrame] = {}
     Xk = X[:, keep]
     n, p = Xk.shape
     if n <= p:
@@ -284,6 +288,9 @@ def fit_captive(
         coef = np.asarray(res.params)
         bse = np.asarray(res.bse) if dof > 0 else np.full(p, math.nan)
         params[eq] = coef
+        names = [f"{eq}_{regs[k]}" for k in keep]
+        cov[eq] = pd.DataFrame(np.asarray(res.cov_params()) if dof > 0 else
+                               np.full((p, p), math.nan), index=names, columns=names)
         tq = t_quantile(dof, alpha)
         for j, k in enumerate(keep):
             sym = f"{eq}_{regs[k]}"
@@ -311,7 +318,7 @@ def fit_captive(
     estimates = {s: estimates[s] for s in order if s in estimates}
     return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
                       estimates=estimates, runs=runs, notes=tuple(notes), by_run=by_run,
-                      chi2_reduced=chi2)
+                      chi2_reduced=chi2, cov=cov)
 
 
 def frequency_agreement(
