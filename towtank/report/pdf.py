@@ -497,6 +497,10 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
         # an added mass's second estimate and its agreement are in its method's footnote
         # (towtank.analysis.hull.fit_added_mass)
         y += 0.2
+    elif day.protocol.model is not None and day.captive_results:
+        y += _heading(fig, y, "Hull coefficients")
+        y += _text_block(fig, y, "No resistance coefficients: the day's runs are captive tests "
+                         "(their derivatives are in the Captive section).", fontsize=8.5) + 0.2
     elif day.protocol.model is not None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
