@@ -103,7 +103,12 @@ class CaptiveEstimate:
 
 @dataclass(frozen=True)
 class CaptiveFit:
-    """The captive derivatives of a day (:func:`fit_captive`)."""
+    """The captive derivatives of a day (:func:`fit_captive`).
+
+    ``notes``: what the report shows beside the derivatives (the PMM runs' agreement over
+    omega'); ``warnings``: what the day's warnings carry (runs that differ over omega',
+    derivatives the runs do not determine, a fit widened by its reduced chi^2).
+    """
 
     plane: str
     rho: float
@@ -112,6 +117,7 @@ class CaptiveFit:
     estimates: dict[str, CaptiveEstimate]
     runs: tuple[CaptiveRun, ...]
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
     by_run: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(
         columns=list(BY_RUN_COLUMNS)))
     chi2_reduced: dict[str, float] = field(default_factory=dict)
@@ -216,6 +222,25 @@ def _and(names: Sequence[str]) -> str:
     return ", ".join(names)
 
 
+#: What a regressor needs of the runs to be excited (for the sentence of those that are not).
+_NEEDS = {"ur": "yaw-rate runs (rotating arm, PMM yaw)",
+          "r|r|": "yaw-rate runs (rotating arm, PMM yaw)", "vdot": "PMM runs",
+          "rdot": "PMM runs", "uudr": "rudder runs", "uv": "drift runs (static, PMM sway)",
+          "v|v|": "drift runs (static, PMM sway)", "uu": "runs"}
+
+
+def not_excited_sentence(runs: Sequence[CaptiveRun], terms: Sequence[tuple[str, str, str]]
+                         ) -> str:
+    """One sentence naming the derivatives (``terms``: force and moment letters, regressor
+    name) the runs do not determine and the runs that would."""
+    names = _and([f"{f}_{k}, {m}_{k}" for f, m, k in terms])
+    horizontal = dict(zip(VERTICAL_REGRESSORS, REGRESSORS, strict=True))
+    needs = dict.fromkeys(_NEEDS[horizontal.get(k, k)] for _, _, k in terms)
+    tests = ", ".join(sorted({TEST_NAMES[r.test] for r in runs}))
+    return (f"{names}: not determined (left out): no {' and no '.join(needs)} excite them "
+            f"(the captive runs: {tests})")
+
+
 def fit_captive(
     runs: Sequence[CaptiveRun], *, rho: float, length_m: float, draught_m: float | None = None,
     plane: str = "horizontal", roll_deg: float = 90.0, alpha: float = 0.05,
@@ -243,18 +268,18 @@ def fit_captive(
 
     runs = tuple(r for r in runs if r.plane == plane)
     (eq_f, eq_m), regs = plane_names(plane)
-    notes: list[str] = []
+    warnings: list[str] = []
     if not runs:
-        return CaptiveFit(plane, rho, length_m, draught_m, {}, (), (f"no {plane} captive runs",))
+        return CaptiveFit(plane, rho, length_m, draught_m, {}, (),
+                          warnings=(f"no {plane} captive runs",))
     rows, X, run_index = _design(runs, plane, roll_deg)
     excited = _excited(X)
     absent = [k for k in range(len(regs)) if not excited[k]]
     if absent:
-        notes.append(f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in absent])}: not "
-                     "excited by these runs (left out)")
+        warnings.append(not_excited_sentence(runs, [(eq_f, eq_m, regs[k]) for k in absent]))
     keep, dropped = _independent(X, [k for k in range(len(regs)) if excited[k]])
     if dropped:
-        notes.append(
+        warnings.append(
             f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in dropped])}: not separable "
             "from the other terms by these runs (e.g. too few drift angles), left out")
     estimates: dict[str, CaptiveEstimate] = {}
@@ -263,7 +288,7 @@ def fit_captive(
     Xk = X[:, keep]
     n, p = Xk.shape
     if n <= p:
-        notes.append(f"{n} run components for {p} derivatives: no interval can be given")
+        warnings.append(f"{n} run components for {p} derivatives: no interval can be given")
     tests = [runs[i].test for i in run_index]
     for eq, moment in ((eq_f, False), (eq_m, True)):
         y = rows[eq].to_numpy(dtype=float)
@@ -301,16 +326,17 @@ def fit_captive(
                 prime=value / scale, prime_lt=value / scale_lt, scale=scale, scale_lt=scale_lt,
                 method=" + ".join(methods), n_runs=len({int(run_index[i]) for i in carrying}))
         if with_se and red > 1.0:
-            notes.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
+            warnings.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
                          "intervals widened by its square root (model error beyond the "
                          "runs' scatter)")
-    by_run, agreement = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
-                                            length_m, chi2)
-    notes += agreement
+    by_run, agree, differ = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
+                                                length_m, chi2)
+    warnings += differ
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
     return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
-                      estimates=estimates, runs=runs, notes=tuple(notes), by_run=by_run,
+                      estimates=estimates, runs=runs, notes=tuple(agree),
+                      warnings=tuple(warnings), by_run=by_run,
                       chi2_reduced=chi2)
 
 
@@ -318,7 +344,7 @@ def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
     chi2_reduced: dict[str, float] | None = None,
-) -> tuple[pd.DataFrame, list[str]]:
+) -> tuple[pd.DataFrame, list[str], list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
@@ -359,7 +385,8 @@ def frequency_agreement(
                     "value": (float(rows.at[best, eq]) - others) / xk,
                     "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
     by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
-    notes = []
+    agree: list[str] = []
+    differ: list[str] = []
     for sym, g in by_run.groupby("symbol", sort=False):
         g = g[np.isfinite(g["std_error"]) & (g["std_error"] > 0)]
         if len(g) < 2:
@@ -376,11 +403,11 @@ def frequency_agreement(
                 f"{g['amplitude_m'].max():.2f} m")
         test = f"chi^2 = {stat:.3g} on {dof} dof, p = {pval:.2g}"
         if pval >= AGREEMENT_P:
-            notes.append(f"{head}: agree ({test})")
+            agree.append(f"{head}: agree ({test})")
         else:
-            notes.append(f"{head}: differ ({test}): the derivative depends on frequency or "
+            differ.append(f"{head}: differ ({test}): the derivative depends on frequency or "
                          "amplitude; the joint value is an average over the runs")
-    return by_run, notes
+    return by_run, agree, differ
 
 
 def captive_runs_from_means(
