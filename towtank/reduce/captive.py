@@ -513,14 +513,17 @@ class Cycles:
         return self.starts.size / (self.t_end - self.starts[0])
 
 
-def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
+def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+               min_cycles: int = MIN_CYCLES,
+               tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> Cycles:
     """The whole steady PMM cycles of the sway ``y`` [m] (FORMATS section 8; shared rules).
 
     t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
     crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
-    (half the peak-to-peak) is within :data:`CYCLE_AMPLITUDE_TOLERANCE` of the median of the
-    full-amplitude cycles (those within 10 % of the largest), the longest unbroken sequence.
-    RunError when fewer than :data:`MIN_CYCLES` remain.
+    (half the peak-to-peak) is within ``tolerance`` [-] of the median of the full-amplitude
+    cycles (those within 10 % of the largest), the longest unbroken sequence. RunError when
+    fewer than ``min_cycles`` remain (the protocol's ``[captive] min_cycles`` and
+    ``amplitude_tolerance``).
     """
     i0, i1 = steady
     ys = y[i0:i1] - float(np.mean(y[i0:i1]))
@@ -535,16 +538,16 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
         # the median of the full-amplitude cycles: the median cycle's when most cycles are
         # steady, and still the steady cycles' when ramp cycles outnumber them
         ref = float(np.median(amps[amps >= 0.9 * np.max(amps)]))
-        keep = np.abs(amps - ref) <= CYCLE_AMPLITUDE_TOLERANCE * ref
+        keep = np.abs(amps - ref) <= tolerance * ref
     idx = np.flatnonzero(keep)
     if idx.size:  # the longest run of consecutive kept cycles
         breaks = np.flatnonzero(np.diff(idx) > 1)
         groups = np.split(idx, breaks + 1)
         idx = max(groups, key=len)
-    if idx.size < MIN_CYCLES:
+    if idx.size < min_cycles:
         raise RunError(
             f"the run has {idx.size} whole steady PMM cycle{'' if idx.size == 1 else 's'}; at "
-            f"least {MIN_CYCLES} are needed (ramp-in and ramp-out cycles are dropped)")
+            f"least {min_cycles} are needed (ramp-in and ramp-out cycles are dropped)")
     return Cycles(starts=cross[idx], t_end=float(cross[idx[-1] + 1]), amplitudes=amps[idx],
                   dropped=int(amps.size - idx.size))
 
@@ -560,7 +563,8 @@ def pmm_run(
     t: np.ndarray, speed: np.ndarray, fx: np.ndarray, fy: np.ndarray, mz: np.ndarray,
     sway: np.ndarray, yaw: np.ndarray | None, steady: tuple[int, int], setting: RunSetting,
     inertia: Inertia, *, length_m: float = math.nan, run: int = 0, file: str = "",
-    notes: tuple[str, ...] = (),
+    notes: tuple[str, ...] = (), min_cycles: int = MIN_CYCLES,
+    tolerance: float = PMM_TOLERANCE,
 ) -> CaptiveRun:
     """A pure-sway, pure-yaw or yaw-with-drift PMM run reduced to its cycle harmonics.
 
@@ -586,11 +590,16 @@ def pmm_run(
         The model on the balance.
     length_m : float
         L [m], for the omega' of the note (optional).
+    min_cycles : int
+        Fewest whole steady cycles the run needs (:func:`pmm_cycles`).
+    tolerance : float
+        Largest relative departure of a cycle's amplitude from the median cycle's and of the
+        measured frequency and amplitude from the sheet's [-].
     """
     # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
-    cyc = pmm_cycles(t, sway, steady)
+    cyc = pmm_cycles(t, sway, steady, min_cycles=min_cycles, tolerance=tolerance)
     f = cyc.frequency_hz
     f_set, y_set = setting.pmm_frequency_hz, setting.pmm_amplitude_m
     sel = (t >= cyc.starts[0]) & (t < cyc.t_end)
@@ -598,12 +607,12 @@ def pmm_run(
     omega = 2.0 * math.pi * f
     y_coef = harmonic_fit(ts, sway[sel], omega)
     y0 = math.hypot(y_coef[1], y_coef[2])
-    if abs(f - f_set) > PMM_TOLERANCE * f_set:
+    if abs(f - f_set) > tolerance * f_set:
         raise RunError(f"the PMM frequency measured from the sway, {f:.4g} Hz, is not within "
-                       f"5 % of the sheet's pmm_frequency_hz {f_set:g} Hz")
-    if abs(y0 - y_set) > PMM_TOLERANCE * y_set:
-        raise RunError(f"the PMM sway amplitude measured, {y0:.4g} m, is not within 5 % of the "
-                       f"sheet's pmm_amplitude_m {y_set:g} m")
+                       f"{tolerance:.0%} of the sheet's pmm_frequency_hz {f_set:g} Hz")
+    if abs(y0 - y_set) > tolerance * y_set:
+        raise RunError(f"the PMM sway amplitude measured, {y0:.4g} m, is not within "
+                       f"{tolerance:.0%} of the sheet's pmm_amplitude_m {y_set:g} m")
     beta, delta = math.radians(setting.drift_deg), math.radians(setting.rudder_deg)
     yaw_rad = np.radians(yaw[sel]) if yaw is not None else np.zeros(ts.size)
     U = float(np.mean(speed[steady[0]:steady[1]]))
@@ -722,6 +731,7 @@ def body_forces(channels: Mapping[str, np.ndarray], drift: float
 def reduce_captive(
     raw_channels: Mapping[str, np.ndarray], fs: float, steady_window: tuple[int, int],
     row: Mapping[str, Any], model: Any, *, run: int = 0, file: str = "",
+    min_cycles: int = MIN_CYCLES, amplitude_tolerance: float = PMM_TOLERANCE,
 ) -> CaptiveRun:
     """One captive run reduced: the day pipeline's entry.
 
@@ -740,6 +750,9 @@ def reduce_captive(
         pmm_frequency_hz).
     model : object
         The protocol's Model (mass_kg, izz_kg_m2, xg_m, balance_x_m, iyy_kg_m2, length_m).
+    min_cycles, amplitude_tolerance : int, float
+        The protocol's ``[captive] min_cycles`` and ``amplitude_tolerance`` [-]
+        (:func:`pmm_run`).
 
     Raises
     ------
@@ -765,7 +778,7 @@ def reduce_captive(
     return pmm_run(t, U, fx, fy, mz, np.asarray(raw_channels["sway"], float),
                    None if yaw is None else np.asarray(yaw, float), (i0, i1), setting,
                    inertia, length_m=float(getattr(model, "length_m", math.nan)), run=run,
-                   file=file, notes=notes)
+                   file=file, notes=notes, min_cycles=min_cycles, tolerance=amplitude_tolerance)
 
 
 def condition_captive(

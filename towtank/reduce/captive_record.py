@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.protocol_types import Processing, Protocol
+from towtank.ingest.protocol_types import Captive, Processing, Protocol
 from towtank.ingest.runfile import RawRun
 from towtank.reduce.captive import CaptiveRun, condition_captive, reduce_captive
 
@@ -97,7 +97,10 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
     chans = captive_channels(raw, red, p, warnings)
     steady = _index_window(raw.time, red.windows.get("steady"))
     assert steady is not None
+    options = protocol.captive or Captive()
     cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
-                                    run=red.run, file=red.file)
+                                    run=red.run, file=red.file,
+                                    min_cycles=options.min_cycles,
+                                    amplitude_tolerance=options.amplitude_tolerance)
     return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *warnings, *cr.notes),
                    warnings=(*red.warnings, *warnings))
