@@ -44,13 +44,14 @@ def _index_window(t: np.ndarray, window: tuple[float, float] | None) -> tuple[in
     return (i0, i1) if i1 - i0 >= 1 else None
 
 
-def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[str]
-                     ) -> dict[str, np.ndarray]:
+def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[str],
+                     zero_var: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows the
     run's reduction ``red`` found (:func:`towtank.reduce.captive.condition_captive`): ``t``
     [s], ``U`` [m/s], ``fx``, ``fy`` [N], ``mz`` [N m] (or a drift run's ``drag``, ``lift``
     [N] in carriage axes), ``sway`` [m], ``yaw`` [deg]. A large drift's sentence is appended
-    to ``said``; a balance that had not settled raises RunError."""
+    to ``said``; a balance that had not settled raises RunError. ``zero_var`` receives the
+    variance of each balance channel's zero at the steady window."""
     t = raw.time
     extra = dict(raw.extra)
     loads = {k: extra[k] for k in CAPTIVE_LOADS if k in extra}
@@ -62,7 +63,7 @@ def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[s
                        "lift) and its yaw moment mz; the file has neither fy nor lift")
     if "mz" not in loads:
         raise RunError("a captive run needs the balance's yaw moment mz; the file has none")
-    positions = {k: extra[k] for k in ("sway", "yaw") if k in extra}
+    positions: dict[str, np.ndarray] = {k: extra[k] for k in ("sway", "yaw") if k in extra}
     pre = _index_window(t, red.windows.get("still_pre"))
     post = _index_window(t, red.windows.get("still_post")) if p.drift == "linear" else None
     steady = _index_window(t, red.windows.get("steady"))
@@ -71,7 +72,7 @@ def captive_channels(raw: RawRun, red: RunReduction, p: Processing, said: list[s
                        "the zero of its balance channels")
     return condition_captive(t, {"U": raw.speed, **loads, **positions}, raw.fs,
                              cutoff_hz=p.cutoff_hz, order=p.filter_order, still=(pre, post),
-                             steady=steady, said=said)
+                             steady=steady, said=said, zero_var=zero_var)
 
 
 def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
@@ -94,13 +95,15 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, red: RunReduction,
             f"the low-pass cut-off [processing] cutoff_hz = {p.cutoff_hz:g} Hz is less than "
             f"{PMM_CUTOFF_FACTOR:g} times the PMM frequency {freq:g} Hz, so it would cut the "
             "loads' harmonics; raise cutoff_hz")
-    chans = captive_channels(raw, red, p, warnings)
+    zero_var: dict[str, float] = {}
+    chans = captive_channels(raw, red, p, warnings, zero_var)
     steady = _index_window(raw.time, red.windows.get("steady"))
     assert steady is not None
     options = protocol.captive or Captive()
     cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
                                     run=red.run, file=red.file,
                                     min_cycles=options.min_cycles,
-                                    amplitude_tolerance=options.amplitude_tolerance)
+                                    amplitude_tolerance=options.amplitude_tolerance,
+                                    zero_var=zero_var)
     return replace(red, captive=cr.to_arrays(), notes=(*red.notes, *warnings, *cr.notes),
                    warnings=(*red.warnings, *warnings))
