@@ -7,8 +7,14 @@ regressors' harmonics are columns of the same design matrix as the linear ones a
 derivative is never read off a first harmonic that still holds v|v| or r|r|. The unit of
 information is a run's component, never a sample.
 
-Weights: 1/SE^2 where every row has a standard error, the covariance scaled by the reduced
-chi^2 when it exceeds 1 (model error widens an interval, never narrows it); rows without one (a
+Weights: 1/var of each row's load less its regressors times the derivatives, the variance
+from the row's covariance of load and regressors over the run's cycles or blocks and the
+zero's (the effective-variance method: the motion channels' noise is in the regressors), by a
+few passes of weighted least squares. Variances estimated from a few cycles make a right fit's
+chi^2 larger by Student's dof/(dof - 2) (:func:`variance_inflation`): the reduced chi^2 is
+given over that factor and the covariance scaled by it, and by the reduced chi^2 when that
+exceeds 1 (model error widens an interval, never narrows it; it is a warning when the chi^2
+test rejects the model at :data:`CHI2_P`). Rows without a standard error (a
 lab's table of means) are fitted on the prime scale (each row over 1/2 rho L^2 U^2, L^3 for
 moments) with the residual-based covariance. Intervals: Student's t on n - p degrees of
 freedom.
@@ -26,11 +32,13 @@ import pandas as pd
 from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
 from towtank.reduce.captive import (
     COMPONENTS,
+    COV_NAMES,
     CYCLE_COLUMNS,
     PERIOD_COLUMNS,
     PMM_TESTS,
     REGRESSORS,
     ROW_COLUMNS,
+    STATIC_BLOCKS,
     VERTICAL_REGRESSORS,
     CaptiveRun,
     arm_kinematics,
@@ -103,7 +111,12 @@ class CaptiveEstimate:
 
 @dataclass(frozen=True)
 class CaptiveFit:
-    """The captive derivatives of a day (:func:`fit_captive`)."""
+    """The captive derivatives of a day (:func:`fit_captive`).
+
+    ``notes``: what the report shows beside the derivatives (the PMM runs' agreement over
+    omega'); ``warnings``: what the day's warnings carry (runs that differ over omega',
+    derivatives the runs do not determine, a fit widened by its reduced chi^2).
+    """
 
     plane: str
     rho: float
@@ -112,6 +125,7 @@ class CaptiveFit:
     estimates: dict[str, CaptiveEstimate]
     runs: tuple[CaptiveRun, ...]
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
     by_run: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(
         columns=list(BY_RUN_COLUMNS)))
     chi2_reduced: dict[str, float] = field(default_factory=dict)
@@ -175,6 +189,32 @@ def mapped_rows(run: CaptiveRun, roll_deg: float = 90.0) -> pd.DataFrame:
     return out
 
 
+def mapped_cov(run: CaptiveRun, roll_deg: float = 90.0) -> np.ndarray:
+    """The run's component covariances (:attr:`CaptiveRun.cov`, of
+    :data:`towtank.reduce.captive.COV_NAMES`) in its plane's signs (:func:`mapped_rows`);
+    NaN where the run has none."""
+    n = len(COV_NAMES)
+    if run.cov is None:
+        return np.full((len(run.rows), n, n), np.nan)
+    if run.plane != "vertical":
+        return np.asarray(run.cov, dtype=float)
+    s = math.copysign(1.0, roll_deg)
+    signs = (_VERTICAL_SIGN[k] for k in REGRESSORS)
+    d = np.array([-s, s, *(1.0 if k is None else k * s for k in signs)])
+    return np.asarray(run.cov, dtype=float) * np.outer(d, d)
+
+
+def _effective_weights(cov: np.ndarray, eq: int, keep: list[int], coef: np.ndarray
+                       ) -> np.ndarray:
+    """1 / var(y_i - x_i b) of each row from its covariance ``cov`` (rows, 10, 10): the
+    equation's load (``eq`` 0 force, 1 moment) and the kept regressors with the
+    coefficients ``coef`` (the regressors' scatter enters with the derivatives' weights)."""
+    a = np.zeros(cov.shape[1])
+    a[eq] = 1.0
+    a[[2 + k for k in keep]] = -np.asarray(coef, dtype=float)
+    return 1.0 / np.einsum("i,nij,j->n", a, cov, a)
+
+
 def _design(runs: Sequence[CaptiveRun], plane: str, roll_deg: float
             ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """All rows of the runs (with run, test, speed), the run index of each row."""
@@ -219,6 +259,58 @@ def _and(names: Sequence[str]) -> str:
     return ", ".join(names)
 
 
+#: What a regressor needs of the runs to be excited (for the sentence of those that are not).
+_NEEDS = {"ur": "yaw-rate runs (rotating arm, PMM yaw)",
+          "r|r|": "yaw-rate runs (rotating arm, PMM yaw)", "vdot": "PMM runs",
+          "rdot": "PMM runs", "uudr": "rudder runs", "uv": "drift runs (static, PMM sway)",
+          "v|v|": "drift runs (static, PMM sway)", "uu": "runs"}
+
+
+def not_excited_sentence(runs: Sequence[CaptiveRun], terms: Sequence[tuple[str, str, str]]
+                         ) -> str:
+    """One sentence naming the derivatives (``terms``: force and moment letters, regressor
+    name) the runs do not determine and the runs that would."""
+    names = _and([f"{f}_{k}, {m}_{k}" for f, m, k in terms])
+    horizontal = dict(zip(VERTICAL_REGRESSORS, REGRESSORS, strict=True))
+    needs = dict.fromkeys(_NEEDS[horizontal.get(k, k)] for _, _, k in terms)
+    tests = ", ".join(sorted({TEST_NAMES[r.test] for r in runs}))
+    return (f"{names}: not determined (left out): no {' and no '.join(needs)} excite them "
+            f"(the captive runs: {tests})")
+
+
+#: Significance of the reduced chi^2 above which the fit is said to have model error.
+CHI2_P = 0.01
+
+
+def variance_inflation(dof: np.ndarray | float) -> np.ndarray:
+    """E[(e/s)^2] of a residual e over a standard error s estimated on ``dof`` degrees of
+    freedom (Student's t variance dof / (dof - 2), taken at 3 dof below 3): the factor by
+    which weights 1/s^2 from a few cycles or blocks inflate the chi^2 of a fit that is
+    right, and deflate its covariance."""
+    d = np.maximum(np.asarray(dof, dtype=float), 3.0)
+    return d / (d - 2.0)
+
+
+#: Passes of the effective-variance weights (each refits with the last pass's derivatives).
+EFFECTIVE_VARIANCE_PASSES = 4
+
+
+def _fit_weights(y: np.ndarray, X: np.ndarray, w: np.ndarray, cov: np.ndarray, eq: int,
+                 keep: list[int]) -> np.ndarray:
+    """The weights of the rows with the regressors' scatter in their variance: from the
+    loads' weights ``w``, :data:`EFFECTIVE_VARIANCE_PASSES` passes of weighted least squares
+    and :func:`_effective_weights` (the effective-variance method for errors in the
+    regressors)."""
+    for _ in range(EFFECTIVE_VARIANCE_PASSES):
+        sw = np.sqrt(w)
+        coef, *_ = np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)
+        w_new = _effective_weights(cov, eq, keep, coef)
+        if not np.all(np.isfinite(w_new) & (w_new > 0)):
+            return w
+        w = w_new
+    return w
+
+
 def fit_captive(
     runs: Sequence[CaptiveRun], *, rho: float, length_m: float, draught_m: float | None = None,
     plane: str = "horizontal", roll_deg: float = 90.0, alpha: float = 0.05,
@@ -241,56 +333,63 @@ def fit_captive(
     alpha : float
         Significance of the intervals.
     """
-    # loaded on use: statsmodels only for the fit
+    # loaded on use: statsmodels only for the fit, scipy.stats for its chi^2 test
     import statsmodels.api as sm
+    from scipy.stats import chi2 as chi2_dist
 
     runs = tuple(r for r in runs if r.plane == plane)
     (eq_f, eq_m), regs = plane_names(plane)
-    notes: list[str] = []
+    warnings: list[str] = []
     if not runs:
-        return CaptiveFit(plane, rho, length_m, draught_m, {}, (), (f"no {plane} captive runs",))
+        return CaptiveFit(plane, rho, length_m, draught_m, {}, (),
+                          warnings=(f"no {plane} captive runs",))
     rows, X, run_index = _design(runs, plane, roll_deg)
+    cov = np.concatenate([mapped_cov(r, roll_deg) for r in runs])
     excited = _excited(X)
     absent = [k for k in range(len(regs)) if not excited[k]]
     if absent:
-        notes.append(f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in absent])}: not "
-                     "excited by these runs (left out)")
+        warnings.append(not_excited_sentence(runs, [(eq_f, eq_m, regs[k]) for k in absent]))
     keep, dropped = _independent(X, [k for k in range(len(regs)) if excited[k]])
     if dropped:
-        notes.append(
+        warnings.append(
             f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in dropped])}: not separable "
             "from the other terms by these runs (e.g. too few drift angles), left out")
     estimates: dict[str, CaptiveEstimate] = {}
     chi2: dict[str, float] = {}
     params: dict[str, np.ndarray] = {}
-    cov: dict[str, pd.DataFrame] = {}
+    param_cov: dict[str, pd.DataFrame] = {}
     Xk = X[:, keep]
     n, p = Xk.shape
     if n <= p:
-        notes.append(f"{n} run components for {p} derivatives: no interval can be given")
+        warnings.append(f"{n} run components for {p} derivatives: no interval can be given")
     tests = [runs[i].test for i in run_index]
+    row_dof = np.array([runs[i].cycles_used - 1 if runs[i].test in PMM_TESTS
+                        else STATIC_BLOCKS - 1 for i in run_index], dtype=float)
     for eq, moment in ((eq_f, False), (eq_m, True)):
         y = rows[eq].to_numpy(dtype=float)
         se = rows[f"{eq}_se"].to_numpy(dtype=float)
         with_se = bool(np.all(np.isfinite(se) & (se > 0)))
         if with_se:
             w = 1.0 / se**2
+            if np.all(np.isfinite(cov)):
+                w = _fit_weights(y, Xk, w, cov, int(moment), keep)
         else:
             U = rows["speed"].to_numpy(dtype=float)
             w = 1.0 / (0.5 * rho * length_m ** (3 if moment else 2) * U**2) ** 2
         res = sm.WLS(y, Xk, weights=w).fit()
         dof = float(n - p)
-        red = float(np.sum(w * res.resid**2) / dof) if dof > 0 else math.nan
+        infl = float(np.mean(variance_inflation(row_dof))) if with_se else 1.0
+        red = float(np.sum(w * res.resid**2) / dof) / infl if dof > 0 else math.nan
         chi2[eq] = red
         if with_se:
             res = sm.WLS(y, Xk, weights=w).fit(cov_type="fixed scale",
-                                                cov_kwds={"scale": max(1.0, red)})
+                                                cov_kwds={"scale": infl * max(1.0, red)})
         coef = np.asarray(res.params)
         bse = np.asarray(res.bse) if dof > 0 else np.full(p, math.nan)
         params[eq] = coef
         names = [f"{eq}_{regs[k]}" for k in keep]
-        cov[eq] = pd.DataFrame(np.asarray(res.cov_params()) if dof > 0 else
-                               np.full((p, p), math.nan), index=names, columns=names)
+        param_cov[eq] = pd.DataFrame(np.asarray(res.cov_params()) if dof > 0 else
+                                     np.full((p, p), math.nan), index=names, columns=names)
         tq = t_quantile(dof, alpha)
         for j, k in enumerate(keep):
             sym = f"{eq}_{regs[k]}"
@@ -307,25 +406,26 @@ def fit_captive(
                 ci_high=value + tq * s, unit=UNITS[REGRESSORS[k]][int(moment)],
                 prime=value / scale, prime_lt=value / scale_lt, scale=scale, scale_lt=scale_lt,
                 method=" + ".join(methods), n_runs=len({int(run_index[i]) for i in carrying}))
-        if with_se and red > 1.0:
-            notes.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
-                         "intervals widened by its square root (model error beyond the "
-                         "runs' scatter)")
-    by_run, agreement = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
-                                            length_m, chi2)
-    notes += agreement
+        if with_se and dof > 0 and chi2_dist.sf(red * dof, dof) < CHI2_P:
+            warnings.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
+                            "intervals widened by its square root (model error beyond the "
+                            "runs' scatter)")
+    by_run, agree, differ = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
+                                                length_m, chi2)
+    warnings += differ
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
     return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
-                      estimates=estimates, runs=runs, notes=tuple(notes), by_run=by_run,
-                      chi2_reduced=chi2, cov=cov)
+                      estimates=estimates, runs=runs, notes=tuple(agree),
+                      warnings=tuple(warnings), by_run=by_run,
+                      chi2_reduced=chi2, cov=param_cov)
 
 
 def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
     chi2_reduced: dict[str, float] | None = None,
-) -> tuple[pd.DataFrame, list[str]]:
+) -> tuple[pd.DataFrame, list[str], list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
@@ -366,7 +466,8 @@ def frequency_agreement(
                     "value": (float(rows.at[best, eq]) - others) / xk,
                     "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
     by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
-    notes = []
+    agree: list[str] = []
+    differ: list[str] = []
     for sym, g in by_run.groupby("symbol", sort=False):
         g = g[np.isfinite(g["std_error"]) & (g["std_error"] > 0)]
         if len(g) < 2:
@@ -383,11 +484,11 @@ def frequency_agreement(
                 f"{g['amplitude_m'].max():.2f} m")
         test = f"chi^2 = {stat:.3g} on {dof} dof, p = {pval:.2g}"
         if pval >= AGREEMENT_P:
-            notes.append(f"{head}: agree ({test})")
+            agree.append(f"{head}: agree ({test})")
         else:
-            notes.append(f"{head}: differ ({test}): the derivative depends on frequency or "
+            differ.append(f"{head}: differ ({test}): the derivative depends on frequency or "
                          "amplitude; the joint value is an average over the runs")
-    return by_run, notes
+    return by_run, agree, differ
 
 
 def captive_runs_from_means(

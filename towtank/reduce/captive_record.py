@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from towtank.errors import RunError
-from towtank.ingest.protocol_types import Processing, Protocol
+from towtank.ingest.protocol_types import Captive, Processing, Protocol
 from towtank.ingest.runfile import RawRun
 from towtank.reduce.captive import CaptiveRun, condition_captive, reduce_captive
 
@@ -43,14 +43,15 @@ def _index_window(t: np.ndarray, window: tuple[float, float] | None) -> tuple[in
 Windows = dict[str, tuple[float, float] | None]
 
 
-def captive_channels(raw: RawRun, windows: Windows, p: Processing, said: list[str]
-                     ) -> dict[str, np.ndarray]:
+def captive_channels(raw: RawRun, windows: Windows, p: Processing, said: list[str],
+                     zero_var: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """The captive channels of ``raw`` filtered and (the loads) zeroed with the windows [s]
     the run's reduction found (``RunReduction.windows``;
     :func:`towtank.reduce.captive.condition_captive`): ``t`` [s], ``U`` [m/s], ``fx``, ``fy``
     [N], ``mz`` [N m] (or a drift run's ``drag``, ``lift`` [N] in carriage axes), ``sway``
     [m], ``yaw`` [deg]. A large drift's sentence is appended to ``said``; a balance that had
-    not settled raises RunError."""
+    not settled raises RunError. ``zero_var`` receives the variance of each balance channel's
+    zero at the steady window."""
     t = raw.time
     extra = dict(raw.extra)
     loads = {k: extra[k] for k in CAPTIVE_LOADS if k in extra}
@@ -71,7 +72,7 @@ def captive_channels(raw: RawRun, windows: Windows, p: Processing, said: list[st
                        "the zero of its balance channels")
     return condition_captive(t, {"U": raw.speed, **loads, **positions}, raw.fs,
                              cutoff_hz=p.cutoff_hz, order=p.filter_order, still=(pre, post),
-                             steady=steady, said=said)
+                             steady=steady, said=said, zero_var=zero_var)
 
 
 def reduce_captive_record(protocol: Protocol, raw: RawRun, windows: Windows, row: dict[str, Any],
@@ -96,9 +97,14 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, windows: Windows, row
             f"the low-pass cut-off [processing] cutoff_hz = {p.cutoff_hz:g} Hz is less than "
             f"{PMM_CUTOFF_FACTOR:g} times the PMM frequency {freq:g} Hz, so it would cut the "
             "loads' harmonics; raise cutoff_hz")
-    chans = captive_channels(raw, windows, p, warnings)
+    zero_var: dict[str, float] = {}
+    chans = captive_channels(raw, windows, p, warnings, zero_var)
     steady = _index_window(raw.time, windows.get("steady"))
     assert steady is not None
+    options = protocol.captive or Captive()
     cr: CaptiveRun = reduce_captive(chans, raw.fs, steady, row, model,
-                                    run=run, file=file)
+                                    run=run, file=file,
+                                    min_cycles=options.min_cycles,
+                                    amplitude_tolerance=options.amplitude_tolerance,
+                                    zero_var=zero_var)
     return cr.to_arrays(), (*warnings, *cr.notes), tuple(warnings)

@@ -386,13 +386,15 @@ def reduce_simulated(frame: pd.DataFrame, spec: CaptiveRunSpec, truth: CaptiveTr
     ph = find_phases(t, speed_f, conditioning.derivative(speed_f, fs), fs, p,
                      steady_required=True)
     assert ph.steady is not None and ph.still_pre is not None
+    zero_var: dict[str, float] = {}
     cond = condition_captive(t, channels, fs, cutoff_hz=p.cutoff_hz, order=p.filter_order,
-                             still=(ph.still_pre, ph.still_post))
+                             still=(ph.still_pre, ph.still_post), steady=ph.steady,
+                             zero_var=zero_var)
     model = SimpleNamespace(mass_kg=truth.mass_kg, izz_kg_m2=truth.izz_kg_m2,
                             iyy_kg_m2=truth.iyy_kg_m2, xg_m=truth.xg_m,
                             balance_x_m=truth.balance_x_m, length_m=truth.length_m)
     return reduce_captive(cond, fs, ph.steady, {**spec.sheet_row(), "plane": truth.plane},
-                          model, run=spec.run, file=f"run_{spec.run:03d}")
+                          model, run=spec.run, file=f"run_{spec.run:03d}", zero_var=zero_var)
 
 
 def simulated_runs(truth: CaptiveTruth | None = None, *, seed: int = 0,
