@@ -46,8 +46,11 @@ def parse_list(text: str, option: str) -> list[float]:
         if not step or not all(math.isfinite(v) for v in (start, stop, step)):
             raise ProtocolError(how)
         if (stop - start) / step < 0:
+            hint = (f"; towtank reads start:stop:step, so steps of {stop:g} from {start:g} "
+                    f"to {step:g} are {start:g}:{step:g}:{stop:g}"
+                    if (step - start) * stop > 0 else "")
             raise ProtocolError(f"{option} {text!r}: the step {step:g} does not lead from "
-                                f"{start:g} to {stop:g}.")
+                                f"{start:g} to {stop:g}{hint}.")
         n = int(math.floor((stop - start) / step + 1e-9)) + 1
         if n > MAX_COMBINATIONS:
             raise ProtocolError(f"{option} {text!r} has {n} values, more than the "
