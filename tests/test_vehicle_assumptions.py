@@ -8,12 +8,17 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
+from towtank.commands.cli import main
 from towtank.commands.steady import parse_list
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import load_protocol
 from towtank.vehicle import glider_controls as gc
+from towtank.vehicle.assumptions import SOURCES, check_assumptions, guessed
+from towtank.vehicle.model import read_model, write_model
+from towtank.vehicle.schema import ModelError
 from towtank.vehicle.simulate import Dynamics
 from towtank.vehicle.spiral import body_rates, solve_state, steady_table
 from towtank.vehicle.stage import predict_vehicle
@@ -95,3 +100,77 @@ def test_a_range_written_start_step_stop_says_how_to_write_it():
     assert "-200:-450:-50" in str(err.value)
     assert parse_list("-200:-450:-50", "--ballast-cc") == [-200.0, -250.0, -300.0, -350.0,
                                                          -400.0, -450.0]
+
+
+# ---- item 5: assumptions in every vehicle output
+
+
+def test_the_shipped_protocols_list_every_input_and_its_source():
+    """REMUS (Prestero's inertia given), Series 58 (design tool: fins, CG guessed, inertia a
+    default) and the glider (the paper's Table 6 wings, its CG, tail and roll mass guessed)."""
+    expect = {"remus_vehicle.toml": set(),
+              "series58_vehicle.toml": {"cg_m", "fins", "inertia_kg_m2"},
+              "glider_parametric.toml": {"cg_m", "fins", "inertia_kg_m2", "buoyancy_N",
+                                         "glider.wing_area_m2", "glider.roll_mass_kg"}}
+    for name, guesses in expect.items():
+        model = _predicted(name).model
+        rows = model["assumptions"]
+        assert {r["source"] for r in rows} <= set(SOURCES)
+        assert {"mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m", "inertia_kg_m2", "hull",
+                "fins"} <= {r["input"] for r in rows}
+        named = {r["input"] for r in guessed(rows)}
+        assert guesses <= named and (guesses or not named), (name, named)
+        assert check_assumptions(rows, name) == []
+    glider = {r["input"]: r for r in _predicted("glider_parametric.toml").model["assumptions"]}
+    assert "Table 6" in glider["glider.wing_area_m2"]["note"]
+
+
+def test_a_neutral_glider_whose_hull_displaces_more_is_one_warning():
+    glider = _predicted("glider_parametric.toml")
+    assert len(glider.warnings) == 1
+    assert "27.5" in glider.warnings[0] and "20.5 kg" in glider.warnings[0]
+    assert _predicted("series58_vehicle.toml").warnings == ()  # 149.4 kg against 150 kg
+    assert _predicted("remus_vehicle.toml").warnings == ()  # 7 N buoyant: not declared neutral
+
+
+def test_model_json_assumptions_are_checked_and_old_files_still_read(tmp_path):
+    model = _predicted("series58_vehicle.toml").model
+    write_model(model, tmp_path / "model.json")
+    assert read_model(tmp_path / "model.json")["assumptions"] == model["assumptions"]
+    old = {k: v for k, v in model.items() if k != "assumptions"}
+    write_model(old, tmp_path / "old.json")
+    assert "assumptions" not in read_model(tmp_path / "old.json")
+    bad = dict(model, assumptions=[{"input": "cg_m", "value": 0, "source": "guess",
+                                    "note": ""}])
+    write_model(bad, tmp_path / "bad.json")
+    with pytest.raises(ModelError, match="'assumptions' entry 1"):
+        read_model(tmp_path / "bad.json")
+
+
+def test_predict_simulate_steady_print_the_guessed_inputs_and_the_turn_speed_loss(
+        tmp_path, capsys):
+    assert main(["predict", str(PROTOCOLS / "series58_vehicle.toml"), "--out",
+                 str(tmp_path / "s58")]) == 0
+    assert "assumed, not measured (model.json 'assumptions'): cg_m, inertia_kg_m2, fins" \
+        in capsys.readouterr().out
+    assert main(["simulate", str(tmp_path / "s58" / "model.json"), "--manoeuvre", "turning",
+                 "--rudder-deg", "10", "--out", str(tmp_path / "turn")]) == 0
+    assert "assumed, not measured" in capsys.readouterr().out
+    metrics = pd.read_csv(tmp_path / "turn" / "metrics.csv").fillna("")
+    names = list(metrics["metric"])
+    assert names.index("speed_loss_percent") == names.index("steady_turn_radius_m") + 1
+    rows = metrics.set_index("metric")
+    start = 1.25
+    loss = rows.loc["speed_loss_percent", "value"]
+    assert loss == pytest.approx(100 * (1 - rows.loc["steady_speed_m_s", "value"] / start),
+                                 rel=1e-4)
+    assert 20 < loss < 80  # constant thrust: the turn's drag slows it
+    assert "model.json 'assumptions'" in rows.loc["steady_turn_radius_m", "note"]
+    assert main(["predict", str(PROTOCOLS / "glider_parametric.toml"), "--out",
+                 str(tmp_path / "g")]) == 0
+    assert "declared neutrally buoyant" in capsys.readouterr().err
+    assert main(["steady", str(tmp_path / "g" / "model.json"), "--ballast-cc", "-300",
+                 "--pitch-deg", "-20", "--out", str(tmp_path / "st")]) == 0
+    assert "glider.wing_area_m2" in capsys.readouterr().out
+    note = pd.read_csv(tmp_path / "st" / "steady.csv")["note"][0]
+    assert "glider.wing_area_m2" in note
