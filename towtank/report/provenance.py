@@ -47,6 +47,9 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
                  **(extra or {})}
     if day.captive_results:
         extra = {"captive": captive_provenance(day), **(extra or {})}
+    vehicle = getattr(day, "vehicle", None)
+    if vehicle is not None and "assumptions" in vehicle.model:  # model.json's, the same list
+        extra = {"assumptions": vehicle.model["assumptions"], **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
