@@ -10,6 +10,7 @@ verdicts that name their test and loads.
 from __future__ import annotations
 
 import io
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,7 @@ import pandas as pd
 import pytest
 
 from towtank.commands.inspect import inspect_run
+from towtank.ingest.describe import describe_file, protocol_block
 from towtank.ingest.protocol import load_protocol
 from towtank.reduce.captive import CaptiveRun, cycle_verdicts, pmm_cycles
 from towtank.reduce.run import reduce_record
@@ -127,3 +129,32 @@ def test_cycle_verdicts_keep_exactly_the_days_cycles():
     assert any(v.reason == "outside the steady window" for v in verdicts)
     assert all(v.reason for v in verdicts if not v.kept)
     assert [v.start for v in verdicts] == sorted(v.start for v in verdicts)
+
+
+def _block(tmp_path: Path, header: str) -> str:
+    path = tmp_path / "lab.csv"
+    n = len(header.split(","))
+    path.write_text(header + "\n" + "".join(",".join(["0.0"] * n) + "\n" for _ in range(20)))
+    return protocol_block(describe_file(path))
+
+
+def test_a_captive_balances_columns_are_proposed_as_fx_fy_mz_sway_yaw(tmp_path):
+    block = _block(tmp_path, "Time (s),Carriage speed (m/s),Fx (N),Fy (N),Mz (N m),PMM y,"
+                             "Yaw angle (deg)")
+    channels = tomllib.loads(block)["channels"]
+    assert channels == {"time": {"column": "Time (s)"},
+                        "speed": {"column": "Carriage speed (m/s)"},
+                        "fx": {"column": "Fx (N)"}, "fy": {"column": "Fy (N)"},
+                        "mz": {"column": "Mz (N m)"}, "sway": {"column": "PMM y"},
+                        "yaw": {"column": "Yaw angle (deg)"}}
+    assert "drag" not in channels and "lift" not in channels
+
+
+@pytest.mark.parametrize("header", ["Time (s),Speed (m/s),Fx (N)",
+                                    "Time (s),Speed (m/s),Fx (N),Fy (N)"])
+def test_a_hull_balances_fx_is_still_the_drag(tmp_path, header):
+    channels = tomllib.loads(_block(tmp_path, header))["channels"]
+    assert channels["drag"] == {"column": "Fx (N)"}
+    assert "fx" not in channels and "mz" not in channels
+    if "Fy" in header:
+        assert channels["lift"] == {"column": "Fy (N)"}
