@@ -10,6 +10,7 @@ verdicts that name their test and loads.
 from __future__ import annotations
 
 import io
+import time
 import tomllib
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from towtank.ingest.describe import describe_file, protocol_block
 from towtank.ingest.protocol import load_protocol
 from towtank.reduce.captive import CaptiveRun, cycle_verdicts, pmm_cycles
 from towtank.reduce.run import reduce_record
+from towtank.testing.bench_watch import watch_session
 from towtank.testing.captive import CaptiveRunSpec, make_captive_day
 
 PLAN = [
@@ -158,3 +160,38 @@ def test_a_hull_balances_fx_is_still_the_drag(tmp_path, header):
     assert "fx" not in channels and "mz" not in channels
     if "Fy" in header:
         assert channels["lift"] == {"column": "Fy (N)"}
+
+
+def test_watch_gives_captive_runs_their_loads_and_the_days_verdicts(tmp_path):
+    make_captive_day(tmp_path, plan=PLAN[:3], seed=3)
+    protocol = tmp_path / "protocol.toml"
+    protocol.write_text(protocol.read_text() + "\n[watch]\nsettle_s = 1.0\n"
+                        "pdf_interval_s = 3600.0\n")
+    s, lines = watch_session(protocol, live_figures=True)
+    try:
+        s.clock = lambda: time.time() + 10.0
+        s.step()
+        s.clock = lambda: time.time() + 20.0
+        s.step()
+        state = s.state()
+        by_run = {v["run"]: v for v in state["verdicts"]}
+        assert set(by_run) == {1, 2, 3}
+        ok = by_run[1]
+        assert ok["status"] == "ok" and ok["drag_N"] is None
+        assert ok["line"].startswith("run 1  drift  β 8.0°  U 1.50 m/s  X ")
+        assert " Y " in ok["line"] and " N m" in ok["line"] and "drag" not in ok["line"]
+        runs = pd.read_csv(tmp_path / "out" / "runs.csv").set_index("run")
+        assert ok["captive"]["Y_N"] == pytest.approx(runs.loc[1, "captive_Y_N"], rel=1e-6)
+        assert by_run[2]["captive"]["cycles_used"] == 5 and "5 cycles" in by_run[2]["line"]
+        assert "PMM 0.10 m 0.35 Hz" in by_run[2]["line"]
+        bad = by_run[3]
+        assert bad["status"] == "rejected" and "2 whole steady PMM cycles" in bad["reason"]
+        assert bad["captive"] == {"X_N": None, "Y_N": None, "N_Nm": None, "cycles_used": None}
+        assert sum(line.startswith("run ") for line in lines) == 3
+        assert state["figures"].get("latest_run")
+        s._start_fits()
+        assert s._collect_fits(wait=True)
+        assert s.state()["figures"].get("captive") == "captive.png"
+        assert (s.live_dir / "captive.png").read_bytes()[:4] == b"\x89PNG"
+    finally:
+        s.finish()
