@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from towtank.ingest.arrayfiles import FS_NAME_KEY
+from towtank.ingest.protocol_types import CAPTIVE_CHANNELS
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
@@ -31,7 +32,6 @@ from towtank.ingest.readers import (
     unit_factor,
 )
 from towtank.ingest.runfile import captive_guess, file_bytes, read_columns
-from towtank.ingest.schema import CAPTIVE_CHANNELS
 from towtank.ingest.segments import describe_segments, find_segments
 from towtank.ingest.timing import stated_rate
 
