@@ -583,18 +583,27 @@ class Cycles:
         return self.starts.size / (self.t_end - self.starts[0])
 
 
-def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
-               min_cycles: int = MIN_CYCLES,
-               tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> Cycles:
-    """The whole steady PMM cycles of the sway ``y`` [m] (FORMATS section 8; shared rules).
+@dataclass(frozen=True)
+class SteadyCycles:
+    """Every cycle of the sway between upward zero crossings inside the steady window, and
+    which of them :func:`pmm_cycles` keeps: ``crossings`` [s] (cycle k spans crossings k and
+    k + 1), ``amplitudes`` [m] (half the peak-to-peak of each), the reference amplitude
+    ``reference`` [m] (the median of the full-amplitude cycles), ``in_tolerance`` (within
+    the tolerance of it) and ``kept`` (the cycles' indices: the longest unbroken sequence of
+    those in tolerance)."""
 
-    t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
-    crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
-    (half the peak-to-peak) is within ``tolerance`` [-] of the median of the full-amplitude
-    cycles (those within 10 % of the largest), the longest unbroken sequence. RunError when
-    fewer than ``min_cycles`` remain (the protocol's ``[captive] min_cycles`` and
-    ``amplitude_tolerance``).
-    """
+    crossings: np.ndarray
+    amplitudes: np.ndarray
+    reference: float
+    in_tolerance: np.ndarray
+    kept: np.ndarray
+
+
+def steady_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+                  tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> SteadyCycles:
+    """The cycles of the sway ``y`` [m] at times ``t`` [s] within the steady window [i0, i1)
+    and the choice of the kept ones, within ``tolerance`` [-] of the reference amplitude
+    (FORMATS section 8; see :func:`pmm_cycles`)."""
     i0, i1 = steady
     ys = y[i0:i1] - float(np.mean(y[i0:i1]))
     ts = t[i0:i1]
@@ -604,6 +613,7 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
         0.5 * float(np.ptp(ys[(ts >= a) & (ts < b)])) for a, b in zip(cross[:-1], cross[1:],
                                                                       strict=True)])
     keep = np.zeros(amps.size, dtype=bool)
+    ref = math.nan
     if amps.size:
         # the median of the full-amplitude cycles: the median cycle's when most cycles are
         # steady, and still the steady cycles' when ramp cycles outnumber them
@@ -614,12 +624,76 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
         breaks = np.flatnonzero(np.diff(idx) > 1)
         groups = np.split(idx, breaks + 1)
         idx = max(groups, key=len)
+    return SteadyCycles(crossings=cross, amplitudes=amps, reference=ref, in_tolerance=keep,
+                        kept=idx)
+
+
+def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+               min_cycles: int = MIN_CYCLES,
+               tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> Cycles:
+    """The whole steady PMM cycles of the sway ``y`` [m] (FORMATS section 8; shared rules).
+
+    t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
+    crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
+    (half the peak-to-peak) is within ``tolerance`` [-] of the median of the full-amplitude
+    cycles (those within 10 % of the largest), the longest unbroken sequence
+    (:func:`steady_cycles`). RunError when fewer than ``min_cycles`` remain (the protocol's
+    ``[captive] min_cycles`` and ``amplitude_tolerance``).
+    """
+    sc = steady_cycles(t, y, steady, tolerance=tolerance)
+    idx, cross, amps = sc.kept, sc.crossings, sc.amplitudes
     if idx.size < min_cycles:
         raise RunError(
             f"the run has {idx.size} whole steady PMM cycle{'' if idx.size == 1 else 's'}; at "
             f"least {min_cycles} are needed (ramp-in and ramp-out cycles are dropped)")
     return Cycles(starts=cross[idx], t_end=float(cross[idx[-1] + 1]), amplitudes=amps[idx],
                   dropped=int(amps.size - idx.size))
+
+
+@dataclass(frozen=True)
+class CycleVerdict:
+    """One cycle of a PMM run's sway as :func:`pmm_cycles` judges it: its span [s], its
+    amplitude [m] (half the peak-to-peak), whether it is kept and, if not, why."""
+
+    start: float
+    end: float
+    amplitude: float
+    kept: bool
+    reason: str = ""
+
+
+def cycle_verdicts(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+                   tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> list[CycleVerdict]:
+    """Every cycle of the sway ``y`` [m] over the whole record, in time order, each kept or
+    dropped with its reason (``towtank inspect``): the cycles inside the steady window
+    [i0, i1) exactly as :func:`pmm_cycles` chooses them (:func:`steady_cycles`), and the
+    cycles that reach outside it (the same zero line and hysteresis over the whole record),
+    which are never kept."""
+    i0, i1 = steady
+    sc = steady_cycles(t, y, steady, tolerance=tolerance)
+    mean = float(np.mean(y[i0:i1]))
+    span = float(np.ptp(y[i0:i1])) if i1 > i0 else 0.0
+    lo, hi = float(t[i0]), float(t[i1 - 1])
+    out = []
+    whole = upward_crossings(t, y - mean, 0.1 * span / 2.0)
+    for a, b in zip(whole[:-1], whole[1:], strict=True):
+        if a < lo or b > hi:
+            part = (t >= a) & (t < b)
+            out.append(CycleVerdict(float(a), float(b), 0.5 * float(np.ptp(y[part])), False,
+                                    "outside the steady window"))
+    kept = set(sc.kept.tolist())
+    for k, amp in enumerate(sc.amplitudes):
+        a, b = float(sc.crossings[k]), float(sc.crossings[k + 1])
+        if k in kept:
+            reason = ""
+        elif not sc.in_tolerance[k]:
+            reason = (f"amplitude {amp:.4g} m is {100 * (amp / sc.reference - 1):+.1f} % from "
+                      f"the steady cycles' {sc.reference:.4g} m (more than "
+                      f"{100 * tolerance:g} %: ramp-in or ramp-out)")
+        else:
+            reason = "not in the longest unbroken sequence of steady cycles"
+        out.append(CycleVerdict(a, b, float(amp), k in kept, reason))
+    return sorted(out, key=lambda c: c.start)
 
 
 def first_harmonic(t: np.ndarray, x: np.ndarray, omega: float) -> tuple[float, float, float]:

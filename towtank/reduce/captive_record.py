@@ -21,9 +21,16 @@ import numpy as np
 from towtank.errors import RunError
 from towtank.ingest.protocol_types import Captive, Processing, Protocol
 from towtank.ingest.runfile import RawRun
-from towtank.reduce.captive import CaptiveRun, condition_captive, reduce_captive
+from towtank.reduce.captive import (
+    PMM_TESTS,
+    CaptiveRun,
+    CycleVerdict,
+    condition_captive,
+    cycle_verdicts,
+    reduce_captive,
+)
 
-__all__ = ["CAPTIVE_LOADS", "captive_channels", "reduce_captive_record"]
+__all__ = ["CAPTIVE_LOADS", "captive_channels", "pmm_cycle_verdicts", "reduce_captive_record"]
 
 #: The balance's load channels of a captive run, and the drag/lift pair a drift run may have.
 CAPTIVE_LOADS = ("fx", "fy", "mz")
@@ -108,3 +115,19 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, windows: Windows, row
                                     amplitude_tolerance=options.amplitude_tolerance,
                                     zero_var=zero_var)
     return cr.to_arrays(), (*warnings, *cr.notes), tuple(warnings)
+
+
+def pmm_cycle_verdicts(protocol: Protocol, raw: RawRun, windows: Windows, row: dict[str, Any]
+                       ) -> list[CycleVerdict]:
+    """Every cycle of a PMM run's recorded sway, kept or dropped with its reason, as
+    :func:`reduce_captive_record` chooses them (:func:`towtank.reduce.captive.cycle_verdicts`
+    on the same filtered channel and steady window); empty for a static run, a run without
+    sway or steady window. Raises RunError as :func:`captive_channels` does."""
+    test = str(row.get("test", "")).strip().lower()
+    steady = _index_window(raw.time, windows.get("steady"))
+    if test not in PMM_TESTS or "sway" not in raw.extra or steady is None:
+        return []
+    chans = captive_channels(raw, windows, protocol.processing, [])
+    options = protocol.captive or Captive()
+    return cycle_verdicts(chans["t"], chans["sway"], steady,
+                          tolerance=options.amplitude_tolerance)
