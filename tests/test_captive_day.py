@@ -30,9 +30,6 @@ from towtank.testing.captive import (
 #: the arm runs, 3 %).
 TOL, TOL_WEAK = 0.01, 0.03
 WEAK = ("Y_r|r|", "Z_q|q|")
-#: Derivatives the generated yaw runs give with a deterministic bias beyond their interval
-#: (tests/test_captive_physics.py BIASED).
-BIASED = ("N_rdot", "M_qdot")
 #: The run whose PMM holds two steady cycles, and the one whose sheet frequency is 10 % off.
 FEW_CYCLES, FREQUENCY_OFF = 15, 16
 KVLCC2 = Path("/work/shared/real/kvlcc2_hmri_captive/captive.csv")
@@ -73,8 +70,7 @@ def assert_derivatives(fit, truth: dict, symbols) -> None:
     for s in symbols:
         e, true = fit.estimates[s], truth["derivatives"][s]
         assert e.value == pytest.approx(true, rel=TOL_WEAK if s in WEAK else TOL), s
-        if s not in BIASED:
-            assert e.ci_low <= true <= e.ci_high, s
+        assert e.ci_low <= true <= e.ci_high, s
 
 
 @pytest.fixture(scope="module")

@@ -17,6 +17,7 @@ from scipy.stats import binomtest
 from towtank.analysis.captive import fit_captive
 from towtank.errors import RunError
 from towtank.reduce.captive import (
+    REGRESSORS,
     CaptiveRun,
     RunSetting,
     body_kinematics,
@@ -31,16 +32,13 @@ from towtank.testing.captive import (
     CaptiveTruth,
     captive_day_plan,
     make_captive_day,
+    pmm_motion,
     reduce_simulated,
     simulate_captive_run,
     simulated_runs,
 )
 
 RHO, L = 998.6, 1.33
-#: Derivatives the generated days give with a bias beyond their intervals (N_rdot 0.16 % low
-#: with quiet instruments too, the same at every omega' and amplitude: the generator's yaw
-#: motion and the reduction disagree by a deterministic part not yet found).
-BIASED = ("N_rdot",)
 
 
 @cache
@@ -156,6 +154,49 @@ def test_harmonics_of_a_pure_sway_run_match_the_truth():
     assert len(run.period) == 72 and run.period["v"].abs().max() == pytest.approx(v0, rel=1e-2)
 
 
+def _quiet_yaw_runs():
+    from towtank.testing.instruments import Noise
+
+    plan = [CaptiveRunSpec(run=1, test="yaw", amplitude_m=0.1, frequency_hz=0.2),
+            CaptiveRunSpec(run=2, test="yaw", amplitude_m=0.2, frequency_hz=0.35)]
+    return CaptiveTruth(), simulated_runs(CaptiveTruth(), plan=plan, noise=Noise.quiet())
+
+
+def test_quiet_pure_yaw_loads_are_the_truth_of_the_reduced_regressors():
+    """Noise-free pure yaw (psi0 = 0.03 and 0.29 rad): each component of the reduced N and Y
+    equals the truth's derivatives times the same components of the reduced regressors, to
+    1e-4 of the run's largest component (the step of r' where the ramp ends stays outside
+    the kept cycles: before, N's cos part was 0.19 % high and its mean 15 % off)."""
+    truth, runs = _quiet_yaw_runs()
+    for run in runs:
+        rows = run.rows.set_index("component")
+        for q in ("Y", "N"):
+            pred = sum(truth.derivatives.get(f"{q}_{k}", 0.0) * rows[k] for k in REGRESSORS)
+            scale = rows[q].abs().max()
+            assert np.allclose(rows[q], pred, rtol=0.0, atol=1e-4 * scale), (run.run, q)
+
+
+def test_quiet_pure_yaw_cycles_are_alike():
+    """Noise-free pure yaw: the first and last kept cycles (next to the ramps) give the same
+    harmonics of N as the middle ones, to 1e-4 (before, 0.5 % apart)."""
+    _, runs = _quiet_yaw_runs()
+    for run in runs:
+        for col in ("N_in", "N_quad", "Y_in", "Y_quad"):
+            x = run.cycles[col].to_numpy()
+            assert np.ptp(x) <= 1e-4 * np.max(np.abs(x)), (run.run, col, x)
+
+
+def test_generated_yaw_rate_derivative_is_exact():
+    """The generator's psi'' is the time derivative of its psi' at every sample, the ends of
+    the ramps (where psi'' steps) included."""
+    spec = CaptiveRunSpec(run=1, test="yaw", amplitude_m=0.2, frequency_hz=0.35)
+    t, h, t0 = np.arange(0.0, 30.0, 0.01), 1e-6, 2.003  # no sample within h of a ramp's end
+    mo = pmm_motion(t, spec, t0, 1.5)
+    ahead, behind = pmm_motion(t + h, spec, t0, 1.5), pmm_motion(t - h, spec, t0, 1.5)
+    diff = (ahead["psi1"] - behind["psi1"]) / (2 * h)
+    assert np.allclose(mo["psi2"], diff, rtol=0.0, atol=1e-6)
+
+
 def test_bad_settings_are_one_sentence():
     for row, match in [({"test": "drift", "drift_deg": 95}, "beyond"),
                        ({"test": "arm", "radius_m": 0}, "radius"),
@@ -169,15 +210,13 @@ def test_bad_settings_are_one_sentence():
 
 def test_joint_fit_recovers_remus():
     """Every one of the 14 derivatives within 1 % of Prestero's REMUS values (Y_r|r|, weakly
-    excited, within 2 %) and inside its 95 % interval (N_rdot: see
-    test_n_rdot_of_generated_yaw_runs_inside_its_interval)."""
+    excited, within 2 %) and inside its 95 % interval."""
     truth, _, fit = day_fit()
     for s in HORIZONTAL_SYMBOLS:
         e, true = fit.estimates[s], truth.derivatives[s]
         tol = 0.02 if s == "Y_r|r|" else 0.01
         assert e.value == pytest.approx(true, rel=tol), s
-        if s not in BIASED:
-            assert e.ci_low <= true <= e.ci_high, s
+        assert e.ci_low <= true <= e.ci_high, s
     table = fit.table()
     assert {"prime", "prime_LT", "ci_low", "method", "dof", "n_runs"} <= set(table.columns)
     row = table.set_index("symbol").loc["N_rdot"]
@@ -248,7 +287,7 @@ def _coverage(seeds):
     inside = total = 0
     for seed in seeds:
         truth, _, fit = day_fit(seed=seed)
-        for s in (s for s in HORIZONTAL_SYMBOLS if s not in BIASED):
+        for s in HORIZONTAL_SYMBOLS:
             e = fit.estimates[s]
             inside += e.ci_low <= truth.derivatives[s] <= e.ci_high
             total += 1
@@ -256,7 +295,7 @@ def _coverage(seeds):
 
 
 def test_coverage_short():
-    """6 generated days x 13 derivatives (all but :data:`BIASED`): the fraction of 95 %
+    """6 generated days x 14 derivatives: the fraction of 95 %
     intervals holding the truth has a Clopper-Pearson interval that holds 0.95 (the long
     study is test_coverage_study)."""
     inside, total = _coverage(range(1, 7))
@@ -273,12 +312,12 @@ def test_coverage_study():
     assert ci.low <= 0.98 and ci.high >= 0.93, (inside, total)
 
 
-@pytest.mark.xfail(strict=True, reason="N_rdot of generated yaw runs is 0.16 % low, a "
-                   "deterministic disagreement of the generator and the reduction")
 def test_n_rdot_of_generated_yaw_runs_inside_its_interval():
+    """N_rdot within 0.05 % of the truth and inside its 95 % interval."""
     truth, _, fit = day_fit()
-    e = fit.estimates["N_rdot"]
-    assert e.ci_low <= truth.derivatives["N_rdot"] <= e.ci_high
+    e, true = fit.estimates["N_rdot"], truth.derivatives["N_rdot"]
+    assert e.value == pytest.approx(true, rel=5e-4)
+    assert e.ci_low <= true <= e.ci_high
 
 
 def test_reduced_chi2_near_one_when_the_truth_is_the_model():

@@ -481,7 +481,7 @@ def static_run(
     speed : ndarray
         Filtered carriage speed U [m/s] (of O along its path on the arm).
     fx, fy, mz : ndarray
-        Zeroed, filtered balance readings, body axes [N], [N], [N m].
+        Zeroed balance readings, body axes [N], [N], [N m].
     steady : tuple of int
         The steady window's indices [i0, i1).
     setting : RunSetting
@@ -889,7 +889,7 @@ def reduce_captive(
     Parameters
     ----------
     raw_channels : mapping
-        The run's zeroed, filtered channels (:func:`condition_captive`): ``t`` [s], ``U``
+        The run's conditioned channels (:func:`condition_captive`): ``t`` [s], ``U``
         [m/s], ``fx``, ``fy`` [N] (or ``drag``, ``lift`` [N], carriage axes), ``mz`` [N m];
         PMM runs ``sway`` [m] and ``yaw`` [deg] (absent: 0).
     fs : float
@@ -944,9 +944,12 @@ def condition_captive(
     steady: tuple[int, int] | None = None, said: list[str] | None = None,
     zero_var: dict[str, float] | None = None,
 ) -> dict[str, np.ndarray]:
-    """The channels low-passed (one zero-phase filter) and the balance channels zeroed: a
-    straight line between the still windows before and after the run
-    (:func:`towtank.signal.conditioning.zero_line`); ``sway`` and ``yaw`` are filtered only.
+    """The channels conditioned: ``U``, ``sway`` and ``yaw`` low-passed (one zero-phase
+    filter); the balance channels zeroed, not filtered: the recorded samples less a straight
+    line between the still windows before and after the run, fitted to the low-passed channel
+    (:func:`towtank.signal.conditioning.zero_line`). The steady means and the PMM cycles'
+    harmonics are the loads' filters; a low-pass would carry a ramp's transient (a step of r')
+    into the first and last kept cycles.
     ``channels`` holds ``U`` and the balance and PMM channels; returns them with ``t``.
 
     With the ``steady`` window [i0, i1) and a post-run still window, each balance channel's
@@ -974,6 +977,6 @@ def condition_captive(
                 mid = 0.5 * (float(out["t"][steady[0]]) + float(out["t"][steady[1] - 1]))
                 zero_var[name] = zero_variance(x, out["t"], pre, post, mid)
             zero, _, _ = conditioning.zero_line(t, x, pre, post)
-            x = x - zero
+            x = np.asarray(channels[name], dtype=float) - zero
         out[name] = x
     return out

@@ -4,10 +4,11 @@ The run has been reduced as any run first (:func:`towtank.reduce.run.reduce_read
 steady window and the zero of its drag channel); this module conditions its captive channels the
 same way and hands them to :func:`towtank.reduce.captive.reduce_captive`:
 
-* every channel low-passed by the day's one zero-phase filter ([processing] cutoff_hz);
+* speed, sway and yaw low-passed by the day's one zero-phase filter ([processing] cutoff_hz);
 * the forces fx, fy [N] and the moment mz [N m] (or a drift run's drag and lift) zeroed as the
   drag is: the mean of the still window before the carriage moves, with the linear drift to the
-  still window after it stops ([processing] drift), and the same drift check;
+  still window after it stops ([processing] drift), and the same drift check; not filtered
+  (the steady means and the PMM harmonics are their filters);
 * the PMM's sway [m] and yaw [deg → rad] are positions, not loads: filtered, never zeroed.
 """
 
