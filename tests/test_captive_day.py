@@ -93,6 +93,14 @@ def test_horizontal_day_derivatives_within_tolerance_and_intervals(horizontal_da
     assert not any("reduced chi^2" in str(w) for w in horizontal_day.day.warnings)
 
 
+def test_small_day_pmm_runs_agree_over_omega(horizontal_day):
+    """The truth does not change with omega': no derivative "differs" over the PMM runs
+    (the per-run standard errors hold the other terms' uncertainty and the test the heavy
+    tails of 5-cycle standard errors)."""
+    fit = horizontal_day.day.captive
+    assert not [w for w in fit.warnings if ": differ (" in w]
+
+
 def test_bad_pmm_runs_rejected_with_their_sentence_the_rest_processed(horizontal_day):
     day = horizontal_day.day
     assert set(day.rejected) == {FEW_CYCLES, FREQUENCY_OFF}

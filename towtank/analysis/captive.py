@@ -10,13 +10,15 @@ information is a run's component, never a sample.
 Weights: 1/var of each row's load less its regressors times the derivatives, the variance
 from the row's covariance of load and regressors over the run's cycles or blocks and the
 zero's (the effective-variance method: the motion channels' noise is in the regressors), by a
-few passes of weighted least squares. Variances estimated from a few cycles make a right fit's
-chi^2 larger by Student's dof/(dof - 2) (:func:`variance_inflation`): the reduced chi^2 is
-given over that factor and the covariance scaled by it, and by the reduced chi^2 when that
-exceeds 1 (model error widens an interval, never narrows it; it is a warning when the chi^2
-test rejects the model at :data:`CHI2_P`). Rows without a standard error (a
+few passes of weighted least squares. A variance estimated from a few cycles is on average
+dof/(dof - 2) times too small (:func:`variance_inflation`): each row's own factor enters the
+derivatives' covariance (:func:`row_covariance`), each derivative's interval takes the
+Welch-Satterthwaite dof of its rows, and the chi^2 test of model error takes the heavy tail of
+such weights (:func:`chi2_p_value`); the reduced chi^2 widens the intervals when it exceeds 1
+(model error widens an interval, never narrows it; it is a warning when that test rejects the
+model at :data:`CHI2_P`). Rows without a standard error (a
 lab's table of means) are fitted on the prime scale (each row over 1/2 rho L^2 U^2, L^3 for
-moments) with the residual-based covariance. Intervals: Student's t on n - p degrees of
+moments) with the residual-based covariance and Student's t on n - p degrees of
 freedom.
 """
 
@@ -46,6 +48,7 @@ from towtank.reduce.captive import (
     hydrodynamic_loads,
 )
 from towtank.reduce.captive import regressors as make_regressors
+from towtank.stats.intervals import welch_satterthwaite
 from towtank.stats.quantiles import t_quantile
 
 #: Each regressor's power k of L in its prime (value / (1/2 rho L^k)) for the force and the
@@ -291,6 +294,54 @@ def variance_inflation(dof: np.ndarray | float) -> np.ndarray:
     return d / (d - 2.0)
 
 
+@dataclass(frozen=True)
+class RowCovariance:
+    """The derivatives' covariance of a weighted fit whose weights are estimated
+    (:func:`row_covariance`): ``cov`` [SI^2], ``parts`` (derivatives, rows) each row's share
+    of each derivative's variance, ``leverage`` the rows' leverages h_i, ``expected_chi2``
+    the weighted residuals' sum of squares a right fit gives on average."""
+
+    cov: np.ndarray
+    parts: np.ndarray
+    leverage: np.ndarray
+    expected_chi2: float
+
+
+def row_covariance(X: np.ndarray, w: np.ndarray, inflation: np.ndarray) -> RowCovariance:
+    """Covariance of the weighted least-squares coefficients b = (X'WX)^-1 X'W y when each
+    row's weight ``w`` is one over a variance estimated with few degrees of freedom, so
+    that the row's true variance is on average ``inflation`` / w
+    (:func:`variance_inflation`): cov = C diag(inflation / w) C', C = (X'WX)^-1 X'W. A
+    derivative carried by PMM rows (5 cycles) is so widened by their factor 2 and one
+    carried by static rows (8 blocks) by 1.4. The expected chi^2 is
+    sum inflation_i (1 - h_i), h_i the rows' leverages."""
+    w = np.asarray(w, dtype=float)
+    inflation = np.asarray(inflation, dtype=float)
+    a_inv = np.linalg.pinv(X.T @ (X * w[:, None]))
+    c = a_inv @ X.T * w[None, :]
+    parts = c**2 * (inflation / w)[None, :]
+    leverage = w * np.einsum("ij,jk,ik->i", X, a_inv, X)
+    return RowCovariance(cov=(c * (inflation / w)[None, :]) @ c.T, parts=parts,
+                         leverage=leverage,
+                         expected_chi2=float(np.sum(inflation * (1.0 - leverage))))
+
+
+#: Draws of the chi^2 test's null distribution (:func:`chi2_p_value`) and their seed.
+CHI2_DRAWS, CHI2_SEED = 5000, 35
+
+
+def chi2_p_value(chi2: float, leverage: np.ndarray, dof: np.ndarray) -> float:
+    """P(S >= ``chi2``) of a right fit's S = sum w_i e_i^2 when each weight is one over a
+    variance estimated on ``dof``_i degrees of freedom: S ~ sum (1 - h_i) t_i^2 with t_i
+    Student's on dof_i (``leverage`` h_i), heavier-tailed than chi^2 on n - p dof (the
+    variance of t^2 on 4 dof is infinite); by :data:`CHI2_DRAWS` seeded draws."""
+    rng = np.random.default_rng(CHI2_SEED)
+    nu = np.maximum(np.asarray(dof, dtype=float), 1.0)
+    t2 = rng.standard_t(nu, size=(CHI2_DRAWS, nu.size)) ** 2
+    s = t2 @ (1.0 - np.asarray(leverage, dtype=float))
+    return float((np.count_nonzero(s >= chi2) + 1) / (CHI2_DRAWS + 1))
+
+
 #: Passes of the effective-variance weights (each refits with the last pass's derivatives).
 EFFECTIVE_VARIANCE_PASSES = 4
 
@@ -333,9 +384,8 @@ def fit_captive(
     alpha : float
         Significance of the intervals.
     """
-    # loaded on use: statsmodels only for the fit, scipy.stats for its chi^2 test
+    # loaded on use: statsmodels only for the fit
     import statsmodels.api as sm
-    from scipy.stats import chi2 as chi2_dist
 
     runs = tuple(r for r in runs if r.plane == plane)
     (eq_f, eq_m), regs = plane_names(plane)
@@ -378,19 +428,26 @@ def fit_captive(
             w = 1.0 / (0.5 * rho * length_m ** (3 if moment else 2) * U**2) ** 2
         res = sm.WLS(y, Xk, weights=w).fit()
         dof = float(n - p)
-        infl = float(np.mean(variance_inflation(row_dof))) if with_se else 1.0
-        red = float(np.sum(w * res.resid**2) / dof) / infl if dof > 0 else math.nan
+        if with_se and dof > 0:
+            rc = row_covariance(Xk, w, variance_inflation(row_dof))
+            stat = float(np.sum(w * res.resid**2))
+            red = stat / rc.expected_chi2
+            p_chi2 = chi2_p_value(stat, rc.leverage, row_dof)
+            widen = max(1.0, red)
+            cov_b = rc.cov * widen
+            dofs = [welch_satterthwaite(list(v), list(row_dof)) for v in rc.parts]
+            dofs = [d if red <= 1.0 else min(d, dof) for d in dofs]
+        else:
+            red = float(np.sum(w * res.resid**2) / dof) if dof > 0 else math.nan
+            p_chi2 = math.nan
+            cov_b = np.asarray(res.cov_params()) if dof > 0 else np.full((p, p), math.nan)
+            dofs = [dof] * p
         chi2[eq] = red
-        if with_se:
-            res = sm.WLS(y, Xk, weights=w).fit(cov_type="fixed scale",
-                                                cov_kwds={"scale": infl * max(1.0, red)})
         coef = np.asarray(res.params)
-        bse = np.asarray(res.bse) if dof > 0 else np.full(p, math.nan)
+        bse = np.sqrt(np.diag(cov_b))
         params[eq] = coef
         names = [f"{eq}_{regs[k]}" for k in keep]
-        param_cov[eq] = pd.DataFrame(np.asarray(res.cov_params()) if dof > 0 else
-                                     np.full((p, p), math.nan), index=names, columns=names)
-        tq = t_quantile(dof, alpha)
+        param_cov[eq] = pd.DataFrame(cov_b, index=names, columns=names)
         for j, k in enumerate(keep):
             sym = f"{eq}_{regs[k]}"
             carrying = sorted({i for i in range(n) if abs(X[i, k]) > 1e-9 * np.max(np.abs(
@@ -401,17 +458,19 @@ def fit_captive(
             scale_lt = (0.5 * rho * draught_m * length_m ** (power - 1)
                         if draught_m else math.nan)
             value, s = float(coef[j]), float(bse[j])
+            tq = t_quantile(dofs[j], alpha)
             estimates[sym] = CaptiveEstimate(
-                symbol=sym, value=value, std_error=s, dof=dof, ci_low=value - tq * s,
+                symbol=sym, value=value, std_error=s, dof=dofs[j], ci_low=value - tq * s,
                 ci_high=value + tq * s, unit=UNITS[REGRESSORS[k]][int(moment)],
                 prime=value / scale, prime_lt=value / scale_lt, scale=scale, scale_lt=scale_lt,
                 method=" + ".join(methods), n_runs=len({int(run_index[i]) for i in carrying}))
-        if with_se and dof > 0 and chi2_dist.sf(red * dof, dof) < CHI2_P:
+        if p_chi2 < CHI2_P:
             warnings.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
                             "intervals widened by its square root (model error beyond the "
                             "runs' scatter)")
-    by_run, agree, differ = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
-                                                length_m, chi2)
+    by_run, agree, differ = frequency_agreement(
+        runs, rows, X, run_index, keep, params, plane, length_m, chi2,
+        {eq: c.to_numpy() for eq, c in param_cov.items()})
     warnings += differ
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
@@ -424,20 +483,19 @@ def fit_captive(
 def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
-    chi2_reduced: dict[str, float] | None = None,
+    chi2_reduced: dict[str, float] | None = None, cov: dict[str, np.ndarray] | None = None,
 ) -> tuple[pd.DataFrame, list[str], list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
     component row where its regressor is largest, the other terms held at the joint fit,
     its standard error the row's over the regressor (widened as the joint fit's by the
-    square root of its reduced chi^2 where that exceeds 1); then a chi^2 homogeneity test across the
-    runs (chi^2 = sum ((d_i - d_w)/u_i)^2 on runs - 1 dof, d_w the weighted mean) and one
+    square root of its reduced chi^2 where that exceeds 1) combined with that of the other
+    terms held at the joint fit (``cov``, per equation, of the kept derivatives); then a
+    homogeneity test across the runs (S = sum ((d_i - d_w)/u_i)^2, d_w the weighted mean,
+    its p value that of :func:`chi2_p_value` for u_i from the runs' few cycles) and one
     sentence per derivative.
     """
-    # loaded on use: scipy.stats only for the test
-    from scipy.stats import chi2 as chi2_dist
-
     (eq_f, eq_m), regs = plane_names(plane)
     records = []
     for k in (REGRESSORS.index(name) for name in AGREEMENT_REGRESSORS):
@@ -459,13 +517,17 @@ def frequency_agreement(
                 b = params[eq]
                 widen = math.sqrt(max(1.0, (chi2_reduced or {}).get(eq, 1.0)))
                 others = float(X[best, keep] @ b) - b[j] * xk
+                x_o = np.where(np.arange(len(keep)) == j, 0.0, X[best, keep])
+                var_o = float(x_o @ cov[eq] @ x_o) if cov and eq in cov else 0.0
+                se_row = float(rows.at[best, f"{eq}_se"])
                 records.append({
                     "run": run.run, "test": run.test,
                     "omega_prime": run.omega_prime(length_m), "amplitude_m": run.amplitude_m,
                     "symbol": f"{eq}_{regs[k]}",
                     "value": (float(rows.at[best, eq]) - others) / xk,
-                    "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
+                    "std_error": math.sqrt((widen * se_row) ** 2 + var_o) / abs(xk)})
     by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
+    cycles_dof = {run.run: float(run.cycles_used - 1) for run in runs}
     agree: list[str] = []
     differ: list[str] = []
     for sym, g in by_run.groupby("symbol", sort=False):
@@ -477,7 +539,7 @@ def frequency_agreement(
         mean = float(np.sum(w * d) / np.sum(w))
         stat = float(np.sum(w * (d - mean) ** 2))
         dof = len(g) - 1
-        pval = float(chi2_dist.sf(stat, dof))
+        pval = chi2_p_value(stat, w / np.sum(w), np.array([cycles_dof[r] for r in g["run"]]))
         kinds = " and ".join(dict.fromkeys(TEST_NAMES[t].replace(" ", "-") for t in g["test"]))
         head = (f"{sym} from {len(g)} {kinds} runs, omega' {g['omega_prime'].min():.2g}–"
                 f"{g['omega_prime'].max():.2g}, y0 {g['amplitude_m'].min():.2f}–"
