@@ -162,8 +162,15 @@ def _sheet_segment(protocol, runfile: Path) -> int | None:  # noqa: ANN001 - a P
 
 def _captive_row(protocol, runfile: Path) -> dict | None:  # noqa: ANN001 - Protocol | None
     """The run sheet's row of ``runfile`` when it is a captive run (its ``test`` one of
-    :data:`CAPTIVE_TESTS`), else None (no protocol, no such row, a sheet that cannot be read)."""
+    :data:`CAPTIVE_TESTS`), else None (no protocol, no such row, a sheet that cannot be read).
+    Only a protocol that can reduce captive runs ([captive], or a [model] with the balance's
+    moment point or the yaw inertia) has its sheet read: a resistance day's inspect stays
+    light (no pandas)."""
     if protocol is None or protocol.campaign.run_sheet is None:
+        return None
+    model = protocol.model
+    if protocol.captive is None and (model is None or (
+            model.balance_x_m is None and model.izz_kg_m2 is None)):
         return None
     try:
         row = _sheet_row(protocol, runfile)

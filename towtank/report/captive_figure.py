@@ -33,6 +33,7 @@ from towtank.reduce.captive import (
     PMM_TESTS,
     REGRESSORS,
     ROW_COLUMNS,
+    STATIC_BLOCKS,
     arm_kinematics,
     body_kinematics,
     regressors,
@@ -46,8 +47,8 @@ if TYPE_CHECKING:
 
 #: Points of a fitted curve.
 CURVE_POINTS = 121
-#: The coverage factor of a run's error bar (95 %, many cycles or blocks).
-BAR_K = 1.96
+#: The level of a run's error bar.
+BAR_LEVEL = 0.95
 
 
 def _rows_frame(reg: dict[str, np.ndarray], loads: dict[str, np.ndarray] | None = None
@@ -107,7 +108,9 @@ def static_points(fit: CaptiveFit, tests: tuple[str, ...], roll_deg: float) -> p
         for eq, moment in ((ef, False), (em, True)):
             s = float(_prime_scale(fit, r.speed, moment))
             rec[eq] = float(m[eq]) / s
-            rec[f"{eq}_half"] = BAR_K * float(m[f"{eq}_se"]) / s
+            # the steady mean's standard error is from STATIC_BLOCKS block means
+            k = t_quantile(STATIC_BLOCKS - 1, 1.0 - BAR_LEVEL)
+            rec[f"{eq}_half"] = k * float(m[f"{eq}_se"]) / s
         recs.append(rec)
     return pd.DataFrame(recs)
 
@@ -293,6 +296,7 @@ def fig_captive(fit: CaptiveFit | None, roll_deg: float = 90.0, *, page: bool = 
         ax.set_ylabel(f"{eq} [{unit}]")
     # 4. derivatives against omega'
     by_run = fit.by_run
+    cycles = {r.run: r.cycles_used for r in fit.runs}
     for col, (eq, _moment) in enumerate(eqs):
         ax = fig.add_subplot(gs[3, col])
         mine = by_run[by_run["symbol"].str.startswith(f"{eq}_")] if len(by_run) else by_run
@@ -308,8 +312,11 @@ def fig_captive(fit: CaptiveFit | None, roll_deg: float = 90.0, *, page: bool = 
                 color = style.PALETTE[(i + 1) % len(style.PALETTE)]
                 ax.fill_between(span, est.ci_low / est.value, est.ci_high / est.value,
                                 color=color, alpha=0.15, lw=0)
+                # each run's value is from its cycles' scatter: t on cycles - 1 dof
+                k = np.array([t_quantile(max(cycles.get(int(r), 2) - 1, 1), 1.0 - BAR_LEVEL)
+                              for r in grp["run"]])
                 ax.errorbar(grp["omega_prime"], grp["value"] / est.value,
-                            yerr=BAR_K * grp["std_error"] / abs(est.value), fmt="o", ms=3.5,
+                            yerr=k * grp["std_error"] / abs(est.value), fmt="o", ms=3.5,
                             color=color, elinewidth=0.8, capsize=2, label=math_symbol(str(sym)))
             ax.axhline(1.0, color="#444444", lw=0.7)
             ax.set_xlim(*span)

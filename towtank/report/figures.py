@@ -47,7 +47,6 @@ from matplotlib.patches import Patch
 
 import towtank.report.style as style
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
-from towtank.report.captive_figure import fig_captive
 from towtank.report.figure_base import (
     PAGE_HEADER_IN,
     align_zero,
@@ -896,6 +895,15 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
         fig.text(0.08, 0.035, literal(note), fontsize=7.5,
                  family="DejaVu Sans Mono", va="bottom", color="#333333")
     return fig
+
+
+def fig_captive(fit: Any, roll_deg: float = 90.0, *, page: bool = False) -> Figure | None:
+    """The captive page's figure (:func:`towtank.report.captive_figure.fig_captive`)."""
+    # loaded on use: the captive figure loads pandas, which inspect's plot of one run never
+    # needs
+    from towtank.report.captive_figure import fig_captive as draw
+
+    return draw(fit, roll_deg, page=page)
 
 
 # ----------------------------------------------------------------------------- all figures
