@@ -470,7 +470,7 @@ def fit_captive(
                             "runs' scatter)")
     by_run, agree, differ = frequency_agreement(
         runs, rows, X, run_index, keep, params, plane, length_m, chi2,
-        {eq: c.to_numpy() for eq, c in param_cov.items()})
+        {eq: c.to_numpy() for eq, c in param_cov.items()}, cov)
     warnings += differ
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
@@ -484,13 +484,17 @@ def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
     chi2_reduced: dict[str, float] | None = None, cov: dict[str, np.ndarray] | None = None,
+    row_cov: np.ndarray | None = None,
 ) -> tuple[pd.DataFrame, list[str], list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
     component row where its regressor is largest, the other terms held at the joint fit,
-    its standard error the row's over the regressor (widened as the joint fit's by the
-    square root of its reduced chi^2 where that exceeds 1) combined with that of the other
+    its standard error the row's over the regressor — from the row's covariance of the load
+    and the regressors (``row_cov``, rows x 10 x 10: the motion channels' noise enters the
+    load through the inertia removed and the regressors together), else the load's alone —
+    (widened as the joint fit's by the square root of its reduced chi^2 where that exceeds
+    1) combined with that of the other
     terms held at the joint fit (``cov``, per equation, of the kept derivatives); then a
     homogeneity test across the runs (S = sum ((d_i - d_w)/u_i)^2, d_w the weighted mean,
     its p value that of :func:`chi2_p_value` for u_i from the runs' few cycles) and one
@@ -513,13 +517,18 @@ def frequency_agreement(
             xk = X[best, k]
             if abs(xk) < 0.05 * col_max:
                 continue
-            for eq in (eq_f, eq_m):
+            for e, eq in enumerate((eq_f, eq_m)):
                 b = params[eq]
                 widen = math.sqrt(max(1.0, (chi2_reduced or {}).get(eq, 1.0)))
                 others = float(X[best, keep] @ b) - b[j] * xk
                 x_o = np.where(np.arange(len(keep)) == j, 0.0, X[best, keep])
                 var_o = float(x_o @ cov[eq] @ x_o) if cov and eq in cov else 0.0
                 se_row = float(rows.at[best, f"{eq}_se"])
+                if row_cov is not None and np.all(np.isfinite(row_cov[best])):
+                    a = np.zeros(row_cov.shape[1])
+                    a[e] = 1.0
+                    a[[2 + kk for kk in keep]] = -b
+                    se_row = math.sqrt(max(float(a @ row_cov[best] @ a), 0.0))
                 records.append({
                     "run": run.run, "test": run.test,
                     "omega_prime": run.omega_prime(length_m), "amplitude_m": run.amplitude_m,
