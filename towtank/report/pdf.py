@@ -59,7 +59,7 @@ from towtank.report.figure_base import (
     sci,
     true_minus,
 )
-from towtank.report.provenance import creation_date, report_date
+from towtank.report.provenance import captive_provenance, creation_date, report_date
 from towtank.report.quality import (
     LINE_IN,
     QUALITY_HEIGHT_IN,
@@ -542,15 +542,35 @@ def captive_rows(fit: CaptiveFit) -> tuple[list[str], list[list[str]], list[str]
     return header, rows, methods
 
 
-def captive_fit_text(fit: CaptiveFit) -> list[str]:
-    """The paragraphs under a captive page's table: the runs by test, the fit's reduced
-    chi^2 per equation and its notes (agreement over omega', terms left out)."""
+def captive_options_text(options: dict[str, Any]) -> str:
+    """The reduction's options as ITTC 7.5-02-06-02 asks them stated (the provenance's
+    ``captive`` section, :func:`towtank.report.provenance.captive_provenance`), one sentence."""
+    inertia = options["inertia_removed"]
+    parts = [f"{k.split('_')[0]} = {v:g} {UNIT_OF_KEY[k]}" for k, v in inertia.items()
+             if v is not None]
+    reference = ("about O (N_O = mz + balance_x_m·fy, balance_x_m = "
+                 f"{options['balance_x_m']:g} m)" if options["moment_reference"] == "origin"
+                 else "about the balance point")
+    return (f"Moments {reference}; the model's inertia removed with {', '.join(parts)}; PMM: "
+            f"{options['pmm_cycle_rule']} (the cycles each run kept: pmm.csv cycles_used).")
+
+
+#: Units of the [model] keys in :func:`captive_options_text`.
+UNIT_OF_KEY = {"mass_kg": "kg", "izz_kg_m2": "kg·m²", "iyy_kg_m2": "kg·m²", "xg_m": "m"}
+
+
+def captive_fit_text(fit: CaptiveFit, options: dict[str, Any] | None = None) -> list[str]:
+    """The paragraphs under a captive page's table: the reduction's options (``options``,
+    the provenance's captive section), the runs by test, the fit's reduced chi^2 per
+    equation and its notes (agreement over omega', terms left out)."""
     counts: dict[str, int] = {}
     for r in fit.runs:
         counts[r.test] = counts.get(r.test, 0) + 1
     tests = ", ".join(f"{n} {CAPTIVE_TEST_NAMES.get(t, t)}" for t, n in counts.items())
     out = [f"{len(fit.runs)} runs fitted jointly ({tests}); a run's steady mean or a PMM run's "
            "cycle-averaged mean and first harmonics are the units of information."]
+    if options is not None:
+        out.insert(0, captive_options_text(options))
     chi2 = "; ".join(f"{eq}: {_v(c, '.3g')}" for eq, c in fit.chi2_reduced.items())
     if chi2:
         out.append(f"Reduced chi^2 of the weighted fit per equation: {chi2}.")
@@ -558,7 +578,8 @@ def captive_fit_text(fit: CaptiveFit) -> list[str]:
     return out
 
 
-def _draw_captive(fig: Figure, fit: CaptiveFit) -> None:
+def _draw_captive(fig: Figure, fit: CaptiveFit, options: dict[str, Any] | None = None
+                  ) -> None:
     """A captive page: the plane's derivatives with their intervals, primes and methods,
     then the fit's notes."""
     y = PAGE_HEADER_IN + 0.1
@@ -581,7 +602,7 @@ def _draw_captive(fig: Figure, fit: CaptiveFit) -> None:
                  "the asymmetry and zero residue, never used as derivatives.")
     y += _text_blocks(fig, y, notes) + 0.15
     y += _heading(fig, y, "The fit")
-    _text_blocks(fig, y, captive_fit_text(fit))
+    _text_blocks(fig, y, captive_fit_text(fit, options))
 
 
 def _fin_table(fig: Figure, y: float, fr: FinResult) -> float:
@@ -956,7 +977,7 @@ def _render(
     elif page.kind == "fin_runs":
         _draw_fin_runs(fig, require(day.fins, "fin"), page.payload)
     elif page.kind == "captive":
-        _draw_captive(fig, page.payload)
+        _draw_captive(fig, page.payload, captive_provenance(day))
     return fig
 
 
