@@ -32,7 +32,8 @@ TOL, TOL_WEAK = 0.01, 0.03
 WEAK = ("Y_r|r|", "Z_q|q|")
 #: The run whose PMM holds two steady cycles, and the one whose sheet frequency is 10 % off.
 FEW_CYCLES, FREQUENCY_OFF = 15, 16
-KVLCC2 = Path("/work/shared/real/kvlcc2_hmri_captive/captive.csv")
+KVLCC2 = (Path(__file__).resolve().parents[2] / "shared" / "real" / "kvlcc2_hmri_captive"
+          / "captive.csv")  # ../shared beside the repository
 
 
 def small_plan() -> list[CaptiveRunSpec]:

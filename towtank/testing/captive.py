@@ -37,7 +37,7 @@ from towtank.reference.sets import reference_table
 from towtank.results.stages import CaptiveResult
 from towtank.results.summary import from_fit
 from towtank.signal import conditioning
-from towtank.testing.days import write_protocol, write_run_sheet
+from towtank.testing.days import write_protocol, write_run_sheet, write_truth
 from towtank.testing.instruments import Noise, draw_imperfections, recorded_channels
 from towtank.testing.layouts import write_layout
 from towtank.testing.profiles import plan_profile, sample_times
@@ -332,7 +332,8 @@ def make_captive_day(
     Returns
     -------
     dict
-        The truth: ``derivatives``, the model's particulars and each run's spec.
+        The truth: ``derivatives``, the model's particulars and each run's spec (also
+        written to ``truth.json``; a setting a run does not use is None).
     """
     if layout not in CAPTIVE_LAYOUTS:
         raise ValueError(f"layout must be one of {', '.join(CAPTIVE_LAYOUTS)}, not {layout!r}")
@@ -370,8 +371,12 @@ def make_captive_day(
         campaign={"name": f"captive {plane} seed {seed}", "run_sheet": "run_sheet.csv",
                   "data_dir": "data", "output_dir": "out"},
         water={"type": "fresh", "temperature_C": 18.0}, model=model, captive=captive)
-    return {"derivatives": dict(truth.derivatives), "plane": plane, "seed": seed,
-            "model": model, "runs": [replace(s).__dict__ for s in plan]}
+    truth_dict = {"derivatives": dict(truth.derivatives), "plane": plane, "seed": seed,
+            "model": model, "runs": [{k: (None if isinstance(v, float) and math.isnan(v) else v)
+                                       for k, v in replace(s).__dict__.items()}
+                                      for s in plan]}
+    write_truth(truth_dict, folder / "truth.json")  # NaN (a setting not used) as null
+    return truth_dict
 
 
 # ====================================================================== in-process reduction
