@@ -106,9 +106,10 @@ def test_a_range_written_start_step_stop_says_how_to_write_it():
 
 
 def test_the_shipped_protocols_list_every_input_and_its_source():
-    """REMUS (Prestero's inertia given), Series 58 (design tool: fins, CG guessed, inertia a
-    default) and the glider (the paper's Table 6 wings, its CG, tail and roll mass guessed)."""
-    expect = {"remus_vehicle.toml": set(),
+    """REMUS (Prestero's inertia given, its propeller guessed), Series 58 (design tool: fins,
+    CG guessed, inertia a default) and the glider (the paper's Table 6 wings, its CG, tail and
+    roll mass guessed)."""
+    expect = {"remus_vehicle.toml": {"propeller"},
               "series58_vehicle.toml": {"cg_m", "fins", "inertia_kg_m2"},
               "glider_parametric.toml": {"cg_m", "fins", "inertia_kg_m2", "buoyancy_N",
                                          "glider.wing_area_m2", "glider.roll_mass_kg"}}

@@ -55,8 +55,8 @@ def vehicle_assumptions(vehicle: Any, masses: dict[str, Any],
     Returns
     -------
     list of dict
-        One entry per mass property, the hull, the fins and each glider input, then any input
-        of ``assumed`` not among those.
+        One entry per mass property, the hull, the fins, each glider input and the
+        propeller, then any input of ``assumed`` not among those.
     """
     assumed = dict(assumed or {})
     rows: list[dict[str, Any]] = []
@@ -76,6 +76,11 @@ def vehicle_assumptions(vehicle: Any, masses: dict[str, Any],
         "fin pairs of [[vehicle.fins]]" if vehicle.fins else "no fins")
     for key, value in sorted((getattr(vehicle, "glider", None) or {}).items()):
         add(f"glider.{key}", value, "given", "[vehicle.glider]")
+    propeller = getattr(vehicle, "propeller", None)
+    if propeller is not None:
+        add("propeller", {k: v for k, v in propeller.items() if k != "speeds_m_s"}, "given",
+            "[vehicle.propeller]: the B-series propeller of powering.csv and of simulate "
+            "--propeller rps")
     for key, why in assumed.items():
         rows.append({"input": key, "value": getattr(vehicle, key, None), "source": "given",
                      "note": f"assumed: {why}"})
