@@ -196,7 +196,7 @@ def fig_predicted(coefficients: Any, *, page: bool = False,
 #: Height of a row of the assumptions' table on the vehicle page [in].
 ASSUMPTION_ROW_IN = 0.19
 #: Most characters of a note in that table (the whole note is in model.json).
-NOTE_CHARS = 58
+NOTE_CHARS = 52
 #: The caption's sentence on that table.
 ASSUMPTIONS_CAPTION = (
     " Below: the inputs of the model that were not measured (model.json 'assumptions'): "
@@ -205,15 +205,15 @@ ASSUMPTIONS_CAPTION = (
     "rest on them.")
 
 
-def _shown(value: Any, width: int = 24) -> str:
-    """An assumption's value in a table cell: numbers to 4 digits, lists and tables joined,
-    cut to ``width`` characters."""
+def _shown(value: Any, width: int = 26, digits: int = 4) -> str:
+    """An assumption's value in a table cell: numbers to ``digits`` significant digits (3 in
+    lists and tables), lists and tables joined, cut to ``width`` characters."""
     if isinstance(value, dict):
-        text = ", ".join(f"{k} {_shown(v)}" for k, v in value.items())
+        text = ", ".join(f"{k} {_shown(v, width, 3)}" for k, v in value.items())
     elif isinstance(value, (list, tuple)):
-        text = ", ".join(_shown(v) for v in value)
+        text = ", ".join(_shown(v, width, 3) for v in value)
     elif isinstance(value, float):
-        text = fmt_number(value)
+        text = fmt_number(value, digits)
     else:
         text = str(value)
     return text if len(text) <= width else text[:width - 1] + "…"
@@ -247,7 +247,7 @@ def _draw_assumptions(ax: Any, table: list[tuple[str, str, str, str]], height_in
     rows_h = ASSUMPTION_ROW_IN * (len(table) + 1) / ax_h
     cells = ax.table(cellText=[list(r) for r in table],
                      colLabels=["input", "value", "source", "note"],
-                     colWidths=[0.25, 0.19, 0.09, 0.47], cellLoc="left", colLoc="left",
+                     colWidths=[0.25, 0.24, 0.09, 0.42], cellLoc="left", colLoc="left",
                      bbox=[left, top - 0.04 / ax_h - rows_h, 0.84 / pos.width, rows_h])
     cells.auto_set_font_size(False)
     cells.set_fontsize(7)
