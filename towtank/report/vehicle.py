@@ -20,7 +20,7 @@ from towtank.report.figure_base import (
     new_figure,
     place_legend,
 )
-from towtank.vehicle.assumptions import guessed
+from towtank.vehicle.assumptions import ASSUMED, guessed, origin
 from towtank.vehicle.model import write_model
 
 
@@ -226,10 +226,8 @@ def assumption_rows(assumptions: list[dict[str, Any]] | None) -> list[tuple[str,
     "assumed: " and cut to fit."""
     out = []
     for a in guessed(assumptions or []):
-        note = str(a.get("note", ""))
-        source = "assumed" if note.startswith("assumed") else str(a.get("source", ""))
-        note = note.removeprefix("assumed: ")
-        out.append((str(a["input"]), _shown(a.get("value")), source,
+        note = str(a["note"]).removeprefix(ASSUMED)
+        out.append((str(a["input"]), _shown(a.get("value")), origin(a),
                     note if len(note) <= NOTE_CHARS else note[:NOTE_CHARS - 1] + "…"))
     return out
 

@@ -254,20 +254,8 @@ def self_propulsion_rps(resistance_n: float, speed_m_s: float, prop: Propeller,
     """The propeller's rate n [1/s] at the self-propulsion point: ``T (1 - t) = R`` at the
     speed U, the advance speed ``V_A = U (1 - w)`` ([2]_; :func:`match_thrust`).
 
-    Parameters
-    ----------
-    resistance_n : float
-        Resistance R at U [N], > 0
-    speed_m_s : float
-        U [m/s], > 0
-    prop : Propeller
-    rho : float
-        Water density [kg/m^3]
-
-    Raises
-    ------
-    ValueError
-        The propeller cannot deliver the thrust (:func:`match_thrust`).
+    ``resistance_n`` is R [N] and ``speed_m_s`` U [m/s], both > 0; ``rho`` the water's density
+    [kg/m^3]. A ValueError when the propeller cannot deliver the thrust (:func:`match_thrust`).
     """
     return float(_self_propulsion(resistance_n, speed_m_s, prop, rho)["rps"])
 
