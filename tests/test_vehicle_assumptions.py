@@ -106,9 +106,10 @@ def test_a_range_written_start_step_stop_says_how_to_write_it():
 
 
 def test_the_shipped_protocols_list_every_input_and_its_source():
-    """REMUS (Prestero's inertia given), Series 58 (design tool: fins, CG guessed, inertia a
-    default) and the glider (the paper's Table 6 wings, its CG, tail and roll mass guessed)."""
-    expect = {"remus_vehicle.toml": set(),
+    """REMUS (Prestero's inertia given, its propeller guessed), Series 58 (design tool: fins,
+    CG guessed, inertia a default) and the glider (the paper's Table 6 wings, its CG, tail and
+    roll mass guessed)."""
+    expect = {"remus_vehicle.toml": {"propeller"},
               "series58_vehicle.toml": {"cg_m", "fins", "inertia_kg_m2"},
               "glider_parametric.toml": {"cg_m", "fins", "inertia_kg_m2", "buoyancy_N",
                                          "glider.wing_area_m2", "glider.roll_mass_kg"}}
@@ -174,3 +175,43 @@ def test_predict_simulate_steady_print_the_guessed_inputs_and_the_turn_speed_los
     assert "glider.wing_area_m2" in capsys.readouterr().out
     note = pd.read_csv(tmp_path / "st" / "steady.csv")["note"][0]
     assert "glider.wing_area_m2" in note
+
+
+def _vehicle_page_text(model: dict) -> str:
+    """The text of the report's "Vehicle" page (pdf.vehicle_pages) of a day whose model is
+    ``model``, drawn to a one-page PDF and read back with pypdf."""
+    import io
+    from types import SimpleNamespace
+
+    from pypdf import PdfReader
+
+    from towtank.report.pdf import vehicle_pages
+
+    coefficients = pd.DataFrame({"symbol": ["X_u|u|", "Y_uv"], "prime": [-3.3e-3, -3.3e-3],
+                                 "predicted": [-2.6e-3, -24e-3],
+                                 "prime_ci_low": [-3.5e-3, -3.5e-3],
+                                 "prime_ci_high": [-3.1e-3, -3.1e-3]})
+    day = SimpleNamespace(coefficients=coefficients, vehicle=SimpleNamespace(model=model))
+    (page,) = vehicle_pages(day)
+    buf = io.BytesIO()
+    page.payload[1](page=True).savefig(buf, format="pdf")
+    return " ".join(PdfReader(buf).pages[0].extract_text().split())
+
+
+def test_the_pdf_vehicle_page_lists_the_guessed_inputs():
+    """Every default and assumed input of the model, with its value, source and note, in a
+    table on the vehicle page; the given ones are not listed."""
+    model = _predicted("series58_vehicle.toml").model
+    text = _vehicle_page_text(model)
+    assert "Assumed, not measured" in text
+    rows = guessed(model["assumptions"])
+    assert {r["input"] for r in rows} >= {"cg_m", "inertia_kg_m2", "fins"}
+    for row in rows:
+        assert row["input"] in text
+        assert ("assumed" if row["note"].startswith("assumed") else row["source"]) in text
+        assert row["note"].removeprefix("assumed: ")[:20] in text
+    inertia = next(r for r in rows if r["input"] == "inertia_kg_m2")["value"]
+    assert f"{inertia[1]:.3g}" in text
+    assert "mass_kg" not in text.split("Assumed, not measured")[1]  # given: not a guess
+    bare = _vehicle_page_text({k: v for k, v in model.items() if k != "assumptions"})
+    assert "Assumed, not measured" not in bare  # an old model.json: the page as before

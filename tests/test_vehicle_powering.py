@@ -97,6 +97,7 @@ def test_predict_writes_powering_and_pressure_hull(tmp_path, capsys):
     from towtank.commands.cli import main
 
     text = (ROOT / "protocols" / "remus_vehicle.toml").read_text()
+    text = text.split("\n[vehicle.assumed]")[0]  # its own guessed propeller replaced below
     text = text.replace('output_dir = "../reports/remus"', 'output_dir = "out"')
     text += ("\n[vehicle.propeller]\ndiameter_m = 0.14\npitch_ratio = 1.0\n"
              "blade_area_ratio = 0.55\nblades = 3\nthrust_deduction = 0.1\n"
@@ -130,6 +131,7 @@ def test_bad_design_sections_stop_with_exit_2(tmp_path, capsys, section, message
     from towtank.commands.cli import main
 
     text = (ROOT / "protocols" / "remus_vehicle.toml").read_text()
+    text = text.split("\n[vehicle.assumed]")[0]  # its own guessed propeller replaced below
     text = text.replace('output_dir = "../reports/remus"', 'output_dir = "out"')
     (tmp_path / "p.toml").write_text(text + "\n" + section)
     assert main(["predict", str(tmp_path / "p.toml")]) == 2

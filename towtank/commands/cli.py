@@ -205,6 +205,10 @@ def _parser() -> argparse.ArgumentParser:
     si.add_argument("--sample-hz", type=float, metavar="F", dest="sample_hz",
                     help="write manoeuvre.csv at this rate [Hz] (default: the integrator's "
                     "steps)")
+    si.add_argument("--propeller", choices=("thrust", "rps"), default="thrust",
+                    help="propulsion: a constant thrust (default), or the model's B-series "
+                    "propeller ([vehicle.propeller]) at the constant rps of its "
+                    "self-propulsion point at the start speed")
     si.add_argument("--samples", type=int, default=0, metavar="N",
                     help="draw the measured coefficients N times for 95 %% bands")
     si.add_argument("--out", type=Path, metavar="DIR",
@@ -439,7 +443,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         net_buoyancy_n=args.net_buoyancy, out=args.out, samples=args.samples,
         duration_s=args.duration_s, dive_angle_deg=args.dive_angle, roll_deg=args.roll_deg,
         seed=args.seed, period_s=args.period_s, schedule=args.schedule, noise=args.noise,
-        sample_hz=args.sample_hz)
+        sample_hz=args.sample_hz, propeller=args.propeller)
 
 
 def cmd_steady(args: argparse.Namespace) -> int:

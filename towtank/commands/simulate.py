@@ -23,6 +23,7 @@ from towtank.vehicle.glider_controls import (
 )
 from towtank.vehicle.model import read_model
 from towtank.vehicle.simulate import (
+    PROPULSION,
     manoeuvre_metrics,
     read_schedule,
     sample_models,
@@ -114,12 +115,14 @@ def simulate_command(
     duration_s: float | None = None, seed: int = 1, dive_angle_deg: float | None = None,
     roll_deg: float | None = None,
     period_s: float | None = None, schedule: Path | None = None, noise: str | None = None,
-    sample_hz: float | None = None,
+    sample_hz: float | None = None, propeller: str = "thrust",
 ) -> int:
     """Simulate, write manoeuvre.csv, metrics.csv and manoeuvre.png; print the metrics.
 
     With ``samples`` > 0 the measured coefficients are drawn ``samples`` times from their
     covariance and metrics.csv gains ci_low, ci_high (2.5 and 97.5 percentiles).
+    ``propeller`` "rps" drives a powered manoeuvre by the model's propeller at a constant rate
+    instead of a constant thrust (:func:`towtank.vehicle.simulate.propulsion`).
     """
     name = Path(model_path).name
     problems: list[str] = []
@@ -137,6 +140,7 @@ def simulate_command(
         duration_s=duration_s, net_buoyancy_n=net_buoyancy_n, samples=samples, name=name)
     problems += _check_dive_angle(model, manoeuvre, dive_angle_deg)
     problems += _check_roll(model, manoeuvre, roll_deg, name)
+    problems += _check_propeller(model, manoeuvre, propeller, name)
     table, noise_sd, more = _check_new_inputs(manoeuvre, period_s, schedule, noise, sample_hz)
     problems += more
     if table is not None and duration_s is None:
@@ -153,7 +157,8 @@ def simulate_command(
             print(f"warning: {warning}", file=sys.stderr)
     kwargs: dict[str, Any] = dict(speed_m_s=u, rudder_deg=rudder, sternplane_deg=stern,
                                   net_buoyancy_n=net_buoyancy_n, duration_s=duration_s,
-                                  dive_angle_deg=dive_angle_deg, roll_deg=roll_deg)
+                                  dive_angle_deg=dive_angle_deg, roll_deg=roll_deg,
+                                  propeller=propeller)
     if manoeuvre in ("sine", "schedule") or sample_hz is not None:
         kwargs.update(period_s=period_s, schedule=table, sample_hz=sample_hz)
     try:
@@ -173,7 +178,7 @@ def simulate_command(
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
         raise ProtocolError(f"{name}: {exc}") from None
-    metrics = _refer_to_assumptions(metrics, model)
+    metrics = _refer_to_assumptions(metrics, model, propeller)
     folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
 
     def write(tmp: Path) -> None:
@@ -192,7 +197,7 @@ def simulate_command(
     write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
         print(metrics.to_string(index=False))
-    line = guessed_line(model.get("assumptions"))
+    line = guessed_line(_used(model, propeller))
     if line:
         print(line)
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"
@@ -206,16 +211,42 @@ REFERRED = ("steady_turn_radius_m", "tactical_diameter_m", "steady_pitch_deg",
             "glide_angle_deg")
 
 
-def _refer_to_assumptions(metrics: pd.DataFrame, model: dict) -> pd.DataFrame:
-    """metrics.csv with the notes of :data:`REFERRED` naming the model's guessed inputs."""
-    names = [str(a["input"]) for a in guessed(model.get("assumptions") or [])]
+def _used(model: dict, propeller: str) -> list[dict]:
+    """model.json's ``assumptions`` the run rests on: the propeller's only when it drives
+    the run (``propeller`` "rps")."""
+    return [a for a in model.get("assumptions") or []
+            if propeller == "rps" or a.get("input") != "propeller"]
+
+
+def _refer_to_assumptions(metrics: pd.DataFrame, model: dict,
+                          propeller: str = "thrust") -> pd.DataFrame:
+    """metrics.csv with the notes of :data:`REFERRED` (and ``speed_loss_percent``) naming the
+    model's guessed inputs; the propeller only when it drives the run (``propeller`` "rps")."""
+    names = [str(a["input"]) for a in guessed(_used(model, propeller))]
     if not names:
         return metrics
     out = metrics.copy()
     text = f"rests on assumed inputs ({', '.join(names)}: model.json 'assumptions')"
-    pick = out["metric"].isin(REFERRED)
+    pick = out["metric"].isin(REFERRED + ("speed_loss_percent",))
     out.loc[pick, "note"] = [f"{n}; {text}" if n else text for n in out.loc[pick, "note"]]
     return out
+
+
+def _check_propeller(model: dict | None, manoeuvre: str, propeller: str,
+                     name: str) -> list[str]:
+    """--propeller: thrust or rps; rps for a powered manoeuvre (not a glide) of a model with
+    a ``propeller`` block."""
+    if propeller not in PROPULSION:
+        return [f"--propeller must be one of {', '.join(PROPULSION)}, not {propeller!r}."]
+    if propeller != "rps":
+        return []
+    if manoeuvre == "glide":
+        return ["--propeller rps is for a powered manoeuvre; a glide has no propulsion."]
+    if model is not None and not isinstance(model.get("propeller"), dict):
+        return [f"{name}: --propeller rps needs the model's propeller, but it has no "
+                "'propeller' block (give the protocol a [vehicle.propeller] with diameter_m, "
+                "pitch_ratio and blade_area_ratio, and run predict again)."]
+    return []
 
 
 def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | None,

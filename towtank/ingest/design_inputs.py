@@ -71,11 +71,12 @@ def _parse(raw: Any, keys: dict, label: str, src: str) -> dict[str, Any]:
     return out
 
 
-def parse_propeller(raw: Any, src: str) -> dict[str, Any]:
-    """The checked ``[vehicle.propeller]`` (keys :data:`PROPELLER_KEYS`)."""
-    out = _parse(raw, PROPELLER_KEYS, "vehicle.propeller", src)
+def parse_propeller(raw: Any, src: str, label: str = "vehicle.propeller") -> dict[str, Any]:
+    """The checked ``[vehicle.propeller]`` (keys :data:`PROPELLER_KEYS`); ``label`` names the
+    section in the sentences (model.json's block: ``propeller``)."""
+    out = _parse(raw, PROPELLER_KEYS, label, src)
     if out["blades"] != int(out["blades"]):
-        raise ProtocolError(f"{src}: 'blades' in [vehicle.propeller] must be a whole number, "
+        raise ProtocolError(f"{src}: 'blades' in [{label}] must be a whole number, "
                             f"but it is {out['blades']}.")
     out["blades"] = int(out["blades"])
     return out

@@ -192,7 +192,8 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
     if "glider" in data:  # ballast, moving mass, roll mass, wings (#26)
         design["glider"] = parse_glider(data.pop("glider"), src)
     if "assumed" in data:
-        design["assumed"] = _assumed(data.pop("assumed"), src, design.get("glider"))
+        design["assumed"] = _assumed(data.pop("assumed"), src, design.get("glider"),
+                                     "propeller" in design)
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
     if v["hull"] == "drdc":
         raise ProtocolError(
@@ -265,13 +266,16 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
                    **design)
 
 
-def _assumed(raw: Any, src: str, glider: dict[str, Any] | None) -> dict[str, str]:
+def _assumed(raw: Any, src: str, glider: dict[str, Any] | None,
+             propeller: bool = False) -> dict[str, str]:
     """``[vehicle.assumed]``: {input: why}, the inputs the protocol guessed (a [vehicle] key,
-    ``fins`` or ``glider.KEY``), each with its reason as text."""
+    ``fins``, ``glider.KEY`` or, with a [vehicle.propeller], ``propeller``), each with its
+    reason as text."""
     if not isinstance(raw, dict):
         raise ProtocolError(f"{src}: [vehicle.assumed] must be a table of input = \"why it is "
                             f"assumed\", but it is {raw!r}.")
-    known = [*VEHICLE_SCHEMA, "fins", *(f"glider.{k}" for k in (glider or {}))]
+    known = [*VEHICLE_SCHEMA, "fins", *(f"glider.{k}" for k in (glider or {})),
+             *(["propeller"] if propeller else [])]
     for key, why in raw.items():
         if key not in known:
             raise ProtocolError(f"{src}: [vehicle.assumed] names '{key}', which is not an input "

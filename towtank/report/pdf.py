@@ -125,13 +125,16 @@ def thumbnail_runs(runs: pd.DataFrame, reductions: Mapping[int, Any],
 
 def vehicle_pages(day: DayResult) -> list[Page]:
     """The "Vehicle" page of a day with a [vehicle]: its measured coefficients beside those
-    predicted from the geometry (:func:`towtank.report.vehicle.fig_predicted`); none without
-    a prediction."""
+    predicted from the geometry and the table of the model's guessed inputs
+    (:func:`towtank.report.vehicle.fig_predicted`); none without a prediction."""
     rows = predicted_rows(getattr(day, "coefficients", None))
     if rows is None or rows.empty:
         return []
+    vehicle = getattr(day, "vehicle", None)
+    model = getattr(vehicle, "model", None) or {}
     return [Page("figure", "Vehicle",
-                 ("predicted_vs_measured", partial(fig_predicted, day.coefficients)))]
+                 ("predicted_vs_measured", partial(fig_predicted, day.coefficients,
+                                                   assumptions=model.get("assumptions"))))]
 
 
 #: The captive figures of :data:`towtank.report.figures.FIGURES`, each the DayResult

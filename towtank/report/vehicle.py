@@ -20,6 +20,7 @@ from towtank.report.figure_base import (
     new_figure,
     place_legend,
 )
+from towtank.vehicle.assumptions import ASSUMED, guessed, origin
 from towtank.vehicle.model import write_model
 
 
@@ -154,10 +155,12 @@ def predicted_figure(coefficients: Any) -> Any:
     return fig
 
 
-def fig_predicted(coefficients: Any, *, page: bool = False) -> Any:
+def fig_predicted(coefficients: Any, *, page: bool = False,
+                  assumptions: list[dict[str, Any]] | None = None) -> Any:
     """The predicted-vs-measured figure of a day with a [vehicle], as a report page: the
-    primes over |predicted| (:func:`predicted_figure`) with their numbers and a caption;
-    None when no coefficient has a prediction.
+    primes over |predicted| (:func:`predicted_figure`) with their numbers and a caption, and
+    below them the table of the model's guessed inputs (:func:`assumption_rows`); None when
+    no coefficient has a prediction.
 
     Parameters
     ----------
@@ -166,18 +169,89 @@ def fig_predicted(coefficients: Any, *, page: bool = False) -> Any:
         docs/formats.md).
     page : bool
         Lay the figure out as an A4 report page.
+    assumptions : list of dict, optional
+        model.json ``assumptions`` (``day.vehicle.model``)
     """
     rows = predicted_rows(coefficients)
     if rows is None or rows.empty:
         return None
+    table = assumption_rows(assumptions)
     with mpl.rc_context(style.rc()):
         fig = new_figure(page)
         height = fig.get_size_inches()[1]
-        # the axes keep ~0.85 in per coefficient (the whole height from 9 on)
-        used = 0.85 * len(rows) + 0.6
+        # the table's rows, its heading and the axes' x label below the axes [in]
+        below = ASSUMPTION_ROW_IN * (len(table) + 2) + 0.6 if table else 0.0
+        # the axes keep ~0.85 in per coefficient (the whole height left from 9 on)
+        used = min(0.85 * len(rows) + 0.6, height - 4.0 - below)
         free = max(height - used - 4.0, 0.0)
         gs = figure_grid(fig, 2, 1, page=page, right=0.6, left=0.14, hspace=0.0,
                          height_ratios=[used, max(free, 1e-3)], title=PREDICTED_TITLE,
-                         text=predicted_caption())
+                         text=predicted_caption() + (ASSUMPTIONS_CAPTION if table else ""))
         _draw_predicted(fig.add_subplot(gs[0, 0]), rows, symbol=math_symbol, numbers=True)
+        if table:
+            _draw_assumptions(fig.add_subplot(gs[1, 0]), table, height)
     return fig
+
+
+#: Height of a row of the assumptions' table on the vehicle page [in].
+ASSUMPTION_ROW_IN = 0.19
+#: Most characters of a note in that table (the whole note is in model.json).
+NOTE_CHARS = 52
+#: The caption's sentence on that table.
+ASSUMPTIONS_CAPTION = (
+    " Below: the inputs of the model that were not measured (model.json 'assumptions'): "
+    "'default' is towtank's choice where the protocol gives nothing, 'assumed' a value the "
+    "protocol marks as a guess ([vehicle.assumed]); the manoeuvres simulated from this model "
+    "rest on them.")
+
+
+def _shown(value: Any, width: int = 26, digits: int = 4) -> str:
+    """An assumption's value in a table cell: numbers to ``digits`` significant digits (3 in
+    lists and tables), lists and tables joined, cut to ``width`` characters."""
+    if isinstance(value, dict):
+        text = ", ".join(f"{k} {_shown(v, width, 3)}" for k, v in value.items())
+    elif isinstance(value, (list, tuple)):
+        text = ", ".join(_shown(v, width, 3) for v in value)
+    elif isinstance(value, float):
+        text = fmt_number(value, digits)
+    else:
+        text = str(value)
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
+def assumption_rows(assumptions: list[dict[str, Any]] | None) -> list[tuple[str, str, str, str]]:
+    """(input, value, source, note) of the guessed inputs
+    (:func:`towtank.vehicle.assumptions.guessed`: the defaults and the protocol's assumed
+    inputs) for the vehicle page; source "default" or "assumed", the note without its
+    "assumed: " and cut to fit."""
+    out = []
+    for a in guessed(assumptions or []):
+        note = str(a["note"]).removeprefix(ASSUMED)
+        out.append((str(a["input"]), _shown(a.get("value")), origin(a),
+                    note if len(note) <= NOTE_CHARS else note[:NOTE_CHARS - 1] + "…"))
+    return out
+
+
+def _draw_assumptions(ax: Any, table: list[tuple[str, str, str, str]], height_in: float) -> None:
+    """The assumptions' table in the axes ``ax`` (turned off), starting 0.6 in below its top
+    (the x label of the axes above), across the caption's width (8 % to 92 % of the page)."""
+    ax.axis("off")
+    pos = ax.get_position()
+    ax_h = pos.height * height_in
+    top = 1.0 - 0.6 / ax_h
+    left = (0.08 - pos.x0) / pos.width
+    ax.text(left, top, "Assumed, not measured (model.json 'assumptions')",
+            transform=ax.transAxes, fontsize=8.5, fontweight="bold", va="bottom")
+    rows_h = ASSUMPTION_ROW_IN * (len(table) + 1) / ax_h
+    cells = ax.table(cellText=[list(r) for r in table],
+                     colLabels=["input", "value", "source", "note"],
+                     colWidths=[0.25, 0.24, 0.09, 0.42], cellLoc="left", colLoc="left",
+                     bbox=[left, top - 0.04 / ax_h - rows_h, 0.84 / pos.width, rows_h])
+    cells.auto_set_font_size(False)
+    cells.set_fontsize(7)
+    for (r, _c), cell in cells.get_celld().items():
+        cell.set_edgecolor("#bbbbbb")
+        cell.set_linewidth(0.4)
+        if r == 0:
+            cell.set_text_props(fontweight="bold")
+            cell.set_facecolor("#eeeeee")

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["SOURCES", "NEUTRAL_TOLERANCE", "vehicle_assumptions", "guessed", "guessed_line",
+__all__ = ["SOURCES", "ASSUMED", "NEUTRAL_TOLERANCE", "vehicle_assumptions", "guessed", "origin",
+           "guessed_line",
            "neutral_warning", "check_assumptions"]
 
 #: The sources of an assumption.
 SOURCES = ("given", "computed", "default")
+#: How the note of an input the protocol marks as a guess begins ([vehicle.assumed]).
+ASSUMED = "assumed: "
 #: Largest relative difference between the hull's displaced mass and the vehicle's mass of a
 #: vehicle declared neutrally buoyant [-].
 NEUTRAL_TOLERANCE = 0.05
@@ -55,8 +58,8 @@ def vehicle_assumptions(vehicle: Any, masses: dict[str, Any],
     Returns
     -------
     list of dict
-        One entry per mass property, the hull, the fins and each glider input, then any input
-        of ``assumed`` not among those.
+        One entry per mass property, the hull, the fins, each glider input and the
+        propeller, then any input of ``assumed`` not among those.
     """
     assumed = dict(assumed or {})
     rows: list[dict[str, Any]] = []
@@ -64,7 +67,7 @@ def vehicle_assumptions(vehicle: Any, masses: dict[str, Any],
     def add(name: str, value: Any, source: str, note: str) -> None:
         why = assumed.pop(name, None)
         if why is not None:
-            note = f"assumed: {why}"
+            note = f"{ASSUMED}{why}"
         rows.append({"input": name, "value": value, "source": source, "note": note})
 
     for key, unit in _MASS_KEYS:
@@ -76,16 +79,26 @@ def vehicle_assumptions(vehicle: Any, masses: dict[str, Any],
         "fin pairs of [[vehicle.fins]]" if vehicle.fins else "no fins")
     for key, value in sorted((getattr(vehicle, "glider", None) or {}).items()):
         add(f"glider.{key}", value, "given", "[vehicle.glider]")
+    propeller = getattr(vehicle, "propeller", None)
+    if propeller is not None:
+        add("propeller", {k: v for k, v in propeller.items() if k != "speeds_m_s"}, "given",
+            "[vehicle.propeller]: the B-series propeller of powering.csv and of simulate "
+            "--propeller rps")
     for key, why in assumed.items():
         rows.append({"input": key, "value": getattr(vehicle, key, None), "source": "given",
-                     "note": f"assumed: {why}"})
+                     "note": f"{ASSUMED}{why}"})
     return rows
+
+
+def origin(entry: dict[str, Any]) -> str:
+    """"assumed" for an input the protocol marks as a guess (its note begins with
+    :data:`ASSUMED`), else the entry's ``source``."""
+    return "assumed" if str(entry["note"]).startswith(ASSUMED.rstrip()) else str(entry["source"])
 
 
 def guessed(assumptions: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The defaults and the inputs the protocol marks as assumed."""
-    return [a for a in assumptions
-            if a["source"] == "default" or str(a["note"]).startswith("assumed")]
+    return [a for a in assumptions if origin(a) in ("default", "assumed")]
 
 
 def guessed_line(assumptions: list[dict[str, Any]] | None) -> str:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -36,11 +37,16 @@ __all__ = [
     "KT_TERMS",
     "KQ_TERMS",
     "POWERING_COLUMNS",
+    "PROPELLER_FIELDS",
     "Propeller",
     "bseries_kt_kq",
     "effective_power",
+    "kt_polynomial",
     "match_thrust",
     "powering_table",
+    "propeller_from",
+    "propeller_thrust",
+    "self_propulsion_rps",
 ]
 
 #: (C, s, t, u, v): C J^s (P/D)^t (A_E/A_0)^u Z^v, K_T at Re = 2e6 ([1]_, Table 1, 39 terms).
@@ -110,6 +116,17 @@ class Propeller:
     blades: int = 3
     thrust_deduction: float = 0.0
     wake_fraction: float = 0.0
+
+
+#: The keys of a propeller's block (``[vehicle.propeller]``, model.json ``propeller``).
+PROPELLER_FIELDS = ("diameter_m", "pitch_ratio", "blade_area_ratio", "blades",
+                    "thrust_deduction", "wake_fraction")
+
+
+def propeller_from(block: dict[str, Any]) -> Propeller:
+    """The :class:`Propeller` of a checked ``[vehicle.propeller]`` or model.json
+    ``propeller`` block (keys :data:`PROPELLER_FIELDS`; t and w default 0, Z 3)."""
+    return Propeller(**{k: block[k] for k in PROPELLER_FIELDS if block.get(k) is not None})
 
 
 def _poly(terms, j, pd_ratio, ear, z):
@@ -217,12 +234,61 @@ def powering_table(speeds_m_s: Sequence[float], resistance_n: Sequence[float],
     pandas.DataFrame
         Columns :data:`POWERING_COLUMNS`
     """
-    rows = []
-    for u, r in zip(speeds_m_s, resistance_n, strict=True):
-        thrust = r / (1.0 - prop.thrust_deduction)
-        va = u * (1.0 - prop.wake_fraction)
-        point = match_thrust(thrust, va, prop, rho)
-        rows.append({"speed_m_s": u, "resistance_N": r,
-                     "effective_power_W": float(effective_power(r, u)), "thrust_N": thrust,
-                     "advance_speed_m_s": va, **point})
+    rows = [{"speed_m_s": u, "resistance_N": r, "effective_power_W": float(effective_power(r, u)),
+             **_self_propulsion(r, u, prop, rho)}
+            for u, r in zip(speeds_m_s, resistance_n, strict=True)]
     return pd.DataFrame(rows, columns=list(POWERING_COLUMNS))
+
+
+def _self_propulsion(resistance_n: float, speed_m_s: float, prop: Propeller,
+                     rho: float) -> dict[str, float]:
+    """The thrust ``T = R / (1 - t)``, the advance speed ``V_A = U (1 - w)`` and the operating
+    point (:func:`match_thrust`) that gives it."""
+    thrust = resistance_n / (1.0 - prop.thrust_deduction)
+    va = speed_m_s * (1.0 - prop.wake_fraction)
+    return {"thrust_N": thrust, "advance_speed_m_s": va, **match_thrust(thrust, va, prop, rho)}
+
+
+def self_propulsion_rps(resistance_n: float, speed_m_s: float, prop: Propeller,
+                        rho: float) -> float:
+    """The propeller's rate n [1/s] at the self-propulsion point: ``T (1 - t) = R`` at the
+    speed U, the advance speed ``V_A = U (1 - w)`` ([2]_; :func:`match_thrust`).
+
+    ``resistance_n`` is R [N] and ``speed_m_s`` U [m/s], both > 0; ``rho`` the water's density
+    [kg/m^3]. A ValueError when the propeller cannot deliver the thrust (:func:`match_thrust`).
+    """
+    return float(_self_propulsion(resistance_n, speed_m_s, prop, rho)["rps"])
+
+
+def kt_polynomial(prop: Propeller) -> np.ndarray:
+    """K_T of ``prop`` as a polynomial in J: the coefficients of J^0 .. J^3 ([1]_, Table 1,
+    with P/D, A_E/A_0 and Z fixed; the terms' J exponents are 0 to 3)."""
+    coef = np.zeros(4)
+    for c, s, t, u, v in KT_TERMS:
+        coef[s] += c * prop.pitch_ratio**t * prop.blade_area_ratio**u * prop.blades**v
+    return coef
+
+
+def propeller_thrust(u_m_s: float, rps: float, prop: Propeller, rho: float,
+                     kt: np.ndarray | None = None) -> float:
+    """The thrust ``T = rho n^2 D^4 K_T(J)`` [N] at the rate n and the surge speed u, with
+    ``J = u (1 - w) / (n D)`` ([1]_); an advance speed below 0 is taken as 0 (the series
+    holds for J >= 0).
+
+    Parameters
+    ----------
+    u_m_s : float
+        Surge speed u [m/s]
+    rps : float
+        n [1/s], > 0
+    prop : Propeller
+    rho : float
+        Water density [kg/m^3]
+    kt : numpy.ndarray, optional
+        :func:`kt_polynomial` of ``prop`` (computed when not given)
+    """
+    coef = kt_polynomial(prop) if kt is None else kt
+    d = prop.diameter_m
+    j = max(u_m_s, 0.0) * (1.0 - prop.wake_fraction) / (rps * d)
+    k_t = coef[0] + j * (coef[1] + j * (coef[2] + j * coef[3]))
+    return float(rho * rps**2 * d**4 * k_t)

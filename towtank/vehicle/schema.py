@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from towtank.errors import ProtocolError
+from towtank.ingest.design_inputs import parse_propeller
 from towtank.ingest.values import finite_number
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.assumptions import check_assumptions
@@ -304,6 +306,11 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
         problems += check_covariance(model["covariance"], name)
     if "assumptions" in model:
         problems += check_assumptions(model["assumptions"], name)
+    if "propeller" in model:  # the B-series propeller of simulate --propeller rps
+        try:
+            parse_propeller(model["propeller"], name, label="propeller")
+        except ProtocolError as exc:
+            problems.append(str(exc))
     if problems:  # the checks below need every value above
         return problems
     # no problem: every required key is there and valid (the scalars are numbers)

@@ -6,8 +6,12 @@
 Every coefficient ``F_<product>`` of the model that is not an added mass adds
 ``F * product`` to the force F, where the product reads the subscript: ``u`` a velocity,
 ``|u|`` its magnitude, ``dr``/``ds`` the rudder/stern-plane angle [rad] (``Y_uudr`` gives
-``Y_uudr u u delta_r``, ``N_r|r|`` gives ``N_r|r| r |r|``). The constant thrust balances the
-axial drag ``X_u|u|`` at the commanded speed on a straight course (none for a glide).
+``Y_uudr u u delta_r``, ``N_r|r|`` gives ``N_r|r| r |r|``). The propulsion (none for a glide)
+balances the axial drag ``X_u|u|`` at the commanded speed on a straight course:
+``propeller="thrust"`` keeps that thrust constant; ``propeller="rps"`` keeps the rate n of the
+model's B-series propeller constant at its self-propulsion point, the surge force
+``(1 - t) rho n^2 D^4 K_T(J)`` with ``J = u (1 - w) / (n D)`` (:mod:`towtank.vehicle.powering`),
+rising as the vehicle slows.
 
 Manoeuvres (metrics.csv ``metric, value, unit``):
 
@@ -57,10 +61,17 @@ from towtank.vehicle.fossen import (
     skew,
 )
 from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
+from towtank.vehicle.powering import (
+    kt_polynomial,
+    propeller_from,
+    propeller_thrust,
+    self_propulsion_rps,
+)
 from towtank.vehicle.schema import MAX_STEPS, default_duration
 from towtank.vehicle.wings import Wings
 
-__all__ = ["MANOEUVRES", "Dynamics", "simulate", "default_duration", "manoeuvre_metrics",
+__all__ = ["MANOEUVRES", "PROPULSION", "Dynamics", "simulate", "propulsion", "default_duration",
+           "manoeuvre_metrics",
            "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
            "TRIM_DEPTH_RATE_M_S", "PITCH_KP", "PITCH_KD", "FIN_LIMIT_DEG"]
 
@@ -78,6 +89,8 @@ TRIM_PITCH_DEG = 2.0
 #: Largest steady depth rate with zero controls of a model in trim [m/s].
 TRIM_DEPTH_RATE_M_S = 0.05
 
+#: simulate's propulsion: a constant thrust, or the model's propeller at a constant rate.
+PROPULSION = ("thrust", "rps")
 MANOEUVRES = ("turning", "zigzag", "dive", "spiral", "glide", "sine", "schedule")
 _TOKEN = re.compile(r"\|[uvwpqr]\||dr|ds|[uvwpqr]")
 COLUMNS = ("t_s", "x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
@@ -209,6 +222,7 @@ def simulate(
     period_s: float | None = None,
     schedule: pd.DataFrame | None = None,
     sample_hz: float | None = None,
+    propeller: str = "thrust",
 ) -> pd.DataFrame:
     """Simulate one manoeuvre; the time series of manoeuvre.csv (columns :data:`COLUMNS`).
 
@@ -251,6 +265,11 @@ def simulate(
     sample_hz : float, optional
         Write the time series at this rate [Hz] (the integrator's dense output; a zigzag
         interpolated linearly) instead of at the integrator's steps
+    propeller : {"thrust", "rps"}
+        The propulsion of a powered manoeuvre: "thrust" a constant thrust, the axial drag at
+        ``speed_m_s``; "rps" the model's ``propeller`` at the constant rate of its
+        self-propulsion point at ``speed_m_s`` (:func:`propulsion`). The time series'
+        ``attrs`` keep ``propeller`` and, with "rps", ``propeller_rps`` [1/s]
     """
     if manoeuvre not in MANOEUVRES:
         raise ValueError(f"the manoeuvre must be one of {', '.join(MANOEUVRES)}, not "
@@ -268,7 +287,7 @@ def simulate(
         raise ValueError(f"the simulated time must be > 0 s, not {duration_s}.")
     h = max_step_s if max_step_s is not None else duration_s / 2000.0
     budget = _Budget(duration_s, MAX_STEPS if max_steps is None else max_steps)
-    thrust = 0.0 if manoeuvre == "glide" else -dyn.x_uu * speed_m_s * abs(speed_m_s)
+    push, rps = propulsion(model, dyn, 0.0 if manoeuvre == "glide" else speed_m_s, propeller)
     dr = math.radians(rudder_deg) if manoeuvre in ("turning", "spiral", "zigzag",
                                                    "glide") else 0.0
     ds = math.radians(sternplane_deg) if manoeuvre in ("dive", "spiral", "glide", "sine") else 0.0
@@ -299,7 +318,7 @@ def simulate(
     if sample_hz is not None:
         t_eval = np.arange(0.0, duration_s * (1 + 1e-12), 1.0 / sample_hz)
     if manoeuvre == "schedule":
-        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern_at(t), thrust),
+        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern_at(t), push(y[6])),
                            (0.0, duration_s), state0, method="RK45", rtol=1e-8, atol=1e-9,
                            max_step=h, t_eval=t_eval)
         _check(sol)
@@ -307,7 +326,7 @@ def simulate(
         rudder = np.array([rudder_at(t) for t in times])
         sterns = np.array([stern_at(t) for t in times])
     elif manoeuvre != "zigzag":
-        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern(y), thrust),
+        sol = budget.solve(lambda t, y: dyn.rhs(y, rudder_at(t), stern(y), push(y[6])),
                            (0.0, duration_s), state0, method="RK45", rtol=1e-8, atol=1e-9,
                            max_step=h, dense_output=False, t_eval=t_eval)
         _check(sol)
@@ -326,7 +345,7 @@ def simulate(
                 return y[5] - target * check
             # solve_ivp reads these two attributes of an event function
             vars(event).update(terminal=True, direction=target)
-            sol = budget.solve(lambda t, y, c=command: dyn.rhs(y, c, ds, thrust),
+            sol = budget.solve(lambda t, y, c=command: dyn.rhs(y, c, ds, push(y[6])),
                                (t0, duration_s), y0, method="RK45", rtol=1e-8, atol=1e-9,
                                max_step=h, events=event)
             _check(sol)
@@ -358,12 +377,52 @@ def simulate(
                            np.degrees([stern(y) for y in states]) if closed else np.degrees(ds)),
     })
     out.attrs["manoeuvre"] = manoeuvre
+    out.attrs["propeller"] = propeller
+    if rps is not None:
+        out.attrs["propeller_rps"] = rps
     if closed and dive_angle_deg is not None:
         out.attrs["dive_angle_deg"] = float(dive_angle_deg)
     out.attrs["check_deg"] = abs(rudder_deg)
     if manoeuvre == "glide" and (roll_deg or rudder_deg):
         out.attrs["turning"] = True  # metrics: turn radius and period (#26)
     return out
+
+
+def propulsion(model: dict[str, Any], dyn: Dynamics, speed_m_s: float,
+               propeller: str = "thrust") -> tuple[Any, float | None]:
+    """The surge force of the propulsion [N] as a function of the surge speed u [m/s], and the
+    propeller's rate n [1/s] (None for a constant thrust).
+
+    Both balance the axial drag ``R = -X_u|u| U|U|`` at ``speed_m_s`` U (0: no propulsion).
+    "thrust": the force R whatever u. "rps": n is the self-propulsion point of the model's
+    ``propeller`` block at U, ``T (1 - t) = R`` with ``V_A = U (1 - w)``
+    (:func:`towtank.vehicle.powering.self_propulsion_rps`), and the force is
+    ``(1 - t) rho n^2 D^4 K_T(J)``, ``J = u (1 - w) / (n D)`` (Oosterveld & van Oossanen 1975;
+    docs/method.md "Propeller at constant rps").
+
+    Raises
+    ------
+    ValueError
+        An unknown ``propeller``; "rps" without the model's ``propeller`` block, or with a
+        propeller that cannot deliver R.
+    """
+    if propeller not in PROPULSION:
+        raise ValueError(f"the propulsion must be one of {', '.join(PROPULSION)}, not "
+                         f"{propeller!r}.")
+    drag = -dyn.x_uu * speed_m_s * abs(speed_m_s)
+    if propeller == "thrust" or drag == 0.0:
+        return (lambda u: drag), None
+    block = model.get("propeller")
+    if not isinstance(block, dict):
+        raise ValueError("a propeller at constant rps needs the model's 'propeller' block "
+                         "(the protocol's [vehicle.propeller]: diameter_m, pitch_ratio, "
+                         "blade_area_ratio, blades); add it and run predict again.")
+    prop = propeller_from(block)
+    rho = float(model.get("rho_kg_m3", 1025.0))
+    n = self_propulsion_rps(drag, speed_m_s, prop, rho)
+    kt = kt_polynomial(prop)
+    share = 1.0 - prop.thrust_deduction
+    return (lambda u: share * propeller_thrust(u, n, prop, rho, kt)), n
 
 
 def _rudder_law(manoeuvre: str, rudder_deg: float, period_s: float | None,
@@ -673,7 +732,8 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
                      else nan, "m", "" if at180 is not None else "no 180 deg of heading change"))
         steady("steady_speed_m_s", "speed_m_s", "m/s")
         beside = next(i for i, r in enumerate(rows) if r[0] == "steady_turn_radius_m") + 1
-        rows.insert(beside, _speed_loss(rows[-1], float(q["speed_m_s"][0])))
+        rows.insert(beside, _speed_loss(rows[-1], float(q["speed_m_s"][0]),
+                                        ts.attrs.get("propeller_rps")))
         steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
         steady("steady_drift_angle_deg", "drift_deg", "deg", angle=True)
         if kind == "spiral":
@@ -723,18 +783,23 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
             note, yaw = turn(("yaw_rate_deg_s", "speed_m_s", "depth_rate_m_s"))
             rows.append(("turn_period_s", nan if note else 360.0 / abs(yaw), "s", note))
             steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
+    if ts.attrs.get("propeller_rps") is not None:
+        rows.append(("propeller_rps", float(ts.attrs["propeller_rps"]), "1/s",
+                     "constant (--propeller rps): the self-propulsion point at the start speed"))
     return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
 
 
-def _speed_loss(steady_speed: tuple[str, float, str, str], start_m_s: float
-                ) -> tuple[str, float, str, str]:
+def _speed_loss(steady_speed: tuple[str, float, str, str], start_m_s: float,
+                rps: float | None = None) -> tuple[str, float, str, str]:
     """metrics.csv's ``speed_loss_percent``: the steady turn's speed below the speed at the
-    start [%], under the thrust that held the start speed on a straight course (simulate keeps
-    it constant)."""
+    start [%], under the propulsion that held the start speed on a straight course (a constant
+    thrust, or the propeller at a constant ``rps`` [1/s])."""
     _, value, _, note = steady_speed
     loss = float("nan") if note else 100.0 * (1.0 - value / start_m_s)
+    how = ("under constant thrust" if rps is None
+           else f"with the propeller at a constant {rps:.4g} rps")
     return ("speed_loss_percent", loss, "%",
-            note or f"of the {start_m_s:.3g} m/s at the start, under constant thrust")
+            note or f"of the {start_m_s:.3g} m/s at the start, {how}")
 
 
 def _dive_angle_rows(ts: pd.DataFrame, angle_deg: float) -> list[tuple[str, float, str, str]]:

@@ -13,7 +13,7 @@ from towtank.reference import water as water_props
 from towtank.vehicle import model as vmodel
 from towtank.vehicle.assumptions import neutral_warning, vehicle_assumptions
 from towtank.vehicle.hull import HullProfile
-from towtank.vehicle.powering import Propeller, powering_table
+from towtank.vehicle.powering import PROPELLER_FIELDS, powering_table, propeller_from
 from towtank.vehicle.predict import FinPair, axial_drag, predict_coefficients
 from towtank.vehicle.pressure_hull import pressure_hull_table
 
@@ -72,6 +72,8 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     if getattr(vehicle, "glider", None) is not None:  # [vehicle.glider] (#26)
         _check_glider(vehicle, profile, float(model["mass_kg"]))
         model["glider"] = dict(vehicle.glider)
+    if getattr(vehicle, "propeller", None) is not None:  # simulate --propeller rps
+        model["propeller"] = {k: vehicle.propeller[k] for k in PROPELLER_FIELDS}
     model["assumptions"] = vehicle_assumptions(vehicle, masses, getattr(vehicle, "assumed", None))
     warning = neutral_warning(str(vehicle.name), masses, float(profile.volume), rho)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
@@ -108,9 +110,7 @@ def _powering(vehicle: Any, profile: HullProfile, fins: list[FinPair], rho: floa
         return None
     speeds = raw["speeds_m_s"] or [f * vehicle.speed_m_s for f in POWERING_SPEED_FRACTIONS]
     resistance = [-axial_drag(profile, fins, rho, nu, u) * u * u for u in speeds]
-    prop = Propeller(raw["diameter_m"], raw["pitch_ratio"], raw["blade_area_ratio"],
-                     raw["blades"], raw["thrust_deduction"], raw["wake_fraction"])
-    return powering_table(speeds, resistance, prop, rho)
+    return powering_table(speeds, resistance, propeller_from(raw), rho)
 
 
 def _pressure_hull(vehicle: Any, profile: HullProfile, rho: float) -> pd.DataFrame | None:
