@@ -251,6 +251,9 @@ def _parser() -> argparse.ArgumentParser:
     idn.add_argument("--noise", metavar="STATE=SD,...", type=_noise_option,
                      help="measurement noise per state, each named once with a standard "
                      "deviation > 0 (default: estimated from the record)")
+    idn.add_argument("--validate", type=Path, metavar="LOG2",
+                     help="a second record the identified model is tested against (default: "
+                          "the record's last quarter, held out of a least-squares refit)")
     idn.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     idn.add_argument("--out", type=Path, metavar="DIR",
                      help="output folder (default: ./identify)")
@@ -453,7 +456,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     return identify_command(args.model, args.log, args.estimate, method=args.method,
                             start=args.start, out=args.out, protocol=args.protocol,
-                            noise=args.noise, quiet=args.quiet)
+                            noise=args.noise, quiet=args.quiet, validate=args.validate)
 
 
 def _noise_option(text: str) -> dict[str, float]:
