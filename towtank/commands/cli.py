@@ -234,8 +234,9 @@ def _parser() -> argparse.ArgumentParser:
         description="Augmented-state unscented (or extended) Kalman filter with the 6-DOF "
         "model of 'simulate', a Rauch-Tung-Striebel smoother and output-error least squares "
         "as the cross-check: identified.csv, model.json (the identified values, sources "
-        "'identified', their covariance) and identify.png in --out; one verdict line per "
-        "coefficient.",
+        "'identified', their covariance), identify.png and fit.csv (whether the record fits "
+        "the model; exit 1 and the verdict 'model does not fit' when it does not) in --out; "
+        "one verdict line per coefficient.",
     )
     idn.add_argument("model", type=Path, help="model.json")
     idn.add_argument("log", type=Path, help="manoeuvre record (CSV in simulate's columns)")
