@@ -252,6 +252,36 @@ def sample_outputs(tmp_path_factory) -> Callable[[str], SampleOutputs]:
     return get
 
 
+@dataclass(frozen=True)
+class SampleReport:
+    """A shipped sample day processed by :func:`towtank.process_day` with its report."""
+
+    day: Any  # towtank.results.DayResult
+    out: Path  # its output folder (with the run cache, .cache)
+
+
+@pytest.fixture(scope="session")
+def sample_report(tmp_path_factory) -> Callable[[str], SampleReport]:
+    """``sample_report(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
+    with its report (PDF, workbook, figures) by ``towtank.process_day(protocol, out=...,
+    report=True)`` once per session (per xdist worker). Writing a report is the longest part of
+    a day, so the tests that read a sample day's written report share this one (the golden
+    comparison, the front doors). The folder is shared: tests only read it."""
+    done: dict[str, SampleReport] = {}
+
+    def get(name: str) -> SampleReport:
+        if name not in done:
+            import towtank
+
+            out = tmp_path_factory.mktemp(f"report_{name}") / "out"
+            day = towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out,
+                                      report=True, jobs=JOBS)
+            done[name] = SampleReport(day, out)
+        return done[name]
+
+    return get
+
+
 # ------------------------------------------------------------------------- many-seed results
 @dataclass
 class SeedResult:

@@ -221,7 +221,8 @@ def test_stray_blanks_and_repeated_blocks_read_to_one_table(tmp_path, rows, pad,
     assert len(a) == len(rows)
 
 
-KVLCC2 = Path("/work/shared/real/kvlcc2_hmri_captive/captive.csv")
+KVLCC2 = (Path(__file__).resolve().parents[2] / "shared" / "real" / "kvlcc2_hmri_captive"
+          / "captive.csv")  # ../shared beside the repository
 
 
 @pytest.mark.skipif(not KVLCC2.is_file(), reason="the real KVLCC2 means are not here")

@@ -250,3 +250,30 @@ def test_identified_coefficients_drop_their_conversions(day_model):
     kept = kept_conversions(day_model["conversions"], ["Y_vdot"])
     assert "N_uv" not in kept and "Y_ur" in kept and "N_ur" in kept
     assert "N_ur" not in kept_conversions(day_model["conversions"], ["N_ur"])
+
+
+@pytest.fixture(scope="module")
+def generated_day_table(protocol, prestero) -> pd.DataFrame:
+    """coefficients.csv rows of a generated captive day of REMUS in each plane (reduced and
+    fitted as a day's runs are), with the hull's X_udot and X_u|u| (no captive test measures
+    them) as a resistance day would give them."""
+    from towtank.testing.captive import CaptiveTruth, simulated_result
+
+    tables = [simulated_result(CaptiveTruth(), seed=3).table(),
+              simulated_result(CaptiveTruth.vertical(), seed=4).table()]
+    hull = _captive_table(protocol, prestero)
+    hull = hull[hull["symbol"].isin(HULL)]
+    table = pd.concat([*tables, hull], ignore_index=True)
+    return table[~table["symbol"].str.endswith("_uu")]  # the offsets stay out of the model
+
+
+def test_a_generated_captive_day_reproduces_the_turn_radius(protocol, generated_day_table,
+                                                           generating_radius):
+    """FORMATS section 8 / issue 35 item 7: the model built from a generated captive day (both
+    planes, every derivative measured) turns on the generating model's radius within 2 %."""
+    result, _, _ = day_vehicle(_with_form(protocol, None), generated_day_table)
+    model = result.model
+    for sym in ("Y_uv", "N_uv", "Y_ur", "N_ur", "Y_vdot", "N_rdot", "Y_uudr", "N_uudr"):
+        assert model["sources"][sym] == "measured"
+    radius = _steady_radius(model)
+    assert radius == pytest.approx(generating_radius, rel=0.02)

@@ -42,10 +42,7 @@ HANG_S = 300
 #: once it has given the runs already in the data folder their verdicts.
 EXIT_STATUS = {"watch": 130}
 #: Documented commands that fail because of a known bug of another issue.
-KNOWN_BUGS = {
-    "towtank steady reports/glider/model.json --ballast-cc -200:-50:-450 --pitch-deg -50:5:-5":
-        "issue 36",
-}
+KNOWN_BUGS: dict[str, str] = {}
 
 
 @dataclass(frozen=True)

@@ -86,15 +86,17 @@ def assert_full_disk_reported(rc: int, stderr: str, out: Path, before: dict) -> 
 # ------------------------------------------------------------------ the day used below
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
-    """A day (plain CSV files) written once with everything (report and the three exports),
-    and its result for the runs below (process_day is not what they test)."""
+    """A day (plain CSV files) written once with everything (report, its pages blank, and the
+    three exports), and its result for the runs below (process_day is not what they test)."""
     from towtank.pipeline import process_day
 
     root = tmp_path_factory.mktemp("full_disk")
     protocol = _make_day(root)
     out = root / "out"
-    rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "1",
-                         *[a for f in ALL for a in ("--export", f)])
+    with pytest.MonkeyPatch.context() as mp:
+        _blank_pages_and_figures(mp)
+        rc, _, err = run_cli(str(protocol), "--out", str(out), "-q", "-j", "1",
+                             *[a for f in ALL for a in ("--export", f)])
     assert rc in (0, 1), err
     return protocol, out, process_day(protocol, jobs=1)
 
@@ -209,10 +211,33 @@ def _zlib_after_full(path: Path) -> None:
         raise zlib.error("Error -2 while flushing: inconsistent stream state")  # noqa: B904
 
 
+def _blank_pages_and_figures(monkeypatch) -> None:
+    """The report's drawing replaced by a blank page per PDF part and one small PNG: the
+    writers still run as they do (the PDF's parts here and forked, joined; the figures
+    forked), without the seconds of drawing that a full disk's handling does not depend on."""
+    from pypdf import PdfWriter
+
+    from towtank.report import figures, pdf
+
+    def blank_part(day, plan, pages, path):
+        writer = PdfWriter()
+        writer.add_blank_page(width=595, height=842)
+        with open(path, "wb") as fh:
+            writer.write(fh)
+
+    def one_figure(day, folder):
+        (Path(folder) / "figures").mkdir(parents=True, exist_ok=True)
+        (Path(folder) / "figures" / "tare.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+
+    monkeypatch.setattr(pdf, "_write_part", blank_part)
+    monkeypatch.setattr(figures, "write_figures", one_figure)
+
+
 def _inject(monkeypatch, where: str) -> None:
     from towtank.report import figures, outputs, pdf, tables, workbook
     from towtank.runtime import manifest
 
+    _blank_pages_and_figures(monkeypatch)  # then the writer that meets the full disk
     if where == "pdf":  # every part, the first one in this process
         monkeypatch.setattr(pdf, "_write_part", lambda day, plan, pages, path:
                             _half_then_full(path))
@@ -289,6 +314,7 @@ def _pdf_part_fails(monkeypatch) -> None:
     def broken(day, plan, pages, path):
         raise zlib.error("Error -2 while flushing: inconsistent stream state")
 
+    _blank_pages_and_figures(monkeypatch)
     monkeypatch.setattr(pdf, "_write_part", broken)
 
 

@@ -2,7 +2,8 @@
 
 Both sample days (``protocols/sut2_hull.toml``, the SUT-2 hull day, and
 ``protocols/naca0015_fin.toml``, the NACA 0015 fin day, whose run files ship in
-``sample_runs/``) are processed and every CSV output, model.json, provenance.json, the cell
+``sample_runs/``) are processed with their report (the session's ``sample_report``, shared
+with the front-door test) and every CSV output, model.json, provenance.json, the cell
 values of report.xlsx, the day's warnings and the pixels of every PDF page and PNG figure are
 hashed and compared with ``tests/golden/sample_days.json``. Only what legitimately varies is
 normalised: the checkout's absolute path, towtank's, Python's and the libraries' versions. The
@@ -26,7 +27,6 @@ from typing import Any
 
 import pytest
 
-import towtank
 from towtank.report.workbook import write_workbook
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,10 +90,9 @@ def _png_pixels(path: Path) -> str:
         return hashlib.sha256(image.convert("RGBA").tobytes()).hexdigest()
 
 
-def day_digest(name: str, out: Path) -> dict[str, str]:
-    """sha256 of every normalised output of one sample day, by file name."""
-    day = towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out, jobs=2,
-                              report=True, cache=False)
+def day_digest(day: Any, out: Path, book: Path) -> dict[str, str]:
+    """sha256 of every normalised output of one sample day (``day``, processed with its report
+    into ``out``), by file name; the workbook is written again into ``book`` from ``day``."""
     digest: dict[str, str] = {}
     for path in sorted(out.iterdir()):
         if path.suffix == ".csv" or path.name == "model.json":
@@ -102,8 +101,6 @@ def day_digest(name: str, out: Path) -> dict[str, str]:
     for key in VARYING:
         prov.pop(key, None)
     digest["provenance.json"] = _sha(_normalise(json.dumps(prov, sort_keys=True)))
-    book = out / "book"
-    book.mkdir()
     digest["report.xlsx (cells)"] = _sha(_workbook_cells(write_workbook(day, book)))
     digest["warnings"] = _sha(_normalise("\n".join(str(n) for n in day.warnings)))
     digest[f"report.pdf ({PIXELS})"] = _pdf_pixels(out / "report.pdf")
@@ -113,8 +110,9 @@ def day_digest(name: str, out: Path) -> dict[str, str]:
 
 
 @pytest.mark.parametrize("name", DAYS)
-def test_sample_day_outputs_match_golden(name: str, tmp_path: Path) -> None:
-    got = day_digest(name, tmp_path / name)
+def test_sample_day_outputs_match_golden(name: str, tmp_path: Path, sample_report) -> None:
+    written = sample_report(name)  # towtank.process_day(protocol, out=..., report=True)
+    got = day_digest(written.day, written.out, tmp_path)
     if os.environ.get("TOWTANK_WRITE_GOLDEN"):
         stored = json.loads(GOLDEN.read_text()) if GOLDEN.is_file() else {}
         stored[name] = got

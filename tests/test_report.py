@@ -8,7 +8,6 @@ synthetic fin day are generated once per module, processed by the pipeline and w
 from __future__ import annotations
 
 import copy
-import hashlib
 import math
 import os
 import re
@@ -261,15 +260,14 @@ def test_fin_pdf_has_no_hull_pages(days):
     assert "not given" in reader.pages[0].extract_text()
 
 
-def test_pdf_metadata_and_reproducible(days, tmp_path):
+def test_pdf_metadata(days):
+    """The metadata; that the same day gives the same bytes is checked on both sample days by
+    tests/test_one_front_door.py (three writes of each compared byte for byte)."""
     day, out = days["hull"]
     meta = PdfReader(out / "report.pdf").metadata
     assert meta["/Author"] == "towtank"
     assert day.protocol.name in meta["/Title"]
     assert meta["/CreationDate"].startswith("D:20240521")
-    again = pdf.write_pdf(day, tmp_path)
-    digest = [hashlib.sha256(p.read_bytes()).hexdigest() for p in (out / "report.pdf", again)]
-    assert digest[0] == digest[1]
     fin_meta = PdfReader(days["fin"][1] / "report.pdf").metadata
     assert "/CreationDate" not in fin_meta  # no date known: none invented
 
@@ -287,12 +285,12 @@ def test_pages_split_into_contiguous_groups(kinds, parts):
 
 
 def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
-    day, out = days["hull"]
+    day, out = days["fin"]  # the shorter day: its pages are drawn in four parts as well
     one = pdf.write_pdf(day, tmp_path, parts=1)
     a, b = PdfReader(one), PdfReader(out / "report.pdf")
     assert len(a.pages) == len(b.pages)
     assert [p.extract_text() for p in a.pages] == [p.extract_text() for p in b.pages]
-    assert a.metadata["/CreationDate"] == b.metadata["/CreationDate"]
+    assert a.metadata == b.metadata
     assert not list(tmp_path.glob(".report-part-*"))
 
 

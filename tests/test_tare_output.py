@@ -15,8 +15,11 @@ from towtank.testing.truth import TareTruth
 
 @pytest.fixture(scope="module")
 def out(hull_day, tmp_path_factory):
+    """The day's tables, provenance and workbook (the tests read no PDF or figure)."""
+    from towtank.report.workbook import write_workbook
+
     folder = tmp_path_factory.mktemp("tare_out") / "out"
-    write_outputs(hull_day.result, folder)
+    write_outputs(hull_day.result, folder, writers=[write_workbook])
     return folder
 
 

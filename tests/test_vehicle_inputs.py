@@ -438,7 +438,9 @@ def test_predict_on_a_storage_error_leaves_the_folder_as_it_was(tmp_path, run, m
     assert sorted(p.name for p in kept.iterdir()) == ["mine.txt"]
 
 
-@pytest.mark.parametrize("code", STORAGE)
+# one errno: simulate and predict share the storage-error path, which the predict test above
+# drives with each of STORAGE
+@pytest.mark.parametrize("code", STORAGE[:1])
 def test_simulate_on_a_storage_error_leaves_the_folder_as_it_was(tmp_path, run, monkeypatch,
                                                                  code):
     import towtank.commands.simulate as sim

@@ -305,7 +305,7 @@ def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, 
             fitted = fit_captive(these, rho=rho, length_m=model.length_m,
                                  draught_m=model.draught_m, plane=plane, roll_deg=roll)
             out[plane] = from_fit(CaptiveResult, fitted)
-            warns += fitted.notes
+            warns += fitted.warnings
     return out, warns
 
 

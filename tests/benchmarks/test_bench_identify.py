@@ -60,9 +60,11 @@ def bench(tmp: Path, duration_s: float = 120.0, rate_hz: float = 20.0) -> dict:
 
 
 def test_bench_identify_runs_and_reports(tmp_path: Path) -> None:
-    out = bench(tmp_path)
+    """The benchmark's code on half its record (60 s, 1,201 rows: the same identification,
+    within 5 % of the truth); the 120 s figure is measured by running the file alone."""
+    out = bench(tmp_path, duration_s=60.0)
     print(json.dumps(out))
-    assert out["samples"] == 2401
+    assert out["samples"] == 1201
     assert np.all(np.abs(out["relative_error"]) < 0.05)
     assert out["wall_s"] > 0 and out["cpu_s"] > 0
 

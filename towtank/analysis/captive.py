@@ -7,10 +7,18 @@ regressors' harmonics are columns of the same design matrix as the linear ones a
 derivative is never read off a first harmonic that still holds v|v| or r|r|. The unit of
 information is a run's component, never a sample.
 
-Weights: 1/SE^2 where every row has a standard error, the covariance scaled by the reduced
-chi^2 when it exceeds 1 (model error widens an interval, never narrows it); rows without one (a
+Weights: 1/var of each row's load less its regressors times the derivatives, the variance
+from the row's covariance of load and regressors over the run's cycles or blocks and the
+zero's (the effective-variance method: the motion channels' noise is in the regressors), by a
+few passes of weighted least squares. A variance estimated from a few cycles is on average
+dof/(dof - 2) times too small (:func:`variance_inflation`): each row's own factor enters the
+derivatives' covariance (:func:`row_covariance`), each derivative's interval takes the
+Welch-Satterthwaite dof of its rows, and the chi^2 test of model error takes the heavy tail of
+such weights (:func:`chi2_p_value`); the reduced chi^2 widens the intervals when it exceeds 1
+(model error widens an interval, never narrows it; it is a warning when that test rejects the
+model at :data:`CHI2_P`). Rows without a standard error (a
 lab's table of means) are fitted on the prime scale (each row over 1/2 rho L^2 U^2, L^3 for
-moments) with the residual-based covariance. Intervals: Student's t on n - p degrees of
+moments) with the residual-based covariance and Student's t on n - p degrees of
 freedom.
 """
 
@@ -26,11 +34,13 @@ import pandas as pd
 from towtank.analysis.hull import COEFFICIENT_COLUMNS, COEFFICIENT_EXTRA_COLUMNS
 from towtank.reduce.captive import (
     COMPONENTS,
+    COV_NAMES,
     CYCLE_COLUMNS,
     PERIOD_COLUMNS,
     PMM_TESTS,
     REGRESSORS,
     ROW_COLUMNS,
+    STATIC_BLOCKS,
     VERTICAL_REGRESSORS,
     CaptiveRun,
     arm_kinematics,
@@ -38,6 +48,7 @@ from towtank.reduce.captive import (
     hydrodynamic_loads,
 )
 from towtank.reduce.captive import regressors as make_regressors
+from towtank.stats.intervals import welch_satterthwaite
 from towtank.stats.quantiles import t_quantile
 
 #: Each regressor's power k of L in its prime (value / (1/2 rho L^k)) for the force and the
@@ -103,7 +114,12 @@ class CaptiveEstimate:
 
 @dataclass(frozen=True)
 class CaptiveFit:
-    """The captive derivatives of a day (:func:`fit_captive`)."""
+    """The captive derivatives of a day (:func:`fit_captive`).
+
+    ``notes``: what the report shows beside the derivatives (the PMM runs' agreement over
+    omega'); ``warnings``: what the day's warnings carry (runs that differ over omega',
+    derivatives the runs do not determine, a fit widened by its reduced chi^2).
+    """
 
     plane: str
     rho: float
@@ -112,9 +128,13 @@ class CaptiveFit:
     estimates: dict[str, CaptiveEstimate]
     runs: tuple[CaptiveRun, ...]
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
     by_run: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(
         columns=list(BY_RUN_COLUMNS)))
     chi2_reduced: dict[str, float] = field(default_factory=dict)
+    #: per equation ("Y", "N"; "Z", "M"), the covariance of its derivatives [SI], indexed by
+    #: symbol both ways (what a prediction's band is drawn from)
+    cov: dict[str, pd.DataFrame] = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
         """coefficients.csv rows: the hull table's columns (NaN where not applicable) and
@@ -172,6 +192,32 @@ def mapped_rows(run: CaptiveRun, roll_deg: float = 90.0) -> pd.DataFrame:
     return out
 
 
+def mapped_cov(run: CaptiveRun, roll_deg: float = 90.0) -> np.ndarray:
+    """The run's component covariances (:attr:`CaptiveRun.cov`, of
+    :data:`towtank.reduce.captive.COV_NAMES`) in its plane's signs (:func:`mapped_rows`);
+    NaN where the run has none."""
+    n = len(COV_NAMES)
+    if run.cov is None:
+        return np.full((len(run.rows), n, n), np.nan)
+    if run.plane != "vertical":
+        return np.asarray(run.cov, dtype=float)
+    s = math.copysign(1.0, roll_deg)
+    signs = (_VERTICAL_SIGN[k] for k in REGRESSORS)
+    d = np.array([-s, s, *(1.0 if k is None else k * s for k in signs)])
+    return np.asarray(run.cov, dtype=float) * np.outer(d, d)
+
+
+def _effective_weights(cov: np.ndarray, eq: int, keep: list[int], coef: np.ndarray
+                       ) -> np.ndarray:
+    """1 / var(y_i - x_i b) of each row from its covariance ``cov`` (rows, 10, 10): the
+    equation's load (``eq`` 0 force, 1 moment) and the kept regressors with the
+    coefficients ``coef`` (the regressors' scatter enters with the derivatives' weights)."""
+    a = np.zeros(cov.shape[1])
+    a[eq] = 1.0
+    a[[2 + k for k in keep]] = -np.asarray(coef, dtype=float)
+    return 1.0 / np.einsum("i,nij,j->n", a, cov, a)
+
+
 def _design(runs: Sequence[CaptiveRun], plane: str, roll_deg: float
             ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """All rows of the runs (with run, test, speed), the run index of each row."""
@@ -216,6 +262,106 @@ def _and(names: Sequence[str]) -> str:
     return ", ".join(names)
 
 
+#: What a regressor needs of the runs to be excited (for the sentence of those that are not).
+_NEEDS = {"ur": "yaw-rate runs (rotating arm, PMM yaw)",
+          "r|r|": "yaw-rate runs (rotating arm, PMM yaw)", "vdot": "PMM runs",
+          "rdot": "PMM runs", "uudr": "rudder runs", "uv": "drift runs (static, PMM sway)",
+          "v|v|": "drift runs (static, PMM sway)", "uu": "runs"}
+
+
+def not_excited_sentence(runs: Sequence[CaptiveRun], terms: Sequence[tuple[str, str, str]]
+                         ) -> str:
+    """One sentence naming the derivatives (``terms``: force and moment letters, regressor
+    name) the runs do not determine and the runs that would."""
+    names = _and([f"{f}_{k}, {m}_{k}" for f, m, k in terms])
+    horizontal = dict(zip(VERTICAL_REGRESSORS, REGRESSORS, strict=True))
+    needs = dict.fromkeys(_NEEDS[horizontal.get(k, k)] for _, _, k in terms)
+    tests = ", ".join(sorted({TEST_NAMES[r.test] for r in runs}))
+    return (f"{names}: not determined (left out): no {' and no '.join(needs)} excite them "
+            f"(the captive runs: {tests})")
+
+
+#: Significance of the reduced chi^2 above which the fit is said to have model error.
+CHI2_P = 0.01
+
+
+def variance_inflation(dof: np.ndarray | float) -> np.ndarray:
+    """E[(e/s)^2] of a residual e over a standard error s estimated on ``dof`` degrees of
+    freedom (Student's t variance dof / (dof - 2), taken at 3 dof below 3): the factor by
+    which weights 1/s^2 from a few cycles or blocks inflate the chi^2 of a fit that is
+    right, and deflate its covariance."""
+    d = np.maximum(np.asarray(dof, dtype=float), 3.0)
+    return d / (d - 2.0)
+
+
+@dataclass(frozen=True)
+class RowCovariance:
+    """The derivatives' covariance of a weighted fit whose weights are estimated
+    (:func:`row_covariance`): ``cov`` [SI^2], ``parts`` (derivatives, rows) each row's share
+    of each derivative's variance, ``leverage`` the rows' leverages h_i, ``expected_chi2``
+    the weighted residuals' sum of squares a right fit gives on average."""
+
+    cov: np.ndarray
+    parts: np.ndarray
+    leverage: np.ndarray
+    expected_chi2: float
+
+
+def row_covariance(X: np.ndarray, w: np.ndarray, inflation: np.ndarray) -> RowCovariance:
+    """Covariance of the weighted least-squares coefficients b = (X'WX)^-1 X'W y when each
+    row's weight ``w`` is one over a variance estimated with few degrees of freedom, so
+    that the row's true variance is on average ``inflation`` / w
+    (:func:`variance_inflation`): cov = C diag(inflation / w) C', C = (X'WX)^-1 X'W. A
+    derivative carried by PMM rows (5 cycles) is so widened by their factor 2 and one
+    carried by static rows (8 blocks) by 1.4. The expected chi^2 is
+    sum inflation_i (1 - h_i), h_i the rows' leverages."""
+    w = np.asarray(w, dtype=float)
+    inflation = np.asarray(inflation, dtype=float)
+    a_inv = np.linalg.pinv(X.T @ (X * w[:, None]))
+    c = a_inv @ X.T * w[None, :]
+    parts = c**2 * (inflation / w)[None, :]
+    leverage = w * np.einsum("ij,jk,ik->i", X, a_inv, X)
+    return RowCovariance(cov=(c * (inflation / w)[None, :]) @ c.T, parts=parts,
+                         leverage=leverage,
+                         expected_chi2=float(np.sum(inflation * (1.0 - leverage))))
+
+
+#: Draws of the chi^2 test's null distribution (:func:`chi2_p_value`) and their seed.
+CHI2_DRAWS, CHI2_SEED = 5000, 35
+
+
+def chi2_p_value(chi2: float, leverage: np.ndarray, dof: np.ndarray) -> float:
+    """P(S >= ``chi2``) of a right fit's S = sum w_i e_i^2 when each weight is one over a
+    variance estimated on ``dof``_i degrees of freedom: S ~ sum (1 - h_i) t_i^2 with t_i
+    Student's on dof_i (``leverage`` h_i), heavier-tailed than chi^2 on n - p dof (the
+    variance of t^2 on 4 dof is infinite); by :data:`CHI2_DRAWS` seeded draws."""
+    rng = np.random.default_rng(CHI2_SEED)
+    nu = np.maximum(np.asarray(dof, dtype=float), 1.0)
+    t2 = rng.standard_t(nu, size=(CHI2_DRAWS, nu.size)) ** 2
+    s = t2 @ (1.0 - np.asarray(leverage, dtype=float))
+    return float((np.count_nonzero(s >= chi2) + 1) / (CHI2_DRAWS + 1))
+
+
+#: Passes of the effective-variance weights (each refits with the last pass's derivatives).
+EFFECTIVE_VARIANCE_PASSES = 4
+
+
+def _fit_weights(y: np.ndarray, X: np.ndarray, w: np.ndarray, cov: np.ndarray, eq: int,
+                 keep: list[int]) -> np.ndarray:
+    """The weights of the rows with the regressors' scatter in their variance: from the
+    loads' weights ``w``, :data:`EFFECTIVE_VARIANCE_PASSES` passes of weighted least squares
+    and :func:`_effective_weights` (the effective-variance method for errors in the
+    regressors)."""
+    for _ in range(EFFECTIVE_VARIANCE_PASSES):
+        sw = np.sqrt(w)
+        coef, *_ = np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)
+        w_new = _effective_weights(cov, eq, keep, coef)
+        if not np.all(np.isfinite(w_new) & (w_new > 0)):
+            return w
+        w = w_new
+    return w
+
+
 def fit_captive(
     runs: Sequence[CaptiveRun], *, rho: float, length_m: float, draught_m: float | None = None,
     plane: str = "horizontal", roll_deg: float = 90.0, alpha: float = 0.05,
@@ -243,48 +389,65 @@ def fit_captive(
 
     runs = tuple(r for r in runs if r.plane == plane)
     (eq_f, eq_m), regs = plane_names(plane)
-    notes: list[str] = []
+    warnings: list[str] = []
     if not runs:
-        return CaptiveFit(plane, rho, length_m, draught_m, {}, (), (f"no {plane} captive runs",))
+        return CaptiveFit(plane, rho, length_m, draught_m, {}, (),
+                          warnings=(f"no {plane} captive runs",))
     rows, X, run_index = _design(runs, plane, roll_deg)
+    cov = np.concatenate([mapped_cov(r, roll_deg) for r in runs])
     excited = _excited(X)
     absent = [k for k in range(len(regs)) if not excited[k]]
     if absent:
-        notes.append(f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in absent])}: not "
-                     "excited by these runs (left out)")
+        warnings.append(not_excited_sentence(runs, [(eq_f, eq_m, regs[k]) for k in absent]))
     keep, dropped = _independent(X, [k for k in range(len(regs)) if excited[k]])
     if dropped:
-        notes.append(
+        warnings.append(
             f"{_and([f'{eq_f}_{regs[k]}, {eq_m}_{regs[k]}' for k in dropped])}: not separable "
             "from the other terms by these runs (e.g. too few drift angles), left out")
     estimates: dict[str, CaptiveEstimate] = {}
     chi2: dict[str, float] = {}
     params: dict[str, np.ndarray] = {}
+    param_cov: dict[str, pd.DataFrame] = {}
     Xk = X[:, keep]
     n, p = Xk.shape
     if n <= p:
-        notes.append(f"{n} run components for {p} derivatives: no interval can be given")
+        warnings.append(f"{n} run components for {p} derivatives: no interval can be given")
     tests = [runs[i].test for i in run_index]
+    row_dof = np.array([runs[i].cycles_used - 1 if runs[i].test in PMM_TESTS
+                        else STATIC_BLOCKS - 1 for i in run_index], dtype=float)
     for eq, moment in ((eq_f, False), (eq_m, True)):
         y = rows[eq].to_numpy(dtype=float)
         se = rows[f"{eq}_se"].to_numpy(dtype=float)
         with_se = bool(np.all(np.isfinite(se) & (se > 0)))
         if with_se:
             w = 1.0 / se**2
+            if np.all(np.isfinite(cov)):
+                w = _fit_weights(y, Xk, w, cov, int(moment), keep)
         else:
             U = rows["speed"].to_numpy(dtype=float)
             w = 1.0 / (0.5 * rho * length_m ** (3 if moment else 2) * U**2) ** 2
         res = sm.WLS(y, Xk, weights=w).fit()
         dof = float(n - p)
-        red = float(np.sum(w * res.resid**2) / dof) if dof > 0 else math.nan
+        if with_se and dof > 0:
+            rc = row_covariance(Xk, w, variance_inflation(row_dof))
+            stat = float(np.sum(w * res.resid**2))
+            red = stat / rc.expected_chi2
+            p_chi2 = chi2_p_value(stat, rc.leverage, row_dof)
+            widen = max(1.0, red)
+            cov_b = rc.cov * widen
+            dofs = [welch_satterthwaite(list(v), list(row_dof)) for v in rc.parts]
+            dofs = [d if red <= 1.0 else min(d, dof) for d in dofs]
+        else:
+            red = float(np.sum(w * res.resid**2) / dof) if dof > 0 else math.nan
+            p_chi2 = math.nan
+            cov_b = np.asarray(res.cov_params()) if dof > 0 else np.full((p, p), math.nan)
+            dofs = [dof] * p
         chi2[eq] = red
-        if with_se:
-            res = sm.WLS(y, Xk, weights=w).fit(cov_type="fixed scale",
-                                                cov_kwds={"scale": max(1.0, red)})
         coef = np.asarray(res.params)
-        bse = np.asarray(res.bse) if dof > 0 else np.full(p, math.nan)
+        bse = np.sqrt(np.diag(cov_b))
         params[eq] = coef
-        tq = t_quantile(dof, alpha)
+        names = [f"{eq}_{regs[k]}" for k in keep]
+        param_cov[eq] = pd.DataFrame(cov_b, index=names, columns=names)
         for j, k in enumerate(keep):
             sym = f"{eq}_{regs[k]}"
             carrying = sorted({i for i in range(n) if abs(X[i, k]) > 1e-9 * np.max(np.abs(
@@ -295,42 +458,48 @@ def fit_captive(
             scale_lt = (0.5 * rho * draught_m * length_m ** (power - 1)
                         if draught_m else math.nan)
             value, s = float(coef[j]), float(bse[j])
+            tq = t_quantile(dofs[j], alpha)
             estimates[sym] = CaptiveEstimate(
-                symbol=sym, value=value, std_error=s, dof=dof, ci_low=value - tq * s,
+                symbol=sym, value=value, std_error=s, dof=dofs[j], ci_low=value - tq * s,
                 ci_high=value + tq * s, unit=UNITS[REGRESSORS[k]][int(moment)],
                 prime=value / scale, prime_lt=value / scale_lt, scale=scale, scale_lt=scale_lt,
                 method=" + ".join(methods), n_runs=len({int(run_index[i]) for i in carrying}))
-        if with_se and red > 1.0:
-            notes.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
-                         "intervals widened by its square root (model error beyond the "
-                         "runs' scatter)")
-    by_run, agreement = frequency_agreement(runs, rows, X, run_index, keep, params, plane,
-                                            length_m, chi2)
-    notes += agreement
+        if p_chi2 < CHI2_P:
+            warnings.append(f"{eq}: reduced chi^2 {red:.3g} of the fit on {dof:g} dof, the "
+                            "intervals widened by its square root (model error beyond the "
+                            "runs' scatter)")
+    by_run, agree, differ = frequency_agreement(
+        runs, rows, X, run_index, keep, params, plane, length_m, chi2,
+        {eq: c.to_numpy() for eq, c in param_cov.items()}, cov)
+    warnings += differ
     order = [f"{eq}_{regs[k]}" for k in range(len(regs)) for eq in (eq_f, eq_m)]
     estimates = {s: estimates[s] for s in order if s in estimates}
     return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
-                      estimates=estimates, runs=runs, notes=tuple(notes), by_run=by_run,
-                      chi2_reduced=chi2)
+                      estimates=estimates, runs=runs, notes=tuple(agree),
+                      warnings=tuple(warnings), by_run=by_run,
+                      chi2_reduced=chi2, cov=param_cov)
 
 
 def frequency_agreement(
     runs: Sequence[CaptiveRun], rows: pd.DataFrame, X: np.ndarray, run_index: np.ndarray,
     keep: list[int], params: dict[str, np.ndarray], plane: str, length_m: float,
-    chi2_reduced: dict[str, float] | None = None,
-) -> tuple[pd.DataFrame, list[str]]:
+    chi2_reduced: dict[str, float] | None = None, cov: dict[str, np.ndarray] | None = None,
+    row_cov: np.ndarray | None = None,
+) -> tuple[pd.DataFrame, list[str], list[str]]:
     """Whether the PMM runs' derivatives agree over omega' and amplitude.
 
     Per PMM run and derivative of :data:`AGREEMENT_REGRESSORS`: the derivative from the
     component row where its regressor is largest, the other terms held at the joint fit,
-    its standard error the row's over the regressor (widened as the joint fit's by the
-    square root of its reduced chi^2 where that exceeds 1); then a chi^2 homogeneity test across the
-    runs (chi^2 = sum ((d_i - d_w)/u_i)^2 on runs - 1 dof, d_w the weighted mean) and one
+    its standard error the row's over the regressor — from the row's covariance of the load
+    and the regressors (``row_cov``, rows x 10 x 10: the motion channels' noise enters the
+    load through the inertia removed and the regressors together), else the load's alone —
+    (widened as the joint fit's by the square root of its reduced chi^2 where that exceeds
+    1) combined with that of the other
+    terms held at the joint fit (``cov``, per equation, of the kept derivatives); then a
+    homogeneity test across the runs (S = sum ((d_i - d_w)/u_i)^2, d_w the weighted mean,
+    its p value that of :func:`chi2_p_value` for u_i from the runs' few cycles) and one
     sentence per derivative.
     """
-    # loaded on use: scipy.stats only for the test
-    from scipy.stats import chi2 as chi2_dist
-
     (eq_f, eq_m), regs = plane_names(plane)
     records = []
     for k in (REGRESSORS.index(name) for name in AGREEMENT_REGRESSORS):
@@ -348,18 +517,28 @@ def frequency_agreement(
             xk = X[best, k]
             if abs(xk) < 0.05 * col_max:
                 continue
-            for eq in (eq_f, eq_m):
+            for e, eq in enumerate((eq_f, eq_m)):
                 b = params[eq]
                 widen = math.sqrt(max(1.0, (chi2_reduced or {}).get(eq, 1.0)))
                 others = float(X[best, keep] @ b) - b[j] * xk
+                x_o = np.where(np.arange(len(keep)) == j, 0.0, X[best, keep])
+                var_o = float(x_o @ cov[eq] @ x_o) if cov and eq in cov else 0.0
+                se_row = float(rows.at[best, f"{eq}_se"])
+                if row_cov is not None and np.all(np.isfinite(row_cov[best])):
+                    a = np.zeros(row_cov.shape[1])
+                    a[e] = 1.0
+                    a[[2 + kk for kk in keep]] = -b
+                    se_row = math.sqrt(max(float(a @ row_cov[best] @ a), 0.0))
                 records.append({
                     "run": run.run, "test": run.test,
                     "omega_prime": run.omega_prime(length_m), "amplitude_m": run.amplitude_m,
                     "symbol": f"{eq}_{regs[k]}",
                     "value": (float(rows.at[best, eq]) - others) / xk,
-                    "std_error": widen * float(rows.at[best, f"{eq}_se"]) / abs(xk)})
+                    "std_error": math.sqrt((widen * se_row) ** 2 + var_o) / abs(xk)})
     by_run = pd.DataFrame(records, columns=list(BY_RUN_COLUMNS))
-    notes = []
+    cycles_dof = {run.run: float(run.cycles_used - 1) for run in runs}
+    agree: list[str] = []
+    differ: list[str] = []
     for sym, g in by_run.groupby("symbol", sort=False):
         g = g[np.isfinite(g["std_error"]) & (g["std_error"] > 0)]
         if len(g) < 2:
@@ -369,18 +548,18 @@ def frequency_agreement(
         mean = float(np.sum(w * d) / np.sum(w))
         stat = float(np.sum(w * (d - mean) ** 2))
         dof = len(g) - 1
-        pval = float(chi2_dist.sf(stat, dof))
+        pval = chi2_p_value(stat, w / np.sum(w), np.array([cycles_dof[r] for r in g["run"]]))
         kinds = " and ".join(dict.fromkeys(TEST_NAMES[t].replace(" ", "-") for t in g["test"]))
         head = (f"{sym} from {len(g)} {kinds} runs, omega' {g['omega_prime'].min():.2g}–"
                 f"{g['omega_prime'].max():.2g}, y0 {g['amplitude_m'].min():.2f}–"
                 f"{g['amplitude_m'].max():.2f} m")
         test = f"chi^2 = {stat:.3g} on {dof} dof, p = {pval:.2g}"
         if pval >= AGREEMENT_P:
-            notes.append(f"{head}: agree ({test})")
+            agree.append(f"{head}: agree ({test})")
         else:
-            notes.append(f"{head}: differ ({test}): the derivative depends on frequency or "
+            differ.append(f"{head}: differ ({test}): the derivative depends on frequency or "
                          "amplitude; the joint value is an average over the runs")
-    return by_run, notes
+    return by_run, agree, differ
 
 
 def captive_runs_from_means(

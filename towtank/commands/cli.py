@@ -74,7 +74,8 @@ def _parser() -> argparse.ArgumentParser:
         help="reduce a test day and write its tables and reports",
         description="Reduce every run of the protocol's run sheet and write coefficients.csv, "
         "runs.csv, fins.csv, fin_curves.csv and fin_control.csv (fin days), scaling.csv, "
-        "tare.csv, report.xlsx, report.pdf, figures/ and provenance.json; with a [vehicle] "
+        "tare.csv, pmm.csv (captive days), report.xlsx, report.pdf, figures/ and "
+        "provenance.json; with a [vehicle] "
         "section also predicted.csv and model.json; with --export, export/. The per-run "
         "cache is kept in .cache/ and the manifest of what towtank wrote in "
         ".towtank-outputs.json.",
@@ -82,10 +83,13 @@ def _parser() -> argparse.ArgumentParser:
     pr.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
     _day_options(pr, jobs_help="runs reduced in parallel (default: the protocol's "
                  "[processing] jobs, else all cores)")
-    pr.add_argument("--export", action="append", choices=("mat", "hdf5", "parquet"),
-                    default=None, metavar="FORMAT",
+    pr.add_argument("--export", action="append",
+                    choices=("mat", "hdf5", "parquet", "simman"), default=None,
+                    metavar="FORMAT",
                     help="also write every usable run's reduced time series (zeroed, filtered, "
                     "tared, with its phases) into DIR/export/: mat (MATLAB), hdf5 or parquet; "
+                    "simman: the captive tests (static means, PMM periods with their Fourier "
+                    "coefficients, particulars) into DIR/export/simman/; "
                     "may be given more than once")
     pr.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no summary")
     pr.add_argument("--no-cache", action="store_true",

@@ -25,10 +25,13 @@ from towtank.ingest.protocol import (
     load_protocol,
     read_and_channels,
 )
+from towtank.ingest.protocol_types import CAPTIVE_TESTS, PMM_TESTS
 from towtank.ingest.readers import name_list
 from towtank.ingest.runfile import load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
+from towtank.reduce.captive import CaptiveRun, CycleVerdict
+from towtank.reduce.captive_record import pmm_cycle_verdicts, reduce_captive_record
 from towtank.reduce.run import RunReduction, record_units, reduce_run, run_preview, sheet_segment
 from towtank.report import style
 from towtank.runtime.pathcheck import resolved
@@ -157,6 +160,25 @@ def _sheet_segment(protocol, runfile: Path) -> int | None:  # noqa: ANN001 - a P
         return None
 
 
+def _captive_row(protocol, runfile: Path) -> dict | None:  # noqa: ANN001 - Protocol | None
+    """The run sheet's row of ``runfile`` when it is a captive run (its ``test`` one of
+    :data:`CAPTIVE_TESTS`), else None (no protocol, no such row, a sheet that cannot be read).
+    Only a protocol that can reduce captive runs ([captive], or a [model] with the balance's
+    moment point or the yaw inertia) has its sheet read: a resistance day's inspect stays
+    light (no pandas)."""
+    if protocol is None or protocol.campaign.run_sheet is None:
+        return None
+    model = protocol.model
+    if protocol.captive is None and (model is None or (
+            model.balance_x_m is None and model.izz_kg_m2 is None)):
+        return None
+    try:
+        row = _sheet_row(protocol, runfile)
+    except RunError:
+        return None
+    return row if str(row.get("test", "")).strip().lower() in CAPTIVE_TESTS else None
+
+
 def _run_number(runfile: Path) -> int:
     """The run number a file name holds (``run_004.csv`` → 4; 0 without one), for the
     ``{run}`` of a ``[zeros]`` pattern."""
@@ -254,6 +276,7 @@ def inspect_run(
     err = err or sys.stderr
     runfile = Path(runfile)
     channels, p, read, protocol = _settings(protocol_path)
+    captive = _captive_row(protocol, runfile)
     raw = None
     proposed = False
     file_units: dict[str, str] = {}
@@ -264,7 +287,12 @@ def inspect_run(
         balance = protocol.balance if protocol is not None else None
         zeros = log = nominal = segment = None
         if protocol is not None:  # as process: the run's zeros file and speed log
-            number = _run_number(runfile)
+            number = _run_number(runfile) if captive is None else int(captive["run"])
+            if captive is not None:  # as the day: the sheet's window, when it gives one
+                ws, we = (captive.get("window_start_s", math.nan),
+                          captive.get("window_end_s", math.nan))
+                if math.isfinite(ws) and math.isfinite(we):
+                    window = (float(ws), float(we))
             if p.speed_source == "nominal":  # the speed (and window) of the sheet's row
                 row = _sheet_row(protocol, runfile)
                 number = int(row["run"])
@@ -281,7 +309,8 @@ def inspect_run(
             return load_run(runfile, channels, max_nan_gap_s=p.max_nan_gap_s,
                             max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                             options=read, balance=balance, speed_log=log,
-                            speed_nominal=nominal, segment=segment)
+                            speed_nominal=nominal, segment=segment,
+                            test="" if captive is None else str(captive["test"]))
 
         # the run sheet (pandas) is read for a segment only when the file holds several
         try:
@@ -339,18 +368,108 @@ def inspect_run(
     if proposed:
         print("reduced with the block above and default processing (provisional: check each "
               "line; a force at gain = 1.0 from volts is in volts, not newtons):", file=out)
-    for line in summary_lines(red, raw.columns, t0=float(raw.time[0]),
-                              timing=raw.time_source):
+    account: list[str] = []
+    refused = None
+    if captive is not None:  # the day's captive reduction of the sheet's test
+        red, account, refused = captive_account(protocol, raw, red, captive, runfile.name)
+    for line in [*summary_lines(red, raw.columns, t0=float(raw.time[0]),
+                                timing=raw.time_source), *account]:
         print(line, file=out)
+    if refused is not None:  # the day's one sentence for this run
+        reason = refused.rstrip(".")
+        head = "" if runfile.name in reason else f"{runfile.name}: "
+        print(f"towtank: {head}{reason}.", file=err)
     target = _target(runfile, png, err, out)
     if target is None:  # refused to overwrite (an error), or not beside the raw data unasked
-        return EXIT_RUN_ERROR if png is not None else EXIT_OK
+        return EXIT_RUN_ERROR if png is not None or refused is not None else EXIT_OK
     volts = any("with the stated gain 1.0" in n for n in red.notes)
     write_plot(red, target, protocol_path, runfile,
                settings=("proposed [channels]" + ("; forces in V" if volts else ""))
                if proposed else None)
     print(f"plot: {target}", file=out)
-    return EXIT_OK
+    return EXIT_OK if refused is None else EXIT_RUN_ERROR
+
+
+def captive_account(protocol, raw, red: RunReduction, row: dict, file: str  # noqa: ANN001
+                    ) -> tuple[RunReduction, list[str], str | None]:
+    """A captive run reduced as the day reduces it
+    (:func:`towtank.reduce.captive_record.reduce_captive_record` with the sheet's ``row``):
+    the reduction with the captive notes, the printed account (:func:`captive_lines`), and
+    the one sentence that rejects the run (None when the day keeps it)."""
+    run = int(row["run"])
+    cr: CaptiveRun | None = None
+    refused = None
+    try:
+        arrays, notes, _ = reduce_captive_record(protocol, raw, red.windows, row, run=run,
+                                                 file=file)
+        cr = CaptiveRun.from_arrays(run, file, arrays)
+        red = replace(red, notes=(*red.notes, *notes))
+    except RunError as exc:
+        refused = exc.reason
+    try:
+        cycles = pmm_cycle_verdicts(protocol, raw, red.windows, row)
+    except RunError:  # its sentence is the rejection's already
+        cycles = []
+    return red, captive_lines(row, cr, cycles, red.windows.get("steady")), refused
+
+
+def _sheet_value(row: dict, name: str) -> float:
+    try:
+        return float(row.get(name, math.nan))
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _pm(value: float, se: float, unit: str) -> str:
+    text = _fmt(value, unit)
+    return text if se != se else f"{text} ± {se:.2g}"
+
+
+#: The rows of a captive run's loads, as inspect names them.
+COMPONENT_NAMES = {"mean": "mean", "sin": "in phase (sin)", "cos": "quadrature (cos)"}
+
+
+def captive_lines(row: dict, cr: CaptiveRun | None, cycles: list[CycleVerdict],
+                  steady: tuple[float, float] | None) -> list[str]:
+    """The printed account of a captive run: the sheet's test and settings, the steady window
+    [s], the hydrodynamic loads X, Y [N] and N [N m] about O with the inertia removed (each
+    component ± its standard error), and for a PMM run every cycle kept or dropped with why,
+    the measured frequency [Hz] and sway amplitude [m] against the sheet's and cycles_used.
+    ``cr`` is None for a run the day rejects (its sentence is printed apart)."""
+    test = str(row.get("test", "")).strip().lower()
+    plane = str(row.get("plane") or "horizontal").strip().lower() or "horizontal"
+    setting = [f"{name} {_sheet_value(row, key):g} {unit}" for name, key, unit in (
+        ("drift", "drift_deg", "deg"), ("rudder", "rudder_deg", "deg"),
+        ("radius", "radius_m", "m"), ("PMM amplitude", "pmm_amplitude_m", "m"),
+        ("PMM frequency", "pmm_frequency_hz", "Hz")) if math.isfinite(_sheet_value(row, key))]
+    lines = [f"captive run: {test} test, {plane} plane (run {row.get('run')} of the sheet)"
+             + (f"; {', '.join(setting)}" if setting else "")]
+    lines.append("  steady window  " + (f"{steady[0]:.2f} – {steady[1]:.2f} s" if steady
+                                        else "not found"))
+    if cr is not None:
+        lines.append("  hydrodynamic loads about O, inertia removed (± standard error):")
+        for r in cr.rows.to_dict("records"):
+            lines.append(f"    {COMPONENT_NAMES.get(r['component'], r['component']):<17s}"
+                         f"X {_pm(r['X'], r['X_se'], 'N')}   Y {_pm(r['Y'], r['Y_se'], 'N')}"
+                         f"   N {_pm(r['N'], r['N_se'], 'N m')}")
+    if test not in PMM_TESTS:
+        return lines
+    if cycles:
+        lines.append("  PMM cycles of the sway [s from the first sample]:")
+        for k, c in enumerate(cycles, 1):
+            verdict = "kept" if c.kept else f"dropped: {c.reason}"
+            lines.append(f"    {k:3d}  {c.start:8.2f} – {c.end:8.2f}  amplitude "
+                         f"{c.amplitude:.4f} m  {verdict}")
+    kept = sum(c.kept for c in cycles)
+    lines.append(f"  cycles_used    {cr.cycles_used if cr is not None else kept} "
+                 f"({len(cycles) - kept} dropped)")
+    if cr is not None:
+        for name, got, key, unit in (("frequency", cr.frequency_hz, "pmm_frequency_hz", "Hz"),
+                                     ("amplitude", cr.amplitude_m, "pmm_amplitude_m", "m")):
+            want = _sheet_value(row, key)
+            lines.append(f"  {name:<14s} {got:.4f} {unit} measured, {want:g} {unit} in the "
+                         f"sheet ({100 * (got / want - 1):+.1f} %)")
+    return lines
 
 
 #: The PNG text chunk that marks a plot as inspect's, with the run file it shows.

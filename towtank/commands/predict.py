@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -10,6 +11,7 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.ingest.protocol import load_protocol
 from towtank.vehicle import model as vmodel
+from towtank.vehicle.assumptions import guessed_line
 from towtank.vehicle.stage import predict_vehicle
 
 #: The files ``predict`` always writes.
@@ -52,6 +54,11 @@ def predict_command(protocol_path: Path, out: Path | None = None) -> int:
           f"V = {p.volume:.4g} m^3, S_w = {p.wetted_area:.4g} m^2; rho = {result.rho:.2f} kg/m^3")
     for name, table in extra.items():
         print(f"\n{name}:\n{table.to_string(index=False)}")
+    line = guessed_line(result.model.get("assumptions"))
+    if line:
+        print(line)
+    for warning in result.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
     names = ["predicted.csv", "model.json", *extra]
     print("wrote " + ", ".join(str(folder / n) for n in names))
     return 0

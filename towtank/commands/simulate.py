@@ -15,6 +15,7 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.manoeuvre_figure import save_manoeuvre_figure
 from towtank.vehicle import schema
+from towtank.vehicle.assumptions import guessed, guessed_line
 from towtank.vehicle.glider import glide_table
 from towtank.vehicle.glider_controls import (
     model_glider_problems,
@@ -172,6 +173,7 @@ def simulate_command(
             metrics["ci_high"] = metrics["metric"].map(hi)
     except ValueError as exc:
         raise ProtocolError(f"{name}: {exc}") from None
+    metrics = _refer_to_assumptions(metrics, model)
     folder = Path(out) if out is not None else Path.cwd() / f"simulate_{manoeuvre}"
 
     def write(tmp: Path) -> None:
@@ -190,9 +192,30 @@ def simulate_command(
     write_outputs_or_stop(folder, SIMULATE_OUTPUTS, write)
     with pd.option_context("display.width", 120):
         print(metrics.to_string(index=False))
+    line = guessed_line(model.get("assumptions"))
+    if line:
+        print(line)
     print(f"wrote {folder / 'manoeuvre.csv'}, metrics.csv and manoeuvre.png"
           + (f" ({samples} samples of the measured coefficients)" if samples else ""))
     return 0
+
+
+#: The metrics whose note names the model's guessed inputs (they rest on the fins, the centre
+#: of gravity and the inertia).
+REFERRED = ("steady_turn_radius_m", "tactical_diameter_m", "steady_pitch_deg",
+            "glide_angle_deg")
+
+
+def _refer_to_assumptions(metrics: pd.DataFrame, model: dict) -> pd.DataFrame:
+    """metrics.csv with the notes of :data:`REFERRED` naming the model's guessed inputs."""
+    names = [str(a["input"]) for a in guessed(model.get("assumptions") or [])]
+    if not names:
+        return metrics
+    out = metrics.copy()
+    text = f"rests on assumed inputs ({', '.join(names)}: model.json 'assumptions')"
+    pick = out["metric"].isin(REFERRED)
+    out.loc[pick, "note"] = [f"{n}; {text}" if n else text for n in out.loc[pick, "note"]]
+    return out
 
 
 def _check_new_inputs(manoeuvre: str, period_s: float | None, schedule: Path | None,

@@ -15,6 +15,7 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.steady_figure import save_steady_figure
 from towtank.vehicle import schema
+from towtank.vehicle.assumptions import guessed, guessed_line
 from towtank.vehicle.glider_controls import model_glider_problems
 from towtank.vehicle.model import read_model
 from towtank.vehicle.spiral import steady_table
@@ -46,8 +47,11 @@ def parse_list(text: str, option: str) -> list[float]:
         if not step or not all(math.isfinite(v) for v in (start, stop, step)):
             raise ProtocolError(how)
         if (stop - start) / step < 0:
+            hint = (f"; towtank reads start:stop:step, so steps of {stop:g} from {start:g} "
+                    f"to {step:g} are {start:g}:{step:g}:{stop:g}"
+                    if (step - start) * stop > 0 else "")
             raise ProtocolError(f"{option} {text!r}: the step {step:g} does not lead from "
-                                f"{start:g} to {stop:g}.")
+                                f"{start:g} to {stop:g}{hint}.")
         n = int(math.floor((stop - start) / step + 1e-9)) + 1
         if n > MAX_COMBINATIONS:
             raise ProtocolError(f"{option} {text!r} has {n} values, more than the "
@@ -107,6 +111,11 @@ def steady_command(model_path: Path, ballast_cc: str, pitch_deg: str,
     if problems:
         raise ProtocolError(schema.joined(problems))
     table = steady_table(model, ballasts, pitches, rolls)
+    names = [str(a["input"]) for a in guessed(model.get("assumptions") or [])]
+    if names:  # every steady state rests on them
+        text = f"rests on assumed inputs ({', '.join(names)}: model.json 'assumptions')"
+        table["note"] = [f"{n}; {text}" if isinstance(n, str) and n else text
+                         for n in table["note"]]
     folder = Path(out) if out is not None else Path.cwd() / "steady"
 
     def write(tmp: Path) -> None:
@@ -119,6 +128,9 @@ def steady_command(model_path: Path, ballast_cc: str, pitch_deg: str,
                            "display.max_rows", 200):
         print(show.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     failed = int((~table["converged"].astype(bool)).sum())
+    line = guessed_line(model.get("assumptions"))
+    if line:
+        print(line)
     print(f"wrote {folder / 'steady.csv'} and steady.png ({len(table)} rows"
           + (f", {failed} with no steady state: see 'note'" if failed else "") + ")")
     return 0

@@ -7,7 +7,6 @@ The only production module that imports the test tooling: the generator stays ou
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shutil
 import sys
@@ -129,27 +128,13 @@ def _generate(args: argparse.Namespace, tmp: Path, out: Path) -> str:
             f"  towtank process {Path(args.outdir) / protocol.name}")
 
 
-
 def _captive_day(args: argparse.Namespace, tmp: Path) -> str:
     """A captive manoeuvring day of REMUS (:func:`towtank.testing.captive.make_captive_day`)
     with its truth in truth.json; the message to print."""
     plane = "vertical" if args.day == "captive-vertical" else "horizontal"
     layout = {"lvm": "lvm", "tdms-waveform": "tdms-waveform", "tdms": "tdms-waveform"}.get(
         args.file_format or "", "csv-units")
-    truth = make_captive_day(tmp, seed=args.seed, layout=layout, plane=plane)
-    (tmp / "truth.json").write_text(json.dumps(_plain(truth), indent=2) + "\n",
-                                    encoding="utf-8")
+    make_captive_day(tmp, seed=args.seed, layout=layout, plane=plane)  # with truth.json
     return (f"synthetic {args.day} day written to {args.outdir}; process it with:\n"
             f"  towtank process {Path(args.outdir) / 'protocol.toml'}")
 
-
-def _plain(value: object) -> object:
-    """``value`` for strict JSON: NaN as null, numpy numbers as Python numbers."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, float | int) and not isinstance(value, bool):
-        f = float(value)
-        return None if f != f else (int(value) if isinstance(value, int) else f)
-    return value

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from towtank.ingest.arrayfiles import FS_NAME_KEY
+from towtank.ingest.protocol_types import CAPTIVE_CHANNELS
 from towtank.ingest.readers import (
     FS_ERROR_KEY,
     FS_KEY,
@@ -30,7 +31,7 @@ from towtank.ingest.readers import (
     text_layout,
     unit_factor,
 )
-from towtank.ingest.runfile import file_bytes, read_columns
+from towtank.ingest.runfile import captive_guess, file_bytes, read_columns
 from towtank.ingest.segments import describe_segments, find_segments
 from towtank.ingest.timing import stated_rate
 
@@ -153,15 +154,33 @@ def describe_file(path: Path, options: ReadOptions | None = None) -> FileDescrip
                        "or map a time column")
     else:
         desc.timing = "none found: give [read] sample_rate_hz or map a time column"
-    desc.parts = force_parts(analog)
+    captive = captive_columns(analog)
+    desc.parts = force_parts([c for c in analog if c not in captive.values()])
     in_parts = {c for cells in desc.parts.values() for c in cells}
+    desc.guesses.update(captive)
     for c in analog:  # a digital line is proposed as no channel
+        if c in captive.values():
+            continue
         canon = next((k for k, cells in desc.parts.items() if c in cells), None)
         if canon is None and c not in in_parts:
             canon = _guess(c)
         if canon and canon not in desc.guesses:
             desc.guesses[canon] = c
     return desc
+
+
+def captive_columns(names: list[str]) -> dict[str, str]:
+    """A captive balance's channels among a file's columns, by name
+    (:func:`towtank.ingest.runfile.captive_guess`): ``{"fx": "Fx (N)", "fy": "Fy (N)", "mz":
+    "Mz (N m)", "sway": "PMM y", ...}`` when the file has both a side force fy and a yaw
+    moment mz (the first column of each name), else empty: a hull balance's ``Fx`` (with or
+    without ``Fy``) stays the drag and lift."""
+    found: dict[str, str] = {}
+    for c in names:
+        canon = captive_guess(c)
+        if canon is not None and canon not in found:
+            found[canon] = c
+    return found if "fy" in found and "mz" in found else {}
 
 
 #: A digital input in a channel's name: ``Digital in``, ``TTL``, ``DI3``, ``DIO``,
@@ -341,7 +360,7 @@ def protocol_block(desc: FileDescription) -> str:
                      "acquisitions is the run (per run: the run sheet's 'segment' column)")
     lines += ["", "[channels]"]
     units = {name: unit for name, unit, _ in desc.channels}
-    for canon in ("time", "speed", "accel", "drag", "lift"):
+    for canon in ("time", "speed", "accel", "drag", "lift", *CAPTIVE_CHANNELS):
         col = desc.guesses.get(canon)
         if col is None:
             continue

@@ -498,6 +498,14 @@ def _squeezed(text: str) -> str:
     return re.sub(r"[\s_\-./]+", "", text)
 
 
+def captive_guess(column: str) -> str | None:
+    """The captive channel (fx, fy, mz, sway, yaw) a column's name is, by
+    :data:`CAPTIVE_GUESSES` (``Fy (N)`` → fy, ``Yaw moment`` → mz, ``PMM y`` → sway), or
+    None."""
+    squeezed = _squeezed(column)
+    return next((canon for canon, words in CAPTIVE_GUESSES.items() if squeezed in words), None)
+
+
 def _found(cols: dict[str, np.ndarray], canon: str) -> str | None:
     """The column named as the canonical channel ``canon`` (blanks and case aside), or None."""
     names = [c for c in cols if not c.startswith("__")]

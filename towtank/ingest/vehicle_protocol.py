@@ -121,6 +121,7 @@ class Vehicle:
     propeller: dict[str, Any] | None = None  # [vehicle.propeller] (towtank.ingest.design_inputs)
     pressure_hull: dict[str, Any] | None = None  # [vehicle.pressure_hull]
     glider: dict[str, Any] | None = None  # [vehicle.glider] (towtank.vehicle.glider_controls)
+    assumed: dict[str, str] | None = None  # [vehicle.assumed]: {input: why it is a guess}
 
 
 def _check(values: dict[str, Any], spec: dict[str, tuple[str, bool]], label: str,
@@ -190,6 +191,8 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
               for k in ("propeller", "pressure_hull") if k in data}
     if "glider" in data:  # ballast, moving mass, roll mass, wings (#26)
         design["glider"] = parse_glider(data.pop("glider"), src)
+    if "assumed" in data:
+        design["assumed"] = _assumed(data.pop("assumed"), src, design.get("glider"))
     v = _check(data, VEHICLE_SCHEMA, "vehicle", src)
     if v["hull"] == "drdc":
         raise ProtocolError(
@@ -260,6 +263,23 @@ def parse_vehicle(data: Any, base: Path, src: str, model_myring: Any = None,
         fins.append(VehicleFin(**fv))
     return Vehicle(**v, hull_table=table, myring=myring, series58=series58, fins=tuple(fins),
                    **design)
+
+
+def _assumed(raw: Any, src: str, glider: dict[str, Any] | None) -> dict[str, str]:
+    """``[vehicle.assumed]``: {input: why}, the inputs the protocol guessed (a [vehicle] key,
+    ``fins`` or ``glider.KEY``), each with its reason as text."""
+    if not isinstance(raw, dict):
+        raise ProtocolError(f"{src}: [vehicle.assumed] must be a table of input = \"why it is "
+                            f"assumed\", but it is {raw!r}.")
+    known = [*VEHICLE_SCHEMA, "fins", *(f"glider.{k}" for k in (glider or {}))]
+    for key, why in raw.items():
+        if key not in known:
+            raise ProtocolError(f"{src}: [vehicle.assumed] names '{key}', which is not an input "
+                                f"of [vehicle]{suggest(key, known)}")
+        if not isinstance(why, str) or not why.strip():
+            raise ProtocolError(f"{src}: '{key}' in [vehicle.assumed] must say, as text, why it "
+                                f"is assumed, not {why!r}.")
+    return {k: str(v).strip() for k, v in raw.items()}
 
 
 def _series58(raw: Any, hull: str, src: str) -> dict[str, float] | None:

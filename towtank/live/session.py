@@ -39,6 +39,7 @@ from watchfiles import watch
 from towtank.analysis.next_run import rank_next_runs
 from towtank.errors import ProtocolError
 from towtank.ingest.inputs import day_sheet, unlisted_warnings
+from towtank.ingest.protocol_types import CAPTIVE_TESTS
 from towtank.live import arrival
 from towtank.live.state import (
     LIVE_DIR,
@@ -71,7 +72,7 @@ if TYPE_CHECKING:
     from towtank.ingest.protocol import Protocol
     from towtank.results import DayResult
 
-__all__ = ["POLL_MS", "Verdict", "WatchSession", "verdict_line"]
+__all__ = ["POLL_MS", "Verdict", "WatchSession", "captive_verdict_line", "verdict_line"]
 
 #: The longest the loop waits for a change before it looks at the files anyway [ms].
 POLL_MS = 100
@@ -79,6 +80,9 @@ POLL_MS = 100
 #: Niceness added to the processes drawing the report and the fit figures: on a machine of
 #: two cores the watching process, which gives the verdicts, gets the processor first.
 CHILD_NICE = 10
+
+#: The live page's figures of the day's fits (state.json "figures" keys).
+FIT_FIGURES = ("damping", "added_mass", "captive")
 
 #: Files an output writer leaves in the report that watch carries over between two PDFs.
 PDF_OUTPUTS = ("report.pdf", "figures")
@@ -113,13 +117,16 @@ class Verdict:
     line: str
     time: str
     sha256: str = ""
+    #: a captive run's loads about O (X_N, Y_N [N], N_Nm [N m]) and its PMM cycles_used
+    #: (None where the run was not reduced); None for any other run
+    captive: dict[str, float | None] | None = None
 
     def entry(self) -> dict[str, Any]:
         """The state.json entry."""
         return {"run": self.run, "file": self.file, "test": self.test,
                 "angle_deg": self.angle_deg, "speed_m_s": self.speed_m_s,
                 "drag_N": self.drag_N, "status": self.status, "reason": self.reason,
-                "line": self.line, "time": self.time}
+                "line": self.line, "time": self.time, "captive": self.captive}
 
 
 def _num(value: Any) -> float | None:
@@ -144,6 +151,43 @@ def verdict_line(run: int, test: str, angle_deg: float | None, speed_m_s: float 
     if reason:
         line += ": " + reason.strip()
     return line
+
+
+def captive_loads(row: dict[str, Any]) -> dict[str, float | None]:
+    """A captive run's runs.csv loads as state.json gives them: X_N, Y_N [N], N_Nm [N m]
+    about O, inertia removed, and the PMM cycles_used (None where not reduced)."""
+    cycles = _num(row.get("pmm_cycles"))
+    return {"X_N": _num(row.get("captive_X_N")), "Y_N": _num(row.get("captive_Y_N")),
+            "N_Nm": _num(row.get("captive_N_Nm")),
+            "cycles_used": int(cycles) if cycles is not None else None}
+
+
+def captive_verdict_line(run: int, test: str, row: dict[str, Any], speed_m_s: float | None,
+                         speed_set: bool, loads: dict[str, float | None], status: str,
+                         reason: str | None) -> str:
+    """``run 26  sway  PMM 0.10 m 0.35 Hz  U 1.50 m/s  X -3.66 N  Y 0.11 N  N -0.04 N m
+    5 cycles  ok``: a captive run's test and the sheet's settings (drift β, rudder δ [deg],
+    arm radius R [m], PMM amplitude [m] and frequency [Hz], those set), its loads about O
+    (the steady or cycle mean) and, for a rejected or suspicious run, ``: <the reason>``."""
+    setting = []
+    for key, text in (("drift_deg", "β {:.1f}°"), ("rudder_deg", "δ {:.1f}°"),
+                      ("radius_m", "R {:g} m")):
+        value = _num(row.get(key))
+        if value is not None and (value != 0.0 or key == "drift_deg"):
+            setting.append(text.format(value))
+    amp, freq = _num(row.get("pmm_amplitude_m")), _num(row.get("pmm_frequency_hz"))
+    if amp is not None and freq is not None:
+        setting.append(f"PMM {amp:.2f} m {freq:g} Hz")
+    u = (f"U {speed_m_s:.2f} m/s" + (" (set)" if speed_set else "")
+         if speed_m_s is not None else "U –")
+    parts = [f"run {run}", test, *setting, u]
+    for key, name, unit in (("X_N", "X", "N"), ("Y_N", "Y", "N"), ("N_Nm", "N", "N m")):
+        value = loads.get(key)
+        parts.append(f"{name} {value:.2f} {unit}" if value is not None else f"{name} –")
+    if loads.get("cycles_used") is not None:
+        parts.append(f"{loads['cycles_used']} cycles")
+    line = "  ".join([*parts, status])
+    return line + (": " + reason.strip() if reason else "")
 
 
 @dataclass
@@ -412,7 +456,7 @@ class WatchSession:
         if code != 0 or not isinstance(drawn, dict):
             self.say("the live page's fit figures could not be drawn; the last ones stay.")
             return True
-        figs = {k: v for k, v in self.figures.items() if k not in ("damping", "added_mass")}
+        figs = {k: v for k, v in self.figures.items() if k not in FIT_FIGURES}
         self.figures = {**figs, **{str(k): str(v) for k, v in drawn.items()}}
         self.publish()
         return True
@@ -487,12 +531,19 @@ class WatchSession:
             angle = _num(row["angle_deg"])
             test = str(row["test"])
             drag = _num(row["drag_mean"])
-            line = verdict_line(run, test, angle, u, speed_set, drag, status, reason)
+            captive = None
+            if test.strip().lower() in CAPTIVE_TESTS:  # its loads about O, not a drag
+                captive, drag = captive_loads(row), None
+                line = captive_verdict_line(run, test, row, u, speed_set, captive, status,
+                                            reason)
+            else:
+                line = verdict_line(run, test, angle, u, speed_set, drag, status, reason)
 
             out.append(Verdict(run=run, file=str(row["file"]), test=test,
                                angle_deg=angle if angle is not None else math.nan,
                                speed_m_s=u, drag_N=drag, status=status, reason=reason,
-                               line=clean_text(line), time=stamp, sha256=sha))
+                               line=clean_text(line), time=stamp, sha256=sha,
+                               captive=captive))
         return out
 
     # ------------------------------------------------------------------ outputs
@@ -733,8 +784,8 @@ class WatchSession:
                 figs.pop("latest_run", None)
                 figs.update(self._draw_latest())
             if fits:
-                figs.pop("damping", None)
-                figs.pop("added_mass", None)
+                for key in FIT_FIGURES:
+                    figs.pop(key, None)
                 figs.update(self._draw_fits())
                 self.fits_stale = False
             self.figures = figs
@@ -875,13 +926,18 @@ def _draw_fits_child(day: DayResult | None, live_dir: Path, listing: Path) -> in
 
 
 def _fit_figures(day: DayResult | None, live_dir: Path) -> dict[str, str]:
-    """The C_D(α) fit and the added-mass plot the day has, saved into ``live_dir``."""
+    """The C_D(α) fit, the added-mass plot and the captive derivatives' figure (the horizontal
+    plane's, else the vertical's: drift, arm, PMM and ω' against the fit) the day has, saved
+    into ``live_dir``."""
     figs: dict[str, str] = {}
     if day is None:
         return figs
+    captive = [draw for name, _, draw in rf.available_figures(day)
+               if name in ("captive", "captive_vertical")]
     drawn = (("damping", rf.fig_damping(
                  day.hull, day.protocol.processing.damping_alpha_max_deg)),
-             ("added_mass", rf.fig_added_mass(day.hull, day.reductions)))
+             ("added_mass", rf.fig_added_mass(day.hull, day.reductions)),
+             ("captive", captive[0](page=False) if captive else None))
     for key, fig in drawn:
         if fig is not None:
             figs[key] = save_figure(fig, live_dir, f"{key}.png")

@@ -41,7 +41,7 @@ WATCH_LOCK = ".watch.lock"
 MARKER_NAME = ".towtank-live"
 MARKER_TEXT = b"towtank watch's live state folder: state.json and the figures it names\n"
 #: The figures watch draws for the page.
-FIGURE_NAMES = ("latest_run.png", "damping.png", "added_mass.png")
+FIGURE_NAMES = ("latest_run.png", "damping.png", "added_mass.png", "captive.png")
 #: Largest state.json read back [bytes]: a day's state is well under 1 MiB.
 MAX_STATE_BYTES = 16 << 20
 

@@ -48,6 +48,8 @@ PLANES = ("horizontal", "vertical")
 COMPONENTS = ("mean", "sin", "cos")
 LOADS = ("X", "Y", "N")
 ROW_COLUMNS = ("component", *LOADS, *(f"{q}_se" for q in LOADS), *REGRESSORS)
+#: The quantities of a component row's covariance (:attr:`CaptiveRun.cov`), in this order.
+COV_NAMES = ("Y", "N", *REGRESSORS)
 CYCLE_COLUMNS = ("cycle", "t_start", "Y_in", "Y_quad", "N_in", "N_quad", "Y_0", "N_0")
 PERIOD_COLUMNS = ("phase", "t", "X", "Y", "N", "y", "psi", "u", "v", "r", "udot", "vdot",
                   "rdot")
@@ -62,7 +64,7 @@ PERIOD_BINS = 72
 STATIC_BLOCKS = 8
 #: Harmonics of the least-squares fit of the PMM motion (besides the mean).
 MOTION_HARMONICS = (1, 3)
-_ARRAYS_VERSION = 1.0
+_ARRAYS_VERSION = 2.0
 
 
 # ================================================================================ kinematics
@@ -187,7 +189,10 @@ class CaptiveRun:
     about O (inertia removed), their standard errors and each regressor's component
     (:data:`REGRESSORS`, rig axes, horizontal names). ``cycles``: a PMM run's kept cycles with
     their first harmonics. ``period``: the cycle-averaged period in :data:`PERIOD_BINS` phase
-    bins (empty for static runs).
+    bins (empty for static runs). ``cov``: per component row, the covariance of the row's
+    Y, N and regressors (:data:`COV_NAMES`) as the run's scatter gives it (over cycles or
+    blocks of the steady window, the zero's uncertainty added to the mean's Y and N), shape
+    (rows, 10, 10); None when unknown (a lab's table of means).
     """
 
     run: int
@@ -205,6 +210,7 @@ class CaptiveRun:
     cycles: pd.DataFrame
     period: pd.DataFrame
     notes: tuple[str, ...] = ()
+    cov: np.ndarray | None = None
 
     def omega_prime(self, length_m: float) -> float:
         """omega' = omega L / U [-] with L = ``length_m`` [m] (NaN for static runs)."""
@@ -218,7 +224,11 @@ class CaptiveRun:
         rows = self.rows.copy()
         rows["component"] = [COMPONENTS.index(c) for c in rows["component"]]
         text = "\x00".join(self.notes).encode("utf-8")
+        n_cov = len(COV_NAMES) ** 2
+        cov = (np.full((len(rows), n_cov), np.nan) if self.cov is None
+               else np.asarray(self.cov, dtype=float).reshape(len(rows), n_cov))
         return {
+            "cov": cov,
             "scalars": np.array(scalars, dtype=float),
             "rows": rows[list(ROW_COLUMNS)].to_numpy(dtype=float).reshape(-1, len(ROW_COLUMNS)),
             "cycles": self.cycles[list(CYCLE_COLUMNS)].to_numpy(dtype=float).reshape(
@@ -242,6 +252,7 @@ class CaptiveRun:
             period = _float_array(arrays, "period", 2)
             notes_b = _float_array(arrays, "notes", 1)
             has_notes = _float_array(arrays, "has_notes", 1)
+            cov = _float_array(arrays, "cov", 2)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"malformed captive arrays: {exc}") from None
         if sc.size != 10 or sc[0] != _ARRAYS_VERSION:
@@ -255,6 +266,8 @@ class CaptiveRun:
                                  f"not {width}")
         if rows.shape[0] not in (1, 3):
             raise ValueError("malformed captive arrays: a run has 1 or 3 component rows")
+        if cov.shape != (rows.shape[0], len(COV_NAMES) ** 2):
+            raise ValueError("malformed captive arrays: 'cov' does not match the rows")
         comps = [_code(c, COMPONENTS, "component") for c in rows[:, 0]]
         if comps != list(COMPONENTS[: rows.shape[0]]):
             raise ValueError("malformed captive arrays: components out of order")
@@ -282,6 +295,8 @@ class CaptiveRun:
                 {"cycle": int}),
             period=pd.DataFrame(period, columns=list(PERIOD_COLUMNS)),
             notes=notes,
+            cov=None if np.all(np.isnan(cov)) else cov.reshape(
+                -1, len(COV_NAMES), len(COV_NAMES)),
         )
 
 
@@ -320,12 +335,61 @@ def _empty(columns: tuple[str, ...]) -> pd.DataFrame:
 def block_mean_se(x: np.ndarray, n_blocks: int = STATIC_BLOCKS) -> float:
     """Standard error of the mean of ``x`` from ``n_blocks`` non-overlapping block means
     (the batch-means estimator: blocks longer than the filter's memory are independent)."""
+    means = block_means(x, n_blocks)
+    if means.size < 2:
+        return math.nan
+    return float(np.std(means, ddof=1) / math.sqrt(n_blocks))
+
+
+def block_means(x: np.ndarray, n_blocks: int = STATIC_BLOCKS) -> np.ndarray:
+    """The means of ``n_blocks`` equal non-overlapping blocks of ``x`` (the tail that does not
+    fill a block left out); empty when ``x`` is shorter than ``n_blocks``."""
     x = np.asarray(x, dtype=float)
     n = x.size // n_blocks
-    if n < 1:
-        return math.nan
-    means = x[: n * n_blocks].reshape(n_blocks, n).mean(axis=1)
-    return float(np.std(means, ddof=1) / math.sqrt(n_blocks))
+    return x[: n * n_blocks].reshape(n_blocks, n).mean(axis=1) if n else np.array([])
+
+
+def mean_cov(parts: np.ndarray) -> np.ndarray:
+    """Covariance [units^2] of the mean of ``parts`` (shape (k, q): k independent parts, block
+    or cycle values, of q quantities): their sample covariance over k."""
+    parts = np.asarray(parts, dtype=float)
+    return np.atleast_2d(np.cov(parts, rowvar=False, ddof=1)) / parts.shape[0]
+
+
+def zero_variance(x: np.ndarray, t: np.ndarray, pre: tuple[int, int],
+                  post: tuple[int, int] | None, at: float) -> float:
+    """Variance [units^2] of the zero line (:func:`towtank.signal.conditioning.zero_line`)
+    of the filtered channel ``x`` at time ``at`` [s]: each still window's mean has the
+    batch-means variance of its :data:`STATIC_BLOCKS` blocks, weighted by the line's
+    interpolation between the windows' mid-times (the pre-window's alone without ``post``)."""
+    var_pre = block_mean_se(x[pre[0]:pre[1]]) ** 2
+    if post is None or post[1] - post[0] < 2:
+        return var_pre
+    var_post = block_mean_se(x[post[0]:post[1]]) ** 2
+    t0, t1 = float(np.mean(t[pre[0]:pre[1]])), float(np.mean(t[post[0]:post[1]]))
+    w = (at - t0) / (t1 - t0) if t1 > t0 else 0.0
+    return (1.0 - w) ** 2 * var_pre + w**2 * var_post
+
+
+def load_zero_variance(zero_var: Mapping[str, float], drift: float, balance_x_m: float
+                       ) -> tuple[float, float]:
+    """Variances of Y [N^2] and N [N^2 m^2] from the zero variances of the balance channels
+    (``fy``, ``mz``, or a drift run's ``drag``, ``lift``; missing: 0) at ``drift`` [rad],
+    with N = mz + x_B fy (``balance_x_m`` x_B [m])."""
+    if "fy" in zero_var:
+        fy = zero_var["fy"]
+    else:
+        fy = (math.sin(drift) ** 2 * zero_var.get("drag", 0.0)
+              + math.cos(drift) ** 2 * zero_var.get("lift", 0.0))
+    return fy, zero_var.get("mz", 0.0) + balance_x_m**2 * fy
+
+
+def _with_zero(cov: np.ndarray, var_y: float, var_n: float) -> np.ndarray:
+    """``cov`` (of :data:`COV_NAMES`) with the zero's variances added to Y's and N's."""
+    out = np.array(cov, dtype=float)
+    out[0, 0] += var_y
+    out[1, 1] += var_n
+    return out
 
 
 @dataclass(frozen=True)
@@ -401,12 +465,14 @@ class Inertia:
 def static_run(
     t: np.ndarray, speed: np.ndarray, fx: np.ndarray, fy: np.ndarray, mz: np.ndarray,
     steady: tuple[int, int], setting: RunSetting, inertia: Inertia, *, run: int = 0,
-    file: str = "", notes: tuple[str, ...] = (),
+    file: str = "", notes: tuple[str, ...] = (), zero_var: tuple[float, float] = (0.0, 0.0),
 ) -> CaptiveRun:
     """A static drift, rudder or rotating-arm run reduced to its steady mean.
 
     Loads and regressors are taken sample by sample over the steady window [i0, i1) and
-    averaged; each load's standard error is :func:`block_mean_se`'s.
+    averaged; the covariance of the mean's Y, N and regressors is that of
+    :data:`STATIC_BLOCKS` block means (:func:`mean_cov`), plus the zero's variances
+    ``zero_var`` (Y [N^2], N [N^2 m^2]); X's standard error is :func:`block_mean_se`'s.
 
     Parameters
     ----------
@@ -415,7 +481,7 @@ def static_run(
     speed : ndarray
         Filtered carriage speed U [m/s] (of O along its path on the arm).
     fx, fy, mz : ndarray
-        Zeroed, filtered balance readings, body axes [N], [N], [N m].
+        Zeroed balance readings, body axes [N], [N], [N m].
     steady : tuple of int
         The steady window's indices [i0, i1).
     setting : RunSetting
@@ -435,15 +501,19 @@ def static_run(
     row: dict[str, Any] = {"component": "mean"}
     for name, x in (("X", X), ("Y", Y), ("N", N)):
         row[name] = float(np.mean(x))
-        row[f"{name}_se"] = block_mean_se(x)
     row.update({k: float(np.mean(x)) for k, x in reg.items()})
+    series = {"Y": Y, "N": N, **reg}
+    cov = _with_zero(mean_cov(np.column_stack([block_means(np.broadcast_to(series[k], U.shape))
+                                               for k in COV_NAMES])), *zero_var)
+    row.update({"X_se": block_mean_se(X), "Y_se": math.sqrt(cov[0, 0]),
+                "N_se": math.sqrt(cov[1, 1])})
     return CaptiveRun(
         run=run, file=file, test=setting.test, plane=setting.plane, speed=float(np.mean(U)),
         drift_deg=setting.drift_deg, rudder_deg=setting.rudder_deg,
         radius_m=setting.radius_m if setting.test == "arm" else math.nan,
         frequency_hz=math.nan, amplitude_m=math.nan, cycles_used=0,
         rows=_rows_frame([row]), cycles=_empty(CYCLE_COLUMNS), period=_empty(PERIOD_COLUMNS),
-        notes=notes,
+        notes=notes, cov=cov[None],
     )
 
 
@@ -513,15 +583,27 @@ class Cycles:
         return self.starts.size / (self.t_end - self.starts[0])
 
 
-def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
-    """The whole steady PMM cycles of the sway ``y`` [m] (FORMATS section 8; shared rules).
+@dataclass(frozen=True)
+class SteadyCycles:
+    """Every cycle of the sway between upward zero crossings inside the steady window, and
+    which of them :func:`pmm_cycles` keeps: ``crossings`` [s] (cycle k spans crossings k and
+    k + 1), ``amplitudes`` [m] (half the peak-to-peak of each), the reference amplitude
+    ``reference`` [m] (the median of the full-amplitude cycles), ``in_tolerance`` (within
+    the tolerance of it) and ``kept`` (the cycles' indices: the longest unbroken sequence of
+    those in tolerance)."""
 
-    t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
-    crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
-    (half the peak-to-peak) is within :data:`CYCLE_AMPLITUDE_TOLERANCE` of the median of the
-    full-amplitude cycles (those within 10 % of the largest), the longest unbroken sequence.
-    RunError when fewer than :data:`MIN_CYCLES` remain.
-    """
+    crossings: np.ndarray
+    amplitudes: np.ndarray
+    reference: float
+    in_tolerance: np.ndarray
+    kept: np.ndarray
+
+
+def steady_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+                  tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> SteadyCycles:
+    """The cycles of the sway ``y`` [m] at times ``t`` [s] within the steady window [i0, i1)
+    and the choice of the kept ones, within ``tolerance`` [-] of the reference amplitude
+    (FORMATS section 8; see :func:`pmm_cycles`)."""
     i0, i1 = steady
     ys = y[i0:i1] - float(np.mean(y[i0:i1]))
     ts = t[i0:i1]
@@ -531,22 +613,87 @@ def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int]) -> Cycles:
         0.5 * float(np.ptp(ys[(ts >= a) & (ts < b)])) for a, b in zip(cross[:-1], cross[1:],
                                                                       strict=True)])
     keep = np.zeros(amps.size, dtype=bool)
+    ref = math.nan
     if amps.size:
         # the median of the full-amplitude cycles: the median cycle's when most cycles are
         # steady, and still the steady cycles' when ramp cycles outnumber them
         ref = float(np.median(amps[amps >= 0.9 * np.max(amps)]))
-        keep = np.abs(amps - ref) <= CYCLE_AMPLITUDE_TOLERANCE * ref
+        keep = np.abs(amps - ref) <= tolerance * ref
     idx = np.flatnonzero(keep)
     if idx.size:  # the longest run of consecutive kept cycles
         breaks = np.flatnonzero(np.diff(idx) > 1)
         groups = np.split(idx, breaks + 1)
         idx = max(groups, key=len)
-    if idx.size < MIN_CYCLES:
+    return SteadyCycles(crossings=cross, amplitudes=amps, reference=ref, in_tolerance=keep,
+                        kept=idx)
+
+
+def pmm_cycles(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+               min_cycles: int = MIN_CYCLES,
+               tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> Cycles:
+    """The whole steady PMM cycles of the sway ``y`` [m] (FORMATS section 8; shared rules).
+
+    t = 0 at an upward zero crossing of y - mean(y); a cycle spans consecutive upward
+    crossings; kept are the cycles wholly inside the steady window [i0, i1) whose amplitude
+    (half the peak-to-peak) is within ``tolerance`` [-] of the median of the full-amplitude
+    cycles (those within 10 % of the largest), the longest unbroken sequence
+    (:func:`steady_cycles`). RunError when fewer than ``min_cycles`` remain (the protocol's
+    ``[captive] min_cycles`` and ``amplitude_tolerance``).
+    """
+    sc = steady_cycles(t, y, steady, tolerance=tolerance)
+    idx, cross, amps = sc.kept, sc.crossings, sc.amplitudes
+    if idx.size < min_cycles:
         raise RunError(
             f"the run has {idx.size} whole steady PMM cycle{'' if idx.size == 1 else 's'}; at "
-            f"least {MIN_CYCLES} are needed (ramp-in and ramp-out cycles are dropped)")
+            f"least {min_cycles} are needed (ramp-in and ramp-out cycles are dropped)")
     return Cycles(starts=cross[idx], t_end=float(cross[idx[-1] + 1]), amplitudes=amps[idx],
                   dropped=int(amps.size - idx.size))
+
+
+@dataclass(frozen=True)
+class CycleVerdict:
+    """One cycle of a PMM run's sway as :func:`pmm_cycles` judges it: its span [s], its
+    amplitude [m] (half the peak-to-peak), whether it is kept and, if not, why."""
+
+    start: float
+    end: float
+    amplitude: float
+    kept: bool
+    reason: str = ""
+
+
+def cycle_verdicts(t: np.ndarray, y: np.ndarray, steady: tuple[int, int], *,
+                   tolerance: float = CYCLE_AMPLITUDE_TOLERANCE) -> list[CycleVerdict]:
+    """Every cycle of the sway ``y`` [m] over the whole record, in time order, each kept or
+    dropped with its reason (``towtank inspect``): the cycles inside the steady window
+    [i0, i1) exactly as :func:`pmm_cycles` chooses them (:func:`steady_cycles`), and the
+    cycles that reach outside it (the same zero line and hysteresis over the whole record),
+    which are never kept."""
+    i0, i1 = steady
+    sc = steady_cycles(t, y, steady, tolerance=tolerance)
+    mean = float(np.mean(y[i0:i1]))
+    span = float(np.ptp(y[i0:i1])) if i1 > i0 else 0.0
+    lo, hi = float(t[i0]), float(t[i1 - 1])
+    out = []
+    whole = upward_crossings(t, y - mean, 0.1 * span / 2.0)
+    for a, b in zip(whole[:-1], whole[1:], strict=True):
+        if a < lo or b > hi:
+            part = (t >= a) & (t < b)
+            out.append(CycleVerdict(float(a), float(b), 0.5 * float(np.ptp(y[part])), False,
+                                    "outside the steady window"))
+    kept = set(sc.kept.tolist())
+    for k, amp in enumerate(sc.amplitudes):
+        a, b = float(sc.crossings[k]), float(sc.crossings[k + 1])
+        if k in kept:
+            reason = ""
+        elif not sc.in_tolerance[k]:
+            reason = (f"amplitude {amp:.4g} m is {100 * (amp / sc.reference - 1):+.1f} % from "
+                      f"the steady cycles' {sc.reference:.4g} m (more than "
+                      f"{100 * tolerance:g} %: ramp-in or ramp-out)")
+        else:
+            reason = "not in the longest unbroken sequence of steady cycles"
+        out.append(CycleVerdict(a, b, float(amp), k in kept, reason))
+    return sorted(out, key=lambda c: c.start)
 
 
 def first_harmonic(t: np.ndarray, x: np.ndarray, omega: float) -> tuple[float, float, float]:
@@ -560,7 +707,8 @@ def pmm_run(
     t: np.ndarray, speed: np.ndarray, fx: np.ndarray, fy: np.ndarray, mz: np.ndarray,
     sway: np.ndarray, yaw: np.ndarray | None, steady: tuple[int, int], setting: RunSetting,
     inertia: Inertia, *, length_m: float = math.nan, run: int = 0, file: str = "",
-    notes: tuple[str, ...] = (),
+    notes: tuple[str, ...] = (), min_cycles: int = MIN_CYCLES,
+    tolerance: float = PMM_TOLERANCE, zero_var: tuple[float, float] = (0.0, 0.0),
 ) -> CaptiveRun:
     """A pure-sway, pure-yaw or yaw-with-drift PMM run reduced to its cycle harmonics.
 
@@ -568,7 +716,9 @@ def pmm_run(
     (y, psi and their derivatives) is the least-squares series (mean, 1st and 3rd harmonic)
     of the recorded ``sway`` [m] and ``yaw`` [deg] over the kept cycles; U the steady mean.
     Each cycle's loads and regressors are split into mean, sin and cos parts; the run's
-    component is their mean over cycles, its standard error their spread / sqrt(cycles).
+    component is their mean over cycles, the covariance of its Y, N and regressors their
+    scatter over the cycles (:func:`mean_cov`), the mean's with the zero's variances
+    ``zero_var`` (Y [N^2], N [N^2 m^2]) added.
 
     Parameters
     ----------
@@ -586,11 +736,16 @@ def pmm_run(
         The model on the balance.
     length_m : float
         L [m], for the omega' of the note (optional).
+    min_cycles : int
+        Fewest whole steady cycles the run needs (:func:`pmm_cycles`).
+    tolerance : float
+        Largest relative departure of a cycle's amplitude from the median cycle's and of the
+        measured frequency and amplitude from the sheet's [-].
     """
     # loaded on use: pandas only for the tables (the workers start light)
     import pandas as pd
 
-    cyc = pmm_cycles(t, sway, steady)
+    cyc = pmm_cycles(t, sway, steady, min_cycles=min_cycles, tolerance=tolerance)
     f = cyc.frequency_hz
     f_set, y_set = setting.pmm_frequency_hz, setting.pmm_amplitude_m
     sel = (t >= cyc.starts[0]) & (t < cyc.t_end)
@@ -598,12 +753,12 @@ def pmm_run(
     omega = 2.0 * math.pi * f
     y_coef = harmonic_fit(ts, sway[sel], omega)
     y0 = math.hypot(y_coef[1], y_coef[2])
-    if abs(f - f_set) > PMM_TOLERANCE * f_set:
+    if abs(f - f_set) > tolerance * f_set:
         raise RunError(f"the PMM frequency measured from the sway, {f:.4g} Hz, is not within "
-                       f"5 % of the sheet's pmm_frequency_hz {f_set:g} Hz")
-    if abs(y0 - y_set) > PMM_TOLERANCE * y_set:
-        raise RunError(f"the PMM sway amplitude measured, {y0:.4g} m, is not within 5 % of the "
-                       f"sheet's pmm_amplitude_m {y_set:g} m")
+                       f"{tolerance:.0%} of the sheet's pmm_frequency_hz {f_set:g} Hz")
+    if abs(y0 - y_set) > tolerance * y_set:
+        raise RunError(f"the PMM sway amplitude measured, {y0:.4g} m, is not within "
+                       f"{tolerance:.0%} of the sheet's pmm_amplitude_m {y_set:g} m")
     beta, delta = math.radians(setting.drift_deg), math.radians(setting.rudder_deg)
     yaw_rad = np.radians(yaw[sel]) if yaw is not None else np.zeros(ts.size)
     U = float(np.mean(speed[steady[0]:steady[1]]))
@@ -631,11 +786,15 @@ def pmm_run(
     comp = {k: np.array(v) for k, v in per_cycle.items()}  # (cycles, 3)
     n_c = cyc.starts.size
     rows = []
+    covs = []
     for j, name in enumerate(COMPONENTS):
         row: dict[str, Any] = {"component": name}
+        cov = mean_cov(np.column_stack([comp[k][:, j] for k in COV_NAMES]))
+        covs.append(_with_zero(cov, *zero_var) if name == "mean" else cov)
         for q in LOADS:
             row[q] = float(np.mean(comp[q][:, j]))
-            row[f"{q}_se"] = float(np.std(comp[q][:, j], ddof=1) / math.sqrt(n_c))
+        row["X_se"] = float(np.std(comp["X"][:, j], ddof=1) / math.sqrt(n_c))
+        row["Y_se"], row["N_se"] = (math.sqrt(covs[-1][i, i]) for i in (0, 1))
         row.update({k: float(np.mean(comp[k][:, j])) for k in REGRESSORS})
         rows.append(row)
     cycles = pd.DataFrame({
@@ -654,7 +813,7 @@ def pmm_run(
         run=run, file=file, test=setting.test, plane=setting.plane, speed=U,
         drift_deg=setting.drift_deg, rudder_deg=setting.rudder_deg, radius_m=math.nan,
         frequency_hz=f, amplitude_m=y0, cycles_used=n_c, rows=_rows_frame(rows),
-        cycles=cycles, period=period, notes=(*notes, *more),
+        cycles=cycles, period=period, notes=(*notes, *more), cov=np.array(covs),
     )
 
 
@@ -722,13 +881,15 @@ def body_forces(channels: Mapping[str, np.ndarray], drift: float
 def reduce_captive(
     raw_channels: Mapping[str, np.ndarray], fs: float, steady_window: tuple[int, int],
     row: Mapping[str, Any], model: Any, *, run: int = 0, file: str = "",
+    min_cycles: int = MIN_CYCLES, amplitude_tolerance: float = PMM_TOLERANCE,
+    zero_var: Mapping[str, float] | None = None,
 ) -> CaptiveRun:
     """One captive run reduced: the day pipeline's entry.
 
     Parameters
     ----------
     raw_channels : mapping
-        The run's zeroed, filtered channels (:func:`condition_captive`): ``t`` [s], ``U``
+        The run's conditioned channels (:func:`condition_captive`): ``t`` [s], ``U``
         [m/s], ``fx``, ``fy`` [N] (or ``drag``, ``lift`` [N], carriage axes), ``mz`` [N m];
         PMM runs ``sway`` [m] and ``yaw`` [deg] (absent: 0).
     fs : float
@@ -740,6 +901,12 @@ def reduce_captive(
         pmm_frequency_hz).
     model : object
         The protocol's Model (mass_kg, izz_kg_m2, xg_m, balance_x_m, iyy_kg_m2, length_m).
+    min_cycles, amplitude_tolerance : int, float
+        The protocol's ``[captive] min_cycles`` and ``amplitude_tolerance`` [-]
+        (:func:`pmm_run`).
+    zero_var : mapping, optional
+        Variance of each balance channel's zero at the steady window [N^2, N^2 m^2]
+        (:func:`condition_captive`'s ``zero_var``); absent: 0.
 
     Raises
     ------
@@ -754,9 +921,11 @@ def reduce_captive(
     if not (0 <= i0 < i1 <= t.size) or i1 - i0 < STATIC_BLOCKS * 2:
         raise RunError("the steady window is too short for a captive run")
     fx, fy, mz = body_forces(raw_channels, math.radians(setting.drift_deg))
+    z_var = load_zero_variance(zero_var or {}, math.radians(setting.drift_deg),
+                               inertia.balance_x_m)
     if setting.test in STATIC_TESTS:
         return static_run(t, U, fx, fy, mz, (i0, i1), setting, inertia, run=run, file=file,
-                          notes=notes)
+                          notes=notes, zero_var=z_var)
     if "sway" not in raw_channels:
         raise RunError("the file has no sway channel, which a PMM run needs")
     yaw = raw_channels.get("yaw")
@@ -765,22 +934,29 @@ def reduce_captive(
     return pmm_run(t, U, fx, fy, mz, np.asarray(raw_channels["sway"], float),
                    None if yaw is None else np.asarray(yaw, float), (i0, i1), setting,
                    inertia, length_m=float(getattr(model, "length_m", math.nan)), run=run,
-                   file=file, notes=notes)
+                   file=file, notes=notes, min_cycles=min_cycles, tolerance=amplitude_tolerance,
+                   zero_var=z_var)
 
 
 def condition_captive(
     t: np.ndarray, channels: Mapping[str, np.ndarray], fs: float, *,
     cutoff_hz: float = 4.0, order: int = 4, still: tuple[tuple[int, int], tuple[int, int] | None],
     steady: tuple[int, int] | None = None, said: list[str] | None = None,
+    zero_var: dict[str, float] | None = None,
 ) -> dict[str, np.ndarray]:
-    """The channels low-passed (one zero-phase filter) and the balance channels zeroed: a
-    straight line between the still windows before and after the run
-    (:func:`towtank.signal.conditioning.zero_line`); ``sway`` and ``yaw`` are filtered only.
+    """The channels conditioned: ``U``, ``sway`` and ``yaw`` low-passed (one zero-phase
+    filter); the balance channels zeroed, not filtered: the recorded samples less a straight
+    line between the still windows before and after the run, fitted to the low-passed channel
+    (:func:`towtank.signal.conditioning.zero_line`). The steady means and the PMM cycles'
+    harmonics are the loads' filters; a low-pass would carry a ramp's transient (a step of r')
+    into the first and last kept cycles.
     ``channels`` holds ``U`` and the balance and PMM channels; returns them with ``t``.
 
     With the ``steady`` window [i0, i1) and a post-run still window, each balance channel's
     drift is judged as the drag's is (:func:`towtank.signal.drift.check_drift`): a balance
     that had not settled raises RunError, a large drift's sentence is appended to ``said``.
+    With ``steady``, ``zero_var`` receives each balance channel's zero variance at the
+    steady window's middle (:func:`zero_variance`).
     """
     names = list(channels)
     filt = conditioning.lowpass(np.column_stack([channels[k] for k in names]), fs, cutoff_hz,
@@ -797,7 +973,10 @@ def condition_captive(
                 check_drift(out["t"], x, pre, post, load, name, None, notes, notes)
                 if said is not None:
                     said += notes[:1]
+            if steady is not None and zero_var is not None:
+                mid = 0.5 * (float(out["t"][steady[0]]) + float(out["t"][steady[1] - 1]))
+                zero_var[name] = zero_variance(x, out["t"], pre, post, mid)
             zero, _, _ = conditioning.zero_line(t, x, pre, post)
-            x = x - zero
+            x = np.asarray(channels[name], dtype=float) - zero
         out[name] = x
     return out

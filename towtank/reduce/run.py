@@ -33,8 +33,8 @@ from towtank.errors import RunError
 from towtank.ingest.calibration import UNITS
 from towtank.ingest.describe import force_parts, unmapped_forces
 from towtank.ingest.protocol import Processing, Protocol, channel_map
+from towtank.ingest.protocol_types import CAPTIVE_TESTS
 from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
-from towtank.ingest.runsheet import CAPTIVE_TESTS
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
 from towtank.messages import Rejection

@@ -13,6 +13,8 @@ mat       ``run_NNN.mat`` (MATLAB v5, ``load('run_001.mat')``): vectors ``t, U, 
 hdf5      ``runs.h5``: a group ``run_NNN`` per run with those datasets and ``meta`` as attributes
 parquet   ``run_NNN.parquet``: columns ``t, U, a, drag, lift, phase, phase_name``; ``meta``
           as JSON in the schema's metadata (key ``towtank``)
+simman    ``simman/``: the captive tests, static means and PMM periods with their Fourier
+          coefficients and the model's particulars (:mod:`towtank.report.simman`)
 ========  ==================================================================================
 
 Units: t [s] from the start of the file, U [m/s], a [m/s²], drag and lift [N] (zeroed,
@@ -45,6 +47,7 @@ import pyarrow.parquet as pq
 from scipy.io import savemat
 
 from towtank.reduce.run import apply_tare, reduce_record
+from towtank.report.simman import write_simman
 from towtank.runtime.storage import os_error
 from towtank.signal.phases import PHASE_NAMES
 
@@ -52,7 +55,7 @@ if TYPE_CHECKING:
     from towtank.reduce.run import RunReduction
     from towtank.results import DayResult
 
-EXPORT_FORMATS = ("mat", "hdf5", "parquet")
+EXPORT_FORMATS = ("mat", "hdf5", "parquet", "simman")
 
 #: Units of the exported channels.
 UNITS = {"t": "s", "U": "m/s", "a": "m/s^2", "drag": "N", "lift": "N", "phase": "-"}
@@ -297,12 +300,17 @@ def export_runs(day: DayResult, folder: str | Path, formats: tuple[str, ...] | l
     if unknown:
         raise ValueError(f"unknown export format(s) {', '.join(unknown)}; use "
                          f"{', '.join(EXPORT_FORMATS)}")
+    missing: list[str] = []
+    if "simman" in formats:
+        options = getattr(day.protocol, "captive", None)
+        missing += write_simman(day, folder,
+                                float(options.roll_deg) if options is not None else 90.0)
+        formats = tuple(f for f in formats if f != "simman")
     if not formats:
-        return []
+        return missing
     metas = _metas(day)
     out = Path(folder) / "export"
     out.mkdir(parents=True, exist_ok=True)
-    missing: list[str] = []
     h5 = _Hdf5Export(out / "runs.h5", str(day.protocol.name)) if "hdf5" in formats else None
     try:
         for run, red, reason in conditioned_runs(day):

@@ -23,6 +23,7 @@ fig_damping              C_D against α with the quadratic fit and its 95 % band
 fig_fin_forces           fin drag and lift against speed per angle (Figs. 14–15)
 fig_fin_coefficients     fin C_L, C_D against α with Sandia 2-D and finite span (Fig. 16)
 fig_scaling              model and prototype resistance, Reynolds ranges
+fig_captive              captive runs against the fitted derivatives (towtank.report.captive_figure)
 run_thumbnail            one run: speed, drag and lift with the phases shaded
 thumbnail_twin           the forces' axes of a thumbnail (made once, reused page after page)
 =======================  ============================================================
@@ -896,6 +897,15 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
     return fig
 
 
+def fig_captive(fit: Any, roll_deg: float = 90.0, *, page: bool = False) -> Figure | None:
+    """The captive page's figure (:func:`towtank.report.captive_figure.fig_captive`)."""
+    # loaded on use: the captive figure loads pandas, which inspect's plot of one run never
+    # needs
+    from towtank.report.captive_figure import fig_captive as draw
+
+    return draw(fit, roll_deg, page=page)
+
+
 # ----------------------------------------------------------------------------- all figures
 #: name, report section, function; the order of the PDF's figure pages.
 FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
@@ -905,6 +915,8 @@ FIGURES: tuple[tuple[str, str, Callable[..., Figure | None]], ...] = (
     ("fin_forces", "Fins", fig_fin_forces),
     ("fin_coefficients", "Fins", fig_fin_coefficients),
     ("scaling", "Scaling", fig_scaling),
+    ("captive", "Captive", fig_captive),
+    ("captive_vertical", "Captive, vertical plane", fig_captive),
 )
 
 
@@ -918,7 +930,15 @@ def _figure_arguments(name: str, day: DayResult) -> tuple[Any, ...]:
         "fin_forces": lambda: (day.fins,),
         "fin_coefficients": lambda: (day.fins,),
         "scaling": lambda: (day.scaling, day.runs, p),
+        "captive": lambda: (day.captive, captive_roll_deg(p)),
+        "captive_vertical": lambda: (day.captive_vertical, captive_roll_deg(p)),
     }[name]()
+
+
+def captive_roll_deg(protocol: Any) -> float:
+    """The model's roll on the rig of vertical-plane runs [deg] ([captive] roll_deg, 90)."""
+    options = getattr(protocol, "captive", None)
+    return float(options.roll_deg) if options is not None else 90.0
 
 
 def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figure | None]]]:
@@ -932,6 +952,9 @@ def available_figures(day: DayResult) -> list[tuple[str, str, Callable[..., Figu
         "fin_forces": day.fins is not None and len(day.fins.force_vs_speed) > 0,
         "fin_coefficients": day.fins is not None and len(day.fins.table) > 0,
         "scaling": day.scaling is not None,
+        "captive": bool(getattr(getattr(day, "captive", None), "estimates", None)),
+        "captive_vertical": bool(getattr(getattr(day, "captive_vertical", None), "estimates",
+                                         None)),
     }
     return [(name, section, partial(func, *_figure_arguments(name, day)))
             for name, section, func in FIGURES if has[name]]

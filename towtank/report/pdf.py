@@ -44,6 +44,7 @@ from pypdf import PdfWriter
 import towtank.report.figures as figures
 import towtank.report.style as style
 from towtank import __version__
+from towtank.analysis.captive import TEST_NAMES as CAPTIVE_TEST_NAMES
 from towtank.analysis.daywide import group_rejections, run_reason
 from towtank.analysis.hull import mirrored
 from towtank.analysis.scaling import geometry_used
@@ -58,7 +59,7 @@ from towtank.report.figure_base import (
     sci,
     true_minus,
 )
-from towtank.report.provenance import creation_date, report_date
+from towtank.report.provenance import captive_provenance, creation_date, report_date
 from towtank.report.quality import (
     LINE_IN,
     QUALITY_HEIGHT_IN,
@@ -74,6 +75,7 @@ from towtank.runtime.parallel import run_beside
 if TYPE_CHECKING:
     import pandas as pd
 
+    from towtank.analysis.captive import CaptiveFit
     from towtank.ingest.protocol_types import Fin, Model, Protocol, Water
     from towtank.results import DayResult, FinResult, ScalingResult
 
@@ -90,7 +92,7 @@ DIFF_HIGHLIGHT_PCT = 10.0  # |diff %| above which a coefficient is highlighted
 class Page:
     """One page of the report: its kind, section title and what it draws."""
 
-    kind: str  # title | summary | figure | runs | quality | thumbs
+    kind: str  # title | summary | figure | captive | runs | fin_runs | quality | thumbs
     section: str
     payload: Any = None
     subtitle: str = ""
@@ -132,10 +134,17 @@ def vehicle_pages(day: DayResult) -> list[Page]:
                  ("predicted_vs_measured", partial(fig_predicted, day.coefficients)))]
 
 
+#: The captive figures of :data:`towtank.report.figures.FIGURES`, each the DayResult
+#: attribute of its result; each gets a page with its derivatives' table before it.
+CAPTIVE_FIGURES = ("captive", "captive_vertical")
+
+
 def page_plan(day: DayResult) -> list[Page]:
     """Every page of the report, in order (known before anything is drawn)."""
     pages = [Page("title", "Title"), Page("summary", "Summary")]
     for name, section, func in figures.available_figures(day):
+        if name in CAPTIVE_FIGURES:  # the derivatives' table first, then their figure
+            pages.append(Page("captive", section, getattr(day, name)))
         pages.append(Page("figure", section, (name, func)))
     pages += vehicle_pages(day)
     fr = day.fins
@@ -432,6 +441,14 @@ def _text_block(fig: Figure, top_in: float, text: str, *, width: int = 112,
     return (wrapped.count("\n") + 1) * fontsize * 1.3 / 72 + 0.06
 
 
+def _text_blocks(fig: Figure, top_in: float, texts: Sequence[str]) -> float:
+    """Small paragraphs (footnotes) one under the other; returns the inches used."""
+    used = 0.0
+    for text in texts:
+        used += _text_block(fig, top_in + used, text, width=125, fontsize=7)
+    return used
+
+
 def _heading(fig: Figure, top_in: float, text: str) -> float:
     fig.text(MARGIN_IN / PAGE_W, _y(top_in), text, fontsize=10.5, fontweight="bold", va="top")
     return 0.3
@@ -476,11 +493,14 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
                      "page 1. "
                      "¹ Prototype, in the row's unit: prime × ½ρ_p·L_p³ (added mass, kg) or "
                      "× ½ρ_p·L_p² (kg/m).")
-        for n in notes:
-            y += _text_block(fig, y, n, width=125, fontsize=7)
+        y += _text_blocks(fig, y, notes)
         # an added mass's second estimate and its agreement are in its method's footnote
         # (towtank.analysis.hull.fit_added_mass)
         y += 0.2
+    elif day.protocol.model is not None and day.captive_results:
+        y += _heading(fig, y, "Hull coefficients")
+        y += _text_block(fig, y, "No resistance coefficients: the day's runs are captive tests "
+                         "(their derivatives are in the Captive section).", fontsize=8.5) + 0.2
     elif day.protocol.model is not None:
         y += _heading(fig, y, "Hull coefficients")
         y += _text_block(fig, y, "No hull coefficients: the day has no usable hull runs "
@@ -497,6 +517,92 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
     if day.hull is None and day.fins is None and day.protocol.model is None:
         _text_block(fig, y, "The day gave no coefficients; the quality section says why.",
                     fontsize=9)
+
+
+def captive_rows(fit: CaptiveFit) -> tuple[list[str], list[list[str]], list[str]]:
+    """Header, rows and method footnotes of a captive page's derivative table.
+
+    Parameters
+    ----------
+    fit : CaptiveFit
+        A plane's captive result (``day.captive``, ``day.captive_vertical``).
+    """
+    lt = fit.draught_m is not None
+    header = ["derivative", "value", "unit", "95 % interval", "prime·10³",
+              *(["prime L·T·10³"] if lt else []), "runs", "method"]
+    methods: list[str] = []
+    rows = []
+    for e in fit.estimates.values():
+        if e.method not in methods:
+            methods.append(e.method)
+        rows.append([math_symbol(e.symbol), _v(e.value), e.unit.replace("*", "·"),
+                     f"{_v(e.ci_low)} … {_v(e.ci_high)}", _v(e.prime, ".4g", 1e3),
+                     *([_v(e.prime_lt, ".4g", 1e3)] if lt else []), str(e.n_runs),
+                     f"[{methods.index(e.method) + 1}]"])
+    return header, rows, methods
+
+
+def captive_options_text(options: dict[str, Any]) -> str:
+    """The reduction's options as ITTC 7.5-02-06-02 asks them stated (the provenance's
+    ``captive`` section, :func:`towtank.report.provenance.captive_provenance`), one sentence."""
+    inertia = options["inertia_removed"]
+    parts = [f"{k.split('_')[0]} = {v:g} {UNIT_OF_KEY[k]}" for k, v in inertia.items()
+             if v is not None]
+    reference = ("about O (N_O = mz + balance_x_m·fy, balance_x_m = "
+                 f"{options['balance_x_m']:g} m)" if options["moment_reference"] == "origin"
+                 else "about the balance point")
+    return (f"Moments {reference}; the model's inertia removed with {', '.join(parts)}; PMM: "
+            f"{options['pmm_cycle_rule']} (the cycles each run kept: pmm.csv cycles_used).")
+
+
+#: Units of the [model] keys in :func:`captive_options_text`.
+UNIT_OF_KEY = {"mass_kg": "kg", "izz_kg_m2": "kg·m²", "iyy_kg_m2": "kg·m²", "xg_m": "m"}
+
+
+def captive_fit_text(fit: CaptiveFit, options: dict[str, Any] | None = None) -> list[str]:
+    """The paragraphs under a captive page's table: the reduction's options (``options``,
+    the provenance's captive section), the runs by test, the fit's reduced chi^2 per
+    equation and its notes (agreement over omega', terms left out)."""
+    counts: dict[str, int] = {}
+    for r in fit.runs:
+        counts[r.test] = counts.get(r.test, 0) + 1
+    tests = ", ".join(f"{n} {CAPTIVE_TEST_NAMES.get(t, t)}" for t, n in counts.items())
+    out = [f"{len(fit.runs)} runs fitted jointly ({tests}); a run's steady mean or a PMM run's "
+           "cycle-averaged mean and first harmonics are the units of information."]
+    if options is not None:
+        out.insert(0, captive_options_text(options))
+    chi2 = "; ".join(f"{eq}: {_v(c, '.3g')}" for eq, c in fit.chi2_reduced.items())
+    if chi2:
+        out.append(f"Reduced chi^2 of the weighted fit per equation: {chi2}.")
+    out += [n for n in fit.notes if n]
+    return out
+
+
+def _draw_captive(fig: Figure, fit: CaptiveFit, options: dict[str, Any] | None = None
+                  ) -> None:
+    """A captive page: the plane's derivatives with their intervals, primes and methods,
+    then the fit's notes."""
+    y = PAGE_HEADER_IN + 0.1
+    plane = "vertical plane (Z, M)" if fit.plane == "vertical" else "horizontal plane (Y, N)"
+    y += _heading(fig, y, f"Captive derivatives, {plane}: model scale, SI")
+    header, rows, methods = captive_rows(fit)
+    widths = [0.9, 0.85, 0.95, 1.5, 0.75, *([0.85] if fit.draught_m is not None else []),
+              0.45, 0.6]
+    y += _table(fig, y, header, rows, widths, fontsize=7.6, row_in=0.2,
+                align=("center", "right", "center", "right", "right",
+                       *(("right",) if fit.draught_m is not None else ()), "right",
+                       "center")) + 0.1
+    lt = (f"; prime L·T: value/(½ρ T L^(k−1)), T = {fit.draught_m:g} m"
+          if fit.draught_m is not None else "")
+    notes = [f"[{i}] {m}" for i, m in enumerate(methods, start=1)]
+    notes.append(f"Prime: value/(½ρ L^k), L = {fit.length_m:g} m, ρ = {fit.rho:.2f} kg/m³, k "
+                 "by the derivative (docs/formats.md)" + lt + ". The rotary and acceleration "
+                 "derivatives are totals (the added-mass Coriolis and Munk parts included). "
+                 "Intervals: 95 %, Student's t on the fit's degrees of freedom. Offsets _uu: "
+                 "the asymmetry and zero residue, never used as derivatives.")
+    y += _text_blocks(fig, y, notes) + 0.15
+    y += _heading(fig, y, "The fit")
+    _text_blocks(fig, y, captive_fit_text(fit, options))
 
 
 def _fin_table(fig: Figure, y: float, fr: FinResult) -> float:
@@ -752,7 +858,7 @@ PDF_PARTS = 4
 #: Rough drawing time of a page by kind, relative (to split the pages evenly between cores);
 #: a thumbnail page costs in proportion to its runs.
 PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "runs": 0.4, "fin_runs": 0.4,
-             "quality": 0.3, "thumbs": 1.0}
+             "quality": 0.3, "thumbs": 1.0, "captive": 0.4}
 
 
 def _page_cost(page: Page) -> float:
@@ -870,6 +976,8 @@ def _render(
         _draw_runs(fig, day.runs, day.protocol, page.payload)
     elif page.kind == "fin_runs":
         _draw_fin_runs(fig, require(day.fins, "fin"), page.payload)
+    elif page.kind == "captive":
+        _draw_captive(fig, page.payload, captive_provenance(day))
     return fig
 
 
@@ -888,6 +996,9 @@ def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: li
     """The per-run table (runs.csv's main columns) for ``run_ids``: one row per run, the
     tare-corrected steady drag and its coefficient on the area its test uses (named in its own
     column); rejected and void runs shaded; a blank acceleration explained below."""
+    if "captive_Y_N" in table.columns:
+        _draw_captive_runs(fig, table, run_ids)
+        return
     runs = table.set_index("run", drop=False)
     y = PAGE_HEADER_IN + 0.25
     header = ["run", "config", "test", "α [deg]", "U [m/s]", "a [m/s²]", "drag [N]",
@@ -928,6 +1039,49 @@ def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: li
                                fontsize=7.5)
     if accel_note:
         _text_block(fig, y + used, accel_note, fontsize=7.5)
+
+
+def _draw_captive_runs(fig: Figure, table: pd.DataFrame, run_ids: list[int]) -> None:
+    """The per-run table of a day with captive runs: each run's test and setting (drift β,
+    rudder δ, arm radius R, PMM frequency), its speed and loads (captive runs: X, Y [N] and
+    N [N m] about O, inertia removed; other runs: the drag and its C_D) and status."""
+    runs = table.set_index("run", drop=False)
+    y = PAGE_HEADER_IN + 0.25
+    header = ["run", "test", "β [deg]", "δ [deg]", "R [m]", "f [Hz]", "U [m/s]",
+              "X or drag [N]", "Y [N]", "N [N m]", r"$C_D$", "cycles", "status"]
+    rows, fill = [], {}
+    for i, run in enumerate(run_ids):
+        r = runs.loc[run]
+        ok = r["status"] == "ok"
+        captive = ok and math.isfinite(float(r["captive_Y_N"]))
+
+        def val(name: str, fmt: str, row: Any = r) -> str:
+            return _v(row.get(name), fmt)
+
+        rows.append([str(run), literal(r.get("test") or ""), val("drift_deg", "g"),
+                     val("rudder_deg", "g"), val("radius_m", "g"), val("pmm_frequency_hz", "g"),
+                     val("speed_mean", ".3f") if ok else "–",
+                     (val("captive_X_N", ".4g") if captive else val("drag_mean", ".4g"))
+                     if ok else "–",
+                     val("captive_Y_N", ".4g") if captive else "–",
+                     val("captive_N_Nm", ".4g") if captive else "–",
+                     "–" if captive or not ok else val("cd_ref", ".4f"),
+                     val("pmm_cycles", ".0f") if captive else "–",
+                     literal(r["status"])])
+        if r["status"] in _STATUS_FILL:
+            for c in range(len(header)):
+                fill[(i, c)] = _STATUS_FILL[str(r["status"])]
+    used = _table(fig, y, header, rows, [0.45, 0.7, 0.55, 0.55, 0.55, 0.5, 0.6, 0.85, 0.7,
+                                        0.7, 0.6, 0.5, 0.7], row_in=0.19, fontsize=7.2,
+                  highlight=fill)
+    _text_block(fig, y + used + 0.12,
+                "Captive runs: the setting from the run sheet (drift β, rudder δ, arm radius R, "
+                "PMM frequency f), the steady mean speed and the hydrodynamic loads X, Y and "
+                "the moment N about O with the model's inertia removed: steady means (static "
+                "tests) or cycle means over the kept PMM cycles (runs.csv captive_X_N, "
+                "captive_Y_N, captive_N_Nm, pmm_cycles). Other runs: the tare-corrected drag "
+                "and its C_D. Rejected runs (red) and void runs (grey) with their reasons: "
+                "Quality page and runs.csv.", fontsize=7.5)
 
 
 __all__ = [

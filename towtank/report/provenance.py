@@ -47,6 +47,9 @@ def provenance(day: DayResult, extra: dict[str, Any] | None = None) -> dict[str,
                  **(extra or {})}
     if day.captive_results:
         extra = {"captive": captive_provenance(day), **(extra or {})}
+    vehicle = getattr(day, "vehicle", None)
+    if vehicle is not None and "assumptions" in vehicle.model:  # model.json's, the same list
+        extra = {"assumptions": vehicle.model["assumptions"], **(extra or {})}
     settings = {
         "processing": asdict(p.processing),
         "trim_s_used": p.processing.trim,
@@ -244,6 +247,8 @@ def captive_provenance(day: DayResult) -> dict[str, Any]:
     assert p.model is not None
     m, options = p.model, p.captive
     pmm = day.pmm
+    tol = options.amplitude_tolerance if options is not None else 0.05
+    min_cycles = options.min_cycles if options is not None else 3
     return {
         "moment_reference": options.moment_ref if options is not None else "origin",
         "moment_transfer": "N_O = mz + balance_x_m * fy",
@@ -252,13 +257,19 @@ def captive_provenance(day: DayResult) -> dict[str, Any]:
                             "iyy_kg_m2": m.iyy_kg_m2, "xg_m": m.xg_m},
         "pmm_cycles_used": {str(int(r)): int(c) for r, c in zip(pmm["run"], pmm["cycles_used"],
                                                                 strict=True)},
-        "pmm_cycle_rule": "whole cycles inside the steady window whose sway amplitude is within "
-                          "5 % of the full cycles' median; ramp-in and ramp-out cycles dropped",
+        "pmm_cycle_rule": (
+            f"whole cycles inside the steady window whose sway amplitude is within "
+            f"{100 * tol:g} % of the full cycles' median (ramp-in and ramp-out cycles "
+            f"dropped); at least {min_cycles} kept cycles; measured frequency and amplitude "
+            f"within {100 * tol:g} % of the sheet's"),
         "roll_deg_vertical": options.roll_deg if options is not None else 90.0,
         "means": str(options.means) if options is not None and options.means else "",
         "means_prime": bool(options.means_prime) if options is not None else False,
-        "fit": {c.plane: {"weights": "1/SE^2 (standard errors of the runs' components), "
-                                     "covariance scaled by the reduced chi^2 when above 1",
+        "fit": {c.plane: {"weights": "1/var(load - regressors x derivatives) of each run's "
+                                     "component, from its covariance over the PMM cycles or "
+                                     "the steady window's blocks (the zero's variance "
+                                     "included); the intervals widened by the reduced chi^2 "
+                                     "when the model is rejected (p < 0.01)",
                           "reduced_chi2": dict(c.chi2_reduced)}
                 for c in day.captive_results},
     }

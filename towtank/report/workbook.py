@@ -7,6 +7,9 @@ Summary       campaign, model, water, test date, program, run counts, the geomet
               (areas, volume and where each came from), key results
 Coefficients  the SUT-2 coefficient table: value, unit, 95 % interval, prime, reference,
               diff %, method, prototype value, second estimate, its method and agreement
+Captive       (days with captive runs) the captive derivatives per plane: value, unit, 95 %
+              interval, primes, method, runs; the fit's reduced chi^2 and notes
+PMM           (days with captive runs) pmm.csv: the PMM runs' first harmonics
 Runs          runs.csv: every run of the sheet with status, reason, phase windows, means
 Fins          fins.csv, then the per-speed curves and the fin's constants
 Scaling       scaling.csv, then the resistance curve, the form factor, the similarity statement
@@ -58,15 +61,18 @@ if TYPE_CHECKING:
     from towtank.ingest.schema import Processing
     from towtank.results import DayResult, FinResult, HullResult, ScalingResult, TareResult
 
-SHEETS = ("Summary", "Coefficients", "Runs", "Tare", "Fins", "Fin curves", "Fin control",
-          "Scaling", "Scaling constants", "Form factor", "Quality", "Provenance")
+SHEETS = ("Summary", "Coefficients", "Captive", "PMM", "Runs", "Tare", "Fins", "Fin curves",
+          "Fin control", "Scaling", "Scaling constants", "Form factor", "Quality",
+          "Provenance")
 
 
 def sheet_names(day: DayResult) -> list[str]:
     """The workbook's sheets, one table each: :data:`SHEETS` without the fin and scaling
     detail sheets a day has no data for."""
     fr, sr = day.fins, day.scaling
-    has = {"Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
+    captive = _captive_results(day)
+    has = {"Captive": bool(captive), "PMM": bool(captive),
+           "Fin curves": fr is not None and len(fr.table) > 0 and len(fr.curves) > 0,
            "Fin control": _has_control(fr),
            "Scaling constants": sr is not None,
            "Form factor": sr is not None and sr.form_factor is not None}
@@ -107,6 +113,13 @@ UNITS: dict[str, str] = {
     # diagnostics
     "alpha_rad": "rad", "speed": "m/s", "fitted": "-", "resid": "-", "student": "-",
     "cooks": "-", "drag": "N", "cd90": "-", "cd_mean": "-", "cd_std": "-",
+    # captive: coefficients, pmm.csv and runs.csv
+    "prime_LT": "-", "frequency_hz": "Hz", "amplitude_m": "m", "omega_prime": "-",
+    "cycles_used": "-", "fy_in": "N", "fy_quad": "N", "mz_in": "N m", "mz_quad": "N m",
+    "fy_in_se": "N", "fy_quad_se": "N", "mz_in_se": "N m", "mz_quad_se": "N m",
+    "captive_X_N": "N", "captive_Y_N": "N", "captive_N_Nm": "N m", "pmm_cycles": "-",
+    "drift_deg": "deg", "rudder_deg": "deg", "radius_m": "m", "pmm_amplitude_m": "m",
+    "pmm_frequency_hz": "Hz",
 }
 for _name in ("still_pre", "accel", "steady", "decel", "still_post"):
     UNITS[f"{_name}_start_s"] = UNITS[f"{_name}_end_s"] = "s"
@@ -438,6 +451,49 @@ def _coefficients(w: SheetWriter, hull: HullResult | None, coef: pd.DataFrame,
            "mass); empty where the reference is 0.")
 
 
+def _captive_results(day: DayResult) -> tuple[Any, ...]:
+    """The day's captive results (horizontal plane first); () for a day without."""
+    return tuple(getattr(day, "captive_results", ()) or ())
+
+
+#: Column order of the Captive sheet.
+CAPTIVE_ORDER = ("symbol", "value", "unit", "ci_low", "ci_high", "std_error", "dof", "prime",
+                 "prime_ci_low", "prime_ci_high", "prime_LT", "n_runs", "method")
+
+
+def _captive(w: SheetWriter, day: DayResult) -> None:
+    """Each plane's captive derivatives (coefficients.csv's captive rows) with the fit's
+    reduced chi^2 and notes."""
+    for i, fit in enumerate(_captive_results(day)):
+        if i:
+            w.gap()
+        letters = "Z, M" if fit.plane == "vertical" else "Y, N"
+        w.title(f"Captive derivatives, {fit.plane} plane ({letters}): {len(fit.runs)} runs")
+        w.table(fit.table(), columns=CAPTIVE_ORDER)
+        w.note(f"value, ci_low, ci_high, std_error in the row's unit (SI, model scale); "
+               f"intervals 95 %, Student's t on dof; prime = value/(½ρL^k) with ρ = "
+               f"{fit.rho:.3f} kg/m³, L = {fit.length_m:g} m"
+               + (f"; prime_LT = value/(½ρTL^(k−1)), T = {fit.draught_m:g} m"
+                  if fit.draught_m is not None else "") + ".")
+        for eq, chi2 in fit.chi2_reduced.items():
+            w.note(f"{eq}: reduced chi^2 of the fit {chi2:.4g}")
+        for n in fit.notes:
+            w.note(n)
+
+
+def _pmm(w: SheetWriter, day: DayResult) -> None:
+    """pmm.csv, or a note that the day has no PMM runs."""
+    pmm = day.pmm
+    if len(pmm) == 0:
+        _note_sheet(w, "No PMM runs: the day's captive runs are all static (drift, rudder, "
+                    "arm).")
+        return
+    w.table(pmm)
+    w.note("First harmonics of Y [N] and N [N m] about O, inertia removed: in = coefficient "
+           "of sin(ωt), in phase with the sway y; quad = of cos(ωt); *_se their standard "
+           "errors over the kept cycles; omega_prime = ωL/U.")
+
+
 def _runs(w: SheetWriter, runs: pd.DataFrame, processing: Processing) -> None:
     w.table(runs, row_fill=_fill_for_status)
     w.gap()
@@ -711,6 +767,8 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
 WRITERS: dict[str, Callable[[SheetWriter, DayResult], None]] = {
     "Summary": _summary,
     "Coefficients": lambda w, day: _coefficients(w, day.hull, day.coefficients, day.protocol),
+    "Captive": _captive,
+    "PMM": _pmm,
     "Runs": lambda w, day: _runs(w, day.runs, day.protocol.processing),
     "Tare": lambda w, day: _tare(w, day.tare),
     "Fins": lambda w, day: _fins(w, day.fins, day.protocol),

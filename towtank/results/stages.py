@@ -298,9 +298,10 @@ class CaptiveResult(CaptiveFit, Estimates):
         return f"Captive derivatives, {self.plane} plane ({len(self.runs)} runs)"
 
     def summary(self, alpha: float = 0.05) -> Summary:
-        """The derivatives with their intervals of level 1 − ``alpha`` and the fit's notes."""
+        """The derivatives with their intervals of level 1 − ``alpha``, the fit's warnings
+        and notes."""
         return estimates_summary(self.summary_title(), self.estimate_frame(),
-                                 self.conf_int(alpha), alpha, self.notes)
+                                 self.conf_int(alpha), alpha, (*self.warnings, *self.notes))
 
     def to_frame(self) -> pd.DataFrame:
         """coefficients.csv rows of the derivatives (:meth:`CaptiveFit.table`)."""

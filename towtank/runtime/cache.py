@@ -51,7 +51,7 @@ from towtank.runtime import records
 from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import is_real_dir, read_regular, sha256_regular
 
-CACHE_FORMAT = 4  # of entries and settings keys (4: npz records, never pickles)
+CACHE_FORMAT = 5  # of entries and settings keys (4: npz records, never pickles; 5: captive cov)
 INDEX_FORMAT = 3  # of files.json
 PACK_ENTRIES = 64  # a pack is written while runs are being reduced once this many wait
 PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interrupt loses little)
@@ -68,6 +68,8 @@ CAPTIVE_TEST_NAMES = ("drift", "rudder", "arm", "sway", "yaw", "yaw_drift")
 CAPTIVE_ROW_KEYS = ("plane", "drift_deg", "rudder_deg", "radius_m", "pmm_amplitude_m",
                     "pmm_frequency_hz")
 CAPTIVE_MODEL_KEYS = ("mass_kg", "length_m", "izz_kg_m2", "iyy_kg_m2", "xg_m", "balance_x_m")
+#: The [captive] keys a PMM run's reduction depends on (which cycles it keeps).
+CAPTIVE_OPTION_KEYS = ("min_cycles", "amplitude_tolerance")
 
 
 def _num(x: Any) -> Any:
@@ -101,8 +103,10 @@ def settings_key(
     version, processing settings, channel mapping (:func:`protocol_settings`, which may be
     given as ``common`` when the keys of many runs are made), file name, manual window, set
     values, the run's purpose (``test``, which decides which notes are warnings) and, when the
-    sheet gives one, the run's ``segment``; and the sha256 of the run's side files
-    (``side_sha``, or the row's ``side_files_sha``: its carriage log and zeros file).
+    sheet gives one, the run's ``segment``; a captive run's sheet settings, the model's
+    inertia and the ``[captive]`` cycle options (:data:`CAPTIVE_OPTION_KEYS`); and the sha256
+    of the run's side files (``side_sha``, or the row's ``side_files_sha``: its carriage log
+    and zeros file).
     """
     payload = dict(protocol_settings(protocol) if common is None else common)
     payload.update({
@@ -120,8 +124,11 @@ def settings_key(
     captive = {k: _num(row.get(k)) for k in CAPTIVE_ROW_KEYS if k in row}
     if payload["test"] in CAPTIVE_TEST_NAMES:  # the sheet's settings and the model's inertia
         model = getattr(protocol, "model", None)
+        options = getattr(protocol, "captive", None)
         payload["captive"] = {**captive, "model": {k: getattr(model, k, None)
-                                                   for k in CAPTIVE_MODEL_KEYS}}
+                                                   for k in CAPTIVE_MODEL_KEYS},
+                              "cycles": {k: getattr(options, k, None)
+                                         for k in CAPTIVE_OPTION_KEYS}}
     side = side_sha or row.get("side_files_sha")
     if side:  # its carriage log and zeros file are read with the run
         payload["side_files"] = side

@@ -37,7 +37,7 @@ from towtank.reference.sets import reference_table
 from towtank.results.stages import CaptiveResult
 from towtank.results.summary import from_fit
 from towtank.signal import conditioning
-from towtank.testing.days import write_protocol, write_run_sheet
+from towtank.testing.days import write_protocol, write_run_sheet, write_truth
 from towtank.testing.instruments import Noise, draw_imperfections, recorded_channels
 from towtank.testing.layouts import write_layout
 from towtank.testing.profiles import plan_profile, sample_times
@@ -138,19 +138,20 @@ def captive_day_plan(speed: float = 1.5) -> list[CaptiveRunSpec]:
 # ================================================================================ the motion
 
 def _ramp(t: np.ndarray, a: float, b: float, c: float, d: float
-          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Envelope 0 before a, raised-cosine up to 1 at b, 1 until c, down to 0 at d; with its
-    first and second time derivatives."""
-    e, e1, e2 = np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
+    first, second and third time derivatives."""
+    e, e1, e2, e3 = (np.zeros_like(t) for _ in range(4))
     for lo, hi, sign in ((a, b, 1.0), (c, d, -1.0)):
         m = (t >= lo) & (t < hi)
         k = math.pi / (hi - lo)
         x = k * (t[m] - lo)
-        e[m] = 0.5 * (1.0 - sign * np.cos(x)) if sign > 0 else 0.5 * (1.0 + np.cos(x))
+        e[m] = 0.5 * (1.0 - sign * np.cos(x))
         e1[m] = sign * 0.5 * k * np.sin(x)
-        e2[m] = sign * 0.5 * k * k * np.cos(x)
+        e2[m] = sign * 0.5 * k**2 * np.cos(x)
+        e3[m] = -sign * 0.5 * k**3 * np.sin(x)
     e[(t >= b) & (t < c)] = 1.0
-    return e, e1, e2
+    return e, e1, e2, e3
 
 
 def pmm_motion(t: np.ndarray, spec: CaptiveRunSpec, t0: float, speed: float
@@ -161,7 +162,7 @@ def pmm_motion(t: np.ndarray, spec: CaptiveRunSpec, t0: float, speed: float
     w = 2.0 * math.pi * spec.frequency_hz
     T = 1.0 / spec.frequency_hz
     nr, ns = spec.ramp_cycles, spec.steady_cycles
-    e, e1, e2 = _ramp(t, t0, t0 + nr * T, t0 + (nr + ns) * T, t0 + (2 * nr + ns) * T)
+    e, e1, e2, e3 = _ramp(t, t0, t0 + nr * T, t0 + (nr + ns) * T, t0 + (2 * nr + ns) * T)
     s, c = np.sin(w * (t - t0)), np.cos(w * (t - t0))
     y0 = spec.amplitude_m
     y = y0 * e * s
@@ -170,10 +171,12 @@ def pmm_motion(t: np.ndarray, spec: CaptiveRunSpec, t0: float, speed: float
     if spec.test == "sway":
         z = np.zeros_like(t)
         return {"y": y, "y1": y1, "y2": y2, "psi": z, "psi1": z, "psi2": z}
-    a, a1 = y1 / speed, y2 / speed
-    psi1 = a1 / (1.0 + a * a)
-    return {"y": y, "y1": y1, "y2": y2, "psi": np.arctan(a), "psi1": psi1,
-            "psi2": np.gradient(psi1, t)}
+    y3 = y0 * (e3 * s + 3.0 * w * e2 * c - 3.0 * w**2 * e1 * s - w**3 * e * c)
+    # psi = atan(a), a = y'/U: psi' = a'/(1 + a^2), psi'' = a''/(1 + a^2) - 2 a a'^2/(1 + a^2)^2
+    a, a1, a2 = y1 / speed, y2 / speed, y3 / speed
+    q = 1.0 + a * a
+    return {"y": y, "y1": y1, "y2": y2, "psi": np.arctan(a), "psi1": a1 / q,
+            "psi2": a2 / q - 2.0 * a * a1**2 / q**2}
 
 
 # ================================================================================ the loads
@@ -329,7 +332,8 @@ def make_captive_day(
     Returns
     -------
     dict
-        The truth: ``derivatives``, the model's particulars and each run's spec.
+        The truth: ``derivatives``, the model's particulars and each run's spec (also
+        written to ``truth.json``; a setting a run does not use is None).
     """
     if layout not in CAPTIVE_LAYOUTS:
         raise ValueError(f"layout must be one of {', '.join(CAPTIVE_LAYOUTS)}, not {layout!r}")
@@ -367,8 +371,12 @@ def make_captive_day(
         campaign={"name": f"captive {plane} seed {seed}", "run_sheet": "run_sheet.csv",
                   "data_dir": "data", "output_dir": "out"},
         water={"type": "fresh", "temperature_C": 18.0}, model=model, captive=captive)
-    return {"derivatives": dict(truth.derivatives), "plane": plane, "seed": seed,
-            "model": model, "runs": [replace(s).__dict__ for s in plan]}
+    truth_dict = {"derivatives": dict(truth.derivatives), "plane": plane, "seed": seed,
+            "model": model, "runs": [{k: (None if isinstance(v, float) and math.isnan(v) else v)
+                                       for k, v in replace(s).__dict__.items()}
+                                      for s in plan]}
+    write_truth(truth_dict, folder / "truth.json")  # NaN (a setting not used) as null
+    return truth_dict
 
 
 # ====================================================================== in-process reduction
@@ -386,13 +394,15 @@ def reduce_simulated(frame: pd.DataFrame, spec: CaptiveRunSpec, truth: CaptiveTr
     ph = find_phases(t, speed_f, conditioning.derivative(speed_f, fs), fs, p,
                      steady_required=True)
     assert ph.steady is not None and ph.still_pre is not None
+    zero_var: dict[str, float] = {}
     cond = condition_captive(t, channels, fs, cutoff_hz=p.cutoff_hz, order=p.filter_order,
-                             still=(ph.still_pre, ph.still_post))
+                             still=(ph.still_pre, ph.still_post), steady=ph.steady,
+                             zero_var=zero_var)
     model = SimpleNamespace(mass_kg=truth.mass_kg, izz_kg_m2=truth.izz_kg_m2,
                             iyy_kg_m2=truth.iyy_kg_m2, xg_m=truth.xg_m,
                             balance_x_m=truth.balance_x_m, length_m=truth.length_m)
     return reduce_captive(cond, fs, ph.steady, {**spec.sheet_row(), "plane": truth.plane},
-                          model, run=spec.run, file=f"run_{spec.run:03d}")
+                          model, run=spec.run, file=f"run_{spec.run:03d}", zero_var=zero_var)
 
 
 def simulated_runs(truth: CaptiveTruth | None = None, *, seed: int = 0,

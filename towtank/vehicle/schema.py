@@ -27,6 +27,7 @@ import numpy as np
 
 from towtank.ingest.values import finite_number
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.vehicle.assumptions import check_assumptions
 from towtank.vehicle.fossen import (
     ADDED_MASS_RE,
     LUMPED,
@@ -301,6 +302,8 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
             problems.append(f"{name}: '{key}' must be {kind}, not {_show(model[key])}.")
     if model.get("covariance") is not None:
         problems += check_covariance(model["covariance"], name)
+    if "assumptions" in model:
+        problems += check_assumptions(model["assumptions"], name)
     if problems:  # the checks below need every value above
         return problems
     # no problem: every required key is there and valid (the scalars are numbers)

@@ -672,6 +672,8 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
         rows.append(("tactical_diameter_m", float(abs(at180["y_m"])) if at180 is not None
                      else nan, "m", "" if at180 is not None else "no 180 deg of heading change"))
         steady("steady_speed_m_s", "speed_m_s", "m/s")
+        beside = next(i for i, r in enumerate(rows) if r[0] == "steady_turn_radius_m") + 1
+        rows.insert(beside, _speed_loss(rows[-1], float(q["speed_m_s"][0])))
         steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
         steady("steady_drift_angle_deg", "drift_deg", "deg", angle=True)
         if kind == "spiral":
@@ -722,6 +724,17 @@ def manoeuvre_metrics(ts: pd.DataFrame) -> pd.DataFrame:
             rows.append(("turn_period_s", nan if note else 360.0 / abs(yaw), "s", note))
             steady("steady_yaw_rate_deg_s", "yaw_rate_deg_s", "deg/s")
     return pd.DataFrame(rows, columns=["metric", "value", "unit", "note"])
+
+
+def _speed_loss(steady_speed: tuple[str, float, str, str], start_m_s: float
+                ) -> tuple[str, float, str, str]:
+    """metrics.csv's ``speed_loss_percent``: the steady turn's speed below the speed at the
+    start [%], under the thrust that held the start speed on a straight course (simulate keeps
+    it constant)."""
+    _, value, _, note = steady_speed
+    loss = float("nan") if note else 100.0 * (1.0 - value / start_m_s)
+    return ("speed_loss_percent", loss, "%",
+            note or f"of the {start_m_s:.3g} m/s at the start, under constant thrust")
 
 
 def _dive_angle_rows(ts: pd.DataFrame, angle_deg: float) -> list[tuple[str, float, str, str]]:

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import root
+from scipy.optimize import minimize_scalar, root
 
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.glider import steady_glide
@@ -35,7 +35,7 @@ from towtank.vehicle.model import coriolis_added_mass
 from towtank.vehicle.simulate import Dynamics
 
 __all__ = ["STEADY_COLUMNS", "body_rates", "equilibrium_residual", "steady_state",
-           "solve_state", "steady_table", "ROLL_STEP_DEG", "TOLERANCE"]
+           "solve_state", "steady_table", "roll_reach", "ROLL_STEP_DEG", "TOLERANCE"]
 
 STEADY_COLUMNS = ("ballast_cc", "net_buoyancy_N", "pitch_deg", "roll_deg", "speed_m_s", "u_m_s",
                   "v_m_s", "w_m_s", "angle_of_attack_deg", "sideslip_deg", "glide_angle_deg",
@@ -121,6 +121,69 @@ def _solve_spiral(model: dict[str, Any], dyn: Dynamics, theta: float, phi_target
     return x, ok, "" if ok else "the spiral's balance was not met to the tolerance"
 
 
+def _spiral_at_gamma(model: dict[str, Any], dyn: Dynamics, theta: float, gamma: float,
+                     guess: np.ndarray) -> np.ndarray | None:
+    """u, v, w, Omega, travel and the roll phi [rad] of the steady spiral with the roll mass
+    held at ``gamma`` [rad] (the roll now an unknown), from ``guess``; None when not met."""
+    scale = _scales(dyn, model)
+
+    def resid(y: np.ndarray) -> np.ndarray:
+        nu = np.concatenate((y[:3], body_rates(y[3], y[5], theta)))
+        return equilibrium_residual(dyn, nu, y[5], theta,
+                                    cg_with_controls(model, y[4], gamma)) / scale
+
+    sol = root(resid, guess, method="hybr", tol=1e-14)
+    ok = np.all(np.isfinite(sol.x)) and np.max(np.abs(resid(sol.x))) < 1e-6
+    return sol.x if ok else None
+
+
+def roll_reach(model: dict[str, Any], dyn: Dynamics, theta: float, start: np.ndarray,
+               sign: float = 1.0) -> tuple[float, float]:
+    """The largest steady roll [deg] the roll mass holds at pitch ``theta`` [rad] and the
+    roll-mass angle [deg] that gives it.
+
+    The roll mass's heeling moment ``m_r g R cos(theta) sin(gamma - phi)`` peaks when the mass
+    lies level across the glider (gamma = phi + 90 deg): turned further it rolls the glider
+    less. The spiral is followed in the roll mass's angle gamma (the roll an unknown) from
+    ``start`` (u, v, w, Omega, travel, gamma, phi of a converged glide or spiral) towards the
+    side of ``sign`` (+1 starboard down) in steps of :data:`ROLL_STEP_DEG` until the roll
+    falls, and the peak refined between the last steps (bounded Brent search of the roll over
+    gamma).
+    """
+    y = np.array([*start[:5], start[6]])
+    gamma = float(start[5])
+    best = (abs(float(start[6])), gamma, y)
+    step = sign * math.radians(ROLL_STEP_DEG)
+    while abs(gamma + step) <= math.pi:
+        nxt = _spiral_at_gamma(model, dyn, theta, gamma + step, y)
+        if nxt is None:
+            break
+        gamma, y = gamma + step, nxt
+        if abs(y[5]) < best[0]:
+            break
+        best = (abs(float(y[5])), gamma, y)
+    g0, y0 = best[1], best[2]
+
+    def minus_roll(g: float) -> float:
+        sol = _spiral_at_gamma(model, dyn, theta, g, y0)
+        return math.inf if sol is None else -abs(float(sol[5]))
+
+    lo, hi = sorted((g0 - step, min(abs(g0 + step), math.pi) * sign))
+    res = minimize_scalar(minus_roll, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-6})
+    if math.isfinite(res.fun) and -res.fun > best[0]:
+        return math.degrees(-res.fun), math.degrees(abs(res.x))
+    return math.degrees(best[0]), math.degrees(abs(g0))
+
+
+def _beyond_reach(roll_deg: float, reach: tuple[float, float]) -> str:
+    """The note of a roll the roll mass cannot hold."""
+    side = "starboard" if roll_deg > 0 else "port"
+    return (f"a roll of {roll_deg:g} deg is beyond the roll mass's reach: it holds at most "
+            f"{reach[0]:.3g} deg to {side}, turned to {reach[1]:.4g} deg (its moment peaks with "
+            "the mass level across the glider; turned further it rolls the glider less)")
+
+
 def _row(model: dict[str, Any], ballast_cc: float, pitch_deg: float, roll_deg: float,
          x: np.ndarray | None, note: str) -> dict[str, Any]:
     nan = float("nan")
@@ -199,7 +262,12 @@ def steady_table(model: dict[str, Any], ballasts_cc: list[float], pitches_deg: l
             done: dict[float, dict[str, Any]] = {}
             for sign in (1.0, -1.0):
                 start = glide
+                reach: tuple[float, float] | None = None
+                last = glide
                 for r in sorted({r for r in rolls if r * sign > 0}, key=abs):
+                    if start is None and reach is not None and abs(r) > reach[0]:
+                        done[r] = _row(model, b, p, r, None, _beyond_reach(r, reach))
+                        continue
                     if start is None:
                         why = note if glide is None else "no steady spiral at a smaller roll"
                         done[r] = _row(model, b, p, r, None, why)
@@ -209,8 +277,14 @@ def steady_table(model: dict[str, Any], ballasts_cc: list[float], pitches_deg: l
                                        "(roll_mass_kg in [vehicle.glider])")
                         continue
                     x, ok_s, note_s = _solve_spiral(mdl, dyn, theta, math.radians(r), start)
+                    if not ok_s:
+                        if reach is None and last is not None:
+                            reach = roll_reach(mdl, dyn, theta, last, sign)
+                        if reach is not None and abs(r) > reach[0]:
+                            note_s = _beyond_reach(r, reach)
                     done[r] = _row(model, b, p, r, x if ok_s else None, note_s)
                     start = np.append(x, math.radians(r)) if ok_s else None
+                    last = start if ok_s else last
             for r in rolls:
                 if r == 0.0:
                     rows.append(_row(model, b, p, 0.0, glide[:6] if glide is not None else None,

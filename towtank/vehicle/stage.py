@@ -11,6 +11,7 @@ import pandas as pd
 from towtank.ingest.glider_inputs import HullBounds, glider_problems
 from towtank.reference import water as water_props
 from towtank.vehicle import model as vmodel
+from towtank.vehicle.assumptions import neutral_warning, vehicle_assumptions
 from towtank.vehicle.hull import HullProfile
 from towtank.vehicle.powering import Propeller, powering_table
 from towtank.vehicle.predict import FinPair, axial_drag, predict_coefficients
@@ -29,6 +30,7 @@ class VehiclePrediction:
     model: dict[str, Any]
     powering: pd.DataFrame | None = None  # powering.csv, with [vehicle.propeller]
     pressure_hull: pd.DataFrame | None = None  # pressure_hull.csv, with [vehicle.pressure_hull]
+    warnings: tuple[str, ...] = ()  # e.g. a neutral vehicle whose hull displaces far more
 
 
 def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
@@ -70,9 +72,12 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     if getattr(vehicle, "glider", None) is not None:  # [vehicle.glider] (#26)
         _check_glider(vehicle, profile, float(model["mass_kg"]))
         model["glider"] = dict(vehicle.glider)
+    model["assumptions"] = vehicle_assumptions(vehicle, masses, getattr(vehicle, "assumed", None))
+    warning = neutral_warning(str(vehicle.name), masses, float(profile.volume), rho)
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
                              _powering(vehicle, profile, fins, rho, nu),
-                             _pressure_hull(vehicle, profile, rho))
+                             _pressure_hull(vehicle, profile, rho),
+                             (warning,) if warning else ())
 
 
 def _check_glider(vehicle: Any, profile: HullProfile, mass_kg: float) -> None:

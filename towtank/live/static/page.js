@@ -126,6 +126,12 @@ function renderFigures(s) {
   renderFigure("latest_run", f.latest_run, s.version, "the latest run's traces, phases and windows");
   renderFigure("damping", f.damping, s.version, "C_D(α) and its fit");
   renderFigure("added_mass", f.added_mass, s.version, "added-mass fit");
+  renderFigure("captive", f.captive, s.version, "captive tests: loads against the fitted derivatives");
+  // a captive day has no C_D(α) nor added-mass fit: its panel shows instead
+  const captive = Boolean(f.captive) && !f.damping && !f.added_mass;
+  document.getElementById("captive-panel").hidden = !f.captive;
+  document.getElementById("damping-panel").hidden = captive;
+  document.getElementById("added-mass-panel").hidden = captive;
 }
 
 function renderSheet(s) {
