@@ -16,36 +16,41 @@ Three tests per measured state, each against a stated threshold:
   chi^2 upper limit.
 
 Each threshold is the 1 - a quantile with ``a = FAMILY_ALPHA / (number of tests)``
-(Bonferroni), the mean squares' at least :data:`NIS_FLOOR` and :data:`CHECK_FLOOR` (the
-filter's innovations and an open-loop prediction spread more than chi^2 says on records the
-model made).
+(Bonferroni). The noise sd that normalises the innovations is estimated from the record
+(:func:`towtank.vehicle.identify_log.noise_sd`, the median absolute second difference): a
+mean square over it is the ratio of two mean squares, ``F(n, nu)`` (Snedecor's F) with ``nu``
+:data:`NOISE_DOF_PER_SAMPLE` times the record's samples, not ``chi^2(n)/n`` — whose quantile
+is the limit when the noise is given (``nu`` infinite). The rates of false alarms these
+thresholds give on records the model made are measured by
+:mod:`towtank.testing.adequacy_study`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.stats import chi2
+from scipy.stats import chi2, f
 from statsmodels.stats.diagnostic import acorr_ljungbox
 
 from towtank.vehicle.identify_log import MIN_ROWS, STATE_COLUMNS
 
-__all__ = ["LB_LAGS", "FAMILY_ALPHA", "NIS_FLOOR", "CHECK_FLOOR", "FIT_COLUMNS", "TEST_NAMES",
-           "adequacy_table", "whiteness", "mean_square", "failure_sentence"]
+__all__ = ["LB_LAGS", "FAMILY_ALPHA", "NOISE_DOF_PER_SAMPLE", "FIT_COLUMNS", "TEST_NAMES",
+           "adequacy_table", "whiteness", "mean_square", "mean_square_limit", "noise_dof",
+           "failure_sentence"]
 
 #: Lags of the Ljung–Box statistic [samples] (fewer when a state has under 5 times as many
 #: values).
 LB_LAGS = 20
 #: Probability that a record the model made fails at least one test [-].
 FAMILY_ALPHA = 0.05
-#: Least threshold of the mean normalised innovation squared [-]: the filter's innovations of
-#: the positions run above their predicted variance on records the model made (1.23 and 1.29
-#: on two of the first matched records, against a chi^2 limit of 1.12-1.17).
-NIS_FLOOR = 1.5
-#: Least threshold of the held-out (validation) mean squared residual [-]: the residual of an
-#: open-loop prediction is correlated along the record, so its mean square spreads more than
-#: chi^2(n)/n (1.61 on a matched 30 s record against a limit of 1.51).
-CHECK_FLOOR = 2.0
+#: Degrees of freedom per sample of the noise variance in a mean square over it [-]. The
+#: variance is estimated from the record (:func:`towtank.vehicle.identify_log.noise_sd`: alone
+#: about 0.25 per sample, the median absolute deviation's efficiency times that of correlated
+#: second differences) and from the very samples whose squares are averaged, so the two move
+#: together: the mean square over it spreads as ``F(m, 0.45 n)`` (m values averaged, n in the
+#: record), measured on white noise (0.39-0.49 for n = 100-1200 with m = n, 0.31-0.46 with
+#: m = n/4; the 1 % quantile exceeded 0.7-1.2 % of the time).
+NOISE_DOF_PER_SAMPLE = 0.45
 #: fit.csv's columns.
 FIT_COLUMNS = ("test", "state", "statistic", "threshold", "passed")
 #: What each test is called in the sentence of a failure.
@@ -75,9 +80,25 @@ def mean_square(e: np.ndarray) -> tuple[float, int]:
     return float(np.mean(x ** 2)) if len(x) else float("nan"), int(len(x))
 
 
+def noise_dof(counts: np.ndarray, given: np.ndarray) -> np.ndarray:
+    """Degrees of freedom of each state's noise variance [-]: :data:`NOISE_DOF_PER_SAMPLE`
+    times its ``counts`` (samples of the record) where estimated, infinite where ``given``."""
+    return np.where(given, np.inf, NOISE_DOF_PER_SAMPLE * np.asarray(counts, dtype=float))
+
+
+def mean_square_limit(n: int, dof: float, a: float) -> float:
+    """Upper ``1 - a`` limit of the mean of ``n`` squared unit normal values over a noise
+    variance estimated with ``dof`` degrees of freedom [-]: the ``F(n, dof)`` quantile,
+    ``chi^2(n)/n``'s when ``dof`` is infinite."""
+    if not np.isfinite(dof):
+        return float(chi2.ppf(1 - a, n) / n)
+    return float(f.ppf(1 - a, n, dof))
+
+
 def adequacy_table(innovation: np.ndarray, check: np.ndarray | None,
                    check_test: str = "holdout", states: list[int] | None = None,
-                   family_alpha: float = FAMILY_ALPHA) -> pd.DataFrame:
+                   family_alpha: float = FAMILY_ALPHA, dof: np.ndarray | None = None,
+                   check_dof: np.ndarray | None = None) -> pd.DataFrame:
     """fit.csv: one row per test and measured state.
 
     Parameters
@@ -93,6 +114,9 @@ def adequacy_table(innovation: np.ndarray, check: np.ndarray | None,
         The states tested (indices of :data:`STATE_COLUMNS`); default every one with values
     family_alpha : float
         Probability that a record the model made fails any test [-]
+    dof, check_dof : ndarray, optional
+        (12,) degrees of freedom of the noise variance that normalises ``innovation``
+        (``check``) (:func:`noise_dof`) [-]; default infinite (the noise given)
 
     Returns
     -------
@@ -105,19 +129,19 @@ def adequacy_table(innovation: np.ndarray, check: np.ndarray | None,
                                         if np.isfinite(check[:, i]).sum() >= MIN_ROWS]
     ntests = max(2 * len(tested) + len(checked), 1)
     a = family_alpha / ntests
+    nu = np.full(innovation.shape[1], np.inf) if dof is None else np.asarray(dof, float)
+    nu_check = nu if check_dof is None else np.asarray(check_dof, float)
     rows = []
     for i in tested:
         q, lag = whiteness(innovation[:, i])
         rows.append(("whiteness", STATE_COLUMNS[i], q, float(chi2.ppf(1 - a, lag))))
     for i in tested:
         ms, n = mean_square(innovation[:, i])
-        rows.append(("nis", STATE_COLUMNS[i], ms, max(float(chi2.ppf(1 - a, n) / n),
-                                                      NIS_FLOOR)))
+        rows.append(("nis", STATE_COLUMNS[i], ms, mean_square_limit(n, nu[i], a)))
     for i in checked:
         assert check is not None
         ms, n = mean_square(check[:, i])
-        rows.append((check_test, STATE_COLUMNS[i], ms, max(float(chi2.ppf(1 - a, n) / n),
-                                                           CHECK_FLOOR)))
+        rows.append((check_test, STATE_COLUMNS[i], ms, mean_square_limit(n, nu_check[i], a)))
     table = pd.DataFrame(rows, columns=list(FIT_COLUMNS[:4]))
     table["passed"] = table["statistic"] <= table["threshold"]
     return table

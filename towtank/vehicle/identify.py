@@ -39,7 +39,7 @@ from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
 from filterpy.kalman import UnscentedKalmanFilter as UKF
 from scipy.optimize import least_squares
 
-from towtank.vehicle.adequacy import adequacy_table
+from towtank.vehicle.adequacy import adequacy_table, noise_dof
 from towtank.vehicle.fossen import (
     DOF,
     SYMBOL_RE,
@@ -351,6 +351,10 @@ class IdentifyFit:
     adequacy : DataFrame or None
         fit.csv: whether the record fits the model (:func:`towtank.vehicle.adequacy.
         adequacy_table`)
+    residuals : dict or None
+        What :attr:`adequacy` was computed from, the keyword arguments of :func:`towtank.
+        vehicle.adequacy.adequacy_table`: ``innovation`` (n, 12) and ``check`` (m, 12) [-],
+        ``check_test``, ``states``
     """
 
     symbols: list[str]
@@ -366,6 +370,7 @@ class IdentifyFit:
     resimulated: pd.DataFrame | None = None
     notes: tuple[str, ...] = ()
     adequacy: pd.DataFrame | None = None
+    residuals: dict[str, Any] | None = None
 
     def fits(self) -> bool:
         """False when a test of :attr:`adequacy` failed (the record does not fit the
@@ -778,22 +783,24 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     sim = simulate_fitted(model, symbols, np.asarray(value), s0, log, speed)
     if innovation is None:  # least squares: its output-error residuals over the noise sd
         innovation = (log.z - sim) / sd
-    table = None
+    table, inputs = None, None
     if adequacy:
         exact = exact_states(log, sd)
         if exact:
             notes.append(f"{', '.join(STATE_COLUMNS[i] for i in exact)} without noise in the "
                          "record (exact): left out of the tests of the fit")
         tested = [i for i in log.measured if i not in exact]
-        table = _adequacy(model, log, symbols, np.asarray(value), sd, innovation, tested,
-                          validate, noise, progress)
+        inputs = _adequacy_inputs(model, log, symbols, np.asarray(value), sd, innovation,
+                                  tested, validate, noise, progress)
+        table = adequacy_table(**inputs)
     resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
                          measured=list(range(12)), name="resimulated")
     return IdentifyFit(symbols=symbols, start=start_vals, value=np.asarray(value),
                        sd=np.asarray(sdv), prior_sd=psd, method=method,
                        covariance=np.asarray(cov), history=hist, notes=tuple(notes),
                        check=None if ls is None else {"value": ls["value"], "sd": ls["sd"]},
-                       measured=log.frame(), resimulated=resim.frame(), adequacy=table)
+                       measured=log.frame(), resimulated=resim.frame(), adequacy=table,
+                       residuals=inputs)
 
 
 def with_coefficients(model: dict[str, Any], symbols: list[str],
@@ -841,30 +848,36 @@ def _fit_and_run(model: dict[str, Any], fit_log: ManoeuvreLog, run_log: Manoeuvr
     return (run_log.z - sim[:, 0, :]) / np.sqrt(sd ** 2 + var)
 
 
-def _adequacy(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
-              value: np.ndarray, sd: np.ndarray, innovation: np.ndarray, tested: list[int],
-              validate: ManoeuvreLog | None, noise: dict[str, float] | None,
-              progress: Progress | None) -> pd.DataFrame:
-    """fit.csv (:func:`towtank.vehicle.adequacy.adequacy_table`): the innovations' tests and
+def _adequacy_inputs(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
+                     value: np.ndarray, sd: np.ndarray, innovation: np.ndarray,
+                     tested: list[int], validate: ManoeuvreLog | None,
+                     noise: dict[str, float] | None,
+                     progress: Progress | None) -> dict[str, Any]:
+    """The arguments of :func:`towtank.vehicle.adequacy.adequacy_table` (fit.csv): the
+    innovations' tests and
     the model against the held-out last :data:`HOLDOUT_FRACTION` of the record (its
     coefficients fitted by least squares to the rest, from ``value``) or, given, against the
     record ``validate`` (its initial measured states fitted, the coefficients ``value``); of
     the states ``tested`` (those with noise)."""
+    dof = _noise_dof(log, noise)
     if validate is not None:
         sd_v = _noise(validate, noise)
         resid = _fit_and_run(with_coefficients(model, symbols, value), validate, validate, [],
                              np.zeros(0), sd_v, progress, "validation record")
         both = [i for i in tested if i not in exact_states(validate, sd_v)]
-        return adequacy_table(innovation, resid, "validation", states=both)
+        return {"innovation": innovation, "check": resid, "check_test": "validation",
+                "states": both, "dof": dof, "check_dof": _noise_dof(validate, noise)}
     n = len(log.t)
     cut = int(round((1.0 - HOLDOUT_FRACTION) * n))
     if n - cut < MIN_ROWS or cut < MIN_ROWS:
-        return adequacy_table(innovation, None, states=tested)
+        return {"innovation": innovation, "check": None, "check_test": "holdout",
+                "states": tested, "dof": dof}
     first = ManoeuvreLog(t=log.t[:cut], z=log.z[:cut], rudder=log.rudder[:cut],
                          sternplane=log.sternplane[:cut], measured=log.measured, name=log.name)
     resid = _fit_and_run(model, first, log, symbols, value, sd, progress,
                          f"least squares, first {1 - HOLDOUT_FRACTION:.0%} of the record")
-    return adequacy_table(innovation, resid[cut:], "holdout", states=tested)
+    return {"innovation": innovation, "check": resid[cut:], "check_test": "holdout",
+            "states": tested, "dof": dof}
 
 
 def _noise(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
@@ -876,6 +889,15 @@ def _noise(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
         sd[STATE_COLUMNS.index(col)] = given * (math.pi / 180.0 if col.endswith(
             ("_deg", "_deg_s")) else 1.0)
     return sd
+
+
+def _noise_dof(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
+    """Degrees of freedom of each state's noise variance (:func:`_noise`) [-]: infinite where
+    ``noise`` gives it (:func:`towtank.vehicle.adequacy.noise_dof`)."""
+    given = np.zeros(len(STATE_COLUMNS), dtype=bool)
+    for state, val in (noise or {}).items():
+        given[STATE_COLUMNS.index(noise_entry(state, val)[0])] = True
+    return noise_dof(np.isfinite(log.z).sum(axis=0), given)
 
 
 def _staged(progress: Progress | None, stage: str) -> Progress | None:
