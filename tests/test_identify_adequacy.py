@@ -82,6 +82,7 @@ def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     res = identify(models["buoyant"], log, PAPER, check=False)
     assert not res.fits()
     fit = res.adequacy
+    assert fit is not None
     assert (fit["statistic"] / fit["threshold"]).max() > 10.0  # by a clear margin
 
 
