@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
+from towtank.commands.cli import main
 from towtank.vehicle.adequacy import adequacy_table, noise_dof
 from towtank.vehicle.identify import identify
 from towtank.vehicle.identify_log import log_from_frame
@@ -50,8 +51,6 @@ METHODS = ("ukf", "ls")
 def predict_remus(out_dir: Path, extra: str = "") -> dict[str, Any]:
     """model.json of protocols/remus_vehicle.toml with the lines ``extra`` added to its vehicle
     section, predicted into ``out_dir``."""
-    from towtank.commands.cli import main
-
     text = (ROOT / "protocols" / "remus_vehicle.toml").read_text()
     text = text.replace("fin_limit_deg = 20.0", "fin_limit_deg = 20.0\n" + extra)
     (out_dir / "p.toml").write_text(text)
