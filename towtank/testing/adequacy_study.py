@@ -15,6 +15,7 @@ Run from the command line (one process; hours at most)::
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import tempfile
 import time
@@ -27,6 +28,8 @@ import pandas as pd
 from scipy.stats import binomtest
 
 from towtank.commands.cli import main
+from towtank.live.state import atomic_write_bytes
+from towtank.runtime.manifest import atomic_write_text
 from towtank.vehicle.adequacy import adequacy_table, noise_dof
 from towtank.vehicle.identify import identify
 from towtank.vehicle.identify_log import log_from_frame
@@ -148,8 +151,11 @@ def run(seeds: Iterable[int], methods: Iterable[str] = METHODS,
                 arrays[f"{method}_{seed}_check"] = inputs["check"]
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
-            pd.concat(frames).to_csv(out / "stats.csv", index=False)
-            np.savez_compressed(out / "arrays.npz", **arrays)
+            # each file replaced whole: a study stopped midway leaves the last records' files
+            atomic_write_text(out / "stats.csv", pd.concat(frames).to_csv(index=False))
+            buf = io.BytesIO()
+            np.savez_compressed(buf, **arrays)
+            atomic_write_bytes(out / "arrays.npz", buf.getvalue())
     return pd.concat(frames, ignore_index=True)
 
 
