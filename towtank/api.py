@@ -318,14 +318,16 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     method : {"ukf", "ekf", "ls"}
     start : {"model", "zero"}
     **kwargs
-        ``noise``, ``prior_sd``, ``check``, ``progress`` of
+        ``noise``, ``prior_sd``, ``check``, ``progress``, ``adequacy``, ``validate`` (a
+        second record: path, DataFrame or ManoeuvreLog) of
         :func:`towtank.vehicle.identify.identify`
 
     Returns
     -------
     towtank.results.IdentifyResult
         ``params``, ``bse``, ``conf_int(alpha)`` (columns ``lower``, ``upper``),
-        ``summary()``, ``to_frame()`` / ``table()`` (identified.csv), ``verdicts()``.
+        ``summary()``, ``to_frame()`` / ``table()`` (identified.csv), ``verdicts()``,
+        ``adequacy`` (fit.csv) and ``fits()``.
     """
 
     # loaded on use: the identification (filterpy, scipy.stats) loads
@@ -336,11 +338,15 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     from towtank.vehicle.identify_log import ManoeuvreLog, log_from_frame, read_log
     from towtank.vehicle.model import read_model
 
+    def record(item: Any, name: str) -> ManoeuvreLog:
+        if isinstance(item, pd.DataFrame):
+            return log_from_frame(item, name)
+        return item if isinstance(item, ManoeuvreLog) else read_log(item)
+
     mdl = model if isinstance(model, dict) else read_model(model)
-    if isinstance(log, pd.DataFrame):
-        rec = log_from_frame(log, "log")
-    else:
-        rec = log if isinstance(log, ManoeuvreLog) else read_log(log)
+    rec = record(log, "log")
+    if kwargs.get("validate") is not None:
+        kwargs["validate"] = record(kwargs["validate"], "validate")
     fit = _identify(mdl, rec, list(estimate), method=method, start=start, **kwargs)
     return from_fit(IdentifyResult, fit)
 

@@ -242,8 +242,9 @@ def _parser() -> argparse.ArgumentParser:
         description="Augmented-state unscented (or extended) Kalman filter with the 6-DOF "
         "model of 'simulate', a Rauch-Tung-Striebel smoother and output-error least squares "
         "as the cross-check: identified.csv, model.json (the identified values, sources "
-        "'identified', their covariance) and identify.png in --out; one verdict line per "
-        "coefficient.",
+        "'identified', their covariance), identify.png and fit.csv (whether the record fits "
+        "the model; exit 1 and the verdict 'model does not fit' when it does not) in --out; "
+        "one verdict line per coefficient.",
     )
     idn.add_argument("model", type=Path, help="model.json")
     idn.add_argument("log", type=Path, help="manoeuvre record (CSV in simulate's columns)")
@@ -259,6 +260,9 @@ def _parser() -> argparse.ArgumentParser:
     idn.add_argument("--noise", metavar="STATE=SD,...", type=_noise_option,
                      help="measurement noise per state, each named once with a standard "
                      "deviation > 0 (default: estimated from the record)")
+    idn.add_argument("--validate", type=Path, metavar="LOG2",
+                     help="a second record the identified model is tested against (default: "
+                          "the record's last quarter, held out of a least-squares refit)")
     idn.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     idn.add_argument("--out", type=Path, metavar="DIR",
                      help="output folder (default: ./identify)")
@@ -461,7 +465,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     return identify_command(args.model, args.log, args.estimate, method=args.method,
                             start=args.start, out=args.out, protocol=args.protocol,
-                            noise=args.noise, quiet=args.quiet)
+                            noise=args.noise, quiet=args.quiet, validate=args.validate)
 
 
 def _noise_option(text: str) -> dict[str, float]:

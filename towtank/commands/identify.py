@@ -16,12 +16,13 @@ from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.identify_figure import save_identify_figure
 from towtank.vehicle import schema
+from towtank.vehicle.adequacy import failure_sentence
 from towtank.vehicle.identify import Progress, identify
 from towtank.vehicle.identify_log import SHORT_NAMES, LogError, noise_entry, read_log
 from towtank.vehicle.model import kept_conversions, read_model, write_model
 
 #: The files ``identify`` writes.
-IDENTIFY_OUTPUTS = frozenset({"identified.csv", "model.json", "identify.png"})
+IDENTIFY_OUTPUTS = frozenset({"identified.csv", "model.json", "identify.png", "fit.csv"})
 
 
 def _channels(protocol: Path | None) -> dict[str, Any] | None:
@@ -115,10 +116,15 @@ def progress_bar(show: bool) -> Iterator[Progress | None]:
 def identify_command(model_path: Path, log_path: Path, estimate: str, *, method: str = "ukf",
                      start: str = "model", out: Path | None = None,
                      protocol: Path | None = None,
-                     noise: str | Mapping[str, float] | None = None, quiet: bool = False) -> int:
-    """Identify, write identified.csv, model.json and identify.png; print one verdict line per
-    coefficient. ``noise``: the text of ``--noise`` or what :func:`noise_option` made of it;
-    a progress bar on stderr when it is a terminal, unless ``quiet``."""
+                     noise: str | Mapping[str, float] | None = None, quiet: bool = False,
+                     validate: Path | None = None) -> int:
+    """Identify, write identified.csv, model.json, identify.png and fit.csv; print one verdict
+    line per coefficient. ``noise``: the text of ``--noise`` or what :func:`noise_option` made
+    of it; a progress bar on stderr when it is a terminal, unless ``quiet``; ``validate``: a
+    second record the identified model is tested against.
+
+    Returns 0, or 1 when the record does not fit the model (a test of fit.csv failed: one
+    sentence on stderr naming it, every verdict ``model does not fit``)."""
     name = Path(model_path).name
     try:
         model = read_model(model_path)
@@ -130,15 +136,19 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         raise ProtocolError(f"--out {folder} holds the input {name}; identify never writes over "
                             "its input, give another folder.")
     try:
-        log = read_log(log_path, _channels(protocol))
+        channels = _channels(protocol)
+        log = read_log(log_path, channels)
+        second = None if validate is None else read_log(validate, channels)
     except LogError as exc:
         raise ProtocolError(str(exc)) from None
     if isinstance(noise, str):
         noise = parse_noise(noise, positive=True)
+    print(trim_sentence(model, log), file=sys.stderr)
     try:
         with progress_bar(not quiet and sys.stderr.isatty()) as progress:
             fit = identify(model, log, symbols, method=method, start=start,
-                           noise=dict(noise or {}) or None, progress=progress)
+                           noise=dict(noise or {}) or None, progress=progress,
+                           validate=second)
     except ValueError as exc:
         raise ProtocolError(f"{Path(log_path).name}: {exc}") from None
     # loaded on use: the results package loads the day's stages, which identify needs only here
@@ -183,11 +193,33 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         table.to_csv(tmp / "identified.csv", index=False, float_format="%.6g")
         write_model(updated, tmp / "model.json")
         save_identify_figure(result, tmp / "identify.png", str(model.get("name", "model")))
+        if result.adequacy is not None:
+            result.adequacy.to_csv(tmp / "fit.csv", index=False, float_format="%.6g")
 
     write_outputs_or_stop(folder, IDENTIFY_OUTPUTS, write)
     for note in result.notes:
         print(f"note: {note}")
     for line in result.verdicts():
         print(line)
-    print(f"wrote {folder / 'identified.csv'}, model.json and identify.png")
+    print(f"wrote {folder / 'identified.csv'}, model.json, identify.png and fit.csv")
+    misfit = failure_sentence(result.adequacy) if result.adequacy is not None else None
+    if misfit:
+        print(f"error: {misfit}", file=sys.stderr)
+        return 1
     return 0
+
+
+def trim_sentence(model: Mapping[str, Any], log: Any) -> str:
+    """One sentence on the model's trim at the record's starting speed, as ``simulate``
+    checks it (:func:`towtank.vehicle.simulate.trim_warning`): ``warning: ...`` when out of
+    trim, else ``trim: ...``."""
+    # loaded on use: simulate's module (scipy.integrate) is needed only here
+    from towtank.vehicle.identify import record_speed
+    from towtank.vehicle.simulate import trim_warning
+
+    speed = record_speed(dict(model), log)
+    warning = trim_warning(dict(model), speed)
+    if warning:
+        return f"warning: {warning}"
+    return (f"trim: the model is in trim at {speed:.3g} m/s, the record's starting speed (with "
+            "zero controls its steady pitch and depth rate are within simulate's limits).")

@@ -18,7 +18,10 @@ from towtank.stats.quantiles import normal_quantile
 from towtank.vehicle.identify import IDENTIFIABLE_RATIO, IdentifyFit
 from towtank.vehicle.predict import coefficient_unit
 
-__all__ = ["IdentifyResult"]
+__all__ = ["IdentifyResult", "MISFIT"]
+
+#: The verdict of every coefficient when the record does not fit the model.
+MISFIT = "model does not fit"
 
 
 @dataclass(frozen=True, repr=False)
@@ -63,6 +66,14 @@ class IdentifyResult(IdentifyFit, Estimates):
         _, sd = self._pair(method)
         return np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
 
+    def verdict(self, identifiable: bool) -> str:
+        """identified.csv's verdict: ``model does not fit`` when a test of the record's fit
+        to the model failed (:attr:`adequacy`), else ``identifiable`` or ``not
+        identifiable``."""
+        if not self.fits():
+            return MISFIT
+        return "identifiable" if identifiable else "not identifiable"
+
     def agree(self, alpha: float = 0.05) -> np.ndarray | None:
         """Filter and least squares agree where their difference is within its interval:
         ``|a - b| <= z sqrt(sd_a^2 + sd_b^2)``; None without the cross-check."""
@@ -87,7 +98,7 @@ class IdentifyResult(IdentifyFit, Estimates):
                     "symbol": s, "start": self.start[j], "value": val[j],
                     "ci_low": ci["lower"].iloc[j], "ci_high": ci["upper"].iloc[j],
                     "method": m, "unit": coefficient_unit(s),
-                    "verdict": "identifiable" if ok[j] else "not identifiable",
+                    "verdict": self.verdict(ok[j]),
                     "agree": "" if agree is None else ("yes" if agree[j] else "no")})
         return pd.DataFrame(rows)
 
@@ -104,7 +115,11 @@ class IdentifyResult(IdentifyFit, Estimates):
         pct = round(100 * (1 - alpha))
         for j, s in enumerate(self.symbols):
             lo, hi = ci["lower"].iloc[j], ci["upper"].iloc[j]
-            if ok[j]:
+            if not self.fits():
+                line = (f"{s}: {MISFIT}, {self.value[j]:.4g} {coefficient_unit(s)} "
+                        f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method}, not to be "
+                        "trusted: the record does not fit the model, fit.csv)")
+            elif ok[j]:
                 line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
                         f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
             else:

@@ -39,6 +39,7 @@ from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
 from filterpy.kalman import UnscentedKalmanFilter as UKF
 from scipy.optimize import least_squares
 
+from towtank.vehicle.adequacy import adequacy_table, noise_dof
 from towtank.vehicle.fossen import (
     DOF,
     SYMBOL_RE,
@@ -48,14 +49,17 @@ from towtank.vehicle.fossen import (
 )
 from towtank.vehicle.identify_log import (
     MAX_GAP_S,
+    MIN_ROWS,
     STATE_COLUMNS,
     ManoeuvreLog,
+    exact_states,
     noise_entry,
     noise_sd,
 )
 from towtank.vehicle.predict import coefficient_unit
 
-__all__ = ["MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
+__all__ = ["record_speed", "simulate_fitted", "with_coefficients", "HOLDOUT_FRACTION",
+           "MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
            "IdentifyFit", "Progress", "identify", "rts_smooth", "coefficient_unit",
            "least_squares_fit", "kalman_fit"]
 
@@ -89,6 +93,9 @@ LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
 #: Most evaluations of the residuals (each a simulation along the record) of one least-squares
 #: fit.
 LS_MAX_NFEV = 60
+#: Fraction of the record held out (its end) for the adequacy test of the model simulated
+#: along it, its coefficients fitted to the rest (docs/method.md, "Model adequacy").
+HOLDOUT_FRACTION = 0.25
 #: Rows of the record between two calls of the progress callback of :func:`identify`.
 PROGRESS_ROWS = 100
 
@@ -341,6 +348,13 @@ class IdentifyFit:
     covariance : ndarray
         Covariance of the estimates (k, k)
     notes : tuple of str
+    adequacy : DataFrame or None
+        fit.csv: whether the record fits the model (:func:`towtank.vehicle.adequacy.
+        adequacy_table`)
+    residuals : dict or None
+        What :attr:`adequacy` was computed from, the keyword arguments of :func:`towtank.
+        vehicle.adequacy.adequacy_table`: ``innovation`` (n, 12) and ``check`` (m, 12) [-],
+        ``check_test``, ``states``
     """
 
     symbols: list[str]
@@ -355,6 +369,13 @@ class IdentifyFit:
     measured: pd.DataFrame | None = None
     resimulated: pd.DataFrame | None = None
     notes: tuple[str, ...] = ()
+    adequacy: pd.DataFrame | None = None
+    residuals: dict[str, Any] | None = None
+
+    def fits(self) -> bool:
+        """False when a test of :attr:`adequacy` failed (the record does not fit the
+        model)."""
+        return self.adequacy is None or bool(self.adequacy["passed"].all())
 
 
 def _initial_state(log: ManoeuvreLog, model: dict[str, Any]) -> np.ndarray:
@@ -382,6 +403,12 @@ def _start_speed(log: ManoeuvreLog, s0: np.ndarray) -> float:
     return float(s0[6])
 
 
+def record_speed(model: dict[str, Any], log: ManoeuvreLog) -> float:
+    """The speed the thrust balances at the record's start [m/s] (:func:`_start_speed`; the
+    model's design speed when u is not measured)."""
+    return _start_speed(log, _initial_state(log, model))
+
+
 def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                start: np.ndarray, prior_sd: np.ndarray, sd: np.ndarray,
                method: str = "ukf", progress: Progress | None = None,
@@ -406,7 +433,9 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     Returns
     -------
     dict
-        ``x`` (n, 12 + k) smoothed means, ``P`` (n, 12 + k, 12 + k) smoothed covariances.
+        ``x`` (n, 12 + k) smoothed means, ``P`` (n, 12 + k, 12 + k) smoothed covariances,
+        ``innovation`` (n, 12): each measured state's innovation divided by its predicted
+        standard deviation ``sqrt(S_ii)`` [-] (NaN where not measured).
 
     Raises
     ------
@@ -430,6 +459,7 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     x_prior = np.zeros((n, dim))
     p_prior = np.zeros((n, dim, dim))
     cross = np.zeros((n, dim, dim))
+    innovation = np.full((n, 12), np.nan)  # each measured state's innovation / its sd [-]
     qrate = np.concatenate((PROCESS_SD ** 2, np.zeros(dim - 12)))
 
     def controls(j: int) -> tuple[float, float]:
@@ -502,6 +532,8 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                         h = np.zeros((len(idx), dim))
                         h[np.arange(len(idx)), idx] = 1.0
                         f.update(zj[idx], HJacobian=lambda x, h=h: h, Hx=lambda x, h=h: h @ x, R=r)
+                    if j > 0:  # the first sample has no prediction to compare with
+                        innovation[j, idx] = f.y / np.sqrt(np.diag(f.S))
                 f.P = 0.5 * (f.P + f.P.T)
                 # the estimate projected onto the process model's domain (Simon 2010): a mean
                 # beyond the bound would see a flat model and could never come back
@@ -524,7 +556,7 @@ def kalman_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
     except np.linalg.LinAlgError:
         raise ValueError("the smoother met a singular predicted covariance (the filter "
                          "diverged); try --start model or --method ls.") from None
-    return {"x": xs_s, "P": ps_s, "x_filtered": xs, "P_filtered": ps}
+    return {"x": xs_s, "P": ps_s, "x_filtered": xs, "P_filtered": ps, "innovation": innovation}
 
 
 def _fd_steps(x: np.ndarray) -> np.ndarray:
@@ -554,7 +586,9 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     Returns
     -------
     dict
-        ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``.
+        ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``,
+        ``covariance_all`` (k + m, k + m): of the coefficients and the m measured initial
+        states.
     """
     for frac in windows[:-1]:
         n = max(int(frac * len(log.t)), 20)
@@ -637,13 +671,14 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         cov = s2 * np.nan_to_num(cov, nan=np.inf)
     beta, s_fit = unpack(sol.x)
     return {"value": beta, "sd": np.sqrt(np.diag(cov)[:k]), "covariance": cov[:k, :k],
-            "s0": s_fit, "cost": float(sol.cost), "s2": s2}
+            "s0": s_fit, "cost": float(sol.cost), "s2": s2, "covariance_all": cov}
 
 
 def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
              method: str = "ukf", start: str = "model", noise: dict[str, float] | None = None,
              prior_sd: dict[str, float] | None = None, check: bool = True,
-             progress: Progress | None = None) -> IdentifyFit:
+             progress: Progress | None = None, adequacy: bool = True,
+             validate: ManoeuvreLog | None = None) -> IdentifyFit:
     """Identify coefficients of ``model`` from the manoeuvre record ``log``.
 
     Parameters
@@ -670,6 +705,12 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     progress : callable, optional
         ``progress(stage, done, total)``: the filter's passes in rows of the record, least
         squares in evaluations (:data:`LS_MAX_NFEV` at most)
+    adequacy : bool
+        Test whether the record fits the model (:mod:`towtank.vehicle.adequacy`): the
+        result's ``adequacy`` table (fit.csv), else None
+    validate : ManoeuvreLog, optional
+        A second record the model with the estimates is tested against, instead of the
+        held-out last :data:`HOLDOUT_FRACTION` of ``log``
 
     Raises
     ------
@@ -694,15 +735,12 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
     start_vals = model_vals.copy() if start == "model" else np.zeros(len(symbols))
     psd = np.array([float((prior_sd or {}).get(s, 3.0 * max(abs(v), 1.0)))
                     for s, v in zip(symbols, model_vals, strict=True)])
-    sd = noise_sd(log)
-    for state, val in (noise or {}).items():
-        col, given = noise_entry(state, val)
-        sd[STATE_COLUMNS.index(col)] = given * (math.pi / 180.0 if col.endswith(
-            ("_deg", "_deg_s")) else 1.0)
+    sd = _noise(log, noise)
     notes = list(log.notes)
     hist: dict[str, np.ndarray] = {}
     ls = None
     s_init = None
+    innovation: np.ndarray | None = None
     if method in ("ukf", "ekf"):
         x_start, prior, prev = start_vals, psd, None
         passes = 0
@@ -725,6 +763,7 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
                                       0, None)),
                 "smoothed": xk[:, 12:12 + k]}
         s_init = xk[0, :12]
+        innovation = res["innovation"]  # the last pass's
         if check:
             ls = least_squares_fit(model, log, symbols, value.copy(), sd, progress=progress)
             s_init = ls["s0"]  # the initial state that fits the whole record open loop
@@ -735,24 +774,130 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
         s_init = ls["s0"]
         ls = None
-    fitted = dict(model)
-    fitted["coefficients"] = dict(coef) | {s: float(v) for s, v in zip(symbols, value,
-                                                                       strict=True)}
     s0 = _initial_state(log, model)
     if s_init is not None:  # the estimated initial state, not the first noisy sample
         s0 = np.asarray(s_init, dtype=float)
     speed = _start_speed(log, _initial_state(log, model))
     if s_init is not None and 6 in log.measured and (ls is not None or method == "ls"):
         speed = float(s0[6])  # least squares' initial speed, which its thrust balanced
-    dyn = BatchModel(fitted, [], speed)
-    sim = dyn.run(s0[None, :], np.zeros((1, 0)), log)[:, 0, :]
+    sim = simulate_fitted(model, symbols, np.asarray(value), s0, log, speed)
+    if innovation is None:  # least squares: its output-error residuals over the noise sd
+        innovation = (log.z - sim) / sd
+    table, inputs = None, None
+    if adequacy:
+        exact = exact_states(log, sd)
+        if exact:
+            notes.append(f"{', '.join(STATE_COLUMNS[i] for i in exact)} without noise in the "
+                         "record (exact): left out of the tests of the fit")
+        tested = [i for i in log.measured if i not in exact]
+        inputs = _adequacy_inputs(model, log, symbols, np.asarray(value), sd, innovation,
+                                  tested, validate, noise, progress)
+        table = adequacy_table(**inputs)
     resim = ManoeuvreLog(t=log.t, z=sim, rudder=log.rudder, sternplane=log.sternplane,
                          measured=list(range(12)), name="resimulated")
     return IdentifyFit(symbols=symbols, start=start_vals, value=np.asarray(value),
                        sd=np.asarray(sdv), prior_sd=psd, method=method,
                        covariance=np.asarray(cov), history=hist, notes=tuple(notes),
                        check=None if ls is None else {"value": ls["value"], "sd": ls["sd"]},
-                       measured=log.frame(), resimulated=resim.frame())
+                       measured=log.frame(), resimulated=resim.frame(), adequacy=table,
+                       residuals=inputs)
+
+
+def with_coefficients(model: dict[str, Any], symbols: list[str],
+                      value: np.ndarray) -> dict[str, Any]:
+    """A copy of ``model`` with the coefficients ``symbols`` set to ``value``."""
+    out = dict(model)
+    out["coefficients"] = dict(model.get("coefficients") or {}) | {
+        s: float(v) for s, v in zip(symbols, value, strict=True)}
+    return out
+
+
+def simulate_fitted(model: dict[str, Any], symbols: list[str], value: np.ndarray,
+                    s0: np.ndarray, log: ManoeuvreLog, speed_m_s: float) -> np.ndarray:
+    """The states (n, 12) [SI] of ``model`` with ``symbols`` set to ``value``, simulated from
+    ``s0`` along the record's times and controls, the thrust balancing the drag at
+    ``speed_m_s`` [m/s]."""
+    dyn = BatchModel(with_coefficients(model, symbols, value), [], speed_m_s)
+    return dyn.run(np.asarray(s0, dtype=float)[None, :], np.zeros((1, 0)), log)[:, 0, :]
+
+
+def _fit_and_run(model: dict[str, Any], fit_log: ManoeuvreLog, run_log: ManoeuvreLog,
+                 symbols: list[str], value: np.ndarray, sd: np.ndarray,
+                 progress: Progress | None, stage: str) -> np.ndarray:
+    """Least squares over ``fit_log`` of the coefficients ``symbols`` from ``value`` (none:
+    the initial measured states alone), then the fitted model along ``run_log`` (which starts
+    as ``fit_log`` does): its residuals over their sd (n, 12) [-], the sd combining the
+    noise ``sd`` and the prediction's own, ``g^T C g`` with ``g`` the states' sensitivity to
+    the fitted coefficients and initial states (forward differences) and ``C`` their
+    covariance."""
+    fit = least_squares_fit(model, fit_log, symbols, value, sd,
+                            progress=_staged(progress, stage))
+    k, meas = len(symbols), list(fit_log.measured)
+    theta = np.concatenate((fit["value"], fit["s0"][meas]))
+    step = 1e-6 * np.maximum(np.abs(theta), 1.0)
+    pts = np.vstack([theta, theta + np.diag(step)])
+    states = np.tile(fit["s0"], (len(pts), 1))
+    states[:, meas] = pts[:, k:]
+    dyn = BatchModel(model, symbols, _start_speed(fit_log, fit["s0"]))
+    if 6 in meas:  # the thrust balances the drag at the fitted initial speed
+        dyn.u0 = states[:, 6]
+    sim = dyn.run(states, pts[:, :k], run_log)  # (n, 1 + p, 12)
+    sens = (sim[:, 1:, :] - sim[:, :1, :]) / step[None, :, None]
+    cov = np.nan_to_num(fit["covariance_all"], nan=0.0, posinf=0.0, neginf=0.0)
+    var = np.einsum("npi,pq,nqi->ni", sens, cov, sens)
+    return (run_log.z - sim[:, 0, :]) / np.sqrt(sd ** 2 + var)
+
+
+def _adequacy_inputs(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
+                     value: np.ndarray, sd: np.ndarray, innovation: np.ndarray,
+                     tested: list[int], validate: ManoeuvreLog | None,
+                     noise: dict[str, float] | None,
+                     progress: Progress | None) -> dict[str, Any]:
+    """The arguments of :func:`towtank.vehicle.adequacy.adequacy_table` (fit.csv): the
+    innovations' tests and
+    the model against the held-out last :data:`HOLDOUT_FRACTION` of the record (its
+    coefficients fitted by least squares to the rest, from ``value``) or, given, against the
+    record ``validate`` (its initial measured states fitted, the coefficients ``value``); of
+    the states ``tested`` (those with noise)."""
+    dof = _noise_dof(log, noise)
+    if validate is not None:
+        sd_v = _noise(validate, noise)
+        resid = _fit_and_run(with_coefficients(model, symbols, value), validate, validate, [],
+                             np.zeros(0), sd_v, progress, "validation record")
+        both = [i for i in tested if i not in exact_states(validate, sd_v)]
+        return {"innovation": innovation, "check": resid, "check_test": "validation",
+                "states": both, "dof": dof, "check_dof": _noise_dof(validate, noise)}
+    n = len(log.t)
+    cut = int(round((1.0 - HOLDOUT_FRACTION) * n))
+    if n - cut < MIN_ROWS or cut < MIN_ROWS:
+        return {"innovation": innovation, "check": None, "check_test": "holdout",
+                "states": tested, "dof": dof}
+    first = ManoeuvreLog(t=log.t[:cut], z=log.z[:cut], rudder=log.rudder[:cut],
+                         sternplane=log.sternplane[:cut], measured=log.measured, name=log.name)
+    resid = _fit_and_run(model, first, log, symbols, value, sd, progress,
+                         f"least squares, first {1 - HOLDOUT_FRACTION:.0%} of the record")
+    return {"innovation": innovation, "check": resid[cut:], "check_test": "holdout",
+            "states": tested, "dof": dof}
+
+
+def _noise(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
+    """Each state's noise sd [SI]: estimated from ``log``, replaced where ``noise`` gives it
+    [the column's unit]."""
+    sd = noise_sd(log)
+    for state, val in (noise or {}).items():
+        col, given = noise_entry(state, val)
+        sd[STATE_COLUMNS.index(col)] = given * (math.pi / 180.0 if col.endswith(
+            ("_deg", "_deg_s")) else 1.0)
+    return sd
+
+
+def _noise_dof(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
+    """Degrees of freedom of each state's noise variance (:func:`_noise`) [-]: infinite where
+    ``noise`` gives it (:func:`towtank.vehicle.adequacy.noise_dof`)."""
+    given = np.zeros(len(STATE_COLUMNS), dtype=bool)
+    for state, val in (noise or {}).items():
+        given[STATE_COLUMNS.index(noise_entry(state, val)[0])] = True
+    return noise_dof(np.isfinite(log.z).sum(axis=0), given)
 
 
 def _staged(progress: Progress | None, stage: str) -> Progress | None:

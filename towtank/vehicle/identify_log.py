@@ -21,7 +21,7 @@ import pandas as pd
 
 __all__ = ["STATE_COLUMNS", "CONTROL_COLUMNS", "MAX_ROWS", "MAX_ROWS_MINUTES", "MIN_ROWS",
            "MAX_GAP_S", "SHORT_NAMES", "LogError", "ManoeuvreLog", "read_log", "log_from_frame",
-           "noise_sd", "noise_entry"]
+           "noise_sd", "noise_entry", "noise_floor", "exact_states"]
 
 #: The state columns in the order of the simulation's state vector and their scale to SI.
 STATE_COLUMNS = ("x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
@@ -280,9 +280,21 @@ def noise_sd(log: ManoeuvreLog) -> np.ndarray:
         y = y[np.isfinite(y)]
         d2 = y[2:] - 2.0 * y[1:-1] + y[:-2]
         mad = float(np.median(np.abs(d2 - np.median(d2)))) if len(d2) else 0.0
-        floor = 1e-6 * max(float(np.ptp(y)), 1e-3)
-        out[i] = max(1.4826 * mad / math.sqrt(6.0), floor)
+        out[i] = max(1.4826 * mad / math.sqrt(6.0), noise_floor(y))
     return out
+
+
+def noise_floor(y: np.ndarray) -> float:
+    """The least noise sd :func:`noise_sd` gives a state [its unit]: 1e-6 of its range (of at
+    least 1e-3)."""
+    fin = y[np.isfinite(y)]
+    return 1e-6 * max(float(np.ptp(fin)) if len(fin) else 0.0, 1e-3)
+
+
+def exact_states(log: ManoeuvreLog, sd: np.ndarray) -> list[int]:
+    """The measured states whose noise sd ``sd`` [SI] is at :func:`noise_floor`: written
+    without noise (``simulate`` writes the states it adds no ``--noise`` to exactly)."""
+    return [i for i in log.measured if sd[i] <= noise_floor(log.z[:, i]) * (1 + 1e-9)]
 
 
 def noise_entry(state: Any, value: Any, positive: bool = True) -> tuple[str, float]:
