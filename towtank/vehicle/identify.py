@@ -20,9 +20,10 @@ Rauch-Tung-Striebel smoother (Rauch, Tung & Striebel 1965; unscented form Särkk
 ``s_k`` and ``s^-_{k+1}`` (EKF: ``D = P_k F_k^T``).
 
 Cross-check: output-error least squares (:func:`scipy.optimize.least_squares`) of the
-simulated against the measured states, weighted by each channel's noise; the covariance
-``s^2 (J^T J)^{-1}`` from the Jacobian at the optimum, ``s^2`` the residual variance
-(Jategaonkar 2015, ch. 4).
+simulated against the measured states with white noise, weighted by each one's noise sd
+re-estimated from the residuals (relaxation; Maine & Iliff 1986, Jategaonkar 2015, ch. 4);
+the covariance the Newey-West sandwich ``M^+ S M^+``, ``M = J^T R^-1 J``, at least ``M^+``
+(:func:`least_squares_fit`).
 """
 
 from __future__ import annotations
