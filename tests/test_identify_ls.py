@@ -13,18 +13,16 @@ at least ``(J^T R^-1 J)^-1``.
 
 from __future__ import annotations
 
-import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+import test_identify
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from towtank.api import identify
-from towtank.commands.cli import main
 from towtank.vehicle.identify import output_error_covariance
 from towtank.vehicle.identify_log import (
     NOISE_FREE_RATIO,
@@ -34,20 +32,8 @@ from towtank.vehicle.identify_log import (
 )
 from towtank.vehicle.simulate import simulate
 
-REPO = Path(__file__).resolve().parents[1]
-PAPER = ["N_ur", "N_rdot", "N_uudr"]
-NOISE = {"u_m_s": 0.01, "v_m_s": 0.01, "r_deg_s": 0.2, "psi_deg": 0.5, "x_m": 0.05, "y_m": 0.05}
-
-
-@pytest.fixture(scope="module")
-def remus(tmp_path_factory) -> dict:
-    """REMUS predicted from the shipped protocol, neutrally buoyant."""
-    out = tmp_path_factory.mktemp("remus")
-    assert main(["predict", str(REPO / "protocols" / "remus_vehicle.toml"), "--out",
-                 str(out / "p")]) == 0
-    model = json.loads((out / "p" / "model.json").read_text())
-    model["buoyancy_N"] = model["weight_N"]
-    return model
+PAPER, NOISE = test_identify.PAPER, test_identify.NOISE
+remus = test_identify.remus  # the fixture: REMUS predicted from the shipped protocol, neutral
 
 
 @pytest.fixture(scope="module")
