@@ -20,9 +20,10 @@ Rauch-Tung-Striebel smoother (Rauch, Tung & Striebel 1965; unscented form Särkk
 ``s_k`` and ``s^-_{k+1}`` (EKF: ``D = P_k F_k^T``).
 
 Cross-check: output-error least squares (:func:`scipy.optimize.least_squares`) of the
-simulated against the measured states, weighted by each channel's noise; the covariance
-``s^2 (J^T J)^{-1}`` from the Jacobian at the optimum, ``s^2`` the residual variance
-(Jategaonkar 2015, ch. 4).
+simulated against the measured states with white noise, weighted by each one's noise sd
+re-estimated from the residuals (relaxation; Maine & Iliff 1986, Jategaonkar 2015, ch. 4);
+the covariance the Newey-West sandwich ``M^+ S M^+``, ``M = J^T R^-1 J``, at least ``M^+``
+(:func:`least_squares_fit`).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import pandas as pd
 from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints
 from filterpy.kalman import UnscentedKalmanFilter as UKF
 from scipy.optimize import least_squares
+from statsmodels.stats.sandwich_covariance import S_hac_simple
 
 from towtank.vehicle.adequacy import adequacy_table, noise_dof
 from towtank.vehicle.fossen import (
@@ -54,6 +56,8 @@ from towtank.vehicle.identify_log import (
     ManoeuvreLog,
     exact_states,
     noise_entry,
+    noise_floor,
+    noise_free_states,
     noise_sd,
 )
 from towtank.vehicle.predict import coefficient_unit
@@ -93,6 +97,10 @@ LS_WINDOWS = (0.1, 0.25, 0.5, 1.0)
 #: Most evaluations of the residuals (each a simulation along the record) of one least-squares
 #: fit.
 LS_MAX_NFEV = 60
+#: Most refits of least squares with the noise covariance re-estimated from its residuals
+#: (relaxation), and the relative change of a state's noise sd that calls for one [-].
+LS_RELAX = 2
+LS_RELAX_TOL = 0.1
 #: Fraction of the record held out (its end) for the adequacy test of the model simulated
 #: along it, its coefficients fitted to the rest (docs/method.md, "Model adequacy").
 HOLDOUT_FRACTION = 0.25
@@ -566,64 +574,93 @@ def _fd_steps(x: np.ndarray) -> np.ndarray:
 def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[str],
                       start: np.ndarray, sd: np.ndarray,
                       windows: tuple[float, ...] = (1.0,),
-                      progress: Progress | None = None) -> dict[str, Any]:
+                      progress: Progress | None = None, relax: bool = True) -> dict[str, Any]:
     """Output-error least squares of the coefficients and the initial measured states.
 
-    Minimises ``sum_k sum_i ((y_i(t_k; beta, s0) - z_ik) / sigma_i)^2`` over the measured
+    Minimises ``sum_k sum_i ((y_i(t_k; beta, s0) - z_ik) / sigma_i)^2`` over the fitted
     states i, ``y`` the model simulated along the record (:meth:`BatchModel.run`), by
     :func:`scipy.optimize.least_squares` (trust-region reflective) with a finite-difference
-    Jacobian computed in one batched simulation. Covariance ``s^2 (J^T J)^+`` (pseudo-inverse:
-    a direction the record does not constrain gets an infinite variance), ``s^2 = RSS/(m - p)``.
+    Jacobian computed in one batched simulation.
+
+    The fitted states are the measured ones with white noise; a state the record carries
+    without it (:func:`towtank.vehicle.identify_log.noise_free_states`: written exactly,
+    derived, smoothed or interpolated) is left out, its initial value the first sample (its
+    residuals are the model's own integration error, serially correlated, and with the weight
+    of a noise estimate that measured the signal's curvature they would drive the fit); all
+    are fitted when none has noise.
+
+    Noise covariance (Maine & Iliff 1986; Jategaonkar 2015, sec. 4.5, the relaxation
+    algorithm): ``R = diag(sigma_i^2)`` starts at ``sd`` and is re-estimated from the
+    residuals, ``sigma_i^2 = mean_k r_ik^2``, the fit repeated with the new weights while an
+    ``sigma_i`` moves by more than :data:`LS_RELAX_TOL` (at most :data:`LS_RELAX` times).
+
+    Covariance of the estimates: the Newey-West sandwich (Newey & West 1987; for output error
+    Morelli & Klein 1997, Klein & Morelli 2006, sec. 6.7)::
+
+        M = J^T R^-1 J,   g_k = sum_i J_ik r_ik / sigma_i^2,
+        S = sum_{|l| <= L} (1 - |l|/(L + 1)) sum_k g_k g_{k+l}^T,   C = M^+ S M^+
+
+    (statsmodels' ``S_hac_simple``, Bartlett kernel, ``L = floor(4 (n/100)^(2/9))``), at
+    least ``M^+`` on the diagonal: with white residuals of variance R, ``S = M``; residuals
+    correlated along the record (a model or noise not quite white) widen it. ``M^+`` is the
+    pseudo-inverse: a direction the record does not constrain gets an infinite variance.
 
     ``windows``: fractions of the record fitted one after the other, each from the previous
     estimates (from a far start, zero, the motion the model predicts over the whole record is
     too far from the measured one for the fit to find its way; over the first part it is
-    not: the usual continuation of output-error fits).
+    not: the usual continuation of output-error fits). ``relax``: re-estimate R (the windows
+    before the last do not).
 
     ``progress``, optional: called as ``progress(stage, evaluations, at most)`` after each
-    evaluation (a simulation along the record), at most :data:`LS_MAX_NFEV` per window.
+    evaluation (a simulation along the record), at most :data:`LS_MAX_NFEV` per fit.
 
     Returns
     -------
     dict
         ``value``, ``sd`` (k,), ``covariance`` (k, k), ``s0`` (12,), ``cost``,
         ``covariance_all`` (k + m, k + m): of the coefficients and the m measured initial
-        states.
+        states (zero rows and columns for the states left out, their initial values fixed),
+        ``noise_sd`` (12,): R's sigma_i [SI] of the fitted states (NaN elsewhere),
+        ``fitted``: the fitted states, ``left_out``: the noise-free ones left out.
     """
     for frac in windows[:-1]:
         n = max(int(frac * len(log.t)), 20)
         sub = ManoeuvreLog(t=log.t[:n], z=log.z[:n], rudder=log.rudder[:n],
                            sternplane=log.sternplane[:n], measured=log.measured, name=log.name)
-        start = least_squares_fit(model, sub, symbols, start, sd, progress=_staged(
-            progress, f"least squares, first {frac:.0%} of the record"))["value"]
+        start = least_squares_fit(model, sub, symbols, start, sd, relax=False,
+                                  progress=_staged(progress,
+                                                   f"least squares, first {frac:.0%} of the "
+                                                   "record"))["value"]
 
     k = len(symbols)
     s0 = _initial_state(log, model)
     dyn = BatchModel(model, symbols, _start_speed(log, s0))
     meas = list(log.measured)
-    zm = log.z[:, meas]
+    left_out = noise_free_states(log)
+    fit = [i for i in meas if i not in left_out] or meas
+    left_out = [i for i in meas if i not in fit]
+    zm = log.z[:, fit]
     mask = np.isfinite(zm)
-    w = 1.0 / sd[meas]
+    rows, cols = np.nonzero(mask)
     scale_b = np.maximum(np.abs(start), 1.0)
-    scale_s = np.array([max(sd[i] * 10, 1e-6) for i in meas])
+    scale_s = np.array([max(sd[i] * 10, 1e-6) for i in fit])
     scale = np.concatenate((scale_b, scale_s))
 
     def unpack(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         th = theta * scale
         s = np.tile(s0, (theta.shape[0], 1)) if theta.ndim == 2 else s0.copy()
         if theta.ndim == 2:
-            s[:, meas] = th[:, k:]
+            s[:, fit] = th[:, k:]
             return th[:, :k], s
-        s[meas] = th[k:]
+        s[fit] = th[k:]
         return th[:k], s
 
     def residuals_many(thetas: np.ndarray) -> np.ndarray:
         beta, s = unpack(thetas)
-        if 6 in meas:  # the thrust balances the drag at the fitted initial speed
+        if 6 in fit:  # the thrust balances the drag at the fitted initial speed
             dyn.u0 = s[:, 6]
-        sim = dyn.run(s, beta, log)[:, :, meas]  # (n, N, m)
-        res = (sim - zm[:, None, :]) * w
-        out = res.transpose(1, 0, 2)[:, mask]
+        sim = dyn.run(s, beta, log)[:, :, fit]  # (n, N, m)
+        out = (sim - zm[:, None, :]).transpose(1, 0, 2)[:, mask]
         out[~np.isfinite(out)] = 1e6
         return out
 
@@ -631,9 +668,9 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     evaluations = [0]
     stage = "least squares" if len(windows) == 1 else "least squares, whole record"
 
-    def both(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # the residuals and the forward-difference Jacobian from one batched simulation: on a
-        # few rows the simulation costs about what one row does
+    def raw(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # the unweighted residuals and their forward-difference Jacobian from one batched
+        # simulation: on a few rows the simulation costs about what one row does
         key = theta.tobytes()
         if key not in cache:
             hstep = 1e-6 * np.maximum(np.abs(theta), 1.0)
@@ -647,31 +684,90 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
         out = cache[key]
         return out[0], out[1:].T
 
-    def fun(theta: np.ndarray) -> np.ndarray:
-        return both(theta)[0]
-
-    def jac(theta: np.ndarray) -> np.ndarray:
-        return both(theta)[1]
-
-    theta0 = np.concatenate((start, s0[meas])) / scale
-    sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac",
-                        max_nfev=LS_MAX_NFEV)
-    j = jac(sol.x) / scale[None, :]
-    m, p = j.shape
-    s2 = float(np.sum(sol.fun ** 2)) / max(m - p, 1)
-    u_, sv, vt = np.linalg.svd(j, full_matrices=False)
-    tol = sv.max() * max(j.shape) * np.finfo(float).eps * 1e3
-    inv = np.where(sv > tol, 1.0 / np.maximum(sv, 1e-300) ** 2, np.inf)
-    with np.errstate(invalid="ignore"):
-        cov = (vt.T * inv) @ vt
-    for i in range(p):  # an unconstrained direction: infinite variance on its coefficients
-        if not np.isfinite(cov[i, i]):
-            cov[i, i] = np.inf
-    with np.errstate(over="ignore", invalid="ignore"):
-        cov = s2 * np.nan_to_num(cov, nan=np.inf)
-    beta, s_fit = unpack(sol.x)
+    sigma = np.array([sd[i] for i in fit], dtype=float)
+    floor = np.array([noise_floor(log.z[:, i]) for i in fit])
+    theta = np.concatenate((start, s0[fit])) / scale
+    cost = 0.0
+    for _ in range(1 + (LS_RELAX if relax else 0)):
+        w = 1.0 / sigma[cols]
+        sol = least_squares(lambda th, w=w: raw(th)[0] * w,
+                            theta, jac=lambda th, w=w: raw(th)[1] * w[:, None],
+                            method="trf", x_scale="jac", max_nfev=LS_MAX_NFEV)
+        theta, cost = sol.x, float(sol.cost)
+        if not relax:
+            break
+        new = np.maximum(output_error_sd(raw(theta)[0], cols, len(fit)), floor)
+        moved = np.abs(new / sigma - 1.0) > LS_RELAX_TOL
+        sigma = new
+        if not moved.any():
+            break
+    r, j = raw(theta)
+    j = j / scale[None, :]
+    cov = output_error_covariance(j / sigma[cols][:, None], r / sigma[cols], rows, len(log.t))
+    p_all = k + len(meas)
+    keep = list(range(k)) + [k + meas.index(i) for i in fit]
+    cov_all = np.zeros((p_all, p_all))
+    cov_all[np.ix_(keep, keep)] = cov
+    beta, s_fit = unpack(theta)
+    noise = np.full(12, np.nan)
+    noise[fit] = sigma
     return {"value": beta, "sd": np.sqrt(np.diag(cov)[:k]), "covariance": cov[:k, :k],
-            "s0": s_fit, "cost": float(sol.cost), "s2": s2, "covariance_all": cov}
+            "s0": s_fit, "cost": cost, "covariance_all": cov_all, "noise_sd": noise,
+            "fitted": fit, "left_out": left_out}
+
+
+def output_error_sd(residuals: np.ndarray, cols: np.ndarray, m: int) -> np.ndarray:
+    """Each output's residual rms ``sqrt(mean_k r_ik^2)`` [its unit]: the diagonal of the
+    output-error estimate of the noise covariance R (Jategaonkar 2015, eq. 4.15).
+
+    Parameters
+    ----------
+    residuals : ndarray
+        (e,) the residuals of the finite measurements
+    cols : ndarray
+        (e,) the output of each
+    m : int
+        The number of outputs
+    """
+    count = np.maximum(np.bincount(cols, minlength=m), 1)
+    return np.sqrt(np.bincount(cols, weights=residuals ** 2, minlength=m) / count)
+
+
+def output_error_covariance(jw: np.ndarray, rw: np.ndarray, rows: np.ndarray,
+                            n: int) -> np.ndarray:
+    """Covariance of output-error estimates: the Newey-West sandwich ``M^+ S M^+``, at least
+    ``M^+`` on the diagonal (:func:`least_squares_fit`).
+
+    Parameters
+    ----------
+    jw : ndarray
+        (e, p) the Jacobian of the residuals over their sd ``R^-1/2 J``
+    rw : ndarray
+        (e,) the residuals over their sd ``R^-1/2 r`` [-]
+    rows : ndarray
+        (e,) the sample (time) of each residual, 0 .. n - 1
+    n : int
+        Samples in the record
+
+    Returns
+    -------
+    ndarray
+        (p, p); ``inf`` on the diagonal of a parameter in a direction ``M`` does not
+        constrain
+    """
+    _, sv, vt = np.linalg.svd(jw, full_matrices=False)
+    tol = sv.max(initial=0.0) * max(jw.shape) * np.finfo(float).eps * 1e3
+    ok = sv > max(tol, 1e-300)
+    m_inv = (vt[ok].T / sv[ok] ** 2) @ vt[ok]
+    score = np.zeros((n, jw.shape[1]))
+    np.add.at(score, rows, jw * rw[:, None])
+    cov = m_inv @ S_hac_simple(score) @ m_inv
+    d = np.sqrt(np.maximum(np.diag(cov), np.diag(m_inv)) / np.maximum(np.diag(cov), 1e-300))
+    cov = cov * np.outer(d, d)
+    free = np.einsum("ij,ij->j", vt[~ok], vt[~ok]) > 1e-9
+    cov[free, :] = np.inf
+    cov[:, free] = np.inf
+    return cov
 
 
 def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
@@ -767,12 +863,14 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         if check:
             ls = least_squares_fit(model, log, symbols, value.copy(), sd, progress=progress)
             s_init = ls["s0"]  # the initial state that fits the whole record open loop
+            notes.extend(_left_out_note(ls))
     else:
         ls = least_squares_fit(model, log, symbols, start_vals, sd,
                                windows=LS_WINDOWS if start == "zero" else (1.0,),
                                progress=progress)
         value, sdv, cov = ls["value"], ls["sd"], ls["covariance"]
         s_init = ls["s0"]
+        notes.extend(_left_out_note(ls))
         ls = None
     s0 = _initial_state(log, model)
     if s_init is not None:  # the estimated initial state, not the first noisy sample
@@ -898,6 +996,15 @@ def _noise_dof(log: ManoeuvreLog, noise: dict[str, float] | None) -> np.ndarray:
     for state, val in (noise or {}).items():
         given[STATE_COLUMNS.index(noise_entry(state, val)[0])] = True
     return noise_dof(np.isfinite(log.z).sum(axis=0), given)
+
+
+def _left_out_note(ls: dict[str, Any]) -> list[str]:
+    """The note naming the states least squares left out (no white noise in the record)."""
+    if not ls["left_out"]:
+        return []
+    return [f"{', '.join(STATE_COLUMNS[i] for i in ls['left_out'])} without white noise in "
+            "the record (written exactly, derived, smoothed or interpolated): left out of the "
+            "least-squares fit, their initial values the first samples"]
 
 
 def _staged(progress: Progress | None, stage: str) -> Progress | None:
