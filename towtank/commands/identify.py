@@ -143,7 +143,8 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         raise ProtocolError(str(exc)) from None
     if isinstance(noise, str):
         noise = parse_noise(noise, positive=True)
-    print(trim_sentence(model, log), file=sys.stderr)
+    said = trim_sentence(model, log)  # a warning to stderr, the in-trim sentence to stdout
+    print(said, file=sys.stderr if said.startswith("warning:") else sys.stdout)
     try:
         with progress_bar(not quiet and sys.stderr.isatty()) as progress:
             fit = identify(model, log, symbols, method=method, start=start,
