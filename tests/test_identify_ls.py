@@ -45,11 +45,7 @@ def clean(remus) -> pd.DataFrame:
 
 def _noisy(clean: pd.DataFrame, seed: int) -> pd.DataFrame:
     """simulate --noise: the six states with white noise, the others exact."""
-    rng = np.random.default_rng(seed)
-    df = clean.copy()
-    for col, sd in NOISE.items():
-        df[col] = df[col] + rng.normal(0.0, sd, len(df))
-    return df
+    return test_identify._noisy(clean, seed, keep=None)
 
 
 def test_white_noise_ratio_tells_noise_from_signal(clean):
