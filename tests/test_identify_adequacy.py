@@ -115,16 +115,17 @@ def test_validate_tests_against_a_second_record(models, tmp_path, capsys):
 def test_identify_says_the_buoyant_model_is_out_of_trim(models, tmp_path, capsys):
     """identify checks trim as simulate does (the 7 N buoyant REMUS rises with zero
     controls): one warning sentence, the same as simulate's."""
-    from towtank.commands.identify import trim_sentence
+    from towtank.commands.identify import trim_check
     from towtank.vehicle.identify import record_speed
     from towtank.vehicle.simulate import trim_warning
 
     log = log_from_frame(sine_record(models["neutral"], 1, duration_s=5.0), "short")
-    said = trim_sentence(models["buoyant"], log)
+    in_trim, said = trim_check(models["buoyant"], log)
     warning = trim_warning(models["buoyant"], record_speed(models["buoyant"], log))
     assert warning is not None and said == f"warning: {warning}"
     assert said.startswith("warning: the model is out of trim") and "\n" not in said
-    assert trim_sentence(models["neutral"], log).startswith("trim: the model is in trim")
+    assert trim_check(models["neutral"], log)[1].startswith("trim: the model is in trim")
+    assert not in_trim and trim_check(models["neutral"], log)[0]
 
 
 def test_the_tests_on_white_and_coloured_innovations():

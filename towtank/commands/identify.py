@@ -143,8 +143,8 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         raise ProtocolError(str(exc)) from None
     if isinstance(noise, str):
         noise = parse_noise(noise, positive=True)
-    said = trim_sentence(model, log)  # a warning to stderr, the in-trim sentence to stdout
-    print(said, file=sys.stderr if said.startswith("warning:") else sys.stdout)
+    in_trim, said = trim_check(model, log)  # a warning to stderr, the in-trim sentence to stdout
+    print(said, file=sys.stdout if in_trim else sys.stderr)
     try:
         with progress_bar(not quiet and sys.stderr.isatty()) as progress:
             fit = identify(model, log, symbols, method=method, start=start,
@@ -210,10 +210,10 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
     return 0
 
 
-def trim_sentence(model: Mapping[str, Any], log: Any) -> str:
-    """One sentence on the model's trim at the record's starting speed, as ``simulate``
-    checks it (:func:`towtank.vehicle.simulate.trim_warning`): ``warning: ...`` when out of
-    trim, else ``trim: ...``."""
+def trim_check(model: Mapping[str, Any], log: Any) -> tuple[bool, str]:
+    """Whether the model is in trim at the record's starting speed, as ``simulate`` checks it
+    (:func:`towtank.vehicle.simulate.trim_warning`), and the one sentence that says so:
+    ``warning: ...`` when out of trim, else ``trim: ...``."""
     # loaded on use: simulate's module (scipy.integrate) is needed only here
     from towtank.vehicle.identify import record_speed
     from towtank.vehicle.simulate import trim_warning
@@ -221,6 +221,7 @@ def trim_sentence(model: Mapping[str, Any], log: Any) -> str:
     speed = record_speed(dict(model), log)
     warning = trim_warning(dict(model), speed)
     if warning:
-        return f"warning: {warning}"
-    return (f"trim: the model is in trim at {speed:.3g} m/s, the record's starting speed (with "
-            "zero controls its steady pitch and depth rate are within simulate's limits).")
+        return False, f"warning: {warning}"
+    return True, (f"trim: the model is in trim at {speed:.3g} m/s, the record's starting speed "
+                  "(with zero controls its steady pitch and depth rate are within simulate's "
+                  "limits).")
