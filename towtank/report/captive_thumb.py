@@ -51,11 +51,13 @@ class CaptiveTrace:
 
     ``trace``: rows of :data:`towtank.reduce.captive.TRACE_COLUMNS` (t [s], X, Y [N], N [N m],
     sway [m], yaw [deg]); ``kept``: the kept PMM cycles as (start, end) [s]; ``test``: the
-    run's captive test (a PMM run's motion is drawn: the sway, and a yaw run's yaw)."""
+    run's captive test (a PMM run's motion is drawn: the sway, and a yaw run's yaw);
+    ``about``: the point N is taken about (O, or the balance point without a protocol)."""
 
     trace: np.ndarray
     kept: tuple[tuple[float, float], ...] = ()
     test: str = "drift"
+    about: str = "O"
 
     @property
     def pmm(self) -> bool:
@@ -180,7 +182,7 @@ def captive_thumbnail(ax: Axes, twin: Axes, ct: CaptiveTrace,
         _motion_band(ax, ct, linewidth=linewidth, fontsize=fontsize)
     if labels:
         ax.set_xlabel(r"$t$ [s]")
-        ax.set_ylabel(r"moment $N$ about O [N m]")
+        ax.set_ylabel(f"moment $N$ about {ct.about} [N m]")
         twin.set_ylabel(r"forces $X$, $Y$, body axes [N]")
 
 

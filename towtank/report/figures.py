@@ -932,6 +932,11 @@ def fig_captive_run(ct: CaptiveTrace, windows: dict[str, tuple[float, float] | N
     return fig
 
 
+def legend_columns(entries: int) -> int:
+    """Columns of a run plot's legend: one row of up to 7 entries, else two rows."""
+    return 7 if entries <= 7 else -(-entries // 2)
+
+
 def _run_axes(note: str) -> tuple[Figure, Axes]:
     fig = Figure(figsize=(9.0, 4.8))
     bottom = 0.21 if note else 0.14
@@ -940,8 +945,8 @@ def _run_axes(note: str) -> tuple[Figure, Axes]:
 
 def _run_texts(fig: Figure, ax: Axes, title: str, note: str, handles: list[Any]) -> None:
     ax.set_title(literal(title), loc="left", fontsize=9.5)
-    fig.legend(handles=handles, loc="upper right",
-               ncol=max(7, len(handles)), fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
+    fig.legend(handles=handles, loc="upper right", ncol=legend_columns(len(handles)),
+               fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
     if note:
         fig.text(0.08, 0.035, literal(note), fontsize=7.5,
                  family="DejaVu Sans Mono", va="bottom", color="#333333")

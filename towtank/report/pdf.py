@@ -883,7 +883,7 @@ class ThumbGrid:
                         if h.get_label() not in said
                         and not (any_hull and h.get_label() == "steady (kept)")]
         self.fig.legend(handles=handles, loc="upper center",
-                        ncol=7 if len(handles) <= 7 else -(-len(handles) // 2),
+                        ncol=figures.legend_columns(len(handles)),
                         fontsize=6.8, frameon=False, columnspacing=1.2,
                         handlelength=1.6, bbox_to_anchor=(0.5, legend_y))
         return self.fig
