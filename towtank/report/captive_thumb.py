@@ -186,9 +186,11 @@ def captive_thumbnail(ax: Axes, twin: Axes, ct: CaptiveTrace,
         twin.set_ylabel(r"forces $X$, $Y$, body axes [N]")
 
 
-def captive_legend_handles(pmm: bool = True, yaw: bool = True) -> list[Any]:
+def captive_legend_handles(pmm: bool = True, yaw: bool = True, *, phases: bool = True
+                           ) -> list[Any]:
     """Legend entries of :func:`captive_thumbnail`: the loads, the motion (``pmm``; the yaw
-    with ``yaw``) and the shades."""
+    with ``yaw``), the phase shades (``phases``: not when a resistance run's legend beside
+    them gives them) and the kept PMM cycles' shade."""
     handles: list[Any] = [
         Line2D([], [], color=style.DRAG_COLOR, label="$X$ [N] (right)"),
         Line2D([], [], color=style.LIFT_COLOR, label="$Y$ [N] (right)"),
@@ -199,10 +201,11 @@ def captive_legend_handles(pmm: bool = True, yaw: bool = True) -> list[Any]:
     if pmm and yaw:
         handles.append(Line2D([], [], color=YAW_COLOR, ls="--", label="yaw (top, scaled)"))
     shades = style.PHASE_SHADES
-    handles += [Patch(color=shades["still_pre"][0], label="zero (still)"),
-                Patch(color=shades["accel"][0], label="acceleration"),
-                Patch(color=shades["steady"][0], label="steady (kept)"),
-                Patch(color=shades["decel"][0], label="deceleration")]
+    if phases:
+        handles += [Patch(color=shades["still_pre"][0], label="zero (still)"),
+                    Patch(color=shades["accel"][0], label="acceleration"),
+                    Patch(color=shades["steady"][0], label="steady (kept)"),
+                    Patch(color=shades["decel"][0], label="deceleration")]
     if pmm:
         handles.append(Patch(color=CYCLE_SHADES[1], label="kept PMM cycles"))
     return handles

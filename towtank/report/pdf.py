@@ -877,11 +877,8 @@ class ThumbGrid:
         legend_y = 1 - (PAGE_HEADER_IN - 0.2) / PAGE_H
         handles = figures.thumbnail_legend_handles(any_lift) if any_hull or not any_captive \
             else []
-        if any_captive:  # the captive entries the hull's do not already give
-            said = {h.get_label() for h in handles}
-            handles += [h for h in captive_legend_handles(any_pmm, any_yaw)
-                        if h.get_label() not in said
-                        and not (any_hull and h.get_label() == "steady (kept)")]
+        if any_captive:  # beside a hull run's entries, without their phase shades again
+            handles += captive_legend_handles(any_pmm, any_yaw, phases=not handles)
         self.fig.legend(handles=handles, loc="upper center",
                         ncol=figures.legend_columns(len(handles)),
                         fontsize=6.8, frameon=False, columnspacing=1.2,
