@@ -14,7 +14,9 @@ import sys
 import tomllib
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+import numpy as np
 
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.describe import describe_file, protocol_block
@@ -30,11 +32,25 @@ from towtank.ingest.readers import name_list
 from towtank.ingest.runfile import load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
-from towtank.reduce.captive import CaptiveRun, CycleVerdict
-from towtank.reduce.captive_record import pmm_cycle_verdicts, reduce_captive_record
+from towtank.reduce.captive import (
+    CaptiveRun,
+    CycleVerdict,
+    body_forces,
+    cycle_verdicts,
+    load_trace,
+)
+from towtank.reduce.captive_record import (
+    CAPTIVE_LOADS,
+    captive_channels,
+    pmm_cycle_verdicts,
+    reduce_captive_record,
+)
 from towtank.reduce.run import RunReduction, record_units, reduce_run, run_preview, sheet_segment
 from towtank.report import style
 from towtank.runtime.pathcheck import resolved
+
+if TYPE_CHECKING:
+    from towtank.report.captive_thumb import CaptiveTrace
 
 EXIT_OK, EXIT_RUN_ERROR = 0, 1
 
@@ -281,6 +297,7 @@ def inspect_run(
     proposed = False
     file_units: dict[str, str] = {}
     window: tuple[float, float] | None = None
+    balance_test = ""  # the captive test a balance file read without a protocol is read as
 
     def load():  # noqa: ANN202 - RawRun
         nonlocal window
@@ -310,7 +327,7 @@ def inspect_run(
                             max_bad_row_fraction=p.max_bad_row_fraction, do_despike=p.despike,
                             options=read, balance=balance, speed_log=log,
                             speed_nominal=nominal, segment=segment,
-                            test="" if captive is None else str(captive["test"]))
+                            test=balance_test if captive is None else str(captive["test"]))
 
         # the run sheet (pandas) is read for a segment only when the file holds several
         try:
@@ -341,7 +358,21 @@ def inspect_run(
                 raise
             proposed = True
             read, channels, file_units = proposal
-            raw = load()
+            try:
+                raw = load()
+            except RunError as again:  # no drag: is it a captive balance's file?
+                if not _missing_channel(again.reason):
+                    raise
+                for test in BALANCE_TESTS:  # read_file reads it as this test
+                    balance_test = test
+                    try:
+                        raw = load()
+                        break
+                    except RunError:
+                        continue
+                else:
+                    balance_test = ""
+                    raise again from None
         red = reduce_run(raw, p, run=0, file=runfile.name, window_s=window)
         red = record_units(red, raw)
         if proposed:
@@ -370,8 +401,11 @@ def inspect_run(
               "line; a force at gain = 1.0 from volts is in volts, not newtons):", file=out)
     account: list[str] = []
     refused = None
+    balance: CaptiveTrace | None = None
     if captive is not None:  # the day's captive reduction of the sheet's test
         red, account, refused = captive_account(protocol, raw, red, captive, runfile.name)
+    elif balance_test:  # a balance file without its protocol: what it measured
+        account, balance = balance_account(raw, red, p, balance_test)
     for line in [*summary_lines(red, raw.columns, t0=float(raw.time[0]),
                                 timing=raw.time_source), *account]:
         print(line, file=out)
@@ -385,7 +419,7 @@ def inspect_run(
     volts = any("with the stated gain 1.0" in n for n in red.notes)
     write_plot(red, target, protocol_path, runfile,
                settings=("proposed [channels]" + ("; forces in V" if volts else ""))
-               if proposed else None)
+               if proposed else None, balance=balance)
     print(f"plot: {target}", file=out)
     return EXIT_OK if refused is None else EXIT_RUN_ERROR
 
@@ -403,7 +437,7 @@ def captive_account(protocol, raw, red: RunReduction, row: dict, file: str  # no
         arrays, notes, _ = reduce_captive_record(protocol, raw, red.windows, row, run=run,
                                                  file=file)
         cr = CaptiveRun.from_arrays(run, file, arrays)
-        red = replace(red, notes=(*red.notes, *notes))
+        red = replace(red, notes=(*red.notes, *notes), captive=arrays)
     except RunError as exc:
         refused = exc.reason
     try:
@@ -411,6 +445,64 @@ def captive_account(protocol, raw, red: RunReduction, row: dict, file: str  # no
     except RunError:  # its sentence is the rejection's already
         cycles = []
     return red, captive_lines(row, cr, cycles, red.windows.get("steady")), refused
+
+
+#: The captive tests a balance file read without a protocol is tried as, most channels first:
+#: a yaw PMM's (sway and yaw), a sway PMM's (sway), a static run's (fx, fy, mz).
+BALANCE_TESTS = ("yaw", "sway", "drift")
+#: What a balance file read without its protocol cannot give, in one sentence.
+BALANCE_NEEDS = ("a captive run's hydrodynamic loads need the campaign's protocol: the "
+                 "model's mass_kg, izz_kg_m2 and xg_m to remove its inertia, balance_x_m to "
+                 "refer the moment to O, and the run sheet's test and settings; give it with "
+                 "--protocol PROTOCOL.toml")
+
+
+def cycle_lines(cycles: list[CycleVerdict]) -> list[str]:
+    """Every cycle of a PMM run's sway, its span [s], amplitude [m] and verdict (none: no
+    lines)."""
+    lines = ["  PMM cycles of the sway [s from the first sample]:"] if cycles else []
+    for k, c in enumerate(cycles, 1):
+        verdict = "kept" if c.kept else f"dropped: {c.reason}"
+        lines.append(f"    {k:3d}  {c.start:8.2f} – {c.end:8.2f}  amplitude "
+                     f"{c.amplitude:.4f} m  {verdict}")
+    return lines
+
+
+def balance_account(raw, red: RunReduction, p: Processing, test: str  # noqa: ANN001 - RawRun
+                    ) -> tuple[list[str], CaptiveTrace | None]:
+    """What a balance file read without its protocol shows: its loads zeroed as the day
+    zeroes them (fx, fy [N], mz [N m] at the balance point, inertia not removed), their steady
+    means, a PMM run's cycles of the sway, and the one sentence of what needs the protocol;
+    with the trace its plot draws (None when the loads cannot be zeroed: no still window)."""
+    # loaded on use: matplotlib only when a captive run is drawn
+    from towtank.report.captive_thumb import CaptiveTrace
+
+    found = [c for c in (*CAPTIVE_LOADS, "sway", "yaw") if c in raw.extra]
+    lines = [f"balance file: {', '.join(found)} (a captive run, read without its protocol)"]
+    try:
+        chans = captive_channels(raw, red.windows, p, [])
+        fx, fy, mz = body_forces(chans, 0.0)
+    except RunError as exc:
+        return [*lines, f"  loads not zeroed: {exc.reason}", f"note: {BALANCE_NEEDS}."], None
+    steady = red.windows.get("steady")
+    t = chans["t"]
+    if steady is not None:
+        m = (t >= steady[0]) & (t <= steady[1])
+        lines.append("  steady means at the balance point (zero and drift removed, inertia "
+                     "not removed):")
+        lines.append(f"    fx {_fmt(float(np.mean(fx[m])), 'N')}   "
+                     f"fy {_fmt(float(np.mean(fy[m])), 'N')}   "
+                     f"mz {_fmt(float(np.mean(mz[m])), 'N m')}")
+    trace = load_trace(t, raw.fs, fx, fy, mz, 0.0, chans.get("sway"), chans.get("yaw"))
+    kept: list[tuple[float, float]] = []
+    if "sway" in chans and steady is not None:
+        i0, i1 = (int(np.searchsorted(t, steady[0])), int(np.searchsorted(t, steady[1],
+                                                                          side="right")))
+        verdicts = cycle_verdicts(t, chans["sway"], (i0, i1))
+        lines += cycle_lines(verdicts)
+        kept = [(c.start, c.end) for c in verdicts if c.kept]
+    lines.append(f"note: {BALANCE_NEEDS}.")
+    return lines, CaptiveTrace(trace, tuple(kept), test, about="the balance point")
 
 
 def _sheet_value(row: dict, name: str) -> float:
@@ -454,12 +546,7 @@ def captive_lines(row: dict, cr: CaptiveRun | None, cycles: list[CycleVerdict],
                          f"   N {_pm(r['N'], r['N_se'], 'N m')}")
     if test not in PMM_TESTS:
         return lines
-    if cycles:
-        lines.append("  PMM cycles of the sway [s from the first sample]:")
-        for k, c in enumerate(cycles, 1):
-            verdict = "kept" if c.kept else f"dropped: {c.reason}"
-            lines.append(f"    {k:3d}  {c.start:8.2f} – {c.end:8.2f}  amplitude "
-                         f"{c.amplitude:.4f} m  {verdict}")
+    lines += cycle_lines(cycles)
     kept = sum(c.kept for c in cycles)
     lines.append(f"  cycles_used    {cr.cycles_used if cr is not None else kept} "
                  f"({len(cycles) - kept} dropped)")
@@ -539,10 +626,25 @@ def _write_preview(raw, path: Path, reason: str, runfile: Path) -> None:  # noqa
 
 
 def write_plot(red: RunReduction, path: Path, protocol_path: str | Path | None = None,
-               runfile: str | Path | None = None, settings: str | None = None) -> Path:
-    """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below)."""
+               runfile: str | Path | None = None, settings: str | None = None,
+               balance: CaptiveTrace | None = None) -> Path:
+    """The run's thumbnail as a PNG (speed, drag, lift; phases shaded; means below); a
+    captive run's (``red.captive``, or ``balance``: a balance file read without its protocol)
+    its loads X, Y, N against time (:func:`towtank.report.figures.fig_captive_run`)."""
     # loaded on use: matplotlib only when the plot is drawn
-    from towtank.report.figures import fig_run
+    from towtank.report.captive_thumb import captive_trace
+    from towtank.report.figures import fig_captive_run, fig_run
+
+    ct = balance if balance is not None else captive_trace(red)
+    if ct is not None:
+        where = "O" if balance is None else "the balance point"
+        title = (f"{red.file}: loads X, Y and N about {where} (zeroed, inertia not removed)")
+        note = (f"{red.fs:g} Hz;  " + (f"settings of {Path(protocol_path).name}"
+                                       if protocol_path else
+                                       settings or "canonical channels, default processing"))
+        fig = fig_captive_run(ct, red.windows, title, note)
+        _save(fig, path, str(Path(runfile).resolve()) if runfile is not None else "")
+        return path
 
     title = f"{red.file}: speed and forces (zero and drift removed, no tare)"
     note = (f"steady: U = {red.speed_mean:.4f} m/s, D = {red.drag_mean_raw:.4f} N"

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -64,7 +64,11 @@ PERIOD_BINS = 72
 STATIC_BLOCKS = 8
 #: Harmonics of the least-squares fit of the PMM motion (besides the mean).
 MOTION_HARMONICS = (1, 3)
-_ARRAYS_VERSION = 2.0
+#: Columns of a run's load trace (:func:`load_trace`): the whole run at :data:`TRACE_HZ`.
+TRACE_COLUMNS = ("t", "X", "Y", "N", "sway", "yaw")
+#: Rate of the load trace drawn in the report's thumbnails and watch's latest-run plot [Hz].
+TRACE_HZ = 10.0
+_ARRAYS_VERSION = 3.0
 
 
 # ================================================================================ kinematics
@@ -192,7 +196,8 @@ class CaptiveRun:
     bins (empty for static runs). ``cov``: per component row, the covariance of the row's
     Y, N and regressors (:data:`COV_NAMES`) as the run's scatter gives it (over cycles or
     blocks of the steady window, the zero's uncertainty added to the mean's Y and N), shape
-    (rows, 10, 10); None when unknown (a lab's table of means).
+    (rows, 10, 10); None when unknown (a lab's table of means). ``trace``: the whole run's
+    measured loads and motion at :data:`TRACE_HZ` for its plots (:func:`load_trace`).
     """
 
     run: int
@@ -211,6 +216,9 @@ class CaptiveRun:
     period: pd.DataFrame
     notes: tuple[str, ...] = ()
     cov: np.ndarray | None = None
+    #: the whole run's measured loads and motion for its plots (:func:`load_trace`, columns
+    #: :data:`TRACE_COLUMNS`), shape (samples, 6); None when not recorded
+    trace: np.ndarray | None = None
 
     def omega_prime(self, length_m: float) -> float:
         """omega' = omega L / U [-] with L = ``length_m`` [m] (NaN for static runs)."""
@@ -237,6 +245,8 @@ class CaptiveRun:
                 -1, len(PERIOD_COLUMNS)),
             "notes": np.frombuffer(text, dtype=np.uint8).astype(float),
             "has_notes": np.array([float(bool(self.notes))]),
+            "trace": (np.empty((0, len(TRACE_COLUMNS))) if self.trace is None
+                      else np.asarray(self.trace, dtype=float)),
         }
 
     @classmethod
@@ -253,6 +263,7 @@ class CaptiveRun:
             notes_b = _float_array(arrays, "notes", 1)
             has_notes = _float_array(arrays, "has_notes", 1)
             cov = _float_array(arrays, "cov", 2)
+            trace = _float_array(arrays, "trace", 2)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"malformed captive arrays: {exc}") from None
         if sc.size != 10 or sc[0] != _ARRAYS_VERSION:
@@ -260,7 +271,8 @@ class CaptiveRun:
         test, plane = _code(sc[1], TESTS, "test"), _code(sc[2], PLANES, "plane")
         for name, a, width in (("rows", rows, len(ROW_COLUMNS)),
                                ("cycles", cycles, len(CYCLE_COLUMNS)),
-                               ("period", period, len(PERIOD_COLUMNS))):
+                               ("period", period, len(PERIOD_COLUMNS)),
+                               ("trace", trace, len(TRACE_COLUMNS))):
             if a.shape[1] != width:
                 raise ValueError(f"malformed captive arrays: '{name}' has {a.shape[1]} columns, "
                                  f"not {width}")
@@ -271,6 +283,8 @@ class CaptiveRun:
         comps = [_code(c, COMPONENTS, "component") for c in rows[:, 0]]
         if comps != list(COMPONENTS[: rows.shape[0]]):
             raise ValueError("malformed captive arrays: components out of order")
+        if not (np.isfinite(trace[:, :4]).all() and np.all(np.diff(trace[:, 0]) > 0)):
+            raise ValueError("malformed captive arrays: 'trace' is not a run's loads in time")
         if not math.isfinite(sc[3]) or sc[3] <= 0 or sc[9] < 0 or sc[9] != int(sc[9]):
             raise ValueError("malformed captive arrays: speed or cycle count out of range")
         if (notes_b.size and (np.any(notes_b < 0) or np.any(notes_b > 255)
@@ -297,6 +311,7 @@ class CaptiveRun:
             notes=notes,
             cov=None if np.all(np.isnan(cov)) else cov.reshape(
                 -1, len(COV_NAMES), len(COV_NAMES)),
+            trace=trace if trace.size else None,
         )
 
 
@@ -838,6 +853,31 @@ def cycle_average(ts: np.ndarray, frequency_hz: float, series: Mapping[str, np.n
 
 # ============================================================================ the one entry
 
+def load_trace(t: np.ndarray, fs: float, fx: np.ndarray, fy: np.ndarray, mz: np.ndarray,
+               balance_x_m: float = 0.0, sway: np.ndarray | None = None,
+               yaw: np.ndarray | None = None, rate_hz: float = TRACE_HZ) -> np.ndarray:
+    """The whole run's measured loads and motion at ``rate_hz`` for its plots.
+
+    Columns :data:`TRACE_COLUMNS`: ``t`` [s]; X, Y [N] the zeroed balance forces in body
+    axes and N [N m] the moment about O (mz + x_B fy, ``balance_x_m`` = x_B [m]; 0: about
+    the balance point), the model's inertia not removed (what the balance measured); the PMM
+    ``sway`` [m] and ``yaw`` [deg] (NaN when absent). Each row is the mean of the samples of
+    one 1/``rate_hz`` block (the loads are not low-passed; the block mean is their filter).
+    """
+    t = np.asarray(t, dtype=float)
+    n = t.size
+    nan = np.full(n, np.nan)
+    cols = [t, np.asarray(fx, float), np.asarray(fy, float),
+            np.asarray(mz, float) + balance_x_m * np.asarray(fy, float),
+            nan if sway is None else np.asarray(sway, float),
+            nan if yaw is None else np.asarray(yaw, float)]
+    step = max(1, int(round(fs / rate_hz)))
+    starts = np.arange(0, n, step)
+    counts = np.diff(np.append(starts, n))
+    return np.column_stack([np.add.reduceat(c, starts) / counts for c in cols])
+
+
+
 def model_inertia(model: Any, plane: str) -> tuple[Inertia, tuple[str, ...]]:
     """:class:`Inertia` of the protocol's model for a run in ``plane`` (vertical: I_yG from
     ``iyy_kg_m2``, else ``izz_kg_m2`` with a note); RunError when mass or inertia is missing."""
@@ -923,19 +963,21 @@ def reduce_captive(
     fx, fy, mz = body_forces(raw_channels, math.radians(setting.drift_deg))
     z_var = load_zero_variance(zero_var or {}, math.radians(setting.drift_deg),
                                inertia.balance_x_m)
+    sway, yaw = raw_channels.get("sway"), raw_channels.get("yaw")
+    trace = load_trace(t, fs, fx, fy, mz, inertia.balance_x_m, sway, yaw)
     if setting.test in STATIC_TESTS:
-        return static_run(t, U, fx, fy, mz, (i0, i1), setting, inertia, run=run, file=file,
-                          notes=notes, zero_var=z_var)
+        return replace(static_run(t, U, fx, fy, mz, (i0, i1), setting, inertia, run=run,
+                                  file=file, notes=notes, zero_var=z_var), trace=trace)
     if "sway" not in raw_channels:
         raise RunError("the file has no sway channel, which a PMM run needs")
-    yaw = raw_channels.get("yaw")
     if setting.test in ("yaw", "yaw_drift") and yaw is None:
         raise RunError("the file has no yaw channel, which a PMM yaw run needs")
-    return pmm_run(t, U, fx, fy, mz, np.asarray(raw_channels["sway"], float),
-                   None if yaw is None else np.asarray(yaw, float), (i0, i1), setting,
-                   inertia, length_m=float(getattr(model, "length_m", math.nan)), run=run,
-                   file=file, notes=notes, min_cycles=min_cycles, tolerance=amplitude_tolerance,
-                   zero_var=z_var)
+    cr = pmm_run(t, U, fx, fy, mz, np.asarray(raw_channels["sway"], float),
+                 None if yaw is None else np.asarray(yaw, float), (i0, i1), setting,
+                 inertia, length_m=float(getattr(model, "length_m", math.nan)), run=run,
+                 file=file, notes=notes, min_cycles=min_cycles, tolerance=amplitude_tolerance,
+                 zero_var=z_var)
+    return replace(cr, trace=trace)
 
 
 def condition_captive(

@@ -24,7 +24,8 @@ fig_fin_forces           fin drag and lift against speed per angle (Figs. 14–1
 fig_fin_coefficients     fin C_L, C_D against α with Sandia 2-D and finite span (Fig. 16)
 fig_scaling              model and prototype resistance, Reynolds ranges
 fig_captive              captive runs against the fitted derivatives (towtank.report.captive_figure)
-run_thumbnail            one run: speed, drag and lift with the phases shaded
+run_thumbnail            one run: speed, drag and lift with the phases shaded (a captive
+                         run: X, Y, N, towtank.report.captive_thumb)
 thumbnail_twin           the forces' axes of a thumbnail (made once, reused page after page)
 =======================  ============================================================
 """
@@ -47,6 +48,12 @@ from matplotlib.patches import Patch
 
 import towtank.report.style as style
 from towtank.reduce.run import PHASE_ACCEL, PHASE_STEADY
+from towtank.report.captive_thumb import (
+    CaptiveTrace,
+    captive_legend_handles,
+    captive_thumbnail,
+    captive_trace,
+)
 from towtank.report.figure_base import (
     PAGE_HEADER_IN,
     align_zero,
@@ -721,7 +728,9 @@ def run_thumbnail(
     """Speed (left axis) and drag/lift (right axis) of one run with its phases shaded.
 
     Draws from ``reduction.thumb`` (the whole run at 10 Hz, zero and drift removed; tare removed
-    after :func:`towtank.reduce.run.apply_tare`) and ``reduction.windows``.
+    after :func:`towtank.reduce.run.apply_tare`) and ``reduction.windows``. A captive run is
+    drawn as what it measured instead: X, Y and N against time with its kept window or PMM
+    cycles shaded (:func:`towtank.report.captive_thumb.captive_thumbnail`).
 
     Parameters
     ----------
@@ -745,8 +754,14 @@ def run_thumbnail(
     Axes
         The twin axes of the forces.
     """
-    th = reduction.thumb
     ax2 = thumbnail_twin(ax) if twin is None else twin
+    ct = captive_trace(reduction)
+    if ct is not None:  # a captive run: what its balance measured
+        captive_thumbnail(ax, ax2, ct, reduction.windows, linewidth=linewidth, labels=labels)
+        if title:
+            ax.set_title(title)
+        return ax2
+    th = reduction.thumb
     for name, (color, _label) in style.PHASE_SHADES.items():
         w = reduction.windows.get(name)
         if w is not None:
@@ -873,7 +888,8 @@ def fig_preview(preview: dict[str, np.ndarray], title: str, note: str = "") -> F
 
 
 def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
-    """A stand-alone figure of one run (for ``towtank inspect``).
+    """A stand-alone figure of one run (for ``towtank inspect`` and ``watch``); a captive run
+    as :func:`fig_captive_run` draws it.
 
     Parameters
     ----------
@@ -884,17 +900,56 @@ def fig_run(reduction: RunReduction, title: str, note: str = "") -> Figure:
     note : str
         Text under the plot (e.g. the steady means).
     """
+    ct = captive_trace(reduction)
+    if ct is not None:
+        return fig_captive_run(ct, reduction.windows, title, note)
+    fig, ax = _run_axes(note)
+    run_thumbnail(ax, reduction, linewidth=1.3)
+    _run_texts(fig, ax, title, note, thumbnail_legend_handles(reduction.has_lift))
+    return fig
+
+
+def fig_captive_run(ct: CaptiveTrace, windows: dict[str, tuple[float, float] | None],
+                    title: str, note: str = "") -> Figure:
+    """A stand-alone figure of one captive run: X, Y [N] and N [N m] against time, the kept
+    window or PMM cycles shaded, a PMM run's motion along the top
+    (:func:`towtank.report.captive_thumb.captive_thumbnail`).
+
+    Parameters
+    ----------
+    ct : CaptiveTrace
+        The run's load trace and kept cycles.
+    windows : dict
+        The run's phase windows [s].
+    title : str
+        Figure title.
+    note : str
+        Text under the plot.
+    """
+    fig, ax = _run_axes(note)
+    captive_thumbnail(ax, thumbnail_twin(ax), ct, windows, linewidth=1.3, fontsize=7.0)
+    _run_texts(fig, ax, title, note, captive_legend_handles(ct.pmm, "yaw" in ct.motion))
+    return fig
+
+
+def legend_columns(entries: int) -> int:
+    """Columns of a run plot's legend: one row of up to 7 entries, else two rows."""
+    return 7 if entries <= 7 else -(-entries // 2)
+
+
+def _run_axes(note: str) -> tuple[Figure, Axes]:
     fig = Figure(figsize=(9.0, 4.8))
     bottom = 0.21 if note else 0.14
-    ax = fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
-    run_thumbnail(ax, reduction, linewidth=1.3)
+    return fig, fig.add_axes((0.08, bottom, 0.84, 0.86 - bottom))
+
+
+def _run_texts(fig: Figure, ax: Axes, title: str, note: str, handles: list[Any]) -> None:
     ax.set_title(literal(title), loc="left", fontsize=9.5)
-    fig.legend(handles=thumbnail_legend_handles(reduction.has_lift), loc="upper right",
-               ncol=7, fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
+    fig.legend(handles=handles, loc="upper right", ncol=legend_columns(len(handles)),
+               fontsize=6.8, bbox_to_anchor=(0.99, 0.995), frameon=False)
     if note:
         fig.text(0.08, 0.035, literal(note), fontsize=7.5,
                  family="DejaVu Sans Mono", va="bottom", color="#333333")
-    return fig
 
 
 def fig_captive(fit: Any, roll_deg: float = 90.0, *, page: bool = False) -> Figure | None:

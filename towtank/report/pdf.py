@@ -48,8 +48,15 @@ from towtank.analysis.captive import TEST_NAMES as CAPTIVE_TEST_NAMES
 from towtank.analysis.daywide import group_rejections, run_reason
 from towtank.analysis.hull import mirrored
 from towtank.analysis.scaling import geometry_used
+from towtank.ingest.protocol_types import CAPTIVE_TESTS
 from towtank.messages import Rejection
 from towtank.reference.sets import reference_name
+from towtank.report.captive_thumb import (
+    CAPTIVE_LOADS_LABEL,
+    CAPTIVE_MOMENT_LABEL,
+    captive_legend_handles,
+    captive_trace,
+)
 from towtank.report.figure_base import (
     PAGE_FOOTER_IN,
     PAGE_HEADER_IN,
@@ -759,7 +766,7 @@ def _draw_quality(fig: Figure, lines: list[tuple[str, str]]) -> None:
 
 def _thumb_title(row: dict[str, Any]) -> str:
     test = str(row.get("test") or "").strip()
-    kind = f" {test}" if test in ("steady", "accel") else ""
+    kind = f" {test}" if test in ("steady", "accel", *CAPTIVE_TESTS) else ""
     head = f"run {int(row['run'])} · {row['config']}{kind} · α = {fmt_num(row['angle_deg'], 3)}°"
     u = row.get("speed_mean")
     if u is not None and isinstance(u, float) and math.isfinite(u):
@@ -794,13 +801,22 @@ class ThumbGrid:
             ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
             self.cells.append((ax, twin))
 
+    @staticmethod
+    def _labels(ax: Any, twin: Any, *, captive: bool) -> None:
+        """The cell's axis labels: a captive run's N (left) and X, Y (right), else U and
+        D, L."""
+        ax.set_ylabel(CAPTIVE_MOMENT_LABEL if captive else figures.SPEED_LABEL_SHORT,
+                      fontsize=6.5, labelpad=1)
+        twin.set_ylabel(CAPTIVE_LOADS_LABEL if captive else figures.FORCE_LABEL_SHORT,
+                        fontsize=6.5, labelpad=1)
+
     def _clear(self) -> None:
         fig = self.fig
         for art in [*fig.texts, *fig.artists, *fig.legends]:
             art.remove()
         for ax, twin in self.cells:
             for a in (ax, twin):
-                for art in [*a.lines, *a.patches, *a.texts]:
+                for art in [*a.lines, *a.patches, *a.texts, *a.child_axes]:
                     art.remove()
                 a.set_title("")
             ax.set_xlabel("")
@@ -812,7 +828,8 @@ class ThumbGrid:
         """The figure with the runs ``run_ids`` drawn (at most :data:`THUMBS_PER_PAGE`)."""
         self._clear()
         by_run = {int(r["run"]): r for r in day.runs.to_dict("records")}
-        any_lift = False
+        any_lift = any_captive = any_pmm = False
+        any_hull = any_yaw = False
         for k, (ax, twin) in enumerate(self.cells):
             if k >= len(run_ids):
                 ax.set_visible(False)
@@ -828,6 +845,8 @@ class ThumbGrid:
                 ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
                 if preview is not None:  # read but not reduced: show what the file holds
                     figures.preview_thumbnail(ax, preview, twin=twin, linewidth=0.8)
+                    self._labels(ax, twin, captive=False)
+                    any_hull = True
                     ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
                     where: dict[str, Any] = {"x": 0.5, "y": 0.97, "va": "top"}
                 else:
@@ -843,13 +862,26 @@ class ThumbGrid:
                         bbox={"boxstyle": "round,pad=0.6", "fc": "#f6f6f6", "ec": "#cccccc",
                               "alpha": 0.92})
                 continue
-            any_lift |= bool(red.has_lift)
+            captive = captive_trace(red)
+            if captive is None:
+                any_lift |= bool(red.has_lift)
+                any_hull = True
+            else:
+                any_captive = True
+                any_pmm |= captive.pmm
+                any_yaw |= "yaw" in captive.motion
             figures.run_thumbnail(ax, red, labels=False, linewidth=0.8, twin=twin)
+            self._labels(ax, twin, captive=captive is not None)
             ax.set_title(literal(title), fontsize=7.5, loc="left", fontweight="normal")
             ax.set_xlabel("t [s]", fontsize=6.5, labelpad=1)
         legend_y = 1 - (PAGE_HEADER_IN - 0.2) / PAGE_H
-        self.fig.legend(handles=figures.thumbnail_legend_handles(any_lift), loc="upper center",
-                        ncol=7, fontsize=6.8, frameon=False, columnspacing=1.2,
+        handles = figures.thumbnail_legend_handles(any_lift) if any_hull or not any_captive \
+            else []
+        if any_captive:  # beside a hull run's entries, without their phase shades again
+            handles += captive_legend_handles(any_pmm, any_yaw, phases=not handles)
+        self.fig.legend(handles=handles, loc="upper center",
+                        ncol=figures.legend_columns(len(handles)),
+                        fontsize=6.8, frameon=False, columnspacing=1.2,
                         handlelength=1.6, bbox_to_anchor=(0.5, legend_y))
         return self.fig
 
