@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import gzip
+import json
 import os
 import signal
 import subprocess
@@ -246,6 +247,10 @@ def test_a_huge_sheet_or_run_file_is_refused_before_it_is_read(tmp_path):
     runs = pd.read_csv(tmp_path / "day" / "out" / "runs.csv")
     reason = runs.loc[3, "reason"]
     assert "too large for one run" in reason and "3.0 GiB" in reason
+    # nor read to be hashed for provenance.json: its sha256 is left empty
+    inputs = json.loads((tmp_path / "day" / "out" / "provenance.json").read_text())["inputs"]
+    sha = {Path(i["path"]).name: i["sha256"] for i in inputs}
+    assert sha[runs.loc[3, "file"]] == "" and len(sha[runs.loc[2, "file"]]) == 64
 
 
 def test_a_gzip_bomb_is_refused(tmp_path):

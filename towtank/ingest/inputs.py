@@ -11,12 +11,14 @@ files: :func:`side_files`).
 from __future__ import annotations
 
 import hashlib
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
+from towtank.ingest import readers
 from towtank.ingest.protocol_types import Protocol, SpeedLog, ZeroFile
 from towtank.ingest.runsheet import NUMERIC, REQUIRED, read_run_sheet, unlisted_files
 from towtank.ingest.sections import check_captive_runs
@@ -96,7 +98,7 @@ def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
         if str(file) in known:
             inputs[str(path)] = known[str(file)]
         elif str(file) and is_regular_file(path):
-            inputs[str(path)] = file_sha(path)
+            inputs[str(path)] = file_sha(path, readers.MAX_RUN_FILE_BYTES)
     for spec in side_files(protocol):  # the carriage logs and zeros files are inputs too
         for run, file in zip(sheet["run"], sheet["file"], strict=True):
             log = log_path(spec, protocol.campaign.data_dir, str(file), int(run))
@@ -105,11 +107,15 @@ def day_inputs(protocol: Protocol, sheet: pd.DataFrame,
     return inputs
 
 
-def file_sha(path: Path) -> str:
+def file_sha(path: Path, max_bytes: int | None = None) -> str:
     """sha256 of a file read in blocks (a file of any size in little memory), or "" when it
-    cannot be read (its run is rejected anyway)."""
+    cannot be read or is larger than ``max_bytes`` [bytes] (a run file over
+    :data:`towtank.ingest.readers.MAX_RUN_FILE_BYTES` is refused before it is read: it is not
+    read to be hashed either; its run is rejected anyway)."""
     try:
         with open(path, "rb") as f:
+            if max_bytes is not None and os.fstat(f.fileno()).st_size > max_bytes:
+                return ""
             return hashlib.file_digest(f, "sha256").hexdigest()
     except OSError:
         return ""
