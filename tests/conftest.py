@@ -350,12 +350,21 @@ def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
 def pytest_addoption(parser):
     parser.addoption("--run-slow", action="store_true", default=False,
                      help="also run the tests marked slow (the coverage study: hours)")
+    parser.addoption("--floors", action="store_true", default=False,
+                     help="also run the tests marked floors (the commands a lab runs, each in "
+                          "a new process: .ci/run runs them on the minimum versions)")
 
 
 def pytest_collection_modifyitems(config, items):
-    if config.getoption("--run-slow") or os.environ.get("TOWTANK_RUN_SLOW"):
-        return
-    skip = pytest.mark.skip(reason="slow: run with --run-slow (or TOWTANK_RUN_SLOW=1)")
+    skips = []
+    if not (config.getoption("--run-slow") or os.environ.get("TOWTANK_RUN_SLOW")):
+        skips.append(("slow", pytest.mark.skip(
+            reason="slow: run with --run-slow (or TOWTANK_RUN_SLOW=1)")))
+    if not config.getoption("--floors"):
+        skips.append(("floors", pytest.mark.skip(
+            reason="floors: run on the minimum versions by .ci/run (--floors); the same "
+                   "commands run in-process in test_docs_commands_run.py")))
     for item in items:
-        if "slow" in item.keywords:
-            item.add_marker(skip)
+        for marker, skip in skips:
+            if marker in item.keywords:
+                item.add_marker(skip)

@@ -216,15 +216,31 @@ def test_no_free_surface_in_air():
 @pytest.fixture(scope="module")
 def air_day(tmp_path_factory) -> dict[str, Any]:
     """The SUT-2 hull plan in air at 20 °C (20 times the speeds: 2-40 m/s), forces at the air's
-    density, a 1 kg model, lab channels in volts; the prototype in air."""
+    density, a 1 kg model, lab channels in volts; the prototype in air. Processed by
+    ``towtank process``; its report is the workbook alone (``[report] pdf = false, figures =
+    false``: the tests read the workbook and the PDF's text functions, not its pages). ``day``:
+    the DayResult the command wrote."""
+    import towtank.runner
+
     d = tmp_path_factory.mktemp("air_day")
     truth = syn.make_air_hull_day(d, file_format="csv", sheet_format="csv")
-    protocol = syn.write_protocol(d / "p.toml",
-                                  **syn.air_protocol_sections(".", "out", sheet_format="csv"))
+    sections = syn.air_protocol_sections(".", "out", sheet_format="csv")
+    sections["report"] = {"pdf": False, "figures": False}
+    protocol = syn.write_protocol(d / "p.toml", **sections)
     rho = air_density(20.0)
     out = d / "out"
-    code = cli.main(["process", str(protocol), "--quiet", "--jobs", "1", "--out", str(out)])
-    return {"dir": d, "truth": truth, "code": code, "out": out, "rho": rho}
+    runs = []
+    run_day = towtank.runner.run_day
+
+    def kept_run_day(*args: Any, **kwargs: Any) -> Any:
+        runs.append(run_day(*args, **kwargs))
+        return runs[-1]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(towtank.runner, "run_day", kept_run_day)
+        code = cli.main(["process", str(protocol), "--quiet", "--jobs", "1", "--out", str(out)])
+    return {"dir": d, "truth": truth, "code": code, "out": out, "rho": rho,
+            "day": runs[0].day}
 
 
 def test_air_day_exits_0_and_recovers_its_truth(air_day):
@@ -283,10 +299,9 @@ def test_air_day_outputs_name_the_medium(air_day):
 def test_air_day_report_text(air_day):
     """The title page and the summary say air, with its pressure and humidity, never 'fresh
     water'; the warnings carry the note of the skipped water-only checks."""
-    from towtank.pipeline import process_day
     from towtank.report import pdf
 
-    day = process_day(air_day["dir"] / "p.toml", jobs=1)
+    day = air_day["day"]
     text = pdf._water_text(day.protocol.water, day.runs)
     assert text.startswith("air, ") and "101325 Pa" in text and "50 % relative humidity" in text
     assert "water" not in text

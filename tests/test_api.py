@@ -76,8 +76,8 @@ def test_process_day_from_a_plain_program(how, tmp_path, cli_coefficients):
     _same(pd.read_csv(out), cli_coefficients)
 
 
-def test_process_day_in_process_returns_the_day(cli_coefficients):
-    day = towtank.process_day(HULL, jobs=1)
+def test_process_day_in_process_returns_the_day(cli_coefficients, sample_hull_day):
+    day = sample_hull_day  # towtank.process_day(HULL) in this process
     assert day.n_rejected == 0 and not day.rejected
     _same(day.coefficients.pipe(lambda d: pd.read_csv(
         pd.io.common.StringIO(d.to_csv(index=False)))), cli_coefficients)
@@ -96,13 +96,13 @@ def test_process_day_writes_what_the_cli_writes(tmp_path, cli_coefficients):
     assert not (out / "report.pdf").exists()
 
 
-def test_read_and_reduce_one_run():
+def test_read_and_reduce_one_run(sample_hull_day):
     protocol = towtank.load_protocol(HULL)
     raw = towtank.read_run(ROOT / "sample_runs/sut2_hull/data/run_021.csv.gz", protocol)
     assert raw.fs == pytest.approx(200.0) and raw.drag.size == raw.time.size
     red = towtank.reduce_run(raw, protocol, run=21, file="run_021.csv.gz")
     assert red.windows["steady"] is not None and red.speed_mean > 0.5
-    day = towtank.process_day(protocol, jobs=1)  # the same run, reduced as the day does
+    day = sample_hull_day  # the same run, reduced as the day does
     assert red.drag_mean_raw == day.reductions[21].drag_mean_raw
     assert red.speed_mean == day.reductions[21].speed_mean
 
@@ -215,10 +215,10 @@ def test_verdicts_are_typed_and_survive_copy():
     assert agreement(1.0, 1.001, 0.001, 0.0).agrees
 
 
-def test_a_fin_day_shows_as_its_runs_and_its_fin_result():
+def test_a_fin_day_shows_as_its_runs_and_its_fin_result(sample_fin_day):
     """A day without hull coefficients: its summary is the runs by configuration and status,
     its FinResult prints in one line and gives fins.csv; nothing raises for the absent stages."""
-    day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
+    day = sample_fin_day
     assert day.hull is None and day.fins is not None
     text = str(day.summary())
     assert "fin" in text and "ok" in text and len(repr(day)) < 5000

@@ -234,13 +234,14 @@ def test_the_run_number_comes_from_the_sheet_not_the_file_name(tmp_path):
 
 
 # ------------------------------------------------------------------ nothing changes a result
-def test_writing_with_an_export_leaves_the_given_day_as_it_was(tmp_path, monkeypatch):
+def test_writing_with_an_export_leaves_the_given_day_as_it_was(tmp_path, monkeypatch,
+                                                                sample_report):
     """A run that cannot be exported is a warning of the day as written (its summary says
     it), on a new DayResult: the day given to the writers is not changed."""
     from towtank.report import outputs
     from towtank.runner import summary
 
-    day = towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=1)
+    day = sample_report("naca0015_fin").day
     before = [str(w) for w in day.warnings]
     planted = "run 3: run_003.csv: could not be exported (planted)"
     monkeypatch.setattr(outputs, "export_runs", lambda d, folder, formats: [planted])

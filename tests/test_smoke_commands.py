@@ -1,7 +1,9 @@
 """The commands a lab runs, end to end in a new process each: both sample days, predict,
-simulate and identify, watch with its page server. `.ci/run` also runs this file on the
-declared minimum versions of every dependency (.ci/min_constraints.py), so a floor in
-pyproject.toml that does not work fails CI."""
+simulate and identify, watch with its page server. `.ci/run` runs this file with ``--floors``
+on the declared minimum versions of every dependency (.ci/min_constraints.py), so a floor in
+pyproject.toml that does not work fails CI. The tests marked ``floors`` are skipped by the
+suite's own run (the README's test command): there the same commands run in-process, as the
+documents quote them (test_docs_commands_run.py), and the golden test checks their outputs."""
 
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ def _towtank(*args: str) -> subprocess.CompletedProcess:
                           text=True, cwd=REPO, timeout=600)
 
 
+@pytest.mark.floors
 def test_the_sample_hull_day(tmp_path):
     run = _towtank("process", "protocols/sut2_hull.toml", "--out", str(tmp_path / "hull"), "-q")
     assert run.returncode == 0, run.stderr
@@ -38,6 +41,7 @@ def test_the_sample_hull_day(tmp_path):
         assert (tmp_path / "hull" / name).is_file(), name
 
 
+@pytest.mark.floors
 def test_the_sample_fin_day(tmp_path):
     run = _towtank("process", "protocols/naca0015_fin.toml", "--out", str(tmp_path / "fin"),
                    "-q")
@@ -46,6 +50,7 @@ def test_the_sample_fin_day(tmp_path):
     assert len(fins) == 40 and fins["cl"].notna().all()
 
 
+@pytest.mark.floors
 def test_predict_then_simulate(tmp_path):
     run = _towtank("predict", "protocols/remus_vehicle.toml", "--out", str(tmp_path / "remus"))
     assert run.returncode == 0, run.stderr
@@ -56,6 +61,7 @@ def test_predict_then_simulate(tmp_path):
     assert 1.0 < metrics["steady_turn_radius_m"] < 100.0
 
 
+@pytest.mark.floors
 def test_simulate_a_sine_then_identify(tmp_path):
     """A noisy sine record from simulate, N_ur identified back by the UKF (filterpy at its
     floor on .ci/run's minimum versions)."""
