@@ -207,3 +207,16 @@ def test_matched_records_fail_at_most_about_1_in_20(tmp_path):
     for row in false_alarms(stats).itertuples():
         assert row.records == 100
         assert row.low <= 0.05 and row.rate <= 0.12, row
+
+
+def test_a_record_without_noise_is_not_tested_and_says_so(models):
+    """simulate without --noise: every state written exactly at 5 Hz; its second differences
+    are the signal's, the innovations cannot be white (before: every state's whiteness failed,
+    Q 58-122 against 24, and the model the record came from 'did not fit')."""
+    from towtank.vehicle.simulate import simulate
+
+    clean = simulate(models["neutral"], "sine", 1.5, rudder_deg=10.0, period_s=4.0,
+                     duration_s=8.0, sample_hz=5.0)
+    res = identify(models["neutral"], log_from_frame(clean, "clean"), ["N_ur"], check=False)
+    assert res.fits() and res.adequacy is not None and res.adequacy.empty
+    assert any("no state is left to test the fit on" in note for note in res.notes)

@@ -883,10 +883,14 @@ def identify(model: dict[str, Any], log: ManoeuvreLog, estimate: list[str],
         innovation = (log.z - sim) / sd
     table, inputs = None, None
     if adequacy:
-        exact = exact_states(log, sd)
+        # the tests assume white measurement noise: a state written exactly, or without white
+        # noise (derived, smoothed, interpolated) cannot have white innovations
+        exact = sorted(set(exact_states(log, sd)) | set(noise_free_states(log)))
         if exact:
-            notes.append(f"{', '.join(STATE_COLUMNS[i] for i in exact)} without noise in the "
-                         "record (exact): left out of the tests of the fit")
+            notes.append(f"{', '.join(STATE_COLUMNS[i] for i in exact)} without white noise in "
+                         "the record (exact, derived, smoothed or interpolated): left out of the "
+                         "tests of the fit" + ("" if len(exact) < len(log.measured) else
+                                               "; no state is left to test the fit on"))
         tested = [i for i in log.measured if i not in exact]
         inputs = _adequacy_inputs(model, log, symbols, np.asarray(value), sd, innovation,
                                   tested, validate, noise, progress)
