@@ -325,3 +325,18 @@ def test_a_spiralling_glide_is_drawn_in_plan_and_a_straight_one_in_the_vertical_
               + manoeuvre_figure(ts, "glide").axes[0].get_ylabel() for ts in (spiral, straight)]
     assert "east" in labels[0] and "depth" not in labels[0]
     assert "depth" in labels[1]
+
+
+def test_a_pitch_beyond_the_moving_mass_names_the_steepest_it_holds(model):
+    """At -300 cc a -80 deg glide needs 1207 mm of travel against the mass's 400: its note
+    names the steepest pitch the mass holds, and the glide there needs the mass at its end."""
+    table = steady_table(model, [-300.0], [-80.0, -45.0])
+    steep, held = table.iloc[0], table.iloc[1]
+    assert steep["moving_mass_travel_mm"] > 400.0 and "outside its range" in steep["note"]
+    said = steep["note"].split("the steepest pitch it holds in a straight glide at -300 cc is ")
+    assert len(said) == 2, steep["note"]
+    reach = float(said[1].split(" deg")[0])
+    assert -80.0 < reach < -45.0
+    end = steady_table(model, [-300.0], [reach]).iloc[0]["moving_mass_travel_mm"]
+    assert end == pytest.approx(400.0, abs=2.0)  # the sentence's 3 digits of pitch
+    assert "steepest" not in str(held["note"]) and held["moving_mass_travel_mm"] < 400.0

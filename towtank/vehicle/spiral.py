@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import minimize_scalar, root
+from scipy.optimize import brentq, minimize_scalar, root
 
 from towtank.reference.constants import STANDARD_GRAVITY
 from towtank.vehicle.glider import steady_glide
@@ -184,8 +184,32 @@ def _beyond_reach(roll_deg: float, reach: tuple[float, float]) -> str:
             "the mass level across the glider; turned further it rolls the glider less)")
 
 
+def pitch_reach(model: dict[str, Any], dyn: Dynamics, theta: float, limit_m: float
+                ) -> float | None:
+    """The pitch [deg] nearest ``theta`` [rad] (towards level) at which the wings-level glide
+    needs the moving mass at ``limit_m`` [m], the end of its travel that ``theta`` is beyond:
+    the travel along the glides from ``theta`` towards level in 1 deg steps until it is back
+    inside, then the root of travel - limit between the last two steps (Brent). None when no
+    glide towards level holds the mass inside its travel."""
+    def excess(th: float) -> float:
+        g, ok, _ = _solve_glide(model, dyn, th)
+        return float(g[2]) - limit_m if ok else math.nan
+
+    far, f_far = theta, excess(theta)
+    towards = -math.copysign(math.radians(1.0), theta)
+    for k in range(1, int(abs(math.degrees(theta))) + 1):
+        near = theta + k * towards
+        f_near = excess(near)
+        if not math.isfinite(f_near):
+            return None
+        if math.copysign(1.0, f_near) != math.copysign(1.0, f_far):
+            return math.degrees(brentq(excess, near, far, xtol=1e-9))
+        far, f_far = near, f_near
+    return None
+
+
 def _row(model: dict[str, Any], ballast_cc: float, pitch_deg: float, roll_deg: float,
-         x: np.ndarray | None, note: str) -> dict[str, Any]:
+         x: np.ndarray | None, note: str, reach_deg: float | None = None) -> dict[str, Any]:
     nan = float("nan")
     base = {"ballast_cc": float(ballast_cc), "net_buoyancy_N": net_buoyancy(model, ballast_cc),
             "pitch_deg": float(pitch_deg), "roll_deg": float(roll_deg)}
@@ -204,7 +228,9 @@ def _row(model: dict[str, Any], ballast_cc: float, pitch_deg: float, roll_deg: f
     lo, hi = glider["moving_mass_travel_mm"]
     if not lo <= travel * 1e3 <= hi:
         notes.append(f"the moving mass would need {travel * 1e3:.4g} mm of travel, outside its "
-                     f"range {lo:g} to {hi:g} mm")
+                     f"range {lo:g} to {hi:g} mm" + ("" if reach_deg is None else
+                     f": the steepest pitch it holds in a straight glide at {ballast_cc:g} cc "
+                     f"is {reach_deg:.3g} deg"))
     return {**base, "speed_m_s": speed, "u_m_s": u, "v_m_s": v, "w_m_s": w,
             "angle_of_attack_deg": math.degrees(math.atan2(w, u)),
             "sideslip_deg": math.degrees(math.asin(v / speed)) if speed else nan,
@@ -259,6 +285,10 @@ def steady_table(model: dict[str, Any], ballasts_cc: list[float], pitches_deg: l
             theta = math.radians(p)
             g, ok, note = _solve_glide(mdl, dyn, theta)
             glide = np.array([g[0], 0.0, g[1], 0.0, g[2], 0.0, 0.0]) if ok else None
+            lo_mm, hi_mm = mdl["glider"]["moving_mass_travel_mm"]
+            reach_deg = (pitch_reach(mdl, dyn, theta, (hi_mm if g[2] * 1e3 > hi_mm else lo_mm)
+                                     * 1e-3)
+                         if ok and not lo_mm <= g[2] * 1e3 <= hi_mm else None)
             done: dict[float, dict[str, Any]] = {}
             for sign in (1.0, -1.0):
                 start = glide
@@ -288,7 +318,7 @@ def steady_table(model: dict[str, Any], ballasts_cc: list[float], pitches_deg: l
             for r in rolls:
                 if r == 0.0:
                     rows.append(_row(model, b, p, 0.0, glide[:6] if glide is not None else None,
-                                     note))
+                                     note, reach_deg))
                 else:
                     rows.append(done[r])
     return pd.DataFrame(rows, columns=list(STEADY_COLUMNS))
