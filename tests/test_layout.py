@@ -342,9 +342,8 @@ ALLOWED_TEXT_READS: set[tuple[str, str]] = {
     # the day-wide grouping of the reductions' per-run warnings (plain sentences that the
     # worker processes return), compared word for word without their run and file prefixes
     ("towtank.analysis.daywide", "own_reason"),
-    # `towtank inspect` on one file: the hint it adds to a RunError's sentence (a missing
-    # channel, a segment) and the sentence's own punctuation
-    ("towtank.commands.inspect", "_missing_channel"),
+    # `towtank inspect` on one file: the hint it adds to a RunError's sentence (a segment) and
+    # the sentence's own punctuation
     ("towtank.commands.inspect", "inspect_run.load"),
     ("towtank.commands.inspect", "inspect_run"),
     # npTDMS's own warnings while it reads a file: the library says what it found only in

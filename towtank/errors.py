@@ -16,12 +16,17 @@ class ProtocolError(TowtankError):
 
 
 class RunError(TowtankError):
-    """One run cannot be used; ``str(err)`` names the run, the file and the reason."""
+    """One run cannot be used; ``str(err)`` names the run, the file and the reason.
 
-    def __init__(self, reason: str, run: int | None = None, file: str | None = None):
+    ``kind``: what went wrong when a caller acts on it (``"missing_channel"``: a channel the
+    run needs is not in the file), else ""."""
+
+    def __init__(self, reason: str, run: int | None = None, file: str | None = None,
+                 kind: str = ""):
         self.reason = reason
         self.run = run
         self.file = file
+        self.kind = kind
         super().__init__(self.sentence())
 
     def sentence(self) -> str:

@@ -223,8 +223,8 @@ def _describe(runfile: Path, read, out: TextIO):  # noqa: ANN001, ANN202 - ReadO
     return (*parsed, {name: unit for name, unit, _ in desc.channels}) if parsed[1] else None
 
 
-def _missing_channel(reason: str) -> bool:
-    return "missing" in reason and "columns found" in reason
+def _missing_channel(exc: RunError) -> bool:
+    return exc.kind == "missing_channel"
 
 
 def units_text(units: dict[str, tuple[str, str]]) -> str:
@@ -351,7 +351,7 @@ def inspect_run(
         try:
             raw = load()
         except RunError as exc:
-            if protocol_path is not None or not _missing_channel(exc.reason):
+            if protocol_path is not None or not _missing_channel(exc):
                 raise
             proposal = _describe(runfile, read, out)
             if proposal is None:  # nothing recognised: the protocol must name the channels
@@ -361,7 +361,7 @@ def inspect_run(
             try:
                 raw = load()
             except RunError as again:  # no drag: is it a captive balance's file?
-                if not _missing_channel(again.reason):
+                if not _missing_channel(again):
                     raise
                 for test in BALANCE_TESTS:  # read_file reads it as this test
                     balance_test = test
@@ -384,8 +384,8 @@ def inspect_run(
         if proposed:
             hint = " (read with the block proposed above)." + (
                 " Complete the block, paste it into the campaign's protocol and give it with "
-                "--protocol PROTOCOL.toml." if _missing_channel(reason) else "")
-        elif _missing_channel(reason):
+                "--protocol PROTOCOL.toml." if _missing_channel(exc) else "")
+        elif _missing_channel(exc):
             hint = (" Give the campaign's protocol with --protocol PROTOCOL.toml, so that its "
                     "[channels] mapping names the lab's columns.")
         stop = "" if reason.endswith(("?", "!")) or hint.startswith(" (") else "."

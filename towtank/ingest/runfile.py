@@ -543,7 +543,7 @@ def captive_mapping(cols: dict[str, np.ndarray], mapping: dict[str, ChannelMap],
         raise RunError(
             f"{name}: the {' and '.join(missing)} channel{'s are' if len(missing) > 1 else ' is'}"
             f" missing, which a {test} run needs (map {'them' if len(missing) > 1 else 'it'} "
-            f"in [channels]); columns found: {name_list(names)}")
+            f"in [channels]); columns found: {name_list(names)}", kind="missing_channel")
     return out
 
 
@@ -577,7 +577,7 @@ def map_channels(
         if key is None:
             listed = name_list(found)
             raise RunError(f"{name}: the column '{col}' of the {canon} channel is missing; "
-                           f"columns found: {listed}")
+                           f"columns found: {listed}", kind="missing_channel")
         arr, _ = _to_float_array(np.asarray(cols[key]))
         return arr
 
@@ -631,7 +631,7 @@ def map_channels(
                         "sample_rate_hz")
             raise RunError(
                 f"{name}: the {canon} channel is missing ({how}); columns found: {listed}"
-                + (_NO_SPEED_HINT if canon == "speed" else "")
+                + (_NO_SPEED_HINT if canon == "speed" else ""), kind="missing_channel"
             )
     return out
 
