@@ -9,8 +9,10 @@ then compare the pipeline's numbers with the per-run truth of ``truth.json``.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import copy
 import os
+import pickle
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -232,20 +234,66 @@ class SampleOutputs:
     out: Path  # its output folder (with the run cache, .cache)
 
 
+def _run_folder(tmp_path_factory) -> Path | None:
+    """The folder every xdist worker of this run shares (None without xdist: one process)."""
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        return None
+    return tmp_path_factory.getbasetemp().parent  # pytest-N, above popen-gw0, popen-gw1, ...
+
+
+@contextlib.contextmanager
+def _locked(path: Path):
+    """An exclusive lock on ``path`` between processes (none where fcntl is missing: Windows,
+    where each worker then builds its own)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    with open(path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def built_once(tmp_path_factory, name: str, build: Callable[[Path], Any]) -> tuple[Any, Path]:
+    """``build(out)`` once per test run: the first xdist worker that asks builds into a folder
+    of the run that every worker shares (under a lock, the others wait) and keeps what it
+    returned beside it (pickled: a DayResult, an exit status); later askers read that. Without
+    xdist, once per session. Returns (what build returned, the folder ``out``)."""
+    shared = _run_folder(tmp_path_factory)
+    if shared is None:
+        out = tmp_path_factory.mktemp(name) / "out"
+        return build(out), out
+    home = shared / f"shared-{name}"
+    out, value_file = home / "out", home / "value.pickle"
+    home.mkdir(exist_ok=True)
+    with _locked(home / ".lock"):
+        if not value_file.exists():
+            value = build(out)
+            value_file.write_bytes(pickle.dumps(value))
+            return value, out
+    return pickle.loads(value_file.read_bytes()), out  # written by this run's own worker
+
+
 @pytest.fixture(scope="session")
 def sample_outputs(tmp_path_factory) -> Callable[[str], SampleOutputs]:
     """``sample_outputs(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
-    once per session (per xdist worker) into a session folder. The folder is shared: tests only
-    read it (a test that writes there copies it first)."""
+    once per test run (:func:`built_once`: shared by the xdist workers) into a run folder. The
+    folder is shared: tests only read it (a test that writes there copies it first)."""
     done: dict[str, SampleOutputs] = {}
 
     def get(name: str) -> SampleOutputs:
         if name not in done:
             from towtank.commands.cli import main
 
-            out = tmp_path_factory.mktemp(f"sample_{name}") / "out"
-            code = main(["process", str(ROOT / "protocols" / f"{name}.toml"), "--no-report",
-                         "--out", str(out), "-q", "--jobs", str(JOBS)])
+            def build(out: Path) -> int:
+                return main(["process", str(ROOT / "protocols" / f"{name}.toml"), "--no-report",
+                             "--out", str(out), "-q", "--jobs", str(JOBS)])
+
+            code, out = built_once(tmp_path_factory, f"sample_{name}", build)
             done[name] = SampleOutputs(code, out)
         return done[name]
 
@@ -264,18 +312,21 @@ class SampleReport:
 def sample_report(tmp_path_factory) -> Callable[[str], SampleReport]:
     """``sample_report(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
     with its report (PDF, workbook, figures) by ``towtank.process_day(protocol, out=...,
-    report=True)`` once per session (per xdist worker). Writing a report is the longest part of
-    a day, so the tests that read a sample day's written report share this one (the golden
-    comparison, the front doors). The folder is shared: tests only read it."""
+    report=True)`` once per test run (:func:`built_once`: shared by the xdist workers). Writing
+    a report is the longest part of a day, so the tests that read a sample day's written report
+    share this one (the golden comparison, the front doors). The folder is shared: tests only
+    read it."""
     done: dict[str, SampleReport] = {}
 
     def get(name: str) -> SampleReport:
         if name not in done:
             import towtank
 
-            out = tmp_path_factory.mktemp(f"report_{name}") / "out"
-            day = towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out,
-                                      report=True, jobs=JOBS)
+            def build(out: Path) -> Any:
+                return towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out,
+                                           report=True, jobs=JOBS)
+
+            day, out = built_once(tmp_path_factory, f"report_{name}", build)
             done[name] = SampleReport(day, out)
         return done[name]
 
