@@ -10,6 +10,7 @@ digital input as the speed (item 17).
 from __future__ import annotations
 
 import io
+import json
 import logging
 import os
 import re
@@ -94,6 +95,24 @@ def _inspect(path: Path, protocol: Path, tmp_path: Path, capsys) -> str:  # noqa
     assert rc == 1 and len(lines) == 1, err
     assert not (tmp_path / "x.png").exists()
     return lines[0]
+
+
+#: towtank's commands (a JSON list of argument lists) one after the other in a new
+#: interpreter, each followed on stderr by the line "--- exit N".
+_CHILD = ("import json, sys\nfrom towtank.commands.cli import main\n"
+          "for args in json.loads(sys.argv[1]):\n"
+          "    print('--- exit', main(args), file=sys.stderr, flush=True)\n")
+
+
+def _in_child(*commands: list[str]) -> list[tuple[int, str]]:
+    """(exit status, stderr) of each of ``commands`` run in one child process (one start-up
+    and import for all) within CHILD_TIMEOUT_S."""
+    child = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(commands)],
+                           capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
+    parts = re.split(r"^--- exit (-?\d+)\n", child.stderr, flags=re.M)
+    done = [(int(code), said) for said, code in zip(parts[:-1:2], parts[1::2], strict=True)]
+    assert len(done) == len(commands), (child.returncode, child.stderr)
+    return done
 
 
 # ========================================== item 1: HDF5 values stored in other files
@@ -189,22 +208,20 @@ def test_external_storage_naming_a_system_file_is_refused_without_reading_it(tmp
 @pytest.mark.parametrize("edit", [_external, _virtual], ids=["external", "virtual"])
 def test_a_fifo_behind_a_dataset_does_not_hang_inspect_or_process(hdf5_day, tmp_path, edit):
     """Reading a FIFO blocks until something writes into it: a towtank that read the dataset
-    would hang. Each command runs in a child process under a time limit, so that a hang
+    would hang. The commands run in a child process under a time limit, so that a hang
     fails the test instead of stopping the suite."""
     protocol = _copy_day(hdf5_day[0], tmp_path / "day")
     run_file = protocol.parent / "data" / "run_021.h5"
     fifo = tmp_path / "pipe"
     os.mkfifo(fifo)
     _edit_h5(run_file, edit, fifo)
-    child = subprocess.run([sys.executable, "-m", "towtank", "inspect", str(run_file),
-                            "--protocol", str(protocol), "--png", str(tmp_path / "x.png")],
-                           capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
-    assert child.returncode == 1, child.stderr
-    assert "keeps its values outside the file" in child.stderr and str(fifo) in child.stderr
-    child = subprocess.run([sys.executable, "-m", "towtank", "process", str(protocol), "--out",
-                            str(protocol.parent / "out"), "-q", "--no-report", "--jobs", "1"],
-                           capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
-    assert child.returncode == 1, child.stderr
+    (code, said), (process_code, process_said) = _in_child(
+        ["inspect", str(run_file), "--protocol", str(protocol), "--png", str(tmp_path / "x.png")],
+        ["process", str(protocol), "--out", str(protocol.parent / "out"), "-q", "--no-report",
+         "--jobs", "1"])
+    assert code == 1, said
+    assert "keeps its values outside the file" in said and str(fifo) in said
+    assert process_code == 1, process_said
     assert "keeps its values outside the file" in _only_rejected(protocol, 21)
 
 
