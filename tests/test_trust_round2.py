@@ -447,7 +447,7 @@ def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path
     out = tmp_path / "out"
     assert main(["predict", str(protocol), "--out", str(tmp_path / "remus")]) == 0
     sim = ["simulate", str(tmp_path / "remus" / "model.json"), "--manoeuvre", "turning",
-           "--duration-s", "20", "--out", str(out)]
+           "--duration-s", "5", "--out", str(out)]
     assert main(sim) == 0
     (out / "notes.txt").write_text("mine")
     day_protocol = repo / "protocols" / "sut2_hull.toml"
