@@ -14,7 +14,6 @@ pipeline (exit status, the sentence, the other runs still processed).
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 import os
@@ -37,18 +36,16 @@ from towtank.commands.cli import main
 from towtank.errors import RunError
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.testing import synthetic as syn
-from towtank.testing.days import hull_day_plan
+from towtank.testing.days import reading_day_plan
 from towtank.testing.hang import hang_bound
 from towtank.testing.layouts import layout_channels, protocol_sections
 
 SEED = 20
 REPO = Path(__file__).resolve().parents[1]
-#: The day of these tests: five sting tares, the hull at 0 deg and runs 21 and 22 at 5 deg,
-#: numbered as in the full day (:func:`towtank.testing.days.hull_day_plan`). What they test is
-#: how one run's file or the sheet is read, never the fit, so eleven runs carry it as well as
-#: 42 and take half the time to process; "the rest of the day" is every other run, processed.
-PLAN = [dataclasses.replace(spec, run=i) for i, spec in enumerate(hull_day_plan(), 1)
-        if i in (1, 4, 5, 6, 7, 13, 14, 15, 16, 21, 22)]
+#: The day of these tests: what they test is how one run's file or the sheet is read, never
+#: the fit, so eleven runs carry it as well as 42 (run 21 among them); "the rest of the day"
+#: is every other run, processed.
+PLAN = reading_day_plan()
 
 
 def _day(root: Path, file_format: str = "csv", sheet_format: str = "csv",
