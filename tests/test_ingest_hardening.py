@@ -15,12 +15,10 @@ pipeline (exit status, the sentence, the other runs still processed).
 from __future__ import annotations
 
 import functools
-import json
 import os
 import re
 import struct
 import subprocess
-import sys
 import textwrap
 import zipfile
 import zlib
@@ -36,6 +34,7 @@ from towtank.commands.cli import main
 from towtank.errors import RunError
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.testing import synthetic as syn
+from towtank.testing.child import run_in_child
 from towtank.testing.days import reading_day_plan
 from towtank.testing.hang import hang_bound
 from towtank.testing.layouts import layout_channels, protocol_sections
@@ -471,12 +470,12 @@ def test_any_prefix_is_read_as_its_complete_rows_or_refused_with_the_sentence(
 # ====================================================== item 6: declared sizes, before reading
 LIMIT_GIB = 2.0  # address space of the subprocesses below: a regression fails, never swaps
 
-_LIMITED = textwrap.dedent("""
-    import json, resource, sys
-    limit = int(float(sys.argv[1]) * 2**30)
+#: Run in the child before towtank is loaded: the address-space limit, and ``read PATH``.
+_LIMIT = textwrap.dedent(f"""
+    import resource
+    limit = int({LIMIT_GIB} * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     from pathlib import Path
-    from towtank.commands.cli import main
     from towtank.errors import RunError
     from towtank.ingest.runfile import read_columns
 
@@ -488,36 +487,19 @@ _LIMITED = textwrap.dedent("""
             return 0
         print("read")
         return 0
-
-    for args in json.loads(sys.argv[2]):
-        code = read(args[1]) if args[0] == "read" else main(args)
-        for stream in (sys.stdout, sys.stderr):
-            print(sys.argv[3], code, file=stream, flush=True)
 """)
-_DONE = "--- done, exit"  # the line the child writes to stdout and stderr after each command
 
 
 def _limited(commands: dict[str, list[str]], timeout: float = 300
              ) -> dict[str, subprocess.CompletedProcess]:
     """Each of ``commands`` (towtank's ``process ...``, or one file read: ``read PATH``) run
     one after the other in one subprocess (one start-up and import for all) whose address
-    space is limited to LIMIT_GIB: each command's exit status, stdout and stderr. The commands
-    after one that ended the child get the child's status and what it said last."""
+    space is limited to LIMIT_GIB: each command's exit status, stdout and stderr."""
     env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1",
                OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    done = subprocess.run([sys.executable, "-c", _LIMITED, str(LIMIT_GIB),
-                           json.dumps(list(commands.values())), _DONE],
-                          capture_output=True, text=True, timeout=timeout, env=env)
-    mark = re.compile(rf"^{re.escape(_DONE)} (-?\d+)\n", re.M)
-    outs, errs = mark.split(done.stdout), mark.split(done.stderr)
-    results = {}
-    for i, (key, args) in enumerate(commands.items()):
-        if 2 * i + 1 < len(outs):
-            code, out, err = int(outs[2 * i + 1]), outs[2 * i], errs[2 * i]
-        else:  # the child ended within this command or an earlier one
-            code, out, err = done.returncode or -1, outs[-1], errs[-1]
-        results[key] = subprocess.CompletedProcess(args, code, out, err)
-    return results
+    done = run_in_child(list(commands.values()), timeout=timeout, prelude=_LIMIT, env=env,
+                        call='read(args[1]) if args[0] == "read" else main(args)')
+    return dict(zip(commands, done, strict=True))
 
 
 def _process_args(protocol: Path) -> list[str]:

@@ -25,6 +25,7 @@ from towtank.commands.cli import main
 from towtank.runtime import records
 from towtank.runtime.manifest import MANIFEST, lock_path, output_lock, read_manifest
 from towtank.testing import synthetic as syn
+from towtank.testing.child import run_in_child
 from towtank.testing.hang import hang_bound
 
 SEED = 5
@@ -332,25 +333,9 @@ def test_a_lock_file_that_is_not_towtanks_is_never_written(tmp_path):
 
 
 # ------------------------------------- 5. odd entries in the output folder hang nothing
-#: ``towtank ARGS`` run twice in one new interpreter (one start-up and import for both); the
-#: exit status is the first non-zero one, each run's said on stderr.
-_TWICE = ("import sys\nfrom towtank.commands.cli import main\ncodes = []\n"
-          "for _ in range(2):\n    codes.append(main(sys.argv[1:]))\n"
-          "    print('exit', codes[-1], file=sys.stderr, flush=True)\n"
-          "sys.exit(next((c for c in codes if c), 0))\n")
-
-
-def _cli_twice(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    """``towtank ARGS`` twice in a process of its own; both exit statuses must be 0."""
-    done = subprocess.run([sys.executable, "-c", _TWICE, *args], capture_output=True,
-                          text=True, timeout=timeout)
-    assert done.stderr.count("exit 0") == 2 or done.returncode != 0, done.stderr
-    return done
-
-
 def _in_process(*args: str, capsys: pytest.CaptureFixture[str], timeout: float
                 ) -> subprocess.CompletedProcess:
-    """``towtank ARGS`` run here within a hang bound, as :func:`_cli` reports it."""
+    """``towtank ARGS`` run here within a hang bound, as :func:`run_in_child` reports it."""
     capsys.readouterr()
     with hang_bound(timeout):
         code = main(list(args))
@@ -394,7 +379,7 @@ def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_
         (cache / "files.json").unlink()
         (cache / "day.json").unlink()
         os.mkfifo(cache / "files.json")
-    runs = ([_cli_twice("process", *args, timeout=120)] if odd in OWN_PROCESS
+    runs = (run_in_child([("process", *args)] * 2, timeout=120) if odd in OWN_PROCESS
             else [_in_process("process", *args, capsys=capsys, timeout=60) for _ in range(2)])
     for run in runs:
         assert run.returncode == 0, run.stderr

@@ -10,12 +10,9 @@ digital input as the speed (item 17).
 from __future__ import annotations
 
 import io
-import json
 import logging
 import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +39,7 @@ from towtank.ingest.runsheet import SHEET_COLUMNS_SHOWN, read_run_sheet
 from towtank.ingest.speedlog import read_speed_log
 from towtank.testing import synthetic as syn
 from towtank.testing.bench_read import wide_csv, wide_lvm
+from towtank.testing.child import run_in_child
 from towtank.testing.days import reading_day_plan
 from towtank.testing.layouts import layout_channels, protocol_sections
 from towtank.testing.truth import FileFormat
@@ -102,22 +100,11 @@ def _inspect(path: Path, protocol: Path, tmp_path: Path, capsys) -> str:  # noqa
     return lines[0]
 
 
-#: towtank's commands (a JSON list of argument lists) one after the other in a new
-#: interpreter, each followed on stderr by the line "--- exit N".
-_CHILD = ("import json, sys\nfrom towtank.commands.cli import main\n"
-          "for args in json.loads(sys.argv[1]):\n"
-          "    print('--- exit', main(args), file=sys.stderr, flush=True)\n")
-
-
 def _in_child(*commands: list[str]) -> list[tuple[int, str]]:
     """(exit status, stderr) of each of ``commands`` run in one child process (one start-up
     and import for all) within CHILD_TIMEOUT_S."""
-    child = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(commands)],
-                           capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
-    parts = re.split(r"^--- exit (-?\d+)\n", child.stderr, flags=re.M)
-    done = [(int(code), said) for said, code in zip(parts[:-1:2], parts[1::2], strict=True)]
-    assert len(done) == len(commands), (child.returncode, child.stderr)
-    return done
+    return [(done.returncode, done.stderr)
+            for done in run_in_child(commands, timeout=CHILD_TIMEOUT_S)]
 
 
 # ========================================== item 1: HDF5 values stored in other files
