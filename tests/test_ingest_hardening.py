@@ -14,11 +14,11 @@ pipeline (exit status, the sentence, the other runs still processed).
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import struct
 import subprocess
-import sys
 import textwrap
 import zipfile
 import zlib
@@ -34,17 +34,24 @@ from towtank.commands.cli import main
 from towtank.errors import RunError
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.testing import synthetic as syn
+from towtank.testing.child import run_in_child
+from towtank.testing.days import reading_day_plan
 from towtank.testing.hang import hang_bound
 from towtank.testing.layouts import layout_channels, protocol_sections
 
 SEED = 20
 REPO = Path(__file__).resolve().parents[1]
+#: The day of these tests: what they test is how one run's file or the sheet is read, never
+#: the fit, so eleven runs carry it as well as 42 (run 21 among them); "the rest of the day"
+#: is every other run, processed.
+PLAN = reading_day_plan()
 
 
 def _day(root: Path, file_format: str = "csv", sheet_format: str = "csv",
          **sections: dict) -> Path:
     """A synthetic hull day in ``root`` (run files in ``file_format``); its protocol."""
-    syn.make_hull_day(root, seed=SEED, file_format=file_format, sheet_format=sheet_format)
+    syn.make_hull_day(root, seed=SEED, file_format=file_format, sheet_format=sheet_format,
+                      runs=PLAN)
     channels = layout_channels(file_format, syn.LabChannels())
     sec = syn.hull_protocol_sections(".", "out", sheet_format=sheet_format, channels=channels)
     sec = protocol_sections(file_format, sec)
@@ -67,7 +74,7 @@ def _only_rejected(protocol: Path, run: int) -> str:
     runs = _runs(protocol)
     rejected = runs.index[runs["status"] == "rejected"].tolist()
     assert rejected == [run], runs.loc[rejected, "reason"].to_dict()
-    assert (runs["status"] == "ok").sum() > 30  # the rest of the day is processed
+    assert (runs["status"] == "ok").sum() == len(PLAN) - 1  # the rest of the day is processed
     return str(runs.loc[run, "reason"])
 
 
@@ -280,7 +287,7 @@ def _cut_mid_line(data: bytes, fraction: float = 0.6, keep_fields: int = 2,
 def _whitespace_day(root: Path) -> tuple[Path, str]:
     """A day of canonical CSV files with run 21 as whitespace-separated text (.dat)."""
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv",
-                      channel_style="canonical")
+                      channel_style="canonical", runs=PLAN)
     sec = syn.hull_protocol_sections(".", "out", sheet_format="csv", channel_style="canonical")
     protocol = syn.write_protocol(root / "protocol.toml", **sec)
     frame = pd.read_csv(root / "data" / "run_021.csv")
@@ -364,14 +371,16 @@ def _text_files(root: Path, n: int) -> dict[str, bytes]:
     return out
 
 
-def _data_line_ends(data: bytes) -> list[int]:
-    """Byte offsets just after each data line (a line starting with a digit or a sign)."""
+@functools.cache
+def _data_line_ends(data: bytes) -> tuple[int, ...]:
+    """Byte offsets just after each data line (a line starting with a digit or a sign);
+    worked out once per file (every prefix of it asks)."""
     ends, pos = [], 0
     for line in data.split(b"\n")[:-1]:
         if line.lstrip()[:1] in (*(bytes([c]) for c in b"0123456789"), b"-", b"+", b"."):
             ends.append(pos + len(line) + 1)
         pos += len(line) + 1
-    return ends
+    return tuple(ends)
 
 
 def _as_float(text: bytes, decimal_comma: bool) -> float:
@@ -461,38 +470,41 @@ def test_any_prefix_is_read_as_its_complete_rows_or_refused_with_the_sentence(
 # ====================================================== item 6: declared sizes, before reading
 LIMIT_GIB = 2.0  # address space of the subprocesses below: a regression fails, never swaps
 
-_LIMITED = textwrap.dedent("""
-    import resource, sys
-    limit = int(float(sys.argv[1]) * 2**30)
+#: Run in the child before towtank is loaded: the address-space limit, and ``read PATH``.
+_LIMIT = textwrap.dedent(f"""
+    import resource
+    limit = int({LIMIT_GIB} * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    if sys.argv[2] == "read":
-        from pathlib import Path
-        from towtank.errors import RunError
-        from towtank.ingest.runfile import read_columns
+    from pathlib import Path
+    from towtank.errors import RunError
+    from towtank.ingest.runfile import read_columns
+
+    def read(path):
         try:
-            read_columns(Path(sys.argv[3]))
+            read_columns(Path(path))
         except RunError as exc:
             print("RunError:", exc)
-            sys.exit(0)
+            return 0
         print("read")
-        sys.exit(0)
-    from towtank.commands.cli import main
-    sys.exit(main(sys.argv[2:]))
+        return 0
 """)
 
 
-def _limited(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    """towtank (``process ...``) or one file read (``read PATH``) in a subprocess whose
-    address space is limited to LIMIT_GIB."""
+def _limited(commands: dict[str, list[str]], timeout: float = 300
+             ) -> dict[str, subprocess.CompletedProcess]:
+    """Each of ``commands`` (towtank's ``process ...``, or one file read: ``read PATH``) run
+    one after the other in one subprocess (one start-up and import for all) whose address
+    space is limited to LIMIT_GIB: each command's exit status, stdout and stderr."""
     env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1",
                OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    return subprocess.run([sys.executable, "-c", _LIMITED, str(LIMIT_GIB), *args],
-                          capture_output=True, text=True, timeout=timeout, env=env)
+    done = run_in_child(list(commands.values()), timeout=timeout, prelude=_LIMIT, env=env,
+                        call='read(args[1]) if args[0] == "read" else main(args)')
+    return dict(zip(commands, done, strict=True))
 
 
-def _process_limited(protocol: Path, timeout: float = 300) -> subprocess.CompletedProcess:
-    return _limited("process", str(protocol), "--out", str(protocol.parent / "out"),
-                    "--no-report", "-q", "--jobs", "1", timeout=timeout)
+def _process_args(protocol: Path) -> list[str]:
+    return ["process", str(protocol), "--out", str(protocol.parent / "out"), "--no-report",
+            "-q", "--jobs", "1"]
 
 
 def _zlib_of_zeros(prefix: bytes, total: int, chunk: int = 1 << 24) -> bytes:
@@ -524,30 +536,20 @@ def _mat_bomb(name: bytes, chunks: int) -> bytes:
     return struct.pack("<II", 15, len(stream)) + stream  # miCOMPRESSED
 
 
-def test_a_compressed_mat_variable_declaring_3_gib_is_refused_before_it_is_read(tmp_path):
-    """3 MB of .mat that decompresses to 3 GiB (a run file is capped at 1 GiB): rejected
-    from the size its header declares, in well under a second and without the memory; the
-    other runs of the day are processed."""
-    protocol = _day(tmp_path, file_format="mat")
-    path = tmp_path / "data" / "run_021.mat"
+def _mat_bomb_day(root: Path) -> tuple[Path, list[str]]:
+    """A .mat day whose run 21 holds 3 MB that decompress to 3 GiB; the command."""
+    protocol = _day(root, file_format="mat")
+    path = root / "data" / "run_021.mat"
     path.write_bytes(path.read_bytes() + _mat_bomb(b"big", 192))
-    assert path.stat().st_size < 4 << 20
-    done = _process_limited(protocol)
-    assert done.returncode == 1, done.stderr
-    reason = _only_rejected(protocol, 21)
-    assert "is too large for one run: its compressed MATLAB variable 'big' (402653177×1) " \
-           "declares 3.0 GiB of numbers" in reason, reason
-    assert "checked before reading" in reason
-    _one_sentence(done.stderr)
+    return path, _process_args(protocol)
 
 
-def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(tmp_path):
-    """An uncompressed cell array inside a struct whose dimensions say 2³¹ elements (a
-    reader would allocate 16 GiB of object pointers before reading one): refused from the
-    dimensions, wherever the array is nested."""
+def _nested_mat(root: Path) -> tuple[Path, list[str]]:
+    """An uncompressed cell array inside a struct whose dimensions say 2³¹−1 elements."""
     import scipy.io
 
-    path = tmp_path / "run.mat"
+    root.mkdir()
+    path = root / "run.mat"
     scipy.io.savemat(path, {"t": np.arange(100.0), "drag": np.zeros(100),
                             "s": {"cells": np.array([[1.0]], dtype=object)}}, format="5")
     data = bytearray(path.read_bytes())
@@ -558,28 +560,67 @@ def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(tmp_path):
     assert at > 0
     data[at + 8 : at + 12] = struct.pack("<i", 2**31 - 1)
     path.write_bytes(bytes(data))
-    done = _limited("read", str(path))
+    return path, ["read", str(path)]
+
+
+def _unwritten_dataset_day(root: Path, layout: str, group: str) -> tuple[Path, list[str]]:
+    """An HDF5 (or MATLAB v7.3) day whose run 21 holds a dataset of 2³¹ doubles never
+    written."""
+    import h5py
+
+    protocol = _day(root, file_format=layout)
+    path = root / "data" / f"run_021.{'h5' if layout == 'hdf5' else 'mat'}"
+    with h5py.File(path, "a") as fh:
+        fh[group].create_dataset("big", shape=(2**31,), dtype="f8", chunks=(1 << 20,))
+    return path, _process_args(protocol)
+
+
+@pytest.fixture(scope="module")
+def limited(tmp_path_factory) -> dict[str, tuple[Path, subprocess.CompletedProcess]]:
+    """The files of the tests below, each with what its command did in one subprocess under
+    the address-space limit (:func:`_limited`)."""
+    root = tmp_path_factory.mktemp("limited")
+    made = {"mat-bomb": _mat_bomb_day(root / "mat"),
+            "nested-mat": _nested_mat(root / "nested"),
+            "hdf5": _unwritten_dataset_day(root / "hdf5", "hdf5", "data"),
+            "mat73": _unwritten_dataset_day(root / "mat73", "mat73", "/")}
+    done = _limited({key: args for key, (_, args) in made.items()})
+    return {key: (path, done[key]) for key, (path, _) in made.items()}
+
+
+def test_a_compressed_mat_variable_declaring_3_gib_is_refused_before_it_is_read(limited):
+    """3 MB of .mat that decompresses to 3 GiB (a run file is capped at 1 GiB): rejected
+    from the size its header declares, in well under a second and without the memory; the
+    other runs of the day are processed."""
+    path, done = limited["mat-bomb"]
+    assert path.stat().st_size < 4 << 20
+    assert done.returncode == 1, done.stderr
+    reason = _only_rejected(path.parents[1] / "protocol.toml", 21)
+    assert "is too large for one run: its compressed MATLAB variable 'big' (402653177×1) " \
+           "declares 3.0 GiB of numbers" in reason, reason
+    assert "checked before reading" in reason
+    _one_sentence(done.stderr)
+
+
+def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(limited):
+    """An uncompressed cell array inside a struct whose dimensions say 2³¹ elements (a
+    reader would allocate 16 GiB of object pointers before reading one): refused from the
+    dimensions, wherever the array is nested."""
+    _, done = limited["nested-mat"]
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("RunError: run.mat is too large for one run: its MATLAB "
                                   "variable 's.cells' (2147483647×1) declares 16.0 GiB"), \
         done.stdout
 
 
-@pytest.mark.parametrize("layout, group", [("hdf5", "data"), ("mat73", "/")])
-def test_an_unwritten_dataset_of_2_31_values_is_refused_before_it_is_read(tmp_path, layout,
-                                                                          group):
+@pytest.mark.parametrize("layout", ["hdf5", "mat73"])
+def test_an_unwritten_dataset_of_2_31_values_is_refused_before_it_is_read(limited, layout):
     """A 10 kB HDF5 file (or MATLAB v7.3) whose dataset of 2³¹ doubles was never written:
     reading it would fill 16 GiB; its shape rejects the run first."""
-    import h5py
-
-    protocol = _day(tmp_path, file_format=layout)
-    path = tmp_path / "data" / f"run_021.{'h5' if layout == 'hdf5' else 'mat'}"
-    with h5py.File(path, "a") as fh:
-        fh[group].create_dataset("big", shape=(2**31,), dtype="f8", chunks=(1 << 20,))
+    path, done = limited[layout]
     assert path.stat().st_size < 1 << 20
-    done = _process_limited(protocol)
     assert done.returncode == 1, done.stderr
-    reason = _only_rejected(protocol, 21)
+    reason = _only_rejected(path.parents[1] / "protocol.toml", 21)
     assert "is too large for one run: its" in reason and "dataset '/big' (2147483648) " \
         "declares 16.0 GiB of numbers" in reason.replace("/data/big", "/big"), reason
     _one_sentence(done.stderr)

@@ -8,6 +8,7 @@ import hashlib
 import json
 import os
 import pickle
+import shutil
 import subprocess
 import sys
 import threading
@@ -24,6 +25,7 @@ from towtank.commands.cli import main
 from towtank.runtime import records
 from towtank.runtime.manifest import MANIFEST, lock_path, output_lock, read_manifest
 from towtank.testing import synthetic as syn
+from towtank.testing.child import run_in_child
 from towtank.testing.hang import hang_bound
 
 SEED = 5
@@ -44,16 +46,32 @@ def day_dir(tmp_path_factory) -> Path:
     return root
 
 
-@pytest.fixture
-def day(day_dir, tmp_path) -> Path:
-    """A protocol of the module's day, written into this test's own folder."""
+@pytest.fixture(scope="module")
+def day(day_dir, tmp_path_factory) -> Path:
+    """A protocol of the module's day, in a folder of its own (the tests only read it)."""
     sections = syn.hull_protocol_sections(str(day_dir), "out", sheet_format="csv")
-    return syn.write_protocol(tmp_path / "protocol.toml", **sections)
+    return syn.write_protocol(tmp_path_factory.mktemp("protocol") / "protocol.toml",
+                              **sections)
 
 
 def _process(protocol: Path, out: Path, *extra: str) -> int:
     return main(["process", str(protocol), "--out", str(out), "-q", "--jobs", "1",
                  "--no-report", *extra])
+
+
+@pytest.fixture(scope="module")
+def processed_out(day, tmp_path_factory) -> Path:
+    """The output folder (with its cache) of ``day`` processed once: a test that starts from
+    the processed day copies it (:func:`_processed`) rather than process the day again."""
+    out = tmp_path_factory.mktemp("processed") / "out"
+    assert _process(day, out) == 0
+    return out
+
+
+def _processed(processed_out: Path, out: Path) -> None:
+    """``out``: a copy of the processed day's output folder, as ``_process(day, out)`` writes
+    it."""
+    shutil.copytree(processed_out, out, symlinks=True)
 
 
 def _coefficients(out: Path) -> pd.Series:
@@ -88,9 +106,9 @@ def _plant(cache: Path, make_blob) -> int:
     return len(entries)
 
 
-def test_a_planted_pickle_in_the_cache_runs_no_code(day, tmp_path):
+def test_a_planted_pickle_in_the_cache_runs_no_code(day, processed_out, tmp_path):
     out = tmp_path / "out"
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     first = _coefficients(out)
     marker = tmp_path / "pwned"
     assert _plant(out / ".cache", lambda old: pickle.dumps(_Planted(str(marker)))) > 30
@@ -122,9 +140,9 @@ def _retyped(old: bytes) -> bytes:
     lambda old: b"PK\x03\x04" + os.urandom(200),  # noise behind a zip signature
     lambda old: json.dumps([1, 2, 3]).encode(),
 ], ids=["wrong-type", "truncated", "noise", "json"])
-def test_a_damaged_or_retyped_cache_entry_is_a_miss(day, tmp_path, make_blob):
+def test_a_damaged_or_retyped_cache_entry_is_a_miss(day, processed_out, tmp_path, make_blob):
     out = tmp_path / "out"
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     first = _coefficients(out)
     _plant(out / ".cache", make_blob)
     assert _process(day, out) == 0
@@ -226,9 +244,9 @@ def test_the_recorder_sees_every_way_of_reading_a_file(tmp_path):
 
 # ------------------------------------------- 3. the user's files are never taken for ours
 @pytest.mark.parametrize("name", [".out.notes", ".figures.old-mine", ".out.tmp-1", ".cachex"])
-def test_user_files_with_names_like_temporaries_are_kept(day, tmp_path, name):
+def test_user_files_with_names_like_temporaries_are_kept(day, processed_out, tmp_path, name):
     out = tmp_path / "out"
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     (out / name).write_text("mine")
     assert _process(day, out, "--no-cache") == 0
     assert _process(day, out, "--no-cache") == 0
@@ -315,14 +333,9 @@ def test_a_lock_file_that_is_not_towtanks_is_never_written(tmp_path):
 
 
 # ------------------------------------- 5. odd entries in the output folder hang nothing
-def _cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "towtank", *args], capture_output=True,
-                          text=True, timeout=timeout)
-
-
 def _in_process(*args: str, capsys: pytest.CaptureFixture[str], timeout: float
                 ) -> subprocess.CompletedProcess:
-    """``towtank ARGS`` run here within a hang bound, as :func:`_cli` reports it."""
+    """``towtank ARGS`` run here within a hang bound, as :func:`run_in_child` reports it."""
     capsys.readouterr()
     with hang_bound(timeout):
         code = main(list(args))
@@ -338,10 +351,11 @@ OWN_PROCESS = ("zero-link", "huge")
 
 @pytest.mark.parametrize("odd", ["fifo", "zero-link", "huge", "cache-file", "day-dir",
                                  "files-dir", "files-fifo"])
-def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, tmp_path, odd, capsys):
+def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_out, tmp_path,
+                                                                 odd, capsys):
     out = tmp_path / "out"
     args = (str(day), "--out", str(out), "-q", "--jobs", "1", "--no-report")
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     cache = out / ".cache"
     if odd == "fifo":
         os.mkfifo(out / "pipe")
@@ -365,9 +379,9 @@ def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, tmp_path, 
         (cache / "files.json").unlink()
         (cache / "day.json").unlink()
         os.mkfifo(cache / "files.json")
-    for _ in range(2):
-        run = (_cli("process", *args, timeout=60) if odd in OWN_PROCESS
-               else _in_process("process", *args, capsys=capsys, timeout=60))
+    runs = (run_in_child([("process", *args)] * 2, timeout=120) if odd in OWN_PROCESS
+            else [_in_process("process", *args, capsys=capsys, timeout=60) for _ in range(2)])
+    for run in runs:
         assert run.returncode == 0, run.stderr
         assert "Traceback" not in run.stderr
     if odd == "cache-file":
@@ -375,11 +389,11 @@ def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, tmp_path, 
         assert "is not a folder" in run.stderr or run.stderr == ""
 
 
-def test_a_cache_link_is_not_followed(day, tmp_path):
+def test_a_cache_link_is_not_followed(day, processed_out, tmp_path):
     out = tmp_path / "out"
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     import shutil
 
     shutil.rmtree(out / ".cache")
@@ -393,9 +407,10 @@ def test_a_cache_link_is_not_followed(day, tmp_path):
 # ------------------------------------------------ 11. a manifest is never trusted unchecked
 @pytest.mark.parametrize("files", [{"runs.csv": 5}, [1, 2], "x",
                                    {"runs.csv": [{"size": "1", "sha256": 3}]}, "deep"])
-def test_a_corrupt_manifest_stops_the_day_in_one_sentence(day, tmp_path, capsys, files):
+def test_a_corrupt_manifest_stops_the_day_in_one_sentence(day, processed_out, tmp_path, capsys,
+                                                          files):
     out = tmp_path / "out"
-    assert _process(day, out) == 0
+    _processed(processed_out, out)
     before = (out / "runs.csv").read_bytes()
     data = json.loads((out / MANIFEST).read_text())
     if files == "deep":
@@ -417,7 +432,7 @@ def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path
     out = tmp_path / "out"
     assert main(["predict", str(protocol), "--out", str(tmp_path / "remus")]) == 0
     sim = ["simulate", str(tmp_path / "remus" / "model.json"), "--manoeuvre", "turning",
-           "--duration-s", "20", "--out", str(out)]
+           "--duration-s", "5", "--out", str(out)]
     assert main(sim) == 0
     (out / "notes.txt").write_text("mine")
     day_protocol = repo / "protocols" / "sut2_hull.toml"

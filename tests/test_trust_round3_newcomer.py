@@ -140,10 +140,12 @@ def _run_file(path: Path, columns: dict[str, np.ndarray]) -> Path:
     return path
 
 
-def _tow(fs: float = 200.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A tow at 1 m/s: time [s], speed [m/s] and a drag of 0.05 U² [V or N]."""
-    t = np.arange(0.0, 20.0, 1.0 / fs)
-    u = np.clip(np.minimum(t - 2.0, 16.0 - t) * 0.5, 0.0, 1.0)
+def _tow(fs: float = 200.0, duration_s: float = 20.0
+         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A tow at 1 m/s: time [s], speed [m/s] and a drag of 0.05 U² [V or N]; at rest for
+    2 s, steady from 4 s to 4 s before the end."""
+    t = np.arange(0.0, duration_s, 1.0 / fs)
+    u = np.clip(np.minimum(t - 2.0, duration_s - 4.0 - t) * 0.5, 0.0, 1.0)
     noise = 1e-3 * np.random.default_rng(1).standard_normal(t.size)
     return t, u, 0.05 * u**2 + noise
 
@@ -158,7 +160,7 @@ def test_a_file_without_speed_names_the_nominal_speed_source(tmp_path):
 
 
 def _tare_protocol(root: Path, extra: str) -> Path:
-    syn.make_hull_day(root, seed=3, file_format="csv", sheet_format="csv")
+    """A protocol of the day in ``root`` (:func:`tare_day`) with a [tare] table section."""
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")
     path = syn.write_protocol(root / "p.toml", **sections)
     path.write_text(path.read_text() + '\n[tare]\nsource = "table"\n' + extra)
@@ -167,7 +169,9 @@ def _tare_protocol(root: Path, extra: str) -> Path:
 
 @pytest.fixture(scope="module")
 def tare_day(tmp_path_factory):
+    """A hull day (written once for the module's tests) and two tare tables beside it."""
     root = tmp_path_factory.mktemp("tare")
+    syn.make_hull_day(root, seed=3, file_format="csv", sheet_format="csv")
     u = [0.2, 0.8, 1.4, 2.0]
     d = [0.01 * x * x + 0.002 * x for x in u]
     (root / "tare.csv").write_text("speed_m_s,drag_N\n" + "".join(
@@ -274,7 +278,7 @@ def test_the_time_is_read_in_seconds_whatever_unit_its_name_gives(tmp_path_facto
                                                                    style, base, fs):
     u_name, factor = unit
     name = style.format(base=base, u=u_name)
-    t, u, drag = _tow(fs)
+    t, u, drag = _tow(fs, duration_s=10.0)  # the time's unit, not the tow, is read here
     path = _run_file(tmp_path_factory.mktemp("unit") / "run.csv",
                      {name: t / factor, "speed": u, "drag": drag})
     raw = load_run(path, {"time": ChannelMap(column=name)})

@@ -630,12 +630,20 @@ def test_the_set_put_back_after_a_kill_is_the_latest_despite_a_planted_time(tmp_
     assert (out / "runs.csv").read_text() == ".out.old-3"
 
 
+@pytest.fixture(scope="module")
+def synth_fin_day(tmp_path_factory) -> Path:
+    """``towtank synth DAY --day fin`` once, for the tests to copy (with its mtimes)."""
+    day = tmp_path_factory.mktemp("synth_fin") / "day"
+    assert main(["synth", str(day), "--day", "fin"]) == 0
+    return day
+
+
 @pytest.mark.parametrize("files", [{"protocol.toml": 5}, {"protocol.toml": [7]}, [1],
                                    {"/etc/passwd": [{"size": 1, "mtime_ns": 1,
                                                      "sha256": "0" * 64}]}])
-def test_a_planted_synth_manifest_is_one_sentence(tmp_path, capsys, files):
+def test_a_planted_synth_manifest_is_one_sentence(synth_fin_day, tmp_path, capsys, files):
     day = tmp_path / "day"
-    assert main(["synth", str(day), "--day", "fin"]) == 0
+    shutil.copytree(synth_fin_day, day, symlinks=True)  # as `towtank synth DAY --day fin`
     (day / "protocol.toml").write_text("mine")
     data = json.loads((day / ".towtank-synth.json").read_text())
     data["files"] = files

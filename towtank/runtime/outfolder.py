@@ -71,11 +71,11 @@ def check_output_dir(out_dir: str | Path, data_dir: str | Path,
             f"the output folder {out} would mix the outputs with the raw run files in {data}; "
             "choose another folder with --out or [campaign] output_dir."
         )
-    inputs = list(inputs)
+    real_inputs = [(path, Path(path).resolve()) for path in inputs]  # each resolved once
     for name in sorted(OUTPUT_NAMES):
         target = out / name
-        for path in inputs:
-            if target == Path(path).resolve() or Path(path).resolve().is_relative_to(target):
+        for path, real in real_inputs:
+            if target == real or real.is_relative_to(target):
                 raise ProtocolError(
                     f"the output folder {out} would overwrite the input {path} with the "
                     f"output {name}; choose another folder with --out or [campaign] output_dir."

@@ -11,7 +11,7 @@ import re
 import shutil
 import zipfile
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -924,3 +924,18 @@ def write_sample_days(
     if protocols_dir is not None:
         write_sample_protocols(protocols_dir)
     return {"sut2_hull": hull, "naca0015_fin": fin}
+
+
+#: The runs of :func:`reading_day_plan`, numbered as in :func:`hull_day_plan`.
+READING_DAY_RUNS = (1, 4, 5, 6, 7, 13, 14, 15, 16, 21, 22)
+
+
+def reading_day_plan() -> list[RunSpec]:
+    """Eleven runs of :func:`hull_day_plan` with their numbers in the full day: five steady
+    sting tares (0.1-2.0 m/s), the hull at 0 deg (0.8-2.0 m/s) and runs 21 and 22 at 5 deg.
+
+    A day for the tests of how one run's file (or the sheet) is read: it processes in half
+    the time of the full day and gives the hull's drag, but not every coefficient.
+    """
+    plan = hull_day_plan()
+    return [replace(plan[n - 1], run=n) for n in READING_DAY_RUNS]
