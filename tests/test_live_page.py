@@ -650,7 +650,7 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
     from towtank.testing.days import RunSpec
 
     plan = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.6, 2.0)]
-            + [RunSpec("hull", a, v, 0.5) for a in (0.0, 10.0, 20.0) for v in (0.8, 1.6, 2.0)])
+            + [RunSpec("hull", a, v, 0.5) for a in (0.0, 10.0, 20.0) for v in (0.8, 2.0)])
     day = tmp_path / "day"
     syn.make_hull_day(day, runs=plan, fs=50.0, file_format="csv", sheet_format="csv", seed=3)
     shutil.move(day / "data", tmp_path / "all")
@@ -675,7 +675,8 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
         wait_for(lambda: browser.find_element(By.TAG_NAME, "body").get_attribute(
             "data-version") not in (None, "", "0"), 20)
         for k, src in enumerate(sorted((tmp_path / "all").iterdir()), start=1):
-            labview_write(src, day / "data" / src.name)
+            # opened, appended in three blocks, closed: the close is what watch waits for
+            labview_write(src, day / "data" / src.name, blocks=3, pause_s=0.05)
             # the verdict shown, and the sheet's checklist marking the run done
             wait_for(lambda k=k: browser.find_element(By.ID, "verdict-head").text
                      .startswith(f"Run {k} ") and browser.find_element(
