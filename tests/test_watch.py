@@ -80,7 +80,9 @@ def reference_tables(root: Path, runs: list[int], tag: str) -> dict[str, str]:
     sections = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     sections["campaign"]["run_sheet"] = f"ref_{tag}/run_sheet.csv"
     protocol = syn.write_protocol(root / f"ref_{tag}.toml", **sections)
-    day = process_day(protocol, jobs=1)
+    # one run cache for every reference of the day: each run file is reduced once, as
+    # towtank process does run after run on the same output folder
+    day = process_day(protocol, jobs=1, cache_dir=root / "ref_cache")
     write_tables(day, ref)
     return {name: (ref / name).read_text() for name in ("runs.csv", "coefficients.csv")}
 
@@ -283,7 +285,7 @@ def test_a_vehicle_figure_drawn_now_beside_the_carried_figures(tmp_path):
     man = read_manifest(out)
     assert man is not None and "runs.csv" in man["files"]
     assert "run_006.csv" in (out / "runs.csv").read_text()
-    s.finish()
+    s.close()
 
 
 def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(tmp_path):
