@@ -352,17 +352,19 @@ def _line(run: int, test: str, angle: float, speed: float, drag: float, status: 
 
 @pytest.fixture(scope="module")
 def sample_day(tmp_path_factory) -> dict[str, Any]:
-    """The sample SUT-2 day processed once: its tables, figures and per-run trace figures (the
-    page shows no PDF or workbook: none is written)."""
+    """The sample SUT-2 day processed once: its tables, the fit figures watch draws for the
+    page (damping, added mass) and per-run trace figures (the page shows no PDF or workbook:
+    none is written, nor the report's other figures)."""
     import pandas as pd
 
     from towtank.api import process_day
     from towtank.commands.inspect import write_plot
-    from towtank.report.figures import write_figures
+    from towtank.live.session import _fit_figures
 
     out = tmp_path_factory.mktemp("live_day") / "out"
     day = process_day(SAMPLE, out=out, jobs=1, report=False)
-    write_figures(day, out)
+    (out / "figures").mkdir()
+    assert {"damping", "added_mass"} <= set(_fit_figures(day, out / "figures"))
     figures = out / "run_figures"
     figures.mkdir()
     for run in (29, 30, 31):
