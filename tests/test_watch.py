@@ -80,9 +80,7 @@ def reference_tables(root: Path, runs: list[int], tag: str) -> dict[str, str]:
     sections = syn.hull_protocol_sections("day", "out", sheet_format="csv")
     sections["campaign"]["run_sheet"] = f"ref_{tag}/run_sheet.csv"
     protocol = syn.write_protocol(root / f"ref_{tag}.toml", **sections)
-    # one run cache for every reference of the day: each run file is reduced once, as
-    # towtank process does run after run on the same output folder
-    day = process_day(protocol, jobs=1, cache_dir=root / "ref_cache")
+    day = process_day(protocol, jobs=1)
     write_tables(day, ref)
     return {name: (ref / name).read_text() for name in ("runs.csv", "coefficients.csv")}
 
