@@ -99,8 +99,10 @@ def _three_front_doors(protocol: Path, root: Path, *, report: bool = True,
     cli, watched = root / "cli", root / "watch"
     if api is None:
         api = root / "api"
-        towtank.process_day(protocol, out=api, report=report)
-    flags = [] if report else ["--no-report"]
+        towtank.process_day(protocol, out=api, report=report, jobs=1)
+    # one job, as the API's day was run: the runs come from its run cache, so a worker pool
+    # would be started for nothing (the outputs do not depend on the jobs)
+    flags = ["--jobs", "1", *([] if report else ["--no-report"])]
     _seed_cache(api, cli)
     assert main(["process", str(protocol), "--out", str(cli), "-q", *flags]) in (0, 1)
     _seed_cache(api, watched)

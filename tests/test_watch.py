@@ -283,7 +283,7 @@ def test_a_vehicle_figure_drawn_now_beside_the_carried_figures(tmp_path):
     man = read_manifest(out)
     assert man is not None and "runs.csv" in man["files"]
     assert "run_006.csv" in (out / "runs.csv").read_text()
-    s.finish()
+    s.close()
 
 
 def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(tmp_path):
