@@ -1,8 +1,9 @@
 """Issue 27, item 3: which run next (towtank.analysis.next_run).
 
 Every day here is generated at 50 Hz with float64 TDMS files (the numbers of a CSV day to the
-last bit, without writing and parsing the decimal text), reduced once, and refitted with subsets of its runs: the runs "still to tow" are held out of the fit,
-ranked, and then put back one at a time to see what the refit actually gives.
+last bit, without writing and parsing the decimal text), reduced once, and refitted with
+subsets of its runs: the runs "still to tow" are held out of the fit, ranked, and then put
+back one at a time to see what the refit actually gives.
 """
 
 from __future__ import annotations
