@@ -19,6 +19,7 @@ pandas, scipy or matplotlib out of ``towtank inspect`` and ``--help``.
 from __future__ import annotations
 
 import ast
+import functools
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,11 +77,23 @@ def _marked(lines: list[str], lineno: int) -> bool:
     return False
 
 
+@functools.cache
+def parse(text: str) -> ast.Module:
+    """``ast.parse(text)``, each distinct source parsed once (the checks only read the trees;
+    ``parse.cache_clear()`` frees them)."""
+    return ast.parse(text)
+
+
+def parse_file(path: Path) -> ast.Module:
+    """The syntax tree of the module at ``path`` (:func:`parse`)."""
+    return parse(path.read_text(encoding="utf-8"))
+
+
 def imports(path: Path, module: str, known: set[str]) -> list[Import]:
     """Every import in ``path`` (the module ``module``); ``known`` is the package's modules."""
     text = path.read_text(encoding="utf-8")
     lines = text.splitlines()
-    tree = ast.parse(text)
+    tree = parse(text)
     parents = _parents(tree)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found = []
@@ -239,7 +252,7 @@ def private_attribute_uses(package_dir: Path) -> list[tuple[str, int, str]]:
     known = set(mods)
     out = []
     for m, p in mods.items():
-        tree = ast.parse(p.read_text(encoding="utf-8"))
+        tree = parse_file(p)
         package = m if p.name == "__init__.py" else m.rpartition(".")[0]
         names = _module_names(tree, m, package, known)
         for node in ast.walk(tree):

@@ -28,6 +28,7 @@ from import_graph import (
     circles,
     graph,
     modules,
+    parse_file,
     private_attribute_uses,
     private_uses,
 )
@@ -38,6 +39,13 @@ PACKAGE = Path(__file__).resolve().parents[1] / "towtank"
 @functools.cache
 def _towtank_edges() -> tuple[Import, ...]:
     return tuple(import_graph.all_imports(PACKAGE))
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _free_the_parsed_modules():
+    """The checks share one parse of each module (import_graph.parse); freed after them."""
+    yield
+    import_graph.parse.cache_clear()
 
 
 def all_imports(package_dir: Path) -> list[Import]:
@@ -447,7 +455,7 @@ def message_text_reads(package_dir: Path, allowed: set[tuple[str, str]]) -> list
     for path in sorted(package_dir.rglob("*.py")):
         rel = path.relative_to(package_dir).with_suffix("")
         module = ".".join((root, *rel.parts)).removesuffix(".__init__")
-        for line, function in _text_reads(ast.parse(path.read_text(encoding="utf-8"))):
+        for line, function in _text_reads(parse_file(path)):
             if (module, function) in allowed:
                 seen.add((module, function))
                 continue
@@ -520,7 +528,7 @@ def day_processors(package_dir: Path) -> list[str]:
     for module, path in modules(package_dir).items():
         if unit_of(module) in (RUNNER, "pipeline", "testing"):
             continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(parse_file(path)):
             if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("pipeline") \
                     and (node.module or "").split(".")[0] in (root, ""):
                 names = [a.name for a in node.names if a.name in DAY_PROCESSORS]
@@ -575,7 +583,7 @@ def result_mutations(package_dir: Path) -> set[tuple[str, str, str]]:
     for module, path in modules(package_dir).items():
         if unit_of(module) == "testing":
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = parse_file(path)
         for fn in ast.walk(tree):
             if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
                 continue

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +29,9 @@ SPEED = "Carriage speed (m/s)"
 UNH = Path(__file__).resolve().parents[2] / "shared" / "real" / "unh_rvat_2013" / "test.tdms"
 
 
-def _day(root: Path, *, windows: bool, **processing) -> tuple[Path, dict]:
-    """The hull day without speed columns; with ``windows`` the sheet gives each run's steady
-    window (the generator's plateau, 0.6 s in from each end)."""
+def _make_files(root: Path, *, windows: bool) -> dict:
+    """The hull day's files without speed columns; with ``windows`` the sheet gives each run's
+    steady window (the generator's plateau, 0.6 s in from each end). Returns the truth."""
     syn.make_hull_day(root, seed=SEED, sheet_format="csv")
     truth = json.loads((root / "truth.json").read_text())
     for run in truth["runs"].values():
@@ -43,10 +44,35 @@ def _day(root: Path, *, windows: bool, **processing) -> tuple[Path, dict]:
         sheet["window_start_s"] = [runs[str(r)]["t_plateau_start"] + 0.6 for r in sheet["run"]]
         sheet["window_end_s"] = [runs[str(r)]["t_plateau_end"] - 0.6 for r in sheet["run"]]
         sheet.to_csv(root / "run_sheet.csv", index=False)
-    sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")
-    del sections["channels"]["speed"]
-    sections.setdefault("processing", {}).update(speed_source="nominal", **processing)
-    return syn.write_protocol(root / "protocol.toml", **sections), truth
+    return truth
+
+
+@pytest.fixture(scope="module")
+def windowed_files(tmp_path_factory) -> Path:
+    """The day's files with sheet windows, made once for this module; each test copies them."""
+    root = tmp_path_factory.mktemp("windowed")
+    _make_files(root, windows=True)
+    return root
+
+
+@pytest.fixture
+def day_files(windowed_files):
+    """``day_files(root, windows=..., **processing)``: the hull day without speed columns in
+    ``root`` (a copy of the module's windowed day, or made anew without windows) and its
+    protocol with ``speed_source = "nominal"``; returns (protocol, truth)."""
+
+    def make(root: Path, *, windows: bool, **processing) -> tuple[Path, dict]:
+        if windows:
+            shutil.copytree(windowed_files, root, dirs_exist_ok=True)
+            truth = json.loads((root / "truth.json").read_text())
+        else:
+            truth = _make_files(root, windows=False)
+        sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")
+        del sections["channels"]["speed"]
+        sections.setdefault("processing", {}).update(speed_source="nominal", **processing)
+        return syn.write_protocol(root / "protocol.toml", **sections), truth
+
+    return make
 
 
 @pytest.fixture(scope="module")
@@ -58,8 +84,8 @@ def measured(tmp_path_factory):
     return towtank.process_day(root / "p.toml", jobs=1, report=False)
 
 
-def test_the_set_speed_and_the_sheet_window_give_the_damping(tmp_path, measured):
-    protocol, truth = _day(tmp_path, windows=True, speed_tolerance=0.01)
+def test_the_set_speed_and_the_sheet_window_give_the_damping(tmp_path, measured, day_files):
+    protocol, truth = day_files(tmp_path, windows=True, speed_tolerance=0.01)
     day = towtank.process_day(protocol, jobs=1, report=False)
     assert not day.rejected, day.rejected
     got = day.coefficients.set_index("symbol")["value"]
@@ -88,12 +114,12 @@ def test_the_set_speed_and_the_sheet_window_give_the_damping(tmp_path, measured)
     assert (measured.runs.set_index("run").loc[ok.index, "speed_source"] == "measured").all()
 
 
-def test_the_steady_window_is_found_from_the_force(tmp_path):
+def test_the_steady_window_is_found_from_the_force(tmp_path, day_files):
     """Without sheet windows the model runs' plateaus are found from the drag: every hull run is
     reduced, each window lies within the generator's plateau, the steady drag is the truth's
     within 1 % (or 2 mN: the zero is held, the balance drift of up to 5 mN is not removed), and
     X_u|u|, Y_v|v| within 2 %."""
-    protocol, truth = _day(tmp_path, windows=False)
+    protocol, truth = day_files(tmp_path, windows=False)
     day = towtank.process_day(protocol, jobs=1, report=False)
     hull = [int(k) for k, r in truth["runs"].items()
             if r["config"] == "hull" and r["status"] != "void"]
@@ -115,8 +141,8 @@ def test_the_steady_window_is_found_from_the_force(tmp_path):
     assert checked >= 10
 
 
-def test_a_run_without_set_speed_is_rejected_in_one_sentence(tmp_path):
-    protocol, _ = _day(tmp_path, windows=True)
+def test_a_run_without_set_speed_is_rejected_in_one_sentence(tmp_path, day_files):
+    protocol, _ = day_files(tmp_path, windows=True)
     sheet = pd.read_csv(tmp_path / "run_sheet.csv")
     sheet.loc[sheet["run"] == 14, "speed_nominal"] = np.nan
     sheet.to_csv(tmp_path / "run_sheet.csv", index=False)
@@ -170,11 +196,11 @@ def test_unh_rvat_with_its_nominal_speed_gives_the_labs_drag(tmp_path):
     assert red.drag_mean_raw == pytest.approx(601.4, rel=1e-3)  # measured: 601.46 N
 
 
-def test_a_measured_speed_and_the_nominal_one_together_are_refused(tmp_path):
+def test_a_measured_speed_and_the_nominal_one_together_are_refused(tmp_path, day_files):
     from towtank.errors import ProtocolError
     from towtank.ingest.protocol import load_protocol
 
-    protocol, _ = _day(tmp_path, windows=True)
+    protocol, _ = day_files(tmp_path, windows=True)
     text = protocol.read_text()
     (tmp_path / "both.toml").write_text(text.replace(
         "[channels]\n", '[channels]\nspeed = { column = "Carriage speed (m/s)" }\n'))
@@ -209,12 +235,12 @@ def test_the_drift_is_removed_only_when_the_file_ends_at_rest():
     assert any("held constant" in n for n in braking.notes)
 
 
-def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path):
+def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path, day_files):
     import io
 
     from towtank.commands.inspect import inspect_run
 
-    protocol, truth = _day(tmp_path, windows=True)
+    protocol, truth = day_files(tmp_path, windows=True)
     out, err = io.StringIO(), io.StringIO()
     rc = inspect_run(tmp_path / "data" / "run_016.csv.gz", protocol, png=tmp_path / "x.png",
                      out=out, err=err)
@@ -226,8 +252,8 @@ def test_inspect_takes_the_set_speed_and_window_from_the_sheet(tmp_path):
     assert speed == pytest.approx(truth["runs"]["16"]["speed_nominal"])
 
 
-def test_the_api_reads_a_run_at_its_set_speed(tmp_path):
-    protocol, truth = _day(tmp_path, windows=True)
+def test_the_api_reads_a_run_at_its_set_speed(tmp_path, day_files):
+    protocol, truth = day_files(tmp_path, windows=True)
     path = tmp_path / "data" / "run_016.csv.gz"
     elsewhere = tmp_path / "elsewhere.csv.gz"  # a file no row of the run sheet names
     elsewhere.write_bytes(path.read_bytes())

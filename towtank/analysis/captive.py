@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
@@ -335,11 +336,20 @@ def chi2_p_value(chi2: float, leverage: np.ndarray, dof: np.ndarray) -> float:
     variance estimated on ``dof``_i degrees of freedom: S ~ sum (1 - h_i) t_i^2 with t_i
     Student's on dof_i (``leverage`` h_i), heavier-tailed than chi^2 on n - p dof (the
     variance of t^2 on 4 dof is infinite); by :data:`CHI2_DRAWS` seeded draws."""
-    rng = np.random.default_rng(CHI2_SEED)
     nu = np.maximum(np.asarray(dof, dtype=float), 1.0)
-    t2 = rng.standard_t(nu, size=(CHI2_DRAWS, nu.size)) ** 2
-    s = t2 @ (1.0 - np.asarray(leverage, dtype=float))
+    s = _t_squared_draws(tuple(nu.tolist())) @ (1.0 - np.asarray(leverage, dtype=float))
     return float((np.count_nonzero(s >= chi2) + 1) / (CHI2_DRAWS + 1))
+
+
+@lru_cache(maxsize=32)
+def _t_squared_draws(nu: tuple[float, ...]) -> np.ndarray:
+    """The :data:`CHI2_DRAWS` x len(``nu``) seeded draws t_i^2 of :func:`chi2_p_value`, made
+    once per set of degrees of freedom (the same seed gives the same draws; a day's fits and
+    a study's days ask again for the same sets). Read-only."""
+    rng = np.random.default_rng(CHI2_SEED)
+    t2 = rng.standard_t(np.array(nu), size=(CHI2_DRAWS, len(nu))) ** 2
+    t2.setflags(write=False)
+    return t2
 
 
 #: Passes of the effective-variance weights (each refits with the last pass's derivatives).
@@ -502,6 +512,7 @@ def frequency_agreement(
     """
     (eq_f, eq_m), regs = plane_names(plane)
     records = []
+    component_rows = (rows["component"] != "mean").to_numpy()
     for k in (REGRESSORS.index(name) for name in AGREEMENT_REGRESSORS):
         if k not in keep:
             continue
@@ -510,7 +521,7 @@ def frequency_agreement(
         for i, run in enumerate(runs):
             if run.test not in PMM_TESTS:
                 continue
-            idx = np.flatnonzero((run_index == i) & (rows["component"] != "mean").to_numpy())
+            idx = np.flatnonzero((run_index == i) & component_rows)
             if not idx.size:
                 continue
             best = idx[np.argmax(np.abs(X[idx, k]))]

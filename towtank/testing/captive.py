@@ -419,9 +419,13 @@ def simulated_runs(truth: CaptiveTruth | None = None, *, seed: int = 0,
 
 
 def simulated_result(truth: CaptiveTruth | None = None, *, seed: int = 0,
-                     plan: Sequence[CaptiveRunSpec] | None = None) -> Any:
-    """The :class:`towtank.results.stages.CaptiveResult` of a generated day (in-process)."""
+                     plan: Sequence[CaptiveRunSpec] | None = None,
+                     runs: Sequence[Any] | None = None) -> Any:
+    """The :class:`towtank.results.stages.CaptiveResult` of a generated day (in-process);
+    ``runs``, when given, are that day's :func:`simulated_runs`, made already."""
     truth = CaptiveTruth() if truth is None else truth
-    fit = fit_captive(simulated_runs(truth, seed=seed, plan=plan), rho=998.6,
+    if runs is None:
+        runs = simulated_runs(truth, seed=seed, plan=plan)
+    fit = fit_captive(list(runs), rho=998.6,
                       length_m=truth.length_m, plane=truth.plane, roll_deg=truth.roll_deg)
     return from_fit(CaptiveResult, fit)
