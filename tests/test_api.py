@@ -20,12 +20,12 @@ HULL = ROOT / "protocols" / "sut2_hull.toml"
 
 
 @pytest.fixture(scope="module")
-def cli_coefficients(tmp_path_factory) -> pd.DataFrame:
-    from towtank.commands.cli import main
-
-    out = tmp_path_factory.mktemp("cli") / "out"
-    assert main(["process", str(HULL), "--out", str(out), "--no-report", "-q"]) == 0
-    return pd.read_csv(out / "coefficients.csv")
+def cli_coefficients(sample_outputs) -> pd.DataFrame:
+    """coefficients.csv of ``towtank process protocols/sut2_hull.toml --no-report`` (the
+    session's run of the command, tests/conftest.py)."""
+    done = sample_outputs("sut2_hull")
+    assert done.code == 0
+    return pd.read_csv(done.out / "coefficients.csv")
 
 
 SCRIPT = """\
