@@ -401,6 +401,22 @@ def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
     return pd.DataFrame(body, columns=header)
 
 
+
+# -------------------------------------------- PDF pages not read by a test (issue 34, s9rep)
+def draw_only_pages(mp: pytest.MonkeyPatch, keep: Callable[[Any], bool]) -> None:
+    """Make :func:`towtank.report.pdf.write_pdf` draw only the pages ``keep(page)`` selects
+    (a :class:`towtank.report.pdf.Page`); every other page of the plan is a blank page, still
+    headed and numbered, so the PDF holds the whole plan in order. For tests that read a few
+    pages of a report: the pages they do not read cost the seconds of drawing a report."""
+    from towtank.report import pdf
+
+    real_render = pdf._render
+
+    def render(day: Any, page: Any, plan: list[Any], grids: Any = None) -> Any:
+        return real_render(day, page, plan, grids) if keep(page) else pdf._page()
+
+    mp.setattr(pdf, "_render", render)
+
 def pytest_addoption(parser):
     parser.addoption("--run-slow", action="store_true", default=False,
                      help="also run the tests marked slow (the coverage study: hours)")

@@ -20,12 +20,12 @@ HULL = ROOT / "protocols" / "sut2_hull.toml"
 
 
 @pytest.fixture(scope="module")
-def cli_coefficients(tmp_path_factory) -> pd.DataFrame:
-    from towtank.commands.cli import main
-
-    out = tmp_path_factory.mktemp("cli") / "out"
-    assert main(["process", str(HULL), "--out", str(out), "--no-report", "-q"]) == 0
-    return pd.read_csv(out / "coefficients.csv")
+def cli_coefficients(sample_outputs) -> pd.DataFrame:
+    """coefficients.csv of ``towtank process protocols/sut2_hull.toml --no-report`` (the
+    session's run of the command, tests/conftest.py)."""
+    done = sample_outputs("sut2_hull")
+    assert done.code == 0
+    return pd.read_csv(done.out / "coefficients.csv")
 
 
 SCRIPT = """\
@@ -268,7 +268,9 @@ def sample_fin_day():
 
 @pytest.fixture(scope="session")
 def short_identification(tmp_path_factory):
-    """N_ur and N_uudr of REMUS by the filter from a 20 s noisy rudder sine (about 1 s)."""
+    """N_ur and N_uudr of REMUS by the filter from one period (10 s) of a noisy rudder sine: an
+    IdentifyResult with estimates and intervals, which is all the vocabulary test reads (the
+    filter's accuracy is tested in test_identify*.py)."""
     import contextlib
     import io
     import json
@@ -284,7 +286,7 @@ def short_identification(tmp_path_factory):
                      str(out)]) == 0
     model = json.loads((out / "model.json").read_text())
     model["buoyancy_N"] = model["weight_N"]
-    record = simulate(model, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=20.0,
+    record = simulate(model, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=10.0,
                       sample_hz=10.0)
     record = record[["t_s", "x_m", "y_m", "psi_deg", "u_m_s", "v_m_s", "r_deg_s",
                      "rudder_deg", "sternplane_deg"]].copy()

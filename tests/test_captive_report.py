@@ -13,19 +13,27 @@ import subprocess
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import draw_only_pages
 
 from towtank.testing.captive import captive_day_plan, make_captive_day
 
 
 @pytest.fixture(scope="module")
 def captive_day(tmp_path_factory):
-    """A generated horizontal captive day processed with its reports: (DayResult, out)."""
+    """A generated horizontal captive day processed with its reports: (DayResult, out). Of the
+    PDF only the pages the tests read are drawn (the captive pages and the runs' table; the
+    others are blank pages), and no PNG figure is written (none is read)."""
     from towtank.api import process_day
+    from towtank.report import figures
 
     folder = tmp_path_factory.mktemp("captive_day")
     make_captive_day(folder, seed=3)
     out = folder / "out"
-    day = process_day(folder / "protocol.toml", out, jobs=2)
+    with pytest.MonkeyPatch.context() as mp:
+        draw_only_pages(mp, lambda page: page.section.startswith("Captive")
+                        or page.kind == "runs")
+        mp.setattr(figures, "write_figures", lambda day, folder: [])
+        day = process_day(folder / "protocol.toml", out, jobs=2)
     return day, out
 
 

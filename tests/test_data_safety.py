@@ -18,12 +18,16 @@ SEED = 11
 EVIL = '=HYPERLINK("http://evil.example","c")'
 
 
-def _day(root: Path, name: str | None = None, sheet_edit=None, **model) -> Path:
-    """A hull day in ``root`` (CSV run files and sheet), its protocol path."""
+def _day(root: Path, name: str | None = None, sheet_edit=None, *, workbook_only: bool = False,
+         **model) -> Path:
+    """A hull day in ``root`` (CSV run files and sheet), its protocol path. ``workbook_only``:
+    the report is the workbook alone (``[report] pdf = false, figures = false``)."""
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv")
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")
     if name is not None:
         sections["campaign"]["name"] = name
+    if workbook_only:
+        sections["report"] = {"pdf": False, "figures": False}
     sections["model"].update(model)
     if sheet_edit is not None:
         sheet = root / "run_sheet.csv"
@@ -45,7 +49,8 @@ def _evil_sheet(frame: pd.DataFrame) -> None:
 def test_no_text_becomes_a_formula_in_the_workbook_or_the_csv(tmp_path):
     import openpyxl
 
-    protocol = _day(tmp_path, name=EVIL + "\x01", sheet_edit=_evil_sheet)
+    # the workbook and the CSVs are what could hold a formula: the PDF and PNGs are not drawn
+    protocol = _day(tmp_path, name=EVIL + "\x01", sheet_edit=_evil_sheet, workbook_only=True)
     assert main(["process", str(protocol), "--out", str(tmp_path / "out"), "-q"]) in (0, 1)
     wb = openpyxl.load_workbook(tmp_path / "out" / "report.xlsx")  # valid XML
     formulas = [(ws.title, c.coordinate, c.value) for ws in wb.worksheets

@@ -15,6 +15,7 @@ from itertools import combinations
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import draw_only_pages
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from pypdf import PdfReader
@@ -204,8 +205,10 @@ def test_thumbnails_label_both_axes_and_share_the_zero_line(hull_day):
 
 
 # ---------------------------------------------------------------- predicted vs measured
-def test_predicted_vs_measured_is_a_page_of_the_report(hull_day, tmp_path):
+def test_predicted_vs_measured_is_a_page_of_the_report(hull_day, tmp_path, monkeypatch):
     day = hull_day.result
+    # the pages read below drawn, the others blank (the PDF still holds the whole plan)
+    draw_only_pages(monkeypatch, lambda page: page.kind == "title" or page.section == "Vehicle")
     assert pdf.vehicle_pages(day) == []  # no [vehicle]: no page
     moved = _with_prediction(day)
     pages = pdf.page_plan(moved)
