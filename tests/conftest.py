@@ -383,6 +383,70 @@ def seed_result(tmp_path_factory) -> Callable[..., SeedResult]:
     return get
 
 
+# --- vehicle tests (issue 34 item 6, part s9veh): one shipped vehicle predicted and turned
+
+
+@dataclass
+class VehicleTurn:
+    """``towtank predict`` of a shipped vehicle protocol, then ``towtank simulate --manoeuvre
+    turning`` of its model.json: the folders and what each command printed."""
+
+    predicted: Path  # predict's --out (model.json)
+    turn: Path  # simulate's --out (metrics.csv, manoeuvre.csv)
+    predict_out: str
+    predict_err: str
+    simulate_out: str
+    simulate_err: str
+
+
+@pytest.fixture(scope="session")
+def series58_turn(tmp_path_factory) -> VehicleTurn:
+    """protocols/series58_vehicle.toml predicted, then turned with 10 deg of rudder at its
+    design speed (1.25 m/s), both in-process, once for the session (no figure)."""
+    base = tmp_path_factory.mktemp("series58_turn")
+    printed = []
+    with pytest.MonkeyPatch.context() as patch:
+        _skip_command_figures(patch)
+        printed += _run_printing(
+            ["predict", str(ROOT / "protocols" / "series58_vehicle.toml"),
+             "--out", str(base / "pred")])
+        printed += _run_printing(
+            ["simulate", str(base / "pred" / "model.json"), "--manoeuvre", "turning",
+             "--rudder-deg", "10", "--out", str(base / "turn")])
+    return VehicleTurn(base / "pred", base / "turn", *printed)
+
+
+def _run_printing(args: list[str]) -> list[str]:
+    """``towtank ARGS`` in-process, which must exit 0: [what it printed, its stderr]."""
+    import contextlib
+    import io
+
+    from towtank.commands.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(args)
+    assert code == 0, (args, err.getvalue())
+    return [out.getvalue(), err.getvalue()]
+
+
+def _skip_command_figures(patch: pytest.MonkeyPatch) -> None:
+    """``simulate`` without drawing manoeuvre.png and ``identify`` without identify.png (a
+    third of a short simulation's time, a quarter of a short identification's), for the
+    tests that assert on the commands' numbers and words, not on their figures."""
+    import towtank.commands.identify as identify
+    import towtank.commands.simulate as simulate
+
+    patch.setattr(simulate, "_figure", lambda *args, **kwargs: None)
+    patch.setattr(identify, "save_identify_figure", lambda *args, **kwargs: None)
+
+
+@pytest.fixture
+def no_command_figures(monkeypatch) -> None:
+    """``towtank simulate`` and ``identify`` in this test draw no figure."""
+    _skip_command_figures(monkeypatch)
+
+
 # ------------------------------------------------------------------------------ workbook
 def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
     """The table under the first row of ``sheet`` whose first cell starts with ``title_start``

@@ -151,16 +151,29 @@ def test_spiral_against_the_time_domain(model):
             row["turn_radius_m"], rel=0.01)
 
 
-def test_glide_with_roll_deg_spirals(model):
+@pytest.fixture(scope="module")
+def trimmed(model):
+    """The glider at -300 cc trimmed by the moving mass at -20 deg of pitch, and the start
+    state of its straight glide there."""
     x, mdl, _ = solve_state(model, -300.0, -20.0, 0.0)
-    held = _held(mdl, x)  # trimmed by the moving mass at -20 deg of pitch
     start = np.r_[np.zeros(4), math.radians(-20.0), 0.0, x[0], 0.0, x[2], 0.0, 0.0, 0.0]
+    return _held(mdl, x), start
+
+
+@pytest.fixture(scope="module")
+def straight_glide(trimmed):
+    """300 s of the trimmed glide, no roll, no rudder."""
+    held, start = trimmed
+    return simulate(held, "glide", 0.6, duration_s=300.0, initial_state=start)
+
+
+def test_glide_with_roll_deg_spirals(trimmed, straight_glide):
+    held, start = trimmed
     ts = simulate(held, "glide", 0.6, roll_deg=8.0, duration_s=2400.0, initial_state=start)
     metrics = manoeuvre_metrics(ts).set_index("metric")
     assert metrics.loc["steady_turn_radius_m", "note"] == ""
     assert 5.0 < metrics.loc["steady_turn_radius_m", "value"] < 500.0
-    level = simulate(held, "glide", 0.6, duration_s=100.0, initial_state=start)
-    assert "steady_turn_radius_m" not in set(manoeuvre_metrics(level)["metric"])
+    assert "steady_turn_radius_m" not in set(manoeuvre_metrics(straight_glide)["metric"])
 
 
 def test_conversions(model):
@@ -282,17 +295,14 @@ def test_simulate_roll_option_refusals(model, tmp_path, capsys):
     assert "has no rudder" in capsys.readouterr().err
 
 
-def test_glide_rudder_turns(model):
+def test_glide_rudder_turns(trimmed, straight_glide):
     """The glide takes the rudder: the glider trimmed at -20 deg turns with 10 deg of rudder
     and goes straight without."""
-    x, mdl, _ = solve_state(model, -300.0, -20.0, 0.0)
-    held = _held(mdl, x)
-    start = np.r_[np.zeros(4), math.radians(-20.0), 0.0, x[0], 0.0, x[2], 0.0, 0.0, 0.0]
+    held, start = trimmed
     turned = simulate(held, "glide", 0.6, rudder_deg=10.0, duration_s=300.0,
                       initial_state=start)
-    straight = simulate(held, "glide", 0.6, duration_s=300.0, initial_state=start)
     assert abs(turned["psi_deg"].iloc[-1]) > 20.0
-    assert abs(straight["psi_deg"].iloc[-1]) < 1e-6
+    assert abs(straight_glide["psi_deg"].iloc[-1]) < 1e-6
 
 
 def test_simulate_refuses_a_bad_glider_block(model, tmp_path, capsys):

@@ -163,6 +163,7 @@ def test_identify_reports_each_stage_of_its_work(remus, record):
 
 
 @pytest.mark.parametrize(("quiet", "shown"), [([], True), (["--quiet"], False)])
+@pytest.mark.usefixtures("no_command_figures")  # asserts on the words printed, not the figure
 def test_the_command_shows_progress_on_a_terminal_unless_quiet(model_path, record, tmp_path,
                                                                capsys, monkeypatch, quiet,
                                                                shown):

@@ -149,15 +149,12 @@ def test_model_json_assumptions_are_checked_and_old_files_still_read(tmp_path):
 
 
 def test_predict_simulate_steady_print_the_guessed_inputs_and_the_turn_speed_loss(
-        tmp_path, capsys):
-    assert main(["predict", str(PROTOCOLS / "series58_vehicle.toml"), "--out",
-                 str(tmp_path / "s58")]) == 0
+        tmp_path, capsys, series58_turn):
+    # predict and simulate --manoeuvre turning --rudder-deg 10: conftest's series58_turn
     assert "assumed, not measured (model.json 'assumptions'): cg_m, inertia_kg_m2, fins" \
-        in capsys.readouterr().out
-    assert main(["simulate", str(tmp_path / "s58" / "model.json"), "--manoeuvre", "turning",
-                 "--rudder-deg", "10", "--out", str(tmp_path / "turn")]) == 0
-    assert "assumed, not measured" in capsys.readouterr().out
-    metrics = pd.read_csv(tmp_path / "turn" / "metrics.csv").fillna("")
+        in series58_turn.predict_out
+    assert "assumed, not measured" in series58_turn.simulate_out
+    metrics = pd.read_csv(series58_turn.turn / "metrics.csv").fillna("")
     names = list(metrics["metric"])
     assert names.index("speed_loss_percent") == names.index("steady_turn_radius_m") + 1
     rows = metrics.set_index("metric")

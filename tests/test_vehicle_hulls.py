@@ -171,21 +171,16 @@ chord_m = 0.12
 SHIPPED = Path(__file__).resolve().parents[1] / "protocols" / "series58_vehicle.toml"
 
 
-def test_predict_and_turn_a_series58_vehicle(tmp_path):
-    """protocols/series58_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s."""
-    from towtank.commands.cli import main
-
-    proto = SHIPPED
-    out = tmp_path / "pred"
-    assert main(["predict", str(proto), "--out", str(out)]) == 0
+def test_predict_and_turn_a_series58_vehicle(series58_turn):
+    """protocols/series58_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s (both run once
+    for the session by conftest's ``series58_turn``)."""
+    out = series58_turn.predicted
     model = json.loads((out / "model.json").read_text())
     assert "Series 58" in model["sources"]["hull"] and "Cp = 0.65" in model["sources"]["hull"]
     assert model["hull"]["name"] == "series58"
     assert model["hull"]["volume_m3"] == pytest.approx(0.14559, rel=1e-3)
     assert model["length_m"] == pytest.approx(2.41)
-    sim = tmp_path / "sim"
-    assert main(["simulate", str(out / "model.json"), "--manoeuvre", "turning",
-                 "--rudder-deg", "10", "--out", str(sim)]) == 0
+    sim = series58_turn.turn
     metrics = pd.read_csv(sim / "metrics.csv").set_index("metric")["value"]
     radius = metrics["steady_turn_radius_m"]
     assert 0.5 * 2.41 < radius < 20 * 2.41  # a turn, neither a spin nor a straight run

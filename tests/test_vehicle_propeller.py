@@ -93,6 +93,7 @@ def test_at_constant_rps_a_turn_loses_less_speed_than_at_constant_thrust(remus):
     assert "propeller_rps" not in set(manoeuvre_metrics(runs["thrust"])["metric"])
 
 
+@pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_simulate_propeller_rps_records_the_option_in_metrics(tmp_path, capsys, remus):
     write_model(remus, tmp_path / "model.json")
     assert main(["simulate", str(tmp_path / "model.json"), "--manoeuvre", "turning",

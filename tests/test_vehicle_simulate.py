@@ -172,6 +172,7 @@ def test_a_diverging_model_is_refused_not_crashed(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_shipped_remus_protocol_predicts_and_turns(tmp_path, capsys):
     """protocols/remus_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s (the MATLAB
     tool's Table 6 case; its 150 kg vehicles turn 3-8 times wider, docs/method.md)."""
@@ -218,6 +219,7 @@ def test_a_turn_without_a_rudder_is_refused_in_one_sentence(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_simulate_and_predict_never_replace_a_users_file(tmp_path, capsys):
     """Issue 14's rule for the vehicle commands: a file of the user's named metrics.csv or
     model.json stops them (exit 2) and is left as it was; their own files are replaced."""

@@ -119,6 +119,17 @@ def _terms(coefficients: dict[str, float]) -> list[tuple[int, float, list[tuple[
     return out
 
 
+def _factors_of(vel: list[float], dr: float, ds: float) -> list[float]:
+    """The factors the terms multiply: u, v, w, p, q, r, their absolute values, dr, ds."""
+    return [*vel, *(abs(x) for x in vel), dr, ds]
+
+
+def _factor_index(kind: str, i: int) -> int:
+    """Index into :func:`_factors_of` of a term's factor (its kind and velocity index as
+    :func:`_terms` gives them)."""
+    return {"vel": i, "abs": 6 + i, "dr": 12, "ds": 13}[kind]
+
+
 @dataclass
 class Dynamics:
     """The model's matrices and terms, ready for the right-hand side."""
@@ -131,6 +142,7 @@ class Dynamics:
     ma: np.ndarray = field(init=False)
     terms: list = field(init=False)
     wings: Any = field(init=False)  # a glider's wings (towtank.vehicle.wings) or None
+    factors: list = field(init=False)  # the terms as (dof, value, indices into _factors_of)
 
     def __post_init__(self) -> None:
         mdl = self.model
@@ -145,6 +157,8 @@ class Dynamics:
         self.m_total = m_rb + self.ma
         self.m_inv = np.linalg.inv(self.m_total)
         self.terms = _terms(mdl["coefficients"])
+        self.factors = [(dof, val, tuple(_factor_index(kind, i) for kind, i in spec))
+                        for dof, val, spec in self.terms]
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
         glider = mdl.get("glider")
         if isinstance(glider, dict) and "wing_area_m2" in glider:
@@ -153,16 +167,20 @@ class Dynamics:
             self.wings = None
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
-        tau = np.zeros(6)
-        for dof, val, spec in self.terms:
+        # the products in Python floats, term by term in the order of the terms: the same
+        # IEEE operations as on numpy scalars, without their overhead
+        vel = np.asarray(nu, dtype=float)[:6].tolist()
+        values = _factors_of(vel, dr, ds)
+        tau = [0.0] * 6
+        for dof, val, indices in self.factors:
             prod = val
-            for kind, i in spec:
-                prod *= (dr if kind == "dr" else ds) if kind in ("dr", "ds") else (
-                    abs(nu[i]) if kind == "abs" else nu[i])
+            for i in indices:
+                prod *= values[i]
             tau[dof] += prod
+        out = np.array(tau, dtype=float)
         if self.wings is not None:
-            tau += self.wings.force(nu)
-        return tau
+            out += self.wings.force(nu)
+        return out
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
         nu1, nu2 = nu[:3], nu[3:]
