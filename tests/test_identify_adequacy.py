@@ -12,6 +12,7 @@ code: N_ur of the wrong sign, every verdict `identifiable`, exit 0), and a recor
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,17 @@ def models(tmp_path_factory) -> dict[str, dict]:
     return remus_models(tmp_path_factory.mktemp("models"))
 
 
+@pytest.fixture
+def no_cross_check(monkeypatch):
+    """identify by the command line without the least-squares cross-check (the fit.csv tests
+    and verdicts asserted do not depend on it: with a filter they are of its innovations and
+    the held-out refit)."""
+    import towtank.commands.identify as command
+    import towtank.vehicle.identify as ident
+
+    monkeypatch.setattr(command, "identify", partial(ident.identify, check=False))
+
+
 def _run(tmp: Path, model: dict, record: pd.DataFrame, *more: str) -> int:
     (tmp / "m").mkdir(exist_ok=True)
     (tmp / "m" / "model.json").write_text(json.dumps(model))
@@ -52,7 +64,8 @@ def _run(tmp: Path, model: dict, record: pd.DataFrame, *more: str) -> int:
                  ",".join(PAPER), "--out", str(tmp / "id"), "--quiet", *more])
 
 
-def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys):
+def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
+                                                     no_cross_check):
     """The Prestero-reading record identified with the default model: exit 1, every verdict
     `model does not fit` (old code: `identifiable`, N_ur of the wrong sign, exit 0), one
     sentence naming the worst test and by how much, fit.csv beside the other outputs."""
@@ -86,7 +99,7 @@ def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     assert (fit["statistic"] / fit["threshold"]).max() > 10.0  # by a clear margin
 
 
-def test_a_record_the_model_made_fits_and_exits_0(models, tmp_path, capsys):
+def test_a_record_the_model_made_fits_and_exits_0(models, tmp_path, capsys, no_cross_check):
     assert _run(tmp_path, models["neutral"], sine_record(models["neutral"], 9)) == 0
     out, err = capsys.readouterr()
     fit = pd.read_csv(tmp_path / "id" / "fit.csv")
