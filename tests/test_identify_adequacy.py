@@ -91,7 +91,8 @@ def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
 def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     """A record made neutral, identified with the 7 N buoyant model (old code: N_rdot 65 %
     off, `identifiable`): the record does not fit."""
-    log = log_from_frame(sine_record(models["buoyant"], 8, net_buoyancy_n=0.0), "neutral")
+    log = log_from_frame(sine_record(models["buoyant"], 8, net_buoyancy_n=0.0, duration_s=20.0),
+                         "neutral")
     res = identify(models["buoyant"], log, PAPER, check=False)
     assert not res.fits()
     fit = res.adequacy
@@ -114,7 +115,7 @@ def test_validate_tests_against_a_second_record(models, tmp_path, capsys):
     """--validate LOG2: the model is simulated along the second record; one of another model
     fails `validation`."""
     models_path = tmp_path / "other.csv"
-    sine_record(models["prestero"], 3, duration_s=20.0).to_csv(models_path, index=False)
+    sine_record(models["prestero"], 3, duration_s=10.0).to_csv(models_path, index=False)
     code = _run(tmp_path, models["neutral"], sine_record(models["neutral"], 10, duration_s=20.0),
                 "--method", "ls", "--validate", str(models_path))
     fit = pd.read_csv(tmp_path / "id" / "fit.csv")
