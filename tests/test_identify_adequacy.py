@@ -70,7 +70,7 @@ def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
     `model does not fit` (old code: `identifiable`, N_ur of the wrong sign, exit 0), one
     sentence naming the worst test and by how much, fit.csv beside the other outputs."""
     assert _run(tmp_path, models["neutral"],
-                sine_record(models["prestero"], 7, duration_s=20.0)) == 1
+                sine_record(models["prestero"], 7, duration_s=10.0)) == 1
     out, err = capsys.readouterr()
     tab = pd.read_csv(tmp_path / "id" / "identified.csv")
     assert (tab["verdict"] == "model does not fit").all()
@@ -91,7 +91,7 @@ def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
 def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     """A record made neutral, identified with the 7 N buoyant model (old code: N_rdot 65 %
     off, `identifiable`): the record does not fit."""
-    log = log_from_frame(sine_record(models["buoyant"], 8, net_buoyancy_n=0.0, duration_s=20.0),
+    log = log_from_frame(sine_record(models["buoyant"], 8, net_buoyancy_n=0.0, duration_s=12.0),
                          "neutral")
     res = identify(models["buoyant"], log, PAPER, check=False)
     assert not res.fits()
@@ -116,7 +116,7 @@ def test_validate_tests_against_a_second_record(models, tmp_path, capsys):
     fails `validation`."""
     models_path = tmp_path / "other.csv"
     sine_record(models["prestero"], 3, duration_s=10.0).to_csv(models_path, index=False)
-    code = _run(tmp_path, models["neutral"], sine_record(models["neutral"], 10, duration_s=20.0),
+    code = _run(tmp_path, models["neutral"], sine_record(models["neutral"], 10, duration_s=10.0),
                 "--method", "ls", "--validate", str(models_path))
     fit = pd.read_csv(tmp_path / "id" / "fit.csv")
     assert code == 1
