@@ -101,7 +101,8 @@ def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
 
 
 def test_a_record_the_model_made_fits_and_exits_0(models, tmp_path, capsys, no_cross_check):
-    assert _run(tmp_path, models["neutral"], sine_record(models["neutral"], 9)) == 0
+    assert _run(tmp_path, models["neutral"], sine_record(models["neutral"], 9, duration_s=15.0)) \
+        == 0
     out, err = capsys.readouterr()
     fit = pd.read_csv(tmp_path / "id" / "fit.csv")
     assert fit["passed"].all() and len(fit) == 18
