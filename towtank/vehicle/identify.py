@@ -238,21 +238,21 @@ class BatchModel:
         sn, cs = np.sin(s[:, 3:6].T), np.cos(s[:, 3:6].T)
         sph, sth, sps = sn
         cph, cth, cps = cs
-        cth_sph, cth_cph = cth * sph, cth * cph
         # g(eta): linear in sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)
-        g = np.array([sth, cth_sph, cth_cph]).T @ self.g_mat.T
+        g = np.array([sth, cth * sph, cth * cph]).T @ self.g_mat.T
         total = tau - rest - g
         if ma is None:
             nu_dot = total @ self.minv0.T
         else:
             nu_dot = np.linalg.solve(self.m_rb + ma, total[:, :, None])[:, :, 0]
         u, v, w_, p, q, r = nu.T
-        # eta_dot = J(eta) nu (Fossen eq. 2.40)
-        cs_th, ss_th = cps * sth, sps * sth
+        # eta_dot = J(eta) nu (Fossen eq. 2.40), R = R_z(psi) R_y(theta) R_x(phi) applied in turn
+        v_x, w_x = cph * v - sph * w_, sph * v + cph * w_
+        u_y = cth * u + sth * w_x
         out = np.empty((n, 12))
-        out[:, 0] = cps * cth * u + (cs_th * sph - sps * cph) * v + (sps * sph + cs_th * cph) * w_
-        out[:, 1] = sps * cth * u + (cps * cph + ss_th * sph) * v + (ss_th * cph - cps * sph) * w_
-        out[:, 2] = -sth * u + cth_sph * v + cth_cph * w_
+        out[:, 0] = cps * u_y - sps * v_x
+        out[:, 1] = sps * u_y + cps * v_x
+        out[:, 2] = cth * w_x - sth * u
         turn = sph * q + cph * r
         out[:, 3] = p + turn * sth / cth
         out[:, 4] = cph * q - sph * r
