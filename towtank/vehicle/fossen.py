@@ -28,6 +28,7 @@ __all__ = [
     "REQUIRED_KEYS",
     "skew",
     "rigid_body_mass_matrix",
+    "coriolis_rigid_body",
     "added_mass_matrix",
     "coriolis_added_mass",
     "LUMPED",
@@ -86,6 +87,28 @@ def rigid_body_mass_matrix(mass: float, rg: np.ndarray, inertia: np.ndarray) -> 
     m_rb[3:, :3] = mass * skew(rg)
     m_rb[3:, 3:] = inertia
     return m_rb
+
+
+def coriolis_rigid_body(mass: float, rg: np.ndarray, inertia: np.ndarray,
+                        nu: np.ndarray) -> np.ndarray:
+    """C_RB(nu) nu about the reference point (Fossen 2011, eq. 3.56) [N, N m].
+
+    Parameters
+    ----------
+    mass : float
+        [kg]
+    rg : numpy.ndarray
+        Centre of gravity from the reference point [m]
+    inertia : numpy.ndarray
+        I_o (3x3) [kg m^2]
+    nu : numpy.ndarray
+        Body velocities u, v, w [m/s], p, q, r [rad/s]
+    """
+    nu1, nu2 = nu[:3], nu[3:]
+    s2 = skew(nu2)
+    top = mass * s2 @ nu1 - mass * s2 @ skew(rg) @ nu2
+    bottom = mass * skew(rg) @ s2 @ nu1 - skew(inertia @ nu2) @ nu2
+    return np.concatenate((top, bottom))
 
 
 def added_mass_matrix(coefficients: dict[str, float]) -> np.ndarray:

@@ -32,6 +32,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,8 @@ from towtank.vehicle.fossen import (
     SYMBOL_RE,
     VELOCITIES,
     added_mass_matrix,
+    coriolis_added_mass,
+    coriolis_rigid_body,
     rigid_body_mass_matrix,
 )
 from towtank.vehicle.identify_log import (
@@ -65,7 +68,7 @@ from towtank.vehicle.predict import coefficient_unit
 __all__ = ["record_speed", "simulate_fitted", "with_coefficients", "HOLDOUT_FRACTION",
            "MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
            "IdentifyFit", "Progress", "identify", "rts_smooth", "coefficient_unit",
-           "least_squares_fit", "kalman_fit"]
+           "least_squares_fit", "kalman_fit", "quadratic_form"]
 
 #: Largest Runge-Kutta step of the process model [s].
 MAX_STEP_S = 0.05
@@ -154,7 +157,20 @@ class BatchModel:
                 self.dot_index.append(j)
         self.m_rb = m_rb
         self.mb_stack = np.array(self.mb).reshape(len(self.mb), 6, 6)
-        self.io_diag = np.diag(self.io)
+        # C_RB(nu) nu + C_A(nu) nu, quadratic in nu and linear in M_A: its coefficients of
+        # nu_a nu_b with M_A0, then those of each estimated added-mass derivative's d M_A
+        self.coriolis = np.concatenate(
+            [quadratic_form(lambda nu: coriolis_rigid_body(self.mass, self.rg, self.io, nu)
+                            + coriolis_added_mass(self.ma0, nu))]
+            + [quadratic_form(partial(coriolis_added_mass, mb)) for mb in self.mb], axis=1)
+        # g(eta) = g_mat @ [sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)] (Fossen
+        # eq. 4.6 with W, B and the centres of gravity and buoyancy)
+        wt, bb = self.weight, self.buoyancy
+        (xg, yg, zg), (xb, yb, zb) = self.rg, self.rb
+        gx, gy, gz = xg * wt - xb * bb, yg * wt - yb * bb, zg * wt - zb * bb
+        self.g_mat = np.array([[wt - bb, 0.0, 0.0], [0.0, -(wt - bb), 0.0],
+                               [0.0, 0.0, -(wt - bb)], [0.0, gz, -gy], [gz, 0.0, gx],
+                               [-gy, -gx, 0.0]])
         self.minv0 = np.linalg.inv(m_rb + self.ma0)
         # upper bound of each estimated coefficient in the filter's process model: a diagonal
         # added-mass derivative (X_udot ... N_rdot) at most half the diagonal of M_RB + M_A0,
@@ -201,7 +217,7 @@ class BatchModel:
         nu = s[:, 6:]
         ext = np.empty((n, 15))
         ext[:, :6] = nu
-        ext[:, 6:12] = np.abs(nu)
+        np.abs(nu, out=ext[:, 6:12])
         ext[:, 12] = dr
         ext[:, 13] = ds
         ext[:, 14] = 1.0
@@ -211,50 +227,36 @@ class BatchModel:
             tau += phi @ self.est_e
         x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
         tau[:, 0] += -x_uu * self.u0 * np.abs(self.u0)
-        m, rg, io = self.mass, self.rg, self.io_diag
-        u, v, w_, p, q, r = nu.T  # rows: contiguous work on the few sigma points
-        v1, v2 = (u, v, w_), (p, q, r)
-        c21 = _cross3(v2, v1)
-        top = [m * c21[i] - m * x for i, x in enumerate(_cross3(v2, _cross3(rg, v2)))]
-        bottom = [m * x - y for x, y in zip(_cross3(rg, c21),
-                                            _cross3((io[0] * p, io[1] * q, io[2] * r), v2),
-                                            strict=True)]
+        # C(nu) nu from the products nu_a nu_b, its M_A part with each row's added masses
+        quad = (nu[:, :, None] * nu[:, None, :]).reshape(n, 36) @ self.coriolis
+        rest = quad[:, :6]
+        ma = None
         if self.dot_index:
-            ma = self.ma0 + np.einsum("nj,jab->nab", beta[:, self.dot_index], self.mb_stack)
-            ab = np.einsum("nab,nb->an", ma, nu)
-        else:
-            ma = None
-            ab = self.ma0 @ nu.T
-        a3, b3 = ab[:3], ab[3:]
-        ca_top = _cross3(a3, v2)
-        ca_bot = [x + y for x, y in zip(_cross3(a3, v1), _cross3(b3, v2), strict=True)]
-        phi_, theta, psi = s[:, 3], s[:, 4], s[:, 5]
-        sph, cph, sth, cth = np.sin(phi_), np.cos(phi_), np.sin(theta), np.cos(theta)
-        sps, cps = np.sin(psi), np.cos(psi)
-        wt, bb = self.weight, self.buoyancy
-        xg, yg, zg = self.rg
-        xb, yb, zb = self.rb
-        g = [(wt - bb) * sth, -(wt - bb) * cth * sph, -(wt - bb) * cth * cph,
-             -(yg * wt - yb * bb) * cth * cph + (zg * wt - zb * bb) * cth * sph,
-             (zg * wt - zb * bb) * sth + (xg * wt - xb * bb) * cth * cph,
-             -(xg * wt - xb * bb) * cth * sph - (yg * wt - yb * bb) * sth]
-        forces = tau.T  # C_A(nu) nu enters with + its cross terms (Fossen eq. 6.43)
-        rest = np.array([top[0] - ca_top[0], top[1] - ca_top[1], top[2] - ca_top[2],
-                         bottom[0] - ca_bot[0], bottom[1] - ca_bot[1], bottom[2] - ca_bot[2]])
-        total = forces - rest - np.array(g)
+            bd = beta[:, self.dot_index]
+            ma = self.ma0 + np.einsum("nj,jab->nab", bd, self.mb_stack)
+            rest = rest + np.einsum("nj,njk->nk", bd, quad[:, 6:].reshape(n, -1, 6))
+        sn, cs = np.sin(s[:, 3:6].T), np.cos(s[:, 3:6].T)
+        sph, sth, sps = sn
+        cph, cth, cps = cs
+        # g(eta): linear in sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)
+        g = np.array([sth, cth * sph, cth * cph]).T @ self.g_mat.T
+        total = tau - rest - g
         if ma is None:
-            nu_dot = (self.minv0 @ total).T
+            nu_dot = total @ self.minv0.T
         else:
-            nu_dot = np.linalg.solve(self.m_rb + ma, total.T[:, :, None])[:, :, 0]
+            nu_dot = np.linalg.solve(self.m_rb + ma, total[:, :, None])[:, :, 0]
+        u, v, w_, p, q, r = nu.T
+        # eta_dot = J(eta) nu (Fossen eq. 2.40), R = R_z(psi) R_y(theta) R_x(phi) applied in turn
+        v_x, w_x = cph * v - sph * w_, sph * v + cph * w_
+        u_y = cth * u + sth * w_x
         out = np.empty((n, 12))
-        out[:, 0] = cps * cth * u + (-sps * cph + cps * sth * sph) * v + (
-            sps * sph + cps * cph * sth) * w_
-        out[:, 1] = sps * cth * u + (cps * cph + sph * sth * sps) * v + (
-            -cps * sph + sth * sps * cph) * w_
-        out[:, 2] = -sth * u + cth * sph * v + cth * cph * w_
-        out[:, 3] = p + (sph * q + cph * r) * sth / cth
+        out[:, 0] = cps * u_y - sps * v_x
+        out[:, 1] = sps * u_y + cps * v_x
+        out[:, 2] = cth * w_x - sth * u
+        turn = sph * q + cph * r
+        out[:, 3] = p + turn * sth / cth
         out[:, 4] = cph * q - sph * r
-        out[:, 5] = (sph * q + cph * r) / cth
+        out[:, 5] = turn / cth
         out[:, 6:] = nu_dot
         return out
 
@@ -301,9 +303,17 @@ class BatchModel:
         return out
 
 
-def _cross3(a: Any, b: Any) -> list[Any]:
-    """Cross product of two 3-vectors given as their components (arrays or numbers)."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+def quadratic_form(f: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """The coefficients (36, 6) of a quadratic function ``f`` of the 6-vector ``nu``:
+    ``f(nu) = (nu nu^T).ravel() @ form`` (the product ``nu_a nu_b`` in row ``6 a + b``, those
+    with ``a > b`` zero)."""
+    eye = np.eye(6)
+    form = np.zeros((6, 6, 6))
+    for a in range(6):
+        form[a, a] = f(eye[a])
+        for b in range(a + 1, 6):
+            form[a, b] = f(eye[a] + eye[b]) - f(eye[a]) - f(eye[b])
+    return form.reshape(36, 6)
 
 
 def rts_smooth(xs: np.ndarray, ps: np.ndarray, x_prior: np.ndarray, p_prior: np.ndarray,

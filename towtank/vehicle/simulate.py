@@ -57,8 +57,8 @@ from towtank.vehicle.fossen import (
     VELOCITIES,
     added_mass_matrix,
     coriolis_added_mass,
+    coriolis_rigid_body,
     rigid_body_mass_matrix,
-    skew,
 )
 from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
 from towtank.vehicle.powering import (
@@ -183,11 +183,7 @@ class Dynamics:
         return out
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
-        nu1, nu2 = nu[:3], nu[3:]
-        s2 = skew(nu2)
-        top = self.mass * s2 @ nu1 - self.mass * s2 @ skew(self.rg) @ nu2
-        bottom = self.mass * skew(self.rg) @ s2 @ nu1 - skew(self.io @ nu2) @ nu2
-        return np.concatenate((top, bottom))
+        return coriolis_rigid_body(self.mass, self.rg, self.io, nu)
 
     def restoring(self, phi: float, theta: float) -> np.ndarray:
         w, b = self.weight_n, self.buoyancy
