@@ -487,6 +487,9 @@ def pytest_addoption(parser):
     parser.addoption("--floors", action="store_true", default=False,
                      help="also run the tests marked floors (the commands a lab runs, each in "
                           "a new process: .ci/run runs them on the minimum versions)")
+    parser.addoption("--bench", action="store_true", default=False,
+                     help="also run the tests marked bench (the campaign benchmark's smoke run, "
+                          "a dozen new processes: .ci/run runs it apart from the suite)")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -498,6 +501,9 @@ def pytest_collection_modifyitems(config, items):
         skips.append(("floors", pytest.mark.skip(
             reason="floors: run on the minimum versions by .ci/run (--floors); the same "
                    "commands run in-process in test_docs_commands_run.py")))
+    if not config.getoption("--bench"):
+        skips.append(("bench", pytest.mark.skip(
+            reason="bench: the benchmark's smoke run, run apart by .ci/run (--bench)")))
     for item in items:
         for marker, skip in skips:
             if marker in item.keywords:

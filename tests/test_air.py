@@ -213,7 +213,7 @@ def test_no_free_surface_in_air():
 
 
 # ------------------------------------------------------------------------- an air day
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def air_day(tmp_path_factory) -> dict[str, Any]:
     """The SUT-2 hull plan in air at 20 °C (20 times the speeds: 2-40 m/s), forces at the air's
     density, a 1 kg model, lab channels in volts; the prototype in air. Processed by

@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 HULL = ROOT / "protocols" / "sut2_hull.toml"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def cli_coefficients(sample_outputs) -> pd.DataFrame:
     """coefficients.csv of ``towtank process protocols/sut2_hull.toml --no-report`` (the
     session's run of the command, tests/conftest.py)."""

@@ -74,7 +74,7 @@ def assert_derivatives(fit, truth: dict, symbols) -> None:
         assert e.ci_low <= true <= e.ci_high, s
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def horizontal_day(tmp_path_factory):
     folder = tmp_path_factory.mktemp("captive_h")
     protocol, truth = write_day(folder)

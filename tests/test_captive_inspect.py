@@ -34,7 +34,7 @@ PLAN = [
 ]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("captive")
     make_captive_day(root, plan=PLAN, seed=3)

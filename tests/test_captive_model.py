@@ -52,18 +52,18 @@ HULL = ["X_udot", "X_u|u|"]
 SE_FRACTION = 0.01
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def protocol():
     return load_protocol(PROTOCOL, check_paths=False, require_runs=False)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def prestero() -> dict[str, float]:
     table = reference_table("remus-prestero2001")
     return dict(zip(table["symbol"], table["value"].astype(float), strict=True))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def generating(protocol, prestero) -> dict:
     return predict_vehicle(protocol, lumped_to_fossen(prestero)).model
 
@@ -101,14 +101,14 @@ def _steady_radius(model: dict) -> float:
     return float(metrics["steady_turn_radius_m"])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def generating_radius(generating) -> float:
     radius = _steady_radius(generating)
     assert np.isfinite(radius)  # 1.115 m
     return radius
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day_model(protocol, prestero) -> dict:
     result, _, _ = day_vehicle(_with_form(protocol, None), _captive_table(protocol, prestero))
     return result.model
@@ -252,7 +252,7 @@ def test_identified_coefficients_drop_their_conversions(day_model):
     assert "N_ur" not in kept_conversions(day_model["conversions"], ["N_ur"])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def generated_day_table(protocol, prestero) -> pd.DataFrame:
     """coefficients.csv rows of a generated captive day of REMUS in each plane (reduced and
     fitted as a day's runs are), with the hull's X_udot and X_u|u| (no captive test measures

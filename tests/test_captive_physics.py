@@ -44,7 +44,7 @@ RHO, L = 998.6, 1.33
 
 @cache
 def day_runs(seed: int = 1, plane: str = "horizontal", slope: float = 0.0):
-    """The truth and the generated day's runs, simulated once per module for the fits that
+    """The truth and the generated day's runs, simulated once per session for the fits that
     share them."""
     truth = CaptiveTruth.vertical() if plane == "vertical" else CaptiveTruth(
         frequency_slope={"Y_vdot": slope} if slope else {})

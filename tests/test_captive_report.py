@@ -18,7 +18,7 @@ from conftest import draw_only_pages
 from towtank.testing.captive import captive_day_plan, make_captive_day
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def captive_day(tmp_path_factory):
     """A generated horizontal captive day processed with its reports: (DayResult, out). Of the
     PDF only the pages the tests read are drawn (the captive pages and the runs' table; the
@@ -37,7 +37,7 @@ def captive_day(tmp_path_factory):
     return day, out
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def vertical_day(tmp_path_factory):
     """A small vertical-plane captive day (drift, arm and PMM runs), processed without files."""
     from towtank.api import process_day
@@ -185,7 +185,7 @@ def test_hull_day_has_no_captive_sheets_or_pages(captive_day):
 
 
 # ------------------------------------------------------------------------ --export simman
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def simman(captive_day, tmp_path_factory):
     """The captive day written with ``--export simman`` only: its export/simman folder."""
     from towtank.report import write_outputs

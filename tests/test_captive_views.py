@@ -36,14 +36,14 @@ PLAN = [
 ]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("captive_views")
     make_captive_day(root, plan=PLAN, seed=5)
     return root
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def reductions(day: Path) -> dict:
     protocol = load_protocol(day / "protocol.toml")
     sheet = pd.read_csv(day / "run_sheet.csv")

@@ -62,12 +62,12 @@ def raw_inputs(day: damage.DamagedDay) -> dict[str, tuple[str, int]]:
     return files
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory) -> damage.DamagedDay:
     return damage.make_damaged_day(tmp_path_factory.mktemp("damaged") / "day", seed=SEED)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def processed(day, tmp_path_factory):
     before = raw_inputs(day)
     out = tmp_path_factory.mktemp("outputs") / "out"

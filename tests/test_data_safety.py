@@ -71,7 +71,7 @@ def test_no_text_becomes_a_formula_in_the_workbook_or_the_csv(tmp_path):
 
 
 # ------------------------------------------------------ 1. the user's files are never deleted
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory) -> Path:
     return _day(tmp_path_factory.mktemp("day"))
 

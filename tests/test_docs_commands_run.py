@@ -166,7 +166,7 @@ def _verb(q: Quoted) -> str:
     return q.command.split()[1]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def workspace(tmp_path_factory) -> Workspace:
     return Workspace(tmp_path_factory.mktemp("docs_commands"))
 

@@ -77,7 +77,7 @@ def _hand_windows(day_dir: Path) -> None:
     sheet.to_csv(sheet_path, index=False, lineterminator="\n")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def edge_day(tmp_path_factory) -> Day:
     day_dir = tmp_path_factory.mktemp("edge_day")
     syn.make_hull_day(day_dir, seed=21, runs=PLAN, sheet_format="csv", file_format="csv",

@@ -15,7 +15,7 @@ from towtank.report import write_outputs
 from towtank.signal.phases import PHASE_NAMES
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def exported(hull_day, tmp_path_factory):
     folder = tmp_path_factory.mktemp("export") / "out"
     write_outputs(hull_day.result, folder, report=False, export=("mat", "hdf5", "parquet"))

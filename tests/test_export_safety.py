@@ -84,7 +84,7 @@ def assert_full_disk_reported(rc: int, stderr: str, out: Path, before: dict) -> 
 
 
 # ------------------------------------------------------------------ the day used below
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def written(tmp_path_factory):
     """A day (plain CSV files) written once with everything (report, its pages blank, and the
     three exports), and its result for the runs below (process_day is not what they test)."""

@@ -29,7 +29,7 @@ from towtank.testing.synthetic import (
 FINS_COLUMNS = ["run", "angle_deg", "speed_mean", "re", "cl", "cd", "cl_sandia", "cd_sandia"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def fin_day(tmp_path_factory):
     d = tmp_path_factory.mktemp("fin_day")
     make_fin_day(d, seed=41)

@@ -29,7 +29,7 @@ REPO = Path(__file__).resolve().parents[1]
 PROTOCOL = REPO / "protocols" / "glider_parametric.toml"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def model():
     protocol = load_protocol(PROTOCOL, check_paths=False, require_runs=False)
     return predict_vehicle(protocol).model
@@ -151,7 +151,7 @@ def test_spiral_against_the_time_domain(model):
             row["turn_radius_m"], rel=0.01)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def trimmed(model):
     """The glider at -300 cc trimmed by the moving mass at -20 deg of pitch, and the start
     state of its straight glide there."""
@@ -160,7 +160,7 @@ def trimmed(model):
     return _held(mdl, x), start
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def straight_glide(trimmed):
     """300 s of the trimmed glide, no roll, no rudder."""
     held, start = trimmed

@@ -184,7 +184,7 @@ def _day(root: Path, layout: str) -> Path:
     return syn.write_protocol(root / "protocol.toml", **protocol_sections(layout, sections))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def rate_name_day(tmp_path_factory):
     root = tmp_path_factory.mktemp("rate_name")
     return root, _day(root, "hdf5-rate-name")

@@ -35,7 +35,7 @@ def _day(root: Path, style: str | None) -> Path:
     return syn.write_protocol(root / "protocol.toml", **sections)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def plain(tmp_path_factory):
     root = tmp_path_factory.mktemp("plain")
     return towtank.process_day(_day(root, None), jobs=1)

@@ -34,7 +34,7 @@ KEEP = ["t_s", "x_m", "y_m", "psi_deg", "u_m_s", "v_m_s", "r_deg_s", "rudder_deg
         "sternplane_deg"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def remus(tmp_path_factory) -> dict:
     """REMUS predicted from the shipped protocol, neutrally buoyant (weight = buoyancy)."""
     out = tmp_path_factory.mktemp("remus")
@@ -45,7 +45,7 @@ def remus(tmp_path_factory) -> dict:
     return model
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def sine_clean(remus) -> pd.DataFrame:
     return simulate(remus, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=60.0,
                     sample_hz=20.0)

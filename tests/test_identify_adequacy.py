@@ -39,7 +39,7 @@ from towtank.vehicle.identify import identify
 from towtank.vehicle.identify_log import ManoeuvreLog, log_from_frame, noise_sd
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def models(tmp_path_factory) -> dict[str, dict]:
     """REMUS as shipped (7 N buoyant), the same neutral, and Prestero's reading neutral."""
     return remus_models(tmp_path_factory.mktemp("models"))

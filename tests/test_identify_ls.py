@@ -36,7 +36,7 @@ PAPER, NOISE = test_identify.PAPER, test_identify.NOISE
 remus = test_identify.remus  # the fixture: REMUS predicted from the shipped protocol, neutral
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def clean(remus) -> pd.DataFrame:
     """The sine-rudder record (10 deg, 10 s, 1.5 m/s), 30 s at 10 Hz, every state."""
     return simulate(remus, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=30.0,

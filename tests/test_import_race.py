@@ -50,7 +50,7 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def protocol(tmp_path_factory):
     root = tmp_path_factory.mktemp("race")
     syn.make_hull_day(root, seed=3, fs=200.0, sheet_format="csv")

@@ -479,7 +479,7 @@ def test_check_clipping_on_arrays():
 
 
 # ----------------------------------------------------------------------------- spikes
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def clean_days(tmp_path_factory):
     """Good hull days at three sample rates (every run of the plan)."""
     out = {}

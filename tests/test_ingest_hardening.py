@@ -401,12 +401,12 @@ def _files_and_columns(root: Path, n: int) -> tuple[dict[str, bytes], dict[str, 
     return files, full
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def small_files(tmp_path_factory):
     return _files_and_columns(tmp_path_factory.mktemp("small"), 30)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def long_files(tmp_path_factory):
     return _files_and_columns(tmp_path_factory.mktemp("long"), 3000)
 
@@ -575,7 +575,7 @@ def _unwritten_dataset_day(root: Path, layout: str, group: str) -> tuple[Path, l
     return path, _process_args(protocol)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def limited(tmp_path_factory) -> dict[str, tuple[Path, subprocess.CompletedProcess]]:
     """The files of the tests below, each with what its command did in one subprocess under
     the address-space limit (:func:`_limited`)."""

@@ -16,7 +16,7 @@ from towtank.testing import synthetic
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("inspect") / "hull"
     synthetic.make_hull_day(root, seed=5)

@@ -91,7 +91,7 @@ def _digest(folder: Path) -> dict[str, str]:
             for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def sample_out(tmp_path_factory, sample_report) -> Path:
     """The sample day processed once, completely (in this process: only the interrupted runs
     below need a process of their own): the outputs a Ctrl-C must leave alone. A copy of the

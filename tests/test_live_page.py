@@ -350,7 +350,7 @@ def _line(run: int, test: str, angle: float, speed: float, drag: float, status: 
     return f"run {run}  {test}  α {angle:.1f}°  U {speed:.2f} m/s  drag {drag:.3f} N  {status}"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def sample_day(tmp_path_factory) -> dict[str, Any]:
     """The sample SUT-2 day processed once: its tables, the fit figures watch draws for the
     page (damping, added mass) and per-run trace figures (the page shows no PDF or workbook:

@@ -75,7 +75,7 @@ def half_width(fit: HullFit, symbol: str) -> float:
     return (e.ci_high - e.ci_low) / 2.0
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory) -> Reduced:
     return reduce_day(5, tmp_path_factory.mktemp("next_run"))
 

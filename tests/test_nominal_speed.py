@@ -47,7 +47,7 @@ def _make_files(root: Path, *, windows: bool) -> dict:
     return truth
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def windowed_files(tmp_path_factory) -> Path:
     """The day's files with sheet windows, made once for this module; each test copies them."""
     root = tmp_path_factory.mktemp("windowed")
@@ -75,7 +75,7 @@ def day_files(windowed_files):
     return make
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def measured(tmp_path_factory):
     root = tmp_path_factory.mktemp("measured")
     syn.make_hull_day(root, seed=SEED, sheet_format="csv")

@@ -270,7 +270,7 @@ def _csvs(out: Path) -> dict[str, bytes]:
     return {n: (out / n).read_bytes() for n in ("runs.csv", "coefficients.csv")}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def cli_outputs(hull_day: Day, tmp_path_factory):
     """The default day processed by the command line: with jobs=2 (and its cache), and again
     with jobs=1 without the cache."""

@@ -75,7 +75,7 @@ PLAN = [
 ]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def small_day(tmp_path_factory):
     d = tmp_path_factory.mktemp("plausible")
     syn.make_hull_day(d, seed=5, fs=100.0, runs=PLAN, file_format="csv.gz")

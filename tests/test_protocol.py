@@ -548,7 +548,7 @@ def _apply(data: dict[str, Any], mutations) -> dict[str, Any]:
     return data
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def fuzz_folder(tmp_path_factory) -> Path:
     return _layout(tmp_path_factory.mktemp("fuzz"))
 

@@ -38,7 +38,7 @@ def _day(root: Path, file_format: str, channel_style: str = "lab") -> Path:
     return syn.write_protocol(root / "protocol.toml", **sections)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def plain(tmp_path_factory):
     root = tmp_path_factory.mktemp("csv")
     day = towtank.process_day(_day(root, "csv"), jobs=1)

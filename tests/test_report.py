@@ -1,8 +1,8 @@
 """Tests of the report stage: report.xlsx, report.pdf and figures/*.png.
 
 A synthetic hull day (with one run damaged, so one is rejected beside the voided one) and a
-synthetic fin day are generated once per module, processed by the pipeline and written by
-:func:`towtank.report.write_outputs`; the tests read the files back.
+synthetic fin day are generated once per session (per xdist worker), processed by the pipeline
+and written by :func:`towtank.report.write_outputs`; the tests read the files back.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ NUMERIC = re.compile(r"^[+-]?\d+(\.\d*)?([eE][+-]?\d+)?$")
 DAMAGED_RUN = 33  # a repeat run at 0 deg, 1.2 m/s: the day stays complete without it
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
     root = tmp_path_factory.mktemp("report")
     out = {}

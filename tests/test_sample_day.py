@@ -20,7 +20,7 @@ TOLERANCE_PCT = {"X_udot": 5, "Y_vdot": 2, "Z_wdot": 2, "X_u|u|": 1, "Y_uv": 1, 
                  "X_w|w|": 35}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def sample(sample_outputs):
     code, out = sample_outputs("sut2_hull").code, sample_outputs("sut2_hull").out
     coef = pd.read_csv(out / "coefficients.csv").set_index("symbol")
@@ -62,7 +62,7 @@ def test_diff_pct_against_remus_as_printed(sample):
 
 
 # --------------------------------------------------------------------- diagnostics, README
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def sample_day(sample_outputs):
     """The sample day's result, its runs read from the run cache of ``sample_outputs``."""
     from conftest import process

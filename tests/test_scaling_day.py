@@ -31,7 +31,7 @@ SCALING_COLUMNS = ["speed_prototype", "re_prototype", "fn_prototype", "speed_mod
                    "speed_model_reynolds", "drag_froude", "drag_ittc57"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def outputs(sample_outputs):
     """The sample day's output folder (shared: read only)."""
     done = sample_outputs("sut2_hull")
@@ -39,7 +39,7 @@ def outputs(sample_outputs):
     return done.out
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def cache(outputs, tmp_path_factory):
     """A copy of the sample day's run cache: the variants below reduce nothing again."""
     folder = tmp_path_factory.mktemp("cache") / ".cache"

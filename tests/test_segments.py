@@ -47,7 +47,7 @@ def _day(root: Path, file_format: str = "lvm-appended") -> Path:
     return syn.write_protocol(root / "protocol.toml", **sections)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(tmp_path_factory):
     root = tmp_path_factory.mktemp("appended")
     protocol = load_protocol(_day(root))

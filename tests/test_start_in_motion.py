@@ -61,7 +61,7 @@ def _protocol(root: Path, name: str, *, zeros: bool, **processing) -> Path:
     return syn.write_protocol(root / name, **sections)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def cut_day(tmp_path_factory):
     root = tmp_path_factory.mktemp("moving")
     return root, _cut_day(root)

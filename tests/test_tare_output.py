@@ -13,7 +13,7 @@ from towtank.report import write_outputs
 from towtank.testing.truth import TareTruth
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def out(hull_day, tmp_path_factory):
     """The day's tables, provenance and workbook (the tests read no PDF or figure)."""
     from towtank.report.workbook import write_workbook

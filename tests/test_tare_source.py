@@ -11,7 +11,7 @@ import towtank
 from towtank.testing import synthetic as syn
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day_dir(tmp_path_factory):
     root = tmp_path_factory.mktemp("tare")
     syn.make_hull_day(root, seed=3, file_format="csv", sheet_format="csv")

@@ -39,14 +39,14 @@ def _protocol(root: Path, extra: str = "", **model) -> Path:
     return path
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day_dir(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("trust2")
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv")
     return root
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day(day_dir, tmp_path_factory) -> Path:
     """A protocol of the module's day, in a folder of its own (the tests only read it)."""
     sections = syn.hull_protocol_sections(str(day_dir), "out", sheet_format="csv")
@@ -59,7 +59,7 @@ def _process(protocol: Path, out: Path, *extra: str) -> int:
                  "--no-report", *extra])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def processed_out(day, tmp_path_factory) -> Path:
     """The output folder (with its cache) of ``day`` processed once: a test that starts from
     the processed day copies it (:func:`_processed`) rather than process the day again."""
@@ -254,7 +254,7 @@ def test_user_files_with_names_like_temporaries_are_kept(day, processed_out, tmp
 
 
 # ----------------------------------------------------------------- 4. two writers, one folder
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def two_days(day_dir, tmp_path_factory):
     other = tmp_path_factory.mktemp("other")
     syn.make_hull_day(other, seed=SEED + 1, file_format="csv", sheet_format="csv")

@@ -76,7 +76,7 @@ def _one_sentence(text: str) -> bool:
 BOMB_ROWS = readers.MAX_RUN_ROWS + readers.TEXT_LINE_SLACK + 300_000
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def bomb_day(tmp_path_factory) -> tuple[Path, int]:
     """The four-run day and a fifth run, ``big.csv.gz``: 2 MB of gzip holding 5.3 M valid rows
     (200 MB), written by streaming a block of the day's rows into gzip.open."""
@@ -160,7 +160,7 @@ def test_the_caps_and_the_sentence():
 RUN_FRAME_ROWS = 600  # rows of the frame each format is written with: over the lowered cap
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def frame() -> pd.DataFrame:
     t = np.arange(RUN_FRAME_ROWS) / 100.0
     return pd.DataFrame({"Time (s)": t, "Carriage speed (m/s)": np.sin(t),
@@ -382,7 +382,7 @@ TOML_NUMBERS = st.one_of(
 )
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def number_day(tmp_path_factory) -> tuple[Path, dict[str, Any]]:
     root = tmp_path_factory.mktemp("numbers")
     _day(root)

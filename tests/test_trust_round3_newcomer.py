@@ -65,7 +65,7 @@ def _synth_day(root: Path, day: str, layout: str, sheet: str) -> towtank.DayResu
     return towtank.process_day(root / "protocol.toml", jobs=1, report=False)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def plain_days(tmp_path_factory):
     """The plain day of each kind (CSV run files, CSV sheet), made when first needed."""
     made: dict[str, towtank.DayResult] = {}
@@ -167,7 +167,7 @@ def _tare_protocol(root: Path, extra: str) -> Path:
     return path
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def tare_day(tmp_path_factory):
     """A hull day (written once for the module's tests) and two tare tables beside it."""
     root = tmp_path_factory.mktemp("tare")

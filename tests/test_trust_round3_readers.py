@@ -108,7 +108,7 @@ def _in_child(*commands: list[str]) -> list[tuple[int, str]]:
 
 
 # ========================================== item 1: HDF5 values stored in other files
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def hdf5_day(tmp_path_factory) -> tuple[Path, Path]:
     """An HDF5 day written once (copied per test): (its folder, its protocol)."""
     root = tmp_path_factory.mktemp("h5day")
@@ -196,7 +196,7 @@ def test_external_storage_naming_a_system_file_is_refused_without_reading_it(tmp
         read_hdf5_columns(path.read_bytes(), "run.h5")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def fifo_days(hdf5_day, tmp_path_factory) -> dict[str, tuple[Path, Path, list]]:
     """A copy of the HDF5 day per way of keeping run 21's drag in a FIFO, and what
     ``inspect`` of that run and ``process`` of the day did in a child process (one for
@@ -376,7 +376,7 @@ def test_inspect_of_a_wide_file_lists_a_few_unrecognised_columns(tmp_path):
 
 
 # ============================================== item 14: a damaged TDMS file is quiet
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def tdms_day(tmp_path_factory) -> tuple[Path, Path]:
     root = tmp_path_factory.mktemp("tdmsday")
     return root, _day(root, "tdms")

@@ -41,7 +41,7 @@ REPO = Path(__file__).resolve().parents[1]
 DAY_EXAMPLES = settings(max_examples=6, suppress_health_check=[HealthCheck.too_slow])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def day_dir(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("trust3")
     syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv")
@@ -64,7 +64,7 @@ def _tables(out: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(out.glob("*.csv"))}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def processed(day_dir, tmp_path_factory) -> tuple[Path, Path, dict[str, bytes]]:
     """(protocol, output folder with its cache, the tables of a fresh run)."""
     root = tmp_path_factory.mktemp("processed")
@@ -83,7 +83,7 @@ def _copy(processed, tmp_path_factory, name: str) -> tuple[Path, Path, dict[str,
     return protocol, copy, fresh
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def own_copy(processed, tmp_path_factory) -> Callable[[str], tuple[Path, Path, dict]]:
     """``own_copy(name)``: :func:`_copy` made once per name, kept across a property test's
     examples."""
@@ -208,7 +208,7 @@ def _held(folder: Path) -> Iterator[None]:
         holder.join(30)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def vehicle_inputs(tmp_path_factory) -> dict[str, Path]:
     """model.json of REMUS and of the glider, and a short rudder-sine record of REMUS."""
     from towtank.vehicle.simulate import simulate
@@ -331,7 +331,7 @@ def _record(cache: Path, loc: list) -> bytes:
     return (cache / "runs" / pack).read_bytes()[offset:offset + length]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def reductions(processed) -> list[RunReduction]:
     cache = processed[1] / ".cache"
     return [records.from_bytes(_record(cache, loc), RunReduction)
@@ -630,7 +630,7 @@ def test_the_set_put_back_after_a_kill_is_the_latest_despite_a_planted_time(tmp_
     assert (out / "runs.csv").read_text() == ".out.old-3"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def synth_fin_day(tmp_path_factory) -> Path:
     """``towtank synth DAY --day fin`` once, for the tests to copy (with its mtimes)."""
     day = tmp_path_factory.mktemp("synth_fin") / "day"

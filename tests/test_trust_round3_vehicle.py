@@ -54,14 +54,14 @@ def _predicted(protocol: str) -> dict:
     return predict_vehicle(load_protocol(path, check_paths=False, require_runs=False)).model
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def remus() -> dict:
     """REMUS, neutrally buoyant."""
     model = _predicted("remus_vehicle.toml")
     return dict(model, buoyancy_N=model["weight_N"])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def record(remus) -> pd.DataFrame:
     """A 40 s sine manoeuvre at 20 Hz (801 rows), the paper's states with a little noise."""
     ts = simulate(remus, "sine", 1.5, rudder_deg=10.0, period_s=10.0, duration_s=40.0,
@@ -288,7 +288,7 @@ def test_a_glider_input_outside_its_hull_stops_predict(tmp_path, capsys, key, va
     assert not (tmp_path / "o").exists()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def glider_model() -> dict:
     return _predicted(GLIDER.name)
 

@@ -32,7 +32,7 @@ PLAN = [syn.RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.6)] + [
 ]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def bad_day(tmp_path_factory):
     """A day whose runs are rejected in every way the sheet and the reduction decide:
     run 3 an empty file, run 4 its tare group without a sting run, run 7 the file of run 5

@@ -31,7 +31,7 @@ def _mypy(targets: list[str]) -> tuple[int, str]:
     return status, stdout + stderr
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str]:
     """One mypy run over towtank/ and a module with two known errors (checking towtank/ is
     the whole cost; the second module adds nothing to it)."""

@@ -28,7 +28,7 @@ KITE = Path(__file__).resolve().parents[2] / "shared" / "real" / "tudelft_kite_l
 SILENCE = "state `unit` in [channels] to silence this"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def frame():
     return syn.simulate_run("hull", 0.0, 1.2, 0.5, fs=200.0, rng=3)[0]
 
@@ -120,7 +120,7 @@ def test_a_unit_towtank_cannot_convert_is_refused(tmp_path):
     assert load_protocol(syn.write_protocol(path, **sections)).channels["drag"].unit == "V"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def bare_day(tmp_path_factory):
     """The hull day as plain CSV with canonical headers: no unit label anywhere."""
     root = tmp_path_factory.mktemp("bare")

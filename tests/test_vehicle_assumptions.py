@@ -32,7 +32,7 @@ def _predicted(name: str):
     return predict_vehicle(protocol)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def glider():
     return _predicted("glider_parametric.toml").model
 

@@ -30,7 +30,7 @@ from towtank.vehicle.stage import predict_vehicle
 REMUS = Path(__file__).resolve().parents[1] / "protocols" / "remus_vehicle.toml"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def remus() -> dict:
     protocol = load_protocol(REMUS, check_paths=False, require_runs=False)
     return predict_vehicle(protocol).model

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 REMUS = ROOT / "protocols" / "remus_vehicle.toml"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def remus(tmp_path_factory):
     """model.json of the shipped REMUS protocol (Prestero's W, B, CG and CB)."""
     from towtank.commands.cli import main

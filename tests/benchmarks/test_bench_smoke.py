@@ -1,7 +1,9 @@
 """Smoke test of the campaign benchmark (``python -m towtank.testing.bench``) at a tiny size.
 
 It runs the whole bench end to end and checks that ``bench.json`` holds every figure. No timing
-is asserted: the figures depend on the machine.
+is asserted: the figures depend on the machine. Marked ``bench``: the benchmark starts a dozen
+new processes (its cold-start and worker measurements), so it runs apart from the unit tests,
+in ``.ci/run``'s own step (``python -m pytest --bench tests/benchmarks/test_bench_smoke.py``).
 """
 
 from __future__ import annotations
@@ -11,6 +13,10 @@ import math
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.bench
 
 TOP_LEVEL = {
     "runs", "fs_hz", "jobs", "csv_mb", "largest_file_mb", "rows", "generation_s", "machine",
