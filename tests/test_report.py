@@ -18,6 +18,7 @@ import numpy as np
 import openpyxl
 import pandas as pd
 import pytest
+from conftest import built_once
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pypdf import PdfReader
@@ -42,7 +43,13 @@ DAMAGED_RUN = 33  # a repeat run at 0 deg, 1.2 m/s: the day stays complete witho
 
 @pytest.fixture(scope="session")
 def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
-    root = tmp_path_factory.mktemp("report")
+    """(DayResult, output folder) of the hull and the fin day, written once per test run
+    (:func:`conftest.built_once`: shared by the xdist workers; the tests only read them)."""
+    value, _ = built_once(tmp_path_factory, "test_report_days", _write_days)
+    return value
+
+
+def _write_days(root: Path) -> dict[str, tuple]:
     out = {}
     hull = root / "hull"
     synthetic.make_hull_day(hull, seed=3)
