@@ -85,7 +85,7 @@ def test_truth_inside_95_percent_interval(seed_result, seed):
 def test_interval_coverage(seed_result):
     """Over 30 seeds the 95 % intervals hold the truth in 85-100 % of the days, per coefficient.
 
-    Measured (these 30 seeds, 100 Hz): X_udot 100 %, Y_vdot 90 %, X_u|u| 100 %, Y_v|v| 97 %,
+    Measured (these 30 seeds, 100 Hz): X_udot 100 %, Y_vdot 90 %, X_u|u| 100 %, Y_v|v| 100 %,
     X_uv 100 % (200 seeds: 100, 97, 99, 96.5, 97 %). X_udot's interval is dominated by the
     stated 0.5 g uncertainty of the weighed mass, hence its full coverage; the test below
     takes the mass out.
