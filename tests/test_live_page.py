@@ -686,12 +686,21 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
                      .get_attribute("data-state") == "done", 60)  # bounds a hang only
         # the verdict line on the terminal, one per run
         assert sum(line.startswith("run ") for line in said) == len(plan)
-        # the coefficient table, once the last state with coefficients is shown
-        with open(tmp_path / "out" / "coefficients.csv", newline="") as fh:
-            rows = {r["symbol"]: r for r in csv.DictReader(fh)}
-        assert rows
+        # the coefficient table, once the last state with coefficients is shown: the page has
+        # a run's verdict before its outputs are written, so coefficients.csv is read as it is
+        # at each look (the last run's once written)
+        def csv_rows() -> dict[str, dict[str, str]]:
+            with open(tmp_path / "out" / "coefficients.csv", newline="") as fh:
+                return {r["symbol"]: r for r in csv.DictReader(fh)}
+
+        def every_run_written() -> bool:
+            with open(tmp_path / "out" / "runs.csv", newline="") as fh:
+                return len(list(csv.DictReader(fh))) == len(plan)
 
         def table_is_csv() -> bool:
+            if not every_run_written():
+                return False
+            rows = csv_rows()
             shown = {}
             for tr in browser.find_elements(By.CSS_SELECTOR, "#coef-body tr"):
                 cell = {td.get_attribute("data-column"): td.text
@@ -702,6 +711,7 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
                 for s in rows for col in ("value", "ci_low", "ci_high") if rows[s][col])
 
         wait_for(table_is_csv, 20)
+        assert csv_rows()
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGINT)
