@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from towtank.errors import ProtocolError
@@ -202,6 +202,8 @@ _cell = st.one_of(
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(cells=st.lists(st.fixed_dictionaries({c: _cell for c in OPTIONAL}), min_size=1,
                       max_size=4))
+@example(cells=[dict.fromkeys(OPTIONAL, ""), dict(dict.fromkeys(OPTIONAL, ""),
+                                                   depth_mm="\x0c0")])  # found by hypothesis
 def test_fuzz_optional_cells(tmp_path, cells):
     """Random content in the optional columns: the reader returns a frame (faults confined to
     their rows' sheet_error) or raises ProtocolError, never anything else."""
@@ -262,3 +264,16 @@ def test_a_bare_carriage_return_in_a_csv_is_a_line_break_with_its_own_row_error(
     df = _read(path)
     assert list(df["run"])[:2] == [1, 2] and list(df["sheet_error"])[:2] == ["", ""]
     assert len(df) == 3 and "row 4 of cr.csv" in df["sheet_error"].iloc[2]
+
+
+@pytest.mark.parametrize("char", ["\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85",
+                                  "\u2028", "\u2029"])
+def test_a_cell_with_a_character_python_calls_a_line_break_stays_in_its_row(tmp_path, char):
+    """A form feed, vertical tab, file/group/record separator, NEL or Unicode line separator
+    pasted into a cell is not where a CSV line ends: the sheet keeps its rows (no phantom run 0)
+    and the cell its text."""
+    rows = [dict(r) for r in ROWS[:2]]
+    rows[1]["remarks"] = f"gauge{char}0"
+    df = _read(_write(tmp_path / "s.csv", rows))
+    assert list(df["run"]) == [1, 2]
+    assert df["remarks"].iloc[1] == f"gauge{char}0"

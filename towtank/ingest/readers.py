@@ -50,6 +50,7 @@ import numpy as np
 from towtank.errors import RunError
 from towtank.ingest.extensions import EXTENSIONS  # noqa: F401 - public here too
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.runtime.safefile import text_lines
 
 UNITS_KEY = "__units__"
 WF_TIME_KEY = "__wf_time__"
@@ -544,7 +545,7 @@ def read_lvm_columns(
     from its ``Delta_X`` and ``X0``.
     """
     text = data.decode("utf-8", "replace") if isinstance(data, bytes) else data
-    lines = text.splitlines()
+    lines = text_lines(text)
     sep, dec = "\t", "."
     for ln in lines[:40]:
         key, _, value = ln.partition("\t")

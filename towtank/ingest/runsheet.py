@@ -36,6 +36,7 @@ from towtank.ingest.values import shown
 from towtank.reference.air import AIR_TEMPERATURE_RANGE_C
 from towtank.reference.water import temperature_problem
 from towtank.runtime.pathcheck import is_regular_file
+from towtank.runtime.safefile import text_lines
 
 REQUIRED = ("run", "file", "config", "angle_deg")
 CONFIGS = ("hull", "fin", "sting")
@@ -207,7 +208,7 @@ def read_csv_grid(path: Path, opts: SheetOptions) -> list[list[Any]]:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         text = raw.decode("latin-1")  # an Excel export on a European system
-    lines = text.splitlines()
+    lines = text_lines(text)
     delim = opts.delimiter
     if delim == "auto":
         sample = [ln for ln in lines[:40] if ln.strip()]

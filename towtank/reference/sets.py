@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from towtank.errors import ProtocolError
-from towtank.runtime.safefile import check_table_size
+from towtank.runtime.safefile import check_table_size, text_lines
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -109,7 +109,7 @@ def read_reference_csv(path: str | Path) -> dict[str, float]:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise ProtocolError(f"{path}: the reference CSV cannot be read ({exc}).") from None
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1)
+    lines = [(n, line) for n, line in enumerate(text_lines(text), start=1)
              if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise ProtocolError(f"{path}: the reference CSV is empty (it needs the columns symbol "

@@ -5,13 +5,15 @@ link to ``/dev/zero`` or to a 12 GB file (a read fills the memory), a folder. Th
 open a path only if it is a regular file, never through a symbolic link and never blocking,
 and read it with a cap (:func:`read_regular`) or by streaming (:func:`sha256_regular`).
 A table a protocol names (reference CSV, tare table) is refused before it is read when it is
-not a regular file or is far too large for a table (:func:`check_table_size`).
+not a regular file or is far too large for a table (:func:`check_table_size`). A text
+table's lines are split only where a file's lines end (:func:`text_lines`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import stat
 from pathlib import Path
 from typing import Any
@@ -118,3 +120,20 @@ def check_table_size(path: Any, what: str, src: str) -> None:
             f"reads such tables up to {MAX_TABLE_BYTES >> 20} MiB (they hold a few lines): is "
             "it the right file?"
         )
+
+
+_LINE_END = re.compile(r"\r\n|\r|\n")
+
+
+def text_lines(text: str) -> list[str]:
+    """The lines of a text file: split at ``\\r\\n``, ``\\r`` or ``\\n`` only.
+
+    ``str.splitlines`` also splits at a form feed, a vertical tab, ``\\x1c``–``\\x1e``,
+    ``\\x85`` and the Unicode line and paragraph separators, which a spreadsheet or a
+    logger may leave inside a cell: a run sheet's cell ``"\\x0c0"`` would become a row of
+    its own (run 0). As ``splitlines``, a final line end adds no empty line.
+    """
+    lines = _LINE_END.split(text)
+    if lines and lines[-1] == "":
+        lines.pop()
+    return lines
