@@ -44,7 +44,7 @@ PLAY = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.6, 2.0)]
         + [RunSpec("hull", 0.0, v, 0.5) for v in (0.8, 1.6, 2.0)]
         + [RunSpec("hull", 5.0, 1.6, 0.5, status="void", remarks="carriage stopped early",
                    plateau_s=0.6)]
-        + [RunSpec("hull", a, v, 0.5) for a in (10.0, 15.0) for v in (0.8, 1.6)]
+        + [RunSpec("hull", a, 1.6, 0.5) for a in (10.0, 15.0)]
         + [RunSpec("hull", 0.0, 2.0, 0.5, test="accel")])
 BURST = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.2, 1.6, 2.0)]
          + [RunSpec("hull", a, v, 0.5) for a in (0.0, 5.0, 10.0, 15.0)
