@@ -139,13 +139,16 @@ class Workspace:
         return self.done[command]
 
     def run_upto(self, q: Quoted) -> tuple[int, str]:
-        """Run the commands quoted before ``q`` in its document (their outputs may be its
-        inputs) and, for a file ``q`` names that is still missing, the documented command
-        whose ``--out`` is its folder (``reports/glider/model.json`` ← ``towtank predict …
-        --out reports/glider``); then ``q``."""
-        before = RUNNABLE[:RUNNABLE.index(q)]
+        """When ``q`` names a file that is still missing (an output of another command: a
+        model.json), run the commands quoted before ``q`` in its document (their outputs may
+        be its inputs) and the documented command whose ``--out`` is its folder
+        (``reports/glider/model.json`` ← ``towtank predict … --out reports/glider``); then
+        ``q``. A command whose files are all there (a protocol, the sample runs) runs on its
+        own: whichever pytest worker it falls on, the days before it are not processed again."""
+        missing = self._missing_folders(q)
+        before = RUNNABLE[:RUNNABLE.index(q)] if missing else []
         for other in [b for b in before if b.source == q.source] + [
-                b for b in RUNNABLE if _out(b) in self._missing_folders(q)]:
+                b for b in RUNNABLE if _out(b) in missing]:
             if other != q and other.command not in KNOWN_BUGS and _verb(other) not in EXIT_STATUS:
                 self.run(other.command)
         return self.run(q.command)
