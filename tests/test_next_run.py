@@ -9,6 +9,7 @@ back one at a time to see what the refit actually gives.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,6 +32,7 @@ from towtank.testing.coverage import clopper_pearson
 
 HELD_OUT = 8  # runs still to tow on each study day
 STUDY_FIRST_SEED = 0
+DAY_SEED = 5  # the unit checks' day
 
 
 @dataclass
@@ -76,8 +78,25 @@ def half_width(fit: HullFit, symbol: str) -> float:
 
 
 @pytest.fixture(scope="session")
-def day(tmp_path_factory) -> Reduced:
-    return reduce_day(5, tmp_path_factory.mktemp("next_run"))
+def reduced(tmp_path_factory) -> Callable[[int], Reduced]:
+    """``reduced(seed)``: the day of that seed reduced; the unit checks' day (seed 5, one of
+    the study's) kept for the session, the tests only read it."""
+    cache: dict[int, Reduced] = {}
+
+    def get(seed: int) -> Reduced:
+        if seed in cache:
+            return cache[seed]
+        red = reduce_day(seed, tmp_path_factory.mktemp(f"next_run{seed}"))
+        if seed == DAY_SEED:
+            cache[seed] = red
+        return red
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def day(reduced) -> Reduced:
+    return reduced(DAY_SEED)
 
 
 # ---------------------------------------------------------------------------- unit checks
@@ -208,11 +227,10 @@ def test_a_degenerate_fit_never_raises(day):
 
 
 # ------------------------------------------------------------------------- the issue's proof
-def study_day(seed: int, where: Path) -> dict[str, Any]:
-    """One study day: hold 8 random hull runs out, rank them, refit with the first ranked and
-    with another drawn at random among the other seven; does the first shrink the target's
-    95 % half-width more?"""
-    red = reduce_day(seed, where)
+def study_day(red: Reduced, seed: int) -> dict[str, Any]:
+    """One study day, ``red`` that of ``seed``: hold 8 random hull runs out, rank them, refit
+    with the first ranked and with another drawn at random among the other seven; does the
+    first shrink the target's 95 % half-width more?"""
     rng = np.random.default_rng(seed)
     held = sorted(int(r) for r in rng.choice(red.hull_runs(), size=HELD_OUT, replace=False))
     fit = red.fit(held)
@@ -226,26 +244,26 @@ def study_day(seed: int, where: Path) -> dict[str, Any]:
             "first_better": hw_first < hw_other}
 
 
-def _fraction(days: int, tmp_path: Path) -> tuple[float, tuple[float, float]]:
-    rows = [study_day(s, tmp_path / f"d{s}") for s in range(STUDY_FIRST_SEED,
-                                                            STUDY_FIRST_SEED + days)]
+def _fraction(days: int, reduced: Callable[[int], Reduced]) -> tuple[float,
+                                                                     tuple[float, float]]:
+    rows = [study_day(reduced(s), s) for s in range(STUDY_FIRST_SEED, STUDY_FIRST_SEED + days)]
     k = sum(r["first_better"] for r in rows)
     return k / days, clopper_pearson(k, days)
 
 
-def test_the_first_ranked_run_beats_a_random_one_on_20_days(tmp_path):
+def test_the_first_ranked_run_beats_a_random_one_on_20_days(reduced):
     """The 20-day version of the issue's proof (seeds 0-19, about 11 s): the first ranked run
     shrinks the targeted interval more than a random other remaining run on 18 of 20 days
     (90 %, Clopper–Pearson 95 % interval 68–99 %); asserted at least 15 of 20 (75 %)."""
-    frac, _ = _fraction(20, tmp_path)
+    frac, _ = _fraction(20, reduced)
     assert frac >= 0.75, frac
 
 
 @pytest.mark.slow
-def test_the_first_ranked_run_beats_a_random_one_on_100_days(tmp_path):
+def test_the_first_ranked_run_beats_a_random_one_on_100_days(reduced):
     """The issue's proof (seeds 0-99, about 80 s): the first ranked run shrinks the targeted
     interval more than a random other remaining run on at least 80 % of the days: measured on
     88 of 100 days (Clopper–Pearson 95 % interval 80.0–93.6 %); the target was X_uv on every
     day."""
-    frac, (lo, hi) = _fraction(100, tmp_path)
+    frac, (lo, hi) = _fraction(100, reduced)
     assert frac >= 0.80, (frac, lo, hi)

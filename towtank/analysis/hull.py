@@ -759,23 +759,28 @@ def repeat_spread(runs: pd.DataFrame) -> pd.DataFrame:
     C_D is each run's coefficient on the area its test uses (runs.csv ``cd_ref``: the lateral
     area at α = 90°, else the frontal area); ``cd`` when the table has no ``cd_ref``.
     """
-    hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")].copy()
+    hull = runs[(runs["status"] == "ok") & (runs["config"] == "hull")]
+    cd = hull["cd"].to_numpy(float)
     if "cd_ref" in hull:
-        hull["cd"] = hull["cd_ref"].where(hull["cd_ref"].notna(), hull["cd"])
+        ref = hull["cd_ref"].to_numpy(float)
+        cd = np.where(np.isnan(ref), cd, ref)
+    angle = np.round(hull["angle_deg"].to_numpy(float), 1)
+    speed = hull["speed_mean"].to_numpy(float)
+    run, drag = hull["run"].to_numpy(), hull["drag_mean"].to_numpy(float)
+    # by angle (a run without one in none), then by speed within an angle
+    order = [i for i in np.lexsort((speed, angle)) if not np.isnan(angle[i])]
     rows = []
-    cols = ["run", "speed_mean", "cd", "drag_mean"]
-    for angle, grp in hull.groupby(np.round(hull["angle_deg"], 1)):
-        speeds = grp.sort_values("speed_mean")[cols].to_dict("records")
-        cluster: list[dict[str, Any]] = []
-        for r in speeds:
-            if cluster and abs(r["speed_mean"] - cluster[0]["speed_mean"]) > 0.03 * max(
-                cluster[0]["speed_mean"], 1e-9
-            ):
-                rows.append(_spread_row(angle, cluster))
-                cluster = []
-            cluster.append(r)
-        if cluster:
-            rows.append(_spread_row(angle, cluster))
+    cluster: list[dict[str, Any]] = []
+    for i in order:
+        r = {"run": run[i], "speed_mean": speed[i], "cd": cd[i], "drag_mean": drag[i]}
+        if cluster and (angle[i] != cluster[0]["angle"] or abs(
+                r["speed_mean"] - cluster[0]["speed_mean"]) > 0.03 * max(
+                cluster[0]["speed_mean"], 1e-9)):
+            rows.append(_spread_row(cluster[0]["angle"], cluster))
+            cluster = []
+        cluster.append(r | {"angle": angle[i]})
+    if cluster:
+        rows.append(_spread_row(cluster[0]["angle"], cluster))
     df = pd.DataFrame(rows)
     return df[df["n"] > 1].reset_index(drop=True) if not df.empty else df
 

@@ -187,6 +187,12 @@ class BatchModel:
         est = [(s, 1.0) for s in estimate if not s.endswith("dot")]
         self.est_cols = [j for j, s in enumerate(estimate) if not s.endswith("dot")]
         self.est_idx, self.est_e = self._table(est)
+        # both tables padded to one width, the fixed terms first
+        width = max(self.fixed_idx.shape[1], self.est_idx.shape[1])
+        self.n_fixed = len(self.fixed_idx)
+        self.all_idx = np.concatenate([np.pad(tab, ((0, 0), (0, width - tab.shape[1])),
+                                              constant_values=14)
+                                       for tab in (self.fixed_idx, self.est_idx)])
         self.x_uu = coef.get("X_u|u|", 0.0)
         self.x_uu_j = estimate.index("X_u|u|") if "X_u|u|" in estimate else None
         self.u0: Any = float(speed_m_s)  # [m/s], or one per row of the states
@@ -210,9 +216,27 @@ class BatchModel:
             len(rows), width)
         return table, np.array(coefs).reshape(len(rows), 6)
 
+    def coefficients(self, beta: np.ndarray) -> dict[str, Any]:
+        """What :meth:`rhs` needs of the coefficients ``beta`` (N, k), computed once for the
+        steps that share them: the estimated terms' coefficients, the axial drag ``X_u|u|``,
+        the estimated added masses and the inverse mass matrix of each row (N, 6, 6), None
+        when no added mass is estimated."""
+        x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
+        pre: dict[str, Any] = {"est": beta[:, self.est_cols], "drag": -x_uu * self.u0
+                               * np.abs(self.u0), "bd": None, "minv": None}
+        if self.dot_index:
+            bd = beta[:, self.dot_index]
+            ma = self.ma0 + np.einsum("nj,jab->nab", bd, self.mb_stack)
+            pre["bd"], pre["minv"] = bd, np.linalg.inv(self.m_rb + ma)
+        return pre
+
     def rhs(self, s: np.ndarray, beta: np.ndarray, dr: float, ds: float) -> np.ndarray:
         """ds/dt (N, 12) of the states ``s`` (N, 12) with the coefficients ``beta`` (N, k),
         rudder ``dr`` and stern plane ``ds`` [rad]."""
+        return self.rhs_with(s, self.coefficients(beta), dr, ds)
+
+    def rhs_with(self, s: np.ndarray, pre: dict[str, Any], dr: float, ds: float) -> np.ndarray:
+        """:meth:`rhs` with the coefficients given by :meth:`coefficients`."""
         n = s.shape[0]
         nu = s[:, 6:]
         ext = np.empty((n, 15))
@@ -221,30 +245,28 @@ class BatchModel:
         ext[:, 12] = dr
         ext[:, 13] = ds
         ext[:, 14] = 1.0
-        tau = ext[:, self.fixed_idx].prod(axis=2) @ self.fixed_c
+        # every term's product of velocities and controls in one gather: the fixed terms',
+        # then the estimated ones'
+        prod = ext[:, self.all_idx].prod(axis=2)
+        tau = prod[:, :self.n_fixed] @ self.fixed_c
         if len(self.est_cols):
-            phi = ext[:, self.est_idx].prod(axis=2) * beta[:, self.est_cols]
-            tau += phi @ self.est_e
-        x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
-        tau[:, 0] += -x_uu * self.u0 * np.abs(self.u0)
+            tau += (prod[:, self.n_fixed:] * pre["est"]) @ self.est_e
+        tau[:, 0] += pre["drag"]
         # C(nu) nu from the products nu_a nu_b, its M_A part with each row's added masses
         quad = (nu[:, :, None] * nu[:, None, :]).reshape(n, 36) @ self.coriolis
         rest = quad[:, :6]
-        ma = None
-        if self.dot_index:
-            bd = beta[:, self.dot_index]
-            ma = self.ma0 + np.einsum("nj,jab->nab", bd, self.mb_stack)
-            rest = rest + np.einsum("nj,njk->nk", bd, quad[:, 6:].reshape(n, -1, 6))
+        if pre["bd"] is not None:
+            rest = rest + np.einsum("nj,njk->nk", pre["bd"], quad[:, 6:].reshape(n, -1, 6))
         sn, cs = np.sin(s[:, 3:6].T), np.cos(s[:, 3:6].T)
         sph, sth, sps = sn
         cph, cth, cps = cs
         # g(eta): linear in sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)
         g = np.array([sth, cth * sph, cth * cph]).T @ self.g_mat.T
         total = tau - rest - g
-        if ma is None:
+        if pre["minv"] is None:
             nu_dot = total @ self.minv0.T
         else:
-            nu_dot = np.linalg.solve(self.m_rb + ma, total[:, :, None])[:, :, 0]
+            nu_dot = np.einsum("nab,nb->na", pre["minv"], total)
         u, v, w_, p, q, r = nu.T
         # eta_dot = J(eta) nu (Fossen eq. 2.40), R = R_z(psi) R_y(theta) R_x(phi) applied in turn
         v_x, w_x = cph * v - sph * w_, sph * v + cph * w_
@@ -261,9 +283,10 @@ class BatchModel:
         return out
 
     def step(self, aug: np.ndarray, dt: float, c0: tuple[float, float],
-             c1: tuple[float, float]) -> np.ndarray:
+             c1: tuple[float, float], pre: dict[str, Any] | None = None) -> np.ndarray:
         """The augmented states (N, 12 + k) after ``dt`` [s]: RK4 in steps of at most
-        :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``.
+        :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``; ``pre``: the
+        coefficients' :meth:`coefficients` when already computed.
 
         Raises
         ------
@@ -276,15 +299,17 @@ class BatchModel:
             raise ValueError(f"a time step of {dt:g} s would take more than the {MAX_SUBSTEPS} "
                              f"Runge-Kutta steps of {MAX_STEP_S:g} s identify takes from one "
                              f"sample to the next (at most {MAX_GAP_S:g} s between samples).")
+        if pre is None:
+            pre = self.coefficients(beta)
         h = dt / nsub
         for i in range(nsub):
             def ctl(f: float) -> tuple[float, float]:
                 return (c0[0] + f * (c1[0] - c0[0]), c0[1] + f * (c1[1] - c0[1]))
             fa, fb, fc = i / nsub, (i + 0.5) / nsub, (i + 1) / nsub
-            k1 = self.rhs(s, beta, *ctl(fa))
-            k2 = self.rhs(s + 0.5 * h * k1, beta, *ctl(fb))
-            k3 = self.rhs(s + 0.5 * h * k2, beta, *ctl(fb))
-            k4 = self.rhs(s + h * k3, beta, *ctl(fc))
+            k1 = self.rhs_with(s, pre, *ctl(fa))
+            k2 = self.rhs_with(s + 0.5 * h * k1, pre, *ctl(fb))
+            k3 = self.rhs_with(s + 0.5 * h * k2, pre, *ctl(fb))
+            k4 = self.rhs_with(s + h * k3, pre, *ctl(fc))
             s = s + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         return np.concatenate((s, beta), axis=1)
 
@@ -295,10 +320,11 @@ class BatchModel:
         out = np.empty((len(log.t), s0.shape[0], 12))
         out[0] = s0
         with np.errstate(all="ignore"):
+            pre = self.coefficients(beta)
             for k in range(1, len(log.t)):
                 aug = self.step(aug, float(log.t[k] - log.t[k - 1]),
                                 (log.rudder[k - 1], log.sternplane[k - 1]),
-                                (log.rudder[k], log.sternplane[k]))
+                                (log.rudder[k], log.sternplane[k]), pre)
                 out[k] = aug[:, :12]
         return out
 
