@@ -452,6 +452,15 @@ def test_a_corrupt_manifest_stops_the_day_in_one_sentence(day, processed_out, tm
     assert (out / "runs.csv").read_bytes() == before
 
 
+def _small_day(root: Path) -> Path:
+    """A four-run hull day (two sting, two hull runs) in ``root``: its protocol."""
+    plan = [syn.RunSpec(kind, 0.0, speed, 0.5) for kind in ("sting", "hull")
+            for speed in (0.8, 1.6)]
+    syn.make_hull_day(root, seed=3, file_format="csv", sheet_format="csv", runs=plan)
+    return syn.write_protocol(root / "protocol.toml",
+                              **syn.hull_protocol_sections(".", "out", sheet_format="csv"))
+
+
 def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path):
     repo = Path(__file__).resolve().parents[1]
     protocol = repo / "protocols" / "remus_vehicle.toml"
@@ -461,7 +470,7 @@ def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path
            "--duration-s", "5", "--out", str(out)]
     assert main(sim) == 0
     (out / "notes.txt").write_text("mine")
-    day_protocol = repo / "protocols" / "sut2_hull.toml"
+    day_protocol = _small_day(tmp_path / "day")
     assert main(["process", str(day_protocol), "--out", str(out), "-q", "--no-report",
                  "--jobs", "1"]) == 0
     assert main(sim) == 0  # its files are still known as towtank's
