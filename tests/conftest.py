@@ -481,6 +481,39 @@ def draw_only_pages(mp: pytest.MonkeyPatch, keep: Callable[[Any], bool]) -> None
 
     mp.setattr(pdf, "_render", render)
 
+# ------------------------- the adversarial rounds' processed day (issue 34 item 6, s10trust)
+@dataclass(frozen=True)
+class TrustDay:
+    """A synthetic SUT-2 day (seed 5, CSV run files and sheet) and its protocol, processed by
+    ``towtank.process_day(protocol, out=out, report=False, jobs=1)``, which writes what
+    ``towtank process --no-report -q --jobs 1`` writes (with the run cache and the replay
+    record). Tests only read ``dir`` and ``out``: a test that writes copies them first."""
+
+    dir: Path  # the day's folder: data/, run_sheet.csv, truth.json
+    protocol: Path  # its protocol, in a folder of its own (paths to ``dir`` absolute)
+    out: Path  # the processed output folder, with .cache
+    day: Any  # towtank.results.DayResult
+
+
+@pytest.fixture(scope="session")
+def trust_day(tmp_path_factory) -> TrustDay:
+    """The day the adversarial-round tests (test_trust_round2.py, test_trust_round3_runtime.py)
+    plant things into copies of, processed once per test run (:func:`built_once`)."""
+
+    def build(out: Path) -> Any:
+        import towtank
+
+        home = out.parent
+        syn.make_hull_day(home / "day", seed=5, file_format="csv", sheet_format="csv")
+        sections = syn.hull_protocol_sections(str(home / "day"), "out", sheet_format="csv")
+        protocol = syn.write_protocol(home / "protocol" / "protocol.toml", **sections)
+        return towtank.process_day(protocol, out=out, report=False, jobs=JOBS)
+
+    day, out = built_once(tmp_path_factory, "trust_day", build)
+    return TrustDay(out.parent / "day", out.parent / "protocol" / "protocol.toml", out, day)
+
+
+
 def pytest_addoption(parser):
     parser.addoption("--run-slow", action="store_true", default=False,
                      help="also run the tests marked slow (the coverage study: hours)")

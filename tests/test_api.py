@@ -77,7 +77,7 @@ def test_process_day_from_a_plain_program(how, tmp_path, cli_coefficients):
 
 
 def test_process_day_in_process_returns_the_day(cli_coefficients, sample_hull_day):
-    day = sample_hull_day  # towtank.process_day(HULL) in this process
+    day = sample_hull_day  # towtank.process_day(HULL, ...) in this session
     assert day.n_rejected == 0 and not day.rejected
     _same(day.coefficients.pipe(lambda d: pd.read_csv(
         pd.io.common.StringIO(d.to_csv(index=False)))), cli_coefficients)
@@ -89,7 +89,7 @@ def test_process_day_in_process_returns_the_day(cli_coefficients, sample_hull_da
 
 def test_process_day_writes_what_the_cli_writes(tmp_path, cli_coefficients):
     out = tmp_path / "out"
-    towtank.process_day(str(HULL), out=out, report=False)
+    towtank.process_day(str(HULL), out=out, report=False, jobs=1)
     _same(pd.read_csv(out / "coefficients.csv"), cli_coefficients)
     assert {"runs.csv", "fins.csv", "scaling.csv", "provenance.json"} <= {
         p.name for p in out.iterdir()}
@@ -255,15 +255,17 @@ def test_a_notice_is_its_sentence_with_its_stage():
 
 # ------------------------------------------------------------ one vocabulary of the results
 @pytest.fixture(scope="session")
-def sample_hull_day():
-    """The sample hull day, processed once (no output written)."""
-    return towtank.process_day(HULL, jobs=2)
+def sample_hull_day(sample_report):
+    """The sample hull day as ``towtank.process_day(HULL, out=..., report=True)`` returns it:
+    the session's day (tests/conftest.py), which the golden comparison writes anyway."""
+    return sample_report("sut2_hull").day
 
 
 @pytest.fixture(scope="session")
-def sample_fin_day():
-    """The sample fin day, processed once (no output written)."""
-    return towtank.process_day(ROOT / "protocols" / "naca0015_fin.toml", jobs=2)
+def sample_fin_day(sample_report):
+    """The sample fin day as ``towtank.process_day`` returns it: the session's day
+    (tests/conftest.py), which the golden comparison writes anyway."""
+    return sample_report("naca0015_fin").day
 
 
 @pytest.fixture(scope="session")

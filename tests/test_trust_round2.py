@@ -40,18 +40,15 @@ def _protocol(root: Path, extra: str = "", **model) -> Path:
 
 
 @pytest.fixture(scope="session")
-def day_dir(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("trust2")
-    syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv")
-    return root
+def day_dir(trust_day) -> Path:
+    """The session's synthetic day (seed 5, CSV run files and sheet: tests/conftest.py)."""
+    return trust_day.dir
 
 
 @pytest.fixture(scope="session")
-def day(day_dir, tmp_path_factory) -> Path:
+def day(trust_day) -> Path:
     """A protocol of the module's day, in a folder of its own (the tests only read it)."""
-    sections = syn.hull_protocol_sections(str(day_dir), "out", sheet_format="csv")
-    return syn.write_protocol(tmp_path_factory.mktemp("protocol") / "protocol.toml",
-                              **sections)
+    return trust_day.protocol
 
 
 def _process(protocol: Path, out: Path, *extra: str) -> int:
@@ -60,12 +57,10 @@ def _process(protocol: Path, out: Path, *extra: str) -> int:
 
 
 @pytest.fixture(scope="session")
-def processed_out(day, tmp_path_factory) -> Path:
+def processed_out(trust_day) -> Path:
     """The output folder (with its cache) of ``day`` processed once: a test that starts from
     the processed day copies it (:func:`_processed`) rather than process the day again."""
-    out = tmp_path_factory.mktemp("processed") / "out"
-    assert _process(day, out) == 0
-    return out
+    return trust_day.out
 
 
 def _processed(processed_out: Path, out: Path) -> None:
@@ -243,27 +238,33 @@ def test_the_recorder_sees_every_way_of_reading_a_file(tmp_path):
 
 
 # ------------------------------------------- 3. the user's files are never taken for ours
-@pytest.mark.parametrize("name", [".out.notes", ".figures.old-mine", ".out.tmp-1", ".cachex"])
-def test_user_files_with_names_like_temporaries_are_kept(day, processed_out, tmp_path, name):
+#: Names of the user's own files that look like towtank's temporaries.
+LOOKALIKES = (".out.notes", ".figures.old-mine", ".out.tmp-1", ".cachex")
+
+
+def test_user_files_with_names_like_temporaries_are_kept(day, processed_out, tmp_path):
+    """All the look-alike names in one folder, which the day's outputs are written into twice:
+    each is kept as it was."""
     out = tmp_path / "out"
     _processed(processed_out, out)
-    (out / name).write_text("mine")
+    for name in LOOKALIKES:
+        (out / name).write_text(f"mine: {name}")
     assert _process(day, out, "--no-cache") == 0
     assert _process(day, out, "--no-cache") == 0
-    assert (out / name).read_text() == "mine"
+    for name in LOOKALIKES:
+        assert (out / name).is_file(), f"{name} was removed"
+        assert (out / name).read_text() == f"mine: {name}", f"{name} was overwritten"
 
 
 # ----------------------------------------------------------------- 4. two writers, one folder
 @pytest.fixture(scope="session")
-def two_days(day_dir, tmp_path_factory):
+def two_days(trust_day, tmp_path_factory):
+    """The session's processed day and another (the next seed), processed."""
     other = tmp_path_factory.mktemp("other")
     syn.make_hull_day(other, seed=SEED + 1, file_format="csv", sheet_format="csv")
-    days = []
-    for root in (day_dir, other):
-        sections = syn.hull_protocol_sections(str(root), "out", sheet_format="csv")
-        p = syn.write_protocol(tmp_path_factory.mktemp("p") / "p.toml", **sections)
-        days.append(towtank.process_day(p, jobs=1))
-    return days
+    sections = syn.hull_protocol_sections(str(other), "out", sheet_format="csv")
+    p = syn.write_protocol(tmp_path_factory.mktemp("p") / "p.toml", **sections)
+    return [trust_day.day, towtank.process_day(p, jobs=1)]
 
 
 def _folder_is_one_day(out: Path, alone: list[dict[str, bytes]]) -> None:
@@ -345,17 +346,13 @@ def _in_process(*args: str, capsys: pytest.CaptureFixture[str], timeout: float
 
 #: Odd entries that a regression could make towtank read without end (/dev/zero, a sparse
 #: 12 GB file): their runs get a process of their own, whose memory a regression cannot take
-#: from the tests. The others (a FIFO, which a hang bound interrupts) run here.
+#: from the tests (one child for both: :func:`own_process_runs`). The others (a FIFO, which a
+#: hang bound interrupts) run here.
 OWN_PROCESS = ("zero-link", "huge")
 
 
-@pytest.mark.parametrize("odd", ["fifo", "zero-link", "huge", "cache-file", "day-dir",
-                                 "files-dir", "files-fifo"])
-def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_out, tmp_path,
-                                                                 odd, capsys):
-    out = tmp_path / "out"
-    args = (str(day), "--out", str(out), "-q", "--jobs", "1", "--no-report")
-    _processed(processed_out, out)
+def _plant_odd(out: Path, odd: str) -> None:
+    """Put the odd entry ``odd`` into the processed output folder ``out``."""
     cache = out / ".cache"
     if odd == "fifo":
         os.mkfifo(out / "pipe")
@@ -365,8 +362,6 @@ def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_
         with open(out / "big.bin", "wb") as fh:
             fh.truncate(12 << 30)  # sparse: 12 GB that take no disk
     elif odd == "cache-file":
-        import shutil
-
         shutil.rmtree(cache)
         cache.write_text("not a folder")
     elif odd == "day-dir":
@@ -379,12 +374,45 @@ def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_
         (cache / "files.json").unlink()
         (cache / "day.json").unlink()
         os.mkfifo(cache / "files.json")
-    runs = (run_in_child([("process", *args)] * 2, timeout=120) if odd in OWN_PROCESS
-            else [_in_process("process", *args, capsys=capsys, timeout=60) for _ in range(2)])
+
+
+def _odd_args(day: Path, out: Path) -> tuple[str, ...]:
+    return (str(day), "--out", str(out), "-q", "--jobs", "1", "--no-report")
+
+
+@pytest.fixture(scope="module")
+def own_process_runs(day, processed_out, tmp_path_factory
+                     ) -> dict[str, list[subprocess.CompletedProcess]]:
+    """Each :data:`OWN_PROCESS` entry planted into a copy of the processed folder, and the
+    day processed twice into each copy, all in one child process: odd -> its two runs."""
+    commands = []
+    for odd in OWN_PROCESS:
+        out = tmp_path_factory.mktemp(f"odd-{odd}") / "out"
+        _processed(processed_out, out)
+        _plant_odd(out, odd)
+        commands += [("process", *_odd_args(day, out))] * 2
+    runs = run_in_child(commands, timeout=240)
+    return {odd: runs[2 * i: 2 * i + 2] for i, odd in enumerate(OWN_PROCESS)}
+
+
+@pytest.mark.parametrize("odd", ["fifo", "zero-link", "huge", "cache-file", "day-dir",
+                                 "files-dir", "files-fifo"])
+def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_out, tmp_path,
+                                                                 odd, capsys, request):
+    if odd in OWN_PROCESS:
+        runs = request.getfixturevalue("own_process_runs")[odd]
+    else:
+        out = tmp_path / "out"
+        _processed(processed_out, out)
+        _plant_odd(out, odd)
+        runs = [_in_process("process", *_odd_args(day, out), capsys=capsys, timeout=60)
+                for _ in range(2)]
+    assert len(runs) == 2
     for run in runs:
         assert run.returncode == 0, run.stderr
         assert "Traceback" not in run.stderr
     if odd == "cache-file":
+        cache = tmp_path / "out" / ".cache"
         assert cache.read_text() == "not a folder"
         assert "is not a folder" in run.stderr or run.stderr == ""
 
@@ -394,8 +422,6 @@ def test_a_cache_link_is_not_followed(day, processed_out, tmp_path):
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     _processed(processed_out, out)
-    import shutil
-
     shutil.rmtree(out / ".cache")
     os.symlink(elsewhere, out / ".cache")
     assert _process(day, out) == 0
@@ -426,6 +452,15 @@ def test_a_corrupt_manifest_stops_the_day_in_one_sentence(day, processed_out, tm
     assert (out / "runs.csv").read_bytes() == before
 
 
+def _small_day(root: Path) -> Path:
+    """A four-run hull day (two sting, two hull runs) in ``root``: its protocol."""
+    plan = [syn.RunSpec(kind, 0.0, speed, 0.5) for kind in ("sting", "hull")
+            for speed in (0.8, 1.6)]
+    syn.make_hull_day(root, seed=3, file_format="csv", sheet_format="csv", runs=plan)
+    return syn.write_protocol(root / "protocol.toml",
+                              **syn.hull_protocol_sections(".", "out", sheet_format="csv"))
+
+
 def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path):
     repo = Path(__file__).resolve().parents[1]
     protocol = repo / "protocols" / "remus_vehicle.toml"
@@ -435,8 +470,9 @@ def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path
            "--duration-s", "5", "--out", str(out)]
     assert main(sim) == 0
     (out / "notes.txt").write_text("mine")
-    day_protocol = repo / "protocols" / "sut2_hull.toml"
-    assert main(["process", str(day_protocol), "--out", str(out), "-q", "--no-report"]) == 0
+    day_protocol = _small_day(tmp_path / "day")
+    assert main(["process", str(day_protocol), "--out", str(out), "-q", "--no-report",
+                 "--jobs", "1"]) == 0
     assert main(sim) == 0  # its files are still known as towtank's
     listed = read_manifest(out)["files"]
     assert "manoeuvre.csv" in listed and "runs.csv" in listed

@@ -35,6 +35,7 @@ from towtank.ingest.schema import SCHEMA
 from towtank.runtime.pathcheck import FILE, FOLDER, MISSING, OTHER, path_kind, resolved
 from towtank.testing import layouts
 from towtank.testing import synthetic as syn
+from towtank.testing.child import run_in_child
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = [syn.RunSpec("sting", 0.0, 0.8, 0.5), syn.RunSpec("sting", 0.0, 1.6, 0.5),
@@ -92,33 +93,50 @@ def bomb_day(tmp_path_factory) -> tuple[Path, int]:
     return protocol, _add_run(root, "big.csv.gz")
 
 
-#: Run in a new interpreter: towtank's command under an address-space limit of the memory
-#: mapped once the libraries are loaded plus HEADROOM; reading the whole file needs more.
+#: Run before each command in one new interpreter (:func:`run_in_child`): the command under an
+#: address-space limit of the memory mapped at its start (the libraries loaded first, and
+#: what an earlier command left) plus HEADROOM; reading the whole file needs more.
 _LIMITED = textwrap.dedent("""
-    import resource, sys
+    import os, resource
     import numpy, pandas, pyarrow, pyarrow.csv, scipy.signal  # the libraries, loaded first
-    from towtank.commands.cli import main
+    from towtank.commands.cli import main as _main
 
-    with open("/proc/self/status") as fh:
-        mapped = next(int(l.split()[1]) * 1024 for l in fh if l.startswith("VmSize:"))
-    resource.setrlimit(resource.RLIMIT_AS, (mapped + int(sys.argv[1]), resource.RLIM_INFINITY))
-    sys.exit(main(sys.argv[2:]))
+    os.chdir({cwd!r})
+
+    def limited(args):
+        with open("/proc/self/status") as fh:
+            mapped = next(int(l.split()[1]) * 1024 for l in fh if l.startswith("VmSize:"))
+        resource.setrlimit(resource.RLIMIT_AS, (mapped + {headroom}, resource.RLIM_INFINITY))
+        try:
+            return _main(args)
+        finally:
+            resource.setrlimit(resource.RLIMIT_AS, (resource.RLIM_INFINITY,
+                                                    resource.RLIM_INFINITY))
 """)
 HEADROOM = 768 << 20  # [bytes]: the 5.3 M rows as text are 200 MB, parsed several GB
 
 
-def _limited(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+@pytest.fixture(scope="module")
+def bomb_commands(bomb_day) -> dict[str, subprocess.CompletedProcess]:
+    """``process`` of the bomb day and ``inspect`` of its big file, each under its own
+    address-space limit, in one child process (one start-up): command -> what it did."""
+    protocol, _ = bomb_day
+    big = protocol.parent / "data" / "big.csv.gz"
     env = {**os.environ, "MALLOC_ARENA_MAX": "2", "OMP_NUM_THREADS": "1",
            "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    return subprocess.run([sys.executable, "-c", _LIMITED, str(HEADROOM), *args], cwd=cwd,
-                          env=env, capture_output=True, text=True, timeout=300, check=False)
+    process, inspect = run_in_child(
+        [["process", str(protocol), "-q", "--jobs", "1", "--no-report"],
+         ["inspect", str(big), "--protocol", str(protocol)]],
+        timeout=600, prelude=_LIMITED.format(cwd=str(protocol.parent), headroom=HEADROOM),
+        call="limited(args)", env=env)
+    return {"process": process, "inspect": inspect}
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc (Linux)")
-def test_process_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_day):
+def test_process_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_day,
+                                                                           bomb_commands):
     protocol, run = bomb_day
-    done = _limited(["process", str(protocol), "-q", "--jobs", "1", "--no-report"],
-                    protocol.parent)
+    done = bomb_commands["process"]
     assert done.returncode == 1, done.stderr
     runs = _runs(protocol.parent)
     reason = runs.loc[run, "reason"]
@@ -131,10 +149,8 @@ def test_process_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bom
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc (Linux)")
-def test_inspect_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_day, tmp_path):
-    protocol, _ = bomb_day
-    big = protocol.parent / "data" / "big.csv.gz"
-    done = _limited(["inspect", str(big), "--protocol", str(protocol)], tmp_path)
+def test_inspect_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_commands):
+    done = bomb_commands["inspect"]
     assert done.returncode == 1, done.stderr
     said = done.stderr.strip()
     assert said.startswith("towtank: big.csv.gz is too long for one run: it holds more than "

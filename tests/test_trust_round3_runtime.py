@@ -34,7 +34,6 @@ from towtank.runtime.outfolder import OUTPUT_NAMES
 from towtank.runtime.reads import recorded, recording
 from towtank.testing import synthetic as syn
 
-SEED = 5
 REPO = Path(__file__).resolve().parents[1]
 #: Enough examples to plant every kind of insanity, few enough that a day's processing per
 #: example stays within seconds.
@@ -42,10 +41,9 @@ DAY_EXAMPLES = settings(max_examples=6, suppress_health_check=[HealthCheck.too_s
 
 
 @pytest.fixture(scope="session")
-def day_dir(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("trust3")
-    syn.make_hull_day(root, seed=SEED, file_format="csv", sheet_format="csv")
-    return root
+def day_dir(trust_day) -> Path:
+    """The session's synthetic day (seed 5, CSV run files and sheet: tests/conftest.py)."""
+    return trust_day.dir
 
 
 def _protocol(day_dir: Path, path: Path, extra: str = "") -> Path:
@@ -65,13 +63,10 @@ def _tables(out: Path) -> dict[str, bytes]:
 
 
 @pytest.fixture(scope="session")
-def processed(day_dir, tmp_path_factory) -> tuple[Path, Path, dict[str, bytes]]:
-    """(protocol, output folder with its cache, the tables of a fresh run)."""
-    root = tmp_path_factory.mktemp("processed")
-    protocol = _protocol(day_dir, root / "protocol.toml")
-    out = root / "out"
-    assert _process(protocol, out) == 0
-    return protocol, out, _tables(out)
+def processed(trust_day) -> tuple[Path, Path, dict[str, bytes]]:
+    """(protocol, output folder with its cache, the tables of a fresh run): the session's
+    processed day (tests/conftest.py), which the tests only read or copy."""
+    return trust_day.protocol, trust_day.out, _tables(trust_day.out)
 
 
 def _copy(processed, tmp_path_factory, name: str) -> tuple[Path, Path, dict[str, bytes]]:
@@ -261,7 +256,7 @@ def linked(processed, tmp_path_factory, monkeypatch) -> tuple[Path, Path]:
 @pytest.mark.parametrize("command", ["process", "predict", "simulate", "steady", "identify",
                                      "scale", "synth"])
 def test_a_command_given_a_link_to_a_locked_folder_waits_for_its_lock(
-        processed, vehicle_inputs, linked, capsys, command):
+        processed, vehicle_inputs, linked, capsys, command, no_command_figures):
     folder, link = linked
     if command == "synth":
         args = ["synth", str(link), "--force"]
