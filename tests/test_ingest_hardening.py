@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import os
 import re
+import shutil
 import struct
 import subprocess
 import textwrap
@@ -680,11 +681,13 @@ def test_a_fifo_as_tare_table_stops_the_day(tmp_path, capsys):
 
 
 # ============================================== item 11: HDF5 sample-rate attributes, links
-def _hdf5_timing_day(root: Path) -> Path:
+@pytest.fixture(scope="session")
+def hdf5_timing_template(tmp_path_factory) -> Path:
     """An HDF5 day whose time comes from the group's ``sample_rate`` attribute (the time
-    column left unmapped and renamed away)."""
+    column left unmapped and renamed away), made once; each test edits a copy."""
     import h5py
 
+    root = tmp_path_factory.mktemp("hdf5_timing")
     protocol = _day(root, file_format="hdf5")
     text = protocol.read_text(encoding="utf-8")
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("time = "))
@@ -692,7 +695,14 @@ def _hdf5_timing_day(root: Path) -> Path:
     for path in (root / "data").glob("*.h5"):
         with h5py.File(path, "a") as fh:
             fh["data"].move("Time (s)", "clock (s)")
-    return protocol
+    return root
+
+
+@pytest.fixture
+def hdf5_timing_day(hdf5_timing_template, tmp_path) -> Path:
+    """A copy of :func:`hdf5_timing_template` in ``tmp_path``: its protocol."""
+    shutil.copytree(hdf5_timing_template, tmp_path, dirs_exist_ok=True)
+    return tmp_path / "protocol.toml"
 
 
 def _edit_h5(path: Path, edit) -> None:  # noqa: ANN001
@@ -703,8 +713,9 @@ def _edit_h5(path: Path, edit) -> None:  # noqa: ANN001
 
 
 @pytest.mark.parametrize("value", ["200 Hz", "0.2 kHz", b"200", "200"])
-def test_a_sample_rate_written_as_text_with_its_unit_is_read(tmp_path, value):
-    protocol = _hdf5_timing_day(tmp_path)
+def test_a_sample_rate_written_as_text_with_its_unit_is_read(tmp_path, hdf5_timing_day,
+                                                            value):
+    protocol = hdf5_timing_day
 
     def text_rate(group):  # noqa: ANN001, ANN202
         group.attrs["sample_rate"] = value
@@ -745,8 +756,8 @@ def _soft_link_loop(group) -> None:  # noqa: ANN001
 ], ids=["text", "unit", "empty-text", "empty-array", "dt-zero", "dt-negative", "nan",
         "two-values", "link-loop"])
 def test_a_bad_sample_rate_attribute_or_a_link_loop_rejects_the_run_in_one_sentence(
-        tmp_path, capsys, edit, words):
-    protocol = _hdf5_timing_day(tmp_path)
+        tmp_path, capsys, hdf5_timing_day, edit, words):
+    protocol = hdf5_timing_day
     _edit_h5(tmp_path / "data" / "run_021.h5", edit)
     assert _process(protocol) == 1
     reason = _only_rejected(protocol, 21)

@@ -351,26 +351,25 @@ def _line(run: int, test: str, angle: float, speed: float, drag: float, status: 
 
 
 @pytest.fixture(scope="session")
-def sample_day(tmp_path_factory) -> dict[str, Any]:
-    """The sample SUT-2 day processed once: its tables, the fit figures watch draws for the
-    page (damping, added mass) and per-run trace figures (the page shows no PDF or workbook:
-    none is written, nor the report's other figures)."""
+def sample_day(tmp_path_factory, sample_report) -> dict[str, Any]:
+    """The sample SUT-2 day as the session processed it once (``sample_report``: its tables,
+    read only), with the fit figures watch draws for the page (damping, added mass) and
+    per-run trace figures, drawn here into a folder of this module's."""
     import pandas as pd
 
-    from towtank.api import process_day
     from towtank.commands.inspect import write_plot
     from towtank.live.session import _fit_figures
 
-    out = tmp_path_factory.mktemp("live_day") / "out"
-    day = process_day(SAMPLE, out=out, jobs=1, report=False)
+    done = sample_report("sut2_hull")
+    out = tmp_path_factory.mktemp("live_day")
     (out / "figures").mkdir()
-    assert {"damping", "added_mass"} <= set(_fit_figures(day, out / "figures"))
+    assert {"damping", "added_mass"} <= set(_fit_figures(done.day, out / "figures"))
     figures = out / "run_figures"
     figures.mkdir()
     for run in (29, 30, 31):
-        write_plot(day.reductions[run], figures / f"run_{run:03d}.png", SAMPLE)
-    return {"out": out, "runs": pd.read_csv(out / "runs.csv"),
-            "coefficients": pd.read_csv(out / "coefficients.csv"), "figures": figures}
+        write_plot(done.day.reductions[run], figures / f"run_{run:03d}.png", SAMPLE)
+    return {"out": out, "runs": pd.read_csv(done.out / "runs.csv"),
+            "coefficients": pd.read_csv(done.out / "coefficients.csv"), "figures": figures}
 
 
 def _jsonable(value: Any) -> Any:
@@ -461,8 +460,10 @@ def browser(tmp_path_factory) -> Iterator[Any]:
         driver.quit()
 
 
-def wait_for(predicate, timeout: float, step: float = 0.02) -> float:
-    """Seconds until ``predicate()`` is true; fails after ``timeout``."""
+def wait_for(predicate, timeout: float, step: float = 0.1) -> float:
+    """Seconds until ``predicate()`` is true; fails after ``timeout``. Each look is a round
+    trip to the browser (its DOM read by chromedriver): ten looks a second, not fifty, keep
+    the browser's and this process's CPU for the page itself."""
     t0 = time.monotonic()
     while True:
         try:
@@ -651,8 +652,10 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
     from towtank.testing.bench_watch import labview_write
     from towtank.testing.days import RunSpec
 
-    plan = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 1.6, 2.0)]
-            + [RunSpec("hull", a, v, 0.5) for a in (0.0, 10.0, 20.0) for v in (0.8, 2.0)])
+    # the fewest runs that give a fit: two sting speeds for the tare, three hull runs (two
+    # speeds at 0°, one at 20°) for X_u|u|, Y_uv and Z_uw; each run's file arrives alone
+    plan = ([RunSpec("sting", 0.0, v, 0.5) for v in (0.8, 2.0)]
+            + [RunSpec("hull", a, v, 0.5) for a, v in ((0.0, 0.8), (0.0, 2.0), (20.0, 2.0))])
     day = tmp_path / "day"
     syn.make_hull_day(day, runs=plan, fs=50.0, file_format="csv", sheet_format="csv", seed=3)
     shutil.move(day / "data", tmp_path / "all")
@@ -669,7 +672,7 @@ def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_pa
     said: list[str] = []
     threading.Thread(target=lambda: said.extend(proc.stdout or ()), daemon=True).start()
     try:
-        wait_for(lambda: any("the live page:" in line for line in said), 120, step=0.1)
+        wait_for(lambda: any("the live page:" in line for line in said), 120)
         url = f"http://127.0.0.1:{port}/"
         wait_for(lambda: socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
                  is None, 20)

@@ -29,44 +29,54 @@ SPEED = "Carriage speed (m/s)"
 UNH = Path(__file__).resolve().parents[2] / "shared" / "real" / "unh_rvat_2013" / "test.tdms"
 
 
-def _make_files(root: Path, *, windows: bool) -> dict:
-    """The hull day's files without speed columns; with ``windows`` the sheet gives each run's
-    steady window (the generator's plateau, 0.6 s in from each end). Returns the truth."""
+def _make_files(root: Path) -> dict:
+    """The hull day's files without speed columns. Returns the truth."""
     syn.make_hull_day(root, seed=SEED, sheet_format="csv")
     truth = json.loads((root / "truth.json").read_text())
     for run in truth["runs"].values():
         path = root / "data" / run["file"]
         frame = pd.read_csv(path)
         frame.drop(columns=[SPEED]).to_csv(path, index=False)  # gzipped as named
-    if windows:
-        sheet = pd.read_csv(root / "run_sheet.csv")
-        runs = truth["runs"]
-        sheet["window_start_s"] = [runs[str(r)]["t_plateau_start"] + 0.6 for r in sheet["run"]]
-        sheet["window_end_s"] = [runs[str(r)]["t_plateau_end"] - 0.6 for r in sheet["run"]]
-        sheet.to_csv(root / "run_sheet.csv", index=False)
     return truth
 
 
+def _add_windows(root: Path, truth: dict) -> None:
+    """The sheet gives each run's steady window (the generator's plateau, 0.6 s in from each
+    end)."""
+    sheet = pd.read_csv(root / "run_sheet.csv")
+    runs = truth["runs"]
+    sheet["window_start_s"] = [runs[str(r)]["t_plateau_start"] + 0.6 for r in sheet["run"]]
+    sheet["window_end_s"] = [runs[str(r)]["t_plateau_end"] - 0.6 for r in sheet["run"]]
+    sheet.to_csv(root / "run_sheet.csv", index=False)
+
+
 @pytest.fixture(scope="session")
-def windowed_files(tmp_path_factory) -> Path:
-    """The day's files with sheet windows, made once for this module; each test copies them."""
+def speedless_files(tmp_path_factory) -> Path:
+    """The day's files without speed columns, made once for this module; each test copies
+    them."""
+    root = tmp_path_factory.mktemp("speedless")
+    _make_files(root)
+    return root
+
+
+@pytest.fixture(scope="session")
+def windowed_files(tmp_path_factory, speedless_files) -> Path:
+    """The same files with sheet windows, made once for this module; each test copies them."""
     root = tmp_path_factory.mktemp("windowed")
-    _make_files(root, windows=True)
+    shutil.copytree(speedless_files, root, dirs_exist_ok=True)
+    _add_windows(root, json.loads((root / "truth.json").read_text()))
     return root
 
 
 @pytest.fixture
-def day_files(windowed_files):
+def day_files(windowed_files, speedless_files):
     """``day_files(root, windows=..., **processing)``: the hull day without speed columns in
-    ``root`` (a copy of the module's windowed day, or made anew without windows) and its
-    protocol with ``speed_source = "nominal"``; returns (protocol, truth)."""
+    ``root`` (a copy of the module's day, with or without sheet windows) and its protocol with
+    ``speed_source = "nominal"``; returns (protocol, truth)."""
 
     def make(root: Path, *, windows: bool, **processing) -> tuple[Path, dict]:
-        if windows:
-            shutil.copytree(windowed_files, root, dirs_exist_ok=True)
-            truth = json.loads((root / "truth.json").read_text())
-        else:
-            truth = _make_files(root, windows=False)
+        shutil.copytree(windowed_files if windows else speedless_files, root, dirs_exist_ok=True)
+        truth = json.loads((root / "truth.json").read_text())
         sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")
         del sections["channels"]["speed"]
         sections.setdefault("processing", {}).update(speed_source="nominal", **processing)
