@@ -171,9 +171,14 @@ class Dynamics:
             self.wings = None
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
+        out = np.array(self._hydro_terms(np.asarray(nu, dtype=float)[:6].tolist(), dr, ds))
+        if self.wings is not None:
+            out += self.wings.force(nu)
+        return out
+
+    def _hydro_terms(self, vel: list[float], dr: float, ds: float) -> list[float]:
         # the products in Python floats, term by term in the order of the terms: the same
         # IEEE operations as on numpy scalars, without their overhead
-        vel = np.asarray(nu, dtype=float)[:6].tolist()
         values = _factors_of(vel, dr, ds)
         tau = [0.0] * 6
         for dof, val, indices in self.factors:
@@ -181,37 +186,41 @@ class Dynamics:
             for i in indices:
                 prod *= values[i]
             tau[dof] += prod
-        out = np.array(tau, dtype=float)
-        if self.wings is not None:
-            out += self.wings.force(nu)
-        return out
+        return tau
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
         return coriolis_rigid_body(self.mass, self.rg, self.io, nu)
 
     def restoring(self, phi: float, theta: float) -> np.ndarray:
+        return np.array(self._restoring_terms(phi, theta))
+
+    def _restoring_terms(self, phi: float, theta: float) -> list[float]:
         w, b = self.weight_n, self.buoyancy
-        xg, yg, zg = self.rg
-        xb, yb, zb = self.rb
+        xg, yg, zg = self.rg.tolist()  # Python floats: the same arithmetic, less overhead
+        xb, yb, zb = self.rb.tolist()
         sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
-        return np.array([
+        return [
             (w - b) * sth,
             -(w - b) * cth * sph,
             -(w - b) * cth * cph,
             -(yg * w - yb * b) * cth * cph + (zg * w - zb * b) * cth * sph,
             (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cph,
             -(xg * w - xb * b) * cth * sph - (yg * w - yb * b) * sth,
-        ])
+        ]
 
     def rhs(self, state: np.ndarray, dr: float, ds: float, thrust: float) -> np.ndarray:
         phi, theta, psi = state[3:6].tolist()
         nu = state[6:]
-        tau = self.hydro(nu, dr, ds)
-        tau[0] += thrust
+        vel = nu.tolist()
+        hydro = self._hydro_terms(vel, dr, ds)
+        hydro[0] += thrust
+        tau = np.array([f - g for f, g in zip(hydro, self._restoring_terms(phi, theta),
+                                               strict=True)])
+        if self.wings is not None:
+            tau += self.wings.force(nu)
         tau -= np.outer(nu, nu).ravel() @ self.coriolis_form  # C_RB(nu) nu + C_A(nu) nu
-        tau -= self.restoring(phi, theta)
         nu_dot = self.m_inv @ tau
-        u, v, w, p, q, r = nu.tolist()
+        u, v, w, p, q, r = vel
         cph, sph, cth, sth = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
         cps, sps = math.cos(psi), math.sin(psi)
         # position: R(phi, theta, psi) (u, v, w); attitude: T(phi, theta) (p, q, r) (Fossen
