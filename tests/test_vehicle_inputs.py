@@ -93,7 +93,8 @@ def refused(code, err, out, *words, lines=1):
     assert not Path(out).exists()
 
 
-def test_the_good_model_simulates(tmp_path, run):
+@pytest.mark.usefixtures("no_command_figures")  # asserts on metrics.csv; the figure is drawn
+def test_the_good_model_simulates(tmp_path, run):  # by the storage-error test below
     path = write_json(tmp_path / "model.json", good_model())
     assert read_model(path)["name"] == "test vehicle"
     code, err = run(simulate_args(path, tmp_path / "out"))

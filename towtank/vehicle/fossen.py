@@ -18,6 +18,7 @@ References
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 import numpy as np
 
@@ -31,6 +32,7 @@ __all__ = [
     "coriolis_rigid_body",
     "added_mass_matrix",
     "coriolis_added_mass",
+    "quadratic_form",
     "LUMPED",
     "ADDED_MASS_RE",
     "ca_bilinear",
@@ -146,6 +148,20 @@ def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
     a = ma[:3, :3] @ nu1 + ma[:3, 3:] @ nu2
     b = ma[3:, :3] @ nu1 + ma[3:, 3:] @ nu2
     return np.concatenate((-skew(a) @ nu2, -skew(a) @ nu1 - skew(b) @ nu2))
+
+
+
+def quadratic_form(f: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """The coefficients (36, 6) of a quadratic function ``f`` of the 6-vector ``nu``:
+    ``f(nu) = (nu nu^T).ravel() @ form`` (the product ``nu_a nu_b`` in row ``6 a + b``, those
+    with ``a > b`` zero)."""
+    eye = np.eye(6)
+    form = np.zeros((6, 6, 6))
+    for a in range(6):
+        form[a, a] = f(eye[a])
+        for b in range(a + 1, 6):
+            form[a, b] = f(eye[a] + eye[b]) - f(eye[a]) - f(eye[b])
+    return form.reshape(36, 6)
 
 
 def ca_bilinear(ma: np.ndarray, symbol: str) -> float:

@@ -50,6 +50,7 @@ from towtank.vehicle.fossen import (
     added_mass_matrix,
     coriolis_added_mass,
     coriolis_rigid_body,
+    quadratic_form,
     rigid_body_mass_matrix,
 )
 from towtank.vehicle.identify_log import (
@@ -327,19 +328,6 @@ class BatchModel:
                                 (log.rudder[k], log.sternplane[k]), pre)
                 out[k] = aug[:, :12]
         return out
-
-
-def quadratic_form(f: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
-    """The coefficients (36, 6) of a quadratic function ``f`` of the 6-vector ``nu``:
-    ``f(nu) = (nu nu^T).ravel() @ form`` (the product ``nu_a nu_b`` in row ``6 a + b``, those
-    with ``a > b`` zero)."""
-    eye = np.eye(6)
-    form = np.zeros((6, 6, 6))
-    for a in range(6):
-        form[a, a] = f(eye[a])
-        for b in range(a + 1, 6):
-            form[a, b] = f(eye[a] + eye[b]) - f(eye[a]) - f(eye[b])
-    return form.reshape(36, 6)
 
 
 def rts_smooth(xs: np.ndarray, ps: np.ndarray, x_prior: np.ndarray, p_prior: np.ndarray,

@@ -58,6 +58,7 @@ from towtank.vehicle.fossen import (
     added_mass_matrix,
     coriolis_added_mass,
     coriolis_rigid_body,
+    quadratic_form,
     rigid_body_mass_matrix,
 )
 from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
@@ -143,6 +144,7 @@ class Dynamics:
     terms: list = field(init=False)
     wings: Any = field(init=False)  # a glider's wings (towtank.vehicle.wings) or None
     factors: list = field(init=False)  # the terms as (dof, value, indices into _factors_of)
+    coriolis_form: np.ndarray = field(init=False)  # C_RB(nu) nu + C_A(nu) nu, quadratic_form
 
     def __post_init__(self) -> None:
         mdl = self.model
@@ -160,6 +162,8 @@ class Dynamics:
         self.factors = [(dof, val, tuple(_factor_index(kind, i) for kind, i in spec))
                         for dof, val, spec in self.terms]
         self.x_uu = float(mdl["coefficients"].get("X_u|u|", 0.0))
+        self.coriolis_form = quadratic_form(
+            lambda nu: self.coriolis_rb(nu) + coriolis_added_mass(self.ma, nu))
         glider = mdl.get("glider")
         if isinstance(glider, dict) and "wing_area_m2" in glider:
             self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
@@ -167,9 +171,14 @@ class Dynamics:
             self.wings = None
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
+        out = np.array(self._hydro_terms(np.asarray(nu, dtype=float)[:6].tolist(), dr, ds))
+        if self.wings is not None:
+            out += self.wings.force(nu)
+        return out
+
+    def _hydro_terms(self, vel: list[float], dr: float, ds: float) -> list[float]:
         # the products in Python floats, term by term in the order of the terms: the same
         # IEEE operations as on numpy scalars, without their overhead
-        vel = np.asarray(nu, dtype=float)[:6].tolist()
         values = _factors_of(vel, dr, ds)
         tau = [0.0] * 6
         for dof, val, indices in self.factors:
@@ -177,47 +186,54 @@ class Dynamics:
             for i in indices:
                 prod *= values[i]
             tau[dof] += prod
-        out = np.array(tau, dtype=float)
-        if self.wings is not None:
-            out += self.wings.force(nu)
-        return out
+        return tau
 
     def coriolis_rb(self, nu: np.ndarray) -> np.ndarray:
         return coriolis_rigid_body(self.mass, self.rg, self.io, nu)
 
     def restoring(self, phi: float, theta: float) -> np.ndarray:
+        return np.array(self._restoring_terms(phi, theta))
+
+    def _restoring_terms(self, phi: float, theta: float) -> list[float]:
         w, b = self.weight_n, self.buoyancy
-        xg, yg, zg = self.rg
-        xb, yb, zb = self.rb
+        xg, yg, zg = self.rg.tolist()  # Python floats: the same arithmetic, less overhead
+        xb, yb, zb = self.rb.tolist()
         sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
-        return np.array([
+        return [
             (w - b) * sth,
             -(w - b) * cth * sph,
             -(w - b) * cth * cph,
             -(yg * w - yb * b) * cth * cph + (zg * w - zb * b) * cth * sph,
             (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cph,
             -(xg * w - xb * b) * cth * sph - (yg * w - yb * b) * sth,
-        ])
+        ]
 
     def rhs(self, state: np.ndarray, dr: float, ds: float, thrust: float) -> np.ndarray:
-        phi, theta, psi = state[3:6]
+        phi, theta, psi = state[3:6].tolist()
         nu = state[6:]
-        tau = self.hydro(nu, dr, ds)
-        tau[0] += thrust
-        tau -= self.coriolis_rb(nu) + coriolis_added_mass(self.ma, nu)
-        tau -= self.restoring(phi, theta)
+        vel = nu.tolist()
+        hydro = self._hydro_terms(vel, dr, ds)
+        hydro[0] += thrust
+        tau = np.array([f - g for f, g in zip(hydro, self._restoring_terms(phi, theta),
+                                               strict=True)])
+        if self.wings is not None:
+            tau += self.wings.force(nu)
+        tau -= np.outer(nu, nu).ravel() @ self.coriolis_form  # C_RB(nu) nu + C_A(nu) nu
         nu_dot = self.m_inv @ tau
+        u, v, w, p, q, r = vel
         cph, sph, cth, sth = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
         cps, sps = math.cos(psi), math.sin(psi)
-        rot = np.array([
-            [cps * cth, -sps * cph + cps * sth * sph, sps * sph + cps * cph * sth],
-            [sps * cth, cps * cph + sph * sth * sps, -cps * sph + sth * sps * cph],
-            [-sth, cth * sph, cth * cph],
-        ])
-        tmat = np.array([[1.0, sph * sth / cth, cph * sth / cth],
-                         [0.0, cph, -sph],
-                         [0.0, sph / cth, cph / cth]])
-        return np.concatenate((rot @ nu[:3], tmat @ nu[3:], nu_dot))
+        # position: R(phi, theta, psi) (u, v, w); attitude: T(phi, theta) (p, q, r) (Fossen
+        # 2011, eqs. 2.18 and 2.29), row by row
+        eta_dot = [
+            cps * cth * u + (-sps * cph + cps * sth * sph) * v + (sps * sph + cps * cph * sth) * w,
+            sps * cth * u + (cps * cph + sph * sth * sps) * v + (-cps * sph + sth * sps * cph) * w,
+            -sth * u + cth * sph * v + cth * cph * w,
+            p + sph * sth / cth * q + cph * sth / cth * r,
+            cph * q - sph * r,
+            sph / cth * q + cph / cth * r,
+        ]
+        return np.concatenate((eta_dot, nu_dot))
 
 
 def simulate(
@@ -629,10 +645,10 @@ class _Budget:
                     raise _Stop(self._sentence(t, f"would need about {pace:.3g} integration "
                                                   f"steps at its pace, more than the "
                                                   f"{self.max_steps} a simulation may take"))
-            if not np.all(np.isfinite(y)):
+            if not np.isfinite(y).all():
                 raise _Stop(_diverged(t, "the state is no longer finite"))
             out = fun(t, y)
-            if not np.all(np.isfinite(out)):
+            if not np.isfinite(out).all():
                 raise _Stop(_diverged(t, "the forces are no longer finite"))
             return out
 
