@@ -481,6 +481,7 @@ def draw_only_pages(mp: pytest.MonkeyPatch, keep: Callable[[Any], bool]) -> None
 
     mp.setattr(pdf, "_render", render)
 
+
 # ------------------------- the adversarial rounds' processed day (issue 34 item 6, s10trust)
 @dataclass(frozen=True)
 class TrustDay:
@@ -511,7 +512,6 @@ def trust_day(tmp_path_factory) -> TrustDay:
 
     day, out = built_once(tmp_path_factory, "trust_day", build)
     return TrustDay(out.parent / "day", out.parent / "protocol" / "protocol.toml", out, day)
-
 
 
 def pytest_addoption(parser):
