@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from conftest import draw_only_pages
 from test_vehicle_inputs import hang_bound  # a command that hangs fails its test
 
 from towtank.commands import watch
@@ -186,6 +187,17 @@ def no_watch_loop(monkeypatch):
     monkeypatch.setattr(watch.webbrowser, "open", lambda url: True)
 
 
+@pytest.fixture
+def report_text_pages(monkeypatch):
+    """The commands' PDF reports with their text pages drawn (title, summary, runs, quality)
+    and their figure and thumbnail pages blank, still numbered: this test asks whether a
+    documented command runs and ends as documented. Every page of both sample days' reports is
+    drawn by ``towtank process`` and compared byte for byte with the API's in
+    tests/test_one_front_door.py, and their pixels with the golden ones in
+    tests/test_golden_outputs.py."""
+    draw_only_pages(monkeypatch, lambda page: page.kind not in ("figure", "thumbs"))
+
+
 def test_the_documents_quote_commands_to_run():
     """The extraction finds the commands a newcomer types (a miss would make the test below
     vacuous): the sample days, watch, the vehicle stage's predict → simulate/steady chains."""
@@ -203,7 +215,7 @@ def test_the_documents_quote_commands_to_run():
 
 
 @pytest.mark.parametrize("quoted", [_case(q) for q in RUNNABLE])
-def test_every_documented_command_runs(quoted, workspace, no_watch_loop):
+def test_every_documented_command_runs(quoted, workspace, no_watch_loop, report_text_pages):
     code, out = workspace.run_upto(quoted)
     expected = EXIT_STATUS.get(_verb(quoted), 0)
     assert code == expected, f"{quoted.source}:{quoted.line}: {quoted.command}\n{out[-3000:]}"
