@@ -29,6 +29,8 @@ from matplotlib import _text_helpers  # the PDF backend's text shaper
 from matplotlib.backends import backend_pdf
 from matplotlib.backends.backend_pdf import RendererPdf
 
+from towtank.report.mathcache import rc_value
+
 __all__ = ["install", "METRICS_CACHE_SIZE", "LAYOUT_CACHE_SIZE"]
 
 #: Strings kept measured (a sample-hull report measures ≈ 1,000 distinct ones).
@@ -51,11 +53,6 @@ _EXPECTED = {
 }
 
 
-def _rc_value(value: Any) -> Any:
-    """An rc value as a hashable key part (a list as a tuple)."""
-    return tuple(value) if isinstance(value, list) else value
-
-
 #: (string, font properties, math, dpi, rc) -> (width, height, descent) [pt].
 _METRICS: dict[tuple[Any, ...], tuple[float, float, float]] = {}
 
@@ -66,7 +63,7 @@ def _metrics(renderer: Any, text: str, fontprop: Any, ismath: Any, dpi: float) -
     if type(base) is not RendererPdf or ismath == "TeX":
         return _ORIGINAL_METRICS(renderer, text, fontprop, ismath, dpi)
     prop = fontprop.copy()  # FontProperties hashes on its (mutable) state
-    key = (text, prop, ismath, dpi, tuple(_rc_value(mpl.rcParams[k]) for k in _RC_KEYS))
+    key = (text, prop, ismath, dpi, tuple(rc_value(mpl.rcParams[k]) for k in _RC_KEYS))
     found = _METRICS.get(key)
     if found is None:
         found = base.get_text_width_height_descent(text, prop, ismath=ismath)
