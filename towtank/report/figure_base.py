@@ -19,8 +19,10 @@ from matplotlib.figure import Figure
 import towtank.report.style as style
 from towtank.report.mathcache import install as _share_math_cache
 from towtank.report.safetext import clean_text
+from towtank.report.textcache import install as _share_text_cache
 
 _share_math_cache()  # one mathtext layout cache for every page and figure (same layouts)
+_share_text_cache()  # one text metrics and glyph layout cache for every PDF page (same results)
 
 PAGE_HEADER_IN = 0.95  # room kept free at the top of a PDF page for the section title [in]
 PAGE_FOOTER_IN = 0.45  # room kept free at the bottom for the page footer [in]

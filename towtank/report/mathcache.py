@@ -19,7 +19,7 @@ from typing import Any
 import matplotlib as mpl
 from matplotlib.mathtext import MathTextParser
 
-__all__ = ["install", "MATH_CACHE_SIZE"]
+__all__ = ["install", "rc_value", "MATH_CACHE_SIZE"]
 
 #: Math strings kept laid out (a sample-hull report has ≈ 200 distinct ones).
 MATH_CACHE_SIZE = 2048
@@ -49,12 +49,12 @@ def _parse_shared(output_type: str, s: str, dpi: float, prop: Any, antialiased: 
 
 def _parse_cached(self: MathTextParser, s: str, dpi: float, prop: Any, antialiased: bool,
                   load_glyph_flags: Any) -> Any:
-    rc = tuple(_rc_value(mpl.rcParams[k]) for k in _RC_KEYS)
+    rc = tuple(rc_value(mpl.rcParams[k]) for k in _RC_KEYS)
     return _parse_shared(getattr(self, "_output_type"), s, dpi, prop, antialiased,  # noqa: B009
                          load_glyph_flags, rc)
 
 
-def _rc_value(value: Any) -> Any:
+def rc_value(value: Any) -> Any:
     """An rc value as a hashable key part (a list as a tuple)."""
     return tuple(value) if isinstance(value, list) else value
 
