@@ -383,7 +383,7 @@ def seed_result(tmp_path_factory) -> Callable[..., SeedResult]:
     return get
 
 
-# --- vehicle tests (issue 34 item 6, part s9veh): one shipped vehicle predicted and turned
+# --- vehicle tests: one shipped vehicle predicted and turned
 
 
 @dataclass
@@ -466,7 +466,7 @@ def workbook_block(path: Path, sheet: str, title_start: str) -> pd.DataFrame:
 
 
 
-# -------------------------------------------- PDF pages not read by a test (issue 34, s9rep)
+# ------------------------------------------------------------- PDF pages not read by a test
 def draw_only_pages(mp: pytest.MonkeyPatch, keep: Callable[[Any], bool]) -> None:
     """Make :func:`towtank.report.pdf.write_pdf` draw only the pages ``keep(page)`` selects
     (a :class:`towtank.report.pdf.Page`); every other page of the plan is a blank page, still
@@ -482,7 +482,7 @@ def draw_only_pages(mp: pytest.MonkeyPatch, keep: Callable[[Any], bool]) -> None
     mp.setattr(pdf, "_render", render)
 
 
-# ------------------------- the adversarial rounds' processed day (issue 34 item 6, s10trust)
+# --------------------------------------------------- the adversarial rounds' processed day
 @dataclass(frozen=True)
 class TrustDay:
     """A synthetic SUT-2 day (seed 5, CSV run files and sheet) and its protocol, processed by
