@@ -150,7 +150,6 @@ def coriolis_added_mass(ma: np.ndarray, nu: np.ndarray) -> np.ndarray:
     return np.concatenate((-skew(a) @ nu2, -skew(a) @ nu1 - skew(b) @ nu2))
 
 
-
 def quadratic_form(f: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     """The coefficients (36, 6) of a quadratic function ``f`` of the 6-vector ``nu``:
     ``f(nu) = (nu nu^T).ravel() @ form`` (the product ``nu_a nu_b`` in row ``6 a + b``, those

@@ -69,7 +69,7 @@ from towtank.vehicle.predict import coefficient_unit
 __all__ = ["record_speed", "simulate_fitted", "with_coefficients", "HOLDOUT_FRACTION",
            "MAX_STEP_S", "MAX_SUBSTEPS", "METHODS", "IDENTIFIABLE_RATIO", "BatchModel",
            "IdentifyFit", "Progress", "identify", "rts_smooth", "coefficient_unit",
-           "least_squares_fit", "kalman_fit", "quadratic_form"]
+           "least_squares_fit", "kalman_fit"]
 
 #: Largest Runge-Kutta step of the process model [s].
 MAX_STEP_S = 0.05
