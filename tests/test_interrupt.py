@@ -229,7 +229,9 @@ def test_run_beside_kills_its_processes_when_interrupted(tmp_path):
 
     def first() -> None:
         end = time.monotonic() + 10.0
-        while not all(f.exists() for f in files) and time.monotonic() < end:
+        # a file exists from its open on, before "started" is in it: wait for the text
+        while not all(f.exists() and f.read_text() == "started" for f in files) \
+                and time.monotonic() < end:
             time.sleep(0.01)
         raise KeyboardInterrupt  # Ctrl-C while the others run
 
