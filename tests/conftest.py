@@ -11,6 +11,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import copy
+import gc
 import os
 import pickle
 import shutil
@@ -541,3 +542,10 @@ def pytest_collection_modifyitems(config, items):
         for marker, skip in skips:
             if marker in item.keywords:
                 item.add_marker(skip)
+
+
+def pytest_collection_finish(session):
+    """What is loaded by now (modules, the collected tests) lives for the whole session: the
+    cyclic garbage collector leaves it out of its scans (gc.freeze), so that a full collection
+    scans what the tests made, not the libraries' millions of objects again."""
+    gc.freeze()

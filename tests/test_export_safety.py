@@ -17,6 +17,7 @@ import dataclasses
 import errno
 import hashlib
 import io
+import itertools
 import json
 import os
 import subprocess
@@ -242,6 +243,8 @@ def _inject(monkeypatch, where: str) -> None:
         monkeypatch.setattr(pdf, "_write_part", lambda day, plan, pages, path:
                             _half_then_full(path))
     elif where in ("pdf-zlib-here", "pdf-zlib-forked"):
+        # this process draws the first group of its first report: part 0 here, part 1 forked
+        monkeypatch.setattr(pdf, "_REPORTS_DRAWN", itertools.count())
         part = ".report-part-0.pdf" if where == "pdf-zlib-here" else ".report-part-1.pdf"
         real = pdf._write_part
 

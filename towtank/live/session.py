@@ -65,6 +65,7 @@ from towtank.runner import (
     reduce_day,
     write_day,
 )
+from towtank.runtime.parallel import leave_inherited_alone
 from towtank.runtime.safefile import read_regular
 from towtank.runtime.storage import STORAGE_ERRNOS, os_error, storage_error
 
@@ -897,6 +898,7 @@ def _fork(task: Callable[[], int]) -> int:
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
                 signal.pthread_sigmask(signal.SIG_SETMASK, old)
                 os.nice(CHILD_NICE)  # the next run's verdict comes first
+                leave_inherited_alone()
                 code = task()
             finally:
                 os._exit(code)

@@ -24,6 +24,7 @@ CreationDate is fixed from the report date so the same day gives the same file.
 
 from __future__ import annotations
 
+import itertools
 import math
 import textwrap
 from collections.abc import Mapping, Sequence
@@ -890,6 +891,14 @@ class ThumbGrid:
 #: Page groups of report.pdf drawn at once (fixed, so that the file is the same on any machine).
 PDF_PARTS = 4
 
+#: Reports this process has drawn. The group this process draws itself (the others are drawn
+#: in forked processes) turns with each report, so a process that draws many reports (a watch
+#: session, a notebook) lays out every kind of page's text itself in turn, and the processes
+#: it forks start with those layouts in its text caches (:mod:`towtank.report.textcache`,
+#: :mod:`towtank.report.mathcache`) instead of empty ones. Which process draws a group does
+#: not change the file.
+_REPORTS_DRAWN = itertools.count()
+
 #: Rough drawing time of a page by kind, relative (to split the pages evenly between cores);
 #: a thumbnail page costs in proportion to its runs.
 PAGE_COST = {"title": 0.1, "summary": 0.7, "figure": 0.5, "runs": 0.4, "fin_runs": 0.4,
@@ -921,7 +930,8 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     """Write ``folder/report.pdf``.
 
     The pages are drawn in ``parts`` groups at once (:func:`split_pages`, each group by
-    matplotlib's ``PdfPages`` into a part file, in a forked process of its own) and the parts
+    matplotlib's ``PdfPages`` into a part file: one group in this process, a different one with
+    each report it draws, the others each in a forked process of its own) and the parts
     joined in order with pypdf; the metadata (title, author, creation date from the report
     date) are set once on the whole. The number of parts does not depend on the machine, so
     the same day gives the same bytes anywhere.
@@ -946,10 +956,12 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
     groups = split_pages(plan, parts)
     part_files = [folder / f".report-part-{k}.pdf" for k in range(len(groups))]
     try:
-        run_beside([
+        tasks = [
             (f"report.pdf pages {g[0] + 1}–{g[-1] + 1}", partial(_write_part, day, plan, g, part))
             for g, part in zip(groups, part_files, strict=True)
-        ])
+        ]
+        here = next(_REPORTS_DRAWN) % len(tasks)
+        run_beside(tasks[here:] + tasks[:here])  # the first is drawn in this process
         writer = PdfWriter()
         for part in part_files:
             writer.append(part)

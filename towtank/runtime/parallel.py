@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import gc
 import importlib
 import multiprocessing as mp
 import os
@@ -225,6 +226,7 @@ def _worker_init(parent_pid: int | None = None) -> None:
     worker), the worker dies with the main process, and pyarrow parses on this worker's core
     only (the others have workers)."""
     _ignore_sigint()  # already ignored since its fork (PRELOAD); this in case that failed
+    leave_inherited_alone()  # the fork server's preloaded modules
     # a library's warning (numpy, npTDMS...) is not for the terminal: what matters reaches
     # the run's notes and reasons
     warnings.simplefilter("ignore")
@@ -486,6 +488,14 @@ def _run_chunk(task: tuple[Callable[..., Any], Any, list[dict[str, Any]], bool])
     return [func(protocol, rec, debug=debug) for rec in records]
 
 
+def leave_inherited_alone() -> None:
+    """In a forked process: what it inherited lives until the process ends, so the cyclic
+    garbage collector leaves it out of its scans (Python's :func:`gc.freeze`): a collection
+    scans what this process makes, not the parent's objects again, and writes nothing to the
+    memory pages it shares with the parent."""
+    gc.freeze()
+
+
 def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]]) -> None:
     """Run independent ``(name, task)`` pairs at once: the first here, the others forked.
 
@@ -566,6 +576,7 @@ def _run_in_child(task: Callable[[], object], send: Any) -> None:
     """In a forked process: one task; sends None, or (error, traceback, storage errno or
     None)."""
     _ignore_sigint()  # born blocking it: a Ctrl-C is the parent's, which then ends this one
+    leave_inherited_alone()
     try:
         task()
         outcome = None
