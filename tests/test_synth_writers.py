@@ -204,3 +204,19 @@ def test_captive_days_are_byte_identical_to_the_old_writers(
         _old_writers(m)
         make_captive_day(tmp_path / "old", layout=layout)
     assert _files(tmp_path / "new") == _files(tmp_path / "old")
+
+
+def test_number_frames_are_written_without_pandas(monkeypatch: pytest.MonkeyPatch) -> None:
+    """float64 and int64 frames take the column-wise writer (the property test above then
+    compares it with pandas), other frames pandas' own."""
+    numbers = pd.DataFrame({"t": [0.0, 0.005], "n": [1, 2], "x": [np.nan, -0.0]})
+    strings = pd.DataFrame({"run": ["1", "2"], "x": [1.0, 2.0]})
+    expected = [_pandas_csv_text(numbers), _pandas_csv_text(strings)]
+
+    def no_pandas(*args: Any, **kwargs: Any) -> str:
+        raise AssertionError("written by pandas")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", no_pandas)
+    assert csv_text(numbers) == expected[0] == "t,n,x\n0.0,1,\n0.005,2,-0.0\n"
+    with pytest.raises(AssertionError, match="written by pandas"):
+        csv_text(strings)

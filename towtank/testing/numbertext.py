@@ -58,7 +58,7 @@ def csv_text(frame: pd.DataFrame, *, header: bool = True, float_format: str | No
         frame.shape[0] > 0
         and len(names) >= 2
         and all(isinstance(c, str) for c in names)
-        and all(type(d) is np.dtype and d in _FAST_DTYPES for d in frame.dtypes)
+        and all(isinstance(d, np.dtype) and d in _FAST_DTYPES for d in frame.dtypes)
     )
     if not simple:
         return frame.to_csv(index=False, header=header, lineterminator="\n",
