@@ -4,7 +4,6 @@ generated days in every layout (the per-value writers kept here as the reference
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 from typing import Any
 
@@ -108,63 +107,23 @@ def _number(x: float) -> str:
     return "" if not np.isfinite(x) else repr(float(x))
 
 
-def _old_lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str],
-             segments: int = 2) -> None:
-    t = layouts._time_column(frame, time_col)
-    cols = [c for c in frame.columns if c != time_col]
-    dt = float(np.median(np.diff(t)))
-    head = ["LabVIEW Measurement\t", "Writer_Version\t2", "Reader_Version\t2", "Separator\tTab",
-            "Decimal_Separator\t.", "Multi_Headings\tNo", "X_Columns\tOne",
-            "Time_Pref\tRelative", "Operator\ttowtank synth", "Date\t2024/05/21",
-            "Time\t09:00:00", "***End_of_Header***", ""]
-    half = t.size // 2
-    out = io.StringIO()
-    out.write("\n".join(head) + "\n")
-    for lo, hi in ((0, half), (half, t.size)) if segments == 2 else ((0, t.size),):
-        n = len(cols)
-        out.write("\n".join([
-            f"Channels\t{n}\t",
-            "Samples\t" + "\t".join([str(hi - lo)] * n),
-            "Date\t" + "\t".join(["2024/05/21"] * n),
-            "Time\t" + "\t".join(["09:00:00"] * n),
-            "Y_Unit_Label\t" + "\t".join(units.get(c, "") for c in cols),
-            "X_Dimension\t" + "\t".join(["Time"] * n),
-            "X0\t" + "\t".join([repr(float(t[lo]))] * n),
-            "Delta_X\t" + "\t".join([repr(dt)] * n),
-            "***End_of_Header***\t",
-            "X_Value\t" + "\t".join(cols) + "\tComment",
-        ]) + "\n")
-        block = np.column_stack([t[lo:hi]] + [frame[c].to_numpy(np.float64)[lo:hi] for c in cols])
-        for row in block:
-            out.write("\t".join(_number(v) for v in row) + "\t\n")
-        out.write("\n")
-    path.write_text(out.getvalue(), encoding="utf-8")
+def _old_lvm_rows(columns: list[np.ndarray]) -> str:
+    block = np.column_stack(columns)
+    return "".join("\t".join(_number(v) for v in row) + "\t\n" for row in block)
 
 
-def _old_txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    out = {}
-    unit_row = []
-    for col in frame.columns:
-        values = frame[col].to_numpy(np.float64)
-        unit = units.get(col, "")
-        if unit == "m/s" and "(" not in col:
-            values, unit = values * 1000.0, "mm/s"
-        out[col] = values
-        unit_row.append(unit)
-    lines = ["Lab B towing tank;;;", "Datum: 21.05.2024;Operator: synth;;",
-             "Messung exportiert aus DAQ;;;", ";".join(frame.columns), ";".join(unit_row)]
-    table = np.column_stack(list(out.values()))
-    text = "\n".join(";".join("" if not np.isfinite(v) else f"{v:.9g}".replace(".", ",")
-                              for v in row) for row in table)
-    path.write_text("\n".join(lines) + "\n" + text + "\n", encoding="latin-1")
+def _old_eu_rows(columns: list[np.ndarray]) -> str:
+    table = np.column_stack(columns)
+    return "\n".join(";".join("" if not np.isfinite(v) else f"{v:.9g}".replace(".", ",")
+                              for v in row) for row in table) + "\n"
 
 
 def _old_writers(monkeypatch: pytest.MonkeyPatch) -> None:
     """The generator's writers as they formatted value by value (pandas for CSV)."""
     for module in (instruments, layouts, captive):
         monkeypatch.setattr(module, "csv_text", _pandas_csv_text)
-    monkeypatch.setattr(layouts, "_lvm", _old_lvm)
-    monkeypatch.setattr(layouts, "_txt_eu", _old_txt_eu)
+    monkeypatch.setattr(layouts, "_lvm_rows", _old_lvm_rows)
+    monkeypatch.setattr(layouts, "_eu_rows", _old_eu_rows)
 
 
 def _files(folder: Path) -> dict[str, bytes]:
@@ -211,12 +170,12 @@ def test_number_frames_are_written_without_pandas(monkeypatch: pytest.MonkeyPatc
     compares it with pandas), other frames pandas' own."""
     numbers = pd.DataFrame({"t": [0.0, 0.005], "n": [1, 2], "x": [np.nan, -0.0]})
     strings = pd.DataFrame({"run": ["1", "2"], "x": [1.0, 2.0]})
-    expected = [_pandas_csv_text(numbers), _pandas_csv_text(strings)]
+    expected = _pandas_csv_text(numbers)
 
     def no_pandas(*args: Any, **kwargs: Any) -> str:
         raise AssertionError("written by pandas")
 
     monkeypatch.setattr(pd.DataFrame, "to_csv", no_pandas)
-    assert csv_text(numbers) == expected[0] == "t,n,x\n0.0,1,\n0.005,2,-0.0\n"
+    assert csv_text(numbers) == expected == "t,n,x\n0.0,1,\n0.005,2,-0.0\n"
     with pytest.raises(AssertionError, match="written by pandas"):
         csv_text(strings)

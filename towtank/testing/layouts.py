@@ -344,10 +344,22 @@ def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str],
             "***End_of_Header***\t",
             "X_Value\t" + "\t".join(cols) + "\tComment",
         ]) + "\n")
-        out.write(rows_text([column_texts(v[lo:hi], blank_infinite=True) for v in values],
-                            "\t", row_end="\t"))
+        out.write(_lvm_rows([v[lo:hi] for v in values]))
         out.write("\n")
     path.write_text(out.getvalue(), encoding="utf-8")
+
+
+def _lvm_rows(columns: list[np.ndarray]) -> str:
+    """LVM data rows: the columns' ``repr`` (non-finite blank), tab-separated, each row ended
+    by a tab."""
+    return rows_text([column_texts(v, blank_infinite=True) for v in columns], "\t", row_end="\t")
+
+
+def _eu_rows(columns: list[np.ndarray]) -> str:
+    """European data rows: ``%.9g`` with decimal commas (non-finite blank), ``;``-separated;
+    a lone line end for no rows."""
+    text = rows_text([column_texts(v, "%.9g", blank_infinite=True) for v in columns], ";")
+    return text.replace(".", ",") or "\n"
 
 
 def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
@@ -364,9 +376,7 @@ def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str
         unit_row.append(unit)
     lines = ["Lab B towing tank;;;", "Datum: 21.05.2024;Operator: synth;;",
              "Messung exportiert aus DAQ;;;", ";".join(frame.columns), ";".join(unit_row)]
-    text = rows_text([column_texts(v, "%.9g", blank_infinite=True) for v in out.values()], ";")
-    path.write_text("\n".join(lines) + "\n" + (text.replace(".", ",") or "\n"),
-                    encoding="latin-1")
+    path.write_text("\n".join(lines) + "\n" + _eu_rows(list(out.values())), encoding="latin-1")
 
 
 def _mat_v5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
