@@ -40,6 +40,7 @@ from towtank.signal import conditioning
 from towtank.testing.days import write_protocol, write_run_sheet, write_truth
 from towtank.testing.instruments import Noise, draw_imperfections, recorded_channels
 from towtank.testing.layouts import write_layout
+from towtank.testing.numbertext import csv_text
 from towtank.testing.profiles import plan_profile, sample_times
 
 #: Horizontal symbols of the 14 derivatives of FORMATS section 8 and their vertical twins.
@@ -295,7 +296,7 @@ def write_captive_file(frame: pd.DataFrame, path: Path, layout: str) -> Path:
     units = {c: CHANNEL_UNITS[c] for c in frame.columns}
     if layout == "csv-units":
         head = ",".join(frame.columns) + "\n" + ",".join(units[c] for c in frame.columns) + "\n"
-        body = frame.to_csv(index=False, header=False, lineterminator="\n", float_format="%.7g")
+        body = csv_text(frame, header=False, float_format="%.7g")
         path.write_text(head + body, encoding="utf-8")
         return path
     return write_layout(layout, frame, path, "time", units)

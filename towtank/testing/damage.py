@@ -44,6 +44,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.testing import synthetic
+from towtank.testing.numbertext import csv_text
 
 __all__ = [
     "read_frame",
@@ -91,7 +92,7 @@ def read_frame(data: bytes) -> pd.DataFrame:
 def frame_bytes(frame: pd.DataFrame) -> bytes:
     """CSV bytes as :mod:`towtank.testing.synthetic` writes them ('\\n' line ends, empty =
     missing)."""
-    return frame.to_csv(index=False, lineterminator="\n", na_rep="").encode("utf-8")
+    return csv_text(frame).encode("utf-8")
 
 
 def _as_bytes(run: bytes | pd.DataFrame) -> tuple[bytes, bool]:

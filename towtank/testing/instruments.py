@@ -23,6 +23,7 @@ from towtank.testing.layouts import (
     write_layout,
     write_zero_file,
 )
+from towtank.testing.numbertext import csv_text
 from towtank.testing.profiles import plan_profile, sample_times
 from towtank.testing.truth import (
     REFERENCE_FS,
@@ -414,7 +415,7 @@ GZIP_LEVEL = 1
 
 def csv_bytes(frame: pd.DataFrame) -> bytes:
     """The frame as a run file's CSV bytes: a header row, no index, ``\n`` line ends."""
-    return frame.to_csv(index=False, lineterminator="\n").encode("utf-8")
+    return csv_text(frame).encode("utf-8")
 
 
 def write_run_file(

@@ -56,6 +56,7 @@ import scipy.io
 from nptdms import ChannelObject, GroupObject, RootObject, TdmsWriter
 
 from towtank.testing.labchannels import LabChannels
+from towtank.testing.numbertext import column_texts, csv_text, rows_text
 
 #: Layout -> file extension.
 LAYOUTS = {
@@ -152,7 +153,7 @@ def write_layout(
 
 
 def _csv(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
-    path.write_bytes(frame.to_csv(index=False, lineterminator="\n").encode())
+    path.write_bytes(csv_text(frame).encode())
 
 
 def carriage_log_name(run_file: str | Path) -> str:
@@ -178,7 +179,7 @@ def write_carriage_log(layout: str, frame: pd.DataFrame, run_path: Path, time_co
             ENCODER_STEP_M
         log = pd.DataFrame({"t (s)": np.round(t_log, 4), "x (mm)": np.round(pos * 1e3, 3)})
     path = Path(run_path).with_name(carriage_log_name(run_path))
-    path.write_bytes(log.to_csv(index=False, lineterminator="\n").encode())
+    path.write_bytes(csv_text(log).encode())
     return path
 
 
@@ -215,7 +216,7 @@ def write_zero_file(frame: pd.DataFrame, run_path: Path, time_col: str,
     start = motion_start(t, frame[speed_col].to_numpy(np.float64)) - 0.5
     zero = frame[(t >= start - ZERO_FILE_S) & (t < start)]
     path = Path(run_path).with_name(f"{Path(run_path).name.split('.', 1)[0]}_zero.csv")
-    path.write_bytes(zero.to_csv(index=False, lineterminator="\n").encode())
+    path.write_bytes(csv_text(zero).encode())
     return path
 
 
@@ -296,10 +297,6 @@ def _tdms_waveform(frame: pd.DataFrame, path: Path, time_col: str, units: dict[s
         writer.write_segment(objects)
 
 
-def _number(x: float) -> str:
-    return "" if not np.isfinite(x) else repr(float(x))
-
-
 def appended_frame(frame: pd.DataFrame, time_col: str) -> pd.DataFrame:
     """Two acquisitions one after another ("lvm-appended"): the run's first
     :data:`APPENDED_FIRST_S` (the balance at rest), then the whole run, its times moved on so
@@ -329,6 +326,7 @@ def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str],
             "Decimal_Separator\t.", "Multi_Headings\tNo", "X_Columns\tOne",
             "Time_Pref\tRelative", "Operator\ttowtank synth", "Date\t2024/05/21",
             "Time\t09:00:00", "***End_of_Header***", ""]
+    values = [t] + [frame[c].to_numpy(np.float64) for c in cols]
     half = t.size // 2
     out = io.StringIO()
     out.write("\n".join(head) + "\n")
@@ -346,11 +344,22 @@ def _lvm(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str],
             "***End_of_Header***\t",
             "X_Value\t" + "\t".join(cols) + "\tComment",
         ]) + "\n")
-        block = np.column_stack([t[lo:hi]] + [frame[c].to_numpy(np.float64)[lo:hi] for c in cols])
-        for row in block:
-            out.write("\t".join(_number(v) for v in row) + "\t\n")
+        out.write(_lvm_rows([v[lo:hi] for v in values]))
         out.write("\n")
     path.write_text(out.getvalue(), encoding="utf-8")
+
+
+def _lvm_rows(columns: list[np.ndarray]) -> str:
+    """LVM data rows: the columns' ``repr`` (non-finite blank), tab-separated, each row ended
+    by a tab."""
+    return rows_text([column_texts(v, blank_infinite=True) for v in columns], "\t", row_end="\t")
+
+
+def _eu_rows(columns: list[np.ndarray]) -> str:
+    """European data rows: ``%.9g`` with decimal commas (non-finite blank), ``;``-separated;
+    a lone line end for no rows."""
+    text = rows_text([column_texts(v, "%.9g", blank_infinite=True) for v in columns], ";")
+    return text.replace(".", ",") or "\n"
 
 
 def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
@@ -367,10 +376,7 @@ def _txt_eu(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str
         unit_row.append(unit)
     lines = ["Lab B towing tank;;;", "Datum: 21.05.2024;Operator: synth;;",
              "Messung exportiert aus DAQ;;;", ";".join(frame.columns), ";".join(unit_row)]
-    table = np.column_stack(list(out.values()))
-    text = "\n".join(";".join("" if not np.isfinite(v) else f"{v:.9g}".replace(".", ",")
-                              for v in row) for row in table)
-    path.write_text("\n".join(lines) + "\n" + text + "\n", encoding="latin-1")
+    path.write_text("\n".join(lines) + "\n" + _eu_rows(list(out.values())), encoding="latin-1")
 
 
 def _mat_v5(frame: pd.DataFrame, path: Path, time_col: str, units: dict[str, str]) -> None:
