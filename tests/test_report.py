@@ -8,6 +8,7 @@ and written by :func:`towtank.report.write_outputs`; the tests read the files ba
 from __future__ import annotations
 
 import copy
+import functools
 import math
 import os
 import re
@@ -47,6 +48,18 @@ def days(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple]:
     (:func:`conftest.built_once`: shared by the xdist workers; the tests only read them)."""
     value, _ = built_once(tmp_path_factory, "test_report_days", _write_days)
     return value
+
+
+def page_texts(path: Path) -> tuple[str, ...]:
+    """The text of each page of the PDF ``path`` (pypdf's), read once per version of the file
+    (the days' reports are read by several tests)."""
+    st = path.stat()
+    return _page_texts(path, st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=8)
+def _page_texts(path: Path, size: int, mtime_ns: int) -> tuple[str, ...]:
+    return tuple(page.extract_text() for page in PdfReader(path).pages)
 
 
 def _write_days(root: Path) -> dict[str, tuple]:
@@ -238,12 +251,11 @@ def _expected_pages(day) -> int:
 
 def test_hull_pdf_pages_and_sections(days):
     day, out = days["hull"]
-    reader = PdfReader(out / "report.pdf")
-    assert len(reader.pages) == _expected_pages(day)
+    text = page_texts(out / "report.pdf")
+    assert len(text) == _expected_pages(day)
     # title, summary, tare, added mass, damping, scaling, the runs' table, quality, 42 runs on
     # 4 appendix pages
-    assert len(reader.pages) == 12
-    text = [p.extract_text() for p in reader.pages]
+    assert len(text) == 12
     for section in ("Summary", "Tare", "Added mass", "Damping", "Scaling", "Runs", "Quality",
                     "Appendix"):
         assert any(section in t for t in text[1:]), section
@@ -256,15 +268,15 @@ def test_hull_pdf_pages_and_sections(days):
 
 def test_fin_pdf_has_no_hull_pages(days):
     day, out = days["fin"]
-    reader = PdfReader(out / "report.pdf")
-    assert len(reader.pages) == _expected_pages(day)
+    pages = page_texts(out / "report.pdf")
+    assert len(pages) == _expected_pages(day)
     # title, summary, the fin post's tare, two fin pages, the fin runs, the runs' table,
     # quality, thumbnails
-    assert len(reader.pages) == 2 + 1 + 2 + 1 + 1 + 1 + math.ceil(len(day.runs) / 12)
-    text = " ".join(p.extract_text() for p in reader.pages)
+    assert len(pages) == 2 + 1 + 2 + 1 + 1 + 1 + math.ceil(len(day.runs) / 12)
+    text = " ".join(pages)
     assert "Fins" in text and "Quality" in text
     assert "Added mass" not in text and "Damping" not in text
-    assert "not given" in reader.pages[0].extract_text()
+    assert "not given" in pages[0]
 
 
 def test_pdf_metadata(days):
@@ -294,10 +306,8 @@ def test_pages_split_into_contiguous_groups(kinds, parts):
 def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
     day, out = days["fin"]  # the shorter day: its pages are drawn in four parts as well
     one = pdf.write_pdf(day, tmp_path, parts=1)
-    a, b = PdfReader(one), PdfReader(out / "report.pdf")
-    assert len(a.pages) == len(b.pages)
-    assert [p.extract_text() for p in a.pages] == [p.extract_text() for p in b.pages]
-    assert a.metadata == b.metadata
+    assert page_texts(one) == page_texts(out / "report.pdf")
+    assert PdfReader(one).metadata == PdfReader(out / "report.pdf").metadata
     assert not list(tmp_path.glob(".report-part-*"))
 
 
@@ -411,9 +421,7 @@ def test_the_runs_table_lists_every_run_with_its_status(days):
     """Issue 16: a per-run table in the PDF (run, config, test, α, U, a, drag, C_D, Re, tare,
     status), one row per run of the sheet."""
     day, out = days["hull"]
-    reader = PdfReader(out / "report.pdf")
-    text = next(p.extract_text() for p in reader.pages if "Runs" in p.extract_text()
-                and "tare [N]" in p.extract_text())
+    text = next(t for t in page_texts(out / "report.pdf") if "Runs" in t and "tare [N]" in t)
     for r in day.runs.itertuples():
         assert str(int(r.run)) in text
     assert "rejected" in text and "status" in text
@@ -437,8 +445,7 @@ def test_runs_table_gives_each_run_its_test_area_coefficient(days):
     assert np.allclose(side.cd_ref, cd90, rtol=0.01)
     assert (side.cd > 3 * cd90).all()  # the frontal-area value, which the table does not show
     assert runs.loc[runs.config == "sting", "cd_ref"].isna().all()
-    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
-                if "tare [N]" in p.extract_text())
+    text = next(t for t in page_texts(out / "report.pdf") if "tare [N]" in t)
     for v in side.cd_ref:
         assert f"{v:.4f}" in text
     for v in side.cd:
@@ -459,8 +466,7 @@ def test_runs_table_says_why_an_acceleration_is_blank(days):
                                      [int(r) for r in day.runs.run])
     assert blank == expected
     assert "no constant-acceleration stretch" in note and "U/a" in note
-    text = next(p.extract_text() for p in PdfReader(out / "report.pdf").pages
-                if "tare [N]" in p.extract_text())
+    text = next(t for t in page_texts(out / "report.pdf") if "tare [N]" in t)
     assert "no constant-acceleration stretch" in text
     ws = openpyxl.load_workbook(out / "report.xlsx")["Runs"]
     notes = [str(c.value) for row in ws.iter_rows() for c in row
@@ -499,7 +505,7 @@ def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
     name = "REMUS 100 (SUT-2 report, Table 4)"
     assert reference_name("remus") == name
     assert reference_name("/lab/my_ref.csv") == "my_ref.csv (user reference CSV)"
-    summary = PdfReader(out / "report.pdf").pages[1].extract_text()
+    summary = page_texts(out / "report.pdf")[1]
     assert name in summary and "'remus'" not in summary
     ws = openpyxl.load_workbook(out / "report.xlsx")["Summary"]
     assert name in [c.value for row in ws.iter_rows() for c in row]
@@ -511,7 +517,7 @@ def test_report_equations_are_written_out_with_their_source(days):
     """Issue 22: a PDF that cites "report eqs. 7–8" writes those equations out and names the
     report with its title, as README and docs/method.md do."""
     _, out = days["hull"]
-    pages = [p.extract_text() for p in PdfReader(out / "report.pdf").pages]
+    pages = list(page_texts(out / "report.pdf"))
     assert any("report eq" in t for t in pages[1:])
     title = " ".join(pages[0].split())
     name = "Identification of Underwater Vehicle Hydrodynamic Coefficients Using Model Tests"
