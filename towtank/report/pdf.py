@@ -39,7 +39,6 @@ from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
-from matplotlib.transforms import Bbox
 from pypdf import PdfWriter
 
 import towtank.report.figures as figures
@@ -67,6 +66,7 @@ from towtank.report.figure_base import (
     sci,
     true_minus,
 )
+from towtank.report.pagetable import page_table
 from towtank.report.provenance import captive_provenance, creation_date, report_date
 from towtank.report.quality import (
     LINE_IN,
@@ -367,18 +367,13 @@ def _table(fig: Figure, top_in: float, header: list[str], rows: list[list[str]],
     ax = fig.add_axes((x0, _y(top_in + height), 1 - 2 * x0, height / PAGE_H))
     ax.set_axis_off()
     total = sum(col_widths)
-    tab = ax.table(cellText=rows, colLabels=header, colWidths=[w / total for w in col_widths],
-                   bbox=Bbox.from_bounds(0, 0, 1, 1), cellLoc="right")
+    tab = page_table(ax, rows, header, [w / total for w in col_widths], align)
     tab.auto_set_font_size(False)
     tab.set_fontsize(fontsize)
     for (r, c), cell in tab.get_celld().items():
         cell.set_linewidth(0.4)
         cell.set_edgecolor("#bbbbbb")
         cell.PAD = 0.04
-        if align is not None:
-            cell.get_text().set_horizontalalignment(align[c])
-            # private, not in matplotlib's stubs: keeps the alignment when the table redraws
-            cell._loc = align[c]  # type: ignore[attr-defined]  # noqa: SLF001
         if r == 0:
             cell.set_facecolor("#" + style.XL_HEADER_FILL)
             cell.get_text().set_fontweight("bold")
