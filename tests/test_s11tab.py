@@ -1,0 +1,87 @@
+"""The report's tables (towtank.report.pagetable): drawn as matplotlib's Table draws them, the
+same pixels, without measuring every cell's window extent."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+import pytest
+from matplotlib.axes import Axes
+from matplotlib.backend_bases import RendererBase
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.table import Cell, Table
+from matplotlib.transforms import Bbox
+
+from towtank.report import pdf
+from towtank.report.pagetable import page_table
+
+HEADER = ["run", "U [m/s]", "status"]
+ROWS = [[str(k), f"{0.25 * k:.3f}", "ok" if k % 3 else "rejected"] for k in range(1, 12)]
+WIDTHS = [0.2, 0.5, 0.3]
+
+
+def _figure() -> tuple[Figure, Axes]:
+    fig = Figure(figsize=(5, 3), dpi=80)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.1, 0.1, 0.8, 0.8))
+    ax.set_axis_off()
+    return fig, ax
+
+
+def _pixels(fig: Figure) -> np.ndarray:
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba()).copy()
+
+
+def _style(tab: Table) -> None:
+    for (r, _c), cell in tab.get_celld().items():
+        cell.set_linewidth(0.4)
+        cell.PAD = 0.04
+        if r == 0:
+            cell.set_facecolor("#dddddd")
+            cell.get_text().set_fontweight("bold")
+
+
+@pytest.mark.parametrize("align", [None, ["left", "center", "right"]])
+def test_page_table_draws_matplotlibs_table_pixels(
+        align: list[Literal["left", "center", "right"]] | None) -> None:
+    """The same rows drawn by matplotlib's ``ax.table`` and by page_table: the same pixels,
+    the same text anchors."""
+    fig_mpl, ax_mpl = _figure()
+    ref = ax_mpl.table(cellText=ROWS, colLabels=HEADER, colWidths=WIDTHS,
+                       bbox=Bbox.from_bounds(0, 0, 1, 1), cellLoc="right")
+    if align is not None:
+        for (_r, c), cell in ref.get_celld().items():
+            cell.get_text().set_horizontalalignment(align[c])
+    fig_ours, ax_ours = _figure()
+    ours = page_table(ax_ours, ROWS, HEADER, WIDTHS, align)
+    for tab in (ref, ours):
+        tab.auto_set_font_size(False)
+        tab.set_fontsize(7.5)
+        _style(tab)
+    assert np.array_equal(_pixels(fig_mpl), _pixels(fig_ours))
+    for key, cell in ref.get_celld().items():
+        np.testing.assert_allclose(ours[key].get_text().get_position(),
+                                   cell.get_text().get_position(), rtol=0, atol=1e-9)
+        assert ours[key].get_bbox().bounds == pytest.approx(cell.get_bbox().bounds, abs=1e-12)
+
+
+def test_report_table_draws_without_measuring_cells(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A report table (pdf._table) is drawn without a window-extent measurement per cell."""
+    calls: list[Cell] = []
+    extent = Cell.get_window_extent
+
+    def counting(self: Cell, renderer: RendererBase | None = None) -> Bbox:
+        calls.append(self)
+        return extent(self, renderer)
+
+    monkeypatch.setattr(Cell, "get_window_extent", counting)
+    fig = Figure(figsize=pdf.style.PAGE_SIZE, dpi=80)
+    FigureCanvasAgg(fig)
+    used = pdf._table(fig, 1.0, HEADER, ROWS, [0.45, 0.55, 0.6])
+    fig.canvas.draw()
+    assert used == pytest.approx((len(ROWS) + 1) * 0.22)
+    assert calls == []
