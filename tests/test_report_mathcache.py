@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import multiprocessing as mp
+
 import matplotlib as mpl
-from matplotlib.font_manager import FontProperties
+from matplotlib.font_manager import FontProperties, get_font
 from matplotlib.ft2font import LoadFlags
 from matplotlib.mathtext import MathTextParser
 
@@ -39,3 +41,36 @@ def test_math_layout_follows_mathtext_rc() -> None:
     assert upright is not italic, "the rc setting is part of the cache key"
     fonts = {tuple(g[0].fname for g in parse.glyphs) for parse in (italic, upright)}
     assert len(fonts) == 2, "upright and italic letters come from different fonts"
+
+
+def _child_layout(text: str, prop: FontProperties, send) -> None:  # noqa: ANN001
+    """In a forked process: the layout of ``text`` from the shared cache, whether each of its
+    glyphs is drawn from this process's own font object, and the glyphs' numbers."""
+    parse = MathTextParser("path").parse(text, 72, prop)
+    send.send(([g[0] is get_font(g[0].fname) for g in parse.glyphs],
+               [tuple(g[1:]) for g in parse.glyphs], (parse.width, parse.height, parse.depth)))
+    send.close()
+
+
+def test_a_forked_process_draws_an_inherited_layout_with_its_own_fonts() -> None:
+    """FreeType reads a font file lazily through its font object's file position, which a
+    forked process shares with its parent: a layout the parent made (its glyphs name the
+    parent's font objects) is given the child's own font objects, the same layout otherwise.
+    Two processes reading through one position read each other's bytes: a report whose
+    forked writers drew math the parent had laid out failed with "invalid outline"."""
+    prop = FontProperties(family="DejaVu Sans", size=8)
+    text = r"$C_{D}(\alpha)$ and $X_{\dot u}$, fork probe"
+    here = MathTextParser("path").parse(text, 72, prop)  # laid out (and cached) here
+    assert all(g[0] is get_font(g[0].fname) for g in here.glyphs)
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child_layout, args=(text, prop, send))
+    child.start()
+    send.close()
+    own, glyphs, size = recv.recv()
+    child.join()
+    assert own and all(own), "the child drew with the parent's font objects"
+    assert glyphs == [tuple(g[1:]) for g in here.glyphs]
+    assert size == (here.width, here.height, here.depth)
+    again = MathTextParser("path").parse(text, 72, prop)
+    assert again is here, "the parent's own layouts stay cached"

@@ -8,15 +8,24 @@ on every page, and a report's few hundred math strings overflow the 50 entries w
 parser's output type, the string, dpi, font properties, antialiasing, glyph-loading flags and
 the ``mathtext.*`` rc settings), not on the parser instance. The layouts are the same as
 matplotlib's (the same function computes them), so the report's pixels do not change.
+
+A layout names the font objects its glyphs are drawn from, and FreeType reads a font's file
+lazily, through the file position of the object's open file. A forked process shares that
+position with its parent, so the two must never read through one object: two processes seeking
+and reading one file position read each other's bytes ("invalid outline", "too many hints", or
+a wrong glyph). matplotlib's own font cache is emptied in a forked process for that reason; the
+layouts this process inherits are likewise set aside at a fork and, when asked for again, given
+the child's own font objects (:func:`_own_fonts`): the same layout, no new parse.
 """
 
 from __future__ import annotations
 
-import functools
 import inspect
+import os
 from typing import Any
 
 import matplotlib as mpl
+from matplotlib.font_manager import get_font
 from matplotlib.mathtext import MathTextParser
 
 __all__ = ["install", "rc_value", "MATH_CACHE_SIZE"]
@@ -31,27 +40,60 @@ _RC_KEYS = tuple(sorted(k for k in mpl.rcParams if k.startswith("mathtext.")))
 _PARSERS: dict[str, MathTextParser] = {}
 _EXPECTED = ("self", "s", "dpi", "prop", "antialiased", "load_glyph_flags")
 
+#: Layouts made in this process (or given its font objects), by what they depend on.
+_LAYOUTS: dict[tuple[Any, ...], Any] = {}
+#: Layouts a parent process made before it forked this one: their glyphs name the parent's
+#: font objects (see the module's text).
+_INHERITED: dict[tuple[Any, ...], Any] = {}
+
+
+def _set_aside_at_fork() -> None:
+    """In a forked process: every layout so far is the parent's."""
+    _INHERITED.update(_LAYOUTS)
+    _LAYOUTS.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_set_aside_at_fork)
+
 
 def _parameters(func: Any) -> tuple[str, ...]:
     return tuple(inspect.signature(func).parameters)
 
 
-@functools.lru_cache(MATH_CACHE_SIZE)
-def _parse_shared(output_type: str, s: str, dpi: float, prop: Any, antialiased: bool,
-                  load_glyph_flags: Any, rc: tuple[Any, ...]) -> Any:
-    """matplotlib's own uncached parse, run by one parser of ``output_type``; ``rc`` is in
-    the key only (the ``mathtext.*`` settings the parse reads)."""
+def _parse_new(output_type: str, s: str, dpi: float, prop: Any, antialiased: bool,
+               load_glyph_flags: Any) -> Any:
+    """matplotlib's own uncached parse, run by one parser of ``output_type``."""
     assert _PARSE is not None
     parser = _PARSERS.setdefault(output_type, MathTextParser("agg" if output_type == "raster"
                                                              else "path"))
     return _PARSE(parser, s, dpi, prop, antialiased, load_glyph_flags)
 
 
+def _own_fonts(parse: Any) -> Any:
+    """An inherited layout with each glyph's font object this process's own: the one
+    matplotlib's font cache gives for the same file, as the parse itself would have loaded it
+    (a raster layout is an image and names no font)."""
+    glyphs = getattr(parse, "glyphs", None)
+    if not glyphs:
+        return parse
+    return parse._replace(glyphs=[(get_font(g[0].fname), *g[1:]) for g in glyphs])
+
+
 def _parse_cached(self: MathTextParser, s: str, dpi: float, prop: Any, antialiased: bool,
                   load_glyph_flags: Any) -> Any:
-    rc = tuple(rc_value(mpl.rcParams[k]) for k in _RC_KEYS)
-    return _parse_shared(getattr(self, "_output_type"), s, dpi, prop, antialiased,  # noqa: B009
-                         load_glyph_flags, rc)
+    output_type = getattr(self, "_output_type")  # noqa: B009
+    rc = tuple(rc_value(mpl.rcParams[k]) for k in _RC_KEYS)  # the mathtext.* settings read
+    key = (output_type, s, dpi, prop, antialiased, load_glyph_flags, rc)
+    found = _LAYOUTS.get(key)
+    if found is None:
+        inherited = _INHERITED.pop(key, None)
+        found = (_own_fonts(inherited) if inherited is not None
+                 else _parse_new(output_type, s, dpi, prop, antialiased, load_glyph_flags))
+        if len(_LAYOUTS) >= MATH_CACHE_SIZE:
+            _LAYOUTS.clear()
+        _LAYOUTS[key] = found
+    return found
 
 
 def rc_value(value: Any) -> Any:
