@@ -325,7 +325,7 @@ def write_day(plan: Plan, reduced: Reduced, *, writers: list[Writer] | None = No
             day = write_day_outputs(reduced.day, out, report=options.report,
                                     writers=writers, keep=KEPT if keep is None else keep,
                                     export=options.export,
-                                    provenance_extra=provenance_extra)
+                                    provenance_extra=provenance_extra, jobs=plan.jobs)
             text = summary(day, out)
             if plan.stamp is not None:
                 changed = plan.stamp.record(code, text, {**reduced.read, **read_stamps(day)})

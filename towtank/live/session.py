@@ -65,7 +65,7 @@ from towtank.runner import (
     reduce_day,
     write_day,
 )
-from towtank.runtime.parallel import leave_inherited_alone
+from towtank.runtime.parallel import leave_inherited_alone, usable_jobs
 from towtank.runtime.safefile import read_regular
 from towtank.runtime.storage import STORAGE_ERRNOS, os_error, storage_error
 
@@ -619,7 +619,8 @@ class WatchSession:
         folder = self.live_dir / f".report-{self.writes}"
         shutil.rmtree(folder, ignore_errors=True)
         runs = [int(r) for r in day.runs["run"]]
-        pid = _fork(lambda: _draw_report(day, folder))
+        beside = usable_jobs(self.jobs) > 1  # one job: the PDF's page groups one by one
+        pid = _fork(lambda: _draw_report(day, folder, beside=beside))
         self._job = (pid, folder, runs, now_iso())
         self.pdf_at = self.clock()
 
@@ -966,14 +967,15 @@ def _span(runs: list[int]) -> str:
     return f"{runs[0]}–{runs[-1]}" if len(runs) > 1 else (str(runs[0]) if runs else "none")
 
 
-def _draw_report(day: DayResult, folder: Path) -> int:
-    """In the forked process: report.pdf and figures/ into ``folder`` (as the protocol's
+def _draw_report(day: DayResult, folder: Path, *, beside: bool = True) -> int:
+    """In the forked process: report.pdf (its page groups ``beside`` this process,
+    :func:`~towtank.report.pdf.write_pdf`) and figures/ into ``folder`` (as the protocol's
     [report] asks), then the marker ``done``; 0, or 1 with the error in ``error.txt``."""
     try:
         folder.mkdir(parents=True)
         options = day.protocol.report
         if getattr(options, "pdf", True):
-            write_pdf(day, folder)
+            write_pdf(day, folder, beside=beside)
         if getattr(options, "figures", True):
             write_figures(day, folder)
         (folder / "done").touch()

@@ -19,7 +19,7 @@ from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.export import export_runs
 from towtank.report.provenance import provenance
 from towtank.runtime import interrupt, manifest
-from towtank.runtime.parallel import run_beside
+from towtank.runtime.parallel import run_beside, usable_jobs
 from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
@@ -173,6 +173,7 @@ def write_day_outputs(
     keep: tuple[str, ...] = KEPT,
     export: tuple[str, ...] | list[str] = (),
     provenance_extra: dict[str, Any] | None = None,
+    jobs: int | None = None,
 ) -> DayResult:
     """Write every output of the day into ``out_dir``, replacing the previous outputs, and
     return the day as written.
@@ -199,6 +200,10 @@ def write_day_outputs(
         "parquet") into ``export/`` (:mod:`towtank.report.export`).
     provenance_extra : dict, optional
         More entries for provenance.json (``towtank watch``: which runs the PDF covers).
+    jobs : int, optional
+        Processes the report may use (default: every core). With one (asked for, or the
+        machine's only core) the writers and the PDF's page groups run in this process one
+        after another; else beside each other (:func:`run_writers`). The files are the same.
 
     Returns
     -------
@@ -217,13 +222,15 @@ def write_day_outputs(
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     with manifest.output_lock(out_dir):  # two writers never mix their files
         return _write_outputs(day, out_dir, report=report, writers=writers, keep=keep,
-                              export=export, provenance_extra=provenance_extra)
+                              export=export, provenance_extra=provenance_extra,
+                              beside=usable_jobs(jobs) > 1)
 
 
 def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
                    writers: list[Writer] | None, keep: tuple[str, ...],
                    export: tuple[str, ...] | list[str],
-                   provenance_extra: dict[str, Any] | None = None) -> DayResult:
+                   provenance_extra: dict[str, Any] | None = None,
+                   beside: bool = True) -> DayResult:
     manifest.recover_outputs(out_dir)
     refuse_foreign_outputs(out_dir)
     sweep_stale_temporaries(out_dir)
@@ -246,7 +253,7 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
 
             write_vehicle(day, tmp, figure=report)
         if report:
-            run_writers(writers or _report_writers(), day, tmp)
+            run_writers(writers or _report_writers(beside=beside), day, tmp, beside=beside)
         (tmp / "provenance.json").write_text(
             json.dumps(provenance(day, provenance_extra), indent=2, sort_keys=False,
                        default=str) + "\n",
@@ -283,25 +290,27 @@ def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,
     return day
 
 
-def run_writers(writers: list[Writer], day: DayResult, folder: Path) -> None:
+def run_writers(writers: list[Writer], day: DayResult, folder: Path, *,
+                beside: bool = True) -> None:
     """Run the report writers, the first in this process and the others beside it.
 
     Each writer writes its own files into ``folder`` and shares nothing with the others, so the
     later ones run in forked processes while this one draws the first (the PDF, the longest):
     the report takes about the time of its longest part
-    (:func:`towtank.runtime.parallel.run_beside`).
-    A writer that fails, here or in its process, fails the whole report (the caller then
-    writes nothing).
+    (:func:`towtank.runtime.parallel.run_beside`); without ``beside`` they run here one after
+    another. A writer that fails, here or in its process, fails the whole report (the caller
+    then writes nothing).
     """
-    run_beside([(_writer_name(w), partial(w, day, folder)) for w in writers])
+    run_beside([(_writer_name(w), partial(w, day, folder)) for w in writers], fork=beside)
 
 
 def _writer_name(writer: Writer) -> str:
     return getattr(writer, "__name__", type(writer).__name__)
 
 
-def _report_writers() -> list[Writer]:
-    """The report's writers: report.xlsx, report.pdf and figures/*.png.
+def _report_writers(*, beside: bool = True) -> list[Writer]:
+    """The report's writers: report.xlsx, report.pdf and figures/*.png (the PDF's page
+    groups drawn ``beside`` this process, :func:`~towtank.report.pdf.write_pdf`).
 
     The protocol's [report] table may turn the PDF (``pdf = false``) or the PNG figures
     (``figures = false``) off; the workbook is always written.
@@ -317,7 +326,7 @@ def _report_writers() -> list[Writer]:
 
     def pdf(day: DayResult, folder: Path) -> None:
         if wanted(day, "pdf"):
-            write_pdf(day, folder)
+            write_pdf(day, folder, beside=beside)
 
     def figures(day: DayResult, folder: Path) -> None:
         if wanted(day, "figures"):

@@ -921,15 +921,17 @@ def split_pages(plan: list[Page], parts: int) -> list[list[int]]:
     return [list(range(a, b)) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
 
 
-def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> Path:
+def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS,
+              beside: bool = True) -> Path:
     """Write ``folder/report.pdf``.
 
     The pages are drawn in ``parts`` groups at once (:func:`split_pages`, each group by
     matplotlib's ``PdfPages`` into a part file: one group in this process, a different one with
-    each report it draws, the others each in a forked process of its own) and the parts
-    joined in order with pypdf; the metadata (title, author, creation date from the report
-    date) are set once on the whole. The number of parts does not depend on the machine, so
-    the same day gives the same bytes anywhere.
+    each report it draws, the others each in a forked process of its own; or, without
+    ``beside``, every group here one after another) and the parts joined in order with pypdf;
+    the metadata (title, author, creation date from the report date) are set once on the
+    whole. Neither the number of parts nor the processes that draw them depend on the machine
+    or the jobs, so the same day gives the same bytes anywhere.
 
     Parameters
     ----------
@@ -939,6 +941,9 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
         The output folder (the report writers' temporary folder).
     parts : int
         Page groups drawn at once.
+    beside : bool
+        Draw the groups in processes of their own, beside this one (False: one job asked
+        for; the same file).
 
     Returns
     -------
@@ -956,7 +961,7 @@ def write_pdf(day: DayResult, folder: str | Path, *, parts: int = PDF_PARTS) -> 
             for g, part in zip(groups, part_files, strict=True)
         ]
         here = next(_REPORTS_DRAWN) % len(tasks)
-        run_beside(tasks[here:] + tasks[:here])  # the first is drawn in this process
+        run_beside(tasks[here:] + tasks[:here], fork=beside)  # the first is drawn here
         writer = PdfWriter()
         for part in part_files:
             writer.append(part)

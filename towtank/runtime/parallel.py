@@ -496,12 +496,13 @@ def leave_inherited_alone() -> None:
     gc.freeze()
 
 
-def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]]) -> None:
+def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]], *, fork: bool = True
+               ) -> None:
     """Run independent ``(name, task)`` pairs at once: the first here, the others forked.
 
-    For tasks that share nothing and write their own files (the parts of the report). Where
-    forking is not available or not safe (another thread is running) they run one after
-    another. A task that fails here raises as it is; one that fails (or dies) in its process
+    For tasks that share nothing and write their own files (the parts of the report). Without
+    ``fork`` (one job asked for), or where forking is not available or not safe (another
+    thread is running), they run here one after another. A task that fails here raises as it is; one that fails (or dies) in its process
     makes a RuntimeError naming it, with its traceback as a note, once every task has ended;
     or an ``OSError`` of the storage errno (``ENOSPC``...) when a task failed for the storage
     (an ``OSError`` with that errno raised or in its chain), so that a full disk met in a forked
@@ -509,7 +510,7 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]]) -> None:
     The forked processes ignore Ctrl-C: when this process is interrupted (KeyboardInterrupt
     here), it kills them before the exception goes on.
     """
-    if len(tasks) < 2 or "fork" not in mp.get_all_start_methods() or (
+    if not fork or len(tasks) < 2 or "fork" not in mp.get_all_start_methods() or (
         threading.active_count() > 1
     ):
         for _, task in tasks:
