@@ -502,11 +502,12 @@ def run_beside(tasks: Sequence[tuple[str, Callable[[], object]]], *, fork: bool 
 
     For tasks that share nothing and write their own files (the parts of the report). Without
     ``fork`` (one job asked for), or where forking is not available or not safe (another
-    thread is running), they run here one after another. A task that fails here raises as it is; one that fails (or dies) in its process
-    makes a RuntimeError naming it, with its traceback as a note, once every task has ended;
-    or an ``OSError`` of the storage errno (``ENOSPC``...) when a task failed for the storage
-    (an ``OSError`` with that errno raised or in its chain), so that a full disk met in a forked
-    writer stays a full disk (:mod:`towtank.runtime.storage`).
+    thread is running), they run here one after another. A task that fails here raises as it
+    is; one that fails (or dies) in its process makes a RuntimeError naming it, with its
+    traceback as a note, once every task has ended; or an ``OSError`` of the storage errno
+    (``ENOSPC``...) when a task failed for the storage (an ``OSError`` with that errno raised or
+    in its chain), so that a full disk met in a forked writer stays a full disk
+    (:mod:`towtank.runtime.storage`).
     The forked processes ignore Ctrl-C: when this process is interrupted (KeyboardInterrupt
     here), it kills them before the exception goes on.
     """
