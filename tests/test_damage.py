@@ -247,7 +247,7 @@ def test_a_failing_report_writer_leaves_the_old_outputs(day, processed, monkeypa
         (folder / "report.pdf").write_bytes(b"%PDF-half")
         raise RuntimeError("disk full while writing the report")
 
-    monkeypatch.setattr(outputs, "_report_writers", lambda: [writer])
+    monkeypatch.setattr(outputs, "_report_writers", lambda **_: [writer])
     rc, stdout, stderr = run_cli(str(day.protocol), "--out", str(out), "-q")
     assert rc not in (0, 1)
     assert "disk full while writing the report" in stderr and "Traceback" not in stderr

@@ -75,8 +75,8 @@ def _seed_cache(src: Path, dst: Path) -> None:
 
 def _watch(protocol: Path, out: Path, *, report: bool = True) -> None:
     """``towtank watch`` of a day whose files are all there, until its outputs and report
-    cover every run of the sheet."""
-    plan = prepare(protocol, out, watch_options(report=report))
+    cover every run of the sheet; one job, as the other two doors are run here."""
+    plan = prepare(protocol, out, watch_options(jobs=1, report=report))
     lines: list[str] = []
     session = WatchSession(plan, echo=lines.append, live_figures=False)
     try:
