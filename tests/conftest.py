@@ -310,13 +310,15 @@ class SampleReport:
 
 
 @pytest.fixture(scope="session")
-def sample_report(tmp_path_factory) -> Callable[[str], SampleReport]:
+def sample_report(tmp_path_factory, sample_outputs) -> Callable[[str], SampleReport]:
     """``sample_report(name)``: ``protocols/<name>.toml`` (sut2_hull, naca0015_fin) processed
     with its report (PDF, workbook, figures) by ``towtank.process_day(protocol, out=...,
     report=True)`` once per test run (:func:`built_once`: shared by the xdist workers). Writing
     a report is the longest part of a day, so the tests that read a sample day's written report
-    share this one (the golden comparison, the front doors). The folder is shared: tests only
-    read it."""
+    share this one (the golden comparison, the front doors). The runs come from the run cache
+    of the session's ``towtank process`` of the day (:func:`sample_outputs`), which reduced
+    them (the golden comparison, tests/test_golden_outputs.py, holds these outputs to the
+    ones recorded from a day reduced afresh). The folder is shared: tests only read it."""
     done: dict[str, SampleReport] = {}
 
     def get(name: str) -> SampleReport:
@@ -324,6 +326,9 @@ def sample_report(tmp_path_factory) -> Callable[[str], SampleReport]:
             import towtank
 
             def build(out: Path) -> Any:
+                reduced = sample_outputs(name).out / ".cache"
+                shutil.copytree(reduced, out / ".cache",
+                                ignore=shutil.ignore_patterns("day.json"))  # runs, no replay
                 return towtank.process_day(ROOT / "protocols" / f"{name}.toml", out=out,
                                            report=True, jobs=JOBS)
 
