@@ -184,9 +184,12 @@ def test_a_full_disk_while_writing_is_exit_2_and_the_old_outputs_stay(tmp_path, 
 
 # ------------------------------------------------------------ 14: bounded work per input
 def test_jobs_beyond_the_cores_are_capped_with_a_note(tmp_path, capsys):
-    from towtank.runtime.parallel import default_jobs, usable_jobs
+    from towtank.runtime.parallel import default_jobs, fork_beside, usable_jobs
 
     assert usable_jobs(100_000) == default_jobs() and usable_jobs(0) == 1
+    # one job is one process: nothing forked beside it, whatever the machine
+    assert not fork_beside(1) and not fork_beside(0)
+    assert fork_beside(2) == fork_beside(None) == (default_jobs() > 1)
     protocol = _day(tmp_path)
     assert main(["process", str(protocol), "--jobs", "100000", "--no-report"]) == 0
     assert f"{default_jobs()} jobs are used" in capsys.readouterr().err

@@ -1,5 +1,6 @@
-"""The package type-checks: mypy, configured by pyproject.toml's ``[tool.mypy]``, finds no
-error in towtank/ (issue 24). mypy is in the ``test`` extra, so CI runs this check."""
+"""The static checks: mypy, configured by pyproject.toml's ``[tool.mypy]``, finds no error in
+towtank/ (issue 24), and ruff (``[tool.ruff]``) finds nothing in towtank/ and tests/. Both are
+in the ``test`` extra, so the README's test command, and CI, run these checks."""
 
 from __future__ import annotations
 
@@ -66,3 +67,28 @@ def test_the_configuration_catches_errors(report: tuple[int, str]) -> None:
     assert status == 1, text
     assert "bad_module.py:2: error" in text and "[operator]" in text, text
     assert "bad_module.py:6: error" in text, text
+
+
+def _ruff(targets: list[str]) -> tuple[int, str]:
+    """ruff's exit status and report for ``targets``, with the project's ``[tool.ruff]``
+    configuration and no cache written."""
+    import ruff  # noqa: F401 - a test dependency: missing, the suite fails rather than skips
+
+    done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", "--config",
+                           str(CONFIG), *targets], capture_output=True, text=True, timeout=120,
+                          check=False)
+    return done.returncode, done.stdout + done.stderr
+
+
+def test_the_code_and_its_tests_are_ruff_clean() -> None:
+    """``ruff check`` (pyproject.toml's rules) finds nothing in towtank/ and tests/."""
+    status, text = _ruff([str(ROOT / "towtank"), str(ROOT / "tests")])
+    assert status == 0, f"ruff found problems:\n{text}"
+
+
+def test_ruff_finds_a_planted_problem(tmp_path: Path) -> None:
+    """The check above can fail: an unused import and an undefined name are reported."""
+    bad = tmp_path / "bad_module.py"
+    bad.write_text("import os\n\n\ndef f():\n    return undefined_name\n", encoding="utf-8")
+    status, text = _ruff([str(bad)])
+    assert status == 1 and "F401" in text and "F821" in text, text

@@ -65,7 +65,7 @@ from towtank.runner import (
     reduce_day,
     write_day,
 )
-from towtank.runtime.parallel import leave_inherited_alone, usable_jobs
+from towtank.runtime.parallel import fork_beside, leave_inherited_alone
 from towtank.runtime.safefile import read_regular
 from towtank.runtime.storage import STORAGE_ERRNOS, os_error, storage_error
 
@@ -619,7 +619,7 @@ class WatchSession:
         folder = self.live_dir / f".report-{self.writes}"
         shutil.rmtree(folder, ignore_errors=True)
         runs = [int(r) for r in day.runs["run"]]
-        beside = usable_jobs(self.jobs) > 1  # one job: the PDF's page groups one by one
+        beside = fork_beside(self.jobs)  # one job: the PDF's page groups one by one
         pid = _fork(lambda: _draw_report(day, folder, beside=beside))
         self._job = (pid, folder, runs, now_iso())
         self.pdf_at = self.clock()

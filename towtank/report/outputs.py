@@ -19,7 +19,7 @@ from towtank.ingest.protocol import OUTPUT_NAMES
 from towtank.report.export import export_runs
 from towtank.report.provenance import provenance
 from towtank.runtime import interrupt, manifest
-from towtank.runtime.parallel import run_beside, usable_jobs
+from towtank.runtime.parallel import fork_beside, run_beside
 from towtank.runtime.storage import storage_error
 
 if TYPE_CHECKING:
@@ -223,7 +223,7 @@ def write_day_outputs(
     with manifest.output_lock(out_dir):  # two writers never mix their files
         return _write_outputs(day, out_dir, report=report, writers=writers, keep=keep,
                               export=export, provenance_extra=provenance_extra,
-                              beside=usable_jobs(jobs) > 1)
+                              beside=fork_beside(jobs))
 
 
 def _write_outputs(day: DayResult, out_dir: Path, *, report: bool,

@@ -86,6 +86,13 @@ def usable_jobs(jobs: int | None) -> int:
     return cores if jobs is None else max(1, min(int(jobs), cores))
 
 
+def fork_beside(jobs: int | None) -> bool:
+    """Whether independent tasks of a request of ``jobs`` run in forked processes beside this
+    one (:func:`run_beside`'s ``fork``): more than one usable job. One job (``--jobs 1``, a
+    one-core machine) is one process throughout."""
+    return usable_jobs(jobs) > 1
+
+
 def chunk_size(n_records: int, jobs: int) -> int:
     """Records per task: about eight tasks per worker, at most :data:`MAX_CHUNK`."""
     return max(1, min(MAX_CHUNK, n_records // (8 * jobs)))
