@@ -32,6 +32,28 @@ from towtank.testing import synthetic as syn
 #: workers on two cores, so a pool of workers per day only adds its start-up; the tests that are
 #: about worker pools ask for them (``--jobs 2``, ``jobs=2``).
 JOBS = 1
+# For the same reason, the processes towtank uses when a test (or a documented command it runs
+# as written) does not say: each pytest-xdist worker gets its share of the cores through
+# towtank's TOWTANK_JOBS (one each for two workers on two cores), unless it is set already. A
+# test about the default itself clears it (``monkeypatch.delenv``).
+_SHARE_SET = ("TOWTANK_JOBS" not in os.environ
+              and os.environ.get("PYTEST_XDIST_WORKER_COUNT", "").isdigit())
+if _SHARE_SET:
+    os.environ["TOWTANK_JOBS"] = str(max(1, len(os.sched_getaffinity(0))
+                                         // max(1, int(os.environ["PYTEST_XDIST_WORKER_COUNT"]))))
+
+
+def lab_environment(**extra: str) -> dict[str, str]:
+    """The environment for a towtank command run in a process of its own as a lab runs it, on
+    every core (the suite's TOWTANK_JOBS share left out): for the tests about its processes
+    (Ctrl-C, the forked writers, a real full disk). ``extra``: variables added."""
+    env = dict(os.environ)
+    if _SHARE_SET:
+        env.pop("TOWTANK_JOBS", None)
+    env.update(extra)
+    return env
+
+
 ROOT = Path(__file__).resolve().parents[1]
 
 # No per-example deadline in any property test: a deadline is a timing bound, and on a loaded

@@ -17,6 +17,7 @@ import sys
 import time
 import warnings
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -183,9 +184,10 @@ def test_a_full_disk_while_writing_is_exit_2_and_the_old_outputs_stay(tmp_path, 
 
 
 # ------------------------------------------------------------ 14: bounded work per input
-def test_jobs_beyond_the_cores_are_capped_with_a_note(tmp_path, capsys):
+def test_jobs_beyond_the_cores_are_capped_with_a_note(tmp_path, capsys, monkeypatch):
     from towtank.runtime.parallel import default_jobs, fork_beside, usable_jobs
 
+    monkeypatch.delenv("TOWTANK_JOBS", raising=False)  # the default itself: every core
     assert usable_jobs(100_000) == default_jobs() and usable_jobs(0) == 1
     # one job is one process: nothing forked beside it, whatever the machine
     assert not fork_beside(1) and not fork_beside(0)
@@ -193,6 +195,43 @@ def test_jobs_beyond_the_cores_are_capped_with_a_note(tmp_path, capsys):
     protocol = _day(tmp_path)
     assert main(["process", str(protocol), "--jobs", "100000", "--no-report"]) == 0
     assert f"{default_jobs()} jobs are used" in capsys.readouterr().err
+
+
+def test_towtank_jobs_sets_the_default_and_a_bad_value_is_a_note(tmp_path, capsys,
+                                                                  monkeypatch):
+    """TOWTANK_JOBS gives the processes when neither --jobs nor the protocol's [processing]
+    jobs says; a value that is not a number of processes is left aside with a note, one larger
+    than the cores is capped with the note --jobs gets."""
+    from towtank.ingest.protocol import load_protocol
+    from towtank.runner import settle_jobs
+    from towtank.runtime.parallel import default_jobs, fork_beside, usable_jobs
+
+    protocol = _day(tmp_path)
+    loaded = load_protocol(protocol)
+    pinned = replace(loaded, processing=replace(loaded.processing, jobs=1))
+    cores = default_jobs()
+    monkeypatch.setenv("TOWTANK_JOBS", "1")
+    assert usable_jobs(None) == 1 and not fork_beside(None)
+    assert settle_jobs(None, loaded) == (1, None)
+    assert settle_jobs(2, loaded)[0] == min(2, cores)  # --jobs first
+    monkeypatch.setenv("TOWTANK_JOBS", "2")
+    assert settle_jobs(None, pinned) == (1, None)  # then the protocol
+    assert usable_jobs(None) == min(2, cores) and usable_jobs(1) == 1
+    monkeypatch.setenv("TOWTANK_JOBS", "100000")
+    jobs, note = settle_jobs(None, loaded)
+    assert jobs == cores and f"{cores} jobs are used" in (note or "")
+    for bad in ("abc", "0", "-2", "1.5", "¹", "２", "99" * 30):
+        monkeypatch.setenv("TOWTANK_JOBS", bad)
+        assert usable_jobs(None) == cores
+        assert settle_jobs(None, loaded) == (None, f"note: TOWTANK_JOBS={bad[:40]!r} is not a "
+                                             "whole number of at least 1: it is left aside and "
+                                             "every core is used.")
+    monkeypatch.setenv("TOWTANK_JOBS", " ")
+    assert settle_jobs(None, loaded) == (None, None)  # set to nothing: as if unset
+    monkeypatch.setenv("TOWTANK_JOBS", "abc")
+    assert main(["process", str(protocol), "--no-report"]) == 0
+    err = capsys.readouterr().err
+    assert "TOWTANK_JOBS='abc' is not a whole number of at least 1" in err
 
 
 def _xlsx_day(tmp_path: Path, edit_xml) -> Path:

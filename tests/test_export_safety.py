@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import lab_environment
 
 import towtank
 from towtank.commands.cli import main
@@ -413,7 +414,7 @@ _TEXT_PAGES_ONLY = textwrap.dedent("""
 
 
 def _towtank(*args: str, prelude: str = "") -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env = lab_environment(PYTHONPATH=str(ROOT))  # every core: the writers forked
     code = prelude + "\nfrom towtank.commands.cli import entry\nentry()\n"
     return subprocess.run([sys.executable, "-c", code, "process", *args], env=env,
                           capture_output=True, text=True, timeout=600, check=False)

@@ -23,6 +23,7 @@ import weakref
 from pathlib import Path
 
 import pytest
+from conftest import lab_environment
 
 from towtank.runtime import interrupt, parallel
 from towtank.runtime.pause import STAGES
@@ -44,7 +45,7 @@ def _towtank(*args: str, env: dict[str, str] | None = None) -> subprocess.Popen:
 
 
 def _environment(**extra: str) -> dict[str, str]:
-    env = dict(os.environ)
+    env = lab_environment()  # every core: the fork server, its workers, the forked writers
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
     env.update(extra)
     return env

@@ -77,7 +77,9 @@ def _write_days(root: Path) -> dict[str, tuple]:
     with pytest.MonkeyPatch.context() as mp:
         _forbid_fitting(mp)  # test_report_stage_does_not_refit: the writers fit nothing
         for name, (folder, day) in processed.items():
-            out[name] = (day, write_outputs(day, folder / "out"))
+            # the fin day with two jobs: its writers and PDF page groups drawn beside this
+            # process, the report test_one_job_draws_the_same_pdf_in_this_process compares
+            out[name] = (day, write_outputs(day, folder / "out", jobs=2 if name == "fin" else 1))
     return out
 
 
@@ -412,7 +414,7 @@ def _die(day, folder):
 
 def test_report_writers_run_beside_each_other(days, tmp_path):
     day, _ = days["hull"]
-    out = write_outputs(day, tmp_path / "out", writers=[_write_a, _write_b])
+    out = write_outputs(day, tmp_path / "out", writers=[_write_a, _write_b], jobs=2)
     assert (out / "a.txt").read_text() == "a"
     assert (out / "b.txt").read_text() != str(os.getpid())  # written in a process of its own
     assert (out / "runs.csv").exists()
@@ -426,7 +428,7 @@ def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
     write_outputs(day, out, report=False)
     before = sorted(p.name for p in out.iterdir())
     with pytest.raises(RuntimeError, match=message):
-        write_outputs(day, out, writers=[_write_a, bad])
+        write_outputs(day, out, writers=[_write_a, bad], jobs=2)
     assert sorted(p.name for p in out.iterdir()) == before  # the previous outputs stand
     assert not (out / "a.txt").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.tmp-")]

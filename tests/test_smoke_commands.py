@@ -19,13 +19,14 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import lab_environment
 
 REPO = Path(__file__).resolve().parents[1]
 
 
 def _towtank(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "towtank", *args], capture_output=True,
-                          text=True, cwd=REPO, timeout=600)
+                          text=True, cwd=REPO, timeout=600, env=lab_environment())
 
 
 @pytest.mark.floors

@@ -94,7 +94,8 @@ def process_day(
         Give the protocol's ``output_dir`` explicitly to write where ``towtank process``
         writes.
     jobs : int, optional
-        Worker processes; default the protocol's ``[processing] jobs``, else every core.
+        Worker processes; default the protocol's ``[processing] jobs``, else the
+        ``TOWTANK_JOBS`` environment variable, else every core.
         ``jobs=1`` reduces in this process.
     report : bool, default True
         With ``out``: also write report.xlsx, report.pdf and figures/ (else the CSV tables and

@@ -65,7 +65,8 @@ class Options:
     replay : a day unchanged since its last complete run is not processed again; its exit
         status and summary are given back (with ``cache``).
     record : remember this run for the next one's replay (with ``cache``).
-    jobs : worker processes (default: the protocol's ``[processing] jobs``, else every core).
+    jobs : worker processes (default: the protocol's ``[processing] jobs``, else
+        ``TOWTANK_JOBS``, else every core).
     prestart : start the workers while this process reads the sheet.
     debug : a bug in a run's reduction raises instead of rejecting the run.
     quiet : no note about the number of jobs.
@@ -151,13 +152,20 @@ class OutputsNotWritten(DayStopped):
 
 
 def settle_jobs(asked: int | None, protocol: Protocol) -> tuple[int | None, str | None]:
-    """The worker processes: ``asked``, else the protocol's ``[processing] jobs``, else None
-    (every core), at most the cores this machine gives towtank; and the note saying so when
-    more were asked for."""
+    """The worker processes: ``asked``, else the protocol's ``[processing] jobs``, else the
+    ``TOWTANK_JOBS`` environment variable, else None (every core), at most the cores this
+    machine gives towtank; and the note saying so when more were asked for, or when the
+    variable is set to something that is not a number of processes (it is then left aside)."""
     # loaded on use: multiprocessing's pools only when a day is run
     from towtank.runtime import parallel
 
     jobs = asked if asked is not None else protocol.processing.jobs
+    if jobs is None:
+        jobs = parallel.environment_jobs()
+        text = os.environ.get(parallel.JOBS_VARIABLE, "").strip()
+        if jobs is None and text:
+            return None, (f"note: {parallel.JOBS_VARIABLE}={text[:40]!r} is not a whole number "
+                          f"of at least 1: it is left aside and every core is used.")
     cores = parallel.default_jobs()
     if jobs is not None and jobs > cores:
         return cores, (f"note: {jobs} jobs asked for, but this machine gives towtank {cores} "

@@ -82,8 +82,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     pr.add_argument("protocol", type=Path, help="the campaign's protocol file (.toml)")
     _day_options(pr, jobs_help="runs reduced in parallel, and the report's parts drawn "
-                 "beside each other (default: the protocol's [processing] jobs, else all "
-                 "cores; 1: everything in this one process)")
+                 "beside each other (default: the protocol's [processing] jobs, else "
+                 "$TOWTANK_JOBS, else all cores; 1: everything in this one process)")
     pr.add_argument("--export", action="append",
                     choices=("mat", "hdf5", "parquet", "simman"), default=None,
                     metavar="FORMAT",
@@ -117,7 +117,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="no page server (verdict lines and outputs only)")
     _day_options(wa, jobs_help="runs reduced in parallel when several arrive at once, and "
                  "the report's pages drawn beside each other (default: the protocol's "
-                 "[processing] jobs, else all cores; 1: one process drawing)")
+                 "[processing] jobs, else $TOWTANK_JOBS, else all cores; 1: one process "
+                 "drawing)")
     wa.add_argument("--quiet", "-q", action="store_true", help="no start-up line")
     _debug_option(wa)
 

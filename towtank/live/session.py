@@ -216,7 +216,8 @@ class WatchSession:
         The output folder (default the protocol's ``output_dir``); ``.cache/`` and
         ``.live/`` are kept in it.
     jobs : int, optional
-        Worker processes for a batch of several runs (default: the protocol's, else all).
+        Worker processes for a batch of several runs (default: the protocol's, else
+        ``TOWTANK_JOBS``, else all).
     report : bool
         Also write the workbook, the PDF and the figures (else the CSV tables only).
     date : str, optional

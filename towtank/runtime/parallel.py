@@ -79,10 +79,28 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: The environment variable that sets the processes towtank uses when neither the command line
+#: (``--jobs``), the caller (``jobs=``) nor the protocol (``[processing] jobs``) says: a whole
+#: number of at least 1, e.g. ``TOWTANK_JOBS=1`` on a machine whose cores other work holds.
+JOBS_VARIABLE = "TOWTANK_JOBS"
+
+
+def environment_jobs() -> int | None:
+    """The processes :data:`JOBS_VARIABLE` asks for: None when it is unset, empty or not a
+    whole number of at least 1 (:func:`towtank.runner.settle_jobs` says so in a note)."""
+    text = os.environ.get(JOBS_VARIABLE, "").strip()
+    if not (text.isascii() and text.isdigit()) or len(text) > 9 or int(text) < 1:
+        return None
+    return int(text)
+
+
 def usable_jobs(jobs: int | None) -> int:
-    """Worker processes for a request of ``jobs`` (None: every core): at least one and never
-    more than the cores this process may use (each worker holds a day's libraries, ~200 MB)."""
+    """Worker processes for a request of ``jobs`` (None: :data:`JOBS_VARIABLE`, else every
+    core): at least one and never more than the cores this process may use (each worker holds
+    a day's libraries, ~200 MB)."""
     cores = default_jobs()
+    if jobs is None:
+        jobs = environment_jobs()
     return cores if jobs is None else max(1, min(int(jobs), cores))
 
 
