@@ -25,6 +25,7 @@ import pandas as pd
 import pytest
 from hypothesis import settings
 
+from towtank.runtime.parallel import default_jobs
 from towtank.testing import days as syn_days
 from towtank.testing import synthetic as syn
 
@@ -39,7 +40,7 @@ JOBS = 1
 _SHARE_SET = ("TOWTANK_JOBS" not in os.environ
               and os.environ.get("PYTEST_XDIST_WORKER_COUNT", "").isdigit())
 if _SHARE_SET:
-    os.environ["TOWTANK_JOBS"] = str(max(1, len(os.sched_getaffinity(0))
+    os.environ["TOWTANK_JOBS"] = str(max(1, default_jobs()
                                          // max(1, int(os.environ["PYTEST_XDIST_WORKER_COUNT"]))))
 
 
