@@ -7,7 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from towtank.vehicle.fossen import restoring_matrix
 from towtank.vehicle.model import added_mass_matrix, coriolis_added_mass, lumped_to_fossen
 from towtank.vehicle.simulate import Dynamics, manoeuvre_metrics, simulate
 
@@ -242,3 +245,53 @@ def test_simulate_and_predict_never_replace_a_users_file(tmp_path, capsys):
                  "--out", str(sim)]) == 2
     assert (sim / "metrics.csv").read_text(encoding="utf-8") == "mine"
     assert "did not write" in capsys.readouterr().err
+
+
+def _fossen_4_6(w, b, rg, rb, phi, theta):
+    """g(eta) written out as Fossen (2011) prints eq. 4.6."""
+    (xg, yg, zg), (xb, yb, zb) = rg, rb
+    sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+    return [
+        (w - b) * sth,
+        -(w - b) * cth * sph,
+        -(w - b) * cth * cph,
+        -(yg * w - yb * b) * cth * cph + (zg * w - zb * b) * cth * sph,
+        (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cph,
+        -(xg * w - xb * b) * cth * sph - (yg * w - yb * b) * sth,
+    ]
+
+
+_finite = dict(allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=200)
+@given(w=st.floats(1.0, 1e5), b=st.floats(1.0, 1e5),
+       rg=st.tuples(*[st.floats(-2.0, 2.0, **_finite)] * 3),
+       rb=st.tuples(*[st.floats(-2.0, 2.0, **_finite)] * 3),
+       phi=st.floats(-math.pi, math.pi), theta=st.floats(-math.pi / 2, math.pi / 2))
+def test_the_restoring_forces_are_fossen_4_6_in_the_simulator_and_the_filter(w, b, rg, rb,
+                                                                               phi, theta):
+    """One G (towtank.vehicle.fossen.restoring_matrix) for the simulator's g(eta), bit for bit
+    the equation as printed, and the identification's batched G [sin theta, cos theta sin phi,
+    cos theta cos phi]."""
+    model = _model({}, mass=w / 9.80665, buoyancy=b, cg=rg)
+    model["weight_N"], model["cb_m"] = w, list(rb)
+    want = _fossen_4_6(w, b, rg, rb, phi, theta)
+    assert Dynamics(model).restoring(phi, theta).tolist() == want
+    g = restoring_matrix(w, b, np.array(rg), np.array(rb))
+    trig = np.array([math.sin(theta), math.cos(theta) * math.sin(phi),
+                     math.cos(theta) * math.cos(phi)])
+    scale = max(abs(w), abs(b)) * (1.0 + max(map(abs, (*rg, *rb))))
+    np.testing.assert_allclose(g @ trig, want, rtol=0, atol=1e-12 * scale)
+
+
+def test_a_bottom_heavy_vehicle_is_righted_in_roll_and_pitch():
+    """Neutral, the centre of gravity 2 cm below the centre of buoyancy (z down): rolled to
+    starboard or pitched nose up, the moment on the vehicle (-g(eta)) turns it back."""
+    model = _model({}, cg=(0.0, 0.0, 0.02))
+    dyn = Dynamics(model)
+    assert -dyn.restoring(0.2, 0.0)[3] < 0 < -dyn.restoring(-0.2, 0.0)[3]
+    assert -dyn.restoring(0.0, 0.2)[4] < 0 < -dyn.restoring(0.0, -0.2)[4]
+    assert np.allclose(dyn.restoring(0.0, 0.0), 0.0)
+    dyn.rg = np.array([0.0, 0.0, -0.02])  # a moving mass lifted above: now it capsizes
+    assert -dyn.restoring(0.2, 0.0)[3] > 0

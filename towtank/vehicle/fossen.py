@@ -33,6 +33,7 @@ __all__ = [
     "added_mass_matrix",
     "coriolis_added_mass",
     "quadratic_form",
+    "restoring_matrix",
     "LUMPED",
     "ADDED_MASS_RE",
     "ca_bilinear",
@@ -55,6 +56,33 @@ LUMPED = {"Y_ur": ("u", "r"), "Z_uq": ("u", "q"), "N_uv": ("u", "v"), "M_uw": ("
 #: The keys every model.json holds (docs/formats.md §6).
 REQUIRED_KEYS = ("rho_kg_m3", "mass_kg", "weight_N", "buoyancy_N", "cg_m", "cb_m",
                  "inertia_kg_m2", "coefficients")
+
+
+def restoring_matrix(weight: float, buoyancy: float, rg: np.ndarray,
+                     rb: np.ndarray) -> np.ndarray:
+    """G, the restoring forces and moments as a matrix: g(eta) = G [sin theta,
+    cos theta sin phi, cos theta cos phi]^T (Fossen 2011, eq. 4.6; g(eta) is on the left-hand
+    side of the equations of motion, so the force on the vehicle is -g(eta)).
+
+    Parameters
+    ----------
+    weight : float
+        W, the vehicle's weight [N].
+    buoyancy : float
+        B, its buoyancy [N].
+    rg, rb : numpy.ndarray
+        The centres of gravity and buoyancy in body axes from the origin [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        G, 6 x 3 [N, N m]: rows X, Y, Z, K, M, N.
+    """
+    (xg, yg, zg), (xb, yb, zb) = np.asarray(rg, dtype=float), np.asarray(rb, dtype=float)
+    w, b = float(weight), float(buoyancy)
+    gx, gy, gz = xg * w - xb * b, yg * w - yb * b, zg * w - zb * b  # W r_g - B r_b
+    return np.array([[w - b, 0.0, 0.0], [0.0, -(w - b), 0.0], [0.0, 0.0, -(w - b)],
+                     [0.0, gz, -gy], [gz, 0.0, gx], [-gy, -gx, 0.0]])
 
 
 def skew(a: np.ndarray) -> np.ndarray:

@@ -51,6 +51,7 @@ from towtank.vehicle.fossen import (
     coriolis_added_mass,
     coriolis_rigid_body,
     quadratic_form,
+    restoring_matrix,
     rigid_body_mass_matrix,
 )
 from towtank.vehicle.identify_log import (
@@ -164,14 +165,8 @@ class BatchModel:
             [quadratic_form(lambda nu: coriolis_rigid_body(self.mass, self.rg, self.io, nu)
                             + coriolis_added_mass(self.ma0, nu))]
             + [quadratic_form(partial(coriolis_added_mass, mb)) for mb in self.mb], axis=1)
-        # g(eta) = g_mat @ [sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)] (Fossen
-        # eq. 4.6 with W, B and the centres of gravity and buoyancy)
-        wt, bb = self.weight, self.buoyancy
-        (xg, yg, zg), (xb, yb, zb) = self.rg, self.rb
-        gx, gy, gz = xg * wt - xb * bb, yg * wt - yb * bb, zg * wt - zb * bb
-        self.g_mat = np.array([[wt - bb, 0.0, 0.0], [0.0, -(wt - bb), 0.0],
-                               [0.0, 0.0, -(wt - bb)], [0.0, gz, -gy], [gz, 0.0, gx],
-                               [-gy, -gx, 0.0]])
+        # g(eta) = g_mat @ [sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)]
+        self.g_mat = restoring_matrix(self.weight, self.buoyancy, self.rg, self.rb)
         self.minv0 = np.linalg.inv(m_rb + self.ma0)
         # upper bound of each estimated coefficient in the filter's process model: a diagonal
         # added-mass derivative (X_udot ... N_rdot) at most half the diagonal of M_RB + M_A0,

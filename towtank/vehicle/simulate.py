@@ -59,6 +59,7 @@ from towtank.vehicle.fossen import (
     coriolis_added_mass,
     coriolis_rigid_body,
     quadratic_form,
+    restoring_matrix,
     rigid_body_mass_matrix,
 )
 from towtank.vehicle.glider_controls import cg_with_controls, roll_mass_angle_for_static_roll_deg
@@ -145,14 +146,15 @@ class Dynamics:
     wings: Any = field(init=False)  # a glider's wings (towtank.vehicle.wings) or None
     factors: list = field(init=False)  # the terms as (dof, value, indices into _factors_of)
     coriolis_form: np.ndarray = field(init=False)  # C_RB(nu) nu + C_A(nu) nu, quadratic_form
+    g_rows: list = field(init=False)  # g(eta)'s matrix G (restoring_matrix) as Python floats
 
     def __post_init__(self) -> None:
         mdl = self.model
         self.weight_n = float(mdl["weight_N"] if self.weight is None else self.weight)
         self.mass = float(mdl["mass_kg"])
         self.buoyancy = float(mdl["buoyancy_N"])
-        self.rg = np.asarray(mdl["cg_m"], dtype=float)
         self.rb = np.asarray(mdl["cb_m"], dtype=float)
+        self.rg = np.asarray(mdl["cg_m"], dtype=float)  # and g(eta)'s G (the setter)
         self.io = np.diag(np.asarray(mdl["inertia_kg_m2"], dtype=float))
         m_rb = rigid_body_mass_matrix(self.mass, self.rg, self.io)
         self.ma = added_mass_matrix(mdl["coefficients"])
@@ -169,6 +171,17 @@ class Dynamics:
             self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
         else:
             self.wings = None
+
+    @property
+    def rg(self) -> np.ndarray:
+        """The centre of gravity in body axes [m]; setting it (a glider's moving mass,
+        :mod:`towtank.vehicle.spiral`) sets g(eta)'s G with it."""
+        return self._rg
+
+    @rg.setter
+    def rg(self, value: np.ndarray) -> None:
+        self._rg = np.asarray(value, dtype=float)
+        self.g_rows = restoring_matrix(self.weight_n, self.buoyancy, self._rg, self.rb).tolist()
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
         out = np.array(self._hydro_terms(np.asarray(nu, dtype=float)[:6].tolist(), dr, ds))
@@ -195,17 +208,18 @@ class Dynamics:
         return np.array(self._restoring_terms(phi, theta))
 
     def _restoring_terms(self, phi: float, theta: float) -> list[float]:
-        w, b = self.weight_n, self.buoyancy
-        xg, yg, zg = self.rg.tolist()  # Python floats: the same arithmetic, less overhead
-        xb, yb, zb = self.rb.tolist()
+        """g(eta): the rows of :func:`~towtank.vehicle.fossen.restoring_matrix` times [sin
+        theta, cos theta sin phi, cos theta cos phi], their non-zero products only, in Python
+        floats (the same arithmetic, less overhead)."""
+        g = self.g_rows
         sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
         return [
-            (w - b) * sth,
-            -(w - b) * cth * sph,
-            -(w - b) * cth * cph,
-            -(yg * w - yb * b) * cth * cph + (zg * w - zb * b) * cth * sph,
-            (zg * w - zb * b) * sth + (xg * w - xb * b) * cth * cph,
-            -(xg * w - xb * b) * cth * sph - (yg * w - yb * b) * sth,
+            g[0][0] * sth,
+            g[1][1] * cth * sph,
+            g[2][2] * cth * cph,
+            g[3][2] * cth * cph + g[3][1] * cth * sph,
+            g[4][0] * sth + g[4][2] * cth * cph,
+            g[5][1] * cth * sph + g[5][0] * sth,
         ]
 
     def rhs(self, state: np.ndarray, dr: float, ds: float, thrust: float) -> np.ndarray:
