@@ -18,7 +18,7 @@ from towtank.errors import ProtocolError
 from towtank.ingest.protocol import load_protocol
 from towtank.vehicle import glider_controls as gc
 from towtank.vehicle.glider import steady_glide
-from towtank.vehicle.model import write_model
+from towtank.vehicle.model import coriolis_added_mass, write_model
 from towtank.vehicle.simulate import Dynamics, manoeuvre_metrics, simulate
 from towtank.vehicle.spiral import body_rates, solve_state, steady_table
 from towtank.vehicle.stage import predict_vehicle
@@ -350,3 +350,22 @@ def test_a_pitch_beyond_the_moving_mass_names_the_steepest_it_holds(model):
     end = steady_table(model, [-300.0], [reach]).iloc[0]["moving_mass_travel_mm"]
     assert end == pytest.approx(400.0, abs=2.0)  # the sentence's 3 digits of pitch
     assert "steepest" not in str(held["note"]) and held["moving_mass_travel_mm"] < 400.0
+
+
+def test_the_equilibrium_residual_moves_the_mass_without_moving_the_model(model):
+    """spiral.equilibrium_residual at a centre of gravity the moving mass puts elsewhere: the
+    residual of a model built with that centre, bit for bit, and the Dynamics it was given
+    left as it was (its centre of gravity, its g(eta))."""
+    from towtank.vehicle.spiral import equilibrium_residual
+
+    dyn = Dynamics(model)
+    before = (dyn.rg.copy(), [row[:] for row in dyn.g_rows])
+    rg = gc.cg_with_controls(model, 0.01, math.radians(20.0))
+    assert not np.allclose(rg, dyn.rg)
+    nu = np.array([0.3, 0.01, 0.05, 0.002, -0.001, 0.01])
+    moved = Dynamics(model | {"cg_m": list(np.asarray(rg, dtype=float))})
+    got = equilibrium_residual(dyn, nu, 0.1, -0.3, rg)
+    want = (moved.hydro(nu, 0.0, 0.0) - moved.coriolis_rb(nu)
+            - coriolis_added_mass(moved.ma, nu) - moved.restoring(0.1, -0.3))
+    assert got.tolist() == want.tolist()
+    assert np.array_equal(dyn.rg, before[0]) and dyn.g_rows == before[1]

@@ -293,5 +293,5 @@ def test_a_bottom_heavy_vehicle_is_righted_in_roll_and_pitch():
     assert -dyn.restoring(0.2, 0.0)[3] < 0 < -dyn.restoring(-0.2, 0.0)[3]
     assert -dyn.restoring(0.0, 0.2)[4] < 0 < -dyn.restoring(0.0, -0.2)[4]
     assert np.allclose(dyn.restoring(0.0, 0.0), 0.0)
-    dyn.rg = np.array([0.0, 0.0, -0.02])  # a moving mass lifted above: now it capsizes
-    assert -dyn.restoring(0.2, 0.0)[3] > 0
+    top_heavy = Dynamics(_model({}, cg=(0.0, 0.0, -0.02)))  # above: it capsizes
+    assert -top_heavy.restoring(0.2, 0.0)[3] > 0 and -top_heavy.restoring(0.0, 0.2)[4] > 0

@@ -72,7 +72,8 @@ from towtank.vehicle.powering import (
 from towtank.vehicle.schema import MAX_STEPS, default_duration
 from towtank.vehicle.wings import Wings
 
-__all__ = ["MANOEUVRES", "PROPULSION", "Dynamics", "simulate", "propulsion", "default_duration",
+__all__ = ["MANOEUVRES", "PROPULSION", "Dynamics", "restoring_terms", "simulate", "propulsion",
+           "default_duration",
            "manoeuvre_metrics",
            "sample_models", "pitch_command", "trim_state", "trim_warning", "TRIM_PITCH_DEG",
            "TRIM_DEPTH_RATE_M_S", "PITCH_KP", "PITCH_KD", "FIN_LIMIT_DEG"]
@@ -132,6 +133,23 @@ def _factor_index(kind: str, i: int) -> int:
     return {"vel": i, "abs": 6 + i, "dr": 12, "ds": 13}[kind]
 
 
+def restoring_terms(g_rows: list[list[float]], phi: float, theta: float) -> list[float]:
+    """g(eta) [N, N m]: the rows of :func:`~towtank.vehicle.fossen.restoring_matrix`
+    (``g_rows``, as Python floats) times [sin theta, cos theta sin phi, cos theta cos phi] for
+    the roll ``phi`` and pitch ``theta`` [rad], their non-zero products only, in Python floats
+    (the same arithmetic as numpy's, less overhead) (Fossen 2011, eq. 4.6)."""
+    g = g_rows
+    sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
+    return [
+        g[0][0] * sth,
+        g[1][1] * cth * sph,
+        g[2][2] * cth * cph,
+        g[3][2] * cth * cph + g[3][1] * cth * sph,
+        g[4][0] * sth + g[4][2] * cth * cph,
+        g[5][1] * cth * sph + g[5][0] * sth,
+    ]
+
+
 @dataclass
 class Dynamics:
     """The model's matrices and terms, ready for the right-hand side."""
@@ -153,9 +171,10 @@ class Dynamics:
         self.weight_n = float(mdl["weight_N"] if self.weight is None else self.weight)
         self.mass = float(mdl["mass_kg"])
         self.buoyancy = float(mdl["buoyancy_N"])
+        self.rg = np.asarray(mdl["cg_m"], dtype=float)
         self.rb = np.asarray(mdl["cb_m"], dtype=float)
-        self.rg = np.asarray(mdl["cg_m"], dtype=float)  # and g(eta)'s G (the setter)
         self.io = np.diag(np.asarray(mdl["inertia_kg_m2"], dtype=float))
+        self.g_rows = restoring_matrix(self.weight_n, self.buoyancy, self.rg, self.rb).tolist()
         m_rb = rigid_body_mass_matrix(self.mass, self.rg, self.io)
         self.ma = added_mass_matrix(mdl["coefficients"])
         self.m_total = m_rb + self.ma
@@ -171,17 +190,6 @@ class Dynamics:
             self.wings = Wings(glider, float(mdl.get("rho_kg_m3", 1025.0)))
         else:
             self.wings = None
-
-    @property
-    def rg(self) -> np.ndarray:
-        """The centre of gravity in body axes [m]; setting it (a glider's moving mass,
-        :mod:`towtank.vehicle.spiral`) sets g(eta)'s G with it."""
-        return self._rg
-
-    @rg.setter
-    def rg(self, value: np.ndarray) -> None:
-        self._rg = np.asarray(value, dtype=float)
-        self.g_rows = restoring_matrix(self.weight_n, self.buoyancy, self._rg, self.rb).tolist()
 
     def hydro(self, nu: np.ndarray, dr: float, ds: float) -> np.ndarray:
         out = np.array(self._hydro_terms(np.asarray(nu, dtype=float)[:6].tolist(), dr, ds))
@@ -208,19 +216,7 @@ class Dynamics:
         return np.array(self._restoring_terms(phi, theta))
 
     def _restoring_terms(self, phi: float, theta: float) -> list[float]:
-        """g(eta): the rows of :func:`~towtank.vehicle.fossen.restoring_matrix` times [sin
-        theta, cos theta sin phi, cos theta cos phi], their non-zero products only, in Python
-        floats (the same arithmetic, less overhead)."""
-        g = self.g_rows
-        sth, cth, sph, cph = math.sin(theta), math.cos(theta), math.sin(phi), math.cos(phi)
-        return [
-            g[0][0] * sth,
-            g[1][1] * cth * sph,
-            g[2][2] * cth * cph,
-            g[3][2] * cth * cph + g[3][1] * cth * sph,
-            g[4][0] * sth + g[4][2] * cth * cph,
-            g[5][1] * cth * sph + g[5][0] * sth,
-        ]
+        return restoring_terms(self.g_rows, phi, theta)
 
     def rhs(self, state: np.ndarray, dr: float, ds: float, thrust: float) -> np.ndarray:
         phi, theta, psi = state[3:6].tolist()

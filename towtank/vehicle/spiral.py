@@ -29,10 +29,11 @@ import pandas as pd
 from scipy.optimize import brentq, minimize_scalar, root
 
 from towtank.reference.constants import STANDARD_GRAVITY
+from towtank.vehicle.fossen import coriolis_rigid_body, restoring_matrix
 from towtank.vehicle.glider import steady_glide
 from towtank.vehicle.glider_controls import ballast_model, cg_with_controls, net_buoyancy
 from towtank.vehicle.model import coriolis_added_mass
-from towtank.vehicle.simulate import Dynamics
+from towtank.vehicle.simulate import Dynamics, restoring_terms
 
 __all__ = ["STEADY_COLUMNS", "body_rates", "equilibrium_residual", "steady_state",
            "solve_state", "steady_table", "roll_reach", "ROLL_STEP_DEG", "TOLERANCE"]
@@ -58,10 +59,13 @@ def body_rates(omega_rad_s: float, phi_rad: float, theta_rad: float) -> np.ndarr
 def equilibrium_residual(dyn: Dynamics, nu: np.ndarray, phi_rad: float, theta_rad: float,
                          rg: np.ndarray) -> np.ndarray:
     """The force and moment [N, N m] left by the equations of motion at velocities ``nu``,
-    roll and pitch [rad], centre of gravity ``rg`` [m]: ``M nu_dot``."""
-    dyn.rg = np.asarray(rg, dtype=float)
-    return (dyn.hydro(nu, 0.0, 0.0) - dyn.coriolis_rb(nu) - coriolis_added_mass(dyn.ma, nu)
-            - dyn.restoring(phi_rad, theta_rad))
+    roll and pitch [rad], centre of gravity ``rg`` [m] (where the glider's moving mass puts
+    it; ``dyn``'s own is left as it is): ``M nu_dot``."""
+    rg = np.asarray(rg, dtype=float)
+    g_rows = restoring_matrix(dyn.weight_n, dyn.buoyancy, rg, dyn.rb).tolist()
+    return (dyn.hydro(nu, 0.0, 0.0) - coriolis_rigid_body(dyn.mass, rg, dyn.io, nu)
+            - coriolis_added_mass(dyn.ma, nu)
+            - np.array(restoring_terms(g_rows, phi_rad, theta_rad)))
 
 
 def _scales(dyn: Dynamics, model: dict[str, Any]) -> np.ndarray:
