@@ -102,6 +102,62 @@ def test_the_good_model_simulates(tmp_path, run):  # by the storage-error test b
     assert (tmp_path / "out" / "metrics.csv").is_file()
 
 
+@pytest.mark.usefixtures("no_command_figures")
+@pytest.mark.parametrize("speed", ["1e-300", "1e-200"])
+def test_a_speed_whose_square_underflows_simulates_from_that_speed(tmp_path, run, speed):
+    """A neutrally buoyant turn at a speed whose square is below the smallest float (the
+    property test below found it in CI, a model whose design speed was 1.5e-300 m/s): the
+    speed at the start is the speed given, not 0, and the speed loss is a number. Before,
+    |nu| = sqrt(u^2 + v^2 + w^2) gave 0 and the speed loss divided by it: exit 3."""
+    import pandas as pd
+
+    path = write_json(tmp_path / "model.json", good_model())
+    out = tmp_path / "out"
+    code, err = run(simulate_args(path, out, f"--speed={speed}", "--net-buoyancy-N=0",
+                                  "--rudder-deg=10"))
+    assert code == 0, err
+    metrics = pd.read_csv(out / "metrics.csv").set_index("metric")
+    assert f"of the {float(speed):.3g} m/s at the start" in metrics.loc["speed_loss_percent",
+                                                                           "note"]
+    assert abs(metrics.loc["speed_loss_percent", "value"]) < 1e-6
+
+
+def test_the_speed_is_the_norm_of_the_velocities_at_every_magnitude():
+    """speed_magnitude is sqrt(u^2 + v^2 + w^2) to 2 ulp wherever the squares are normal
+    floats, and where they are not (below 1e-154 or above 1e154 m/s) it is still the norm:
+    the largest component's magnitude at most, sqrt(3) times it at most; exactly |x| with
+    the other two 0."""
+    from hypothesis import given
+    from hypothesis import strategies as st
+
+    from towtank.vehicle.steady import speed_magnitude
+
+    speeds = st.floats(-1e300, 1e300, allow_nan=False, allow_subnormal=True)
+
+    @given(speeds, speeds, speeds)
+    def check(u, v, w):
+        got = float(speed_magnitude(np.array([u]), np.array([v]), np.array([w]))[0])
+        top = max(abs(u), abs(v), abs(w))
+        assert top <= got <= math.sqrt(3.0) * top * (1 + 1e-15)
+        if all(x == 0.0 or 1e-150 < abs(x) < 1e150 for x in (u, v, w)):  # normal squares
+            assert got == pytest.approx(math.sqrt(u * u + v * v + w * w), rel=4.5e-16, abs=0.0)
+        for x in (u, v, w):
+            assert float(speed_magnitude(np.array([x]), np.zeros(1), np.zeros(1))[0]) == abs(x)
+
+    check()
+
+
+def test_a_start_at_rest_has_no_speed_loss_and_says_why():
+    from towtank.vehicle.simulate import _speed_loss
+
+    metric, value, unit, note = _speed_loss(("steady_speed_m_s", 1.2, "m/s", ""), 0.0)
+    assert (metric, unit) == ("speed_loss_percent", "%") and math.isnan(value)
+    assert note == "no speed at the start (0 m/s) to lose speed from"
+    # a turn that is not steady keeps its own note
+    assert _speed_loss(("steady_speed_m_s", math.nan, "m/s", "not steady"), 0.0)[3] == \
+        "not steady"
+
+
 # ---------------------------------------------------------------------------------------------
 # simulate: inputs that could make the integration run for ever
 

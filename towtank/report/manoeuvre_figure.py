@@ -24,6 +24,7 @@ from matplotlib.ticker import MaxNLocator, MultipleLocator
 
 import towtank.report.style as style
 from towtank.report.figure_base import place_legend, styled
+from towtank.vehicle.steady import speed_magnitude
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -213,7 +214,7 @@ def _controls(ax: Axes, ts: pd.DataFrame, t: np.ndarray) -> None:
 
 def _speed(ax: Axes, ts: pd.DataFrame, t: np.ndarray) -> None:
     u = ts["u_m_s"].to_numpy(float)
-    total = np.sqrt(u**2 + ts["v_m_s"].to_numpy(float) ** 2 + ts["w_m_s"].to_numpy(float) ** 2)
+    total = speed_magnitude(u, ts["v_m_s"].to_numpy(float), ts["w_m_s"].to_numpy(float))
     ax.plot(t, total, color=style.PALETTE[0], label=r"speed $|V|$")
     ax.plot(t, u, color=style.PALETTE[4], ls="--", label=r"surge $u$")
     ax.set_ylim(0.0, float(np.nanmax(total)) * 1.1)

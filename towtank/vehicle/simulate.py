@@ -707,8 +707,8 @@ def _rates(ts: pd.DataFrame) -> dict[str, np.ndarray]:
         lambda c: np.zeros(len(t)))
     xr, yr, zr = grad("x_m"), grad("y_m"), grad("z_m")
     return {
-        "t": t, "speed_m_s": np.sqrt(ts["u_m_s"] ** 2 + ts["v_m_s"] ** 2
-                                     + ts["w_m_s"] ** 2).to_numpy(),
+        "t": t, "speed_m_s": sd.speed_magnitude(ts["u_m_s"].to_numpy(), ts["v_m_s"].to_numpy(),
+                                                ts["w_m_s"].to_numpy()),
         "horizontal_speed_m_s": np.hypot(xr, yr), "xr": xr, "depth_rate_m_s": zr,
         "yaw_rate_deg_s": grad("psi_deg"), "pitch_deg": ts["theta_deg"].to_numpy(),
         "drift_deg": np.degrees(np.arctan2(ts["v_m_s"], ts["u_m_s"])).to_numpy(),
@@ -835,6 +835,8 @@ def _speed_loss(steady_speed: tuple[str, float, str, str], start_m_s: float,
     start [%], under the propulsion that held the start speed on a straight course (a constant
     thrust, or the propeller at a constant ``rps`` [1/s])."""
     _, value, _, note = steady_speed
+    if not note and not start_m_s > 0.0:
+        note = f"no speed at the start ({start_m_s:.3g} m/s) to lose speed from"
     loss = float("nan") if note else 100.0 * (1.0 - value / start_m_s)
     how = ("under constant thrust" if rps is None
            else f"with the propeller at a constant {rps:.4g} rps")

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 __all__ = ["STEADY_FRACTION", "THRESHOLDS", "LABELS", "MIN_YAW_RATE_DEG_S", "wrap_deg",
-           "circle_fit", "steady_mask", "steadiness", "looped"]
+           "circle_fit", "steady_mask", "steadiness", "looped", "speed_magnitude"]
 
 #: The steady part of a run: its last fifth [-].
 STEADY_FRACTION = 0.2
@@ -36,6 +36,14 @@ LABELS = {"pitch_deg": "pitch", "drift_deg": "drift angle",
           "speed_m_s": "speed", "yaw_rate_deg_s": "yaw rate"}
 #: Smallest mean |yaw rate| over the steady part for a turn radius [deg/s].
 MIN_YAW_RATE_DEG_S = 0.1
+
+
+def speed_magnitude(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The speed through the water ``|V| = sqrt(u^2 + v^2 + w^2)`` [m/s] of the body-axis
+    velocities ``u``, ``v``, ``w`` [m/s], as ``hypot(hypot(u, v), w)``: no component's square
+    underflows to 0 or overflows, so a speed of 1e-300 m/s is 1e-300 m/s, not 0."""
+    return np.hypot(np.hypot(np.asarray(u, dtype=float), np.asarray(v, dtype=float)),
+                    np.asarray(w, dtype=float))
 
 
 def wrap_deg(angle_deg: float | np.ndarray) -> float | np.ndarray:
