@@ -161,8 +161,7 @@ def settle_jobs(asked: int | None, protocol: Protocol) -> tuple[int | None, str 
 
     jobs = asked if asked is not None else protocol.processing.jobs
     if jobs is None:
-        jobs = parallel.environment_jobs()
-        text = os.environ.get(parallel.JOBS_VARIABLE, "").strip()
+        jobs, text = parallel.jobs_setting()
         if jobs is None and text:
             return None, (f"note: {parallel.JOBS_VARIABLE}={text[:40]!r} is not a whole number "
                           f"of at least 1: it is left aside and every core is used.")

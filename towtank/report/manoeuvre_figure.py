@@ -142,7 +142,7 @@ def manoeuvre_figure(ts: pd.DataFrame, manoeuvre: str, name: str = "model") -> F
             ax.set_xlabel(r"time $t$ [s]")
         else:
             ax.tick_params(labelbottom=False)
-    u0 = float(np.hypot(ts["u_m_s"].iloc[0], np.hypot(ts["v_m_s"].iloc[0], ts["w_m_s"].iloc[0])))
+    u0 = float(speed_magnitude(ts["u_m_s"].iloc[0], ts["v_m_s"].iloc[0], ts["w_m_s"].iloc[0]))
     rudder = float(ts["rudder_deg"].abs().max())
     stern = float(ts["sternplane_deg"].abs().max())
     fig.suptitle(f"{name}: {manoeuvre}, starting at {u0:.2f} m/s; rudder {rudder:g}°, sternplanes "

@@ -85,13 +85,19 @@ def default_jobs() -> int:
 JOBS_VARIABLE = "TOWTANK_JOBS"
 
 
+def jobs_setting() -> tuple[int | None, str]:
+    """:data:`JOBS_VARIABLE` read once: the processes it asks for (None when it is unset, empty
+    or not a whole number of at least 1) and its text ("" when unset), for
+    :func:`towtank.runner.settle_jobs`'s note on a value it leaves aside."""
+    text = os.environ.get(JOBS_VARIABLE, "").strip()
+    usable = text.isascii() and text.isdigit() and len(text) <= 9 and int(text) >= 1
+    return (int(text) if usable else None), text
+
+
 def environment_jobs() -> int | None:
     """The processes :data:`JOBS_VARIABLE` asks for: None when it is unset, empty or not a
     whole number of at least 1 (:func:`towtank.runner.settle_jobs` says so in a note)."""
-    text = os.environ.get(JOBS_VARIABLE, "").strip()
-    if not (text.isascii() and text.isdigit()) or len(text) > 9 or int(text) < 1:
-        return None
-    return int(text)
+    return jobs_setting()[0]
 
 
 def usable_jobs(jobs: int | None) -> int:
