@@ -85,3 +85,50 @@ def test_report_table_draws_without_measuring_cells(monkeypatch: pytest.MonkeyPa
     fig.canvas.draw()
     assert used == pytest.approx((len(ROWS) + 1) * 0.22)
     assert calls == []
+
+
+def test_row_height_is_matplotlibs() -> None:
+    """page_table's rows are as high as matplotlib's ``table()`` makes them."""
+    from towtank.report.pagetable import row_height
+
+    fig, ax = _figure()
+    tab = Table(ax, None, Bbox.from_bounds(0, 0, 1, 1))
+    private = getattr(tab, "_approx_text_height", None)
+    if private is None:
+        pytest.skip("this matplotlib's Table has no _approx_text_height to compare with")
+    assert row_height(tab, ax) == private()
+
+
+@pytest.mark.parametrize("align", [None, ["left", "center", "right"]])
+def test_without_matplotlibs_private_methods_the_table_is_matplotlibs_own(
+        monkeypatch: pytest.MonkeyPatch,
+        align: list[Literal["left", "center", "right"]] | None) -> None:
+    """A matplotlib whose Table lacks a private method the shortcut uses (planted: a name it
+    does not have): page_table's table is drawn by Table.draw itself, with the same pixels as
+    the shortcut's and matplotlib's ``ax.table``."""
+    from towtank.report import pagetable
+
+    assert pagetable.fast_placement()  # this matplotlib: the shortcut
+    fig_fast, ax_fast = _figure()
+    fast = page_table(ax_fast, ROWS, HEADER, WIDTHS, align)
+    monkeypatch.setattr(pagetable, "PRIVATE_METHODS",
+                        (*pagetable.PRIVATE_METHODS, "_a_method_no_matplotlib_has"))
+    assert not pagetable.fast_placement()
+    fig_slow, ax_slow = _figure()
+    slow = page_table(ax_slow, ROWS, HEADER, WIDTHS, align)
+    for tab in (fast, slow):
+        tab.auto_set_font_size(False)
+        tab.set_fontsize(7.5)
+        _style(tab)
+    measured: list[Cell] = []
+    extent = Cell.get_window_extent
+
+    def counting(self: Cell, renderer: RendererBase | None = None) -> Bbox:
+        measured.append(self)
+        return extent(self, renderer)
+
+    monkeypatch.setattr(Cell, "get_window_extent", counting)
+    slow_pixels = _pixels(fig_slow)
+    assert measured, "Table.draw measures its cells: it was not the one drawing"
+    monkeypatch.setattr(pagetable, "PRIVATE_METHODS", pagetable.PRIVATE_METHODS[:-1])
+    assert np.array_equal(_pixels(fig_fast), slow_pixels)

@@ -8,6 +8,11 @@ cells of a table are axis-aligned rectangles whose corners are known in axes coo
 :class:`PageTable` reads the grid's box from the corners and transforms the corners of all the
 cells at once to place the texts. The cells, their order, their rectangles and their texts are
 matplotlib's; the numbers are the same to rounding, so the page's pixels do not change.
+
+The shortcut leans on two private methods of matplotlib's Table (``_update_positions`` places
+the cells, ``_get_grid_bbox`` is what it measures). A matplotlib without them draws the
+report's tables with :meth:`Table.draw` itself: the same cells, measured as matplotlib
+measures them, only slower (:func:`fast_placement` says which).
 """
 
 from __future__ import annotations
@@ -20,7 +25,16 @@ from matplotlib.patches import Rectangle
 from matplotlib.table import Cell, Table
 from matplotlib.transforms import Bbox
 
-__all__ = ["PageTable", "page_table"]
+__all__ = ["PageTable", "page_table", "fast_placement"]
+
+#: matplotlib's private Table methods the shortcut uses (there since matplotlib 2.x).
+PRIVATE_METHODS = ("_update_positions", "_get_grid_bbox")
+
+
+def fast_placement() -> bool:
+    """Whether this matplotlib's Table has the private methods :class:`PageTable`'s shortcut
+    uses (:data:`PRIVATE_METHODS`); without them its tables are drawn by :meth:`Table.draw`."""
+    return all(callable(getattr(Table, name, None)) for name in PRIVATE_METHODS)
 
 
 def _corners(cells: Sequence[Cell]) -> np.ndarray:
@@ -43,7 +57,11 @@ class PageTable(Table):
         return Bbox.from_extents(xy[:, 0].min(), xy[:, 1].min(), xy[:, 2].max(), xy[:, 3].max())
 
     def draw(self, renderer: Any) -> None:
-        """Position the cells (as matplotlib does), then draw each rectangle and its text."""
+        """Position the cells (as matplotlib does), then draw each rectangle and its text;
+        matplotlib's own drawing where its Table lacks the private methods used."""
+        if not fast_placement():
+            super().draw(renderer)
+            return
         if not self.get_visible():
             return
         renderer.open_group("table", gid=self.get_gid())
@@ -78,6 +96,13 @@ def _text_x(x0: float, x1: float, loc: str, pad: float) -> float:
     return x0 + width * (1 - pad)
 
 
+def row_height(tab: Table, ax: Any) -> float:
+    """The row height [axes fraction] matplotlib's ``table()`` gives its cells: 1.2 lines of
+    the table's font size (``Table.FONTSIZE`` [pt]) at the figure's dpi over the axes' height
+    (matplotlib's ``Table._approx_text_height``, computed from public values)."""
+    return tab.FONTSIZE / 72.0 * ax.figure.dpi / ax.bbox.height * 1.2
+
+
 def page_table(ax: Any, rows: Sequence[Sequence[str]], header: Sequence[str],
                col_widths: Sequence[float],
                align: Sequence[str] | None = None) -> PageTable:
@@ -90,8 +115,7 @@ def page_table(ax: Any, rows: Sequence[Sequence[str]], header: Sequence[str],
     """
     tab = PageTable(ax, None, Bbox.from_bounds(0, 0, 1, 1))
     tab.edges = "closed"
-    # the row height matplotlib's table uses; private, not in its stubs
-    height = tab._approx_text_height()  # type: ignore[attr-defined]  # noqa: SLF001
+    height = row_height(tab, ax)
     for r, row in enumerate(rows):
         for c, text in enumerate(row):
             tab.add_cell(r + 1, c, width=col_widths[c], height=height, text=text,

@@ -33,7 +33,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -126,6 +126,21 @@ ALPHA = 0.1
 DOT_BOUND = 0.5
 
 
+class RowCoefficients(NamedTuple):
+    """What :meth:`BatchModel.rhs_with` needs of N coefficient sets, computed once for the
+    Runge-Kutta steps that share them (:meth:`BatchModel.coefficients`)."""
+
+    est: np.ndarray
+    """The estimated terms' coefficients (N, k_terms)."""
+    drag: np.ndarray | float
+    """The thrust's balance of the axial drag, -X_u|u| u0 |u0| [N] per row."""
+    added: np.ndarray | None
+    """The estimated added masses (N, k_dot); None when none is estimated."""
+    minv: np.ndarray | None
+    """The inverse mass matrix of each row (N, 6, 6) [1/kg, 1/(kg m²)]; None when no added
+    mass is estimated (the model's own inverse is used)."""
+
+
 class BatchModel:
     """The simulator's dynamics for many states and coefficient sets at once.
 
@@ -212,26 +227,25 @@ class BatchModel:
             len(rows), width)
         return table, np.array(coefs).reshape(len(rows), 6)
 
-    def coefficients(self, beta: np.ndarray) -> dict[str, Any]:
+    def coefficients(self, beta: np.ndarray) -> RowCoefficients:
         """What :meth:`rhs` needs of the coefficients ``beta`` (N, k), computed once for the
         steps that share them: the estimated terms' coefficients, the axial drag ``X_u|u|``,
         the estimated added masses and the inverse mass matrix of each row (N, 6, 6), None
         when no added mass is estimated."""
         x_uu = self.x_uu if self.x_uu_j is None else beta[:, self.x_uu_j]
-        pre: dict[str, Any] = {"est": beta[:, self.est_cols], "drag": -x_uu * self.u0
-                               * np.abs(self.u0), "bd": None, "minv": None}
-        if self.dot_index:
-            bd = beta[:, self.dot_index]
-            ma = self.ma0 + np.einsum("nj,jab->nab", bd, self.mb_stack)
-            pre["bd"], pre["minv"] = bd, np.linalg.inv(self.m_rb + ma)
-        return pre
+        est, drag = beta[:, self.est_cols], -x_uu * self.u0 * np.abs(self.u0)
+        if not self.dot_index:
+            return RowCoefficients(est, drag, None, None)
+        bd = beta[:, self.dot_index]
+        ma = self.ma0 + np.einsum("nj,jab->nab", bd, self.mb_stack)
+        return RowCoefficients(est, drag, bd, np.linalg.inv(self.m_rb + ma))
 
     def rhs(self, s: np.ndarray, beta: np.ndarray, dr: float, ds: float) -> np.ndarray:
         """ds/dt (N, 12) of the states ``s`` (N, 12) with the coefficients ``beta`` (N, k),
         rudder ``dr`` and stern plane ``ds`` [rad]."""
         return self.rhs_with(s, self.coefficients(beta), dr, ds)
 
-    def rhs_with(self, s: np.ndarray, pre: dict[str, Any], dr: float, ds: float) -> np.ndarray:
+    def rhs_with(self, s: np.ndarray, pre: RowCoefficients, dr: float, ds: float) -> np.ndarray:
         """:meth:`rhs` with the coefficients given by :meth:`coefficients`."""
         n = s.shape[0]
         nu = s[:, 6:]
@@ -246,23 +260,23 @@ class BatchModel:
         prod = ext[:, self.all_idx].prod(axis=2)
         tau = prod[:, :self.n_fixed] @ self.fixed_c
         if len(self.est_cols):
-            tau += (prod[:, self.n_fixed:] * pre["est"]) @ self.est_e
-        tau[:, 0] += pre["drag"]
+            tau += (prod[:, self.n_fixed:] * pre.est) @ self.est_e
+        tau[:, 0] += pre.drag
         # C(nu) nu from the products nu_a nu_b, its M_A part with each row's added masses
         quad = (nu[:, :, None] * nu[:, None, :]).reshape(n, 36) @ self.coriolis
         rest = quad[:, :6]
-        if pre["bd"] is not None:
-            rest = rest + np.einsum("nj,njk->nk", pre["bd"], quad[:, 6:].reshape(n, -1, 6))
+        if pre.added is not None:
+            rest = rest + np.einsum("nj,njk->nk", pre.added, quad[:, 6:].reshape(n, -1, 6))
         sn, cs = np.sin(s[:, 3:6].T), np.cos(s[:, 3:6].T)
         sph, sth, sps = sn
         cph, cth, cps = cs
         # g(eta): linear in sin(theta), cos(theta) sin(phi), cos(theta) cos(phi)
         g = np.array([sth, cth * sph, cth * cph]).T @ self.g_mat.T
         total = tau - rest - g
-        if pre["minv"] is None:
+        if pre.minv is None:
             nu_dot = total @ self.minv0.T
         else:
-            nu_dot = np.einsum("nab,nb->na", pre["minv"], total)
+            nu_dot = np.einsum("nab,nb->na", pre.minv, total)
         u, v, w_, p, q, r = nu.T
         # eta_dot = J(eta) nu (Fossen eq. 2.40), R = R_z(psi) R_y(theta) R_x(phi) applied in turn
         v_x, w_x = cph * v - sph * w_, sph * v + cph * w_
@@ -279,7 +293,7 @@ class BatchModel:
         return out
 
     def step(self, aug: np.ndarray, dt: float, c0: tuple[float, float],
-             c1: tuple[float, float], pre: dict[str, Any] | None = None) -> np.ndarray:
+             c1: tuple[float, float], pre: RowCoefficients | None = None) -> np.ndarray:
         """The augmented states (N, 12 + k) after ``dt`` [s]: RK4 in steps of at most
         :data:`MAX_STEP_S`, the controls [rad] linear from ``c0`` to ``c1``; ``pre``: the
         coefficients' :meth:`coefficients` when already computed.
