@@ -25,7 +25,7 @@ from matplotlib.patches import Rectangle
 from matplotlib.table import Cell, Table
 from matplotlib.transforms import Bbox
 
-__all__ = ["PageTable", "page_table", "fast_placement"]
+__all__ = ["PageTable", "page_table", "fast_placement", "row_height", "PRIVATE_METHODS"]
 
 #: matplotlib's private Table methods the shortcut uses (there since matplotlib 2.x).
 PRIVATE_METHODS = ("_update_positions", "_get_grid_bbox")
