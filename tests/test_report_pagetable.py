@@ -36,13 +36,17 @@ def _pixels(fig: Figure) -> np.ndarray:
     return np.asarray(canvas.buffer_rgba()).copy()
 
 
-def _style(tab: Table) -> None:
-    for (r, _c), cell in tab.get_celld().items():
-        cell.set_linewidth(0.4)
-        cell.PAD = 0.04
-        if r == 0:
-            cell.set_facecolor("#dddddd")
-            cell.get_text().set_fontweight("bold")
+def _style(*tables: Table) -> None:
+    """The report's look on each table: 7.5 pt text, thin lines, a grey bold header."""
+    for tab in tables:
+        tab.auto_set_font_size(False)
+        tab.set_fontsize(7.5)
+        for (r, _c), cell in tab.get_celld().items():
+            cell.set_linewidth(0.4)
+            cell.PAD = 0.04
+            if r == 0:
+                cell.set_facecolor("#dddddd")
+                cell.get_text().set_fontweight("bold")
 
 
 @pytest.mark.parametrize("align", [None, ["left", "center", "right"]])
@@ -58,10 +62,7 @@ def test_page_table_draws_matplotlibs_table_pixels(
             cell.get_text().set_horizontalalignment(align[c])
     fig_ours, ax_ours = _figure()
     ours = page_table(ax_ours, ROWS, HEADER, WIDTHS, align)
-    for tab in (ref, ours):
-        tab.auto_set_font_size(False)
-        tab.set_fontsize(7.5)
-        _style(tab)
+    _style(ref, ours)
     assert np.array_equal(_pixels(fig_mpl), _pixels(fig_ours))
     for key, cell in ref.get_celld().items():
         np.testing.assert_allclose(ours[key].get_text().get_position(),
@@ -69,8 +70,9 @@ def test_page_table_draws_matplotlibs_table_pixels(
         assert ours[key].get_bbox().bounds == pytest.approx(cell.get_bbox().bounds, abs=1e-12)
 
 
-def test_report_table_draws_without_measuring_cells(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A report table (pdf._table) is drawn without a window-extent measurement per cell."""
+@pytest.fixture
+def measured_cells(monkeypatch: pytest.MonkeyPatch) -> list[Cell]:
+    """The cells whose window extent is measured from now on, in the order measured."""
     calls: list[Cell] = []
     extent = Cell.get_window_extent
 
@@ -79,12 +81,17 @@ def test_report_table_draws_without_measuring_cells(monkeypatch: pytest.MonkeyPa
         return extent(self, renderer)
 
     monkeypatch.setattr(Cell, "get_window_extent", counting)
+    return calls
+
+
+def test_report_table_draws_without_measuring_cells(measured_cells: list[Cell]) -> None:
+    """A report table (pdf._table) is drawn without a window-extent measurement per cell."""
     fig = Figure(figsize=pdf.style.PAGE_SIZE, dpi=80)
     FigureCanvasAgg(fig)
     used = pdf._table(fig, 1.0, HEADER, ROWS, [0.45, 0.55, 0.6])
     fig.canvas.draw()
     assert used == pytest.approx((len(ROWS) + 1) * 0.22)
-    assert calls == []
+    assert measured_cells == []
 
 
 def test_row_height_is_matplotlibs() -> None:
@@ -101,7 +108,7 @@ def test_row_height_is_matplotlibs() -> None:
 
 @pytest.mark.parametrize("align", [None, ["left", "center", "right"]])
 def test_without_matplotlibs_private_methods_the_table_is_matplotlibs_own(
-        monkeypatch: pytest.MonkeyPatch,
+        monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest,
         align: list[Literal["left", "center", "right"]] | None) -> None:
     """A matplotlib whose Table lacks a private method the shortcut uses (planted: a name it
     does not have): page_table's table is drawn by Table.draw itself, with the same pixels as
@@ -116,18 +123,8 @@ def test_without_matplotlibs_private_methods_the_table_is_matplotlibs_own(
     assert not pagetable.fast_placement()
     fig_slow, ax_slow = _figure()
     slow = page_table(ax_slow, ROWS, HEADER, WIDTHS, align)
-    for tab in (fast, slow):
-        tab.auto_set_font_size(False)
-        tab.set_fontsize(7.5)
-        _style(tab)
-    measured: list[Cell] = []
-    extent = Cell.get_window_extent
-
-    def counting(self: Cell, renderer: RendererBase | None = None) -> Bbox:
-        measured.append(self)
-        return extent(self, renderer)
-
-    monkeypatch.setattr(Cell, "get_window_extent", counting)
+    _style(fast, slow)
+    measured = request.getfixturevalue("measured_cells")  # from here on
     slow_pixels = _pixels(fig_slow)
     assert measured, "Table.draw measures its cells: it was not the one drawing"
     monkeypatch.setattr(pagetable, "PRIVATE_METHODS", pagetable.PRIVATE_METHODS[:-1])
