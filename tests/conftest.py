@@ -15,6 +15,7 @@ import gc
 import os
 import pickle
 import shutil
+import signal
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -42,6 +43,15 @@ _SHARE_SET = ("TOWTANK_JOBS" not in os.environ
 if _SHARE_SET:
     os.environ["TOWTANK_JOBS"] = str(max(1, default_jobs()
                                          // max(1, int(os.environ["PYTEST_XDIST_WORKER_COUNT"]))))
+
+# A suite started with Ctrl-C ignored (under nohup, or as `pytest &` from a script: a
+# non-interactive shell starts a background command with SIGINT ignored) still tests what a
+# terminal's Ctrl-C does to a towtank command: the commands the tests start would inherit the
+# ignored SIGINT (towtank then leaves it ignored, as nohup asks) and the Ctrl-C tests would
+# wait for an exit that never comes. SIGINT is Python's default again in each test process; a
+# command started from it gets the default action (exec resets a handled signal).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def lab_environment(**extra: str) -> dict[str, str]:
