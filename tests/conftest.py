@@ -22,13 +22,26 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-import pytest
-from hypothesis import Phase, settings
+from towtank.testing.bytecode import keep_bytecode_under
 
-from towtank.runtime.parallel import default_jobs
-from towtank.testing import days as syn_days
-from towtank.testing import synthetic as syn
+# The suite starts about eighty new Python processes (the commands that need a process of their
+# own, the fork servers of the worker pools, pytest-xdist's workers). Where the environment
+# switches bytecode writing off (PYTHONDONTWRITEBYTECODE), each of them would compile towtank's
+# modules from source again (0.9 CPU-s a start): the run keeps the bytecode under a temporary
+# folder of its own, removed when the run ends, and writes none beside the sources.
+_BYTECODE = Path(tempfile.mkdtemp(prefix="towtank-test-pycache-"))
+if keep_bytecode_under(_BYTECODE):
+    atexit.register(shutil.rmtree, _BYTECODE, ignore_errors=True)
+else:
+    _BYTECODE.rmdir()
+
+import pandas as pd  # noqa: E402 - after the bytecode switch, as every import below
+import pytest  # noqa: E402
+from hypothesis import Phase, settings  # noqa: E402
+
+from towtank.runtime.parallel import default_jobs  # noqa: E402
+from towtank.testing import days as syn_days  # noqa: E402
+from towtank.testing import synthetic as syn  # noqa: E402
 
 #: Worker processes for the days the fixtures process: none. The suite runs on two pytest-xdist
 #: workers on two cores, so a pool of workers per day only adds its start-up; the tests that are

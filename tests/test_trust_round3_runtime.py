@@ -13,6 +13,8 @@ import math
 import os
 import re
 import shutil
+import subprocess
+import sys
 import tempfile
 import threading
 import zlib
@@ -113,6 +115,46 @@ def test_the_replay_rule_leaves_out_only_python_towtank_and_the_kernel(tmp_path)
     assert not recorded("/proc/self/status") and not recorded("/sys/fs/cgroup/cpu.max")
     assert not recorded(str(tmp_path / ".cache" / "day.json"), skip=(str(tmp_path / ".cache"),))
     assert recorded(str(tmp_path / "tare.csv"), skip=(str(tmp_path / ".cache"),))
+
+
+def test_a_module_compiled_under_pythons_bytecode_folder_is_no_input(tmp_path, monkeypatch):
+    """PYTHONPYCACHEPREFIX: Python reads a module imported during the day from its own
+    bytecode folder, which is then not a file of the day (a pandas module imported lazily
+    was listed in provenance.json's inputs, and the day's outputs differed with the moment of
+    that first import)."""
+    cache = tmp_path / "pycache"
+    compiled = cache / "opt" / "venv" / "pandas" / "core" / "reshape.cpython-311.pyc"
+    assert recorded(str(compiled))  # no bytecode folder: any file is recorded, as before
+    monkeypatch.setattr(sys, "pycache_prefix", str(cache))
+    assert not recorded(str(compiled))
+    assert recorded(str(tmp_path / "tare.csv"))
+    assert recorded(str(tmp_path / "pycache-notes.csv"))  # a name that only begins the same
+
+
+def test_a_day_imports_through_the_bytecode_folder_and_records_only_its_files(tmp_path):
+    """The whole rule in a process of its own that imports a module during the recording
+    from PYTHONPYCACHEPREFIX's folder (as a lazy import of a library does during a day)."""
+    src, cache = tmp_path / "src", tmp_path / "pycache"
+    src.mkdir()
+    (src / "late_module.py").write_text("VALUE = 1\n")
+    (tmp_path / "tare.csv").write_text("speed_m_s,drag_N\n1,2\n")
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1])\n"
+        "import late_module\n"  # compiled into the bytecode folder
+        "del sys.modules['late_module']\n"
+        "from towtank.runtime.reads import Recorder\n"
+        "rec = Recorder([]).start()\n"
+        "import late_module\n"  # read from the bytecode folder during the recording
+        "open(sys.argv[2]).read()\n"
+        "print(sorted(rec.stop()))\n")
+    root = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPYCACHEPREFIX": str(cache),
+           "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    done = subprocess.run([sys.executable, "-c", code, str(src), str(tmp_path / "tare.csv")],
+                          env=env, capture_output=True, text=True, timeout=120, check=True)
+    assert list(cache.rglob("late_module*.pyc"))  # the import went through the folder
+    assert done.stdout.strip() == repr([str(tmp_path / "tare.csv")])
 
 
 @pytest.fixture

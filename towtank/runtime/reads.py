@@ -81,11 +81,16 @@ def exempt_roots() -> tuple[str, ...]:
     Only the files the day's fingerprint records otherwise: towtank's own code (its files'
     sizes and times), Python's standard library (Python's version) with the system's time
     zone tables it reads (:data:`zoneinfo.TZPATH`), the installed libraries (their names and
-    versions), and the kernel's pseudo file systems (:data:`PSEUDO_ROOTS`). Every other file
+    versions), the compiled modules of all three where Python keeps them apart from the
+    sources (:data:`sys.pycache_prefix`, set by ``PYTHONPYCACHEPREFIX``: a module imported
+    during the day is read from there), and the kernel's pseudo file systems
+    (:data:`PSEUDO_ROOTS`). Every other file
     the day reads is an input wherever it lives: on a USB stick under ``/run/media``, under
     ``/mnt``, ``/etc``, ``/usr/local/share``, a home folder.
     """
     roots = {str(Path(__file__).resolve().parents[1]), *PSEUDO_ROOTS, *zoneinfo.TZPATH}
+    if sys.pycache_prefix:
+        roots.add(sys.pycache_prefix)
     paths = sysconfig.get_paths()
     roots.update(paths[key] for key in ("stdlib", "platstdlib", "purelib", "platlib")
                  if key in paths)

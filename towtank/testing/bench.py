@@ -47,6 +47,7 @@ import pyarrow.csv as pacsv
 
 from towtank.runtime.parallel import default_jobs
 from towtank.testing import synthetic as syn
+from towtank.testing.bytecode import bytecode_env
 from towtank.testing.synthetic import RunSpec, hull_protocol_sections, write_protocol
 
 PLAN_VERSION = 1  # bump when the generated campaign changes
@@ -267,11 +268,7 @@ def child_env(workdir: Path) -> dict[str, str]:
     never does: the bytecode is then kept under the work folder (``PYTHONPYCACHEPREFIX``) and
     written by the untimed warm-up run.
     """
-    env = dict(os.environ)
-    if env.get("PYTHONDONTWRITEBYTECODE"):
-        env.pop("PYTHONDONTWRITEBYTECODE")
-        env.setdefault("PYTHONPYCACHEPREFIX", str(workdir / "pycache"))
-    return env
+    return bytecode_env(os.environ, workdir / "pycache")
 
 
 def _become_subreaper() -> bool:

@@ -1,0 +1,49 @@
+"""The test run's and the benchmark's new processes keep their bytecode where the environment
+switches writing it off (towtank.testing.bytecode), and never write it beside the sources."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from towtank.testing.bytecode import NO_BYTECODE, PREFIX, bytecode_env
+
+
+def test_the_environment_is_changed_only_where_writing_is_off(tmp_path):
+    base = {"PATH": "/usr/bin"}
+    assert bytecode_env(base, tmp_path) == base
+    assert bytecode_env(base | {NO_BYTECODE: ""}, tmp_path) == base | {NO_BYTECODE: ""}
+    assert bytecode_env(base | {NO_BYTECODE: "1"}, tmp_path) == base | {PREFIX: str(tmp_path)}
+    # a folder the environment names already is kept
+    named = base | {NO_BYTECODE: "1", PREFIX: "/elsewhere"}
+    assert bytecode_env(named, tmp_path) == base | {PREFIX: "/elsewhere"}
+    assert named[NO_BYTECODE] == "1"  # the caller's mapping is left as it was
+
+
+_CHILD = """
+import subprocess, sys
+from pathlib import Path
+from towtank.testing.bytecode import keep_bytecode_under
+src, cache = Path(sys.argv[1]), Path(sys.argv[2])
+assert sys.dont_write_bytecode
+assert keep_bytecode_under(cache)
+sys.path.insert(0, str(src))
+import probe_module  # compiled here: its bytecode under the cache
+subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv[1]); "
+                "import probe_grandchild", str(src)], check=True)
+"""
+
+
+def test_a_process_and_its_children_write_bytecode_under_the_folder_only(tmp_path):
+    src, cache = tmp_path / "src", tmp_path / "cache"
+    src.mkdir()
+    for name in ("probe_module", "probe_grandchild"):
+        (src / f"{name}.py").write_text("VALUE = 1\n")
+    env = {"PATH": "/usr/bin", NO_BYTECODE: "1",
+           "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    subprocess.run([sys.executable, "-c", _CHILD, str(src), str(cache)], env=env, check=True,
+                   timeout=120)
+    written = sorted(p.name.split(".")[0] for p in cache.rglob("probe_*.pyc"))
+    assert written == ["probe_grandchild", "probe_module"]
+    assert not list(src.rglob("*.pyc")) and not (src / "__pycache__").exists()
