@@ -74,12 +74,15 @@ def test_every_result_class_lives_in_the_results_package():
     assert towtank.IdentifyResult is IdentifyResult
 
 
-def test_the_results_of_a_day_load_no_identification():
+def test_the_results_of_a_day_and_simulate_load_no_identification():
     """IdentifyResult comes with the package's names, but the identification's filter loads
-    only when it is asked for (a fresh interpreter: what an import loads is the point)."""
-    code = ("import sys, towtank.results, towtank.pipeline\n"
+    only when it is asked for (a fresh interpreter: what an import loads is the point); nor
+    does ``towtank simulate`` load it (its ``--noise`` is read by the manoeuvre record's
+    module: the identification's imports were a third of simulate's 3.4 s)."""
+    code = ("import sys, towtank.results, towtank.pipeline, towtank.commands.simulate\n"
             "assert 'filterpy' not in sys.modules, 'filterpy'\n"
             "assert 'towtank.vehicle.identify' not in sys.modules\n"
+            "assert 'towtank.report.identify_figure' not in sys.modules\n"
             "from towtank.results import IdentifyResult\n"
             "assert 'filterpy' in sys.modules\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -18,7 +18,7 @@ from towtank.report.identify_figure import save_identify_figure
 from towtank.vehicle import schema
 from towtank.vehicle.adequacy import failure_sentence
 from towtank.vehicle.identify import Progress, identify
-from towtank.vehicle.identify_log import SHORT_NAMES, LogError, noise_entry, read_log
+from towtank.vehicle.identify_log import LogError, parse_noise, read_log
 from towtank.vehicle.model import kept_conversions, read_model, write_model
 
 #: The files ``identify`` writes.
@@ -41,36 +41,6 @@ def _channels(protocol: Path | None) -> dict[str, Any] | None:
     if not isinstance(table, dict):
         raise ProtocolError(f"{name}: [channels] must be a table.")
     return table
-
-
-def parse_noise(text: str | None, positive: bool = False) -> dict[str, float]:
-    """``--noise u=0.01,r=0.2,psi=0.5``: standard deviation per state, in the state's column
-    unit (m, deg, m/s, deg/s); short names (``u``, ``psi``) or the columns (``u_m_s``), each
-    state once; ``positive``: every value above 0, else 0 allowed
-    (:func:`towtank.vehicle.identify_log.noise_entry`).
-
-    Raises
-    ------
-    ProtocolError
-        One sentence naming the part that is wrong.
-    """
-    out: dict[str, float] = {}
-    for part in (text or "").split(","):
-        if not part.strip():
-            continue
-        key, sep, val = part.partition("=")
-        if not sep:
-            raise ProtocolError(f"--noise: {part.strip()!r} is not state=sd (states: "
-                                f"{', '.join(SHORT_NAMES)}).")
-        try:
-            col, sd = noise_entry(key, val, positive)
-        except ValueError as exc:
-            raise ProtocolError(str(exc)) from None
-        if col in out:
-            raise ProtocolError(f"--noise names the state {col} twice ({text!r}); give "
-                                "each state once.")
-        out[col] = sd
-    return out
 
 
 def noise_option(text: str) -> dict[str, float]:

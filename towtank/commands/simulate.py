@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from towtank.commands.identify import parse_noise
 from towtank.commands.storage import write_outputs_or_stop
 from towtank.errors import ProtocolError
 from towtank.report.manoeuvre_figure import save_manoeuvre_figure
@@ -21,6 +20,7 @@ from towtank.vehicle.glider_controls import (
     model_glider_problems,
     roll_mass_angle_for_static_roll_deg,
 )
+from towtank.vehicle.identify_log import parse_noise
 from towtank.vehicle.model import read_model
 from towtank.vehicle.simulate import (
     PROPULSION,

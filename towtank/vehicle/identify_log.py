@@ -19,10 +19,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from towtank.errors import ProtocolError
+
 __all__ = ["STATE_COLUMNS", "CONTROL_COLUMNS", "MAX_ROWS", "MAX_ROWS_MINUTES", "MIN_ROWS",
            "MAX_GAP_S", "SHORT_NAMES", "LogError", "ManoeuvreLog", "read_log", "log_from_frame",
-           "noise_sd", "noise_entry", "noise_floor", "exact_states", "white_noise_ratio",
-           "NOISE_FREE_RATIO", "noise_free_states"]
+           "noise_sd", "noise_entry", "parse_noise", "noise_floor", "exact_states",
+           "white_noise_ratio", "NOISE_FREE_RATIO", "noise_free_states"]
 
 #: The state columns in the order of the simulation's state vector and their scale to SI.
 STATE_COLUMNS = ("x_m", "y_m", "z_m", "phi_deg", "theta_deg", "psi_deg", "u_m_s", "v_m_s",
@@ -363,3 +365,33 @@ def noise_entry(state: Any, value: Any, positive: bool = True) -> tuple[str, flo
                          f"number {'> 0' if positive else '>= 0'}, not "
                          f"{str(value).strip()!r}.")
     return col, sd
+
+
+def parse_noise(text: str | None, positive: bool = False) -> dict[str, float]:
+    """``--noise u=0.01,r=0.2,psi=0.5``: standard deviation per state, in the state's column
+    unit (m, deg, m/s, deg/s); short names (``u``, ``psi``) or the columns (``u_m_s``), each
+    state once; ``positive``: every value above 0, else 0 allowed
+    (:func:`noise_entry`).
+
+    Raises
+    ------
+    ProtocolError
+        One sentence naming the part that is wrong.
+    """
+    out: dict[str, float] = {}
+    for part in (text or "").split(","):
+        if not part.strip():
+            continue
+        key, sep, val = part.partition("=")
+        if not sep:
+            raise ProtocolError(f"--noise: {part.strip()!r} is not state=sd (states: "
+                                f"{', '.join(SHORT_NAMES)}).")
+        try:
+            col, sd = noise_entry(key, val, positive)
+        except ValueError as exc:
+            raise ProtocolError(str(exc)) from None
+        if col in out:
+            raise ProtocolError(f"--noise names the state {col} twice ({text!r}); give "
+                                "each state once.")
+        out[col] = sd
+    return out
