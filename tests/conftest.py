@@ -24,7 +24,7 @@ from typing import Any
 
 from towtank.testing.bytecode import keep_bytecode_under
 
-# The suite starts about eighty new Python processes (the commands that need a process of their
+# The suite starts about sixty new Python processes (the commands that need a process of their
 # own, the fork servers of the worker pools, pytest-xdist's workers). Where the environment
 # switches bytecode writing off (PYTHONDONTWRITEBYTECODE), each of them would compile towtank's
 # modules from source again (0.9 CPU-s a start): the run keeps the bytecode under a temporary

@@ -84,9 +84,9 @@ def exempt_roots() -> tuple[str, ...]:
     versions), the compiled modules of all three where Python keeps them apart from the
     sources (:data:`sys.pycache_prefix`, set by ``PYTHONPYCACHEPREFIX``: a module imported
     during the day is read from there), and the kernel's pseudo file systems
-    (:data:`PSEUDO_ROOTS`). Every other file
-    the day reads is an input wherever it lives: on a USB stick under ``/run/media``, under
-    ``/mnt``, ``/etc``, ``/usr/local/share``, a home folder.
+    (:data:`PSEUDO_ROOTS`). Every other file the day reads is an input wherever it lives: on a
+    USB stick under ``/run/media``, under ``/mnt``, ``/etc``, ``/usr/local/share``, a home
+    folder.
     """
     roots = {str(Path(__file__).resolve().parents[1]), *PSEUDO_ROOTS, *zoneinfo.TZPATH}
     if sys.pycache_prefix:
