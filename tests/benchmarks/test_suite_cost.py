@@ -114,6 +114,25 @@ def test_summary_adds_the_columns_and_ranks_the_heaviest():
     assert lines[-1] == "     0.50  day (session): 2 set-ups"  # all but the costlier one
 
 
+def test_an_output_path_holding_another_file_is_refused_before_the_run(tmp_path):
+    """Only an earlier run's suite-cost file is overwritten; any other file, a folder or a
+    link is refused in one sentence, and nothing is written."""
+    earlier = tmp_path / "earlier.csv"
+    earlier.write_text(",".join(suitecost.COLUMNS) + "\n", encoding="utf-8")
+    suitecost.check_output(earlier)
+    suitecost.check_output(tmp_path / "new.csv")
+    notes = tmp_path / "notes.csv"
+    notes.write_text("run,speed\n1,1.2\n", encoding="utf-8")
+    link = tmp_path / "link.csv"
+    link.symlink_to(earlier)
+    for path in (notes, tmp_path, link, tmp_path / "dangling.csv"):
+        if path.name == "dangling.csv":
+            path.symlink_to(tmp_path / "nowhere")
+        with pytest.raises(pytest.UsageError, match="exists and is not a suite-cost file"):
+            suitecost.check_output(path)
+    assert notes.read_text(encoding="utf-8") == "run,speed\n1,1.2\n"
+
+
 @given(st.lists(st.tuples(
     st.sampled_from(["test", "fixture", "outside"]),
     st.text(min_size=1, max_size=30).filter(lambda s: "\x00" not in s),

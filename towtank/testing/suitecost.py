@@ -28,6 +28,7 @@ more than once. Linux and macOS (the ``resource`` module).
 
 from __future__ import annotations
 
+import atexit
 import csv
 import os
 import resource
@@ -41,7 +42,7 @@ from typing import Any
 
 import pytest
 
-__all__ = ["COLUMNS", "read_rows", "summary_lines"]
+__all__ = ["COLUMNS", "check_output", "read_rows", "summary_lines"]
 
 #: The CSV's columns, in order.
 COLUMNS = ("kind", "worker", "name", "wall_s", "cpu_s", "children_s")
@@ -118,7 +119,9 @@ def pytest_configure(config: pytest.Config) -> None:
         return
     workerinput = getattr(config, "workerinput", None)
     if workerinput is None:  # the process that started the run: the folder of the parts
+        check_output(Path(path))
         parts = Path(tempfile.mkdtemp(prefix="towtank-suite-cost-"))
+        atexit.register(shutil.rmtree, parts, ignore_errors=True)  # an interrupted run too
         os.environ[PARTS_ENV] = str(parts)  # before pytest-xdist starts its workers
         config.stash[_PARTS] = parts
         config.stash[_STARTED] = time.perf_counter()
@@ -129,6 +132,22 @@ def pytest_configure(config: pytest.Config) -> None:
     recorder = _Recorder(parts, worker)
     config.stash[_RECORDER] = recorder
     config.pluginmanager.register(recorder, "towtank-suite-cost-recorder")
+
+
+def check_output(path: Path) -> None:
+    """Refuse (:class:`pytest.UsageError`, one sentence) an output path that holds anything
+    but an earlier run's suite-cost file, before the run: no other file is overwritten."""
+    if not path.exists() and not path.is_symlink():
+        return
+    try:
+        with open(path, encoding="utf-8", newline="") as fh:
+            ours = path.is_file() and not path.is_symlink() and (
+                fh.readline().rstrip("\r\n") == ",".join(COLUMNS))
+    except (OSError, UnicodeDecodeError):
+        ours = False
+    if not ours:
+        raise pytest.UsageError(f"--suite-cost: {path} exists and is not a suite-cost file "
+                                f"written by an earlier run; give a new path.")
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
