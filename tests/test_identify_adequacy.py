@@ -93,6 +93,7 @@ def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
     assert (tmp_path / "id" / "model.json").exists()
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # none reaches a notebook user
 def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     """A record made neutral, identified with the 7 N buoyant model (old code: N_rdot 65 %
     off, `identifiable`): the record does not fit."""

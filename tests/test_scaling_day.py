@@ -374,3 +374,49 @@ def test_form_factor_trend_of_the_sample_day_is_named(outputs):
     assert trend.last[1] == pytest.approx(1.701, abs=0.005)
     assert sr.form_factor_trend_text.startswith("1 + k rises with Re from 1.365")
     assert f"the mean {sr.form_factor.one_plus_k:.3f}" in sr.form_factor_trend_text
+
+
+def _straight_runs(speeds: list[float], k2: float = 12.0, k1: float = 0.8) -> pd.DataFrame:
+    """Steady straight hull runs whose drag is R = k2·U|U| + k1·U plus a ripple [N] that no
+    two-term curve follows, in fresh water at 18 °C."""
+    u = np.asarray(speeds, dtype=float)
+    rho, nu = 998.6, 1.054e-6
+    return pd.DataFrame({
+        "run": np.arange(1, len(u) + 1), "config": "hull", "status": "ok", "angle_deg": 0.0,
+        "speed_mean": u, "drag_mean": k2 * u * np.abs(u) + k1 * u + 0.01 * np.cos(7.0 * u),
+        "rho": rho, "nu": nu, "re": u * 0.35 / nu,
+    })
+
+
+@pytest.mark.parametrize("speeds", [[0.6, 1.2], [0.6, 0.9, 1.2, 1.5]])
+def test_the_resistance_curves_errors_are_nan_only_when_two_runs_fix_it(speeds):
+    """k2 and k1 from exactly two straight runs leave no residual freedom: their standard errors
+    are NaN with 0 degrees of freedom (not statsmodels' ∞ with a divide-by-zero warning that a
+    notebook user would see), and their intervals NaN, never (−∞, ∞) or a point; from four runs
+    they are finite, with 2 degrees of freedom, and hold the curve's k2 and k1."""
+    import warnings
+
+    from towtank.analysis.scaling import scale_to_prototype
+    from towtank.ingest.protocol import load_protocol
+    from towtank.results import ScalingResult
+    from towtank.results.summary import from_fit
+
+    protocol = load_protocol(PROTOCOL)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit, _ = scale_to_prototype(
+            _straight_runs(speeds), protocol.model, protocol.prototype, scale=4.0,
+            rho_m=998.6, nu_m=1.054e-6, rho_p=1025.9, nu_p=1.19e-6, laminar_re=5e5,
+            damping_alpha_max_deg=10.0)
+    assert fit is not None
+    result = from_fit(ScalingResult, fit)
+    ci = result.conf_int()
+    if len(speeds) == 2:
+        assert fit.resistance_dof == 0.0
+        assert all(math.isnan(s) for s in fit.resistance_se)
+        assert ci.loc[["k2", "k1"]].isna().all().all()
+    else:
+        assert fit.resistance_dof == 2.0
+        assert all(0 < s < 1 for s in fit.resistance_se)
+        assert ci.loc["k2", "lower"] < 12.0 < ci.loc["k2", "upper"]
+        assert ci.loc["k1", "lower"] < 0.8 < ci.loc["k1", "upper"]

@@ -53,6 +53,7 @@ class ScalingFit:
     #: drag indicative only); "" when none does
     laminar_note: str = ""
     #: standard errors of k2, k1 [N s²/m², N s/m] and their residual degrees of freedom [-]
+    #: (NaN and 0 when two straight runs fix the curve exactly)
     resistance_se: tuple[float, float] = (math.nan, math.nan)
     resistance_dof: float = math.nan
 
@@ -155,6 +156,10 @@ def scale_to_prototype(
     r = zero["drag_mean"].to_numpy(float)
     res = OLS(r, np.column_stack([u * np.abs(u), u])).fit()
     k2, k1 = (float(v) for v in res.params)
+    # two speeds fix the curve exactly: no residual freedom, so no standard error (NaN, where
+    # statsmodels' bse would divide by zero degrees of freedom: ∞ and a RuntimeWarning)
+    se = ((float(res.bse[0]), float(res.bse[1])) if res.df_resid >= 1
+          else (math.nan, math.nan))
     ff = None
     one_plus_k = math.nan
     if model.wetted_area_m2 is not None:
@@ -216,7 +221,7 @@ def scale_to_prototype(
         wetted_area_prototype=(model.wetted_area_m2 * scale**2
                                if model.wetted_area_m2 is not None else None),
         delta_cf=prototype.delta_cf,
-        resistance_se=(float(res.bse[0]), float(res.bse[1])), resistance_dof=float(res.df_resid),
+        resistance_se=se, resistance_dof=float(res.df_resid),
     )
     outside = table.loc[~table["froude_in_tested_range"], "speed_prototype"].tolist()
     deep = air or (depth is not None and model.diameter_m is not None

@@ -723,9 +723,12 @@ def least_squares_fit(model: dict[str, Any], log: ManoeuvreLog, symbols: list[st
     cost = 0.0
     for _ in range(1 + (LS_RELAX if relax else 0)):
         w = 1.0 / sigma[cols]
-        sol = least_squares(lambda th, w=w: raw(th)[0] * w,
-                            theta, jac=lambda th, w=w: raw(th)[1] * w[:, None],
-                            method="trf", x_scale="jac", max_nfev=LS_MAX_NFEV)
+        # a trial step far from the record can overflow the cost ½·f·f: it is infinite, and
+        # least_squares rejects the step, as it should (quietly: not a user's warning)
+        with np.errstate(over="ignore"):
+            sol = least_squares(lambda th, w=w: raw(th)[0] * w,
+                                theta, jac=lambda th, w=w: raw(th)[1] * w[:, None],
+                                method="trf", x_scale="jac", max_nfev=LS_MAX_NFEV)
         theta, cost = sol.x, float(sol.cost)
         if not relax:
             break
