@@ -199,8 +199,42 @@ def test_cycle_options_are_in_the_run_cache_key(tmp_path):
            "pmm_amplitude_m": 0.1}
     from dataclasses import replace
     keys = {settings_key(replace(p, captive=replace(p.captive, **opt)), row)
-            for opt in ({}, {"min_cycles": 4}, {"amplitude_tolerance": 0.1})}
-    assert len(keys) == 3
+            for opt in ({}, {"min_cycles": 4}, {"amplitude_tolerance": 0.1},
+                        {"moment_ref": "balance"})}
+    assert len(keys) == 4
+
+
+def test_a_day_whose_moments_are_about_the_balance_point(tmp_path):
+    """``[captive] moment_ref = "balance"`` (FORMATS section 8) with the balance 0.30 m ahead
+    of O: a generated day whose truth refers to the balance point B (its sway velocity
+    v_B = v + x_B r, its moments about B) gives the 14 derivatives there within tolerance and
+    inside their intervals; provenance.json and the report say that no moment was moved. The
+    same files processed with ``moment_ref = "origin"`` give the derivatives about O, which
+    for this programme (no run has both v and r at O, so v|v| stays v|v|) are N_uv(O) =
+    N_uv(B) + x_B Y_uv(B) and Y_ur(O) = Y_ur(B) + x_B Y_uv(B) (N_O = N_B + x_B Y,
+    v_B = v + x_B r), each within 1 %, while Y_uv is the same at both points."""
+    from towtank.testing.captive import CaptiveTruth
+
+    x_b = 0.30
+    truth = make_captive_day(tmp_path, plan=small_plan()[:14], seed=4, truth=CaptiveTruth(
+        balance_x_m=x_b, moment_ref="balance"))
+    protocol = tmp_path / "protocol.toml"
+    assert 'moment_ref = "balance"' in protocol.read_text(encoding="utf-8")
+    day = towtank.process_day(protocol, out=tmp_path / "out", report=False, jobs=1)
+    assert not day.rejected
+    assert_derivatives(day.captive, truth, HORIZONTAL_SYMBOLS)
+    said = json.loads((tmp_path / "out" / "provenance.json").read_text())["captive"]
+    assert said["moment_reference"] == "balance" and said["moment_transfer"].startswith("none")
+
+    text = protocol.read_text(encoding="utf-8").replace('moment_ref = "balance"',
+                                                        'moment_ref = "origin"')
+    protocol.write_text(text, encoding="utf-8")
+    about_o = towtank.process_day(protocol, out=tmp_path / "out_o", report=False, jobs=1)
+    d, est = truth["derivatives"], about_o.captive.estimates
+    assert est["Y_uv"].value == pytest.approx(d["Y_uv"], rel=TOL)
+    assert est["N_uv"].value == pytest.approx(d["N_uv"] + x_b * d["Y_uv"], rel=TOL)
+    assert est["Y_ur"].value == pytest.approx(d["Y_ur"] + x_b * d["Y_uv"], rel=TOL)
+    assert abs(est["N_uv"].value - d["N_uv"]) > 10 * est["N_uv"].std_error
 
 
 # ==================================================================== the real KVLCC2 table

@@ -277,3 +277,35 @@ def test_a_generated_captive_day_reproduces_the_turn_radius(protocol, generated_
         assert model["sources"][sym] == "measured"
     radius = _steady_radius(model)
     assert radius == pytest.approx(generating_radius, rel=0.02)
+
+
+@pytest.mark.parametrize("balance_x_m", [0.3, 0.0])
+def test_derivatives_about_the_balance_point_stay_out_of_model_json(protocol, prestero,
+                                                                    balance_x_m):
+    """``[captive] moment_ref = "balance"`` with the balance 0.3 m from O: the captive
+    derivatives refer to the balance point, not to the vehicle's origin, so model.json keeps
+    the prediction for each of them (and the hull's measured X_udot, X_u|u|), coefficients.csv
+    still lists them, and one warning says why. With the balance at O the balance point is O:
+    they go in as measured."""
+    attrs = {f.name: getattr(protocol, f.name) for f in fields(protocol)}
+    moved = SimpleNamespace(**attrs | {"captive": {"moment_ref": "balance"},
+                                       "model": SimpleNamespace(balance_x_m=balance_x_m,
+                                                                myring=None)})
+    table = _captive_table(protocol, prestero)
+    result, out, warnings = day_vehicle(moved, table)
+    measured, _, _ = day_vehicle(_with_form(protocol, None), table)
+    predicted = predict_vehicle(protocol).model["coefficients"]
+    got = result.model["coefficients"]
+    said = [w for w in warnings if "balance point" in w]
+    assert out is not None and set(CAPTIVE) <= set(out["symbol"])
+    if balance_x_m:
+        assert len(said) == 1 and "0.3 m from O" in said[0]
+        assert "conversions" not in result.model
+        for sym in CAPTIVE:
+            if sym in predicted:
+                assert got[sym] == pytest.approx(predicted[sym]), sym
+        for sym in HULL:
+            assert got[sym] == pytest.approx(measured.model["coefficients"][sym]), sym
+    else:
+        assert not said
+        assert got == measured.model["coefficients"]

@@ -47,6 +47,7 @@ from towtank.reduce.captive import (
     arm_kinematics,
     body_kinematics,
     hydrodynamic_loads,
+    kinematics_at,
 )
 from towtank.reduce.captive import regressors as make_regressors
 from towtank.stats.intervals import welch_satterthwaite
@@ -233,14 +234,27 @@ def _design(runs: Sequence[CaptiveRun], plane: str, roll_deg: float
     return rows, rows[list(regs)].to_numpy(dtype=float), rows["run_index"].to_numpy()
 
 
-#: A regressor whose largest component is below this fraction of the largest regressor's
-#: is not excited by the runs (measurement noise of the motion, not a test of it).
+#: A regressor whose largest component, made non-dimensional (:func:`_excited`), is below
+#: this fraction of the largest regressor's is not excited by the runs (measurement noise of
+#: the motion, not a test of it).
 EXCITED_FRACTION = 1e-3
 
 
-def _excited(X: np.ndarray) -> np.ndarray:
-    """Columns that carry information (see :data:`EXCITED_FRACTION`)."""
-    scale = np.max(np.abs(X), axis=0)
+def _excited(X: np.ndarray, speed: np.ndarray, length_m: float) -> np.ndarray:
+    """Columns that carry information (see :data:`EXCITED_FRACTION`).
+
+    Each regressor is compared as its term enters the force's prime: x·L^(k-2)/U² (k its
+    :data:`PRIME_POWER`; u v/U², r|r|·L²/U², v'·L/U², ...), so that the test does not depend
+    on the model's size or speed (in SI, r|r| [rad²/s²] beside u² [m²/s²] would count as
+    noise on a long model whose r' is large). ``speed`` U [m/s] of each row, ``length_m``
+    L [m]."""
+    powers = np.array([PRIME_POWER[name][0] for name in REGRESSORS], dtype=float)
+    if math.isfinite(length_m) and length_m > 0:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            X = (X * length_m ** (powers - 2.0)[None, :]
+                 / (np.asarray(speed, dtype=float) ** 2)[:, None])
+    size = np.where(np.isfinite(X), np.abs(X), 0.0)
+    scale = np.max(size, axis=0) if size.size else np.zeros(X.shape[1])
     return scale > EXCITED_FRACTION * (float(np.max(scale)) if scale.size else 1.0)
 
 
@@ -405,7 +419,7 @@ def fit_captive(
                           warnings=(f"no {plane} captive runs",))
     rows, X, run_index = _design(runs, plane, roll_deg)
     cov = np.concatenate([mapped_cov(r, roll_deg) for r in runs])
-    excited = _excited(X)
+    excited = _excited(X, rows["speed"].to_numpy(dtype=float), length_m)
     absent = [k for k in range(len(regs)) if not excited[k]]
     if absent:
         warnings.append(not_excited_sentence(runs, [(eq_f, eq_m, regs[k]) for k in absent]))
@@ -575,17 +589,19 @@ def frequency_agreement(
 
 def captive_runs_from_means(
     table: pd.DataFrame, *, balance_x_m: float, mass_kg: float = 0.0, xg_m: float = 0.0,
-    plane: str = "horizontal",
+    plane: str = "horizontal", ref_x_m: float = 0.0,
 ) -> list[CaptiveRun]:
     """Static :class:`CaptiveRun` objects from a lab's table of means (FORMATS section 8).
 
     ``table`` has the canonical columns run, drift_deg, rudder_deg, radius_m, speed [m/s],
     fx, fy [N], mz [N m about ``balance_x_m``] (a table of primes is first turned into SI by
-    :func:`towtank.ingest.captive_means.captive_means`). The moment is moved to O; the
-    inertia is already removed except the rotating arm's centripetal part, added here with
-    ``mass_kg`` [kg] and ``xg_m`` [m]. A row with a finite non-zero radius is an arm run,
-    with a rudder angle a rudder run, else a drift run; standard errors are NaN (the fit then
-    works on primes).
+    :func:`towtank.ingest.captive_means.captive_means`). The moment is moved to the point
+    x = ``ref_x_m`` [m] from O the derivatives refer to (0: O; ``[captive] moment_ref =
+    "balance"``: the balance point, :func:`towtank.reduce.captive.reference_x`), and the
+    velocities taken there; the inertia is already removed except the rotating arm's
+    centripetal part, added here with ``mass_kg`` [kg] and ``xg_m`` [m] from O. A row with
+    a finite non-zero radius is an arm run, with a rudder angle a rudder run, else a drift
+    run; standard errors are NaN (the fit then works on primes).
     """
     out: list[CaptiveRun] = []
     for rec in table.to_dict("records"):
@@ -596,11 +612,11 @@ def captive_runs_from_means(
         radius = math.nan if radius == 0.0 else radius
         fx, fy, mz = (float(rec[k]) for k in ("fx", "fy", "mz"))
         arm = math.isfinite(radius)
-        kin = arm_kinematics(np.array([U]), beta, radius) if arm else body_kinematics(
-            np.array([U]), np.array([beta]))
+        kin = kinematics_at(arm_kinematics(np.array([U]), beta, radius) if arm
+                            else body_kinematics(np.array([U]), np.array([beta])), ref_x_m)
         X, Y, N = hydrodynamic_loads(np.array([fx]), np.array([fy]), np.array([mz]), kin,
-                                     mass_kg=mass_kg, izz_kg_m2=0.0, xg_m=xg_m,
-                                     balance_x_m=balance_x_m)
+                                     mass_kg=mass_kg, izz_kg_m2=0.0, xg_m=xg_m - ref_x_m,
+                                     balance_x_m=balance_x_m - ref_x_m)
         reg = make_regressors(kin, math.radians(delta_deg))
         row = {"component": "mean", "X": float(X[0]), "Y": float(Y[0]), "N": float(N[0]),
                "X_se": math.nan, "Y_se": math.nan, "N_se": math.nan,

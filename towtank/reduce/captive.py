@@ -148,10 +148,12 @@ def hydrodynamic_loads(
     fx: np.ndarray, fy: np.ndarray, mz: np.ndarray, kin: Mapping[str, np.ndarray], *,
     mass_kg: float, izz_kg_m2: float, xg_m: float, balance_x_m: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Hydrodynamic X, Y [N] and N about O [N m] from the balance readings (FORMATS section 8).
+    """Hydrodynamic X, Y [N] and N [N m] about the reference point P from the balance
+    readings (FORMATS section 8; P = O unless ``[captive] moment_ref = "balance"``).
 
     X = fx + m (u' - v r - x_G r^2); Y = fy + m (v' + u r + x_G r');
-    N = mz + x_B fy + (I_zG + m x_G^2) r' + m x_G (v' + u r).
+    N = mz + x_B fy + (I_zG + m x_G^2) r' + m x_G (v' + u r), with the kinematics of P and
+    x_G, x_B measured from P (the rigid body's equations about any point of its x axis).
 
     Parameters
     ----------
@@ -160,9 +162,9 @@ def hydrodynamic_loads(
     mz : ndarray
         Balance yaw moment about x = ``balance_x_m``, zeroed [N m].
     kin : mapping
-        :func:`body_kinematics` of O.
+        :func:`body_kinematics` of P (:func:`kinematics_at` to move them from O).
     mass_kg, izz_kg_m2, xg_m, balance_x_m : float
-        m [kg], I_zG [kg m^2] about the CG, x_G [m] and x_B [m] from O.
+        m [kg], I_zG [kg m^2] about the CG, x_G [m] and x_B [m] from P.
     """
     u, v, r = kin["u"], kin["v"], kin["r"]
     ud, vd, rd = kin["udot"], kin["vdot"], kin["rdot"]
@@ -171,6 +173,23 @@ def hydrodynamic_loads(
     Y = fy + m * (vd + u * r + xg_m * rd)
     N = mz + balance_x_m * fy + (izz_kg_m2 + m * xg_m**2) * rd + m * xg_m * (vd + u * r)
     return X, Y, N
+
+
+def kinematics_at(kin: Mapping[str, np.ndarray], x_m: float) -> dict[str, np.ndarray]:
+    """The body-axis kinematics of the point x = ``x_m`` [m] on the x axis from those of O:
+    v_P = v + x_P r and v_P' = v' + x_P r'; u, u', r and r' are the same (a rigid body)."""
+    out = dict(kin)
+    if x_m:
+        out["v"] = kin["v"] + x_m * kin["r"]
+        out["vdot"] = kin["vdot"] + x_m * kin["rdot"]
+    return out
+
+
+def reference_x(moment_ref: str, balance_x_m: float | None) -> float:
+    """x [m] from O of the point the derivatives refer to: 0 for ``[captive] moment_ref =
+    "origin"``; the balance point ``balance_x_m`` for ``"balance"`` (0 when it is not given:
+    the balance's point is then the origin the model's x_G is measured from)."""
+    return float(balance_x_m or 0.0) if moment_ref == "balance" else 0.0
 
 
 def regressors(kin: Mapping[str, np.ndarray], rudder: float) -> dict[str, np.ndarray]:
@@ -462,19 +481,31 @@ class RunSetting:
 @dataclass(frozen=True)
 class Inertia:
     """The model on the balance: mass m [kg], I [kg m^2] about its CG (I_zG; I_yG for a
-    vertical-plane run), x_G [m] and the balance point x_B [m] from O."""
+    vertical-plane run), x_G [m] and the balance point x_B [m] from O, and the point P the
+    derivatives refer to, x_P [m] from O (:func:`reference_x`: 0, or x_B)."""
 
     mass_kg: float
     inertia_kg_m2: float
     xg_m: float
     balance_x_m: float
+    ref_x_m: float = 0.0
+
+    @property
+    def moment_arm_m(self) -> float:
+        """x_B - x_P [m]: N about P = mz + (x_B - x_P) fy."""
+        return self.balance_x_m - self.ref_x_m
+
+    def at_ref(self, kin: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The kinematics of P from those of O (:func:`kinematics_at`)."""
+        return kinematics_at(kin, self.ref_x_m)
 
     def loads(self, fx: np.ndarray, fy: np.ndarray, mz: np.ndarray,
               kin: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:func:`hydrodynamic_loads` with this model."""
+        """:func:`hydrodynamic_loads` about P with this model; ``kin`` those of P
+        (:meth:`at_ref`)."""
         return hydrodynamic_loads(fx, fy, mz, kin, mass_kg=self.mass_kg,
-                                  izz_kg_m2=self.inertia_kg_m2, xg_m=self.xg_m,
-                                  balance_x_m=self.balance_x_m)
+                                  izz_kg_m2=self.inertia_kg_m2, xg_m=self.xg_m - self.ref_x_m,
+                                  balance_x_m=self.moment_arm_m)
 
 
 def static_run(
@@ -508,9 +539,9 @@ def static_run(
     beta, delta = math.radians(setting.drift_deg), math.radians(setting.rudder_deg)
     U = np.asarray(speed[i0:i1], dtype=float)
     if setting.test == "arm":
-        kin = arm_kinematics(U, beta, setting.radius_m)
+        kin = inertia.at_ref(arm_kinematics(U, beta, setting.radius_m))
     else:
-        kin = body_kinematics(U, beta)
+        kin = inertia.at_ref(body_kinematics(U, beta))
     X, Y, N = inertia.loads(fx[i0:i1], fy[i0:i1], mz[i0:i1], kin)
     reg = regressors(kin, delta)
     row: dict[str, Any] = {"component": "mean"}
@@ -788,10 +819,10 @@ def pmm_run(
         y_c = harmonic_fit(tc, sway[sel][m], omega)
         p_c = harmonic_fit(tc, yaw_rad[m], omega)
         psi = beta + harmonic_eval(p_c, tc, omega)
-        kin = body_kinematics(
+        kin = inertia.at_ref(body_kinematics(
             U, psi, psi_dot=harmonic_eval(p_c, tc, omega, 1),
             psi_ddot=harmonic_eval(p_c, tc, omega, 2),
-            y_dot=harmonic_eval(y_c, tc, omega, 1), y_ddot=harmonic_eval(y_c, tc, omega, 2))
+            y_dot=harmonic_eval(y_c, tc, omega, 1), y_ddot=harmonic_eval(y_c, tc, omega, 2)))
         X, Y, N = inertia.loads(fx[sel][m], fy[sel][m], mz[sel][m], kin)
         series = {"X": X, "Y": Y, "N": N, **regressors(kin, delta)}
         for k, x in series.items():
@@ -859,9 +890,10 @@ def load_trace(t: np.ndarray, fs: float, fx: np.ndarray, fy: np.ndarray, mz: np.
     """The whole run's measured loads and motion at ``rate_hz`` for its plots.
 
     Columns :data:`TRACE_COLUMNS`: ``t`` [s]; X, Y [N] the zeroed balance forces in body
-    axes and N [N m] the moment about O (mz + x_B fy, ``balance_x_m`` = x_B [m]; 0: about
-    the balance point), the model's inertia not removed (what the balance measured); the PMM
-    ``sway`` [m] and ``yaw`` [deg] (NaN when absent). Each row is the mean of the samples of
+    axes and N [N m] the moment about the reference point P (mz + (x_B - x_P) fy,
+    ``balance_x_m`` = x_B - x_P [m]; 0: about the balance point), the model's inertia not
+    removed (what the balance measured); the PMM ``sway`` [m] and ``yaw`` [deg] (NaN when
+    absent). Each row is the mean of the samples of
     one 1/``rate_hz`` block (the loads are not low-passed; the block mean is their filter).
     """
     t = np.asarray(t, dtype=float)
@@ -878,9 +910,11 @@ def load_trace(t: np.ndarray, fs: float, fx: np.ndarray, fy: np.ndarray, mz: np.
 
 
 
-def model_inertia(model: Any, plane: str) -> tuple[Inertia, tuple[str, ...]]:
+def model_inertia(model: Any, plane: str, moment_ref: str = "origin"
+                  ) -> tuple[Inertia, tuple[str, ...]]:
     """:class:`Inertia` of the protocol's model for a run in ``plane`` (vertical: I_yG from
-    ``iyy_kg_m2``, else ``izz_kg_m2`` with a note); RunError when mass or inertia is missing."""
+    ``iyy_kg_m2``, else ``izz_kg_m2`` with a note), its derivatives referred to the point
+    ``moment_ref`` names (:func:`reference_x`); RunError when mass or inertia is missing."""
     def value(name: str) -> float | None:
         x = getattr(model, name, None)
         return None if x is None else float(x)
@@ -898,7 +932,8 @@ def model_inertia(model: Any, plane: str) -> tuple[Inertia, tuple[str, ...]]:
         raise RunError("a captive run needs [model] mass_kg, izz_kg_m2 and xg_m to remove "
                        "the model's inertia")
     bx = value("balance_x_m")
-    return Inertia(mass, inertia, xg, 0.0 if bx is None else bx), notes
+    bx = 0.0 if bx is None else bx
+    return Inertia(mass, inertia, xg, bx, reference_x(moment_ref, bx)), notes
 
 
 def body_forces(channels: Mapping[str, np.ndarray], drift: float
@@ -922,7 +957,7 @@ def reduce_captive(
     raw_channels: Mapping[str, np.ndarray], fs: float, steady_window: tuple[int, int],
     row: Mapping[str, Any], model: Any, *, run: int = 0, file: str = "",
     min_cycles: int = MIN_CYCLES, amplitude_tolerance: float = PMM_TOLERANCE,
-    zero_var: Mapping[str, float] | None = None,
+    zero_var: Mapping[str, float] | None = None, moment_ref: str = "origin",
 ) -> CaptiveRun:
     """One captive run reduced: the day pipeline's entry.
 
@@ -947,6 +982,9 @@ def reduce_captive(
     zero_var : mapping, optional
         Variance of each balance channel's zero at the steady window [N^2, N^2 m^2]
         (:func:`condition_captive`'s ``zero_var``); absent: 0.
+    moment_ref : {"origin", "balance"}
+        The protocol's ``[captive] moment_ref``: the loads, the regressors and the
+        derivatives refer to O, or to the balance point (:func:`reference_x`).
 
     Raises
     ------
@@ -954,7 +992,7 @@ def reduce_captive(
         One sentence for a run that cannot be used.
     """
     setting = RunSetting.from_row(row)
-    inertia, notes = model_inertia(model, setting.plane)
+    inertia, notes = model_inertia(model, setting.plane, moment_ref)
     t = np.asarray(raw_channels["t"], dtype=float)
     U = np.asarray(raw_channels["U"], dtype=float)
     i0, i1 = steady_window
@@ -962,9 +1000,9 @@ def reduce_captive(
         raise RunError("the steady window is too short for a captive run")
     fx, fy, mz = body_forces(raw_channels, math.radians(setting.drift_deg))
     z_var = load_zero_variance(zero_var or {}, math.radians(setting.drift_deg),
-                               inertia.balance_x_m)
+                               inertia.moment_arm_m)
     sway, yaw = raw_channels.get("sway"), raw_channels.get("yaw")
-    trace = load_trace(t, fs, fx, fy, mz, inertia.balance_x_m, sway, yaw)
+    trace = load_trace(t, fs, fx, fy, mz, inertia.moment_arm_m, sway, yaw)
     if setting.test in STATIC_TESTS:
         return replace(static_run(t, U, fx, fy, mz, (i0, i1), setting, inertia, run=run,
                                   file=file, notes=notes, zero_var=z_var), trace=trace)

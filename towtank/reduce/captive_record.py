@@ -114,7 +114,7 @@ def reduce_captive_record(protocol: Protocol, raw: RawRun, windows: Windows, row
                                     run=run, file=file,
                                     min_cycles=options.min_cycles,
                                     amplitude_tolerance=options.amplitude_tolerance,
-                                    zero_var=zero_var)
+                                    zero_var=zero_var, moment_ref=options.moment_ref)
     return cr.to_arrays(), (*warnings, *cr.notes), tuple(warnings)
 
 

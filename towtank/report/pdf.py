@@ -556,7 +556,9 @@ def captive_options_text(options: dict[str, Any]) -> str:
              if v is not None]
     reference = ("about O (N_O = mz + balance_x_m·fy, balance_x_m = "
                  f"{options['balance_x_m']:g} m)" if options["moment_reference"] == "origin"
-                 else "about the balance point")
+                 else "about the balance point, x = "
+                 f"{options['balance_x_m'] or 0.0:g} m from O (the sway velocities and x_G "
+                 "taken there too)")
     return (f"Moments {reference}; the model's inertia removed with {', '.join(parts)}; PMM: "
             f"{options['pmm_cycle_rule']} (the cycles each run kept: pmm.csv cycles_used).")
 

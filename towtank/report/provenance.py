@@ -249,9 +249,12 @@ def captive_provenance(day: DayResult) -> dict[str, Any]:
     pmm = day.pmm
     tol = options.amplitude_tolerance if options is not None else 0.05
     min_cycles = options.min_cycles if options is not None else 3
+    reference = options.moment_ref if options is not None else "origin"
     return {
-        "moment_reference": options.moment_ref if options is not None else "origin",
-        "moment_transfer": "N_O = mz + balance_x_m * fy",
+        "moment_reference": reference,
+        "moment_transfer": ("N_O = mz + balance_x_m * fy" if reference == "origin" else
+                            "none: N = mz about the balance point, the velocities and x_G "
+                            "taken there (v_B = v + balance_x_m * r, x_G - balance_x_m)"),
         "balance_x_m": m.balance_x_m,
         "inertia_removed": {"mass_kg": m.mass_kg, "izz_kg_m2": m.izz_kg_m2,
                             "iyy_kg_m2": m.iyy_kg_m2, "xg_m": m.xg_m},

@@ -68,8 +68,9 @@ CAPTIVE_TEST_NAMES = ("drift", "rudder", "arm", "sway", "yaw", "yaw_drift")
 CAPTIVE_ROW_KEYS = ("plane", "drift_deg", "rudder_deg", "radius_m", "pmm_amplitude_m",
                     "pmm_frequency_hz")
 CAPTIVE_MODEL_KEYS = ("mass_kg", "length_m", "izz_kg_m2", "iyy_kg_m2", "xg_m", "balance_x_m")
-#: The [captive] keys a PMM run's reduction depends on (which cycles it keeps).
-CAPTIVE_OPTION_KEYS = ("min_cycles", "amplitude_tolerance")
+#: The [captive] keys a captive run's reduction depends on (which cycles a PMM run keeps, the
+#: point its loads and motion refer to).
+CAPTIVE_OPTION_KEYS = ("min_cycles", "amplitude_tolerance", "moment_ref")
 
 
 def _num(x: Any) -> Any:

@@ -29,7 +29,9 @@ from towtank.reduce.captive import (
     VERTICAL_REGRESSORS,
     body_kinematics,
     condition_captive,
+    kinematics_at,
     reduce_captive,
+    reference_x,
     regressors,
 )
 from towtank.reduce.run import find_phases
@@ -64,7 +66,9 @@ class CaptiveTruth:
     ``derivatives``: symbol -> value [SI] of the plane's model (Y_*, N_* or Z_*, M_*; the
     offsets Y_uu, N_uu / Z_uu, M_uu too). ``frequency_slope``: symbol -> d value / d omega' of
     a derivative that depends on the PMM frequency (value at omega' = value + slope (omega' -
-    1)); X = X_u|u| u|u| + X_vv v^2 + X_rr r^2 [N] for fx.
+    1)); X = X_u|u| u|u| + X_vv v^2 + X_rr r^2 [N] for fx. ``moment_ref``: the point the
+    derivatives refer to, as ``[captive] moment_ref`` names it ("origin": O; "balance": the
+    balance point, its velocities and moments).
     """
 
     derivatives: dict[str, float] = field(default_factory=lambda: {
@@ -80,6 +84,7 @@ class CaptiveTruth:
     X_rr: float = -1.0
     roll_deg: float = 90.0
     frequency_slope: dict[str, float] = field(default_factory=dict)
+    moment_ref: str = "origin"
 
     @classmethod
     def vertical(cls, **kw: Any) -> CaptiveTruth:
@@ -184,8 +189,9 @@ def pmm_motion(t: np.ndarray, spec: CaptiveRunSpec, t0: float, speed: float
 
 def truth_loads(kin: Mapping[str, np.ndarray], truth: CaptiveTruth, rudder: float,
                 omega_prime: float = math.nan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Hydrodynamic X, Y [N] and N [N m] about O of the truth, rig axes, for ``rudder`` [rad]
-    (a vertical truth: w = -s v, q = s r, Z = -s Y, M = s N with s = sign(roll_deg))."""
+    """Hydrodynamic X, Y [N] and N [N m] of the truth, rig axes, for ``rudder`` [rad], from
+    ``kin`` of the point the truth refers to (``truth.moment_ref``) and about it (a vertical
+    truth: w = -s v, q = s r, Z = -s Y, M = s N with s = sign(roll_deg))."""
     reg = regressors(kin, rudder)
     d = truth.derivatives
 
@@ -214,14 +220,16 @@ def balance_readings(X: np.ndarray, Y: np.ndarray, N: np.ndarray,
                      kin: Mapping[str, np.ndarray], truth: CaptiveTruth
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """fx, fy [N], mz [N m] about the balance point: the inverse of
-    :func:`towtank.reduce.captive.hydrodynamic_loads`."""
+    :func:`towtank.reduce.captive.hydrodynamic_loads`, with X, Y, N, ``kin`` and the model's
+    x_G and x_B taken at the point P the truth refers to (``truth.moment_ref``)."""
     u, v, r = kin["u"], kin["v"], kin["r"]
     ud, vd, rd = kin["udot"], kin["vdot"], kin["rdot"]
-    m, xg = truth.mass_kg, truth.xg_m
+    ref = reference_x(truth.moment_ref, truth.balance_x_m)
+    m, xg, xb = truth.mass_kg, truth.xg_m - ref, truth.balance_x_m - ref
     inertia = truth.izz_kg_m2 if truth.plane == "horizontal" else truth.iyy_kg_m2
     fx = X - m * (ud - v * r - xg * r**2)
     fy = Y - m * (vd + u * r + xg * rd)
-    mz = N - truth.balance_x_m * fy - (inertia + m * xg**2) * rd - m * xg * (vd + u * r)
+    mz = N - xb * fy - (inertia + m * xg**2) * rd - m * xg * (vd + u * r)
     return fx, fy, mz
 
 
@@ -262,6 +270,7 @@ def simulate_captive_run(
                "rdot": a / spec.radius_m}
     else:
         kin = body_kinematics(U, beta, speed_dot=a)
+    kin = kinematics_at(kin, reference_x(truth.moment_ref, truth.balance_x_m))
     X, Y, N = truth_loads(kin, truth, delta, omega_prime)
     fx, fy, mz = balance_readings(X, Y, N, kin, truth)
     first = recorded_channels(t, U, a, fx, fy, noise, draw_imperfections(noise, t.size, rng,
@@ -363,7 +372,7 @@ def make_captive_day(
         "balance_x_m": truth.balance_x_m}
     if plane == "vertical":
         model["iyy_kg_m2"] = truth.iyy_kg_m2
-    captive: dict[str, Any] = {"moment_ref": "origin"}
+    captive: dict[str, Any] = {"moment_ref": truth.moment_ref}
     if plane == "vertical":
         captive["roll_deg"] = truth.roll_deg
     write_protocol(
@@ -383,10 +392,11 @@ def make_captive_day(
 # ====================================================================== in-process reduction
 
 def reduce_simulated(frame: pd.DataFrame, spec: CaptiveRunSpec, truth: CaptiveTruth,
-                     *, fs: float = 100.0) -> Any:
+                     *, fs: float = 100.0, moment_ref: str | None = None) -> Any:
     """A simulated run reduced in-process as the day's pipeline does: one low-pass, the phases
     from the speed (:func:`towtank.reduce.run.find_phases`), the zero line between the still
-    windows, then :func:`towtank.reduce.captive.reduce_captive` (RunError as the day's)."""
+    windows, then :func:`towtank.reduce.captive.reduce_captive` (RunError as the day's), with
+    the loads referred to ``moment_ref`` (default: the truth's)."""
     p = Processing()
     t = frame["time"].to_numpy(dtype=float)
     channels = {("U" if k == "speed" else k): frame[k].to_numpy(dtype=float)
@@ -403,19 +413,21 @@ def reduce_simulated(frame: pd.DataFrame, spec: CaptiveRunSpec, truth: CaptiveTr
                             iyy_kg_m2=truth.iyy_kg_m2, xg_m=truth.xg_m,
                             balance_x_m=truth.balance_x_m, length_m=truth.length_m)
     return reduce_captive(cond, fs, ph.steady, {**spec.sheet_row(), "plane": truth.plane},
-                          model, run=spec.run, file=f"run_{spec.run:03d}", zero_var=zero_var)
+                          model, run=spec.run, file=f"run_{spec.run:03d}", zero_var=zero_var,
+                          moment_ref=truth.moment_ref if moment_ref is None else moment_ref)
 
 
 def simulated_runs(truth: CaptiveTruth | None = None, *, seed: int = 0,
                    plan: Sequence[CaptiveRunSpec] | None = None, noise: Noise | None = None,
-                   fs: float = 100.0) -> list[Any]:
-    """A generated captive day's runs, reduced in-process (no files): list of CaptiveRun."""
+                   fs: float = 100.0, moment_ref: str | None = None) -> list[Any]:
+    """A generated captive day's runs, reduced in-process (no files): list of CaptiveRun, the
+    loads referred to ``moment_ref`` (default: the truth's)."""
     truth = CaptiveTruth() if truth is None else truth
     plan = list(plan) if plan is not None else captive_day_plan()
     streams = np.random.SeedSequence(seed).spawn(len(plan))
     return [reduce_simulated(simulate_captive_run(spec, truth, noise=noise, fs=fs,
                                                   rng=np.random.default_rng(stream)),
-                             spec, truth, fs=fs)
+                             spec, truth, fs=fs, moment_ref=moment_ref)
             for spec, stream in zip(plan, streams, strict=True)]
 
 

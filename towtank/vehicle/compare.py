@@ -8,7 +8,10 @@ the day takes the measured values (converted through their primes to the vehicle
 the protocol's water) with the covariance of their standard errors, and the prediction for
 every other term. Coefficients measured by captive tests (:data:`CAPTIVE_METHODS`) are totals:
 model.json takes them converted to the Fossen form once
-(:func:`towtank.vehicle.model.totals_to_fossen`), unless ``[captive] form = "fossen"``.
+(:func:`towtank.vehicle.model.totals_to_fossen`), unless ``[captive] form = "fossen"``; and only
+when they refer to the vehicle's origin O: with ``[captive] moment_ref = "balance"`` and the
+balance away from O they refer to the balance point, and model.json keeps the prediction for
+them (:func:`captive_reference_note`).
 """
 
 from __future__ import annotations
@@ -21,11 +24,13 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import TowtankError
+from towtank.reduce.captive import reference_x
 from towtank.vehicle.model import FORMS
 from towtank.vehicle.predict import prime_exponent
 from towtank.vehicle.stage import VehiclePrediction, predict_vehicle
 
-__all__ = ["CAPTIVE_METHODS", "FAR_PCT", "captive_form", "day_vehicle", "drag_side_only",
+__all__ = ["CAPTIVE_METHODS", "FAR_PCT", "captive_form", "captive_reference_note", "day_vehicle",
+           "drag_side_only",
            "measured_forms", "measured_for_vehicle", "with_predicted"]
 
 #: A measured prime further than this from its prediction is a warning [%].
@@ -47,6 +52,24 @@ def captive_form(protocol: Any) -> str:
         raise TowtankError(f"[captive] form must be one of {', '.join(map(repr, FORMS))}, "
                            f"not {form!r}.")
     return str(form)
+
+
+def captive_reference_note(protocol: Any) -> str | None:
+    """Why the captive derivatives stay out of model.json, or None when they refer to O.
+
+    With ``[captive] moment_ref = "balance"`` and ``[model] balance_x_m`` ≠ 0, the
+    derivatives refer to the balance point (:func:`towtank.reduce.captive.reference_x`), not
+    to the origin O of the vehicle's equations of motion: N_O = N_B + x_B·Y and v_B = v +
+    x_B·r change the moment and the yaw-rate derivatives, and v_B|v_B| is no term at O."""
+    captive = getattr(protocol, "captive", None)
+    ref = (captive.get("moment_ref") if isinstance(captive, dict)
+           else getattr(captive, "moment_ref", None))
+    x = reference_x(str(ref), getattr(getattr(protocol, "model", None), "balance_x_m", None))
+    if x == 0.0:
+        return None
+    return (f"the captive derivatives refer to the balance point, {x:g} m from O ([captive] "
+            "moment_ref = \"balance\"), not to the vehicle's origin: model.json keeps the "
+            "prediction for them; process with moment_ref = \"origin\" to put them in.")
 
 
 def measured_forms(coefficients: pd.DataFrame, form: str = "total") -> dict[str, str]:
@@ -142,8 +165,11 @@ def day_vehicle(protocol: Any, coefficients: pd.DataFrame | None) -> tuple[
     if model is not None and model.myring is not None and vehicle.hull == "myring" and (
             vehicle.myring == {k: float(getattr(model.myring, k)) for k in vehicle.myring}):
         length = None if vehicle.scale == 1.0 else model.length_m * vehicle.scale
-    measured, cov = measured_for_vehicle(coefficients, first.rho, length)
     forms = measured_forms(coefficients, captive_form(protocol))
-    result = predict_vehicle(protocol, measured, cov, forms)
+    note = captive_reference_note(protocol) if forms else None
+    usable = (coefficients[~coefficients["symbol"].isin(list(forms))] if note is not None
+              else coefficients)
+    measured, cov = measured_for_vehicle(usable, first.rho, length)
+    result = predict_vehicle(protocol, measured, cov, {} if note is not None else forms)
     table, warnings = with_predicted(coefficients, result.predicted)
-    return result, table, warnings
+    return result, table, [*warnings, *([note] if note is not None else [])]
