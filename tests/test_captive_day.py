@@ -263,3 +263,22 @@ def test_real_kvlcc2_means_through_a_means_only_protocol(tmp_path):
     assert "Y_ur" in said and "Y_vdot" in said
     assert "no yaw-rate runs" in said and "no PMM runs" in said
     assert said in [str(w) for w in day.warnings]
+
+
+def test_a_captive_file_without_fx_is_rejected_for_its_missing_fx(tmp_path):
+    """A pure-sway file recorded with fy, mz, sway and yaw but no fx: the run is rejected
+    with the sentence that names the missing fx (not "drag channel shows no signal: it reads
+    0", a channel the file never had), and the other 13 runs are processed."""
+    make_captive_day(tmp_path, plan=small_plan()[:14], seed=4)
+    path = tmp_path / "data" / "run_011.csv"
+    lines = path.read_text(encoding="utf-8").splitlines()
+    cells = [ln.split(",") for ln in lines]
+    col = cells[0].index("fx")
+    path.write_text("\n".join(",".join(c[:col] + c[col + 1:]) for c in cells) + "\n",
+                    encoding="utf-8")
+    day = towtank.process_day(tmp_path / "protocol.toml", out=tmp_path / "out", report=False,
+                              jobs=1)
+    assert set(day.rejected) == {11}
+    reason = day.rejected[11].reason
+    assert "no fx channel" in reason and "no signal" not in reason, reason
+    assert len(day.captive.runs) == 13

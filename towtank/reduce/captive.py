@@ -949,6 +949,9 @@ def body_forces(channels: Mapping[str, np.ndarray], drift: float
     if "drag" in channels and "lift" in channels:
         fx, fy = drag_lift_to_body(channels["drag"], channels["lift"], drift)
         return fx, fy, np.asarray(channels["mz"], float)
+    if "fy" in channels:
+        raise RunError("the file has fy but no fx channel (the balance's axial force), which a "
+                       "captive run needs beside fy and mz")
     raise RunError("the file has neither fx and fy nor drag and lift channels, which a "
                    "captive run needs")
 
