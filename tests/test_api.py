@@ -17,6 +17,7 @@ import towtank
 
 ROOT = Path(__file__).resolve().parents[1]
 HULL = ROOT / "protocols" / "sut2_hull.toml"
+RUN_21 = ROOT / "sample_runs" / "sut2_hull" / "data" / "run_021.csv.gz"
 
 
 @pytest.fixture(scope="session")
@@ -269,10 +270,9 @@ def sample_fin_day(sample_report):
 
 
 @pytest.fixture(scope="session")
-def short_identification(tmp_path_factory):
-    """N_ur and N_uudr of REMUS by the filter from one period (10 s) of a noisy rudder sine: an
-    IdentifyResult with estimates and intervals, which is all the vocabulary test reads (the
-    filter's accuracy is tested in test_identify*.py)."""
+def remus_sine(tmp_path_factory):
+    """REMUS's predicted model (neutrally buoyant) and one period (10 s) of a noisy rudder
+    sine recorded at 10 Hz."""
     import contextlib
     import io
     import json
@@ -295,7 +295,23 @@ def short_identification(tmp_path_factory):
     rng = np.random.default_rng(1)
     for column, sd in {"u_m_s": 0.01, "v_m_s": 0.01, "r_deg_s": 0.2, "psi_deg": 0.5}.items():
         record[column] += rng.normal(0.0, sd, len(record))
+    return model, record
+
+
+@pytest.fixture(scope="session")
+def short_identification(remus_sine):
+    """N_ur and N_uudr of REMUS by the filter from :func:`remus_sine`: an IdentifyResult with
+    estimates and intervals, which is all the vocabulary test reads (the filter's accuracy
+    is tested in test_identify*.py)."""
+    model, record = remus_sine
     return towtank.identify(model, record, ["N_ur", "N_uudr"], check=False)
+
+
+def test_identify_takes_one_symbol_alone(remus_sine):
+    """``estimate="N_ur"`` is the list ``["N_ur"]``, not the letters N, _, u, r."""
+    model, record = remus_sine
+    result = towtank.identify(model, record, "N_ur", check=False)
+    assert list(result.params.index) == ["N_ur"]
 
 
 #: Every result with estimates: (class name, a factory of one from the test's request). A new
@@ -339,9 +355,66 @@ def test_every_result_with_estimates_speaks_one_vocabulary(name, factory, reques
     for summary in (result.summary(), result.summary(0.10)):
         assert isinstance(summary, Summary) and list(params.index)[0] in str(summary)
     assert isinstance(result.to_frame(), pd.DataFrame) and len(result.to_frame()) > 0
+    # in a notebook: its summary table, never its raw frames
+    assert result._repr_html_() == result.summary()._repr_html_()
+    frame = result.to_frame()  # a copy: editing it leaves the result as it was
+    frame["edited"] = 1.0
+    assert "edited" not in result.to_frame()
 
 
 def _captive_result(request: pytest.FixtureRequest) -> Any:
     from towtank.testing.captive import simulated_result
 
     return simulated_result(seed=1)
+
+
+@pytest.mark.parametrize(("call", "error", "words"), [
+    (lambda: towtank.process_day(None), TypeError, "protocol must be the path"),
+    (lambda: towtank.process_day({"campaign": {}}), TypeError, "not dict"),
+    (lambda: towtank.process_day(HULL, jobs="2"), TypeError, "jobs must be a whole number"),
+    (lambda: towtank.process_day(HULL, jobs=0), ValueError, "jobs must be at least 1"),
+    (lambda: towtank.process_day(HULL, date="2024-13-40"), ValueError,
+     "'2024-13-40' is not a date that exists"),
+    (lambda: towtank.process_day(HULL, date=20240517), TypeError, "date must be a text"),
+    (lambda: towtank.read_run(RUN_21, 5), TypeError, "protocol must be the path"),
+    (lambda: towtank.read_run(RUN_21, HULL, segment="2"), TypeError, "segment must be"),
+    (lambda: towtank.reduce_run(str(RUN_21), HULL), TypeError,
+     "reduce_run takes the RawRun that towtank.read_run returns, not str"),
+    (lambda: towtank.reduce_run(towtank.read_run(RUN_21, HULL), HULL, run=21, window_s=5.0),
+     TypeError, "window_s must be a (start, end) pair"),
+], ids=["process-none", "process-dict", "jobs-text", "jobs-0", "date-13-40", "date-int",
+        "read-int-protocol", "segment-text", "reduce-a-path", "window-one-number"])
+def test_a_wrong_argument_is_one_sentence_naming_it(call, error, words):
+    """A notebook's slips with the API's arguments: the error Python uses for them (TypeError
+    for the wrong kind, ValueError for the wrong value), raised before anything is read or
+    written, in one sentence that names the argument (not an AttributeError from deep inside,
+    nor a date the report would print as given)."""
+    with pytest.raises(error) as caught:
+        call()
+    text = str(caught.value)
+    assert words in text and "\n" not in text
+    assert caught.traceback[-1].path.name == "api.py"
+
+
+def test_an_empty_summary_says_so():
+    """A summary without rows (a hull stage that gave no coefficient) prints its title and
+    "(no estimates)", never pandas' "Empty DataFrame"."""
+    from towtank.results import Summary
+
+    text = str(Summary(title="day: Hull coefficients (0 estimates)", table=pd.DataFrame(),
+                       notes=("12 runs, 12 reduced, 0 rejected",)))
+    assert "(no estimates)" in text and "Empty DataFrame" not in text
+    assert text.splitlines()[-1] == "12 runs, 12 reduced, 0 rejected"
+
+
+def test_the_days_tables_are_copies_to_edit(sample_hull_day, sample_fin_day):
+    """``day.coefficients`` and ``day.table(...)`` are the day's CSV tables as copies: a
+    column added to one is in neither the day nor its stage's result afterwards (on the hull
+    day without a [vehicle], coefficients.csv was the hull result's own frame)."""
+    for day, get, own in (
+            (sample_hull_day, lambda d: d.coefficients, lambda d: d.hull.coefficients),
+            (sample_hull_day, lambda d: d.table("scaling"), lambda d: d.scaling.table),
+            (sample_fin_day, lambda d: d.table("fins"), lambda d: d.fins.table)):
+        frame = get(day)
+        frame["edited"] = 1.0
+        assert "edited" not in get(day) and "edited" not in own(day)

@@ -94,6 +94,14 @@ def test_horizontal_day_derivatives_within_tolerance_and_intervals(horizontal_da
     assert not any("reduced chi^2" in str(w) for w in horizontal_day.day.warnings)
 
 
+def test_a_captive_day_names_its_stage(horizontal_day):
+    """The day's one line and its summary's notes list the captive stage (they said
+    "stages: none" on a day whose coefficients are all captive)."""
+    day = horizontal_day.day
+    assert "stages: captive." in repr(day)
+    assert "stages: captive." in day.summary().notes[-1]
+
+
 def test_small_day_pmm_runs_agree_over_omega(horizontal_day):
     """The truth does not change with omega': no derivative "differs" over the PMM runs
     (the per-run standard errors hold the other terms' uncertainty and the test the heavy

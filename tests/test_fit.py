@@ -689,3 +689,23 @@ def test_intervals_carry_the_subtracted_tares_uncertainty(hull_day: Day):
     est = hf.estimates["X_u|u|"]
     se_c = math.sqrt(np.asarray(regression.cov_params())[2, 2] + expected[2, 2])
     assert est.std_error == pytest.approx(q * se_c, rel=1e-6)
+
+
+def test_four_angles_judge_no_run_an_outlier():
+    """C_D(α) at four angles (0, 5, 10, 15°) and one speed: the quadratic leaves n − p = 1
+    degree of freedom, so no run can be left out of the variance (its studentized residual is
+    0/0) and Cook's distance is fixed by the angles: no run is flagged (the day said "runs 15
+    (studentized residual +nan, Cook's distance 6.3) ... are flagged as outliers" on every such
+    day). With six angles a run 0.05 off the curve is still flagged."""
+    def runs(angles, bump):
+        alpha = np.radians(np.array(angles, dtype=float))
+        cd = 0.8 * alpha**2 + 0.02 * alpha + 0.12 + 1e-3 * np.cos(40.0 * alpha)
+        cd[-2] += bump
+        return pd.DataFrame({"run": np.arange(1, len(angles) + 1), "status": "ok",
+                             "config": "hull", "angle_deg": np.array(angles, dtype=float),
+                             "speed_mean": 1.5, "cd": cd})
+
+    damping, _, _ = fit.fit_damping(runs([0, 5, 10, 15], 0.0), 998.0, 0.03, 30.0)
+    assert damping is not None and damping.outliers == []
+    damping, _, _ = fit.fit_damping(runs([0, 3, 6, 9, 12, 15], 0.05), 998.0, 0.03, 30.0)
+    assert damping is not None and 5 in damping.outliers

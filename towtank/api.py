@@ -24,6 +24,7 @@ for an unusable protocol or run sheet (what the command line turns into exit sta
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -71,7 +72,46 @@ def load_protocol(path: str | Path) -> Protocol:
 
 
 def _protocol(protocol: str | Path | Protocol) -> Protocol:
+    _check_protocol(protocol)
     return load_protocol(protocol) if isinstance(protocol, str | Path) else protocol
+
+
+def _check_protocol(protocol: Any) -> None:
+    """TypeError (one sentence) unless ``protocol`` is a protocol file's path or a Protocol."""
+    if not isinstance(protocol, str | Path | Protocol):
+        raise TypeError("protocol must be the path of a protocol file (str or Path) or a "
+                        f"Protocol from towtank.load_protocol, not {type(protocol).__name__}")
+
+
+def _check_whole(value: Any, name: str, least: int) -> None:
+    """TypeError or ValueError (one sentence) unless ``value`` is None or a whole number of at
+    least ``least``."""
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be a whole number (int) or None, not "
+                        f"{type(value).__name__} {value!r}")
+    if value < least:
+        raise ValueError(f"{name} must be at least {least}, not {value}")
+
+
+def _check_date(date: Any) -> str | None:
+    """``date`` as YYYY-MM-DD text: TypeError or ValueError (one sentence) for anything but
+    None, a date or such a text of a date that exists."""
+    import datetime as dt
+
+    if date is None or isinstance(date, dt.datetime):
+        return None if date is None else date.date().isoformat()
+    if isinstance(date, dt.date):
+        return date.isoformat()
+    if not isinstance(date, str):
+        raise TypeError(f"date must be a text YYYY-MM-DD or a datetime.date, not "
+                        f"{type(date).__name__}")
+    try:
+        return dt.datetime.strptime(date.strip(), "%Y-%m-%d").date().isoformat()
+    except ValueError:
+        raise ValueError(f"date {date!r} is not a date that exists, written YYYY-MM-DD"
+                         ) from None
 
 
 def process_day(
@@ -102,8 +142,9 @@ def process_day(
         provenance.json only).
     cache : bool, default True
         With ``out``: keep and reuse reduced runs in ``out/.cache``.
-    date : str, optional
-        Test date printed in the report (YYYY-MM-DD), instead of the protocol's or the sheet's.
+    date : str or datetime.date, optional
+        Test date printed in the report (YYYY-MM-DD, a date that exists), instead of the
+        protocol's or the sheet's.
 
     Returns
     -------
@@ -120,6 +161,10 @@ def process_day(
     ------
     ProtocolError
         The protocol, the run sheet or the output folder is unusable; nothing was written.
+    TypeError, ValueError
+        An argument of the wrong kind (``jobs="2"``, a protocol that is neither a path nor a
+        Protocol) or value (``jobs=0``, ``date="2024-13-40"``), in one sentence naming it;
+        nothing was read or written.
 
     Notes
     -----
@@ -135,6 +180,10 @@ def process_day(
     # and reduce_run do not need
     from towtank.runner import Options, run_day
 
+    _check_protocol(protocol)
+    _check_whole(jobs, "jobs", 1)
+    jobs = None if jobs is None else int(jobs)
+    date = _check_date(date)
     options = Options(report=report, date=date, cache=cache, jobs=jobs, replay=False,
                       quiet=True)
     run = run_day(protocol, out, options, write=out is not None)
@@ -180,6 +229,8 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
     towtank.errors.RunError
         The file cannot be used; ``.reason`` is one sentence saying why.
     """
+    _check_whole(segment, "segment", 1)
+    _check_whole(run, "run", 0)
     path = Path(file)
     loaded = None if protocol is None else _protocol(protocol)
     row = None if loaded is None else _sheet_row(loaded, path, run=run, segment=segment)
@@ -284,6 +335,15 @@ def reduce_run(
     towtank.errors.RunError
         The run cannot be reduced; ``.reason`` is one sentence saying why.
     """
+    if not isinstance(raw, RawRun):
+        raise TypeError(f"reduce_run takes the RawRun that towtank.read_run returns, not "
+                        f"{type(raw).__name__}: towtank.reduce_run(towtank.read_run(file, "
+                        "protocol), protocol)")
+    _check_whole(run, "run", 0)
+    if window_s is not None and not (
+            isinstance(window_s, tuple | list) and len(window_s) == 2
+            and all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in window_s)):
+        raise TypeError(f"window_s must be a (start, end) pair of times [s], not {window_s!r}")
     loaded = None if protocol is None else _protocol(protocol)
     row = None if loaded is None else _sheet_row(loaded, run=run)
     sheet = row if row is not None else {}
@@ -303,7 +363,7 @@ def _given(value: float | None, default: float) -> float:
     return float(default) if value is None else value
 
 
-def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str], *,
+def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str] | str, *,
              method: str = "ukf", start: str = "model", **kwargs: Any) -> Any:
     """Identify coefficients of a model from a manoeuvre record (``towtank identify``).
 
@@ -314,8 +374,9 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     log : path, DataFrame or ManoeuvreLog
         The record in simulate's columns (``t_s``, states, ``rudder_deg``, ``sternplane_deg``),
         or as read (:class:`towtank.vehicle.identify_log.ManoeuvreLog`)
-    estimate : list of str
-        model.json symbols to identify (e.g. ``["N_ur", "N_rdot", "N_uudr"]``)
+    estimate : list of str, or str
+        model.json symbols to identify (e.g. ``["N_ur", "N_rdot", "N_uudr"]``; one symbol may
+        be given alone, ``"N_ur"``)
     method : {"ukf", "ekf", "ls"}
     start : {"model", "zero"}
     **kwargs
@@ -348,7 +409,8 @@ def identify(model: str | Path | dict, log: str | Path | Any, estimate: list[str
     rec = record(log, "log")
     if kwargs.get("validate") is not None:
         kwargs["validate"] = record(kwargs["validate"], "validate")
-    fit = _identify(mdl, rec, list(estimate), method=method, start=start, **kwargs)
+    symbols = [estimate] if isinstance(estimate, str) else list(estimate)
+    fit = _identify(mdl, rec, symbols, method=method, start=start, **kwargs)
     return from_fit(IdentifyResult, fit)
 
 

@@ -641,7 +641,11 @@ def fit_damping(
             "fitted": res.fittedvalues, "resid": res.resid, "student": student,
             "cooks": cooks,
         })
-        outl = table.loc[(np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5)), "run"]
+        # with n - p - 1 < 1 no run can be left out of the variance (t_i is NaN) and Cook's
+        # distance is fixed by the angles alone: no run is judged
+        flag = ((np.abs(student) > 3.0) | (cooks > max(4.0 / n, 0.5))
+                if n - x.shape[1] - 1 >= 1 else np.zeros(n, dtype=bool))
+        outl = table.loc[flag, "run"]
         fit = DampingFit(params=params, cov=cov + cov_tare, dof=dof, rho=rho, area=area,
                          runs=table, outliers=[int(r) for r in outl])
         for sym, g in (("X_u|u|", [0, 0, -q]), ("X_uv", [0, -q, 0]),

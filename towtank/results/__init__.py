@@ -118,16 +118,16 @@ class DayResult:
         return TareResult(dict(self.tares))
 
     def table(self, name: Literal["fins", "scaling"]) -> pd.DataFrame:
-        """The CSV table ``name`` of the day, with its header when the stage did not run:
+        """The CSV table ``name`` of the day (a copy), with its header when the stage did not run:
         ``"fins"`` fins.csv (one row per fin run, ``day.fins.table``), ``"scaling"``
         scaling.csv (one row per prototype speed, ``day.scaling.table``)."""
         if name == "fins":
             if self.fins is not None:
-                return self.fins.table
+                return self.fins.table.copy()
             return pd.DataFrame(columns=list(FIN_TABLE_COLUMNS))
         if name == "scaling":
             if self.scaling is not None:
-                return self.scaling.table
+                return self.scaling.table.copy()
             return pd.DataFrame(columns=list(SCALING_COLUMNS + SCALING_RECOMMENDED_COLUMNS))
         raise ValueError(f"a day's table is 'fins' or 'scaling', not {name!r}")
 
@@ -147,16 +147,16 @@ class DayResult:
 
     @property
     def coefficients(self) -> pd.DataFrame:
-        """coefficients.csv of the day: the hull's coefficients with their prototype values
-        and, with a [vehicle], the predicted beside them (empty without hull runs)."""
+        """coefficients.csv of the day (a copy): the hull's coefficients with their prototype
+        values and, with a [vehicle], the predicted beside them (empty without hull runs)."""
         if self.vehicle is not None and self.vehicle.coefficients is not None:
-            return self.vehicle.coefficients  # made from the measured with prototype values
+            return self.vehicle.coefficients.copy()  # the measured with prototype values
         hull = (with_prototype_values(self.hull.coefficients, self.prototype_values)
                 if self.hull is not None else None)
         tables = [t for t in (hull, *(c.table() for c in self.captive_results)) if t is not None]
         if not tables:
             return pd.DataFrame(columns=COEFFICIENT_COLUMNS + COEFFICIENT_EXTRA_COLUMNS)
-        return tables[0] if len(tables) == 1 else pd.concat(tables, ignore_index=True)
+        return tables[0].copy() if len(tables) == 1 else pd.concat(tables, ignore_index=True)
 
     @property
     def captive_results(self) -> tuple[CaptiveResult, ...]:
@@ -173,7 +173,7 @@ class DayResult:
     def summary(self, alpha: float = 0.05) -> Summary:
         """The day at a glance: the hull's coefficient table (:meth:`HullResult.summary`) or,
         without hull coefficients, the runs by configuration and status."""
-        if self.hull is not None:
+        if self.hull is not None and len(self.hull.estimate_frame()):
             s = self.hull.summary(alpha)
             return Summary(title=f"{self.protocol.name}: {s.title}", table=s.table,
                            notes=(*s.notes, self._counts()))
@@ -184,7 +184,8 @@ class DayResult:
 
     def _counts(self) -> str:
         stages = [name for name, r in (("hull", self.hull), ("fins", self.fins),
-                                       ("scaling", self.scaling),
+                                       ("scaling", self.scaling), ("captive", self.captive),
+                                       ("captive_vertical", self.captive_vertical),
                                        ("vehicle", self.vehicle)) if r is not None]
         n = len(self.warnings)
         return (f"{len(self.runs)} runs, {len(self.reductions)} reduced, {self.n_rejected} "

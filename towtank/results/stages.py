@@ -78,9 +78,6 @@ class TareResult(Estimates):
         groups = ", ".join(sorted(self.models)) or "none"
         return f"TareResult(tare groups: {groups})"
 
-    def _repr_html_(self) -> str:
-        return f"<p><b>{esc(repr(self))}</b></p>" + self.to_frame().to_html(index=False)
-
 
 @dataclass(frozen=True, repr=False)
 class HullResult(Estimates):
@@ -157,9 +154,6 @@ class HullResult(Estimates):
         return (f"HullResult({len(self.estimates)} coefficients: "
                 f"{', '.join(self.estimates)}; rho = {self.fit.rho:.6g} kg/m³)")
 
-    def _repr_html_(self) -> str:
-        return self.summary()._repr_html_()
-
 
 @dataclass(frozen=True, repr=False)
 class FinResult(FinFit, Estimates):
@@ -188,9 +182,6 @@ class FinResult(FinFit, Estimates):
     def __repr__(self) -> str:
         return (f"FinResult({len(self.table)} fin runs, {len(self.curves)} speed groups, "
                 f"AR_eff = {self.aspect_ratio:.4g}, e = {self.oswald_e:g})")
-
-    def _repr_html_(self) -> str:
-        return f"<p><b>{esc(repr(self))}</b></p>" + self.curves.to_html(index=False)
 
 
 @dataclass(frozen=True, repr=False)
@@ -225,9 +216,6 @@ class ScalingResult(ScalingFit, Estimates):
               else "")
         return (f"ScalingResult(λ = {self.scale:g}, {len(self.table)} prototype speeds, "
                 f"R = {k2:.4g}·U|U| {k1:+.4g}·U{ff})")
-
-    def _repr_html_(self) -> str:
-        return f"<p><b>{esc(repr(self))}</b></p>" + self.table.to_html(max_rows=20)
 
 
 class FromPrediction(Generic[T]):
@@ -310,6 +298,3 @@ class CaptiveResult(CaptiveFit, Estimates):
     def __repr__(self) -> str:
         return f"CaptiveResult({self.plane}: {len(self.estimates)} derivatives, " \
                f"{len(self.runs)} runs)"
-
-    def _repr_html_(self) -> str:
-        return self.summary()._repr_html_()

@@ -61,9 +61,13 @@ class Summary:
 
     def as_text(self) -> str:
         """The table as fixed-width text, framed like a statsmodels summary."""
+        if not len(self.table):  # no estimates: no pandas "Empty DataFrame" frame
+            width = max(60, len(self.title))
+            rule = "=" * width
+            return "\n".join([self.title.center(width), rule, "(no estimates)", rule,
+                              *self.notes])
         body = self.table.to_string(index=False, float_format=lambda v: f"{v:.5g}")
-        width = max(len(line) for line in body.splitlines()) if len(self.table) else 60
-        width = max(width, len(self.title))
+        width = max(max(len(line) for line in body.splitlines()), len(self.title))
         rule = "=" * width
         lines = [self.title.center(width), rule]
         body_lines = body.splitlines()
@@ -184,3 +188,7 @@ class Estimates:
         level 1 − ``alpha``."""
         return estimates_summary(self.summary_title(), self.estimate_frame(),
                                  self.conf_int(alpha), alpha)
+
+    def _repr_html_(self) -> str:
+        """In a notebook: the :meth:`summary` table (never the raw frames)."""
+        return self.summary()._repr_html_()
