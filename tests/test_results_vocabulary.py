@@ -207,7 +207,8 @@ def test_the_day_names_its_stage_results_evenly():
                      rho_p=1025.0, nu_p=1.19e-6, rho_m=998.0, nu_m=1.0e-6, scale=5.0)
     day = _day(scaling=from_fit(ScalingResult, fit))
     assert day.fins is None and isinstance(day.scaling, ScalingResult)
-    assert day.table("scaling") is day.scaling.table
+    pd.testing.assert_frame_equal(day.table("scaling"), day.scaling.table)
+    assert day.table("scaling") is not day.scaling.table  # a copy to edit
     empty = day.table("fins")  # fins.csv with its header on a day without fins
     assert empty.empty and list(empty.columns)[:2] == ["run", "angle_deg"]
     with pytest.raises(ValueError, match="'fins' or 'scaling'"):

@@ -195,7 +195,7 @@ def test_the_prototype_values_are_joined_once(bad_day):
         bad_day, hull=SimpleNamespace(coefficients=hull),
         vehicle=SimpleNamespace(coefficients=joined),
         prototype_values=pd.DataFrame({"symbol": ["X_udot"], "prototype_value": [9.0]}))
-    assert day.coefficients is joined
+    pd.testing.assert_frame_equal(day.coefficients, joined)  # a copy of it
     alone = dataclasses.replace(day, vehicle=None)
     assert alone.coefficients["prototype_value"].tolist()[0] == 9.0
     assert hull["prototype_value"].isna().all()  # the hull's table as it was

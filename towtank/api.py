@@ -23,6 +23,7 @@ for an unusable protocol or run sheet (what the command line turns into exit sta
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 import numbers
 import warnings
@@ -98,8 +99,6 @@ def _check_whole(value: Any, name: str, least: int) -> None:
 def _check_date(date: Any) -> str | None:
     """``date`` as YYYY-MM-DD text: TypeError or ValueError (one sentence) for anything but
     None, a date or such a text of a date that exists."""
-    import datetime as dt
-
     if date is None or isinstance(date, dt.datetime):
         return None if date is None else date.date().isoformat()
     if isinstance(date, dt.date):
