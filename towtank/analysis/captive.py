@@ -44,10 +44,9 @@ from towtank.reduce.captive import (
     STATIC_BLOCKS,
     VERTICAL_REGRESSORS,
     CaptiveRun,
+    Inertia,
     arm_kinematics,
     body_kinematics,
-    hydrodynamic_loads,
-    kinematics_at,
 )
 from towtank.reduce.captive import regressors as make_regressors
 from towtank.stats.intervals import welch_satterthwaite
@@ -603,6 +602,8 @@ def captive_runs_from_means(
     a finite non-zero radius is an arm run, with a rudder angle a rudder run, else a drift
     run; standard errors are NaN (the fit then works on primes).
     """
+    # no r' in a static mean: the inertia about the CG does not enter
+    inertia = Inertia(mass_kg, 0.0, xg_m, balance_x_m, ref_x_m)
     out: list[CaptiveRun] = []
     for rec in table.to_dict("records"):
         U = float(rec["speed"])
@@ -612,11 +613,9 @@ def captive_runs_from_means(
         radius = math.nan if radius == 0.0 else radius
         fx, fy, mz = (float(rec[k]) for k in ("fx", "fy", "mz"))
         arm = math.isfinite(radius)
-        kin = kinematics_at(arm_kinematics(np.array([U]), beta, radius) if arm
-                            else body_kinematics(np.array([U]), np.array([beta])), ref_x_m)
-        X, Y, N = hydrodynamic_loads(np.array([fx]), np.array([fy]), np.array([mz]), kin,
-                                     mass_kg=mass_kg, izz_kg_m2=0.0, xg_m=xg_m - ref_x_m,
-                                     balance_x_m=balance_x_m - ref_x_m)
+        kin = inertia.at_ref(arm_kinematics(np.array([U]), beta, radius) if arm
+                             else body_kinematics(np.array([U]), np.array([beta])))
+        X, Y, N = inertia.loads(np.array([fx]), np.array([fy]), np.array([mz]), kin)
         reg = make_regressors(kin, math.radians(delta_deg))
         row = {"component": "mean", "X": float(X[0]), "Y": float(Y[0]), "N": float(N[0]),
                "X_se": math.nan, "Y_se": math.nan, "N_se": math.nan,
