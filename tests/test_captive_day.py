@@ -13,11 +13,20 @@ import math
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pandas as pd
 import pytest
+from conftest import draw_only_pages
+from openpyxl import load_workbook
+from pypdf import PdfReader
 
 import towtank
 from towtank.commands.cli import main
+from towtank.errors import RunError
+from towtank.reduce.captive import CaptiveRun
+from towtank.report import figures
+from towtank.report.captive_figure import arm_curve, static_points
+from towtank.report.simman import particulars
 from towtank.runtime.cache import settings_key
 from towtank.testing.captive import (
     HORIZONTAL_SYMBOLS,
@@ -228,16 +237,42 @@ def test_a_day_whose_moments_are_about_the_balance_point(tmp_path):
         balance_x_m=x_b, moment_ref="balance"))
     protocol = tmp_path / "protocol.toml"
     assert 'moment_ref = "balance"' in protocol.read_text(encoding="utf-8")
-    day = towtank.process_day(protocol, out=tmp_path / "out", report=False, jobs=1)
+    with pytest.MonkeyPatch.context() as mp:
+        draw_only_pages(mp, lambda page: page.section.startswith("Captive")
+                        or page.kind == "runs")
+        mp.setattr(figures, "write_figures", lambda day, folder: [])
+        day = towtank.process_day(protocol, out=tmp_path / "out", jobs=1)
     assert not day.rejected
     assert_derivatives(day.captive, truth, HORIZONTAL_SYMBOLS)
     said = json.loads((tmp_path / "out" / "provenance.json").read_text())["captive"]
     assert said["moment_reference"] == "balance" and said["moment_transfer"].startswith("none")
+    # what the outputs say of the moments: about B wherever they are named, never about O
+    about_b = "about the balance point (x = 0.3 m from O)"
+    assert day.captive.ref_x_m == x_b and day.captive.moment_point() == about_b
+    pages = [p.extract_text() for p in PdfReader(tmp_path / "out" / "report.pdf").pages]
+    said_pages = " ".join(" ".join(t.split()) for t in pages)
+    assert "moment N " + about_b in said_pages  # the runs table's caption
+    assert "moment " + about_b + ")" in said_pages  # the captive figure's caption
+    assert "about O" not in said_pages
+    book = load_workbook(tmp_path / "out" / "report.xlsx", read_only=True)
+    notes = {name: " ".join(str(c) for row in book[name].iter_rows(values_only=True)
+                            for c in row if isinstance(c, str)) for name in ("Captive", "PMM")}
+    assert all(about_b in text and "about O" not in text for text in notes.values())
+    assert particulars(day).set_index("quantity").at["moment_ref_x_m", "value"] == x_b
+    # the figure's rotating-arm curve is drawn at B too (v_B = x_B r at zero drift): through
+    # the arm runs, 2 % of the largest (drawn at O: Y' off by 170 % of it, N' by 60 %)
+    arm = static_points(day.captive, ("arm",), 90.0)
+    r_prime = (day.captive.length_m / arm["radius_m"]).to_numpy(dtype=float)
+    for eq, moment in (("Y", False), ("N", True)):
+        mean, _ = arm_curve(day.captive, r_prime, 0.0, 90.0, eq, moment, day.captive.runs[0])
+        scale = float(np.max(np.abs(arm[eq])))
+        assert np.max(np.abs(mean - arm[eq].to_numpy(dtype=float))) < 0.02 * scale, eq
 
     text = protocol.read_text(encoding="utf-8").replace('moment_ref = "balance"',
                                                         'moment_ref = "origin"')
     protocol.write_text(text, encoding="utf-8")
     about_o = towtank.process_day(protocol, out=tmp_path / "out_o", report=False, jobs=1)
+    assert about_o.captive.ref_x_m == 0.0 and about_o.captive.moment_point() == "about O"
     d, est = truth["derivatives"], about_o.captive.estimates
     assert est["Y_uv"].value == pytest.approx(d["Y_uv"], rel=TOL)
     assert est["N_uv"].value == pytest.approx(d["N_uv"] + x_b * d["Y_uv"], rel=TOL)
@@ -290,3 +325,19 @@ def test_a_captive_file_without_fx_is_rejected_for_its_missing_fx(tmp_path):
     reason = day.rejected[11].reason
     assert "no fx channel" in reason and "no signal" not in reason, reason
     assert len(day.captive.runs) == 13
+    # the notebook's one-run reader and reducer (docs/api.md): the same sentence for run 11,
+    # the day's loads for a drift, an arm and a PMM run
+    protocol = tmp_path / "protocol.toml"
+    with pytest.raises(RunError) as caught:
+        towtank.read_run(path, protocol)
+    assert caught.value.reason.endswith(reason) and caught.value.kind == "missing_channel"
+    by_run = {r.run: r for r in day.captive.runs}
+    for run in (1, 8, 12):
+        file = tmp_path / "data" / f"run_{run:03d}.csv"
+        raw = towtank.read_run(file, protocol)
+        assert {"fx", "fy", "mz"} <= set(raw.extra)
+        red = towtank.reduce_run(raw, protocol, run=run)
+        rows = CaptiveRun.from_arrays(run, file.name, red.captive).rows
+        pd.testing.assert_frame_equal(rows, by_run[run].rows)
+    with pytest.raises(ValueError, match="run sheet's row"):
+        towtank.reduce_run(raw, protocol, test="sway")

@@ -35,6 +35,7 @@ import pandas as pd
 from towtank.errors import ProtocolError, RunError
 from towtank.ingest.protocol import Protocol
 from towtank.ingest.protocol import load_protocol as _load
+from towtank.ingest.protocol_types import CAPTIVE_TESTS
 from towtank.ingest.runfile import RawRun
 from towtank.ingest.runsheet import read_run_sheet
 from towtank.reduce.run import (
@@ -221,7 +222,9 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
     -------
     RawRun
         ``.time`` [s], ``.speed`` [m/s], ``.drag`` [N], ``.lift`` [N] or None, ``.accel``
-        [m/s²] or None, ``.fs`` [Hz], ``.sha256`` of the bytes read, ``.notes``.
+        [m/s²] or None, ``.fs`` [Hz], ``.sha256`` of the bytes read, ``.notes``; for a run
+        whose sheet row is a captive test, ``.extra``: its balance and PMM channels (fx, fy
+        [N], mz [N m], sway [m], yaw [deg]).
 
     Raises
     ------
@@ -252,7 +255,8 @@ def read_run(file: str | Path, protocol: str | Path | Protocol | None = None, *,
                            "[m/s]")
         nominal = speed_nominal
     raw, _stamp = load_record(loaded, folder, name, number, speed_nominal=nominal,
-                              segment=segment)
+                              segment=segment,
+                              test=str(row.get("test", "")) if row is not None else "")
     return zeroed_record(loaded, raw, folder, name, number)
 
 
@@ -318,7 +322,9 @@ def reduce_run(
         Set acceleration [m/s²], cross-checked likewise.
     test : str, optional
         The sheet's test ("steady", "accel"): an accel run without a usable
-        constant-acceleration stretch is warned of, a steady run not noted for it.
+        constant-acceleration stretch is warned of, a steady run not noted for it. A captive
+        test (drift, rudder, arm, sway, yaw, yaw_drift) is reduced to its loads as the day
+        does, with the settings of the sheet's row ``run`` (ValueError without it).
 
     Returns
     -------
@@ -327,7 +333,8 @@ def reduce_run(
         tare still in), ``.accel_mean`` [m/s²], ``.windows`` (still_pre, accel, steady, decel,
         still_post as (start, end) in seconds), ``.notes``, ``.warnings``, ``.units`` (per
         channel: its unit and where it came from, "file", "protocol", "assumed" or
-        "unknown") and the decimated samples.
+        "unknown") and the decimated samples; for a captive run ``.captive``, the arrays of
+        its loads (``towtank.reduce.captive.CaptiveRun.from_arrays(run, file, .captive)``).
 
     Raises
     ------
@@ -346,6 +353,10 @@ def reduce_run(
     loaded = None if protocol is None else _protocol(protocol)
     row = None if loaded is None else _sheet_row(loaded, run=run)
     sheet = row if row is not None else {}
+    kind = test if test is not None else str(sheet.get("test", ""))
+    if kind in CAPTIVE_TESTS and row is None:
+        raise ValueError(f"a {kind} run is reduced with the settings of its run sheet's row: "
+                         "give the protocol and run=N of the row that lists it")
     if window_s is None:
         ws, we = sheet.get("window_start_s", math.nan), sheet.get("window_end_s", math.nan)
         if math.isfinite(ws) and math.isfinite(we):
@@ -355,7 +366,7 @@ def reduce_run(
         window_s=window_s,
         speed_nominal=_given(speed_nominal, sheet.get("speed_nominal", math.nan)),
         accel_nominal=_given(accel_nominal, sheet.get("accel_nominal", math.nan)),
-        test=test if test is not None else str(sheet.get("test", "")))
+        test=kind, row=row)
 
 
 def _given(value: float | None, default: float) -> float:

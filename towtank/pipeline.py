@@ -42,7 +42,7 @@ from towtank.ingest.inputs import (
 from towtank.ingest.protocol import Protocol, load_protocol
 from towtank.ingest.runsheet import CAPTIVE_TESTS
 from towtank.messages import Notice, Rejection, Stage, notices
-from towtank.reduce.captive import CaptiveRun, reference_x
+from towtank.reduce.captive import CaptiveRun, protocol_reference_x
 from towtank.reduce.run import RunReduction, crashed_record, reduce_record
 from towtank.reduce.sanity import sane_reduction
 from towtank.reduce.tare import TareModel
@@ -292,19 +292,21 @@ def captive_stage(protocol: Protocol, runs: pd.DataFrame, reductions: dict[int, 
     rho = medium_at(protocol.water)[0]
     if model is None:
         return {}, warns
+    ref_x = protocol_reference_x(options, model)
     if options is not None and options.means is not None:
         table, said = captive_means(protocol)
         warns += said
         caps += captive_runs_from_means(
             table, balance_x_m=model.balance_x_m or 0.0, mass_kg=model.mass_kg,
-            xg_m=model.xg_m or 0.0, ref_x_m=reference_x(options.moment_ref, model.balance_x_m))
+            xg_m=model.xg_m or 0.0, ref_x_m=ref_x)
     roll = options.roll_deg if options is not None else 90.0
     out: dict[str, CaptiveResult] = {}
     for plane in ("horizontal", "vertical"):
         these = [c for c in caps if c.plane == plane]
         if these:
             fitted = fit_captive(these, rho=rho, length_m=model.length_m,
-                                 draught_m=model.draught_m, plane=plane, roll_deg=roll)
+                                 draught_m=model.draught_m, plane=plane, roll_deg=roll,
+                                 ref_x_m=ref_x)
             out[plane] = from_fit(CaptiveResult, fitted)
             warns += fitted.warnings
     return out, warns

@@ -47,6 +47,7 @@ from towtank.reduce.captive import (
     Inertia,
     arm_kinematics,
     body_kinematics,
+    moment_point,
 )
 from towtank.reduce.captive import regressors as make_regressors
 from towtank.stats.intervals import welch_satterthwaite
@@ -136,6 +137,13 @@ class CaptiveFit:
     #: per equation ("Y", "N"; "Z", "M"), the covariance of its derivatives [SI], indexed by
     #: symbol both ways (what a prediction's band is drawn from)
     cov: dict[str, pd.DataFrame] = field(default_factory=dict)
+    #: x [m] from O of the point P the moments and derivatives refer to (0: O; the balance
+    #: point with ``[captive] moment_ref = "balance"``, :func:`towtank.reduce.captive.reference_x`)
+    ref_x_m: float = 0.0
+
+    def moment_point(self) -> str:
+        """Where the moments are taken, in words (:func:`towtank.reduce.captive.moment_point`)."""
+        return moment_point(self.ref_x_m)
 
     def table(self) -> pd.DataFrame:
         """coefficients.csv rows: the hull table's columns (NaN where not applicable) and
@@ -388,6 +396,7 @@ def _fit_weights(y: np.ndarray, X: np.ndarray, w: np.ndarray, cov: np.ndarray, e
 def fit_captive(
     runs: Sequence[CaptiveRun], *, rho: float, length_m: float, draught_m: float | None = None,
     plane: str = "horizontal", roll_deg: float = 90.0, alpha: float = 0.05,
+    ref_x_m: float = 0.0,
 ) -> CaptiveFit:
     """The derivatives of ``plane`` from the captive runs of that plane (see module docstring).
 
@@ -406,6 +415,9 @@ def fit_captive(
         The model's roll on the rig for vertical runs [deg] (its sign maps the axes).
     alpha : float
         Significance of the intervals.
+    ref_x_m : float
+        x [m] from O of the point the runs' moments and velocities refer to (0: O); carried
+        into the result for what it says about its moments.
     """
     # loaded on use: statsmodels only for the fit
     import statsmodels.api as sm
@@ -415,7 +427,7 @@ def fit_captive(
     warnings: list[str] = []
     if not runs:
         return CaptiveFit(plane, rho, length_m, draught_m, {}, (),
-                          warnings=(f"no {plane} captive runs",))
+                          warnings=(f"no {plane} captive runs",), ref_x_m=ref_x_m)
     rows, X, run_index = _design(runs, plane, roll_deg)
     cov = np.concatenate([mapped_cov(r, roll_deg) for r in runs])
     excited = _excited(X, rows["speed"].to_numpy(dtype=float), length_m)
@@ -500,7 +512,7 @@ def fit_captive(
     return CaptiveFit(plane=plane, rho=rho, length_m=length_m, draught_m=draught_m,
                       estimates=estimates, runs=runs, notes=tuple(agree),
                       warnings=tuple(warnings), by_run=by_run,
-                      chi2_reduced=chi2, cov=param_cov)
+                      chi2_reduced=chi2, cov=param_cov, ref_x_m=ref_x_m)
 
 
 def frequency_agreement(

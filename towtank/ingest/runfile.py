@@ -688,7 +688,7 @@ def load_run(
         The run sheet's test. A captive test (:data:`towtank.ingest.protocol_types.
         CAPTIVE_TESTS`) also reads the balance's and the PMM's channels into
         ``RawRun.extra`` (:func:`captive_mapping`); its ``drag`` is −fx when the file has fx
-        and no drag.
+        and no drag (a captive file with neither is a RunError).
 
     Raises
     ------
@@ -772,9 +772,12 @@ def _load_run(
     units: dict[str, tuple[str, str]] = {}
     numeric = calibrate(numeric, full, used, stated_units(cols), name, notes, units)
     if "drag" not in numeric:  # a captive run's file without drag
-        numeric["drag"] = -numeric["fx"] if "fx" in numeric else np.zeros_like(numeric["time"])
-        notes.append("drag taken as −fx (the file has no drag channel)" if "fx" in numeric
-                     else "no fx nor drag channel: the axial force is not measured")
+        if "fx" not in numeric:
+            raise RunError(f"{name}: the file has no fx channel (the balance's axial force) "
+                           "nor a drag channel, which a captive run needs beside fy and mz",
+                           kind="missing_channel")
+        numeric["drag"] = -numeric["fx"]
+        notes.append("drag taken as −fx (the file has no drag channel)")
     if used.get("time", "").startswith("time (from the file") and FS_KEY not in cols and \
             WF_TIME_KEY not in cols:
         units["time"] = ("s", "protocol")  # [read] sample_rate_hz

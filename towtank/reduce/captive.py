@@ -192,6 +192,21 @@ def reference_x(moment_ref: str, balance_x_m: float | None) -> float:
     return float(balance_x_m or 0.0) if moment_ref == "balance" else 0.0
 
 
+def protocol_reference_x(captive: Any, model: Any) -> float:
+    """:func:`reference_x` of a protocol's ``[captive]`` section (its ``moment_ref``; a dict
+    or the section's object; None: "origin") and ``[model]`` (its ``balance_x_m``)."""
+    ref = (captive.get("moment_ref") if isinstance(captive, dict)
+           else getattr(captive, "moment_ref", None))
+    return reference_x(str(ref or "origin"), getattr(model, "balance_x_m", None))
+
+
+def moment_point(ref_x_m: float) -> str:
+    """Where the moments are taken, for a caption: "about O", or "about the balance point (x =
+    ... m from O)" when the derivatives refer to a point ``ref_x_m`` [m] from O
+    (:func:`reference_x`)."""
+    return "about O" if ref_x_m == 0.0 else f"about the balance point (x = {ref_x_m:g} m from O)"
+
+
 def regressors(kin: Mapping[str, np.ndarray], rudder: float) -> dict[str, np.ndarray]:
     """The model's regressors (:data:`REGRESSORS`) from :func:`body_kinematics`; ``rudder``
     delta [rad]."""

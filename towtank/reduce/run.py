@@ -658,10 +658,6 @@ def check_force_signal(
     for name, x in (("drag", raw.drag), ("lift", raw.lift)):
         if x is None or m1 - m0 < 3:
             continue
-        # a captive file without fx: its drag of zeros stands in for a channel it does not
-        # have (the captive reduction names the missing fx)
-        if name == "drag" and "fy" in raw.extra and "fx" not in raw.extra:
-            continue
         seg = x[m0:m1]
         if float(np.max(seg) - np.min(seg)) <= DEAD_CHANNEL_SPAN_N:
             raise RunError(
@@ -872,12 +868,8 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             test=str(row.get("test", "")),
             keep_series=keep_series,
+            row=row,
         )
-        if str(row.get("test", "")) in CAPTIVE_TESTS:
-            arrays, notes, warnings = reduce_captive_record(protocol, raw, red.windows, row,
-                                                            run=run, file=file)
-            red = replace(red, captive=arrays, notes=(*red.notes, *notes),
-                          warnings=(*red.warnings, *warnings))
         return run, replace(red, file_stamp=stamp), None, None
     except RunError as exc:
         return run, None, Rejection.of_run_error(run, file, exc.reason), _safe_preview(raw)
@@ -943,14 +935,18 @@ def zeroed_record(protocol: Protocol | None, raw: RawRun, folder: Path, file: st
 def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
                 window_s: tuple[float, float] | None = None,
                 speed_nominal: float = math.nan, accel_nominal: float = math.nan,
-                test: str = "", keep_series: bool = False) -> RunReduction:
+                test: str = "", keep_series: bool = False,
+                row: dict[str, Any] | None = None) -> RunReduction:
     """Reduce a run read by :func:`load_record` as the day does (before tare).
 
     :func:`reduce_run` with the protocol's ``[processing]``, then: a note and a warning per
     channel that looks like a force and that no ``[channels]`` entry uses
     (:func:`unmapped_force_warnings`), the channels' units with their notes
     (:func:`units_notes`), and by the sheet's ``test``: an ``accel`` run without a usable
-    constant-acceleration stretch is warned of, a ``steady`` run is not noted for it.
+    constant-acceleration stretch is warned of, a ``steady`` run is not noted for it, a
+    captive test is reduced to its loads (``RunReduction.captive``,
+    :func:`towtank.reduce.captive_record.reduce_captive_record`) with the settings of its run
+    sheet ``row`` (a captive test needs the protocol and the row).
     ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²]: the sheet's.
     """
     red = reduce_run(raw, Processing() if protocol is None else protocol.processing,
@@ -967,7 +963,15 @@ def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
         warnings = (*warnings, red.accel_missing)
     elif red.accel_missing and kind == "steady":  # made for its plateau: no news
         notes = tuple(n for n in notes if n != red.accel_missing)
-    return replace(red, notes=notes, warnings=warnings, units=dict(raw.units))
+    captive: dict[str, np.ndarray] = {}
+    if test in CAPTIVE_TESTS:
+        if protocol is None or row is None:
+            raise RunError(f"a {test} run is reduced with its run sheet row's settings and the "
+                           "protocol's [model]: the protocol and its sheet's row are needed")
+        captive, more, warned = reduce_captive_record(protocol, raw, red.windows, row,
+                                                      run=run, file=file)
+        notes, warnings = (*notes, *more), (*warnings, *warned)
+    return replace(red, notes=notes, warnings=warnings, units=dict(raw.units), captive=captive)
 
 
 def unmapped_force_warnings(protocol: Protocol, columns: tuple[str, ...], file: str

@@ -36,6 +36,7 @@ from towtank.reduce.captive import (
     STATIC_BLOCKS,
     arm_kinematics,
     body_kinematics,
+    kinematics_at,
     regressors,
 )
 from towtank.report.figure_base import figure_grid, math_symbol, new_figure, styled
@@ -119,7 +120,8 @@ def drift_curve(fit: CaptiveFit, beta_deg: np.ndarray, roll_deg: float, eq: str,
                 run: CaptiveRun) -> tuple[np.ndarray, np.ndarray]:
     """The prime of ``eq`` against the drift angle ``beta_deg`` [deg] at U = 1 m/s (a static
     load's prime does not depend on U) with its 95 % half-width."""
-    kin = body_kinematics(np.ones_like(beta_deg), np.radians(beta_deg))
+    kin = kinematics_at(body_kinematics(np.ones_like(beta_deg), np.radians(beta_deg)),
+                        fit.ref_x_m)
     rows = plane_rows(run, _rows_frame(regressors(kin, 0.0)), roll_deg)
     mean, half = predict(fit, rows, eq)
     s = _prime_scale(fit, 1.0, moment)
@@ -129,11 +131,13 @@ def drift_curve(fit: CaptiveFit, beta_deg: np.ndarray, roll_deg: float, eq: str,
 def arm_curve(fit: CaptiveFit, r_prime: np.ndarray, drift_deg: float, roll_deg: float,
               eq: str, moment: bool, run: CaptiveRun) -> tuple[np.ndarray, np.ndarray]:
     """The prime of ``eq`` against r' = L/R [-] at the drift ``drift_deg`` [deg], U = 1 m/s,
-    with its 95 % half-width."""
+    with its 95 % half-width; the kinematics (drift at O) taken at the point the fit refers
+    to (v_P = v + x_P r)."""
     reg: dict[str, list[float]] = {k: [] for k in REGRESSORS}
     for rp in r_prime:
         radius = fit.length_m / rp if rp != 0 else math.inf
-        kin = arm_kinematics(np.array([1.0]), math.radians(drift_deg), radius)
+        kin = kinematics_at(arm_kinematics(np.array([1.0]), math.radians(drift_deg), radius),
+                            fit.ref_x_m)
         for k, v in regressors(kin, 0.0).items():
             reg[k].append(float(v[0]))
     rows = plane_rows(run, _rows_frame({k: np.array(v) for k, v in reg.items()}), roll_deg)
@@ -216,10 +220,10 @@ def captive_caption(fit: CaptiveFit) -> str:
             "(none for a lab's table of means); lines: the joint fit of all the captive runs "
             "with its 95 % confidence band, drawn from the fitted derivatives (the offsets "
             f"{ef}_uu, {em}_uu included). PMM: the cycle-averaged loads of the run shown "
-            "(inertia removed, moment about O) against the fit's prediction from the same "
-            "motion. Last row: each PMM run's derivative (from the component where its "
-            "regressor is largest, the other terms held at the joint fit) over the joint "
-            f"value, with 95 % bars; the bands are the joint values' intervals.{rig}")
+            f"(inertia removed, moment {fit.moment_point()}) against the fit's prediction "
+            "from the same motion. Last row: each PMM run's derivative (from the component "
+            "where its regressor is largest, the other terms held at the joint fit) over the "
+            f"joint value, with 95 % bars; the bands are the joint values' intervals.{rig}")
 
 
 @styled

@@ -50,6 +50,7 @@ from towtank.analysis.hull import mirrored
 from towtank.analysis.scaling import geometry_used
 from towtank.ingest.protocol_types import CAPTIVE_TESTS
 from towtank.messages import Rejection
+from towtank.reduce.captive import moment_point, protocol_reference_x
 from towtank.reference.sets import reference_name
 from towtank.report.captive_thumb import (
     CAPTIVE_LOADS_LABEL,
@@ -1046,7 +1047,8 @@ def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: li
     tare-corrected steady drag and its coefficient on the area its test uses (named in its own
     column); rejected and void runs shaded; a blank acceleration explained below."""
     if "captive_Y_N" in table.columns:
-        _draw_captive_runs(fig, table, run_ids)
+        ref_x = protocol_reference_x(protocol.captive, protocol.model)
+        _draw_captive_runs(fig, table, run_ids, moment_point(ref_x))
         return
     runs = table.set_index("run", drop=False)
     y = PAGE_HEADER_IN + 0.25
@@ -1090,10 +1092,12 @@ def _draw_runs(fig: Figure, table: pd.DataFrame, protocol: Protocol, run_ids: li
         _text_block(fig, y + used, accel_note, fontsize=7.5)
 
 
-def _draw_captive_runs(fig: Figure, table: pd.DataFrame, run_ids: list[int]) -> None:
+def _draw_captive_runs(fig: Figure, table: pd.DataFrame, run_ids: list[int],
+                      moment: str = "about O") -> None:
     """The per-run table of a day with captive runs: each run's test and setting (drift β,
     rudder δ, arm radius R, PMM frequency), its speed and loads (captive runs: X, Y [N] and
-    N [N m] about O, inertia removed; other runs: the drag and its C_D) and status."""
+    N [N m] ``moment`` (:func:`towtank.reduce.captive.moment_point`), inertia removed; other
+    runs: the drag and its C_D) and status."""
     runs = table.set_index("run", drop=False)
     y = PAGE_HEADER_IN + 0.25
     header = ["run", "test", "β [deg]", "δ [deg]", "R [m]", "f [Hz]", "U [m/s]",
@@ -1126,7 +1130,7 @@ def _draw_captive_runs(fig: Figure, table: pd.DataFrame, run_ids: list[int]) -> 
     _text_block(fig, y + used + 0.12,
                 "Captive runs: the setting from the run sheet (drift β, rudder δ, arm radius R, "
                 "PMM frequency f), the steady mean speed and the hydrodynamic loads X, Y and "
-                "the moment N about O with the model's inertia removed: steady means (static "
+                f"the moment N {moment} with the model's inertia removed: steady means (static "
                 "tests) or cycle means over the kept PMM cycles (runs.csv captive_X_N, "
                 "captive_Y_N, captive_N_Nm, pmm_cycles). Other runs: the tare-corrected drag "
                 "and its C_D. Rejected runs (red) and void runs (grey) with their reasons: "

@@ -6,9 +6,10 @@ Files in the output folder's ``export/simman/`` (docs/formats.md, "--export simm
 file                  content
 ====================  ===========================================================================
 particulars.csv       quantity, value, unit: scale, L, mass, I_z (I_y), x_G, x of the balance,
-                      draught, water temperature and density, sample rate
+                      x of the point P the moments refer to, draught, water temperature and
+                      density, sample rate
 static.csv            one row per static run (drift, rudder, arm) of the horizontal plane: its
-                      setting, speed and the steady mean loads X, Y [N], N [N m] about O
+                      setting, speed and the steady mean loads X, Y [N], N [N m] about P
                       (inertia removed) with their standard errors
 static_vertical.csv   the same for the vertical plane (X, Z, M; w and q mapped from the rig)
 pmm_run_NNN.csv       a PMM run's filtered, cycle-averaged period: t, X, Y, N, x, y, psi, u, v,
@@ -31,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from towtank.analysis.captive import mapped_rows, plane_names
-from towtank.reduce.captive import PMM_TESTS, harmonic_fit
+from towtank.reduce.captive import PMM_TESTS, harmonic_fit, protocol_reference_x
 from towtank.report.safetext import csv_text
 
 if TYPE_CHECKING:
@@ -61,7 +62,9 @@ def particulars(day: DayResult) -> pd.DataFrame:
     rows = [("scale", get("scale"), "-"), ("length_m", get("length_m"), "m"),
             ("mass_kg", get("mass_kg"), "kg"), ("izz_kg_m2", get("izz_kg_m2"), "kg m^2"),
             ("iyy_kg_m2", get("iyy_kg_m2"), "kg m^2"), ("xg_m", get("xg_m"), "m"),
-            ("balance_x_m", get("balance_x_m"), "m"), ("draught_m", get("draught_m"), "m"),
+            ("balance_x_m", get("balance_x_m"), "m"),
+            ("moment_ref_x_m", protocol_reference_x(day.protocol.captive, m), "m"),
+            ("draught_m", get("draught_m"), "m"),
             ("water_temperature_C", float(captive["water_temp_C"].dropna().mean())
              if captive["water_temp_C"].notna().any() else float(w.temperature_C), "degC"),
             ("rho_kg_m3", float(rho.mean()) if len(rho) else math.nan, "kg/m^3"),
@@ -91,7 +94,8 @@ def static_table(fit: CaptiveFit, roll_deg: float) -> pd.DataFrame:
 def period_table(run: CaptiveRun) -> pd.DataFrame:
     """A PMM run's cycle-averaged period (:data:`PERIOD_EXPORT`): x [m] = U t, the distance
     towed from the period's start; y [m] the sway of O, psi [rad] the heading (drift + yaw),
-    loads X, Y [N], N [N m] about O with the inertia removed (rig axes)."""
+    loads X, Y [N], N [N m] about the point P the day's moments refer to (O, or the balance
+    point with ``[captive] moment_ref = "balance"``) with the inertia removed (rig axes)."""
     p = run.period
     out = p[[c for c in PERIOD_EXPORT if c in p.columns]].copy()
     out.insert(4, "x", run.speed * p["t"].to_numpy(dtype=float))

@@ -470,7 +470,8 @@ def _captive(w: SheetWriter, day: DayResult) -> None:
         letters = "Z, M" if fit.plane == "vertical" else "Y, N"
         w.title(f"Captive derivatives, {fit.plane} plane ({letters}): {len(fit.runs)} runs")
         w.table(fit.table(), columns=CAPTIVE_ORDER)
-        w.note(f"value, ci_low, ci_high, std_error in the row's unit (SI, model scale); "
+        w.note(f"value, ci_low, ci_high, std_error in the row's unit (SI, model scale), the "
+               f"moments {fit.moment_point()}; "
                f"intervals 95 %, Student's t on dof; prime = value/(½ρL^k) with ρ = "
                f"{fit.rho:.3f} kg/m³, L = {fit.length_m:g} m"
                + (f"; prime_LT = value/(½ρTL^(k−1)), T = {fit.draught_m:g} m"
@@ -489,7 +490,9 @@ def _pmm(w: SheetWriter, day: DayResult) -> None:
                     "arm).")
         return
     w.table(pmm)
-    w.note("First harmonics of Y [N] and N [N m] about O, inertia removed: in = coefficient "
+    results = _captive_results(day)
+    about = results[0].moment_point() if results else "about O"
+    w.note(f"First harmonics of Y [N] and N [N m] {about}, inertia removed: in = coefficient "
            "of sin(ωt), in phase with the sway y; quad = of cos(ωt); *_se their standard "
            "errors over the kept cycles; omega_prime = ωL/U.")
 

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.errors import TowtankError
-from towtank.reduce.captive import reference_x
+from towtank.reduce.captive import protocol_reference_x
 from towtank.vehicle.model import FORMS
 from towtank.vehicle.predict import prime_exponent
 from towtank.vehicle.stage import VehiclePrediction, predict_vehicle
@@ -61,10 +61,8 @@ def captive_reference_note(protocol: Any) -> str | None:
     derivatives refer to the balance point (:func:`towtank.reduce.captive.reference_x`), not
     to the origin O of the vehicle's equations of motion: N_O = N_B + x_B·Y and v_B = v +
     x_B·r change the moment and the yaw-rate derivatives, and v_B|v_B| is no term at O."""
-    captive = getattr(protocol, "captive", None)
-    ref = (captive.get("moment_ref") if isinstance(captive, dict)
-           else getattr(captive, "moment_ref", None))
-    x = reference_x(str(ref), getattr(getattr(protocol, "model", None), "balance_x_m", None))
+    x = protocol_reference_x(getattr(protocol, "captive", None),
+                             getattr(protocol, "model", None))
     if x == 0.0:
         return None
     return (f"the captive derivatives refer to the balance point, {x:g} m from O ([captive] "
