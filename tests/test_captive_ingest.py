@@ -18,7 +18,12 @@ from hypothesis import strategies as st
 from towtank.analysis.hull import LATERAL_AREA_UNKNOWN, fit_transverse
 from towtank.commands import cli
 from towtank.errors import ProtocolError, RunError
-from towtank.ingest.captive_means import captive_means, read_means_table
+from towtank.ingest.captive_means import (
+    captive_means,
+    means_in_si,
+    prime_magnitude_warning,
+    read_means_table,
+)
 from towtank.ingest.protocol import Captive, ChannelMap, Model, load_protocol
 from towtank.ingest.runfile import load_run
 from towtank.ingest.runsheet import read_run_sheet
@@ -141,7 +146,8 @@ def test_means_protocol_needs_no_run_sheet_nor_data_folder(tmp_path):
     assert row["fy"] == pytest.approx(0.0166 * 0.5 * rho * 2.0**2 * 1.2**2, rel=1e-4)
     assert row["mz"] == pytest.approx(0.0033 * 0.5 * rho * 2.0**3 * 1.2**2, rel=1e-4)
     with pytest.raises(ProtocolError, match="needs balance_x_m in \\[model\\]"):
-        load_protocol(_protocol(tmp_path, "", 'means = "means.csv"', campaign=""))
+        load_protocol(_protocol(tmp_path, "", 'means = "means.csv"\nmeans_prime = true',
+                                campaign=""))
 
 
 def test_captive_runs_name_the_missing_model_keys():
@@ -188,6 +194,44 @@ def test_bad_means_tables_are_one_sentence(tmp_path, edit, said):
     path.write_text(edit(MEANS_CSV))
     with pytest.raises(ProtocolError, match=re.escape(said)):
         read_means_table(path)
+
+
+def test_primes_read_as_newtons_stop_the_protocol(tmp_path):
+    """A table whose load columns are headed X', Y', N' (primes, as the KVLCC2 table's) and a
+    protocol without means_prime: read as newtons they would give derivatives 10^4 times too
+    small (Y_uv' −1.3e-6 for −0.0197 on the real table), so the protocol stops in one sentence
+    naming the columns; with means_prime it loads. A column with a unit (Y (N)) read as a
+    prime stops it too."""
+    (tmp_path / "means.csv").write_text(MEANS_CSV)
+    with pytest.raises(ProtocolError, match=re.escape(
+            "load column(s) X', Y', N' are named as primes")) as caught:
+        load_protocol(_protocol(tmp_path, "balance_x_m = 0.0", 'means = "means.csv"',
+                                campaign=""))
+    assert "set means_prime = true" in str(caught.value)
+    load_protocol(_protocol(tmp_path, "balance_x_m = 0.0",
+                            'means = "means.csv"\nmeans_prime = true', campaign=""))
+    (tmp_path / "means.csv").write_text(MEANS_CSV.replace("Y'", "Y (N)"))
+    with pytest.raises(ProtocolError, match=re.escape("Y (N) carry a unit, but")):
+        load_protocol(_protocol(tmp_path, "balance_x_m = 0.0",
+                                'means = "means.csv"\nmeans_prime = true', campaign=""))
+
+
+@pytest.mark.parametrize(("prime", "scale", "said"), [
+    (False, 1.0, "are they primes?"),  # primes under names without a mark, read as N
+    (True, 0.5 * 998.0 * 1.2**2 * 2.0**2, "are they in N and N m?"),  # N read as primes
+    (False, 0.5 * 998.0 * 1.2**2 * 2.0**2, None),
+    (True, 1.0, None),
+])
+def test_loads_whose_size_contradicts_means_prime_are_named(prime, scale, said):
+    """The same primes (|Y'| up to 0.0166 at 1.2 m/s on a 2 m model), given as they are or
+    times ½ρU²L² (forces in N, and N·L for the moments), read with and without means_prime:
+    one sentence when the reading makes them implausible, none when it is right."""
+    y = np.array([5.4e-4, 1.66e-2, -1.64e-2])
+    n = np.array([-2.7e-4, 3.3e-3, -3.2e-3])
+    table = pd.DataFrame({"speed": 1.2, "fx": 0.0, "fy": y * scale, "mz": n * scale * 2.0})
+    si = means_in_si(table, prime=prime, rho=998.0, length_m=2.0)
+    got = prime_magnitude_warning(si, prime=prime, rho=998.0, length_m=2.0, name="m.csv")
+    assert (got is None) if said is None else (said in got), got
 
 
 _value = st.floats(-1e3, 1e3, allow_nan=False).map(lambda v: float(f"{v:.6g}"))

@@ -393,6 +393,27 @@ def test_other_unit_warnings(folder, section, key, value, hint):
     assert any(key in w and hint in w for w in p.warnings), p.warnings
 
 
+@pytest.mark.parametrize("key, value, ratio", [
+    ("wetted_area_m2", 472.0, 8512.0),  # the FORMATS example's 0.0472 m² typed in cm²
+    ("frontal_area_m2", 19.6, 9982.0),
+    ("lateral_area_m2", 152.0, 8612.0),
+    ("wetted_area_m2", 0.00472, 0.0851),  # a slip the other way
+])
+def test_areas_in_other_units_warn(folder, key, value, ratio):
+    """An area that no hull of the model's length and diameter (0.353 m, 0.05 m) has: one
+    sentence naming the key, its ratio to π·D·L, π·D²/4 or L·D and the likely unit; the
+    FORMATS example's own values (0.85, 1.0, 0.86 times) give none. (A volume in other units
+    stops the protocol through the mass check.)"""
+    data = _base()
+    assert not any(k in w for w in load_protocol(_write(folder, data)).warnings
+                   for k in ("_area_m2",))
+    data["model"][key] = value
+    p = load_protocol(_write(folder, data))
+    said = [w for w in p.warnings if f"[model] {key} = {value:g}" in w]
+    assert len(said) == 1, p.warnings
+    assert f"is {ratio:.3g} times" in said[0] and "was it given in" in said[0]
+
+
 @pytest.mark.parametrize("value, hint", [(291.15, "kelvin (18.0 °C)"), (100.0, "°F (37.8 °C)"),
                                          (180.0, "a typo for 18"), (-273.16, ""),
                                          (1e300, "not a water temperature")])

@@ -149,9 +149,57 @@ def test_row_faults(tmp_path, column, value, words):
 
 def test_run_number_not_whole_stops_the_sheet(tmp_path):
     rows = [dict(r) for r in ROWS]
-    rows[2]["run"] = "3b"
-    with pytest.raises(ProtocolError, match="row 4 has run number '3b'"):
+    rows[1]["run"] = "2b"
+    with pytest.raises(ProtocolError, match="row 3 has run number '2b'"):
         _read(_write(tmp_path / "s.csv", rows))
+
+
+def test_a_void_row_or_a_total_row_without_a_run_number_is_left_aside(tmp_path):
+    """docs/formats.md §2: a void row is never an error, even with a typo in a cell. Run 3
+    (void) with its number typed '3b', and a total line at the bottom ('Total' and a sum of
+    the speeds, no file): both are left aside with a note, and the other runs read; they
+    stopped the whole day (exit 2). A run row with a file and no whole run number still
+    stops it (test above)."""
+    rows = [dict(r) for r in ROWS]
+    rows[2]["run"] = "3b"
+    total = {k: "" for k in ROWS[0]} | {"run": "Total", "speed_nominal": 4.0}
+    sheet = _read(_write(tmp_path / "s.csv", [*rows, total]))
+    assert sheet["run"].tolist() == [1, 2, 4]
+    notes = sheet.attrs["notes"]
+    assert "row 4 is left aside: its run number '3b' is not a whole number and it is void" \
+        in notes
+    assert any(n.startswith("row 6 is left aside: its run number 'Total'") for n in notes)
+    only = [dict(ROWS[2], run="x")]
+    with pytest.raises(ProtocolError, match="has no runs"):
+        _read(_write(tmp_path / "v.csv", only))
+
+
+@pytest.mark.parametrize(("angles", "warned"), [
+    ([0, 0.0873, 0.1745, 0.2618, 1.5708], True),  # 0, 5, 10, 15, 90° typed in radians
+    ([0, 0.087, 0.175, 0.262, 1.571], True),  # the same rounded to 3 decimals
+    ([0, 5, 10, 15, 90], False),
+    ([0, 0.5, 1.0, 1.5, 1.0], False),  # small angles in degrees: whole or half degrees
+    ([0, 0.1, 0.2, 0.3, 0.4], False),  # 5.73°, 11.46°... are no whole degrees
+    ([0, 0.0873, 0.0873, 0, 0], False),  # one angle: not enough to tell
+])
+def test_angles_typed_in_radians_are_named(tmp_path, angles, warned):
+    """A sheet whose angle_deg column holds radians (a hull day's 0–90° as 0–1.5708): read
+    as degrees, X_uv and X_v|v| came out 4 orders off without a word. One sentence when
+    every angle is within ±π/2 and a whole or half degree as radians; none for degrees, nor
+    with the unit in the header (converted)."""
+    rows = [dict(r, angle_deg=a) for r, a in zip(ROWS * 2, angles, strict=False)]
+    for i, r in enumerate(rows):
+        r["run"], r["file"] = i + 1, f"run_{i + 1:03d}.csv"
+    sheet = _read(_write(tmp_path / "s.csv", rows))
+    said = [w for w in sheet.attrs["warnings"] if "typed in radians" in w]
+    assert len(said) == int(warned), sheet.attrs["warnings"]
+    if warned:
+        assert "angle_deg" in said[0] and "= 90.0" in said[0]
+        renamed = [{("Angle [rad]" if k == "angle_deg" else k): v for k, v in r.items()}
+                   for r in rows]
+        named = _read(_write(tmp_path / "r.csv", renamed))
+        assert not [w for w in named.attrs["warnings"] if "radians" in w]
+        assert named["angle_deg"].max() == pytest.approx(90.0, abs=0.05)
 
 
 def test_manual_window_columns(tmp_path):

@@ -20,6 +20,7 @@ import pandas as pd
 import pytest
 
 from towtank.analysis import similarity
+from towtank.analysis.scaling import form_factor_warnings
 from towtank.commands.cli import main
 from towtank.pipeline import process_day
 from towtank.reference import geometry
@@ -122,7 +123,7 @@ def test_ittc57_drag_follows_form_factor(outputs):
     runs = pd.read_csv(outputs / "runs.csv")
     zero = runs[(runs.config == "hull") & (runs.status == "ok") & (runs.angle_deg == 0)]
     ff = similarity.form_factor(zero.drag_mean.to_numpy(), zero.speed_mean.to_numpy(), 0.0472,
-                                float(zero.rho.mean()), float(zero.nu.mean()), 0.353)
+                                zero.rho.to_numpy(), zero.nu.to_numpy(), 0.353)
     sea = water_properties(15.0, "sea")
     up = sc["speed_prototype"].to_numpy()
     cf = 0.075 / (np.log10(up * 1.412 / sea.nu) - 2) ** 2
@@ -263,7 +264,7 @@ def test_myring_geometry_is_used_and_documented(tmp_path, cache):
     assert g.wetted_area == pytest.approx(0.0483, abs=5e-5)  # not the 0.0472 of the protocol
 
     zero = _zero_runs(day.runs)
-    rho_m, nu_m = float(zero.rho.mean()), float(zero.nu.mean())
+    rho_m, nu_m = zero.rho.to_numpy(), zero.nu.to_numpy()  # each run's water
     ff = similarity.form_factor(zero.drag_mean, zero.speed_mean, g.wetted_area, rho_m, nu_m,
                                 0.353)
     assert day.scaling.form_factor.one_plus_k == pytest.approx(ff.one_plus_k, rel=1e-12)
@@ -313,6 +314,51 @@ def test_roughness_allowance_adds_its_term_exactly(tmp_path, cache):
                                    base.scaling.table["drag_froude"])
 
 
+def test_a_wetted_area_in_cm2_is_named_twice_and_1_plus_k_below_1_is_warned(tmp_path, cache):
+    """wetted_area_m2 = 472 (the sample hull's 0.0472 m² typed in cm²): the protocol warns
+    of the unit, and the day's form factor, 1 + k = 0.000155 (the drag is 6500 times less than
+    the friction of 472 m²), is named as no hull's, with drag_ittc57 not to be trusted."""
+    text = _variant(tmp_path).read_text(encoding="utf-8")
+    text, n = re.subn(r"(?m)^wetted_area_m2 = 0\.0472", "wetted_area_m2 = 472.0", text)
+    assert n == 1
+    (tmp_path / "cm2.toml").write_text(text, encoding="utf-8")
+    day = process_day(tmp_path / "cm2.toml", cache_dir=cache)
+    said = [str(w) for w in day.warnings]
+    assert any("[model] wetted_area_m2 = 472 m² is 8.51e+03 times π·D·L" in w for w in said)
+    one_plus_k = day.scaling.form_factor.one_plus_k
+    assert one_plus_k == pytest.approx(1.548e-4, rel=0.01)
+    hits = [w for w in said if w.startswith("form factor 1 + k = 0.000155 is far below 1")]
+    assert len(hits) == 1 and "wetted_area_m2 in other units" in hits[0], said
+
+
+def test_form_factor_takes_each_run_at_its_own_water():
+    """Two runs at 0.8 m/s in water at 10 °C and 26 °C, two at 2 m/s at 26 °C (the sample
+    hull's speeds and drags): 1 + k by hand, each run's C_T with its ρ and C_F at its
+    Re = U L/ν, equals form_factor's with the runs' waters. The mean water (what the day
+    used) moved this programme's 1 + k by 0.5 %, its speeds' 1 + k by up to 3 %."""
+    u = np.array([0.8, 0.8, 2.0, 2.0])
+    r = np.array([0.1392, 0.1376, 0.8264, 0.8251])
+    w = [water_properties(t, "fresh") for t in (10.0, 26.0, 26.0, 26.0)]
+    rho, nu = np.array([x.rho for x in w]), np.array([x.nu for x in w])
+    ff = similarity.form_factor(r, u, 0.0472, rho, nu, 0.353, re_min=1e5)
+    re = u * 0.353 / nu
+    k = r / (0.5 * rho * 0.0472 * u**2) / (0.075 / (np.log10(re) - 2.0) ** 2)
+    assert ff.one_plus_k == pytest.approx(np.mean([k[:2].mean(), k[2:].mean()]), rel=1e-12)
+    np.testing.assert_allclose(ff.reynolds, re, rtol=1e-12)
+    mean = similarity.form_factor(r, u, 0.0472, rho.mean(), nu.mean(), 0.353, re_min=1e5)
+    assert abs(mean.one_plus_k / ff.one_plus_k - 1.0) > 0.004  # 0.50 %
+    with pytest.raises(ValueError, match="one per point"):
+        similarity.form_factor(r, u, 0.0472, rho[:3], nu, 0.353)
+
+
+def test_form_factor_warnings_by_range():
+    """None at 1 and above; laminar flow named between 0.5 and 1; units below 0.5."""
+    assert form_factor_warnings(1.0, 0.05) == [] and form_factor_warnings(1.3, 0.05) == []
+    assert form_factor_warnings(math.nan, 0.05) == []
+    assert "laminar" in form_factor_warnings(0.8, 0.05)[0]
+    assert "other units" in form_factor_warnings(0.4, 0.05)[0]
+
+
 def test_hot_prototype_water_is_a_day_warning(tmp_path, cache):
     text = _variant(tmp_path).read_text(encoding="utf-8")
     text, n = re.subn(r"(\[prototype\.water\]\ntype = \"sea\"\ntemperature_C = )15\.0",
@@ -329,8 +375,9 @@ def test_sample_day_form_factor_is_the_mean_over_tested_speeds(outputs):
     runs = pd.read_csv(outputs / "runs.csv")
     zero = _zero_runs(runs)
     u = zero.speed_mean.to_numpy()
-    ct = zero.drag_mean.to_numpy() / (0.5 * zero.rho.mean() * 0.0472 * u**2)
-    k = ct / similarity.ittc57_cf(u * 0.353 / zero.nu.mean())
+    # each run at its own water (runs.csv rho, nu), as docs/method.md says of every run
+    ct = zero.drag_mean.to_numpy() / (0.5 * zero.rho.to_numpy() * 0.0472 * u**2)
+    k = ct / similarity.ittc57_cf(u * 0.353 / zero.nu.to_numpy())
     per_speed = pd.Series(k).groupby(np.round(u, 1)).mean()
     assert list(per_speed.index) == [0.8, 1.2, 1.6, 2.0]
     prov = json.loads((outputs / "provenance.json").read_text(encoding="utf-8"))

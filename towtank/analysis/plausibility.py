@@ -84,10 +84,12 @@ def plausibility_warnings(
             continue
         v = _value(table, sym)
         if math.isfinite(v) and v > 0:
+            small = (", its gain left out (forces in V are too small beside the weighed "
+                     "mass's inertia m·a)" if sym.endswith("dot") else "")
             out.append(
                 f"{sym} = {v:+.4g} is positive, but it is negative for any body (added mass is "
                 "positive, drag opposes the motion): is a force channel's sign reversed (the "
-                "sign of its gain), or [model] mass_kg far off?"
+                f"sign of its gain){small}, or [model] mass_kg far off?"
             )
     if added_mass and volume_m3 is not None and rho > 0:
         disp = rho * volume_m3
@@ -113,7 +115,9 @@ def plausibility_warnings(
             continue
         cd = -v / (q * area)
         if cd > 0 and not lo <= cd <= hi:
-            hint = _UNITS_HINT if (cd > 5 * hi or cd < lo / 5) else "check the reference area"
+            hint = _UNITS_HINT if (cd > 5 * hi or cd < lo / 5) else (
+                "check the reference area, and the drag channel's gain (left out, the forces "
+                "are in V or mV)" if cd < lo else "check the reference area")
             out.append(f"{name} = {cd:.3g} (from {sym} = {v:.4g} kg/m) is outside the "
                        f"{lo:g}–{hi:g} of a streamlined hull: {hint}")
     return out

@@ -95,6 +95,29 @@ def with_prototype_values(coefficients: pd.DataFrame, values: pd.DataFrame | Non
     return out
 
 
+#: 1 + k below which the model's drag is too small for its wetted area to be a unit-free
+#: reading: laminar flow over part of a small model can put 1 + k somewhat below 1 (the
+#: ITTC-57 line is a turbulent one), but not below half of it.
+MIN_ONE_PLUS_K = 0.5
+
+
+def form_factor_warnings(one_plus_k: float, wetted_area_m2: float) -> list[str]:
+    """The sentence a form factor 1 + k below 1 needs (ITTC 7.5-02-02-02: 1 + k = C_T/C_F0 at
+    low speed, about 1.1–1.6 for a streamlined hull): below :data:`MIN_ONE_PLUS_K` the
+    wetted area ``wetted_area_m2`` [m²] or the drag is in other units; between it and 1
+    the flow over the model is partly laminar. None at or above 1."""
+    if not math.isfinite(one_plus_k) or one_plus_k >= 1.0:
+        return []
+    if one_plus_k < MIN_ONE_PLUS_K:
+        return [f"form factor 1 + k = {one_plus_k:.3g} is far below 1, which no hull has "
+                f"(its drag less than the friction of its wetted area {wetted_area_m2:g} m²): "
+                "is [model] wetted_area_m2 in other units (cm²?), or the drag? drag_ittc57 "
+                "is not to be trusted."]
+    return [f"form factor 1 + k = {one_plus_k:.3g} is below 1: the model's drag is less than "
+            "the ITTC-57 friction of its wetted area, as with laminar flow over part of it "
+            "(trip the boundary layer) or a wetted area given too large."]
+
+
 def scale_to_prototype(
     runs: pd.DataFrame,
     model: Model,
@@ -164,11 +187,12 @@ def scale_to_prototype(
     one_plus_k = math.nan
     if model.wetted_area_m2 is not None:
         try:
-            ff = similarity.form_factor(
-                r, u, model.wetted_area_m2, float(zero["rho"].mean()),
-                float(zero["nu"].mean()), model.length_m, re_min=laminar_re,
+            ff = similarity.form_factor(  # each run at its own water
+                r, u, model.wetted_area_m2, zero["rho"].to_numpy(float),
+                zero["nu"].to_numpy(float), model.length_m, re_min=laminar_re,
             )
             one_plus_k = float(ff.one_plus_k)
+            warn += form_factor_warnings(one_plus_k, model.wetted_area_m2)
         except ValueError as exc:
             warn.append(f"form factor: {exc}")
     else:

@@ -346,8 +346,8 @@ def form_factor(
     drag: ArrayLike,
     speed: ArrayLike,
     wetted_area: float,
-    rho: float,
-    nu: float,
+    rho: float | ArrayLike,
+    nu: float | ArrayLike,
     length: float,
     re_min: float = 2e5,
     rel_tol: float = 0.02,
@@ -370,10 +370,10 @@ def form_factor(
         Model speed of each point [m/s]
     wetted_area : float
         Wetted surface area of the model [m^2]
-    rho : float
-        Density of the tank water [kg/m^3]
-    nu : float
-        Kinematic viscosity of the tank water [m^2/s]
+    rho : float or array_like
+        Density of the tank water [kg/m^3]: one value, or each point's (its run's water)
+    nu : float or array_like
+        Kinematic viscosity of the tank water [m^2/s]: one value, or each point's
     length : float
         Model length [m]
     re_min : float, default 2e5
@@ -397,10 +397,11 @@ def form_factor(
             f"drag and speed must have the same length ({r.size} and {u.size} points given)."
         )
     area = _positive(wetted_area, "wetted_area")
-    re = np.asarray(reynolds_number(u, _positive(length, "length"), _positive(nu, "nu")))
+    rho_i, nu_i = (_positive_each(x, name, r.shape) for x, name in ((rho, "rho"), (nu, "nu")))
+    re = np.asarray(reynolds_number(u, _positive(length, "length"), nu_i))
     values = np.full(r.shape, np.nan)
     valid = np.isfinite(re) & (re > 100.0) & np.isfinite(r)
-    ct = r[valid] / (0.5 * _positive(rho, "rho") * area * u[valid] ** 2)
+    ct = r[valid] / (0.5 * rho_i[valid] * area * u[valid] ** 2)
     values[valid] = ct / ittc57_cf(re[valid])
     used = valid & (re >= re_min)
     n_runs = int(np.count_nonzero(used))
@@ -913,6 +914,18 @@ def _re_range(values: tuple[float, float], name: str) -> tuple[float, float]:
     if not (math.isfinite(lo) and math.isfinite(hi) and lo > 0.0):
         raise ValueError(f"{name} must hold two finite Reynolds numbers > 0, not {values}.")
     return lo, hi
+
+
+def _positive_each(value: float | ArrayLike, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` (one value or one per point) as an array of ``shape``; ValueError unless
+    every value is finite and > 0, or the sizes differ."""
+    v = np.asarray(value, dtype=float)
+    if v.ndim and v.shape != shape:
+        raise ValueError(f"{name} must be one value or one per point ({v.size} given for "
+                         f"{int(np.prod(shape))} points).")
+    if not (np.all(np.isfinite(v)) and np.all(v > 0.0)):
+        raise ValueError(f"{name} must be finite values > 0.")
+    return np.broadcast_to(v, shape)
 
 
 def _positive(value: float, name: str) -> float:

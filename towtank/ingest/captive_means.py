@@ -33,8 +33,8 @@ from towtank.ingest.schema import check_table_size
 from towtank.ingest.sheetlayout import SheetOptions
 from towtank.reference.water import water_at
 
-__all__ = ["MAX_DRIFT_DEG", "MAX_MEANS_SPEED", "captive_means", "means_in_si",
-           "read_means_table"]
+__all__ = ["MAX_DRIFT_DEG", "MAX_MEANS_SPEED", "captive_means", "check_prime_names",
+           "means_in_si", "prime_magnitude_warning", "read_means_table"]
 
 #: Largest |drift angle| and |rudder angle| of a captive run [deg].
 MAX_DRIFT_DEG = 90.0
@@ -158,7 +158,8 @@ def _number(cell: Any) -> float:
 
 
 def read_means_table(path: str | Path, columns: dict[str, str] | None = None, *,
-                     src: str = "") -> tuple[pd.DataFrame, list[str]]:
+                     src: str = "", prime: bool | None = None
+                     ) -> tuple[pd.DataFrame, list[str]]:
     """Read a lab's table of static captive means, in the table's own units.
 
     Parameters
@@ -169,6 +170,9 @@ def read_means_table(path: str | Path, columns: dict[str, str] | None = None, *,
         ``[captive] means_columns``: canonical name -> the table's column; the rest guessed.
     src : str
         The protocol's name, for the messages.
+    prime : bool, optional
+        ``[captive] means_prime``: the loads' column names must agree with it
+        (:func:`check_prime_names`); None: not checked.
 
     Returns
     -------
@@ -185,7 +189,8 @@ def read_means_table(path: str | Path, columns: dict[str, str] | None = None, *,
     ProtocolError
         Unreadable table, required column (speed, fy, mz) not found, a cell that is not a
         number, a run listed twice with different values, a drift or rudder angle beyond
-        ±90°, a speed not in 0–50 m/s.
+        ±90°, a speed not in 0–50 m/s, load columns named as primes (X', Y', N') without
+        ``prime`` or with a unit (N) with it.
     """
     path = Path(path)
     src = src or path.name
@@ -195,6 +200,9 @@ def read_means_table(path: str | Path, columns: dict[str, str] | None = None, *,
     header = ["" if c is None else str(c).strip() for c in grid[0]]
     index, factors, test = _columns(header, columns or {}, path, src)
     missing = [c for c in ("speed", "fy", "mz") if c not in index]
+    if prime is not None:
+        check_prime_names([header[index[c]] for c in ("fx", "fy", "mz") if c in index],
+                          prime, path.name, src)
     if missing:
         raise ProtocolError(
             f"{src}: the means table {path.name} has no column for {', '.join(missing)} "
@@ -239,6 +247,62 @@ def read_means_table(path: str | Path, columns: dict[str, str] | None = None, *,
     table = table[cols].reset_index(drop=True)
     table["run"] = table["run"].astype(int)
     return table, notes
+
+
+#: The marks a lab writes after a load's name for its prime (X', Y′).
+PRIME_MARKS = ("'", "′", "’")
+
+
+def check_prime_names(names: list[str], prime: bool, name: str, src: str) -> None:
+    """ProtocolError when the load columns ``names`` of the means table ``name`` contradict
+    ``[captive] means_prime`` (``prime``): a column named as a prime (X', Y′) read as newtons,
+    or a column with a unit (``Y (N)``) read as a prime; a slip of 10^4 either way."""
+    primed = [n for n in names if _split_unit(n)[0].strip().endswith(PRIME_MARKS)]
+    if primed and not prime:
+        raise ProtocolError(
+            f"{src}: the means table {name}'s load column(s) {', '.join(primed)} are named "
+            "as primes (X' = X/(½ρL²U²)), but [captive] means_prime is not true, so they "
+            "would be read as newtons: set means_prime = true.")
+    united = [n for n in names if _split_unit(n)[1].strip()]
+    if united and prime:
+        raise ProtocolError(
+            f"{src}: the means table {name}'s load column(s) {', '.join(united)} carry a "
+            "unit, but [captive] means_prime = true reads them as primes: remove "
+            "means_prime, or give the primes' columns.")
+
+
+#: Largest |Y'| and |N'| of a table's loads below which loads given in N and N m are primes
+#: after all: a captive programme's largest drift or rudder gives primes of 10^-3 to 10^-1;
+#: below 10^-5 a 2 m model at 1 m/s would feel less than 0.02 N.
+MIN_PLAUSIBLE_PRIME = 1e-5
+#: Largest |Y'| and |N'| above which loads given as primes are newtons after all (a
+#: slender body's Y' at 90° drift is about 0.5).
+MAX_PLAUSIBLE_PRIME = 2.0
+
+
+def prime_magnitude_warning(table: pd.DataFrame, *, prime: bool, rho: float, length_m: float,
+                            name: str) -> str | None:
+    """One sentence when the loads' size contradicts ``[captive] means_prime``: every |Y'|
+    and |N'| below :data:`MIN_PLAUSIBLE_PRIME` read as newtons (primes read as N), or any
+    above :data:`MAX_PLAUSIBLE_PRIME` read as primes (newtons read as primes); else None.
+    ``table`` in SI (:func:`means_in_si`), ``rho`` [kg/m³], ``length_m`` L [m]."""
+    q = 0.5 * rho * table["speed"].to_numpy(float) ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        primes = np.abs(np.concatenate([table["fy"].to_numpy(float) / (q * length_m**2),
+                                        table["mz"].to_numpy(float) / (q * length_m**3)]))
+    primes = primes[np.isfinite(primes)]
+    if primes.size == 0 or not primes.any():
+        return None
+    top = float(primes.max())
+    if not prime and top < MIN_PLAUSIBLE_PRIME:
+        return (f"the means table {name}'s loads are at most {top:.2g} as primes (Y/(½ρL²U²), "
+                f"N/(½ρL³U²)), below the {MIN_PLAUSIBLE_PRIME:g} of any captive test: are they "
+                "primes? Then set [captive] means_prime = true.")
+    if prime and top > MAX_PLAUSIBLE_PRIME:
+        return (f"the means table {name}'s primes reach {top:.3g}, above the "
+                f"{MAX_PLAUSIBLE_PRIME:g} of any captive test: are they in N and N m? Then "
+                "remove [captive] means_prime.")
+    return None
 
 
 def _check_values(table: pd.DataFrame, name: str, src: str) -> None:
@@ -326,11 +390,14 @@ def captive_means(protocol: Protocol) -> tuple[pd.DataFrame, list[str]]:
         raise ProtocolError(f"{protocol.path.name}: the protocol names no [captive] means "
                             "table.")
     table, notes = read_means_table(captive.means, captive.means_columns,
-                                    src=protocol.path.name)
+                                    src=protocol.path.name, prime=captive.means_prime)
     w = protocol.water
     rho = float(water_at(w.temperature_C, w.type, w.salinity_g_kg, w.pressure_Pa,
                          w.relative_humidity_pct)[0])
     out = means_in_si(table, prime=captive.means_prime, rho=rho,
                       length_m=protocol.model.length_m)
+    said = prime_magnitude_warning(out, prime=captive.means_prime, rho=rho,
+                                   length_m=protocol.model.length_m, name=Path(captive.means).name)
+    notes += [said] if said else []
     out.attrs["prime"] = captive.means_prime
     return out, notes

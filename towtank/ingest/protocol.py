@@ -20,7 +20,7 @@ import re
 import sys
 import tomllib
 import warnings as _warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -217,6 +217,42 @@ def slugify(text: str) -> str:
     return slug or "campaign"
 
 
+#: [model] areas given with a diameter, against the body of revolution of that length L and
+#: diameter D [m]: (key, what it is compared with, its value from L and D, the range of
+#: ratios a hull has, the units a ratio far outside suggests). Wetted area against the
+#: cylinder's side πDL (a Myring hull about 0.75–0.9 of it, a double cone 0.5, a hull with
+#: fins and appendages up to about 1.2); frontal area against πD²/4 (fins add a little);
+#: lateral area against L·D (0.7–0.9 for a Myring profile). A volume in other units is
+#: caught with the mass (:func:`towtank.ingest.sections.check_mass`).
+AREA_CHECKS: tuple[tuple[str, str, Callable[[float, float], float], tuple[float, float],
+                         str], ...] = (
+    ("wetted_area_m2", "π·D·L", lambda L, D: math.pi * D * L, (0.3, 1.5), "cm² or mm²"),
+    ("frontal_area_m2", "π·D²/4", lambda L, D: math.pi * D * D / 4.0, (0.5, 3.0),
+     "cm² or mm²"),
+    ("lateral_area_m2", "L·D", lambda L, D: L * D, (0.3, 1.5), "cm² or mm²"),
+)
+
+
+def _area_warnings(model: Model) -> list[str]:
+    """One sentence per [model] area that no hull of its length and diameter has
+    (:data:`AREA_CHECKS`): a unit slip (cm² for m²) that would scale the drag coefficients or
+    the form factor by a power of ten. Nothing without a diameter (a ship)."""
+    L, D = model.length_m, model.diameter_m
+    if not D or not 0.05 <= L <= 20.0 or not 0.005 <= D <= 3.0:
+        return []  # a length or diameter in other units: their own warnings name it
+    out = []
+    for key, against, size, (lo, hi), units in AREA_CHECKS:
+        value = getattr(model, key)
+        if value is None or key in model.myring_computed:
+            continue
+        ratio = value / size(L, D)
+        if not lo <= ratio <= hi:
+            out.append(f"[model] {key} = {value:g} m² is {ratio:.3g} times {against} = "
+                       f"{size(L, D):.3g} m² of a body {L:g} m long and {D:g} m across, "
+                       f"where a hull has {lo:g}–{hi:g} times it: was it given in {units}?")
+    return out
+
+
 def _unit_warnings(
     model: Model | None, fin: Fin | None, water: Water, prototype: Prototype | None = None
 ) -> list[str]:
@@ -241,6 +277,7 @@ def _unit_warnings(
                 f"[model] length/diameter = {model.length_m / model.diameter_m:.0f} is unusually "
                 "large; check the units of length_m and diameter_m."
             )
+        out += _area_warnings(model)
     if fin is not None:
         check(fin.chord_m, 0.005, 5.0, "[fin] chord_m", "was it given in mm or cm?")
         check(fin.span_m, 0.005, 10.0, "[fin] span_m", "was it given in mm or cm?")

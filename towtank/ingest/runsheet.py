@@ -608,6 +608,13 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
                 raise ValueError
             run = int(run_f)
         except (ValueError, OverflowError):
+            status = words(_as_text(rec.get("status", "")), STATUS_WORDS)
+            if status == "void" or not _as_text(rec["file"]):
+                # not a run: a voided row (never an error) or a total or note line
+                notes.append(f"row {sheet_row} is left aside: its run number {run_text!r} is "
+                             "not a whole number and it "
+                             + ("is void" if status == "void" else "names no data file"))
+                continue
             raise ProtocolError(
                 f"{src}: row {sheet_row} has run number {run_text!r}, which is not a whole number "
                 f"from 0 to {MAX_RUN_NUMBER}."
@@ -674,6 +681,8 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         )
         rows.append(out)
 
+    if not rows:
+        raise ProtocolError(f"{src}: the run sheet has no runs.")
     df = pd.DataFrame(rows)
     captive_columns = ("plane", *CAPTIVE_NUMERIC)
     if not df["test"].isin(CAPTIVE_TESTS).any() and \
@@ -689,9 +698,41 @@ def read_run_sheet(path: str | Path, default_temperature_C: float,
         raise ProtocolError(f"{src}: duplicated run numbers ({detail}).")
     if "segment" in df.columns:  # whole numbers (runs.csv carries them as written)
         df["segment"] = df["segment"].astype("Int64")
+    for col in ANGLE_COLUMNS:
+        if col in df.columns and units.get(col) is None:  # a unit in the header is its own
+            said = radian_angles_warning(df[col].to_numpy(dtype=float), col, src)
+            warnings += [said] if said else []
     df.attrs["notes"] = notes
     df.attrs["warnings"] = warnings
     return df
+
+
+#: The sheet's angle columns [deg] checked for angles typed in radians.
+ANGLE_COLUMNS = ("angle_deg", "drift_deg", "rudder_deg")
+#: How close [deg] each angle read as radians must come to a whole or half degree.
+RADIAN_GRID_TOL_DEG = 0.03
+
+
+def radian_angles_warning(angles: np.ndarray, column: str, src: str) -> str | None:
+    """One sentence when the angles of ``column`` (read as degrees) look typed in radians:
+    at least two different non-zero angles, all within ±π/2 (a tow at a fraction of a degree
+    is no test programme), each a whole or half degree when read as radians (to
+    :data:`RADIAN_GRID_TOL_DEG`, enough for values rounded to 3 decimals) while the values
+    themselves are not whole or half degrees. Else None."""
+    a = np.abs(angles[np.isfinite(angles)])
+    a = a[a > 0.0]
+    if np.unique(np.round(a, 6)).size < 2 or a.max() > math.pi / 2 + 1e-3:
+        return None
+    deg = np.degrees(a)
+    on_grid = np.abs(2.0 * deg - np.round(2.0 * deg)) <= 2.0 * RADIAN_GRID_TOL_DEG
+    already = np.abs(2.0 * a - np.round(2.0 * a)) <= 1e-9
+    if not on_grid.all() or already.all():
+        return None
+    i = int(np.argmax(a))
+    return (f"{src}: every {column} of the run sheet lies within ±π/2 and is a whole or half "
+            f"degree when read as radians ({a[i]:g} = {deg[i]:.2f}°): were the angles typed in "
+            "radians? towtank reads them as degrees (write them in degrees, or give the "
+            "column's unit in its header: Angle [rad]).")
 
 
 #: Largest |drift_deg| and |rudder_deg| of a captive run [deg].

@@ -307,7 +307,7 @@ def parse_captive(data: Any, base: Path, src: str, check_paths: bool) -> Captive
         # loaded on use: the means table's reader (pandas) only for a protocol naming one
         from towtank.ingest.captive_means import read_means_table
 
-        read_means_table(means, columns, src=src)
+        read_means_table(means, columns, src=src, prime=c.get("means_prime", False))
     return Captive(moment_ref=moment_ref, means=means, means_prime=c.get("means_prime", False),
                    means_columns=columns, roll_deg=float(math.copysign(90.0, roll)),
                    min_cycles=cycles, amplitude_tolerance=tol)

@@ -244,6 +244,8 @@ def reduce_run(
     s0, s1 = steady
     u_s = speed_f[s0:s1]
     speed_mean = float(np.mean(u_s))
+    if not raw.extra:  # a captive run's drag is the balance's −fx
+        check_drag_direction(drag_f[s0:s1], speed_mean)
     accel_mean = math.nan
     if ph.accel is not None:
         accel_mean = float(np.mean(accel_f[ph.accel[0] : ph.accel[1]]))
@@ -393,6 +395,8 @@ def reduce_nominal(
                  "does not end at rest by its force, or drift = \"none\")")
     drag_f = zeroed[0]
     lift_f = zeroed[1] if has_lift else np.full(n, np.nan)
+    if not raw.extra:  # a captive run's drag is the balance's −fx
+        check_drag_direction(drag_f[s0:s1], u_set)
     u_u = p.speed_tolerance * u_set / math.sqrt(3.0)
     notes.append(f"speed: the set speed {u_set:g} m/s of the run sheet (no speed channel; "
                  f"u = {u_u:.2g} m/s from speed_tolerance = {p.speed_tolerance:g}); no "
@@ -665,6 +669,36 @@ def check_force_signal(
                 f"run while the carriage moves at up to {float(np.max(speed_f)):.3f} m/s (a "
                 "dead load cell, an unplugged cable, or the wrong column?)"
             )
+
+
+#: Blocks of the steady window whose means give the steady drag's standard error for
+#: :func:`check_drag_direction` (block means outlast the filtered noise's correlation).
+DIRECTION_BLOCKS = 8
+#: How many of those standard errors the steady drag must lie on the side of the motion to
+#: be rejected (t with 7 degrees of freedom: 5 is p < 0.002 for a drag that is truly 0).
+DIRECTION_SIGMAS = 5.0
+
+
+def check_drag_direction(drag: np.ndarray, speed: float) -> None:
+    """Reject a run whose steady drag [N] (zero and drift removed, tare still in) points
+    along the tow at the mean steady ``speed`` [m/s]: every towed body's drag opposes its
+    motion (positive for a forward tow, negative for a backward one), so a drag on the other
+    side of zero by :data:`DIRECTION_SIGMAS` standard errors of its
+    :data:`DIRECTION_BLOCKS` block means is a reversed drag channel, a drag and lift cable
+    swapped, or a zero taken while towing. Captive runs, whose drag is the balance's −fx,
+    are not checked."""
+    if not speed or drag.size < 2 * DIRECTION_BLOCKS:
+        return
+    along = drag * math.copysign(1.0, speed)
+    means = np.array([b.mean() for b in np.array_split(along, DIRECTION_BLOCKS)])
+    mean = float(along.mean())
+    se = float(np.std(means, ddof=1)) / math.sqrt(DIRECTION_BLOCKS)
+    if mean < -DIRECTION_SIGMAS * se:
+        raise RunError(
+            f"the steady drag is {mean * math.copysign(1.0, speed):+.3g} N at "
+            f"{speed:+.3g} m/s, {-mean / se:.0f} standard errors on the side of the motion, "
+            "where a towed body's drag opposes it (is the drag channel's sign reversed, the "
+            "drag and lift cables swapped, or the zero taken while towing?)")
 
 
 def fit_samples(

@@ -444,8 +444,9 @@ def _coefficients(w: SheetWriter, hull: HullResult | None, coef: pd.DataFrame,
            f"Rows with |diff_pct| > {DIFF_HIGHLIGHT_PCT:g} are highlighted.")
     hf = hull.fit
     w.note(f"prime = value/(½ρL³) (added mass) or value/(½ρL²) (damping) with ρ = "
-           f"{hf.rho:.3f} kg/m³, the mean of the hull runs' "
-           f"{'air' if protocol.water.is_air else 'water'} densities, and L = "
+           f"{hf.rho:.3f} kg/m³, the density of the protocol's "
+           f"{'air' if protocol.water.is_air else 'water'} ([water]; each run's C_D is taken "
+           "with its own), and L = "
            f"{hf.length:g} m. diff_pct = (prime − reference_prime)/|reference_prime|·100, signed: "
            "negative where the prime is more negative than the reference (e.g. a larger added "
            "mass); empty where the reference is 0.")
