@@ -22,6 +22,8 @@ import pytest
 from towtank.analysis import similarity
 from towtank.analysis.scaling import form_factor_warnings
 from towtank.commands.cli import main
+from towtank.errors import ProtocolError
+from towtank.ingest.protocol import load_protocol
 from towtank.pipeline import process_day
 from towtank.reference import geometry
 from towtank.reference.water import water_properties
@@ -199,6 +201,21 @@ def test_scale_command_refuses_unusable_speeds(outputs, capsys, speed):
     assert code == 2
     assert err.count("\n") == 0 and "--speeds" in err and "internal error" not in err
     assert "prototype speed" in err
+
+
+def test_scale_speeds_are_checked_as_the_protocols_speeds_m_s(outputs, tmp_path, capsys):
+    """--speeds 2500 (mm/s for m/s) printed R_p = 5,033,207 N at Fn = 672 with exit 0, where
+    [prototype] speeds_m_s = [2500.0] stops: both go through one check, in one sentence."""
+    code = main(["scale", str(PROTOCOL), "--speeds", "2", "2500", "--out", str(outputs)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    said = ("must all be positive prototype speeds up to 100 m/s, but they are 2, 2500; was it "
+            "given in mm/s for m/s?")
+    assert err == f"towtank: --speeds {said}"
+    path = _variant(tmp_path, prototype={"speeds_m_s": "[2.0, 2500.0]"})
+    with pytest.raises(ProtocolError) as exc:
+        load_protocol(path)
+    assert str(exc.value) == f"{path.name}: 'speeds_m_s' in [prototype] {said}"
 
 
 def test_prototype_speeds_below_the_turbulent_range_are_warned(outputs, capsys):

@@ -317,6 +317,8 @@ def test_samples_without_a_covariance_are_refused_before_simulating(tmp_path, ru
     ({"weight_N": 250.0, "buoyancy_N": 250.0}, ["'weight_N'", "mass_kg x g"]),
     ({"buoyancy_N": 10 * MASS * G}, ["'buoyancy_N'", "weight"]),
     ({"cg_m": [5.0, 0.0, 0.0]}, ["'cg_m'", "length_m"]),
+    ({"cg_m": [0.0, 0.0, 19.6]}, ["'cg_m'", "length_m (1.33 m)", "[0.0, 0.0, 19.6]",
+                                  "was it given in mm for m?"]),
 ])
 def test_what_no_vehicle_is_refused(tmp_path, run, change, words):
     path = write_json(tmp_path / "model.json", good_model(**change))

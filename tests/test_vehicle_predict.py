@@ -4,14 +4,21 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from towtank.commands import cli
+from towtank.ingest import protocol as protocol_loader
+from towtank.ingest.vehicle_protocol import Vehicle, VehicleFin
 from towtank.reference.sets import design_tool_table1
 from towtank.vehicle.hull import myring_profile, suboff_profile, table_profile
+from towtank.vehicle.model import vehicle_profile
 from towtank.vehicle.predict import FinPair, lamb_k_factors, predict_coefficients, prime_exponent
+from towtank.vehicle.schema import check_model, vehicle_geometry_problems
 
 RHO = 1030.0  # Prestero's sea water
 
@@ -217,6 +224,86 @@ def test_bad_vehicle_sections_stop_with_exit_2(tmp_path, capsys, edit, message):
     assert main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+#: [vehicle.myring] of PROTOCOL: Prestero's REMUS hull [m, -, deg].
+REMUS_MYRING = dict(a=0.191, b=0.654, c=0.541, n=2.0, theta_deg=24.98, d=0.191,
+                    a_offset=0.0165, c_offset=0.0368)
+
+
+# A lab's slip: the geometry typed in millimetres (the brief's REMUS numbers: Y_vdot -1.84e6 kg
+# from span_m = 85.7, N_ur -8.65e6 from x_m = -638, N_uv -1.37e4 from origin_m = 611, and a
+# model.json simulate refused from cg_m = [0, 0, 19.6], each written with exit 0 before).
+@pytest.mark.parametrize("edit,words", [
+    (("span_m = 0.0857", "span_m = 85.7"),
+     ["'span_m' in [vehicle.fins #1] is 85.7 m", "the hull's length of 1.333 m"]),
+    (("chord_m = 0.0776", "chord_m = 77.6"),
+     ["'chord_m' in [vehicle.fins #1] is 77.6 m", "the hull's length of 1.333 m"]),
+    (("x_m = -0.638", "x_m = -638"),
+     ["'x_m' in [vehicle.fins #1] is -638 m", "origin_m, 0.611 m aft of the nose tip",
+      "from -0.7217 m (the tail) to 0.611 m (the nose)"]),
+    (("origin_m = 0.611", "origin_m = 611"),
+     ["'origin_m' in [vehicle] is 611 m aft of the nose tip", "from 0 to 1.333 m"]),
+    (("cg_m = [0.0, 0.0, 0.0196]", "cg_m = [0, 0, 19.6]"),
+     ["'cg_m' in [vehicle] must lie within the hull's length (1.3327 m) of the reference point",
+      "[0.0, 0.0, 19.6]"]),
+])
+def test_geometry_in_millimetres_stops_predict_with_exit_2(tmp_path, capsys, edit, words):
+    proto = tmp_path / "mm.toml"
+    assert edit[0] in PROTOCOL
+    proto.write_text(PROTOCOL.replace(edit[0], edit[1], 1))
+    assert cli.main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("towtank: mm.toml: ") and err.count("\n") == 1, err
+    for word in [*words, "was it given in mm for m?"]:
+        assert word in err, (word, err)
+    assert not (tmp_path / "out").exists()  # nothing written
+
+
+def test_a_fin_is_bounded_by_the_hull_from_the_centre_of_buoyancy_without_origin_m():
+    """x_m is measured from the reference point, positive forward; without origin_m that is the
+    hull's centre of buoyancy: a fin lies from x_B - L (the tail) to x_B (the nose)."""
+    vehicle = Vehicle(hull="myring", myring=REMUS_MYRING)
+    profile = vehicle_profile(vehicle)
+    length, x_b = profile.length, profile.x_buoyancy
+    fin = VehicleFin("rudder", 0.0, 0.0857, 0.0776)
+    for x in (x_b - length, -0.638, 0.0, x_b):  # tail end, Prestero's fins, at the CB, nose tip
+        on = replace(vehicle, fins=(replace(fin, x_m=x),))
+        assert vehicle_geometry_problems(on, length, x_b) == [], x
+    for x in (x_b - 1.01 * length, 1.01 * x_b):  # just off the tail, just ahead of the nose
+        off = replace(vehicle, fins=(replace(fin, x_m=x),))
+        (said,) = vehicle_geometry_problems(off, length, x_b)
+        assert "the centre of buoyancy, 0.6058 m aft of the nose tip" in said, said
+        assert said.endswith("(the nose).")  # a little off: no unit slip to name
+    span = replace(vehicle, fins=(replace(fin, span_m=length),))  # at most the hull's length
+    assert vehicle_geometry_problems(span, length, x_b) == []
+
+
+@pytest.mark.parametrize("z", [0.5, 1.3, 1.34, 19.6])
+def test_predict_bounds_the_centres_as_simulate_does(z):
+    """cg_m and cb_m: the one bound of model.json (:func:`towtank.vehicle.schema.centre_problem`),
+    so that predict writes no model.json that simulate refuses for them."""
+    for key in ("cg_m", "cb_m"):
+        vehicle = Vehicle(hull="myring", myring=REMUS_MYRING, origin_m=0.611,
+                          **{key: (0.0, 0.0, z)})
+        length = vehicle_profile(vehicle).length
+        by_predict = vehicle_geometry_problems(vehicle, length, 0.611)
+        model = {"rho_kg_m3": 1030.0, "mass_kg": 30.0, "weight_N": 30.0 * 9.80665,
+                 "buoyancy_N": 30.0 * 9.80665, "cg_m": [0.0, 0.0, 0.0], "cb_m": [0.0, 0.0, 0.0],
+                 "inertia_kg_m2": [1.0, 1.0, 1.0], "coefficients": {}, "length_m": length,
+                 key: [0.0, 0.0, z]}
+        by_simulate = [p for p in check_model(model) if f"'{key}'" in p]
+        assert bool(by_predict) == bool(by_simulate) == (z > length), (key, z)
+
+
+@pytest.mark.parametrize("name", ["remus_vehicle", "series58_vehicle", "glider_parametric"])
+def test_the_shipped_vehicles_lie_on_their_hulls(name):
+    root = Path(__file__).resolve().parents[1]
+    vehicle = protocol_loader.load_protocol(root / "protocols" / f"{name}.toml",
+                                            check_paths=False, require_runs=False).vehicle
+    profile = vehicle_profile(vehicle)
+    x_ref = profile.x_buoyancy if vehicle.origin_m is None else vehicle.origin_m
+    assert vehicle.fins and vehicle_geometry_problems(vehicle, profile.length, x_ref) == []
 
 
 def test_remus_prestero2001_reference_set_normalised_consistently():

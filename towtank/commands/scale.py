@@ -10,7 +10,12 @@ import pandas as pd
 
 from towtank.analysis import similarity
 from towtank.errors import ProtocolError
-from towtank.ingest.protocol import Prototype, Water, load_protocol
+from towtank.ingest.protocol import (
+    Prototype,
+    Water,
+    check_prototype_speed_range,
+    load_protocol,
+)
 from towtank.runner import Options, Plan, reduce_day
 from towtank.runtime.manifest import output_lock
 
@@ -22,14 +27,14 @@ def scale_command(
 
     The day is reduced through the per-run cache in the output folder (``.cache``), so after a
     ``towtank process`` no run file is read again; only the fits and the scaling are redone.
-    Speeds that are not finite, not > 0 or give a prototype Re below 1e3 are refused
-    (:func:`towtank.analysis.similarity.check_prototype_speeds`) with a ProtocolError (exit status
-    2).
+    Speeds that are not > 0 and at most 100 m/s, as in ``[prototype] speeds_m_s``
+    (:func:`towtank.ingest.protocol.check_prototype_speed_range`), or give a prototype Re below
+    1e3 (:func:`towtank.analysis.similarity.check_prototype_speeds`) are refused with a
+    ProtocolError (exit status 2).
     """
     protocol = load_protocol(protocol_path)
-    if speeds and not all(math.isfinite(s) and s > 0 for s in speeds):
-        bad = next(s for s in speeds if not (math.isfinite(s) and s > 0))
-        raise ProtocolError(f"--speeds: the prototype speed {bad:g} m/s is not a finite speed > 0.")
+    if speeds:  # as [prototype] speeds_m_s: > 0 and at most MAX_PROTOTYPE_SPEED
+        check_prototype_speed_range(speeds, "--speeds")
     if protocol.model is None:
         raise ProtocolError(f"{protocol.path.name}: scaling needs a [model] section.")
     model = protocol.model

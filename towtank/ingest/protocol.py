@@ -20,7 +20,7 @@ import re
 import sys
 import tomllib
 import warnings as _warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -597,6 +597,35 @@ def _fin(data: Any, src: str) -> Fin:
     return Fin(**f)
 
 
+def check_prototype_speed_range(speeds: Sequence[float], where: str) -> None:
+    """Prototype speeds [m/s], each > 0 and at most :data:`MAX_PROTOTYPE_SPEED` (NaN is
+    neither): those of ``[prototype] speeds_m_s`` and of ``towtank scale --speeds`` alike.
+
+    Parameters
+    ----------
+    speeds : sequence of float
+        The prototype speeds [m/s]
+    where : str
+        What gave them, the start of the sentence (``"p.toml: 'speeds_m_s' in [prototype]"``,
+        ``"--speeds"``)
+
+    Raises
+    ------
+    ProtocolError
+        One sentence naming them and the bound; a speed over it that is one in mm/s (a
+        thousandth of it lies within) is named as such.
+    """
+    if all(0 < s <= MAX_PROTOTYPE_SPEED for s in speeds):
+        return
+    slip = ("; was it given in mm/s for m/s?"
+            if all(0 < s / 1000.0 <= MAX_PROTOTYPE_SPEED for s in speeds)
+            and any(s > MAX_PROTOTYPE_SPEED for s in speeds) else ".")
+    raise ProtocolError(
+        f"{where} must all be positive prototype speeds up to {MAX_PROTOTYPE_SPEED:g} m/s, but "
+        f"they are {', '.join(f'{s:g}' for s in speeds)}{slip}"
+    )
+
+
 def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
     """``[prototype]``: its length (given, or the model's × scale, which must agree), speeds,
     roughness allowance and water."""
@@ -618,12 +647,7 @@ def _prototype(data: Any, model: Model | None, src: str) -> Prototype:
                 f"(they must agree within {LENGTH_SCALE_TOLERANCE:.0%}); correct one of them "
                 "or leave [prototype] length_m out."
             )
-    if not all(0 < s <= MAX_PROTOTYPE_SPEED for s in p["speeds_m_s"]):
-        raise ProtocolError(
-            f"{src}: 'speeds_m_s' in [prototype] must all be positive speeds up to "
-            f"{MAX_PROTOTYPE_SPEED:g} m/s, but they are "
-            f"{', '.join(f'{s:g}' for s in p['speeds_m_s'])}."
-        )
+    check_prototype_speed_range(p["speeds_m_s"], f"{src}: 'speeds_m_s' in [prototype]")
     delta_cf = p.get("delta_cf", 0.0)
     if abs(delta_cf) > MAX_DELTA_CF:
         raise ProtocolError(

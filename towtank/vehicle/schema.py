@@ -12,6 +12,10 @@ The limits are module constants, stated in the sentences and in docs/formats.md:
   holds at most :data:`MAX_COEFFICIENTS` coefficients of at most :data:`MAX_FACTORS` factors;
 - densities lie in :data:`RHO_RANGE_KG_M3`, speeds in (0, :data:`MAX_SPEED_M_S`], hull and
   vehicle lengths in :data:`LENGTH_RANGE_M`;
+- the centres of gravity and buoyancy lie within the vehicle's length of the reference point
+  (:func:`centre_problem`, for model.json and ``[vehicle]`` alike), and a ``[vehicle]``'s
+  reference point, fins and their sizes inside the hull it describes
+  (:func:`vehicle_geometry_problems`);
 - a simulation covers at most :data:`MAX_DURATION_S` of simulated time in at most
   :data:`MAX_STEPS` integration steps, and ``--samples`` is at most :data:`MAX_SAMPLES`.
 """
@@ -58,6 +62,8 @@ __all__ = [
     "MAX_SAMPLES",
     "COVARIANCE_TOLERANCE",
     "MASS_MATRIX_TOLERANCE",
+    "MM_PER_M",
+    "GEOMETRY_TOLERANCE",
     "ModelError",
     "json_depth",
     "check_model",
@@ -66,6 +72,9 @@ __all__ = [
     "CONVERSION_TOLERANCE",
     "check_simulation",
     "check_hull",
+    "centre_problem",
+    "vehicle_geometry_problems",
+    "unit_slip",
     "default_duration",
     "joined",
 ]
@@ -273,9 +282,9 @@ def check_model(model: Any, name: str = "model.json") -> list[str]:
         elif positive and min(nums) <= 0:
             problems.append(f"{name}: '{key}' must be three moments of inertia > 0 "
                             f"[{labels}] [{unit}], not {_show(value)}.")
-        elif not positive and length is not None and max(abs(n) for n in nums) > length:
-            problems.append(f"{name}: '{key}' must lie within the vehicle's length_m "
-                            f"({length:g} m) of the reference point [m], not {_show(value)}.")
+        elif not positive and length is not None and (far := centre_problem(
+                key, nums, length, f"{name}: '{key}'", "the vehicle's length_m")):
+            problems.append(far)
         else:
             triples[key] = nums
 
@@ -571,6 +580,115 @@ def default_duration(model: dict[str, Any], manoeuvre: str, speed_m_s: float) ->
     if manoeuvre in ("turning", "spiral", "zigzag", "sine", "schedule"):
         duration = max(duration, 120.0 * length / speed_m_s)
     return duration
+
+
+#: A length typed in millimetres for metres is this many times too large [-].
+MM_PER_M = 1000.0
+#: Relative tolerance of the bounds of :func:`vehicle_geometry_problems` [-] (a fin at the
+#: tail's very end is on the hull).
+GEOMETRY_TOLERANCE = 1e-9
+
+
+def unit_slip(value_m: float, low_m: float, high_m: float) -> str:
+    """The end of the sentence that refuses a length ``value_m`` [m] outside [``low_m``,
+    ``high_m``] [m]: ``": was it given in mm for m?"`` when a thousandth of it lies inside
+    while a tenth of it still lies outside (far out, as millimetres are), else ``"."``."""
+    def inside(v: float) -> bool:
+        return low_m <= v <= high_m
+
+    if inside(value_m / MM_PER_M) and not inside(value_m / 10.0):
+        return ": was it given in mm for m?"
+    return "."
+
+
+def centre_problem(key: str, value: list[float] | tuple[float, ...], length_m: float,
+                   where: str, length_name: str) -> str | None:
+    """The sentence for a centre of gravity or buoyancy farther than the vehicle's length from
+    the reference point in any axis, else None: the one bound of model.json (``simulate``,
+    ``steady``) and of ``[vehicle]`` (``predict``), so that ``predict`` writes no model that
+    ``simulate`` refuses.
+
+    Parameters
+    ----------
+    key : str
+        ``cg_m`` or ``cb_m``
+    value : list of float
+        Its x, y, z from the reference point, finite [m]
+    length_m : float
+        The vehicle's length [m]
+    where : str
+        The start of the sentence, naming the key (``"model.json: 'cg_m'"``)
+    length_name : str
+        What the length is called (``"the vehicle's length_m"``, ``"the hull's length"``)
+    """
+    far = max((float(v) for v in value), key=abs)
+    if abs(far) <= length_m:
+        return None
+    return (f"{where} must lie within {length_name} ({length_m:g} m) of the reference point "
+            f"[m], not {_show([float(v) for v in value])}"
+            f"{unit_slip(far, -length_m, length_m)}")
+
+
+def vehicle_geometry_problems(vehicle: Any, length_m: float, x_ref_m: float) -> list[str]:
+    """Problems of a ``[vehicle]``'s positions and sizes against the hull it describes, one
+    sentence each naming the key, its value, the bound and the likely slip (geometry typed in
+    millimetres: :func:`unit_slip`).
+
+    ``origin_m`` (the reference point aft of the nose tip) lies from 0 to L; each fin's
+    ``x_m`` and ``x_drag_m`` (from the reference point, positive forward) on the hull, from
+    ``x_ref_m - L`` (the tail) to ``x_ref_m`` (the nose); its ``span_m`` and ``chord_m`` at most
+    L; ``cg_m`` and ``cb_m`` within L of the reference point (:func:`centre_problem`, as in
+    model.json).
+
+    Parameters
+    ----------
+    vehicle : towtank.ingest.vehicle_protocol.Vehicle
+        The ``[vehicle]`` section
+    length_m : float
+        The length L of the hull it describes (after ``scale``) [m]
+    x_ref_m : float
+        The reference point aft of the nose tip: ``origin_m``, else the hull's centre of
+        buoyancy [m]
+
+    Returns
+    -------
+    list of str
+        The problems, the reference point's first; empty when all lie on the hull.
+    """
+    tol = GEOMETRY_TOLERANCE * length_m
+    hull = f"the hull's length of {length_m:.4g} m"
+    problems = []
+    origin = getattr(vehicle, "origin_m", None)
+    if origin is not None and not -tol <= origin <= length_m + tol:
+        problems.append(f"'origin_m' in [vehicle] is {origin:g} m aft of the nose tip, outside "
+                        f"{hull} (it lies from 0 to {length_m:.4g} m)"
+                        f"{unit_slip(origin, 0.0, length_m)}")
+    ref = (f"origin_m, {x_ref_m:.4g} m aft of the nose tip" if origin is not None else
+           f"the centre of buoyancy, {x_ref_m:.4g} m aft of the nose tip")
+    low, high = x_ref_m - length_m, x_ref_m
+    for i, fin in enumerate(getattr(vehicle, "fins", ()), start=1):
+        label = f"[vehicle.fins #{i}]"
+        for key in ("x_m", "x_drag_m"):
+            x = getattr(fin, key, None)
+            if x is not None and not low - tol <= x <= high + tol:
+                problems.append(
+                    f"'{key}' in {label} is {x:g} m, off the {length_m:.4g} m hull: it is "
+                    f"measured from the reference point ({ref}), positive forward, so a fin "
+                    f"lies from {low:.4g} m (the tail) to {high:.4g} m (the nose)"
+                    f"{unit_slip(x, low, high)}")
+        for key in ("span_m", "chord_m"):
+            size = getattr(fin, key)
+            if size > length_m + tol:
+                problems.append(f"'{key}' in {label} is {size:g} m, more than {hull} that "
+                                f"carries the fin{unit_slip(size, 0.0, length_m)}")
+    for key in ("cg_m", "cb_m"):
+        value = getattr(vehicle, key, None)
+        if value is not None:
+            far = centre_problem(key, value, length_m, f"'{key}' in [vehicle]",
+                                 "the hull's length")
+            if far:
+                problems.append(far)
+    return problems
 
 
 def check_hull(x_m: np.ndarray, r_m: np.ndarray, name: str) -> list[str]:

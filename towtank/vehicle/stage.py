@@ -16,6 +16,7 @@ from towtank.vehicle.hull import HullProfile
 from towtank.vehicle.powering import PROPELLER_FIELDS, powering_table, propeller_from
 from towtank.vehicle.predict import FinPair, axial_drag, predict_coefficients
 from towtank.vehicle.pressure_hull import pressure_hull_table
+from towtank.vehicle.schema import vehicle_geometry_problems
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,7 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
     rho = float(water_props.density(w.temperature_C, w.type, w.salinity_g_kg))
     nu = float(water_props.kinematic_viscosity(w.temperature_C, w.type, w.salinity_g_kg))
     profile = vmodel.vehicle_profile(vehicle)
+    _check_geometry(vehicle, profile)
     fins = [FinPair(f.plane, f.x_m, f.span_m, f.chord_m, f.section, f.taper,
                     getattr(f, "x_drag_m", None)) for f in vehicle.fins]
     predicted = predict_coefficients(profile, fins, rho=rho, nu=nu, speed_m_s=vehicle.speed_m_s,
@@ -80,6 +82,22 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
                              _powering(vehicle, profile, fins, rho, nu),
                              _pressure_hull(vehicle, profile, rho),
                              (warning,) if warning else ())
+
+
+def _check_geometry(vehicle: Any, profile: HullProfile) -> None:
+    """``[vehicle]``'s reference point, fins and centres against the hull it describes, before
+    anything is computed from them.
+
+    Raises
+    ------
+    ValueError
+        Its first problem (:func:`towtank.vehicle.schema.vehicle_geometry_problems`): e.g. a fin
+        typed in millimetres, whose span would be longer than the hull.
+    """
+    x_ref = profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
+    problems = vehicle_geometry_problems(vehicle, float(profile.length), x_ref)
+    if problems:
+        raise ValueError(problems[0])
 
 
 def _check_glider(vehicle: Any, profile: HullProfile, mass_kg: float) -> None:
