@@ -318,7 +318,9 @@ def reduce_run(
         Set acceleration [m/s²], cross-checked likewise.
     test : str, optional
         The sheet's test ("steady", "accel"): an accel run without a usable
-        constant-acceleration stretch is warned of, a steady run not noted for it.
+        constant-acceleration stretch is warned of, a steady run not noted for it. The
+        sheet's row of ``run`` also gives the run's config: a fin run whose lift column holds
+        no numbers is rejected (RunError), as the day rejects it.
 
     Returns
     -------
@@ -355,7 +357,8 @@ def reduce_run(
         window_s=window_s,
         speed_nominal=_given(speed_nominal, sheet.get("speed_nominal", math.nan)),
         accel_nominal=_given(accel_nominal, sheet.get("accel_nominal", math.nan)),
-        test=test if test is not None else str(sheet.get("test", "")))
+        test=test if test is not None else str(sheet.get("test", "")),
+        config=str(sheet.get("config", "")))
 
 
 def _given(value: float | None, default: float) -> float:
