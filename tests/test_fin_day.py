@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import warnings
 
 import numpy as np
@@ -19,6 +20,7 @@ from towtank.analysis import fins
 from towtank.pipeline import process_day
 from towtank.reference import sandia
 from towtank.testing.synthetic import (
+    LabChannels,
     RunSpec,
     fin_day_plan,
     fin_protocol_sections,
@@ -281,3 +283,126 @@ def test_protocol_linear_max_deg_sets_the_linear_range(fin_day, tmp_path):
     assert "(|α| ≤ 5°, below stall)" in five.fins.control["lift_slope_source"].iloc[0]
     # 0-5 deg is the straight part of the section at every speed: close to its 0.11/deg
     assert five.fins.curves["lift_slope"].to_numpy() == pytest.approx(6.3, abs=0.2)
+
+
+# ------------------------------------------------------------- a lab's slips on the fin's lift
+def _fin_warnings(day) -> list[str]:
+    """The day's sentences of the fin plausibility check."""
+    return [w for w in map(str, day.warnings) if w.startswith("fin lift slope = ")]
+
+
+def test_correct_fin_day_is_plausible(fin_day):
+    _, _, day = fin_day
+    assert _fin_warnings(day) == []
+    assert not [w for w in day.fins.warnings if "swapped" in w or "gain left out" in w]
+
+
+def test_swapped_lift_and_drag_channels_are_named(fin_day, tmp_path):
+    """drag = { column = "lift" }, lift = { column = "drag" }: the lift slopes were 0.06-0.07
+    /rad against the section's 5.9 and the fin's 2.42 (Y_uudr 1.2 for 107), with no warning
+    at all (the finite-span sentence went too). Now one sentence names the slopes, the
+    expectation and the swap."""
+    d, _, day = fin_day
+    sections = fin_protocol_sections(str(d), str(tmp_path / "out"))
+    sections["channels"] = {"drag": {"column": "lift"}, "lift": {"column": "drag"}}
+    write_protocol(tmp_path / "swapped.toml", **sections)
+    swapped = process_day(tmp_path / "swapped.toml", jobs=1)
+    slopes = swapped.fins.curves["lift_slope"]
+    assert (slopes.abs() < 0.3).all()  # the drag's slope: the slip is there
+    (text,) = _fin_warnings(swapped)
+    assert "at U ≈ 1.00, 1.50, 2.00 and 2.50 m/s" in text
+    assert f"{slopes.min():.2g}" in text and "expected of this fin" in text
+    assert "lift and drag channels swapped?" in text
+    assert text in swapped.fins.warnings  # the stage's warnings, the report's Quality page
+
+
+@pytest.fixture(scope="module")
+def lab_fin_day(tmp_path_factory):
+    """A fin day recorded in volts: lift 25 N/V, drag 20 N/V (columns 'Fx load cell (V)',
+    'Fy load cell (V)'), in CSV."""
+    d = tmp_path_factory.mktemp("lab_fin_day")
+    lab = LabChannels(lift_gain=25.0)
+    make_fin_day(d, seed=41, file_format="csv", channel_style="lab", channels=lab)
+    return d, lab
+
+
+def _lab_protocol(day_dir, path, lab, **lift):
+    sections = fin_protocol_sections(str(day_dir), str(path.parent / "out"))
+    sections["channels"] = lab.protocol_section()
+    sections["channels"]["lift"].update(lift)
+    return write_protocol(path, **sections)
+
+
+def test_lift_gain_left_out_is_named(lab_fin_day, tmp_path):
+    """The lift in V with its 25 N/V left out (gain 1.0): slopes 0.23-0.24 /rad, Y_uudr 4.3
+    for 107, and no warning. With the gain the same files are plausible."""
+    d, lab = lab_fin_day
+    right = process_day(_lab_protocol(d, tmp_path / "right.toml", lab), jobs=1)
+    assert right.rejected == {} and _fin_warnings(right) == []
+    assert right.fins.curves["lift_slope"].between(5.5, 6.5).all()
+    wrong = process_day(_lab_protocol(d, tmp_path / "wrong.toml", lab, gain=1.0), jobs=1)
+    np.testing.assert_allclose(wrong.fins.curves["lift_slope"],
+                               right.fins.curves["lift_slope"] / 25.0, rtol=0.05)
+    (text,) = _fin_warnings(wrong)
+    assert "a lift gain left out" in text and "2.42 /rad expected of this fin" in text
+    assert "C_D rises" not in text
+
+
+def test_fin_run_with_a_blank_lift_column_is_rejected(lab_fin_day, tmp_path):
+    """Run 14 (5° at 1.0 m/s) with every lift cell blank was kept as ok, its lift dropped with
+    a note in runs.csv, and the 1.0 m/s group lost its slope to a warning blaming the stall.
+    A fin run needs its lift: rejected in one sentence naming the run, the file and the
+    channel, the rest of the day processed."""
+    d, lab = lab_fin_day
+    day_dir = tmp_path / "day"
+    shutil.copytree(d, day_dir)
+    path = day_dir / "data" / "run_014.csv"
+    frame = pd.read_csv(path)
+    frame[lab.lift] = np.nan  # written as empty cells
+    frame.to_csv(path, index=False)
+    day = process_day(_lab_protocol(day_dir, tmp_path / "p.toml", lab), jobs=1)
+    assert list(day.rejected) == [14]
+    reason = str(day.rejected[14])
+    assert reason.startswith("run 14: run_014.csv: the lift channel (column 'Fy load cell (V)') "
+                             "holds no numbers"), reason
+    assert "a fin run needs its lift" in reason
+    runs = day.runs.set_index("run")
+    assert runs.loc[14, "status"] == "rejected" and runs.loc[14, "reason"] == reason
+    assert (runs.drop(index=14)["status"] == "ok").all()
+    assert len(day.fins.table) == 39 and 14 not in day.fins.table["run"].tolist()
+    # the group without its 5° run has no slope, and the warning says which run is missing
+    slow = [w for w in map(str, day.warnings) if w.startswith("fin lift slope at U ≈ 1.00")]
+    assert len(slow) == 1 and slow[0].endswith("no slope (run 14 at 5° was rejected)."), slow
+    assert day.fins.curves["lift_slope"].iloc[1:].notna().all()
+
+
+def test_blank_lift_column_rejects_fin_runs_only(lab_fin_day, tmp_path):
+    """The same file read for a hull run keeps it (a hull's lift is a check, in no
+    coefficient), with the reader's note; read_run and reduce_run reject the fin run as the
+    day does, and the cache keeps a fin run's reduction apart from a hull run's."""
+    from towtank import read_run, reduce_run
+    from towtank.errors import RunError
+    from towtank.ingest.protocol import load_protocol
+    from towtank.reduce.run import reduce_record
+    from towtank.runtime.cache import settings_key
+
+    d, lab = lab_fin_day
+    data = tmp_path / "data"
+    shutil.copytree(d / "data", data)
+    path = data / "run_014.csv"
+    frame = pd.read_csv(path)
+    frame[lab.lift] = np.nan
+    frame.to_csv(path, index=False)
+    shutil.copy(d / "run_sheet.csv", tmp_path / "run_sheet.csv")
+    protocol = load_protocol(_lab_protocol(tmp_path, tmp_path / "p.toml", lab))
+    row = {"run": 14, "file": "run_014.csv", "speed_nominal": 1.0, "accel_nominal": 0.5,
+           "test": "steady"}
+    _, red, rejection, preview = reduce_record(protocol, {**row, "config": "fin"})
+    assert red is None and "the lift channel" in str(rejection) and preview is not None
+    _, red, rejection, _ = reduce_record(protocol, {**row, "config": "hull"})
+    assert rejection is None and not red.has_lift
+    assert "the lift column holds no numbers; the channel is ignored" in red.notes
+    with pytest.raises(RunError, match="a fin run needs its lift"):
+        reduce_run(read_run(path, protocol), protocol, run=14)
+    assert settings_key(protocol, {**row, "config": "fin"}) != \
+        settings_key(protocol, {**row, "config": "hull"})

@@ -377,6 +377,32 @@ def test_no_slope_below_two_non_zero_angles_and_the_warning_says_why():
     assert math.isnan(slope) and "no speed group" in source
 
 
+def test_a_lift_falling_from_zero_is_no_stall():
+    """A lift of reversed sign falls from 0° on: no stall at 0° (it cut every angle off the
+    slope fit and blamed the stall), but a negative slope for the plausibility check."""
+    runs = sandia_group([0.0, 2.5, 5.0, 7.5, 10.0, 15.0])
+    table = fins.fin_table(runs.assign(cl=-runs["cl"]), aspect_ratio=1.25)
+    row = fins.fin_curves(table, aspect_ratio=1.25).iloc[0]
+    assert not bool(row["stall_reached"])
+    assert row["slope_angles_deg"] == "0 2.5 5 7.5 10"
+    assert row["lift_slope"] < -3.0
+    assert fins.lift_slope_warnings(fins.fin_curves(table)) == []
+
+
+def test_no_slope_warning_names_the_rejected_runs_of_its_range():
+    """A group that lost its 5° run to a rejection says so, not only that the stall leaves
+    too few angles; a rejected run past the stall, or of another speed, is not named."""
+    table = fins.fin_table(sandia_group([0.0, 2.5, 7.5, 10.0, 15.0]), aspect_ratio=1.25)
+    curves = fins.fin_curves(table)
+    rejected = pd.DataFrame({"run": [14, 30, 15], "angle_deg": [5.0, 20.0, 5.0],
+                             "speed_nominal": [1.0, 1.0, 1.5]})
+    assert fins.lift_slope_warnings(curves, rejected=rejected) == [
+        "fin lift slope at U ≈ 1.00 m/s: only 0° and 2.5° lie below stall (7.5°) within the "
+        "linear range (≤ 10°), fewer than two distinct non-zero angles; no slope (run 14 at "
+        "5° was rejected)."
+    ]
+
+
 def test_two_non_zero_angles_fit_through_the_origin():
     runs = sandia_group([2.0, 4.0, 2.0, 4.0], re=1e6)
     row = fins.fin_curves(fins.fin_table(runs, aspect_ratio=4.0)).iloc[0]

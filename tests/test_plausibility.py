@@ -14,9 +14,11 @@ from conftest import process, write_hull_protocol
 
 import towtank
 import towtank.testing.synthetic as syn
-from towtank.analysis.plausibility import plausibility_warnings
+from towtank.analysis import fins
+from towtank.analysis.plausibility import fin_plausibility_warnings, plausibility_warnings
 from towtank.errors import RunError
 from towtank.reduce.run import check_drag_direction
+from towtank.reference import sandia
 from towtank.reference.geometry import displaced_volume
 
 RHO = 998.6
@@ -70,6 +72,68 @@ def test_a_drag_gain_left_out_is_named_as_a_possible_cause():
 def test_sign_flip_is_named(symbol):
     text = " ".join(_warn(**{symbol: -TRUTH[symbol]}))
     assert f"{symbol} = +" in text and "sign" in text
+
+
+# ------------------------------------------------------------------------ fin lift slope
+FIN_AR = 1.25  # the synthetic fin: span 0.15 m / chord 0.12 m, free tips
+FIN_GROUPS = ((1.0, 1.14e5), (2.0, 2.28e5))  # speed [m/s], Re on the chord
+
+
+def _fin_warn(lift=lambda cl, cd: cl, drag=lambda cl, cd: cd, *, finite_span=False):
+    """The fin check on two speed groups at 0-20° whose measured C_L, C_D are ``lift`` and
+    ``drag`` of the truth: the Sandia NACA 0015 section at each Re (a fin that behaves as a
+    section), or its lifting-line finite span (``finite_span``)."""
+    alpha = np.array([0.0, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0])
+    runs = []
+    for k, (speed, re) in enumerate(FIN_GROUPS):
+        if finite_span:
+            cl, cd = fins.finite_span_coefficients(alpha, re, FIN_AR)
+        else:
+            cl, cd = sandia.section_coefficients(alpha, np.full(alpha.shape, re))
+        runs.append(pd.DataFrame({
+            "run": np.arange(alpha.size) + 1 + 10 * k, "angle_deg": alpha, "speed_mean": speed,
+            "re": re, "cl": lift(cl, cd), "cd": drag(cl, cd), "drag_mean": 1.0,
+            "lift_mean": 1.0}))
+    table = fins.fin_table(pd.concat(runs, ignore_index=True), FIN_AR)
+    curves = fins.fin_curves(table, 10.0, aspect_ratio=FIN_AR)
+    return fin_plausibility_warnings(curves, table, FIN_AR)
+
+
+@pytest.mark.parametrize("finite_span", [False, True])
+def test_a_fin_as_its_section_or_as_a_finite_span_is_plausible(finite_span):
+    """The band holds both ends of what a fin can have: 5.9-6.3 /rad as a section (the
+    synthetic days), 2.4 /rad by lifting-line theory with free tips."""
+    assert _fin_warn(finite_span=finite_span) == []
+
+
+@pytest.mark.parametrize("finite_span", [False, True])
+def test_swapped_fin_channels_are_named(finite_span):
+    """Lift and drag swapped: C_L is the drag (slope ~0.1 /rad), and C_D rises with α as a lift
+    does: one sentence for both groups, saying "swapped?"."""
+    (text,) = _fin_warn(lambda cl, cd: cd, lambda cl, cd: cl, finite_span=finite_span)
+    assert text.startswith("fin lift slope = ") and "at U ≈ 1.00 and 2.00 m/s" in text
+    assert "lift and drag channels swapped?" in text
+    assert "expected of this fin" in text and "a fin can have" in text
+
+
+@pytest.mark.parametrize("finite_span", [False, True])
+def test_fin_lift_gain_left_out_is_named(finite_span):
+    """The lift in V, its 25 N/V left out: 1/25 of the slope, C_D flat: not called a swap."""
+    (text,) = _fin_warn(lambda cl, cd: cl / 25.0, finite_span=finite_span)
+    assert "a lift gain left out" in text and "another unit" in text
+    assert "C_D rises" not in text  # a swap stays among the slips, not said as the one
+
+
+def test_fin_lift_in_mv_is_named():
+    (text,) = _fin_warn(lambda cl, cd: cl * 1000.0)
+    assert "smaller unit than N" in text and "mV" in text
+
+
+def test_fin_lift_of_reversed_sign_is_named():
+    """A reversed lift falls from 0° on: no stall there, a negative slope, its sign named."""
+    (text,) = _fin_warn(lambda cl, cd: -cl)
+    assert "fin lift slope = -" in text and "sign reversed" in text
+    assert "gain left out" not in text
 
 
 # ------------------------------------------------------------------------ on a whole day

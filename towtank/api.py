@@ -324,7 +324,9 @@ def reduce_run(
         The sheet's test ("steady", "accel"): an accel run without a usable
         constant-acceleration stretch is warned of, a steady run not noted for it. A captive
         test (drift, rudder, arm, sway, yaw, yaw_drift) is reduced to its loads as the day
-        does, with the settings of the sheet's row ``run`` (ValueError without it).
+        does, with the settings of the sheet's row ``run`` (ValueError without it). The
+        sheet's row of ``run`` also gives the run's config: a fin run whose lift column holds
+        no numbers is rejected (RunError), as the day rejects it.
 
     Returns
     -------
@@ -366,7 +368,7 @@ def reduce_run(
         window_s=window_s,
         speed_nominal=_given(speed_nominal, sheet.get("speed_nominal", math.nan)),
         accel_nominal=_given(accel_nominal, sheet.get("accel_nominal", math.nan)),
-        test=kind, row=row)
+        test=kind, row=row, config=str(sheet.get("config", "")))
 
 
 def _given(value: float | None, default: float) -> float:

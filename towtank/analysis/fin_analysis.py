@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from towtank.analysis import fins
+from towtank.analysis.plausibility import fin_plausibility_warnings
 from towtank.ingest.protocol import Fin
 from towtank.reference import sandia
 
@@ -54,11 +55,14 @@ def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinFit | None, list[str]
     -------
     (FinFit or None, list of str)
         A run beyond ±180° (the section data's range) is left out with a sentence; Sandia's Re
-        clamp is said once; any other Python warning goes on as a warning.
+        clamp is said once; a lift slope no fin can have is named with its likely slip
+        (:func:`towtank.analysis.plausibility.fin_plausibility_warnings`); any other Python
+        warning goes on as a warning.
     """
     sel = runs[(runs["config"] == "fin") & (runs["status"] == "ok")]
     if sel.empty:
         return None, []
+    rejected = runs[(runs["config"] == "fin") & (runs["status"] == "rejected")]
     warn: list[str] = []
     beyond = sel["angle_deg"].abs() > 180.0  # the section data stop there (ValueError)
     for run, angle in zip(sel.loc[beyond, "run"], sel.loc[beyond, "angle_deg"], strict=True):
@@ -84,7 +88,8 @@ def analyse_fins(runs: pd.DataFrame, fin: Fin) -> tuple[FinFit | None, list[str]
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     warn += fins.low_reynolds_warnings(table)
-    warn += fins.lift_slope_warnings(curves, linear_max)
+    warn += fins.lift_slope_warnings(curves, linear_max, rejected)
+    warn += fin_plausibility_warnings(curves, table, ar)
     warn += fins.two_dimensional_warning(curves, ar)
     control = None
     if fin.x_m is not None and len(curves):

@@ -49,6 +49,7 @@ __all__ = [
     "force_vs_speed",
     "induced_drag",
     "lift_slope_warnings",
+    "linear_slope",
     "low_reynolds_warnings",
     "section_stall_angle",
     "attached_flow",
@@ -603,11 +604,34 @@ def _ls_slope(alpha_rad: np.ndarray, y: np.ndarray) -> float:
     return float(x @ y / (x @ x))
 
 
+def linear_slope(alpha_deg: npt.ArrayLike, y: npt.ArrayLike) -> float:
+    """Least-squares slope of a coefficient on the angle, the model of :func:`fin_curves`' slopes.
+
+    C = a·α + c0 with three or more distinct angles, C = a·α with two non-zero ones, NaN with
+    fewer (no secant); non-finite pairs are left out.
+
+    Parameters
+    ----------
+    alpha_deg : array_like
+        Angles of attack [deg].
+    y : array_like
+        The coefficient at those angles [-] (C_L, or C_D for the plausibility check's swap test).
+
+    Returns
+    -------
+    float
+        dy/dα [1/rad].
+    """
+    return _ls_slope(np.deg2rad(np.asarray(alpha_deg, dtype=float)), np.asarray(y, dtype=float))
+
+
 def _stall(alpha_deg: np.ndarray, cl: np.ndarray) -> tuple[float, float, object]:
     """(stall angle [deg], C_L,max, stall reached) from runs folded to (|α|, sign(α)·C_L).
 
     C_L is averaged over the runs at each |α|; the stall is the first local maximum of that
-    curve. (NaN, NaN, pd.NA) without a finite run.
+    curve at a positive angle and a positive C_L (a lift that falls from α = 0 on has not
+    stalled: its sign is reversed, and its slope is fitted, negative, for the plausibility
+    check to name). (NaN, NaN, pd.NA) without a finite run.
     """
     ok = np.isfinite(alpha_deg) & np.isfinite(cl)
     if not ok.any():
@@ -617,7 +641,7 @@ def _stall(alpha_deg: np.ndarray, cl: np.ndarray) -> tuple[float, float, object]
     per_angle = pd.Series(folded_cl).groupby(folded_alpha).mean().sort_index()
     angles = per_angle.index.to_numpy(dtype=float)
     mean_cl = per_angle.to_numpy(dtype=float)
-    drops = np.flatnonzero(np.diff(mean_cl) < 0)
+    drops = np.flatnonzero((np.diff(mean_cl) < 0) & (angles[:-1] > 0) & (mean_cl[:-1] > 0))
     if drops.size:
         k = int(drops[0])
         return float(angles[k]), float(mean_cl[k]), True
@@ -643,7 +667,8 @@ def fin_curves(
 
     Stall: each run is folded to (|α|, sign(α)·C_L) (the section is symmetric) and C_L is
     averaged over the runs at each |α|; the stall angle is the first angle after which C_L falls
-    (the first local maximum of C_L(|α|)), and its C_L is C_L,max (positive). Past stall a
+    (the first local maximum of C_L(|α|) at α > 0 and C_L > 0: a lift falling from 0° on is
+    one of reversed sign, not a stall), and its C_L is C_L,max (positive). Past stall a
     section's lift can rise again towards the flat-plate regime (the Sandia tables peak again
     near 45°), so the global maximum is not the stall. ``stall_reached`` is False when C_L never
     falls within the tested angles.
@@ -818,12 +843,14 @@ def two_dimensional_warning(curves: pd.DataFrame, aspect_ratio: float) -> list[s
     ]
 
 
-def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0) -> list[str]:
+def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0,
+                        rejected: pd.DataFrame | None = None) -> list[str]:
     """One sentence per speed group of :func:`fin_curves` that has no lift slope.
 
     A group gets no slope when fewer than two distinct non-zero angles lie in its linear range
     (|α| <= ``linear_max_deg`` and below its stall angle); the sentence names the group, the
-    angles that remain, the stall angle and the linear range.
+    angles that remain, the stall angle and the linear range, and the group's rejected fin
+    runs within the linear range (their angle is missing for that reason, not for the stall).
 
     Parameters
     ----------
@@ -832,12 +859,16 @@ def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0) -> l
         [deg], stall_reached, slope_angles_deg).
     linear_max_deg : float, default 10.0
         The linear range the curves were fitted with [deg].
+    rejected : pandas.DataFrame, optional
+        The day's rejected fin runs (run, angle_deg [deg], speed_nominal [m/s]); one counts
+        in a group when its set speed is within 5 % of the group's.
 
     Returns
     -------
     list of str
         E.g. "fin lift slope at U ≈ 1.00 m/s: only 5° lies below stall (10°) within the linear
-        range (≤ 10°); no slope." In the order of ``curves``.
+        range (≤ 10°); no slope." (with "; no slope (run 14 at 2.5° was rejected)." when a
+        rejected run would have been in the range). In the order of ``curves``.
     """
     _require(curves, ("speed_group", "lift_slope", "stall_angle_deg", "stall_reached",
                       "slope_angles_deg"), "The fin curves")
@@ -857,8 +888,30 @@ def lift_slope_warnings(curves: pd.DataFrame, linear_max_deg: float = 10.0) -> l
         else:
             what = (f"only {', '.join(left[:-1])} and {left[-1]} lie {where}, fewer than two "
                     "distinct non-zero angles")
-        out.append(f"fin lift slope at U ≈ {row['speed_group']:.2f} m/s: {what}; no slope.")
+        stall = float(row["stall_angle_deg"]) if stalled else np.inf
+        lost = _rejected_in_range(rejected, float(row["speed_group"]), linear_max_deg, stall)
+        out.append(f"fin lift slope at U ≈ {row['speed_group']:.2f} m/s: {what}; no slope"
+                   f"{lost}.")
     return out
+
+
+def _rejected_in_range(rejected: pd.DataFrame | None, speed: float,
+                       linear_max_deg: float, stall_deg: float) -> str:
+    """" (run 14 at 5° was rejected)" for the rejected runs of a speed group within the linear
+    range (|α| <= ``linear_max_deg`` and below ``stall_deg``; "" for none)."""
+    if rejected is None or rejected.empty or not {"run", "angle_deg", "speed_nominal"} <= set(
+            rejected.columns):
+        return ""
+    nominal = rejected["speed_nominal"].to_numpy(dtype=float)
+    angle = rejected["angle_deg"].to_numpy(dtype=float)
+    mine = ((np.abs(nominal - speed) <= 0.05 * speed) & (np.abs(angle) <= linear_max_deg)
+            & (np.abs(angle) < stall_deg))
+    if not mine.any():
+        return ""
+    runs = [f"run {_run_label(r)} at {a:g}°"
+            for r, a in zip(rejected["run"][mine], angle[mine], strict=True)]
+    listed = runs[0] if len(runs) == 1 else f"{', '.join(runs[:-1])} and {runs[-1]}"
+    return f" ({listed} {'was' if len(runs) == 1 else 'were'} rejected)"
 
 
 def force_vs_speed(fin_df: pd.DataFrame) -> pd.DataFrame:

@@ -125,6 +125,10 @@ class RawRun:
     extra: dict[str, np.ndarray] = field(default_factory=dict)
     #: the file's columns that ``extra`` was read from (so no note calls them unmapped)
     extra_columns: tuple[str, ...] = ()
+    #: the optional channels (lift, accel, ...) whose column holds no numbers, each with the
+    #: column it was read from: left out of the run (``lift`` is None) with a note; a fin
+    #: run, which needs its lift, is rejected for it (:func:`towtank.reduce.run.reduce_read`)
+    blank: dict[str, str] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -806,7 +810,8 @@ def _load_run(
         numeric["speed"] = speed_on_run_time(t, *speed_log)
         notes.append(f"carriage speed from the speed log {speed_log[2]}")
 
-    _repair_and_check(numeric, t, fs, full, tb.n_lost, max_gap, do_despike, name, where, notes)
+    blank = _repair_and_check(numeric, t, fs, full, tb.n_lost, max_gap, do_despike, name,
+                              where, notes)
     return RawRun(
         time=t,
         speed=numeric["speed"],
@@ -824,6 +829,7 @@ def _load_run(
         extra={c: numeric[c] for c in CAPTIVE_CHANNELS if c in numeric},
         extra_columns=tuple(col for c in CAPTIVE_CHANNELS if c in mapping and c in numeric
                             for col in (mapping[c].columns or (mapping[c].column,))),
+        blank={c: used.get(c, c) for c in blank},
     )
 
 
@@ -936,9 +942,10 @@ def _put_back_lost(numeric: dict[str, np.ndarray], tb: TimeBase, where: _Where,
 def _repair_and_check(
     numeric: dict[str, np.ndarray], t: np.ndarray, fs: float, full: dict[str, ChannelMap],
     n_lost: int, max_gap: int, do_despike: bool, name: str, where: _Where, notes: list[str],
-) -> None:
+) -> list[str]:
     """Per channel (in ``numeric``): gaps filled, clipping checked, spikes removed, range
-    checked; an optional channel without numbers dropped."""
+    checked; an optional channel without numbers dropped (the dropped ones are returned)."""
+    blank = []
     for canon in ("speed",) + FORCE_CHANNELS + ("accel",) + CAPTIVE_CHANNELS:
         if canon not in numeric:
             continue
@@ -946,6 +953,7 @@ def _repair_and_check(
         if np.isnan(arr).all() and canon not in REQUIRED_CHANNELS:
             del numeric[canon]
             notes.append(f"the {canon} column holds no numbers; the channel is ignored")
+            blank.append(canon)
             continue
         arr, n_filled = fill_gaps(arr, t, max_gap, canon, file=name, where=where)
         if n_filled and not n_lost:
@@ -962,3 +970,4 @@ def _repair_and_check(
                 notes.append(f"{n_spikes} spike(s) removed from {canon}")
         _check_range(arr, t, canon, name, where)
         numeric[canon] = arr
+    return blank

@@ -701,6 +701,25 @@ def check_drag_direction(drag: np.ndarray, speed: float) -> None:
             "drag and lift cables swapped, or the zero taken while towing?)")
 
 
+def check_fin_lift(raw: RawRun, config: str, file: str) -> None:
+    """Reject a fin run whose lift column holds no numbers (every cell blank).
+
+    The reader leaves such a column out with a note ("the lift column holds no numbers"),
+    which is right for a hull run (its lift is a check, used in no coefficient) but not for a
+    fin run: its C_L is what the fin analysis is for, and without it the run would be kept
+    with its lift dropped, its speed group losing a slope angle to no visible cause. The
+    sentence names the channel and its column, as :func:`check_force_signal` does for a
+    channel of one constant value.
+    """
+    if config.strip().lower() != "fin" or raw.lift is not None or "lift" not in raw.blank:
+        return
+    raise RunError(
+        f"{file}: the lift channel (column '{raw.blank['lift']}') holds no numbers, every "
+        "cell blank, and a fin run needs its lift (a channel not recorded, an unplugged "
+        "cable, or the wrong column?)"
+    )
+
+
 def fit_samples(
     t: np.ndarray,
     speed_f: np.ndarray,
@@ -901,6 +920,7 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             test=str(row.get("test", "")),
+            config=str(row.get("config", "")),
             keep_series=keep_series,
             row=row,
         )
@@ -969,7 +989,7 @@ def zeroed_record(protocol: Protocol | None, raw: RawRun, folder: Path, file: st
 def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
                 window_s: tuple[float, float] | None = None,
                 speed_nominal: float = math.nan, accel_nominal: float = math.nan,
-                test: str = "", keep_series: bool = False,
+                test: str = "", keep_series: bool = False, config: str = "",
                 row: dict[str, Any] | None = None) -> RunReduction:
     """Reduce a run read by :func:`load_record` as the day does (before tare).
 
@@ -981,8 +1001,11 @@ def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
     captive test is reduced to its loads (``RunReduction.captive``,
     :func:`towtank.reduce.captive_record.reduce_captive_record`) with the settings of its run
     sheet ``row`` (a captive test needs the protocol and the row).
-    ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²]: the sheet's.
+    ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²], ``config``: the
+    sheet's; a ``fin`` run whose lift column holds no numbers is rejected first
+    (:func:`check_fin_lift`).
     """
+    check_fin_lift(raw, config, file)
     red = reduce_run(raw, Processing() if protocol is None else protocol.processing,
                      run=run, file=file, window_s=window_s, speed_nominal=speed_nominal,
                      accel_nominal=accel_nominal, keep_series=keep_series)

@@ -103,7 +103,8 @@ def settings_key(
     The sha256 of ``json.dumps(payload, sort_keys=True, default=str)`` with payload = format,
     version, processing settings, channel mapping (:func:`protocol_settings`, which may be
     given as ``common`` when the keys of many runs are made), file name, manual window, set
-    values, the run's purpose (``test``, which decides which notes are warnings) and, when the
+    values, the run's purpose (``test``, which decides which notes are warnings), ``config``
+    when it is ``fin`` (a fin run without numbers in its lift column is rejected) and, when the
     sheet gives one, the run's ``segment``; a captive run's sheet settings, the model's
     inertia and the ``[captive]`` cycle options (:data:`CAPTIVE_OPTION_KEYS`); and the sha256
     of the run's side files (``side_sha``, or the row's ``side_files_sha``: its carriage log
@@ -122,6 +123,8 @@ def settings_key(
         segment = math.nan
     if math.isfinite(segment):
         payload["segment"] = int(segment)
+    if str(row.get("config", "")).strip().lower() == "fin":  # a fin run needs its lift
+        payload["config"] = "fin"
     captive = {k: _num(row.get(k)) for k in CAPTIVE_ROW_KEYS if k in row}
     if payload["test"] in CAPTIVE_TEST_NAMES:  # the sheet's settings and the model's inertia
         model = getattr(protocol, "model", None)
