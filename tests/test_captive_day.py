@@ -27,6 +27,7 @@ from towtank.reduce.captive import CaptiveRun
 from towtank.report import figures
 from towtank.report.captive_figure import arm_curve, static_points
 from towtank.report.simman import particulars
+from towtank.runner import summary
 from towtank.runtime.cache import settings_key
 from towtank.testing.captive import (
     HORIZONTAL_SYMBOLS,
@@ -297,6 +298,10 @@ def test_real_kvlcc2_means_through_a_means_only_protocol(tmp_path):
     day = towtank.process_day(protocol, jobs=1)
     fit = day.captive
     assert len(fit.runs) == 63
+    # the day's count names the table's runs (it printed "0 runs, 0 ok, 0 rejected, 0 void")
+    assert summary(day, tmp_path).splitlines()[0] == (
+        "KVLCC2 HMRI captive: 0 runs, 0 ok, 0 rejected, 0 void, and 63 runs from the table "
+        "of means captive.csv")
     est = fit.estimates
     assert est["Y_uv"].value < 0 and est["N_uv"].value < 0
     assert est["Y_uudr"].value > 0 and est["N_uudr"].value < 0

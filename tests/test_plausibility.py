@@ -245,3 +245,24 @@ def test_drag_direction_by_its_standard_error():
         check_drag_direction(-0.5 + noise, 1.0)
     with pytest.raises(RunError, match="on the side of the motion"):
         check_drag_direction(0.5 + noise, -1.0)
+
+
+@pytest.mark.parametrize(("edit", "said"), [
+    ("time in minutes", "the file lasts only 0.344 s while the carriage's speed changes at up"),
+    ("rows reversed", "run_015.csv: the time runs backwards (it goes back at 4130 of its 4130 "
+                      "steps, from t = 20.6500 s to 0.0000 s)"),
+])
+def test_a_time_on_the_wrong_scale_or_reversed_is_named(trust_day, tmp_path, edit, said):
+    """Run 15's file with its time in minutes under "Time (s)", or its rows in reverse order:
+    rejected as "no still window before the carriage moves", or as a file of "4131
+    segments"; the sentence now names the likely slip."""
+    frame = pd.read_csv(trust_day.dir / "data" / "run_015.csv")
+    if edit == "time in minutes":
+        frame["Time (s)"] = frame["Time (s)"] / 60.0
+    else:
+        frame["Time (s)"] = frame["Time (s)"].to_numpy()[::-1]
+    path = tmp_path / "run_015.csv"
+    frame.to_csv(path, index=False)
+    with pytest.raises(RunError) as caught:
+        towtank.reduce_run(towtank.read_run(path, trust_day.protocol), trust_day.protocol)
+    assert said in caught.value.reason, caught.value.reason

@@ -422,7 +422,7 @@ def summary(day: DayResult, out: Path) -> str:
     counts = runs["status"].value_counts()
     lines = [
         f"{day.protocol.name}: {len(runs)} runs, {counts.get('ok', 0)} ok, "
-        f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void"
+        f"{counts.get('rejected', 0)} rejected, {counts.get('void', 0)} void{day.means_text}"
     ]
     # loaded on use: pandas only when runs were rejected
     from towtank.analysis.daywide import group_rejections

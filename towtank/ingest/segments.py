@@ -179,9 +179,15 @@ def segment_error(name: str, t: np.ndarray, segments: list[Segment],
                   rows: np.ndarray | None = None, label: str = "row",
                   chosen: int | None = None) -> RunError:
     """The one sentence of a file with several acquisitions and no (or no such) choice."""
+    n = len(segments)
+    if chosen is None and n > 2 and n - 1 > 0.5 * (len(t) - 1):
+        # most steps go back in time: one reversed acquisition, not thousands of restarts
+        return RunError(
+            f"{name}: the time runs backwards (it goes back at {n - 1} of its {len(t) - 1} "
+            f"steps, from t = {float(t[0]):.4f} s to {float(t[-1]):.4f} s): are the rows in "
+            "reverse order, or is the time column another channel?")
     lines = describe_segments(t, segments, rows, label)
     listed = "; ".join(lines[:MAX_LISTED]) + ("; …" if len(lines) > MAX_LISTED else "")
-    n = len(segments)
     if chosen is not None:
         head = f"{name}: segment {chosen} is chosen, but the file holds {n} segment" + \
             ("s" if n > 1 else "")

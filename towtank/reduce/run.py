@@ -108,6 +108,28 @@ class RunReduction:
     captive: dict[str, np.ndarray] = field(default_factory=dict)
 
 
+#: A run whose phases are not found and whose file lasts less than this [s] while its
+#: carriage's speed changes faster than :data:`HINT_ACCEL_MS2` is on a wrong time scale.
+HINT_SHORT_S = 5.0
+#: Carriage accelerations [m/s²] beyond any towing carriage's few m/s².
+HINT_ACCEL_MS2 = 5.0
+
+
+def time_unit_hint(t: np.ndarray, accel: np.ndarray) -> str:
+    """What to add to a run's rejection for phases not found when its time [s] looks in
+    other units: a file shorter than :data:`HINT_SHORT_S` in which the carriage's speed
+    changes at more than :data:`HINT_ACCEL_MS2` (``accel`` [m/s²], filtered) is a time in
+    minutes (60 times too short, its accelerations 60 times too large); "" otherwise."""
+    duration = float(t[-1] - t[0]) if t.size else 0.0
+    finite = np.abs(accel[np.isfinite(accel)])
+    peak = float(finite.max()) if finite.size else 0.0
+    if 0.0 < duration < HINT_SHORT_S and peak > HINT_ACCEL_MS2:
+        return (f" (the file lasts only {duration:.3g} s while the carriage's speed changes "
+                f"at up to {peak:.3g} m/s², where a tow lasts tens of seconds at a few m/s²: "
+                "is the time in minutes?)")
+    return ""
+
+
 #: A hand-set steady window whose speed varies by more than this many plateau bands is not
 #: steady: the run is rejected rather than biasing a coefficient.
 MANUAL_SPREAD_REJECT = 5.0
@@ -231,8 +253,12 @@ def reduce_run(
     fs, t, p = raw.fs, raw.time, processing
     notes = list(raw.notes)
     filt, speed_f, accel_f = filter_channels(raw, p)
-    ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None,
-                     still_required=not raw.zero_levels and p.zero_at == "before_motion")
+    try:
+        ph = find_phases(t, speed_f, accel_f, fs, p, steady_required=window_s is None,
+                         still_required=not raw.zero_levels and p.zero_at == "before_motion")
+    except RunError as exc:  # the phases of a run on a wrong time scale are not found
+        raise RunError(exc.reason + time_unit_hint(t, accel_f), exc.run, exc.file,
+                       exc.kind) from None
     windows = ph.windows_s(t)
     steady, window_source, manual_warnings = choose_steady_window(
         t, speed_f, ph, windows, window_s, p, notes

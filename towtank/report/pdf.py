@@ -281,10 +281,11 @@ def _fin_text(fin: Fin | None, fins: FinResult | None) -> str | None:
             + (f", effective aspect ratio {fins.aspect_ratio:.3g}" if fins else ""))
 
 
-def _counts(runs: pd.DataFrame) -> str:
-    c = runs["status"].value_counts()
-    return (f"{len(runs)} in the sheet: {int(c.get('ok', 0))} ok, "
-            f"{int(c.get('rejected', 0))} rejected, {int(c.get('void', 0))} void")
+def _counts(day: DayResult) -> str:
+    c = day.runs["status"].value_counts()
+    return (f"{len(day.runs)} in the sheet: {int(c.get('ok', 0))} ok, "
+            f"{int(c.get('rejected', 0))} rejected, {int(c.get('void', 0))} void"
+            f"{day.means_text}")
 
 
 def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
@@ -301,7 +302,7 @@ def _draw_title(fig: Figure, day: DayResult, plan: list[Page]) -> None:
         ("Fin", _fin_text(proto.fin, day.fins)),
         (_medium_label(proto.water), _water_text(proto.water, day.runs)),
         ("Test date", date or "not given"),
-        ("Runs", _counts(day.runs)),
+        ("Runs", _counts(day)),
         ("Protocol", str(day.protocol.path.name)),
         ("Program", f"towtank {__version__}"),
     ]
@@ -470,7 +471,7 @@ def _draw_summary(fig: Figure, day: DayResult) -> None:
              ("Model", _model_text(proto.model) if has_model else None),
              ("Fin", _fin_text(proto.fin, day.fins)),
              (_medium_label(proto.water), _water_text(proto.water, day.runs)),
-             ("Test date", date or "not given"), ("Runs", _counts(day.runs)),
+             ("Test date", date or "not given"), ("Runs", _counts(day)),
              ("Reference", f"prime values of {reference_name(day.protocol.campaign.reference)}"
               if day.hull is not None else None)]
     for label, value in facts:

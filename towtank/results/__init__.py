@@ -28,6 +28,7 @@ from __future__ import annotations
 import warnings as _warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Literal, TypeVar
 
 import numpy as np
@@ -162,6 +163,17 @@ class DayResult:
     def captive_results(self) -> tuple[CaptiveResult, ...]:
         """The captive results of the day, horizontal plane first (empty without)."""
         return tuple(c for c in (self.captive, self.captive_vertical) if c is not None)
+
+    @property
+    def means_text(self) -> str:
+        """The runs of a lab's table of means (``[captive] means``), which are in no run
+        sheet, for the sentences that count the day's runs: ", and 63 runs from the table of
+        means captive.csv"; "" without."""
+        means = sum(1 for fit in self.captive_results for r in fit.runs if not r.file)
+        options = self.protocol.captive
+        if not means or options is None or options.means is None:
+            return ""
+        return f", and {means} runs from the table of means {Path(options.means).name}"
 
     @property
     def pmm(self) -> pd.DataFrame:
