@@ -260,6 +260,25 @@ def test_geometry_in_millimetres_stops_predict_with_exit_2(tmp_path, capsys, edi
     assert not (tmp_path / "out").exists()  # nothing written
 
 
+def test_geometry_in_millimetres_stops_process_before_anything_is_written(tmp_path, capsys):
+    """The sample hull day's protocol with [vehicle] origin_m = 176.5 (the 0.353 m model's
+    middle in mm): process stops with exit 2 in one sentence, as predict does, before a run is
+    read or an output written (it processed the day and warned "no prediction")."""
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "protocols" / "sut2_hull.toml").read_text(encoding="utf-8")
+    text = text.replace('"../', f'"{root.as_posix()}/').replace(
+        "speed_m_s = 1.0\n", "speed_m_s = 1.0\norigin_m = 176.5\n", 1)
+    assert "origin_m = 176.5" in text
+    proto = tmp_path / "mm.toml"
+    proto.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    assert cli.main(["process", str(proto), "--out", str(out), "--no-report", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("towtank: mm.toml: 'origin_m' in [vehicle] is 176.5 m aft"), err
+    assert "was it given in mm for m?" in err and err.count("\n") == 1, err
+    assert not out.exists()
+
+
 def test_a_fin_is_bounded_by_the_hull_from_the_centre_of_buoyancy_without_origin_m():
     """x_m is measured from the reference point, positive forward; without origin_m that is the
     hull's centre of buoyancy: a fin lies from x_B - L (the tail) to x_B (the nose)."""

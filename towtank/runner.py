@@ -213,6 +213,13 @@ def prepare(protocol: str | Path | Protocol, out: str | Path | None = None,
                 loaded = load_protocol(protocol)
             else:
                 loaded = protocol
+            if getattr(loaded, "vehicle", None) is not None:
+                # loaded on use: the vehicle's hull only for a protocol that describes one
+                from towtank.vehicle.stage import geometry_problem
+
+                problem = geometry_problem(loaded.vehicle)
+                if problem is not None:  # a slip (mm for m) stops the day, as predict does
+                    raise ProtocolError(f"{Path(loaded.path).name}: {problem}")
             folder, stamp, replay = None, None, None
             if write:
                 # loaded on use: the protocol's checks, as above

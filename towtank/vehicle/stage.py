@@ -84,6 +84,26 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
                              (warning,) if warning else ())
 
 
+def geometry_problem(vehicle: Any) -> str | None:
+    """The first problem of ``[vehicle]``'s reference point, fins and centres against the
+    hull it describes (:func:`towtank.vehicle.schema.vehicle_geometry_problems`), for a day
+    to stop on before anything is read or written; None when there is none, or when the hull
+    itself cannot be built (the vehicle stage says why in its warning)."""
+    try:
+        profile = vmodel.vehicle_profile(vehicle)
+    except ValueError:
+        return None
+    problems = vehicle_geometry_problems(vehicle, float(profile.length), _reference_x(
+        vehicle, profile))
+    return problems[0] if problems else None
+
+
+def _reference_x(vehicle: Any, profile: HullProfile) -> float:
+    """x [m] aft of the nose tip of the vehicle's reference point: ``origin_m``, else the
+    hull's centre of buoyancy."""
+    return profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
+
+
 def _check_geometry(vehicle: Any, profile: HullProfile) -> None:
     """``[vehicle]``'s reference point, fins and centres against the hull it describes, before
     anything is computed from them.
@@ -94,8 +114,8 @@ def _check_geometry(vehicle: Any, profile: HullProfile) -> None:
         Its first problem (:func:`towtank.vehicle.schema.vehicle_geometry_problems`): e.g. a fin
         typed in millimetres, whose span would be longer than the hull.
     """
-    x_ref = profile.x_buoyancy if vehicle.origin_m is None else float(vehicle.origin_m)
-    problems = vehicle_geometry_problems(vehicle, float(profile.length), x_ref)
+    problems = vehicle_geometry_problems(vehicle, float(profile.length),
+                                         _reference_x(vehicle, profile))
     if problems:
         raise ValueError(problems[0])
 
