@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from towtank.api import identify
 from towtank.commands.cli import main
-from towtank.vehicle.identify import BatchModel, rts_smooth
+from towtank.vehicle.identify import IDENTIFIABLE_RATIO, BatchModel, rts_smooth
 from towtank.vehicle.identify_log import LogError, log_from_frame, read_log
 from towtank.vehicle.simulate import Dynamics, read_schedule, simulate
 
@@ -175,6 +175,76 @@ def test_a_pitch_term_from_a_flat_turn_is_not_identifiable(remus, sine_clean):
     ci = res.conf_int().loc["M_uq"]
     assert ci["upper"] - ci["lower"] > 2 * abs(remus["coefficients"]["M_uq"])
     assert any("M_uq: NOT identifiable" in line for line in res.verdicts())
+
+
+def test_model_json_keeps_the_models_value_of_what_is_not_identifiable(
+        remus, sine_clean, tmp_path, capsys, monkeypatch):
+    """N_ur and M_uq from the horizontal sine by the command line: N_ur identified goes into
+    model.json (source 'identified', its covariance); M_uq, NOT identifiable, keeps the
+    model's value and source, and the note names it. It was written as 'identified' (M_q|q|
+    from such a record went from −8.63 to −25.3, which simulate then used)."""
+    import towtank.commands.identify as command
+    import towtank.vehicle.identify as ident
+
+    (tmp_path / "m").mkdir()
+    model_path = tmp_path / "m" / "model.json"
+    model_path.write_text(json.dumps(remus))
+    log = tmp_path / "flat.csv"
+    _noisy(sine_clean, 11).to_csv(log, index=False)
+    monkeypatch.setattr(command, "identify", partial(ident.identify, adequacy=False,
+                                                     check=False))
+    out = tmp_path / "id"
+    assert main(["identify", str(model_path), str(log), "--estimate", "N_ur,M_uq",
+                 "--out", str(out)]) == 0
+    assert "M_uq: NOT identifiable" in capsys.readouterr().out
+    new = json.loads((out / "model.json").read_text())
+    assert new["sources"]["N_ur"] == "identified"
+    assert new["coefficients"]["M_uq"] == remus["coefficients"]["M_uq"]
+    assert new["sources"].get("M_uq") == remus.get("sources", {}).get("M_uq")
+    assert "N_ur" in new["covariance"]["symbols"]
+    assert "M_uq" not in new["covariance"]["symbols"]
+    assert "M_uq kept at the model's values: not identifiable from it" in \
+        new["notes"]["identified"]
+
+
+@pytest.mark.parametrize(("slip", "said"), [
+    ("radians", "times the model's 21.26: is the rudder's angle in radians under its _deg "
+                "column?"),
+    ("reversed", "has the opposite sign of the model's 21.26: is the rudder's sign "
+                 "convention reversed in the record?"),
+])
+def test_a_rudder_in_radians_or_reversed_is_named_against_the_model(remus, sine_clean, slip,
+                                                                    said):
+    """The sine record's rudder logged in radians under rudder_deg, or with its sign
+    reversed: Y_uudr and N_uudr come out 57 times the model's (1200 for 21.3) or with their
+    signs flipped, each interval tight, and went into model.json without a word. Each is now
+    named against the model's value in one sentence."""
+    frame = _noisy(sine_clean, 3)
+    frame["rudder_deg"] = (np.radians(frame["rudder_deg"]) if slip == "radians"
+                           else -frame["rudder_deg"])
+    log = log_from_frame(frame, slip)
+    res = identify(remus, log, ["Y_uudr", "N_uudr"], start="model", check=False,
+                   adequacy=False)
+    warned = res.against_model(remus["coefficients"])
+    assert len(warned) == 2, warned
+    assert warned[0].startswith("Y_uudr = ") and said in warned[0], warned
+    clean = identify(remus, log_from_frame(_noisy(sine_clean, 3), "sine"), ["Y_uudr"],
+                     start="model", check=False, adequacy=False)
+    assert clean.against_model(remus["coefficients"]) == []
+
+
+def test_a_coefficient_far_below_1_si_whose_sign_the_record_leaves_open(remus, sine_clean):
+    """K_p|p| (roll damping, −0.0055 kg·m² on REMUS) from the horizontal sine with its roll
+    recorded: its sd, 0.074, is 2.5 % of the prior's 3·max(|v|, 1) = 3, which alone called it
+    identifiable, yet its 95 % interval, ±0.15, is five times its size and holds zero. Now
+    it is not identifiable, said as a sign the record does not fix; N_ur (sd ≪ its size)
+    from the same kind of record stays identifiable (test above)."""
+    log = log_from_frame(_noisy(sine_clean, 5, keep=None), "sine")
+    res = identify(remus, log, ["K_p|p|"], start="model", check=False, adequacy=False)
+    assert res.sd[0] < IDENTIFIABLE_RATIO * res.prior_sd[0]  # the prior's test alone passes
+    assert not res.identifiable()[0]
+    (line,) = res.verdicts()
+    assert line.startswith("K_p|p|: NOT identifiable") and "does not fix its sign" in line
 
 
 def test_the_extended_filter_from_zero(remus, sine_clean):

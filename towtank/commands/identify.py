@@ -128,25 +128,31 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
 
     result = from_fit(IdentifyResult, fit)
     table = result.table()
+    # only what the record determined replaces the model's values: an estimate that is not
+    # identifiable, or one from a record that does not fit the model, is said, not kept
+    kept = np.asarray(result.identifiable(), dtype=bool) & bool(result.fits())
+    idents = [s for s, k in zip(result.symbols, kept, strict=True) if k]
+    left = [s for s, k in zip(result.symbols, kept, strict=True) if not k]
     updated = dict(model)
     coef = dict(model.get("coefficients") or {})
     sources = dict(model.get("sources") or {})
-    for s, v in zip(result.symbols, result.value, strict=True):
-        coef[s] = float(v)
-        sources[s] = "identified"
+    for s, v, k in zip(result.symbols, result.value, kept, strict=True):
+        if k:
+            coef[s] = float(v)
+            sources[s] = "identified"
     updated["coefficients"] = coef
     updated["sources"] = sources
     if isinstance(model.get("conversions"), dict):  # read_model checked it
-        updated["conversions"] = kept_conversions(model["conversions"], list(result.symbols))
+        updated["conversions"] = kept_conversions(model["conversions"], idents)
     old = model.get("covariance") or {}
-    old_sym = [s for s in (old.get("symbols") or []) if s not in result.symbols]
-    syms = old_sym + list(result.symbols)
+    old_sym = [s for s in (old.get("symbols") or []) if s not in idents]
+    syms = old_sym + idents
     mat = np.zeros((len(syms), len(syms)))
     if old_sym:
         idx = [list(old["symbols"]).index(s) for s in old_sym]
         mat[:len(old_sym), :len(old_sym)] = np.asarray(old["matrix"], dtype=float)[
             np.ix_(idx, idx)]
-    cov = np.array(result.covariance, dtype=float)
+    cov = np.array(result.covariance, dtype=float)[np.ix_(kept, kept)]
     free = ~np.isfinite(np.diag(cov))  # a direction the record does not constrain
     cov[free, :] = 0.0
     cov[:, free] = 0.0
@@ -155,9 +161,14 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
     mat[len(old_sym):, len(old_sym):] = cov
     updated["covariance"] = {"symbols": syms, "matrix": mat.tolist()}
     notes = dict(model.get("notes") or {})
-    notes["identified"] = (f"{', '.join(result.symbols)} identified by {result.method} from "
-                           f"{Path(log_path).name} (towtank identify); covariance of the "
-                           "identified values in 'covariance'")
+    said = [f"{', '.join(idents)} identified by {result.method} from {Path(log_path).name} "
+            "(towtank identify); covariance of the identified values in 'covariance'"] \
+        if idents else []
+    if left:
+        why = ("not identifiable from it" if result.fits()
+               else "the record does not fit the model (fit.csv)")
+        said.append(f"{', '.join(left)} kept at the model's values: {why}")
+    notes["identified"] = "; ".join(said)
     updated["notes"] = notes
 
     def write(tmp: Path) -> None:
@@ -172,6 +183,8 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
         print(f"note: {note}")
     for line in result.verdicts():
         print(line)
+    for said in result.against_model(model.get("coefficients") or {}):
+        print(f"warning: {said}", file=sys.stderr)
     print(f"wrote {folder / 'identified.csv'}, model.json, identify.png and fit.csv")
     misfit = failure_sentence(result.adequacy) if result.adequacy is not None else None
     if misfit:

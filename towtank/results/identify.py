@@ -8,6 +8,8 @@ identifiability verdicts and identified.csv.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +19,14 @@ from towtank.results.summary import CONF_INT_COLUMNS, Estimates, Summary, estima
 from towtank.stats.quantiles import normal_quantile
 from towtank.vehicle.identify import IDENTIFIABLE_RATIO, IdentifyFit
 from towtank.vehicle.predict import coefficient_unit
+
+#: The normal quantile of a 95 % interval: an identifiable coefficient's interval half-width,
+#: SIGN_Z·sd, is below its size (:meth:`IdentifyResult.identifiable`).
+SIGN_Z = normal_quantile(0.05)
+#: An identified value more than this many times the model's, or less than its inverse, is
+#: named (:meth:`IdentifyResult.against_model`): predictions of a hull and fins hold their
+#: coefficients within a factor of 2 to 3, a unit slip moves them by 57 (deg, rad) or 10^n.
+MODEL_FACTOR = 10.0
 
 __all__ = ["IdentifyResult", "MISFIT"]
 
@@ -61,10 +71,17 @@ class IdentifyResult(IdentifyFit, Estimates):
         raise ValueError(f"no {method} estimates in this result.")
 
     def identifiable(self, method: str | None = None) -> np.ndarray:
-        """True where the record constrains the coefficient: sd below
-        :data:`~towtank.vehicle.identify.IDENTIFIABLE_RATIO` of its prior sd (and finite)."""
-        _, sd = self._pair(method)
-        return np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
+        """True where the record constrains the coefficient: its sd below
+        :data:`~towtank.vehicle.identify.IDENTIFIABLE_RATIO` of its prior sd (and finite),
+        and its 95 % interval's half-width, 1.96 sd, below its size, the larger of its estimate
+        and its starting value: the record fixes its sign and its order of magnitude. The
+        prior's scale, 3 max(|value|, 1), is wide for a coefficient far below 1 in SI (a roll
+        damping K_p|p| of −0.0055 kg·m² on REMUS): by the prior alone an estimate 21 times the
+        truth with an interval across zero was called identifiable."""
+        value, sd = self._pair(method)
+        size = np.maximum(np.abs(value), np.abs(self.start))
+        return (np.isfinite(sd) & (sd < IDENTIFIABLE_RATIO * self.prior_sd)
+                & (SIGN_Z * sd < size))
 
     def verdict(self, identifiable: bool) -> str:
         """identified.csv's verdict: ``model does not fit`` when a test of the record's fit
@@ -122,6 +139,12 @@ class IdentifyResult(IdentifyFit, Estimates):
             elif ok[j]:
                 line = (f"{s}: identifiable, {self.value[j]:.4g} {coefficient_unit(s)} "
                         f"({pct} % interval {lo:.4g} to {hi:.4g}, {self.method})")
+            elif self.sd[j] < IDENTIFIABLE_RATIO * self.prior_sd[j]:  # narrow, yet not its sign
+                size = max(abs(self.value[j]), abs(self.start[j]))
+                line = (f"{s}: NOT identifiable from this record: 95 % interval {lo:.4g} to "
+                        f"{hi:.4g}, ±{SIGN_Z * self.sd[j]:.3g}, wider than the coefficient's "
+                        f"size {size:.3g} (the larger of its estimate and its start): the "
+                        "record does not fix its sign; the manoeuvre does not excite it enough")
             else:
                 line = (f"{s}: NOT identifiable from this record: {pct} % interval {lo:.4g} "
                         f"to {hi:.4g}, its sd {self.sd[j]:.3g} still "
@@ -134,6 +157,42 @@ class IdentifyResult(IdentifyFit, Estimates):
                          "; least squares DISAGREES") + f" ({lv:.4g})"
             lines.append(line)
         return lines
+
+    def against_model(self, model_values: Mapping[str, float]) -> list[str]:
+        """One sentence per coefficient whose estimate, its 95 % interval clear of zero,
+        contradicts the model's value ``model_values[symbol]`` (SI): the opposite sign, or a
+        size more than :data:`MODEL_FACTOR` times larger or smaller (identifiable or not: the
+        prior, scaled by the model's value, is too narrow for a value 57 times it). For a
+        control derivative (δr, δs) that is the record's control in other units or with its
+        sign reversed: a ratio near 180/π is a control angle in radians under a *_deg column
+        (its derivatives 57 times too large)."""
+        out = []
+        ci = self.conf_int()
+        for j, s in enumerate(self.symbols):
+            ref = float(model_values.get(s, 0.0) or 0.0)
+            v = float(self.value[j])
+            if ref == 0.0 or not abs(v) > SIGN_Z * float(self.sd[j]):
+                continue  # no model value, or a sign the record does not fix
+            control = s.endswith(("dr", "ds"))
+            what = ("the rudder's" if s.endswith("dr") else "the stern plane's") if control \
+                else ""
+            lo, hi = float(ci["lower"].iloc[j]), float(ci["upper"].iloc[j])
+            if v * ref < 0 and (lo > 0 or hi < 0):
+                hint = (f"is {what} sign convention reversed in the record?" if control else
+                        "is a sign convention of the record (an axis, a positive turn) "
+                        "reversed?")
+                out.append(f"{s} = {v:.4g} {coefficient_unit(s)} has the opposite sign of "
+                           f"the model's {ref:.4g}: {hint}")
+                continue
+            ratio = abs(v / ref)
+            if ratio > MODEL_FACTOR or ratio < 1.0 / MODEL_FACTOR:
+                rad = abs(math.log(ratio / (180.0 / math.pi))) < 0.2
+                hint = (f"is {what} angle in radians under its _deg column?" if control and rad
+                        else f"is {what} angle in other units?" if control
+                        else "is a column of the record in other units?")
+                out.append(f"{s} = {v:.4g} {coefficient_unit(s)} is {ratio:.3g} times the "
+                           f"model's {ref:.4g}: {hint}")
+        return out
 
     def summary(self, alpha: float = 0.05) -> Summary:
         """The identified coefficients (identified.csv's rows) with the verdicts as notes."""
