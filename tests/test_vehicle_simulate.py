@@ -175,6 +175,24 @@ def test_a_diverging_model_is_refused_not_crashed(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.usefixtures("no_command_figures")  # asserts on the words, not the figure
+def test_a_coefficient_of_the_wrong_sign_is_named(tmp_path, capsys):
+    """model.json edited by hand with X_udot and K_pdot positive (their signs reversed):
+    simulate ran it with exit 0 and no word; it still runs, with one warning per coefficient
+    that is negative for any vehicle. The right signs give none."""
+    from towtank.commands.cli import main
+
+    good = _write(tmp_path / "good.json", _model(LINEAR | {"X_udot": -0.94, "K_pdot": -0.0127}))
+    bad = _write(tmp_path / "bad.json", _model(LINEAR | {"X_udot": 0.94, "K_pdot": 0.0127}))
+    for path, said in ((good, []), (bad, ["X_udot = +0.94 is positive", "K_pdot = +0.0127"])):
+        assert main(["simulate", str(path), "--manoeuvre", "turning", "--duration-s", "5",
+                     "--out", str(tmp_path / path.stem)]) == 0
+        err = [line for line in capsys.readouterr().err.splitlines() if "is positive" in line]
+        assert len(err) == len(said), err
+        for line, words in zip(err, said, strict=True):
+            assert words in line and line.endswith("is its sign reversed?"), line
+
+
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_shipped_remus_protocol_predicts_and_turns(tmp_path, capsys):
     """protocols/remus_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s (the MATLAB

@@ -151,6 +151,8 @@ def simulate_command(
     if manoeuvre == "glide" and net_buoyancy_n is None:
         net_buoyancy_n = float(model["buoyancy_N"]) - float(model["weight_N"])
     _check_controls(model, manoeuvre, rudder, stern, name)
+    for said in schema.sign_warnings(model.get("coefficients") or {}):
+        print(f"warning: {name}: {said}", file=sys.stderr)
     if manoeuvre != "glide":  # a glide is out of trim on purpose
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:

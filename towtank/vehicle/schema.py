@@ -45,6 +45,8 @@ from towtank.vehicle.fossen import (
 )
 
 __all__ = [
+    "NEGATIVE_COEFFICIENTS",
+    "sign_warnings",
     "MAX_MODEL_BYTES",
     "MAX_DEPTH",
     "MAX_COEFFICIENTS",
@@ -587,6 +589,28 @@ MM_PER_M = 1000.0
 #: Relative tolerance of the bounds of :func:`vehicle_geometry_problems` [-] (a fin at the
 #: tail's very end is on the hull).
 GEOMETRY_TOLERANCE = 1e-9
+
+
+#: Coefficients negative for any vehicle in the SNAME convention model.json uses: the added
+#: masses and inertias of each axis (added mass is positive, its coefficient −m_a), the
+#: quadratic damping of each motion and the lift slope of the hull in sway and heave (drag and
+#: lift oppose the motion). docs/method.md "Sign conventions".
+NEGATIVE_COEFFICIENTS = ("X_udot", "Y_vdot", "Z_wdot", "K_pdot", "M_qdot", "N_rdot",
+                         "X_u|u|", "Y_v|v|", "Z_w|w|", "K_p|p|", "M_q|q|", "N_r|r|",
+                         "Y_uv", "Z_uw")
+
+
+def sign_warnings(coefficients: dict[str, Any]) -> list[str]:
+    """One sentence per coefficient of :data:`NEGATIVE_COEFFICIENTS` that model.json gives
+    positive: a sign convention reversed by hand (simulate runs it, its motion wrong)."""
+    out = []
+    for sym in NEGATIVE_COEFFICIENTS:
+        v = coefficients.get(sym)
+        if isinstance(v, int | float) and not isinstance(v, bool) and v > 0:
+            out.append(f"{sym} = {v:+.4g} is positive, but it is negative for any vehicle "
+                       "(SNAME: an added mass is −m_a, a damping opposes the motion): is its "
+                       "sign reversed?")
+    return out
 
 
 def unit_slip(value_m: float, low_m: float, high_m: float) -> str:
