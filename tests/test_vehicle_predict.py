@@ -260,6 +260,70 @@ def test_geometry_in_millimetres_stops_predict_with_exit_2(tmp_path, capsys, edi
     assert not (tmp_path / "out").exists()  # nothing written
 
 
+@pytest.mark.parametrize("edit,words", [
+    (("mass_kg = 30.48", "mass_kg = 30480.0"),
+     ["'mass_kg' in [vehicle] gives 3.048e+04 kg, 963 times the 31.66 kg of water its hull "
+      "displaces", "was it given in g"]),
+    (("inertia_kg_m2 = [0.177, 3.45, 3.45]", "inertia_kg_m2 = [177000.0, 3450000.0, 3450000.0]"),
+     ["'inertia_kg_m2' in [vehicle] is [177000.0, 3450000.0, 3450000.0], more than "
+      "m·(L/2)² = 13.53 kg·m²", "was it given in kg·mm²?"]),
+    (("mass_kg = 30.48", "mass_kg = 30.48\nvolume_m3 = 31.66"),
+     ["'volume_m3' in [vehicle] is 31.66 m³, 1e+03 times its hull's 0.03166 m³",
+      "was it given in litres?"]),
+])
+def test_mass_volume_and_inertia_in_other_units_stop_predict(tmp_path, capsys, edit, words):
+    """REMUS with its mass in grams, its inertia from CAD in kg·mm², or its volume in litres:
+    predict wrote a model.json (exit 0) that simulate refused with a sentence about the
+    added masses, or ran (I_zz 250,000 times the most a 30 kg, 1.33 m body can have). Now
+    each stops predict (exit 2) in one sentence naming the key and the likely unit."""
+    proto = tmp_path / "slip.toml"
+    assert edit[0] in PROTOCOL
+    proto.write_text(PROTOCOL.replace(edit[0], edit[1], 1))
+    assert cli.main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("towtank: slip.toml: ") and err.count("\n") == 1, err
+    for word in words:
+        assert word in err, (word, err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_hull_table_in_millimetres_stops_predict(tmp_path, capsys):
+    """A 0.8 m × 0.1 m hull's radius table typed in mm for a 5.5 kg vehicle: predict gave
+    X_udot −1.2e8 kg (exit 0); its hull displaces 5.4e9 kg, named with the mm slip."""
+    x = np.linspace(0.0, 0.8, 41)
+    r = 0.05 * np.sqrt(np.clip(1.0 - ((x - 0.4) / 0.4) ** 6, 0.0, None))
+    (tmp_path / "hull_mm.csv").write_text(
+        "x_m,r_m\n" + "".join(f"{a * 1000:.3f},{b * 1000:.3f}\n" for a, b in zip(x, r,
+                                                                              strict=True)))
+    proto = tmp_path / "auv.toml"
+    proto.write_text('[campaign]\nname = "small AUV"\n[water]\ntemperature_C = 18.0\n'
+                     '[vehicle]\nname = "small AUV"\nhull = "table"\nhull_table = '
+                     '"hull_mm.csv"\nmass_kg = 5.5\nspeed_m_s = 1.0\n')
+    assert cli.main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "'mass_kg' in [vehicle] gives 5.5 kg" in err and "hull's size in mm" in err, err
+
+
+def test_a_centre_of_gravity_above_the_centre_of_buoyancy_is_named(tmp_path, capsys):
+    """REMUS with cg_m's z given positive up (−0.0196): simulate turned it upside down
+    (roll 171–192° at the end) and reported a steady turn without a word. predict and
+    simulate now name it; the right z gives no such warning."""
+    for z, said in (("0.0196", False), ("-0.0196", True)):
+        proto = tmp_path / f"cg{z}.toml"
+        proto.write_text(PROTOCOL.replace("cg_m = [0.0, 0.0, 0.0196]",
+                                          f"cg_m = [0.0, 0.0, {z}]", 1))
+        out = tmp_path / f"out{z}"
+        assert cli.main(["predict", str(proto), "--out", str(out)]) == 0
+        err = capsys.readouterr().err
+        assert ("lies 0.0196 m above the centre of buoyancy" in err) is said, err
+        if said:
+            assert "[vehicle]: the centre of gravity" in err and "positive up?" in err
+            model = json.loads((out / "model.json").read_text())
+            from towtank.vehicle.schema import stability_warning
+
+            assert stability_warning(model["cg_m"], model["cb_m"]) is not None
+
+
 def test_geometry_in_millimetres_stops_process_before_anything_is_written(tmp_path, capsys):
     """The sample hull day's protocol with [vehicle] origin_m = 176.5 (the 0.353 m model's
     middle in mm): process stops with exit 2 in one sentence, as predict does, before a run is

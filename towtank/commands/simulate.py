@@ -153,6 +153,9 @@ def simulate_command(
     _check_controls(model, manoeuvre, rudder, stern, name)
     for said in schema.sign_warnings(model.get("coefficients") or {}):
         print(f"warning: {name}: {said}", file=sys.stderr)
+    upright = schema.stability_warning(model.get("cg_m"), model.get("cb_m"), name)
+    if upright:
+        print(f"warning: {upright}", file=sys.stderr)
     if manoeuvre != "glide":  # a glide is out of trim on purpose
         warning = trim_warning(model, u, net_buoyancy_n)
         if warning:

@@ -47,6 +47,8 @@ from towtank.vehicle.fossen import (
 __all__ = [
     "NEGATIVE_COEFFICIENTS",
     "sign_warnings",
+    "vehicle_mass_problems",
+    "stability_warning",
     "MAX_MODEL_BYTES",
     "MAX_DEPTH",
     "MAX_COEFFICIENTS",
@@ -613,6 +615,21 @@ def sign_warnings(coefficients: dict[str, Any]) -> list[str]:
     return out
 
 
+def stability_warning(cg_m: Any, cb_m: Any, where: str = "model.json") -> str | None:
+    """The sentence for a centre of gravity above the centre of buoyancy (its z, positive
+    down, less than the buoyancy's): the vehicle has no righting moment in roll and pitch and
+    turns over (a z given positive up); None otherwise or without both centres [m]."""
+    try:
+        zg, zb = float(cg_m[2]), float(cb_m[2])
+    except (TypeError, ValueError, IndexError):
+        return None
+    if not zg < zb:
+        return None
+    return (f"{where}: the centre of gravity lies {zb - zg:.3g} m above the centre of "
+            f"buoyancy (cg_m z = {zg:g}, cb_m z = {zb:g}, z positive down): the vehicle "
+            "has no righting moment and turns over; was z given positive up?")
+
+
 def unit_slip(value_m: float, low_m: float, high_m: float) -> str:
     """The end of the sentence that refuses a length ``value_m`` [m] outside [``low_m``,
     ``high_m``] [m]: ``": was it given in mm for m?"`` when a thousandth of it lies inside
@@ -651,6 +668,63 @@ def centre_problem(key: str, value: list[float] | tuple[float, ...], length_m: f
     return (f"{where} must lie within {length_name} ({length_m:g} m) of the reference point "
             f"[m], not {_show([float(v) for v in value])}"
             f"{unit_slip(far, -length_m, length_m)}")
+
+
+#: A vehicle's mass against the mass of water its hull displaces (ρV, ρ = 1000 kg/m³): an
+#: underwater vehicle is built near neutral buoyancy (a glider or a ballasted AUV within a few
+#: per cent, a vehicle with a free-flooding hull or a heavy payload within a factor of 2 or
+#: 3); outside this range of ratios the mass, or the hull's size, is in other units.
+MASS_DISPLACEMENT_RANGE = (0.2, 5.0)
+#: A given volume_m3 against the hull's own volume: a vehicle displaces about its hull's
+#: volume (fins and appendages add little, a free-flooding part takes some away).
+VOLUME_RANGE = (0.5, 2.0)
+
+
+def vehicle_mass_problems(vehicle: Any, volume_m3: float, length_m: float) -> list[str]:
+    """Problems of a ``[vehicle]``'s mass, volume and inertia against the hull it describes
+    (its displaced volume ``volume_m3`` [m³] and length ``length_m`` [m]), one sentence each
+    naming the key, its value, the bound and the likely slip: a mass outside
+    :data:`MASS_DISPLACEMENT_RANGE` times ρV (a mass in grams, or a hull table in mm: its
+    volume 10⁹ times too large), a ``volume_m3`` outside :data:`VOLUME_RANGE` times the
+    hull's (litres for m³), an inertia above m·(L/2)², the most any body of mass m and length
+    L can have about an axis through it (kg·mm² for kg·m²)."""
+    problems = []
+    mass = getattr(vehicle, "mass_kg", None)
+    weight = getattr(vehicle, "weight_N", None)
+    if mass is None and weight is not None:
+        mass = float(weight) / _G
+    disp = 1000.0 * volume_m3
+    if mass is not None and disp > 0:
+        ratio = mass / disp
+        lo, hi = MASS_DISPLACEMENT_RANGE
+        if not lo <= ratio <= hi:
+            key = "mass_kg" if getattr(vehicle, "mass_kg", None) is not None else "weight_N"
+            slip = ("was it given in g (or weight_N in kgf·1000)?" if ratio > hi else
+                    "is the hull's size in mm (its table, or length_m), or the mass in t?")
+            problems.append(f"'{key}' in [vehicle] gives {mass:.4g} kg, {ratio:.3g} times the "
+                            f"{disp:.4g} kg of water its hull displaces ({volume_m3:.4g} m³, "
+                            f"{length_m:.4g} m long); a vehicle weighs {lo:g}–{hi:g} times "
+                            f"that: {slip}")
+    volume = getattr(vehicle, "volume_m3", None)
+    if volume is not None and volume_m3 > 0:
+        ratio = float(volume) / volume_m3
+        lo, hi = VOLUME_RANGE
+        if not lo <= ratio <= hi:
+            slip = ("was it given in litres?" if abs(math.log10(ratio) - 3.0) < 0.5
+                    else "is it in other units?")
+            problems.append(f"'volume_m3' in [vehicle] is {float(volume):g} m³, {ratio:.3g} "
+                            f"times its hull's {volume_m3:.4g} m³ ({lo:g}–{hi:g} times is a "
+                            f"vehicle's): {slip}")
+    inertia = getattr(vehicle, "inertia_kg_m2", None)
+    if inertia is not None and mass is not None and mass > 0:
+        most = mass * (length_m / 2.0) ** 2
+        big = [float(v) for v in inertia if float(v) > most]
+        if big:
+            slip = ": was it given in kg·mm²?" if max(big) / 1e6 <= most else "."
+            problems.append(f"'inertia_kg_m2' in [vehicle] is {_show(list(inertia))}, more "
+                            f"than m·(L/2)² = {most:.4g} kg·m², the most a body of {mass:.4g} "
+                            f"kg and {length_m:.4g} m can have about an axis through it{slip}")
+    return problems
 
 
 def vehicle_geometry_problems(vehicle: Any, length_m: float, x_ref_m: float) -> list[str]:

@@ -16,7 +16,11 @@ from towtank.vehicle.hull import HullProfile
 from towtank.vehicle.powering import PROPELLER_FIELDS, powering_table, propeller_from
 from towtank.vehicle.predict import FinPair, axial_drag, predict_coefficients
 from towtank.vehicle.pressure_hull import pressure_hull_table
-from towtank.vehicle.schema import vehicle_geometry_problems
+from towtank.vehicle.schema import (
+    stability_warning,
+    vehicle_geometry_problems,
+    vehicle_mass_problems,
+)
 
 
 @dataclass(frozen=True)
@@ -78,10 +82,11 @@ def predict_vehicle(protocol: Any, measured: dict[str, float] | None = None,
         model["propeller"] = {k: vehicle.propeller[k] for k in PROPELLER_FIELDS}
     model["assumptions"] = vehicle_assumptions(vehicle, masses, getattr(vehicle, "assumed", None))
     warning = neutral_warning(str(vehicle.name), masses, float(profile.volume), rho)
+    upright = stability_warning(model.get("cg_m"), model.get("cb_m"), "[vehicle]")
     return VehiclePrediction(profile, predicted, masses, rho, nu, model,
                              _powering(vehicle, profile, fins, rho, nu),
                              _pressure_hull(vehicle, profile, rho),
-                             (warning,) if warning else ())
+                             tuple(w for w in (warning, upright) if w))
 
 
 def geometry_problem(vehicle: Any) -> str | None:
@@ -93,9 +98,17 @@ def geometry_problem(vehicle: Any) -> str | None:
         profile = vmodel.vehicle_profile(vehicle)
     except ValueError:
         return None
-    problems = vehicle_geometry_problems(vehicle, float(profile.length), _reference_x(
-        vehicle, profile))
+    problems = _problems(vehicle, profile)
     return problems[0] if problems else None
+
+
+def _problems(vehicle: Any, profile: HullProfile) -> list[str]:
+    """What [vehicle] gives that its hull cannot have: positions and sizes
+    (:func:`towtank.vehicle.schema.vehicle_geometry_problems`), then mass, volume and
+    inertia (:func:`towtank.vehicle.schema.vehicle_mass_problems`)."""
+    length = float(profile.length)
+    return (vehicle_geometry_problems(vehicle, length, _reference_x(vehicle, profile))
+            + vehicle_mass_problems(vehicle, float(profile.volume), length))
 
 
 def _reference_x(vehicle: Any, profile: HullProfile) -> float:
@@ -114,8 +127,7 @@ def _check_geometry(vehicle: Any, profile: HullProfile) -> None:
         Its first problem (:func:`towtank.vehicle.schema.vehicle_geometry_problems`): e.g. a fin
         typed in millimetres, whose span would be longer than the hull.
     """
-    problems = vehicle_geometry_problems(vehicle, float(profile.length),
-                                         _reference_x(vehicle, profile))
+    problems = _problems(vehicle, profile)
     if problems:
         raise ValueError(problems[0])
 
