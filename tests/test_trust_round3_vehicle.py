@@ -119,6 +119,17 @@ def test_a_gap_beyond_the_limit_is_a_sentence_one_within_is_predicted_across(rec
     assert any("gap" in note for note in log.notes)
 
 
+def test_a_time_in_milliseconds_is_named_not_taken_for_a_gap(record):
+    """The record's t_s in ms (every step 50 "s"): it was refused as "the time jumps by 50 s
+    at row 3 ... split the record at the gap", a gap it does not have; the sentence now asks
+    whether t_s is in ms."""
+    df = record.copy()
+    df["t_s"] = df["t_s"] * 1000.0
+    with pytest.raises(LogError, match=r"^g: the time steps by 50 s from row to row "
+                                       r"\(median\).*is t_s in ms\?$"):
+        log_from_frame(df, "g")
+
+
 # --- item 7 (b): the integrator's work is bounded ------------------------------------------
 
 @pytest.mark.parametrize("dt", [1e7, MAX_SUBSTEPS * 0.05 + 0.1, math.inf, math.nan])

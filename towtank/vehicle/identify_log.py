@@ -211,6 +211,10 @@ def log_from_frame(raw: pd.DataFrame, name: str = "log",
         raise LogError(f"{name}: the time goes back or repeats at row {keep[i + 1] + 2} "
                        f"({t[i]:g} s then {t[i + 1]:g} s); identify needs a time that "
                        "increases from row to row.")
+    if np.median(dt) > MAX_GAP_S:  # every step long: not a gap, the time's unit
+        raise LogError(f"{name}: the time steps by {float(np.median(dt)):.4g} s from row to "
+                       f"row (median), more than the {MAX_GAP_S:g} s identify predicts "
+                       "across: is t_s in ms?")
     if (dt > MAX_GAP_S).any():
         i = int(np.nonzero(dt > MAX_GAP_S)[0][0])
         raise LogError(f"{name}: the time jumps by {dt[i]:.4g} s at row {keep[i + 1] + 2} "
