@@ -161,14 +161,14 @@ def identify_command(model_path: Path, log_path: Path, estimate: str, *, method:
     mat[len(old_sym):, len(old_sym):] = cov
     updated["covariance"] = {"symbols": syms, "matrix": mat.tolist()}
     notes = dict(model.get("notes") or {})
-    said = [f"{', '.join(idents)} identified by {result.method} from {Path(log_path).name} "
+    told = [f"{', '.join(idents)} identified by {result.method} from {Path(log_path).name} "
             "(towtank identify); covariance of the identified values in 'covariance'"] \
         if idents else []
     if left:
         why = ("not identifiable from it" if result.fits()
                else "the record does not fit the model (fit.csv)")
-        said.append(f"{', '.join(left)} kept at the model's values: {why}")
-    notes["identified"] = "; ".join(said)
+        told.append(f"{', '.join(left)} kept at the model's values: {why}")
+    notes["identified"] = "; ".join(told)
     updated["notes"] = notes
 
     def write(tmp: Path) -> None:

@@ -73,8 +73,9 @@ class IdentifyResult(IdentifyFit, Estimates):
     def identifiable(self, method: str | None = None) -> np.ndarray:
         """True where the record constrains the coefficient: its sd below
         :data:`~towtank.vehicle.identify.IDENTIFIABLE_RATIO` of its prior sd (and finite),
-        and its 95 % interval's half-width, 1.96 sd, below its size, the larger of its estimate
-        and its starting value: the record fixes its sign and its order of magnitude. The
+        and its 95 % interval's half-width, :data:`SIGN_Z` sd, below its size, the larger of
+        its estimate and its starting value: the record fixes its sign and its order of
+        magnitude. The
         prior's scale, 3 max(|value|, 1), is wide for a coefficient far below 1 in SI (a roll
         damping K_p|p| of −0.0055 kg·m² on REMUS): by the prior alone an estimate 21 times the
         truth with an interval across zero was called identifiable."""
