@@ -231,36 +231,28 @@ REMUS_MYRING = dict(a=0.191, b=0.654, c=0.541, n=2.0, theta_deg=24.98, d=0.191,
                     a_offset=0.0165, c_offset=0.0368)
 
 
-# A lab's slip: the geometry typed in millimetres (the brief's REMUS numbers: Y_vdot -1.84e6 kg
-# from span_m = 85.7, N_ur -8.65e6 from x_m = -638, N_uv -1.37e4 from origin_m = 611, and a
-# model.json simulate refused from cg_m = [0, 0, 19.6], each written with exit 0 before).
+MM = "was it given in mm for m?"
+
+
+# A lab's slips: the geometry typed in millimetres (the brief's REMUS numbers: Y_vdot -1.84e6
+# kg from span_m = 85.7, N_ur -8.65e6 from x_m = -638, N_uv -1.37e4 from origin_m = 611, and a
+# model.json simulate refused from cg_m = [0, 0, 19.6], each written with exit 0 before); the
+# mass in grams, the inertia from CAD in kg·mm², the volume in litres (predict wrote a
+# model.json that simulate refused with a sentence about the added masses, or ran with I_zz
+# 250,000 times the most a 30 kg, 1.33 m body can have).
 @pytest.mark.parametrize("edit,words", [
     (("span_m = 0.0857", "span_m = 85.7"),
-     ["'span_m' in [vehicle.fins #1] is 85.7 m", "the hull's length of 1.333 m"]),
+     ["'span_m' in [vehicle.fins #1] is 85.7 m", "the hull's length of 1.333 m", MM]),
     (("chord_m = 0.0776", "chord_m = 77.6"),
-     ["'chord_m' in [vehicle.fins #1] is 77.6 m", "the hull's length of 1.333 m"]),
+     ["'chord_m' in [vehicle.fins #1] is 77.6 m", "the hull's length of 1.333 m", MM]),
     (("x_m = -0.638", "x_m = -638"),
      ["'x_m' in [vehicle.fins #1] is -638 m", "origin_m, 0.611 m aft of the nose tip",
-      "from -0.7217 m (the tail) to 0.611 m (the nose)"]),
+      "from -0.7217 m (the tail) to 0.611 m (the nose)", MM]),
     (("origin_m = 0.611", "origin_m = 611"),
-     ["'origin_m' in [vehicle] is 611 m aft of the nose tip", "from 0 to 1.333 m"]),
+     ["'origin_m' in [vehicle] is 611 m aft of the nose tip", "from 0 to 1.333 m", MM]),
     (("cg_m = [0.0, 0.0, 0.0196]", "cg_m = [0, 0, 19.6]"),
      ["'cg_m' in [vehicle] must lie within the hull's length (1.3327 m) of the reference point",
-      "[0.0, 0.0, 19.6]"]),
-])
-def test_geometry_in_millimetres_stops_predict_with_exit_2(tmp_path, capsys, edit, words):
-    proto = tmp_path / "mm.toml"
-    assert edit[0] in PROTOCOL
-    proto.write_text(PROTOCOL.replace(edit[0], edit[1], 1))
-    assert cli.main(["predict", str(proto), "--out", str(tmp_path / "out")]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("towtank: mm.toml: ") and err.count("\n") == 1, err
-    for word in [*words, "was it given in mm for m?"]:
-        assert word in err, (word, err)
-    assert not (tmp_path / "out").exists()  # nothing written
-
-
-@pytest.mark.parametrize("edit,words", [
+      "[0.0, 0.0, 19.6]", MM]),
     (("mass_kg = 30.48", "mass_kg = 30480.0"),
      ["'mass_kg' in [vehicle] gives 3.048e+04 kg, 963 times the 31.66 kg of water its hull "
       "displaces", "was it given in g"]),
@@ -271,11 +263,9 @@ def test_geometry_in_millimetres_stops_predict_with_exit_2(tmp_path, capsys, edi
      ["'volume_m3' in [vehicle] is 31.66 m³, 1e+03 times its hull's 0.03166 m³",
       "was it given in litres?"]),
 ])
-def test_mass_volume_and_inertia_in_other_units_stop_predict(tmp_path, capsys, edit, words):
-    """REMUS with its mass in grams, its inertia from CAD in kg·mm², or its volume in litres:
-    predict wrote a model.json (exit 0) that simulate refused with a sentence about the
-    added masses, or ran (I_zz 250,000 times the most a 30 kg, 1.33 m body can have). Now
-    each stops predict (exit 2) in one sentence naming the key and the likely unit."""
+def test_a_vehicle_in_other_units_stops_predict_with_exit_2(tmp_path, capsys, edit, words):
+    """Each slip stops predict (exit 2) in one sentence naming the key, its bound and the
+    likely unit, before anything is written."""
     proto = tmp_path / "slip.toml"
     assert edit[0] in PROTOCOL
     proto.write_text(PROTOCOL.replace(edit[0], edit[1], 1))
@@ -284,7 +274,7 @@ def test_mass_volume_and_inertia_in_other_units_stop_predict(tmp_path, capsys, e
     assert err.startswith("towtank: slip.toml: ") and err.count("\n") == 1, err
     for word in words:
         assert word in err, (word, err)
-    assert not (tmp_path / "out").exists()
+    assert not (tmp_path / "out").exists()  # nothing written
 
 
 def test_a_hull_table_in_millimetres_stops_predict(tmp_path, capsys):

@@ -368,7 +368,7 @@ def reduce_run(
         window_s=window_s,
         speed_nominal=_given(speed_nominal, sheet.get("speed_nominal", math.nan)),
         accel_nominal=_given(accel_nominal, sheet.get("accel_nominal", math.nan)),
-        test=kind, row=row, config=str(sheet.get("config", "")))
+        test=kind, row=row)
 
 
 def _given(value: float | None, default: float) -> float:

@@ -946,7 +946,6 @@ def reduce_record(protocol: Protocol, row: dict[str, Any], *, debug: bool = Fals
             speed_nominal=float(row.get("speed_nominal", math.nan)),
             accel_nominal=float(row.get("accel_nominal", math.nan)),
             test=str(row.get("test", "")),
-            config=str(row.get("config", "")),
             keep_series=keep_series,
             row=row,
         )
@@ -1015,7 +1014,7 @@ def zeroed_record(protocol: Protocol | None, raw: RawRun, folder: Path, file: st
 def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
                 window_s: tuple[float, float] | None = None,
                 speed_nominal: float = math.nan, accel_nominal: float = math.nan,
-                test: str = "", keep_series: bool = False, config: str = "",
+                test: str = "", keep_series: bool = False,
                 row: dict[str, Any] | None = None) -> RunReduction:
     """Reduce a run read by :func:`load_record` as the day does (before tare).
 
@@ -1027,11 +1026,11 @@ def reduce_read(protocol: Protocol | None, raw: RawRun, *, run: int, file: str,
     captive test is reduced to its loads (``RunReduction.captive``,
     :func:`towtank.reduce.captive_record.reduce_captive_record`) with the settings of its run
     sheet ``row`` (a captive test needs the protocol and the row).
-    ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²], ``config``: the
-    sheet's; a ``fin`` run whose lift column holds no numbers is rejected first
+    ``window_s`` [s], ``speed_nominal`` [m/s], ``accel_nominal`` [m/s²]: the sheet's; a run
+    whose ``row`` says config ``fin`` and whose lift column holds no numbers is rejected first
     (:func:`check_fin_lift`).
     """
-    check_fin_lift(raw, config, file)
+    check_fin_lift(raw, str((row or {}).get("config", "")), file)
     red = reduce_run(raw, Processing() if protocol is None else protocol.processing,
                      run=run, file=file, window_s=window_s, speed_nominal=speed_nominal,
                      accel_nominal=accel_nominal, keep_series=keep_series)
