@@ -12,28 +12,26 @@ import atexit
 import contextlib
 import copy
 import gc
+import importlib
 import os
 import pickle
 import shutil
 import signal
+import sys
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from towtank.testing.bytecode import keep_bytecode_under
+from towtank.testing.bytecode import write_bytecode_again
 
 # The suite starts about sixty new Python processes (the commands that need a process of their
 # own, the fork servers of the worker pools, pytest-xdist's workers). Where the environment
 # switches bytecode writing off (PYTHONDONTWRITEBYTECODE), each of them would compile towtank's
-# modules from source again (0.9 CPU-s a start): the run keeps the bytecode under a temporary
-# folder of its own, removed when the run ends, and writes none beside the sources.
-_BYTECODE = Path(tempfile.mkdtemp(prefix="towtank-test-pycache-"))
-if keep_bytecode_under(_BYTECODE):
-    atexit.register(shutil.rmtree, _BYTECODE, ignore_errors=True)
-else:
-    _BYTECODE.rmdir()
+# modules and the test modules from source again (0.9 CPU-s a start for towtank's): the run
+# writes them beside the sources, in __pycache__, as Python does by default.
+write_bytecode_again()
 
 import pandas as pd  # noqa: E402 - after the bytecode switch, as every import below
 import pytest  # noqa: E402
@@ -580,6 +578,10 @@ def pytest_addoption(parser):
     parser.addoption("--bench", action="store_true", default=False,
                      help="also run the tests marked bench (the campaign benchmark's smoke run, "
                           "a dozen new processes: .ci/run runs it apart from the suite)")
+    parser.addoption("--heavy", action="store_true", default=False,
+                     help="also run the tests marked heavy (each more than 1.5 CPU-s: whole "
+                          "days, new processes, signals, coverage over many draws, mypy; "
+                          ".ci/run runs them as a step of their own: --heavy -m heavy)")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -594,10 +596,47 @@ def pytest_collection_modifyitems(config, items):
     if not config.getoption("--bench"):
         skips.append(("bench", pytest.mark.skip(
             reason="bench: the benchmark's smoke run, run apart by .ci/run (--bench)")))
+    if not config.getoption("--heavy"):
+        # deselected, not skipped: the run ends with their number ("262 deselected"), not
+        # with a line for each
+        heavy = [item for item in items if item.get_closest_marker("heavy") is not None]
+        if heavy:
+            config.hook.pytest_deselected(items=heavy)
+            items[:] = [item for item in items if item.get_closest_marker("heavy") is None]
     for item in items:
         for marker, skip in skips:
-            if marker in item.keywords:
+            if item.get_closest_marker(marker) is not None:  # a mark, not a folder's name
                 item.add_marker(skip)
+
+
+def pytest_collection(session):
+    """Each pytest-xdist worker collects every test module, and where no bytecode is kept yet
+    (a fresh checkout, or the run's own bytecode folder above) each rewrites the asserts of
+    every test module and compiles it, the same ones at the same moment: about 20 CPU-s a
+    worker, the same work twice. The first worker's collection goes through the modules in
+    order; worker k of n first imports the modules of its k-th share backwards, from the end
+    of the share, until it meets one whose bytecode is written (by a worker before it): each
+    module is then compiled about once. A module is imported here as its collection would
+    (the same name, with pytest's assertion rewriting); one that fails to import is left to
+    the collection, which reports it."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    count = os.environ.get("PYTEST_XDIST_WORKER_COUNT", "")
+    if (sys.dont_write_bytecode or not worker.startswith("gw") or not worker[2:].isdigit()
+            or not count.isdigit() or int(count) < 2 or int(worker[2:]) == 0):
+        return
+    k, n = int(worker[2:]), int(count)
+    files = sorted(Path(__file__).resolve().parent.glob("test_*.py"))
+    # where pytest keeps a rewritten module's bytecode (_pytest.assertion.rewrite)
+    tag = f"{sys.implementation.cache_tag}-pytest-{pytest.__version__}.pyc"
+    for path in reversed(files[k * len(files) // n:(k + 1) * len(files) // n]):
+        cache = (Path(sys.pycache_prefix, *path.parent.parts[1:]) if sys.pycache_prefix
+                 else path.parent / "__pycache__")
+        if path.stem in sys.modules or (cache / f"{path.stem}.{tag}").exists():
+            break
+        try:
+            importlib.import_module(path.stem)
+        except (Exception, pytest.skip.Exception):  # noqa: BLE001 - the collection reports it
+            sys.modules.pop(path.stem, None)
 
 
 #: Collections of the middle generation between two full collections in a test process

@@ -243,6 +243,7 @@ def air_day(tmp_path_factory) -> dict[str, Any]:
             "day": runs[0].day}
 
 
+@pytest.mark.heavy
 def test_air_day_exits_0_and_recovers_its_truth(air_day):
     assert air_day["code"] == 0
     out = air_day["out"]
@@ -345,6 +346,7 @@ def test_kite_in_air_is_not_stopped_by_the_mass_check(tmp_path, capsys):
     assert code != 2 and "mass_kg" not in capsys.readouterr().err
 
 
+@pytest.mark.heavy
 def test_synth_air_day_processes(tmp_path):
     """``towtank synth --day air``: a day a lab can try; it processes with exit 0 (every run
     usable), the protocol in air."""

@@ -55,6 +55,7 @@ def _same(a: pd.DataFrame, b: pd.DataFrame) -> None:
     pd.testing.assert_frame_equal(a.reset_index(drop=True), b.reset_index(drop=True))
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("how", ["script", "guarded-script", "python -c", "python -"])
 def test_process_day_from_a_plain_program(how, tmp_path, cli_coefficients):
     """No main guard (the workers would re-run the script), -c and stdin: all 41 runs reduced,
@@ -77,6 +78,7 @@ def test_process_day_from_a_plain_program(how, tmp_path, cli_coefficients):
     _same(pd.read_csv(out), cli_coefficients)
 
 
+@pytest.mark.heavy
 def test_process_day_in_process_returns_the_day(cli_coefficients, sample_hull_day):
     day = sample_hull_day  # towtank.process_day(HULL, ...) in this session
     assert day.n_rejected == 0 and not day.rejected
@@ -216,6 +218,7 @@ def test_verdicts_are_typed_and_survive_copy():
     assert agreement(1.0, 1.001, 0.001, 0.0).agrees
 
 
+@pytest.mark.heavy
 def test_a_fin_day_shows_as_its_runs_and_its_fin_result(sample_fin_day):
     """A day without hull coefficients: its summary is the runs by configuration and status,
     its FinResult prints in one line and gives fins.csv; nothing raises for the absent stages."""
@@ -307,6 +310,7 @@ def short_identification(remus_sine):
     return towtank.identify(model, record, ["N_ur", "N_uudr"], check=False)
 
 
+@pytest.mark.heavy
 def test_identify_takes_one_symbol_alone(remus_sine):
     """``estimate="N_ur"`` is the list ``["N_ur"]``, not the letters N, _, u, r."""
     model, record = remus_sine
@@ -326,6 +330,7 @@ RESULTS_WITH_ESTIMATES: tuple[tuple[str, Callable[[pytest.FixtureRequest], Any]]
 )
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(("name", "factory"), RESULTS_WITH_ESTIMATES,
                          ids=[n for n, _ in RESULTS_WITH_ESTIMATES])
 def test_every_result_with_estimates_speaks_one_vocabulary(name, factory, request):

@@ -93,6 +93,7 @@ def _damage(frame: pd.DataFrame, root: Path) -> None:
     frame.loc[hull[8], "remarks"] = "bell\x07 \ufffe\uffff remark\x1b[2J"
 
 
+@pytest.mark.heavy
 def test_bad_runs_are_rejected_one_by_one_and_the_report_is_written(tmp_path, capsys):
     BAD.clear()
     # the PDF and the workbook (what is read below); the PNGs draw the PDF's figures again
@@ -247,6 +248,7 @@ def _xlsx_day(tmp_path: Path, edit_xml) -> Path:
     return protocol
 
 
+@pytest.mark.heavy
 def test_a_merged_range_to_the_sheets_end_is_cut_to_the_used_area(tmp_path):
     """A 7 kB workbook whose merged range is L1:XFD1048576 (17 billion cells, which the
     reader would create one by one until the memory runs out) is read as the lab sees it."""
@@ -418,6 +420,7 @@ def _wait_for_pause(proc: subprocess.Popen, marker: Path, stage: str,
     raise AssertionError(f"never reached {stage!r}")
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_ctrl_c_is_exit_130_in_one_line_and_the_old_outputs_stay(tmp_path):
     """Ctrl-C in the middle of the reduction: exit 130, one line, the old outputs kept. The
@@ -440,6 +443,7 @@ def test_ctrl_c_is_exit_130_in_one_line_and_the_old_outputs_stay(tmp_path):
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_workers_die_with_the_main_process(tmp_path, sig):

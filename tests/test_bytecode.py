@@ -1,5 +1,6 @@
 """The test run's and the benchmark's new processes keep their bytecode where the environment
-switches writing it off (towtank.testing.bytecode), and never write it beside the sources."""
+switches writing it off (towtank.testing.bytecode): the run's beside the sources, as Python's
+default has it, the benchmark's under a folder of its own."""
 
 from __future__ import annotations
 
@@ -24,26 +25,27 @@ def test_the_environment_is_changed_only_where_writing_is_off(tmp_path):
 _CHILD = """
 import subprocess, sys
 from pathlib import Path
-from towtank.testing.bytecode import keep_bytecode_under
-src, cache = Path(sys.argv[1]), Path(sys.argv[2])
+from towtank.testing.bytecode import write_bytecode_again
+src = Path(sys.argv[1])
 assert sys.dont_write_bytecode
-assert keep_bytecode_under(cache)
+assert write_bytecode_again()
+assert not write_bytecode_again()  # on already: nothing to do
 sys.path.insert(0, str(src))
-import probe_module  # compiled here: its bytecode under the cache
+import probe_module  # compiled here: its bytecode beside it
 subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv[1]); "
                 "import probe_grandchild", str(src)], check=True)
 """
 
 
-def test_a_process_and_its_children_write_bytecode_under_the_folder_only(tmp_path):
-    src, cache = tmp_path / "src", tmp_path / "cache"
+def test_a_process_and_its_children_write_bytecode_beside_the_sources(tmp_path):
+    """Switched on again as Python's default has it: in __pycache__ beside each source, where
+    an installed library's bytecode is read from too."""
+    src = tmp_path / "src"
     src.mkdir()
     for name in ("probe_module", "probe_grandchild"):
         (src / f"{name}.py").write_text("VALUE = 1\n")
     env = {"PATH": "/usr/bin", NO_BYTECODE: "1",
            "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
-    subprocess.run([sys.executable, "-c", _CHILD, str(src), str(cache)], env=env, check=True,
-                   timeout=120)
-    written = sorted(p.name.split(".")[0] for p in cache.rglob("probe_*.pyc"))
+    subprocess.run([sys.executable, "-c", _CHILD, str(src)], env=env, check=True, timeout=120)
+    written = sorted(p.name.split(".")[0] for p in (src / "__pycache__").glob("probe_*.pyc"))
     assert written == ["probe_grandchild", "probe_module"]
-    assert not list(src.rglob("*.pyc")) and not (src / "__pycache__").exists()

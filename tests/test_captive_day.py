@@ -196,6 +196,7 @@ def test_vertical_day_without_iyy_uses_izz_with_a_note(tmp_path):
 
 # ======================================================================= [captive] options
 
+@pytest.mark.heavy
 def test_captive_cycle_options_decide_which_runs_are_kept(tmp_path):
     """amplitude_tolerance = 0.12 accepts the run 10 % off the sheet; min_cycles = 6 rejects
     every PMM run of five steady cycles, naming six."""
@@ -222,6 +223,7 @@ def test_cycle_options_are_in_the_run_cache_key(tmp_path):
     assert len(keys) == 4
 
 
+@pytest.mark.heavy
 def test_a_day_whose_moments_are_about_the_balance_point(tmp_path):
     """``[captive] moment_ref = "balance"`` (FORMATS section 8) with the balance 0.30 m ahead
     of O: a generated day whose truth refers to the balance point B (its sway velocity

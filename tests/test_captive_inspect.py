@@ -162,6 +162,7 @@ def test_a_hull_balances_fx_is_still_the_drag(tmp_path, header):
         assert channels["lift"] == {"column": "Fy (N)"}
 
 
+@pytest.mark.heavy
 def test_watch_gives_captive_runs_their_loads_and_the_days_verdicts(tmp_path):
     make_captive_day(tmp_path, plan=PLAN[:3], seed=3)
     protocol = tmp_path / "protocol.toml"

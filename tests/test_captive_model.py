@@ -114,6 +114,7 @@ def day_model(protocol, prestero) -> dict:
     return result.model
 
 
+@pytest.mark.heavy
 def test_converted_totals_reproduce_the_turn_radius(day_model, generating_radius, tmp_path):
     # through model.json: written, read back and checked
     model = read_model(write_model(day_model, tmp_path / "model.json"))
@@ -125,6 +126,7 @@ def test_converted_totals_reproduce_the_turn_radius(day_model, generating_radius
         assert model["conversions"][sym]["form"] == "total"
 
 
+@pytest.mark.heavy
 def test_totals_counted_twice_miss_the_turn(protocol, prestero, generating_radius):
     result, _, _ = day_vehicle(_with_form(protocol, "fossen"), _captive_table(protocol, prestero))
     model = result.model
@@ -267,6 +269,7 @@ def generated_day_table(protocol, prestero) -> pd.DataFrame:
     return table[~table["symbol"].str.endswith("_uu")]  # the offsets stay out of the model
 
 
+@pytest.mark.heavy
 def test_a_generated_captive_day_reproduces_the_turn_radius(protocol, generated_day_table,
                                                            generating_radius):
     """FORMATS section 8 / issue 35 item 7: the model built from a generated captive day (both

@@ -304,6 +304,7 @@ def _coverage(seeds):
     return inside, total
 
 
+@pytest.mark.heavy
 def test_coverage_short():
     """6 generated days x 14 derivatives: the fraction of 95 %
     intervals holding the truth has a Clopper-Pearson interval that holds 0.95 (the long
@@ -366,6 +367,7 @@ def test_n_rdot_of_generated_yaw_runs_inside_its_interval():
     assert e.ci_low <= true <= e.ci_high
 
 
+@pytest.mark.heavy
 def test_reduced_chi2_near_one_when_the_truth_is_the_model():
     """The rows' variances hold the zero's and the motion channels' scatter: 5 generated days
     of the model's own truth give reduced chi^2 within 0.5-1.6 (56 dof) and no chi^2
@@ -445,6 +447,7 @@ def test_make_captive_day_writes_protocol_sheet_and_files(tmp_path, layout):
     assert len(files) == 2 and all(f.stat().st_size > 1000 for f in files)
 
 
+@pytest.mark.heavy
 def test_pmm_derivatives_of_a_frequency_independent_truth_agree_over_omega():
     """The agreement over omega' (issue 35 item 3) takes a run's standard error from the
     covariance of its load AND its regressors: the yaw channel's noise enters N through the

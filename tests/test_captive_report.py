@@ -49,6 +49,7 @@ def vertical_day(tmp_path_factory):
 
 
 # ------------------------------------------------------------------------------ the PDF
+@pytest.mark.heavy
 def test_pdf_has_a_captive_section_with_table_and_figure(captive_day):
     from towtank.report.pdf import page_plan
 
@@ -59,6 +60,7 @@ def test_pdf_has_a_captive_section_with_table_and_figure(captive_day):
     assert captive[1].payload[0] == "captive"
 
 
+@pytest.mark.heavy
 def test_captive_pages_drawn_in_the_pdf(captive_day):
     from pypdf import PdfReader
 
@@ -102,6 +104,7 @@ def test_pmm_prediction_follows_the_cycle_averaged_loads(captive_day):
         assert rms < 0.05 * np.max(np.abs(measured))
 
 
+@pytest.mark.heavy
 def test_vertical_day_gets_its_captive_page(vertical_day):
     from towtank.report.captive_figure import fig_captive
     from towtank.report.pdf import _draw_captive, _page, page_plan

@@ -20,6 +20,7 @@ def test_help_names_every_command(capsys):
     assert "exit status" in text
 
 
+@pytest.mark.heavy
 def test_synth_writes_a_day_that_processes(tmp_path, capsys):
     day = tmp_path / "day"
     assert main(["synth", str(day), "--day", "hull", "--seed", "7"]) == 0
@@ -31,6 +32,7 @@ def test_synth_writes_a_day_that_processes(tmp_path, capsys):
     assert coef.loc["X_u|u|", "value"] == pytest.approx(truth["X_u|u|"], rel=0.01)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(("day_kind", "file_format", "sheet"),
                          [("hull", "tdms", "csv"), ("fin", "csv", "xlsx")])
 def test_synth_writes_the_formats_asked_for(tmp_path, capsys, day_kind, file_format, sheet):
@@ -45,6 +47,7 @@ def test_synth_writes_the_formats_asked_for(tmp_path, capsys, day_kind, file_for
     assert set(runs["status"]) <= {"ok", "void"}
 
 
+@pytest.mark.heavy
 def test_jobs_from_the_protocol_unless_given(tmp_path, capsys, monkeypatch):
     from towtank.runtime import parallel
 
@@ -114,6 +117,7 @@ def test_process_without_a_command_or_protocol(tmp_path, capsys):
     assert "does not exist" in err and "Traceback" not in err
 
 
+@pytest.mark.heavy
 def test_sheet_disagreements_are_warned_on_the_terminal(tmp_path, capsys):
     """A set speed the carriage did not run at, and a temperature in °F, reach the user."""
     from towtank.testing.synthetic import hull_protocol_sections, make_hull_day, write_protocol

@@ -26,6 +26,7 @@ STUDY_DAYS = 100
 FIRST_SEED = 1000
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("condition", list(CONDITIONS))
 def test_every_coefficient_present_and_within_tolerance(condition, tmp_path):
     rows = day_result(condition, FIRST_SEED, workdir=tmp_path)

@@ -79,6 +79,7 @@ def processed(day, tmp_path_factory):
     }
 
 
+@pytest.mark.heavy
 def test_make_damaged_day_unpacks_and_covers_every_kind(day):
     expected, ok_with_note = day
     assert set(day.kinds.values()) >= {

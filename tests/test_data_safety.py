@@ -117,6 +117,7 @@ def test_a_symlink_with_an_output_name_is_not_followed(day, tmp_path):
 
 
 # --------------------------------------------------------------- 2. synth never overwrites
+@pytest.mark.heavy
 def test_synth_refuses_a_folder_that_is_not_empty(tmp_path, capsys):
     real = tmp_path / "real_day"
     (real / "data").mkdir(parents=True)
@@ -139,6 +140,7 @@ def test_synth_refuses_a_folder_that_is_not_empty(tmp_path, capsys):
 
 
 # ------------------------------------------------------------ 4. the folder keeps its mode
+@pytest.mark.heavy
 def test_output_folder_keeps_its_mode_and_new_ones_follow_the_umask(day, tmp_path):
     shared = tmp_path / "shared"
     shared.mkdir()
@@ -166,6 +168,7 @@ def test_a_set_left_beside_a_missing_folder_is_put_back(day, tmp_path, capsys):
     assert (out / "runs.csv").read_bytes() == runs
 
 
+@pytest.mark.heavy
 def test_a_mixed_set_is_marked_until_it_is_complete(day, tmp_path, monkeypatch):
     from towtank.report import outputs
 

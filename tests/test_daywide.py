@@ -71,6 +71,7 @@ def test_run_ranges(runs, text):
     assert run_ranges(runs) == text
 
 
+@pytest.mark.heavy
 def test_a_missing_gain_is_one_sentence_and_no_empty_thumbnails(tmp_path, capsys):
     syn.make_hull_day(tmp_path, seed=3, file_format="csv", sheet_format="csv")
     sections = syn.hull_protocol_sections(".", "out", sheet_format="csv")

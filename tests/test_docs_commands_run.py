@@ -214,6 +214,7 @@ def test_the_documents_quote_commands_to_run():
     assert "towtank inspect FILE" in skipped and "towtank watch" in skipped
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("quoted", [_case(q) for q in RUNNABLE])
 def test_every_documented_command_runs(quoted, workspace, no_watch_loop, report_text_pages):
     code, out = workspace.run_upto(quoted)

@@ -263,6 +263,7 @@ def _tiny_day(tmp_path: Path, plan: list[syn.RunSpec]) -> Path:
     return write_hull_protocol(tmp_path, sheet_format="csv", channel_style="canonical")
 
 
+@pytest.mark.heavy
 def test_day_without_any_coefficient_still_writes_its_outputs(tmp_path):
     """Tare runs and one hull run at 5°: no coefficient can be fitted; every output is written
     and the missing runs are named (exit 0, not an internal error)."""

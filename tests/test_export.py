@@ -22,6 +22,7 @@ def exported(hull_day, tmp_path_factory):
     return hull_day, folder
 
 
+@pytest.mark.heavy
 def test_the_steady_mean_of_the_export_is_the_runs_table(exported):
     from scipy.io import loadmat
 
@@ -65,6 +66,7 @@ def test_hdf5_and_parquet_hold_the_same_series(exported):
             assert h5[name]["drag"].attrs["unit"] == "N"
 
 
+@pytest.mark.heavy
 def test_export_from_the_command_line_is_an_output_like_the_others(tmp_path, capsys):
     from towtank.testing import synthetic as syn
 

@@ -120,6 +120,7 @@ def _disk_fills_after(monkeypatch, nbytes: int) -> None:
 
     monkeypatch.setattr(export._NeverFailingFile, "_pwrite", staticmethod(pwrite))
 
+@pytest.mark.heavy
 def test_the_export_holds_one_run_at_a_time(written, tmp_path):
     """The Python and numpy memory live at once while the day is exported (all three
     formats) stays within a few runs' series, far below the day's (an export that reduced
@@ -170,6 +171,7 @@ _PEAK_SCRIPT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not Path("/proc/self/clear_refs").exists(), reason="Linux /proc only")
 def test_the_peak_memory_of_an_export_is_one_runs_worth(tmp_path):
     """A process exporting a 5 kHz day (41 runs, 160 MB of series) grows its resident memory
@@ -294,6 +296,7 @@ WRITERS = ["pdf", "pdf-zlib-here", "pdf-zlib-forked", "workbook", "figures", "ta
            "manifest", "mat", "hdf5", "parquet"]
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("where", WRITERS)
 def test_a_full_disk_in_any_writer_is_exit_2_and_the_folder_stays(written, monkeypatch, where):
     protocol, out, day = written
@@ -322,6 +325,7 @@ def _pdf_part_fails(monkeypatch) -> None:
     monkeypatch.setattr(pdf, "_write_part", broken)
 
 
+@pytest.mark.heavy
 def test_a_library_error_on_a_full_disk_is_the_full_disk(written, monkeypatch):
     """A writer's own error without the OSError behind it (as h5py's or a C library's can be)
     while the file system has no space left: exit 2, not 3."""
@@ -337,6 +341,7 @@ def test_a_library_error_on_a_full_disk_is_the_full_disk(written, monkeypatch):
     assert_full_disk_reported(rc, err, out, before)
 
 
+@pytest.mark.heavy
 def test_the_same_library_error_with_space_left_is_still_a_bug(written, monkeypatch):
     protocol, out, day = written
     before = fingerprint(out)
@@ -420,6 +425,7 @@ def _towtank(*args: str, prelude: str = "") -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=600, check=False)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("size, extra", [("2m", ("--no-report", "--export", "hdf5")),
                                          ("250k", ())], ids=["hdf5", "report"])
 def test_a_real_full_disk_is_exit_2_and_the_folder_stays(tmp_path, small_disk, size, extra):
@@ -439,6 +445,7 @@ def test_a_real_full_disk_is_exit_2_and_the_folder_stays(tmp_path, small_disk, s
 
 
 # ------------------------------------------------------------------ item 11: NUL in text
+@pytest.mark.heavy
 def test_a_nul_in_the_run_sheet_is_exported_as_the_nul_symbol(tmp_path):
     """A NUL in a text cell that reaches ``meta`` (the tare group is free text; so is the
     campaign's name) and in a remark: exit 0 or 1 (not exit 3 from h5py's "VLEN strings do

@@ -333,6 +333,7 @@ def _lab_protocol(day_dir, path, lab, **lift):
     return write_protocol(path, **sections)
 
 
+@pytest.mark.heavy
 def test_lift_gain_left_out_is_named(lab_fin_day, tmp_path):
     """The lift in V with its 25 N/V left out (gain 1.0): slopes 0.23-0.24 /rad, Y_uudr 4.3
     for 107, and no warning. With the gain the same files are plausible."""

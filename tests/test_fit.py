@@ -82,6 +82,7 @@ def test_truth_inside_95_percent_interval(seed_result, seed):
             symbol, res.truth[symbol], (row["ci_low"], row["ci_high"]))
 
 
+@pytest.mark.heavy
 def test_interval_coverage(seed_result):
     """Over 30 seeds the 95 % intervals hold the truth in 85-100 % of the days, per coefficient.
 
@@ -111,6 +112,7 @@ def _refit(res: SeedResult, mass_sd: float) -> fit.HullFit:
                         lateral_area=m.lateral_area, tares=res.tares)
 
 
+@pytest.mark.heavy
 def test_added_mass_interval_coverage_without_mass_uncertainty(seed_result):
     """With mass_uncertainty_kg = 0 the added-mass intervals are the regression's and the tare's
     alone; over the 30 cached days of test_interval_coverage they still hold the truth in

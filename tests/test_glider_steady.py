@@ -123,6 +123,7 @@ def test_paper_003_larger_roll_smaller_radius_and_period(model):
     assert solve_state(model, 300.0, 20.0, 10.0)[0][3] < 0
 
 
+@pytest.mark.heavy
 def test_spiral_against_the_time_domain(model):
     """From the steady solution the simulator stays on it; from the straight glide with the
     roll mass turned it converges to it (radius, period, speed within 1 % after 3 turns)."""
@@ -167,6 +168,7 @@ def straight_glide(trimmed):
     return simulate(held, "glide", 0.6, duration_s=300.0, initial_state=start)
 
 
+@pytest.mark.heavy
 def test_glide_with_roll_deg_spirals(trimmed, straight_glide):
     held, start = trimmed
     ts = simulate(held, "glide", 0.6, roll_deg=8.0, duration_s=2400.0, initial_state=start)
@@ -295,6 +297,7 @@ def test_simulate_roll_option_refusals(model, tmp_path, capsys):
     assert "has no rudder" in capsys.readouterr().err
 
 
+@pytest.mark.heavy
 def test_glide_rudder_turns(trimmed, straight_glide):
     """The glide takes the rudder: the glider trimmed at -20 deg turns with 10 deg of rudder
     and goes straight without."""

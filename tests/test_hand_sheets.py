@@ -41,6 +41,7 @@ def plain(tmp_path_factory):
     return towtank.process_day(_day(root, None), jobs=1)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("style", ["hand-xlsx", "hand-csv"])
 def test_a_hand_typed_sheet_gives_the_plain_days_coefficients(style, plain, tmp_path):
     day = towtank.process_day(_day(tmp_path, style), jobs=1)

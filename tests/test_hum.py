@@ -137,6 +137,7 @@ def _shared_zero_day(root: Path, noise: syn.Noise) -> Path:
     return syn.write_protocol(root / "protocol.toml", **sections)
 
 
+@pytest.mark.heavy
 def test_hum_leaves_no_bias_on_a_day(tmp_path):
     """The same day (same seed, one zero for the balance, shared by every run) with and
     without hum: the runs' steady drags (before and after the tare) differ by less than

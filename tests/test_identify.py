@@ -112,6 +112,7 @@ def test_rts_smoother_equals_filterpys():
     assert np.abs(mine - xs).max() > 1e-3  # the smoother did change the estimates
 
 
+@pytest.mark.heavy
 def test_paper_case_from_zero_starts(remus, sine_clean, tmp_path, capsys, monkeypatch):
     """N_ur, N_rdot, N_uudr from zero within 5 % and inside their 95 % intervals, by the
     command line (simulate's CSV columns, the paper's measured states); UKF and least squares
@@ -165,6 +166,7 @@ def test_paper_case_from_zero_starts(remus, sine_clean, tmp_path, capsys, monkey
     assert json.loads(model_path.read_text()) == remus  # the input model is untouched
 
 
+@pytest.mark.heavy
 def test_a_pitch_term_from_a_flat_turn_is_not_identifiable(remus, sine_clean):
     """M_uq (pitch damping) from the horizontal sine: reported not identifiable, its
     interval about as wide as the prior; N_ur beside it still identified."""
@@ -177,6 +179,7 @@ def test_a_pitch_term_from_a_flat_turn_is_not_identifiable(remus, sine_clean):
     assert any("M_uq: NOT identifiable" in line for line in res.verdicts())
 
 
+@pytest.mark.heavy
 def test_model_json_keeps_the_models_value_of_what_is_not_identifiable(
         remus, sine_clean, tmp_path, capsys, monkeypatch):
     """N_ur and M_uq from the horizontal sine by the command line: N_ur identified goes into
@@ -207,6 +210,7 @@ def test_model_json_keeps_the_models_value_of_what_is_not_identifiable(
         new["notes"]["identified"]
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(("slip", "said"), [
     ("radians", "times the model's 21.26: is the rudder's angle in radians under its _deg "
                 "column?"),
@@ -233,6 +237,7 @@ def test_a_rudder_in_radians_or_reversed_is_named_against_the_model(remus, sine_
     assert clean.against_model(remus["coefficients"]) == []
 
 
+@pytest.mark.heavy
 def test_a_coefficient_far_below_1_si_whose_sign_the_record_leaves_open(remus, sine_clean):
     """K_p|p| (roll damping, −0.0055 kg·m² on REMUS) from the horizontal sine with its roll
     recorded: its sd, 0.074, is 2.5 % of the prior's 3·max(|v|, 1) = 3, which alone called it
@@ -247,6 +252,7 @@ def test_a_coefficient_far_below_1_si_whose_sign_the_record_leaves_open(remus, s
     assert line.startswith("K_p|p|: NOT identifiable") and "does not fix its sign" in line
 
 
+@pytest.mark.heavy
 def test_the_extended_filter_from_zero(remus, sine_clean):
     """--method ekf (the paper's filter): the same three coefficients from zero, within 5 %
     and inside the 95 % intervals."""
@@ -260,6 +266,7 @@ def test_the_extended_filter_from_zero(remus, sine_clean):
     assert res.identifiable().all()
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("seed", [1034, 1050])
 def test_seed_1034_from_zero_converges_with_the_added_mass_bound(remus, sine_clean, seed):
     """Records 1034 and 1050 from zero converge, within 5 % of the truth and inside the 95 %
@@ -302,6 +309,7 @@ def test_a_filter_that_still_breaks_down_is_one_sentence_and_exit_2(remus, sine_
     assert not (out / "identified.csv").exists()
 
 
+@pytest.mark.heavy
 def test_least_squares_alone_and_the_result_api(remus, sine_clean):
     log = log_from_frame(_noisy(sine_clean, 5), "sine")
     res = identify(remus, log, ["N_ur", "N_uudr"], method="ls", start="zero", adequacy=False)
@@ -356,6 +364,7 @@ def test_a_bad_estimate_is_one_sentence_and_exit_2(remus, sine_clean, tmp_path, 
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.heavy
 def test_a_million_rows_are_refused_in_one_sentence(remus, tmp_path, capsys):
     model = tmp_path / "model.json"
     model.write_text(json.dumps(remus))
@@ -368,6 +377,7 @@ def test_a_million_rows_are_refused_in_one_sentence(remus, tmp_path, capsys):
     assert "1000000 rows" in err and "resample" in err
 
 
+@pytest.mark.heavy
 def test_gaps_nan_and_irregular_sampling_are_handled(remus, sine_clean):
     """Drop a 3 s gap, blank 5 % of the values, jitter the sampling: N_ur still within 5 %."""
     rng = np.random.default_rng(2)
@@ -382,6 +392,7 @@ def test_gaps_nan_and_irregular_sampling_are_handled(remus, sine_clean):
     assert abs(res.value[0] / remus["coefficients"]["N_ur"] - 1) < 0.05
 
 
+@pytest.mark.heavy
 def test_protocol_channels_map_other_names(remus, sine_clean, tmp_path, monkeypatch):
     import towtank.commands.identify as command
     import towtank.vehicle.identify as ident
@@ -415,6 +426,7 @@ def test_identify_never_writes_over_its_input_model(remus, tmp_path, capsys, sin
 _COLS = ["t_s", "x_m", "psi_deg", "r_deg_s", "rudder_deg", "sternplane_deg", "junk"]
 
 
+@pytest.mark.heavy
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True),
                                    st.text(max_size=4), st.none()),
@@ -440,6 +452,7 @@ def test_read_log_on_garbage_bytes(tmp_path):
         read_log(p)
 
 
+@pytest.mark.heavy
 def test_simulate_sine_schedule_and_noise(remus, tmp_path, capsys, monkeypatch):
     """The sine rudder is A sin(2 pi t/T); a schedule is followed (interpolated); --noise has
     the asked standard deviation and the same seed gives the same record."""

@@ -69,6 +69,7 @@ def _run(tmp: Path, model: dict, record: pd.DataFrame, *more: str) -> int:
                  ",".join(PAPER), "--out", str(tmp / "id"), "--quiet", *more])
 
 
+@pytest.mark.heavy
 def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
                                                      no_cross_check):
     """The Prestero-reading record identified with the default model: exit 1, every verdict
@@ -93,6 +94,7 @@ def test_a_record_of_another_prediction_does_not_fit(models, tmp_path, capsys,
     assert (tmp_path / "id" / "model.json").exists()
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("error::RuntimeWarning")  # none reaches a notebook user
 def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     """A record made neutral, identified with the 7 N buoyant model (old code: N_rdot 65 %
@@ -106,6 +108,7 @@ def test_a_neutral_record_does_not_fit_the_buoyant_model(models):
     assert (fit["statistic"] / fit["threshold"]).max() > 10.0  # by a clear margin
 
 
+@pytest.mark.heavy
 def test_a_record_the_model_made_fits_and_exits_0(models, tmp_path, capsys, no_cross_check):
     assert _run(tmp_path, models["neutral"],
                 sine_record(models["neutral"], 9, duration_s=15.0, max_step_s=STEP_S)) == 0
@@ -118,6 +121,7 @@ def test_a_record_the_model_made_fits_and_exits_0(models, tmp_path, capsys, no_c
     assert "trim: the model is in trim at 1." in out
 
 
+@pytest.mark.heavy
 def test_validate_tests_against_a_second_record(models, tmp_path, capsys):
     """--validate LOG2: the model is simulated along the second record; one of another model
     fails `validation`."""

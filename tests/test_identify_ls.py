@@ -102,6 +102,7 @@ def test_an_unconstrained_direction_has_an_infinite_variance():
     assert np.isfinite(cov[0, 0]) and np.isinf(cov[1, 1])
 
 
+@pytest.mark.heavy
 def test_the_issues_record_interval_holds_the_truth(remus, clean):
     """A record with every state (simulate --noise): least squares' 95 % intervals hold the
     truth (old code: N_uudr +-0.0009 wide, 5 to 40 sd off), the exact states named in a
@@ -121,6 +122,7 @@ def test_the_issues_record_interval_holds_the_truth(remus, clean):
     assert np.all(width <= 6.0), width
 
 
+@pytest.mark.heavy
 def test_linearly_interpolated_positions_do_not_narrow_the_interval(remus, clean):
     """x, y logged at 1 Hz with 0.05 m noise and interpolated to 10 Hz (their second
     differences vanish: the old code took their noise at its floor, 1e-6 of their range,

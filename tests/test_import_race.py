@@ -58,6 +58,7 @@ def protocol(tmp_path_factory):
                               **syn.hull_protocol_sections(".", "out", sheet_format="csv"))
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("jobs", [1, 2])
 def test_main_thread_never_imports_while_the_loader_does(protocol, tmp_path, jobs):
     script = tmp_path / "run_day.py"

@@ -445,6 +445,7 @@ def _check_prefix(name: str, data: bytes, full: dict[str, np.ndarray], cut: int)
         np.testing.assert_array_equal(row[: len(written)], written[: len(row)])
 
 
+@pytest.mark.heavy
 def test_every_prefix_of_a_short_file_in_each_layout(small_files):
     """Exhaustively: each of the ~5500 prefixes of a 30-row file in the four layouts (cuts in
     the header, the units row, an LVM segment header, a number, a separator)."""
@@ -454,6 +455,7 @@ def test_every_prefix_of_a_short_file_in_each_layout(small_files):
             _check_prefix(name, data, full[name], cut)
 
 
+@pytest.mark.heavy
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(which=st.sampled_from(["run.csv", "run.txt", "run.lvm", "run.dat"]),
        where=st.floats(0.0, 1.0))
@@ -589,6 +591,7 @@ def limited(tmp_path_factory) -> dict[str, tuple[Path, subprocess.CompletedProce
     return {key: (path, done[key]) for key, (path, _) in made.items()}
 
 
+@pytest.mark.heavy
 def test_a_compressed_mat_variable_declaring_3_gib_is_refused_before_it_is_read(limited):
     """3 MB of .mat that decompresses to 3 GiB (a run file is capped at 1 GiB): rejected
     from the size its header declares, in well under a second and without the memory; the
@@ -603,6 +606,7 @@ def test_a_compressed_mat_variable_declaring_3_gib_is_refused_before_it_is_read(
     _one_sentence(done.stderr)
 
 
+@pytest.mark.heavy
 def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(limited):
     """An uncompressed cell array inside a struct whose dimensions say 2³¹ elements (a
     reader would allocate 16 GiB of object pointers before reading one): refused from the
@@ -614,6 +618,7 @@ def test_a_nested_mat_array_declaring_huge_dimensions_is_refused(limited):
         done.stdout
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("layout", ["hdf5", "mat73"])
 def test_an_unwritten_dataset_of_2_31_values_is_refused_before_it_is_read(limited, layout):
     """A 10 kB HDF5 file (or MATLAB v7.3) whose dataset of 2³¹ doubles was never written:

@@ -61,6 +61,7 @@ def _paste(protocol_text: str, block: str) -> str:
     return head + block + tail
 
 
+@pytest.mark.heavy
 def test_lab_columns_without_protocol_are_reduced_with_the_proposed_block(day, tmp_path):
     """Issue 22: a run in the lab's column names (load cells in volts), no --protocol: inspect
     names the time column, proposes [read]/[channels], reduces the run with that block (forces
@@ -207,6 +208,7 @@ def test_a_problem_run_is_plotted_with_its_reason_and_same_names_do_not_clash(
     assert (tmp_path / "run_015.png").read_bytes() == first
 
 
+@pytest.mark.heavy
 def test_inspect_into_a_closed_pipe_ends_quietly(day, tmp_path):
     """`towtank inspect … | head -1`: no 'internal error (BrokenPipeError)'."""
     import subprocess

@@ -395,6 +395,7 @@ def test_formulas_without_a_saved_value_stop_the_day(tmp_path):
         read_run_sheet(path, 18.0)
 
 
+@pytest.mark.heavy
 def test_dollars_and_carets_from_the_inputs_never_break_the_report(tmp_path, monkeypatch):
     """Names, remarks, file names and cells typed by people reach the PDF as text; matplotlib
     would parse '$…$' as mathtext (and fail on '$\\frac$'): they must be drawn literally.

@@ -136,6 +136,7 @@ def _at_the_moment(stage: str, main_pid: int) -> None:
         assert forked, procs
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("stage", STAGES)
 def test_ctrl_c_to_the_whole_group_is_exit_130_in_one_line(sample_out, tmp_path, stage):
     out = sample_out

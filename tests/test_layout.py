@@ -156,6 +156,7 @@ def test_every_module_is_in_a_layer():
         layer_of(unit_of(module), LAYERS)
 
 
+@pytest.mark.heavy
 def test_imports_run_down_the_data_path_only():
     mods = modules(PACKAGE)
     wrong = layer_violations(all_imports(PACKAGE), set(mods), "towtank", LAYERS,
@@ -163,6 +164,7 @@ def test_imports_run_down_the_data_path_only():
     assert not wrong, "imports against the data path:\n" + "\n".join(wrong)
 
 
+@pytest.mark.heavy
 def test_nothing_in_production_imports_the_test_tooling():
     users = sorted({
         e.module for e in all_imports(PACKAGE)

@@ -490,6 +490,7 @@ def _number(text: str) -> float:
     return float(text.replace("−", "-"))
 
 
+@pytest.mark.heavy
 def test_the_page_shows_a_new_verdict_without_a_reload(browser, live_server, folder, sample_day):
     """A new state.json reaches the open page by its event stream. How fast (the issue's 2 s
     bound) is measured by ``python -m towtank.testing.bench_watch --browser``, not here: a
@@ -635,6 +636,7 @@ def test_the_page_reconnects_when_the_server_restarts(browser, folder, sample_da
 
 
 # ------------------------------------------------------------ end to end: towtank watch + page
+@pytest.mark.heavy
 def test_watch_end_to_end_each_closed_run_file_shows_on_the_page(browser, tmp_path):
     """``towtank watch`` as a lab starts it (its own page server, no browser opened), the page
     in Chromium with the network blocked, a generated day's files written one by one as

@@ -251,6 +251,7 @@ def _fraction(days: int, reduced: Callable[[int], Reduced]) -> tuple[float,
     return k / days, clopper_pearson(k, days)
 
 
+@pytest.mark.heavy
 def test_the_first_ranked_run_beats_a_random_one_on_20_days(reduced):
     """The 20-day version of the issue's proof (seeds 0-19, about 11 s): the first ranked run
     shrinks the targeted interval more than a random other remaining run on 18 of 20 days

@@ -94,6 +94,7 @@ def measured(tmp_path_factory):
     return towtank.process_day(root / "p.toml", jobs=1, report=False)
 
 
+@pytest.mark.heavy
 def test_the_set_speed_and_the_sheet_window_give_the_damping(tmp_path, measured, day_files):
     protocol, truth = day_files(tmp_path, windows=True, speed_tolerance=0.01)
     day = towtank.process_day(protocol, jobs=1, report=False)
@@ -171,6 +172,7 @@ def test_force_plateau_without_one_says_so():
     assert truth["t_plateau_start"] <= tt[i0] and tt[i1 - 1] <= truth["t_plateau_end"]
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not UNH.exists(), reason="../shared/real/unh_rvat_2013/test.tdms is not "
                     "present (real recordings are not kept in the repository)")
 def test_unh_rvat_with_its_nominal_speed_gives_the_labs_drag(tmp_path):

@@ -134,6 +134,7 @@ def _assert_the_same_files(cli: Path, api: Path, watched: Path) -> None:
                 assert got[rel] == data, f"{out.name}/{rel}"
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("name", SAMPLE_DAYS)
 def test_process_the_api_and_watch_write_the_same_files(name, tmp_path, capsys, sample_report):
     api = sample_report(name.removesuffix(".toml")).out  # towtank.process_day, report=True
@@ -142,6 +143,7 @@ def test_process_the_api_and_watch_write_the_same_files(name, tmp_path, capsys, 
     _assert_the_same_files(outs["cli"], outs["api"], outs["watch"])
 
 
+@pytest.mark.heavy
 def test_every_front_door_records_a_file_only_the_protocol_names(tmp_path, capsys):
     """A tare table ([tare] source = "table"): read when the protocol is loaded, named by no
     run; it is an input of the day in provenance.json whichever front door ran the day."""

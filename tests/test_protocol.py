@@ -581,6 +581,7 @@ def fuzz_folder(tmp_path_factory) -> Path:
 @example(mutations=[(("campaign", "output_dir"), "out\x00put")])
 @example(mutations=[(("campaign", "run_sheet"), "sheet\x00.csv")])
 # a path component longer than the file system allows (ENAMETOOLONG)
+@pytest.mark.heavy
 @example(mutations=[(("campaign", "run_sheet"), "a" * 300 + ".csv")])
 @example(mutations=[(("campaign", "data_dir"), "d" * 300)])
 def test_fuzz_protocol_loads_or_raises_protocol_error(fuzz_folder, mutations):

@@ -46,6 +46,7 @@ def plain(tmp_path_factory):
     return day, truth
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("layout", sorted(LAYOUTS))
 def test_every_layout_gives_the_plain_days_coefficients(layout, plain, tmp_path):
     base, truth = plain
@@ -89,6 +90,7 @@ def test_every_layout_gives_the_plain_days_coefficients(layout, plain, tmp_path)
         assert got[sym] == pytest.approx(truth["coefficients"][sym], rel=rel_tol)
 
 
+@pytest.mark.heavy
 def test_european_text_in_canonical_units_is_converted(tmp_path, plain):
     """';' separators, decimal commas, a preamble and a units row; the speed in mm/s."""
     protocol = _day(tmp_path, "txt-eu", channel_style="canonical")

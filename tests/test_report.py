@@ -115,6 +115,7 @@ def _same(a, b) -> bool:
 
 
 # ----------------------------------------------------------------------------- the workbook
+@pytest.mark.heavy
 @pytest.mark.parametrize("name", ["hull", "fin"])
 def test_workbook_has_every_sheet_frozen_and_filtered(days, name):
     _, out = days[name]
@@ -132,6 +133,7 @@ def test_workbook_has_every_sheet_frozen_and_filtered(days, name):
         assert ws["A1"].font.bold, ws.title
 
 
+@pytest.mark.heavy
 def test_workbook_coefficients_equal_the_csv_exactly(days):
     day, out = days["hull"]
     csv = pd.read_csv(out / "coefficients.csv")
@@ -174,6 +176,7 @@ def test_workbook_coefficients_equal_the_csv_exactly(days):
         assert _same(row[idx["value"]], rec["value"])
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("name", ["hull", "fin"])
 def test_workbook_numbers_are_numbers(days, name):
     day, out = days[name]
@@ -193,6 +196,7 @@ def test_workbook_numbers_are_numbers(days, name):
         assert isinstance(r[cols["run"] - 1], int)
 
 
+@pytest.mark.heavy
 def test_workbook_highlights_rejected_and_void_runs(days):
     day, out = days["hull"]
     ws = openpyxl.load_workbook(out / "report.xlsx")["Runs"]
@@ -209,6 +213,7 @@ def test_workbook_highlights_rejected_and_void_runs(days):
     assert f"run {DAMAGED_RUN}" in text and "carriage stopped early" in text
 
 
+@pytest.mark.heavy
 def test_workbook_highlights_large_differences(days, tmp_path):
     day, _ = days["hull"]
     hull = copy.copy(day.hull)
@@ -221,6 +226,7 @@ def test_workbook_highlights_large_differences(days, tmp_path):
     assert ws["A3"].fill.fgColor.rgb[-6:] != style.XL_DIFF_FILL
 
 
+@pytest.mark.heavy
 def test_fin_day_workbook_notes_why_sheets_are_empty(days):
     _, out = days["fin"]
     wb = openpyxl.load_workbook(out / "report.xlsx")
@@ -232,6 +238,7 @@ def test_fin_day_workbook_notes_why_sheets_are_empty(days):
     assert fins.max_row > 30  # the runs, then the per-speed curves below
 
 
+@pytest.mark.heavy
 def test_workbook_provenance_lists_inputs_with_sha256(days):
     day, out = days["hull"]
     ws = openpyxl.load_workbook(out / "report.xlsx")["Provenance"]
@@ -251,6 +258,7 @@ def _expected_pages(day) -> int:
     return 2 + n_figs + n_runs + n_quality + math.ceil(len(day.runs) / pdf.THUMBS_PER_PAGE)
 
 
+@pytest.mark.heavy
 def test_hull_pdf_pages_and_sections(days):
     day, out = days["hull"]
     text = page_texts(out / "report.pdf")
@@ -268,6 +276,7 @@ def test_hull_pdf_pages_and_sections(days):
     assert f"run {DAMAGED_RUN}" in all_text and "rejected" in all_text
 
 
+@pytest.mark.heavy
 def test_fin_pdf_has_no_hull_pages(days):
     day, out = days["fin"]
     pages = page_texts(out / "report.pdf")
@@ -281,6 +290,7 @@ def test_fin_pdf_has_no_hull_pages(days):
     assert "not given" in pages[0]
 
 
+@pytest.mark.heavy
 def test_pdf_metadata(days):
     """The metadata; that the same day gives the same bytes is checked on both sample days by
     tests/test_one_front_door.py (three writes of each compared byte for byte)."""
@@ -305,6 +315,7 @@ def test_pages_split_into_contiguous_groups(kinds, parts):
     assert all(groups)
 
 
+@pytest.mark.heavy
 def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
     day, out = days["fin"]  # the shorter day: its pages are drawn in four parts as well
     one = pdf.write_pdf(day, tmp_path, parts=1)
@@ -313,6 +324,7 @@ def test_pdf_in_one_part_has_the_same_pages(days, tmp_path):
     assert not list(tmp_path.glob(".report-part-*"))
 
 
+@pytest.mark.heavy
 def test_one_job_draws_the_same_pdf_in_this_process(days, tmp_path, monkeypatch):
     """``jobs=1``: every page group drawn here, one after another, and the same bytes as the
     groups drawn in processes beside this one (the fixture's report). That the forked
@@ -335,6 +347,7 @@ def test_one_job_draws_the_same_pdf_in_this_process(days, tmp_path, monkeypatch)
     assert not list(tmp_path.glob(".report-part-*"))
 
 
+@pytest.mark.heavy
 def test_report_date_order(days):
     day, _ = days["fin"]
     assert provenance.report_date(day) == (None, "not given")
@@ -346,6 +359,7 @@ def test_report_date_order(days):
 
 
 # -------------------------------------------------------------------------------- figures
+@pytest.mark.heavy
 def test_figures_written(days):
     for name, expected in (("hull", {"tare", "added_mass", "damping", "scaling"}),
                            ("fin", {"tare", "fin_forces", "fin_coefficients"})):
@@ -356,6 +370,7 @@ def test_figures_written(days):
             assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.heavy
 def test_damping_figure_draws_the_stored_fit(days):
     day, _ = days["hull"]
     dm = day.hull.fit.damping
@@ -372,6 +387,7 @@ def test_damping_figure_draws_the_stored_fit(days):
     np.testing.assert_allclose(line2.get_ydata(), line.get_ydata() + 0.01)
 
 
+@pytest.mark.heavy
 def test_report_stage_does_not_refit(days):
     """Both days' outputs are written (the ``days`` fixture) with every fitting function
     replaced by one that fails (:func:`_forbid_fitting`): the report and the workbook are
@@ -382,6 +398,7 @@ def test_report_stage_does_not_refit(days):
         assert (out / "report.xlsx").exists()
 
 
+@pytest.mark.heavy
 def test_run_thumbnail_shades_the_phases(days):
     from matplotlib.figure import Figure
 
@@ -412,6 +429,7 @@ def _die(day, folder):
     os._exit(3)
 
 
+@pytest.mark.heavy
 def test_report_writers_run_beside_each_other(days, tmp_path):
     day, _ = days["hull"]
     out = write_outputs(day, tmp_path / "out", writers=[_write_a, _write_b], jobs=2)
@@ -420,6 +438,7 @@ def test_report_writers_run_beside_each_other(days, tmp_path):
     assert (out / "runs.csv").exists()
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("bad, message", [(_fail, "_fail: ValueError: no ink"),
                                           (_die, "_die: the process running it stopped")])
 def test_a_failing_report_writer_writes_nothing(days, tmp_path, bad, message):
@@ -441,6 +460,7 @@ def test_math_symbol():
     assert Path(pdf.__file__).name == "pdf.py"
 
 
+@pytest.mark.heavy
 def test_the_runs_table_lists_every_run_with_its_status(days):
     """Issue 16: a per-run table in the PDF (run, config, test, α, U, a, drag, C_D, Re, tare,
     status), one row per run of the sheet."""
@@ -451,6 +471,7 @@ def test_the_runs_table_lists_every_run_with_its_status(days):
     assert "rejected" in text and "status" in text
 
 
+@pytest.mark.heavy
 def test_runs_table_gives_each_run_its_test_area_coefficient(days):
     """Issue 22: one C_D per run on the area its test uses. The transverse tows (α = 90°) show
     C_D on the lateral area, the C_D,90 of the damping page (not ~6 on the frontal area), and
@@ -477,6 +498,7 @@ def test_runs_table_gives_each_run_its_test_area_coefficient(days):
     assert "lateral area" in text
 
 
+@pytest.mark.heavy
 def test_runs_table_says_why_an_acceleration_is_blank(days):
     """Issue 22: the usable runs without a mean acceleration (a ramp too short at low speed)
     are marked and explained under the table, in the PDF and the workbook."""
@@ -498,6 +520,7 @@ def test_runs_table_says_why_an_acceleration_is_blank(days):
     assert notes and "no constant-acceleration stretch" in notes[0]
 
 
+@pytest.mark.heavy
 def test_the_hull_lift_slope_says_it_is_a_check_and_what_it_would_give(days):
     """Issue 22: the measured hull lift slope is shown as a check, used in no coefficient, with
     the Y_uv it would give with the hull's lift, −½ρA·(∂C_L/∂α + c)."""
@@ -517,6 +540,7 @@ def test_the_hull_lift_slope_says_it_is_a_check_and_what_it_would_give(days):
     assert text in lines
 
 
+@pytest.mark.heavy
 def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
     """Issue 22: the reader sees "REMUS 100 (SUT-2 report, Table 4)", not the protocol key
     'remus', in the PDF, the workbook and provenance.json."""
@@ -537,6 +561,7 @@ def test_the_reference_set_is_shown_by_its_name_not_its_key(days):
     assert prov["settings"]["reference_name"] == name
 
 
+@pytest.mark.heavy
 def test_report_equations_are_written_out_with_their_source(days):
     """Issue 22: a PDF that cites "report eqs. 7–8" writes those equations out and names the
     report with its title, as README and docs/method.md do."""

@@ -205,6 +205,7 @@ def test_thumbnails_label_both_axes_and_share_the_zero_line(hull_day):
 
 
 # ---------------------------------------------------------------- predicted vs measured
+@pytest.mark.heavy
 def test_predicted_vs_measured_is_a_page_of_the_report(hull_day, tmp_path, monkeypatch):
     day = hull_day.result
     # the pages read below drawn, the others blank (the PDF still holds the whole plan)

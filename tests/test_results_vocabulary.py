@@ -74,6 +74,7 @@ def test_every_result_class_lives_in_the_results_package():
     assert towtank.IdentifyResult is IdentifyResult
 
 
+@pytest.mark.heavy
 def test_the_results_of_a_day_and_simulate_load_no_identification():
     """IdentifyResult comes with the package's names, but the identification's filter loads
     only when it is asked for (a fresh interpreter: what an import loads is the point); nor

@@ -155,6 +155,7 @@ _TOKENS = st.one_of(
 )
 
 
+@pytest.mark.heavy
 @SETTINGS
 @given(
     cells=st.lists(
@@ -185,6 +186,7 @@ def test_random_block_of_values_replaced(start, length, col, token):
     _never_crashes(b"\n".join(b",".join(f) for f in lines) + b"\n")
 
 
+@pytest.mark.heavy
 @SETTINGS
 @given(
     names=st.lists(
@@ -284,6 +286,7 @@ def test_fatal_damage_is_always_rejected(kind, seed):
         load_run(Path("run_001.csv"), {}, data=data)
 
 
+@pytest.mark.heavy
 @SETTINGS
 @given(
     kind=st.sampled_from(["spikes", "nan_gap", "text_rows"]),

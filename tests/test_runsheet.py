@@ -246,6 +246,7 @@ _cell = st.one_of(
 )
 
 
+@pytest.mark.heavy
 @settings(max_examples=150, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(cells=st.lists(st.fixed_dictionaries({c: _cell for c in OPTIONAL}), min_size=1,
@@ -274,6 +275,7 @@ def test_fuzz_optional_cells(tmp_path, cells):
         assert isinstance(row["water_temp_C"], float)
 
 
+@pytest.mark.heavy
 @settings(max_examples=40, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(cells=st.lists(

@@ -147,6 +147,7 @@ def _zero_day(root: Path, **processing) -> Path:
     return syn.write_protocol(root / "protocol.toml", **protocol_sections("zero-file", sections))
 
 
+@pytest.mark.heavy
 def test_the_zeros_file_gives_the_zero(tmp_path):
     """A zeros file whose drag reads δ higher moves the run's zeroed drag by −gain·δ (with
     drift = "none"; with the linear drift, by the zero line's value in the steady window)."""

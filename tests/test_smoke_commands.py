@@ -84,6 +84,7 @@ def test_simulate_a_sine_then_identify(tmp_path):
         assert (tmp_path / "id" / name).is_file(), name
 
 
+@pytest.mark.heavy
 def test_watch_gives_a_verdict_and_its_page_serves_the_state(tmp_path):
     """`towtank watch` with its page server (watchfiles, starlette and uvicorn at their floors
     on .ci/run's minimum versions): a run file written into the watched folder gets its

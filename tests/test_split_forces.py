@@ -67,6 +67,7 @@ def _two_cell_day(root: Path) -> Path:
     return syn.write_protocol(root / "protocol.toml", **protocol_sections("two-cell", sections))
 
 
+@pytest.mark.heavy
 def test_inspect_proposes_both_cells_and_process_warns_of_a_cell_left_out(tmp_path):
     protocol = _two_cell_day(tmp_path)
     run = tmp_path / "data" / "run_021.csv"

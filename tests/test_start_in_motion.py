@@ -74,6 +74,7 @@ def _check(day, truth) -> None:
         assert got[sym] == pytest.approx(truth["coefficients"][sym], rel=0.02), sym
 
 
+@pytest.mark.heavy
 def test_without_a_zero_source_a_run_in_motion_is_rejected_in_one_sentence(cut_day):
     root, truth = cut_day
     day = towtank.process_day(_protocol(root, "plain.toml", zeros=False), jobs=1,

@@ -56,6 +56,7 @@ def frames(draw: Any) -> pd.DataFrame:
     return frame
 
 
+@pytest.mark.heavy
 @settings(max_examples=300)
 @given(frame=frames(), header=st.booleans(),
        float_format=st.sampled_from([None, "%.7g", "%.3f"]))
@@ -154,6 +155,7 @@ def test_days_are_byte_identical_to_the_old_writers(
     assert new == old
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("layout", list(CAPTIVE_LAYOUTS))
 def test_captive_days_are_byte_identical_to_the_old_writers(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, layout: str

@@ -23,6 +23,7 @@ def out(hull_day, tmp_path_factory):
     return folder
 
 
+@pytest.mark.heavy
 def test_tare_csv_holds_the_generators_tare_inside_its_intervals(out):
     truth = TareTruth()
     table = pd.read_csv(out / "tare.csv").set_index("channel")

@@ -28,6 +28,7 @@ def _protocol(root, extra: str, mass_kg: float | None = None) -> str:
     return path
 
 
+@pytest.mark.heavy
 def test_a_tare_table_recovers_the_hull(day_dir):
     """A table of the mounting's drag against speed (from the generator's true tare) replaces
     the sting runs; with the mounting's mass weighed into mass_kg (a table holds no tare

@@ -101,6 +101,7 @@ def _plant(cache: Path, make_blob) -> int:
     return len(entries)
 
 
+@pytest.mark.heavy
 def test_a_planted_pickle_in_the_cache_runs_no_code(day, processed_out, tmp_path):
     out = tmp_path / "out"
     _processed(processed_out, out)
@@ -185,6 +186,7 @@ def _hull_table(path: Path, radius: float) -> None:
     pd.DataFrame({"x_m": x, "r_m": r}).to_csv(path, index=False)
 
 
+@pytest.mark.heavy
 def test_an_edited_tare_table_or_hull_table_is_never_replayed(day_dir, tmp_path):
     root = tmp_path
     for name in ("run_sheet.csv", "truth.json"):
@@ -277,6 +279,7 @@ def _folder_is_one_day(out: Path, alone: list[dict[str, bytes]]) -> None:
     assert any(tables == {k: v for k, v in a.items() if k.endswith(".csv")} for a in alone)
 
 
+@pytest.mark.heavy
 def test_two_threads_writing_one_folder_never_mix(two_days, tmp_path):
     from towtank.report import write_outputs
 
@@ -395,6 +398,7 @@ def own_process_runs(day, processed_out, tmp_path_factory
     return {odd: runs[2 * i: 2 * i + 2] for i, odd in enumerate(OWN_PROCESS)}
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("odd", ["fifo", "zero-link", "huge", "cache-file", "day-dir",
                                  "files-dir", "files-fifo"])
 def test_odd_entries_in_the_output_folder_neither_hang_nor_crash(day, processed_out, tmp_path,
@@ -461,6 +465,7 @@ def _small_day(root: Path) -> Path:
                               **syn.hull_protocol_sections(".", "out", sheet_format="csv"))
 
 
+@pytest.mark.heavy
 def test_simulate_files_stay_towtanks_after_process_rewrites_the_folder(tmp_path):
     repo = Path(__file__).resolve().parents[1]
     protocol = repo / "protocols" / "remus_vehicle.toml"

@@ -132,6 +132,7 @@ def bomb_commands(bomb_day) -> dict[str, subprocess.CompletedProcess]:
     return {"process": process, "inspect": inspect}
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc (Linux)")
 def test_process_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_day,
                                                                            bomb_commands):
@@ -148,6 +149,7 @@ def test_process_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bom
     assert (runs.drop(index=run)["status"] == "ok").all()
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc (Linux)")
 def test_inspect_rejects_a_small_gzip_of_too_many_rows_within_bounded_memory(bomb_commands):
     done = bomb_commands["inspect"]

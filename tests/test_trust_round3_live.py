@@ -172,6 +172,7 @@ def test_a_link_or_a_foreign_entry_in_watchs_places_is_refused_untouched(
     assert "run 1" not in out
 
 
+@pytest.mark.heavy
 def test_a_link_put_in_the_live_folder_while_watching_is_one_sentence(tmp_path):
     protocol = make_day(tmp_path)
     s, lines = session_of(protocol)
@@ -234,6 +235,7 @@ def _full(*args: Any, **kwargs: Any) -> None:
     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
 
+@pytest.mark.heavy
 def test_a_full_disk_under_the_live_state_is_one_sentence_and_the_verdicts_go_on(
         tmp_path, monkeypatch):
     protocol = make_day(tmp_path)
@@ -350,6 +352,7 @@ def _until(check: Callable[[], bool], what: str) -> None:
         time.sleep(0.1)
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals of Linux")
 @pytest.mark.parametrize(("how", "code"), [("SIGTERM", 128 + 15), ("SIGHUP", 128 + 1),
                                            ("SIGKILL", -9)])

@@ -87,6 +87,7 @@ def _check_matrix(plain_days, tmp_path, day: str, layout: str, sheet: str) -> No
     assert gaps and max(gaps.values()) <= 1.0, {k: v for k, v in gaps.items() if v > 1.0}
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(("day", "layout", "sheet"), FAST, ids=["-".join(c) for c in FAST])
 def test_synth_days_in_a_lab_layout_give_the_plain_days_results(plain_days, tmp_path, day,
                                                                  layout, sheet):

@@ -219,6 +219,7 @@ def fifo_days(hdf5_day, tmp_path_factory) -> dict[str, tuple[Path, Path, list]]:
     return {way: (*days[way], done[2 * i : 2 * i + 2]) for i, way in enumerate(days)}
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes on this system")
 @pytest.mark.parametrize("way", ["external", "virtual"])
 def test_a_fifo_behind_a_dataset_does_not_hang_inspect_or_process(fifo_days, way):

@@ -192,6 +192,7 @@ def _drag_coefficient(out: Path) -> float:
     return float(pd.read_csv(out / "coefficients.csv").set_index("symbol")["value"]["X_u|u|"])
 
 
+@pytest.mark.heavy
 def test_an_edited_tare_table_on_a_usb_stick_is_never_replayed(day_dir, stick, tmp_path):
     table = stick / "tare.csv"
     _tare_table(day_dir, table, 1.0)
@@ -295,6 +296,7 @@ def linked(processed, tmp_path_factory, monkeypatch) -> tuple[Path, Path]:
     return folder, folder.parent / "olink"
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("command", ["process", "predict", "simulate", "steady", "identify",
                                      "scale", "synth"])
 def test_a_command_given_a_link_to_a_locked_folder_waits_for_its_lock(
@@ -530,6 +532,7 @@ def test_fresh_reductions_of_other_kinds_are_sane(day_dir, tmp_path, variant):
         assert red.has_lift == (variant != "no lift")
 
 
+@pytest.mark.heavy
 @settings(max_examples=300)
 @given(data=st.data())
 def test_a_well_typed_insane_record_is_found_out(reductions, data):
@@ -556,6 +559,7 @@ def _plant(cache: Path, changes: dict[str, Change]) -> None:
     (cache / "day.json").unlink(missing_ok=True)
 
 
+@pytest.mark.heavy
 @DAY_EXAMPLES
 @given(data=st.data())
 def test_planted_insane_records_are_reduced_again(own_copy, data):
@@ -618,6 +622,7 @@ def planted_manifest(draw, out: Path, victim: Path) -> tuple[dict, bool]:
             "files": files}, spoiled
 
 
+@pytest.mark.heavy
 @DAY_EXAMPLES
 @given(data=st.data())
 def test_a_planted_manifest_neither_crashes_nor_reaches_outside(own_copy, data):

@@ -158,6 +158,7 @@ def test_a_record_built_past_the_reader_stops_at_the_bound(remus, record):
 
 # --- item 7 (c): progress ------------------------------------------------------------------
 
+@pytest.mark.heavy
 def test_identify_reports_each_stage_of_its_work(remus, record):
     seen: list[tuple[str, int, int]] = []
     log = log_from_frame(record.head(241), "short")
@@ -173,6 +174,7 @@ def test_identify_reports_each_stage_of_its_work(remus, record):
     assert all(0 < d <= total == 60 for s, d, total in seen if s.startswith("least squares"))
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(("quiet", "shown"), [([], True), (["--quiet"], False)])
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the words printed, not the figure
 def test_the_command_shows_progress_on_a_terminal_unless_quiet(model_path, record, tmp_path,

@@ -47,6 +47,7 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str]:
     return _mypy([str(ROOT / "towtank"), str(bad)])
 
 
+@pytest.mark.heavy
 def test_towtank_has_no_type_error(report: tuple[int, str]) -> None:
     """Every error mypy reports is in the known-bad module: none in towtank/."""
     status, text = report
@@ -60,6 +61,7 @@ def test_towtank_has_no_type_error(report: tuple[int, str]) -> None:
     assert int(summary.group(3)) > 100, f"towtank's modules were not all checked:\n{text}"
 
 
+@pytest.mark.heavy
 def test_the_configuration_catches_errors(report: tuple[int, str]) -> None:
     """The check can fail: under the project's configuration mypy reports an unchecked None
     and, in a function without annotations (check_untyped_defs), a str added to an int."""

@@ -148,6 +148,7 @@ def test_model_json_assumptions_are_checked_and_old_files_still_read(tmp_path):
         read_model(tmp_path / "bad.json")
 
 
+@pytest.mark.heavy
 def test_predict_simulate_steady_print_the_guessed_inputs_and_the_turn_speed_loss(
         tmp_path, capsys, series58_turn):
     # predict and simulate --manoeuvre turning --rudder-deg 10: conftest's series58_turn

@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 from conftest import Day, process
 
 from towtank.commands.cli import main
@@ -29,6 +30,7 @@ chord_m = 0.02
 """
 
 
+@pytest.mark.heavy
 def test_hull_day_with_a_vehicle_writes_predicted_beside_measured(hull_day: Day, tmp_path,
                                                                   capsys):
     text = hull_day.protocol.read_text()

@@ -228,6 +228,7 @@ TOWTANK_TABLE6 = {
 }
 
 
+@pytest.mark.heavy
 def test_table6_turning_comparison():
     """The design tool's Table 6 set up with towtank (towtank.vehicle.hull_families).
 

@@ -499,6 +499,7 @@ def test_predict_on_a_storage_error_leaves_the_folder_as_it_was(tmp_path, run, m
 
 # one errno: simulate and predict share the storage-error path, which the predict test above
 # drives with each of STORAGE
+@pytest.mark.heavy
 @pytest.mark.parametrize("code", STORAGE[:1])
 def test_simulate_on_a_storage_error_leaves_the_folder_as_it_was(tmp_path, run, monkeypatch,
                                                                  code):
@@ -626,6 +627,7 @@ def test_the_model_loader_raises_only_its_one_sentence_errors(tmp_path_factory):
     check()
 
 
+@pytest.mark.heavy
 def test_simulate_answers_0_or_2_for_any_model_file(tmp_path_factory, capsys):
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st

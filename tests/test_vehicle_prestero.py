@@ -373,6 +373,7 @@ def test_protocol_fin_lift_key_reaches_predict(tmp_path, capsys):
     assert "fin_lift" in err and err.strip().count("\n") == 0
 
 
+@pytest.mark.heavy
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_remus_15_degree_turn_with_prestero_fin_lift(tmp_path):
     """REMUS, 15 deg rudder at 1.5 m/s, neutrally buoyant: half the fin lift turns tighter.

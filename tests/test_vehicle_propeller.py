@@ -79,6 +79,7 @@ def test_a_straight_run_at_the_self_propulsion_rate_holds_its_speed(remus):
     assert ts.attrs["propeller"] == "rps" and ts.attrs["propeller_rps"] == pytest.approx(n)
 
 
+@pytest.mark.heavy
 def test_at_constant_rps_a_turn_loses_less_speed_than_at_constant_thrust(remus):
     """REMUS, 15 deg rudder, the first 12 s of the turn: the same start, then the propeller's
     thrust rises as the vehicle slows (K_T grows as J falls) and the speed falls less."""

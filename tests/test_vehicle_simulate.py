@@ -175,6 +175,7 @@ def test_a_diverging_model_is_refused_not_crashed(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.heavy
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the words, not the figure
 def test_a_coefficient_of_the_wrong_sign_is_named(tmp_path, capsys):
     """model.json edited by hand with X_udot and K_pdot positive (their signs reversed):
@@ -193,6 +194,7 @@ def test_a_coefficient_of_the_wrong_sign_is_named(tmp_path, capsys):
             assert words in line and line.endswith("is its sign reversed?"), line
 
 
+@pytest.mark.heavy
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_shipped_remus_protocol_predicts_and_turns(tmp_path, capsys):
     """protocols/remus_vehicle.toml: predict, then a 10 deg turn at 1.25 m/s (the MATLAB
@@ -240,6 +242,7 @@ def test_a_turn_without_a_rudder_is_refused_in_one_sentence(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.heavy
 @pytest.mark.usefixtures("no_command_figures")  # asserts on the numbers, not the figure
 def test_simulate_and_predict_never_replace_a_users_file(tmp_path, capsys):
     """Issue 14's rule for the vehicle commands: a file of the user's named metrics.csv or
@@ -282,6 +285,7 @@ def _fossen_4_6(w, b, rg, rb, phi, theta):
 _finite = dict(allow_nan=False, allow_infinity=False)
 
 
+@pytest.mark.heavy
 @settings(max_examples=200)
 @given(w=st.floats(1.0, 1e5), b=st.floats(1.0, 1e5),
        rg=st.tuples(*[st.floats(-2.0, 2.0, **_finite)] * 3),

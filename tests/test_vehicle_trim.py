@@ -194,6 +194,7 @@ def _geometric_circle(x, y):
     ("turning", dict(rudder_deg=10.0)),  # level
     ("spiral", dict(rudder_deg=20.0, sternplane_deg=15.0)),  # diving at 13 deg of pitch
 ])
+@pytest.mark.heavy
 def test_turn_radius_is_the_circle_of_the_plan_track(remus, manoeuvre, kwargs):
     """The old V cos(theta)/|psi_dot| over the last quarter was 0.3 % (level) and 1.3 %
     (diving spiral: V counts the heave and sway, theta is not the path angle) off the track."""

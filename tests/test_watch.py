@@ -97,6 +97,7 @@ def sheet_runs(root: Path) -> pd.DataFrame:
 
 
 # ------------------------------------------------------------------------------ the play
+@pytest.mark.heavy
 def test_a_day_played_run_by_run_equals_process_after_every_run(tmp_path):
     protocol = make_day(tmp_path, PLAY)
     s, lines = session_of(protocol, live_figures=True)
@@ -261,6 +262,7 @@ def test_sheet_edits_lock_files_vanishing_and_unlisted_files(tmp_path):
     assert len([line for line in lines if line.startswith("run 1  ")]) == before + 1
 
 
+@pytest.mark.heavy
 def test_a_vehicle_figure_drawn_now_beside_the_carried_figures(tmp_path, monkeypatch):
     """A day with a [vehicle]: each write draws figures/predicted_vs_measured.png itself, and
     the figures carried over from the last report go in beside it (a restarted watch on an
@@ -288,6 +290,7 @@ def test_a_vehicle_figure_drawn_now_beside_the_carried_figures(tmp_path, monkeyp
     s.close()
 
 
+@pytest.mark.heavy
 def test_the_pdf_is_carried_over_between_redraws_and_provenance_says_which_runs(tmp_path,
                                                                                 monkeypatch):
     # the PDFs are compared whole; the runs table, which lists the runs each PDF covers, is
@@ -364,6 +367,7 @@ def _wait_for(q: queue.Queue, text: str, seen: list[str]) -> str:
     raise AssertionError(f"{text!r} never came; stdout: {''.join(seen)}")
 
 
+@pytest.mark.heavy
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals")
 def test_the_command_gives_a_verdict_and_stops_cleanly_on_ctrl_c(tmp_path):
     protocol = make_day(tmp_path, PLAY[:4])

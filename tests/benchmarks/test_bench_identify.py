@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 PAPER = ["N_ur", "N_rdot", "N_uudr"]
@@ -61,6 +62,7 @@ def bench(tmp: Path, duration_s: float = 120.0, rate_hz: float = 20.0,
             "relative_error": (res.value / truth - 1.0).tolist(), "notes": res.notes}
 
 
+@pytest.mark.heavy
 def test_bench_identify_runs_and_reports(tmp_path: Path) -> None:
     """The benchmark's code on a short record (20 s at 10 Hz, 201 rows: the same
     identification, within 5 % of the truth, every field reported); the 120 s figure is

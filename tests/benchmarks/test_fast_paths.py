@@ -350,6 +350,7 @@ def _loaded(body: str) -> set[str]:
     return set(last.split()[1:])
 
 
+@pytest.mark.heavy
 def test_a_reduction_worker_never_loads_pandas():
     """pyarrow's to_numpy loads pandas; in every worker that cost 0.3 s (see ingest)."""
     loaded = _loaded(
@@ -361,6 +362,7 @@ def test_a_reduction_worker_never_loads_pandas():
     assert loaded == set()
 
 
+@pytest.mark.heavy
 def test_inspect_loads_neither_pandas_nor_statsmodels():
     loaded = _loaded(
         "from towtank.commands.cli import main\n"

@@ -64,6 +64,7 @@ def xdist_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, list[dict]
     return done.stdout, suitecost.read_rows(out)
 
 
+@pytest.mark.heavy
 def test_each_test_is_counted_once_with_its_own_and_its_childrens_cpu(xdist_run):
     _, rows = xdist_run
     tests = {r["name"].split("::")[1]: r for r in rows if r["kind"] == "test"}
@@ -78,6 +79,7 @@ def test_each_test_is_counted_once_with_its_own_and_its_childrens_cpu(xdist_run)
     assert waits["children_s"] >= BURN_S - 0.005 and waits["cpu_s"] < BURN_S / 2
 
 
+@pytest.mark.heavy
 def test_the_workers_rows_are_joined_with_each_processs_cpu_outside_the_tests(xdist_run):
     printed, rows = xdist_run
     tests = [r for r in rows if r["kind"] == "test"]
@@ -112,6 +114,11 @@ def test_summary_adds_the_columns_and_ranks_the_heaviest():
     listed = [line.split()[-1] for line in lines if line.startswith("  ") and "%" in line]
     assert listed[:2] == ["b.py::t2", "a.py::t1"]  # the two heaviest tests, heaviest first
     assert lines[-1] == "     0.50  day (session): 2 set-ups"  # all but the costlier one
+    limited = suitecost.summary_lines(rows, top=1, limit_cpu_s=1.25)
+    # every test over the limit, whatever top: the heavy tests a run has not marked
+    assert limited[-3:] == ["tests over 1.25 CPU-s: 2", "     3.00  b.py::t2",
+                            "     1.50  a.py::t1"]
+    assert suitecost.summary_lines(rows, limit_cpu_s=3.0)[-1] == "tests over 3 CPU-s: 0"
 
 
 def test_an_output_path_holding_another_file_is_refused_before_the_run(tmp_path):

@@ -60,6 +60,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                          "processes) to PATH (CSV) and print where the run's time went")
     group.addoption("--suite-cost-top", metavar="N", type=int, default=15,
                     help="tests and files listed in the printed summary (default 15)")
+    group.addoption("--suite-cost-limit", metavar="CPU_S", type=float, default=None,
+                    help="also list every test of the run that cost more than CPU_S CPU-s "
+                         "with its child processes (the suite marks such tests heavy)")
 
 
 def _cpu(who: int) -> float:
@@ -173,7 +176,8 @@ def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> Non
     terminalreporter.section("towtank suite cost")
     run_wall = time.perf_counter() - config.stash[_STARTED]
     for line in summary_lines(rows, top=config.getoption("--suite-cost-top"),
-                              run_wall_s=run_wall):
+                              run_wall_s=run_wall,
+                              limit_cpu_s=config.getoption("--suite-cost-limit")):
         terminalreporter.write_line(line)
     terminalreporter.write_line(f"every row: {out}")
 
@@ -191,12 +195,15 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
 
 
 def summary_lines(rows: list[dict[str, Any]], *, top: int = 15,
-                  run_wall_s: float | None = None) -> list[str]:
+                  run_wall_s: float | None = None,
+                  limit_cpu_s: float | None = None) -> list[str]:
     """What the run's time went to, as printed: the totals, the ``top`` heaviest tests and
     files by CPU (the test process's and its children's), and the shared fixtures set up more
     than once at a cost (0.01 CPU-s or more beyond the costliest set-up). ``run_wall_s``: the
     run's wall time [s], from its configuration to the summary (with it, the average number of
-    cores the run kept busy)."""
+    cores the run kept busy). ``limit_cpu_s``: with it, every test over that many CPU-s [s] is
+    listed last, whatever ``top`` (a shared fixture's set-up counts in the first test that asks
+    for it, so a light test can be listed for its fixture: the fixtures' rows tell)."""
     tests = [r for r in rows if r["kind"] == "test"]
     outside = [r for r in rows if r["kind"] == "outside"]
     cost = {r["name"]: r["cpu_s"] + r["children_s"] for r in tests}
@@ -234,4 +241,8 @@ def summary_lines(rows: list[dict[str, Any]], *, top: int = 15,
         lines.append("shared fixtures set up more than once (CPU-s beyond the first set-up):")
         for extra, name, n in again[:top]:
             lines.append(f"  {extra:7.2f}  {name}: {n} set-ups")
+    if limit_cpu_s is not None:
+        over = sorted(((c, name) for name, c in cost.items() if c > limit_cpu_s), reverse=True)
+        lines.append(f"tests over {limit_cpu_s:g} CPU-s: {len(over)}")
+        lines.extend(f"  {c:7.2f}  {name}" for c, name in over)
     return lines
