@@ -377,6 +377,36 @@ def test_fin_run_with_a_blank_lift_column_is_rejected(lab_fin_day, tmp_path):
     assert day.fins.curves["lift_slope"].iloc[1:].notna().all()
 
 
+def test_fin_run_without_a_lift_column_is_rejected(tmp_path):
+    """A protocol that names no lift column (the lift then optional) and run 14's file
+    written without it: the run was kept "ok" with C_L empty. A fin run needs its lift:
+    rejected in one sentence naming the file and the columns it has; the hull reading of the
+    same file keeps it, and the rest of the day is processed."""
+    from towtank.errors import RunError
+    from towtank.ingest.runfile import RawRun
+    from towtank.reduce.run import check_fin_lift
+
+    make_fin_day(tmp_path, seed=41, file_format="csv")
+    path = tmp_path / "data" / "run_014.csv"
+    frame = pd.read_csv(path)
+    frame.drop(columns=["lift"]).to_csv(path, index=False)
+    protocol = write_protocol(tmp_path / "p.toml", **fin_protocol_sections(".", "out"))
+    day = process_day(protocol, jobs=1)
+    assert list(day.rejected) == [14]
+    reason = str(day.rejected[14])
+    assert reason == ("run 14: run_014.csv: the file has no lift column (columns found: "
+                      "'time', 'speed', 'drag'), and a fin run needs its lift (a channel not "
+                      "recorded, or a lift column under another name: map it under "
+                      "[channels] lift)"), reason
+    assert (day.runs.set_index("run").drop(index=14)["status"] == "ok").all()
+    assert 14 not in day.fins.table["run"].tolist() and len(day.fins.table) == 39
+    raw = RawRun(time=np.arange(3.0), speed=np.ones(3), drag=np.ones(3),
+                 columns=("time", "speed", "drag"))
+    check_fin_lift(raw, "hull", "run_014.csv")  # a hull's lift is a check: kept
+    with pytest.raises(RunError, match="has no lift column"):
+        check_fin_lift(raw, " Fin ", "run_014.csv")
+
+
 def test_blank_lift_column_rejects_fin_runs_only(lab_fin_day, tmp_path):
     """The same file read for a hull run keeps it (a hull's lift is a check, in no
     coefficient), with the reader's note; read_run and reduce_run reject the fin run as the

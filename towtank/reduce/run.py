@@ -34,6 +34,7 @@ from towtank.ingest.calibration import UNITS
 from towtank.ingest.describe import force_parts, unmapped_forces
 from towtank.ingest.protocol import Processing, Protocol, channel_map
 from towtank.ingest.protocol_types import CAPTIVE_TESTS
+from towtank.ingest.readers import name_list
 from towtank.ingest.runfile import RawRun, file_bytes_stamped, load_run
 from towtank.ingest.speedlog import run_speed_log
 from towtank.ingest.zerofile import run_zero_levels, with_zero_levels
@@ -728,21 +729,29 @@ def check_drag_direction(drag: np.ndarray, speed: float) -> None:
 
 
 def check_fin_lift(raw: RawRun, config: str, file: str) -> None:
-    """Reject a fin run whose lift column holds no numbers (every cell blank).
+    """Reject a fin run without its lift: a lift column that holds no numbers (every cell
+    blank), or no lift column in the file at all.
 
-    The reader leaves such a column out with a note ("the lift column holds no numbers"),
-    which is right for a hull run (its lift is a check, used in no coefficient) but not for a
-    fin run: its C_L is what the fin analysis is for, and without it the run would be kept
-    with its lift dropped, its speed group losing a slope angle to no visible cause. The
-    sentence names the channel and its column, as :func:`check_force_signal` does for a
-    channel of one constant value.
+    The reader leaves a blank column out with a note ("the lift column holds no numbers"), and
+    a lift column the protocol does not name is optional, which is right for a hull run (its
+    lift is a check, used in no coefficient) but not for a fin run: its C_L is what the fin
+    analysis is for, and without it the run would be kept with its lift dropped, its speed
+    group losing a slope angle to no visible cause. The sentence names the channel and its
+    column, as :func:`check_force_signal` does for a channel of one constant value, or the
+    columns the file has.
     """
-    if config.strip().lower() != "fin" or raw.lift is not None or "lift" not in raw.blank:
+    if config.strip().lower() != "fin" or raw.lift is not None:
         return
+    if "lift" in raw.blank:
+        raise RunError(
+            f"{file}: the lift channel (column '{raw.blank['lift']}') holds no numbers, every "
+            "cell blank, and a fin run needs its lift (a channel not recorded, an unplugged "
+            "cable, or the wrong column?)"
+        )
     raise RunError(
-        f"{file}: the lift channel (column '{raw.blank['lift']}') holds no numbers, every "
-        "cell blank, and a fin run needs its lift (a channel not recorded, an unplugged "
-        "cable, or the wrong column?)"
+        f"{file}: the file has no lift column (columns found: {name_list(raw.columns)}), and "
+        "a fin run needs its lift (a channel not recorded, or a lift column under another "
+        "name: map it under [channels] lift)"
     )
 
 

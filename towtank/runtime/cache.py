@@ -51,9 +51,10 @@ from towtank.runtime import records
 from towtank.runtime.manifest import read_manifest
 from towtank.runtime.safefile import is_real_dir, read_regular, sha256_regular
 
-CACHE_FORMAT = 7  # of entries and settings keys (5: captive cov; 6: captive load trace;
+CACHE_FORMAT = 8  # of entries and settings keys (5: captive cov; 6: captive load trace;
 #                   7: a drag along the tow, a fin run's blank lift and a captive file without
-#                   fx rejected, runs reduced before them kept no more)
+#                   fx rejected, runs reduced before them kept no more; 8: a fin run without
+#                   a lift column rejected)
 INDEX_FORMAT = 3  # of files.json
 PACK_ENTRIES = 64  # a pack is written while runs are being reduced once this many wait
 PACK_SECONDS = 2.0  # ... and this long has passed since the last (so an interrupt loses little)
