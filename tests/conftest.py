@@ -24,14 +24,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from towtank.testing.bytecode import write_bytecode_again
+from towtank.testing.bytecode import pycache_folders, remove_new_pycache, write_bytecode_again
 
 # The suite starts about sixty new Python processes (the commands that need a process of their
 # own, the fork servers of the worker pools, pytest-xdist's workers). Where the environment
 # switches bytecode writing off (PYTHONDONTWRITEBYTECODE), each of them would compile towtank's
 # modules and the test modules from source again (0.9 CPU-s a start for towtank's): the run
-# writes them beside the sources, in __pycache__, as Python does by default.
-write_bytecode_again()
+# writes them beside the sources, in __pycache__, as Python does by default, and the process
+# that switched writing on (the one that started the run) removes the folders it made when it
+# ends, after its pytest-xdist workers.
+_SOURCES = tuple(Path(__file__).resolve().parents[1] / name for name in ("towtank", "tests"))
+if write_bytecode_again():
+    atexit.register(remove_new_pycache, _SOURCES, pycache_folders(_SOURCES))
 
 import pandas as pd  # noqa: E402 - after the bytecode switch, as every import below
 import pytest  # noqa: E402
@@ -597,12 +601,13 @@ def pytest_collection_modifyitems(config, items):
         skips.append(("bench", pytest.mark.skip(
             reason="bench: the benchmark's smoke run, run apart by .ci/run (--bench)")))
     if not config.getoption("--heavy"):
-        # deselected, not skipped: the run ends with their number ("262 deselected"), not
-        # with a line for each
-        heavy = [item for item in items if item.get_closest_marker("heavy") is not None]
+        # deselected, not skipped: the run ends with their number, not with a line for each
+        keep, heavy = [], []
+        for item in items:
+            (keep if item.get_closest_marker("heavy") is None else heavy).append(item)
         if heavy:
             config.hook.pytest_deselected(items=heavy)
-            items[:] = [item for item in items if item.get_closest_marker("heavy") is None]
+            items[:] = keep
     for item in items:
         for marker, skip in skips:
             if item.get_closest_marker(marker) is not None:  # a mark, not a folder's name
@@ -610,15 +615,15 @@ def pytest_collection_modifyitems(config, items):
 
 
 def pytest_collection(session):
-    """Each pytest-xdist worker collects every test module, and where no bytecode is kept yet
-    (a fresh checkout, or the run's own bytecode folder above) each rewrites the asserts of
-    every test module and compiles it, the same ones at the same moment: about 20 CPU-s a
-    worker, the same work twice. The first worker's collection goes through the modules in
-    order; worker k of n first imports the modules of its k-th share backwards, from the end
+    """Each pytest-xdist worker collects every test module, and where no bytecode is kept yet (a
+    fresh checkout, or bytecode writing switched off until the run switched it on) each rewrites
+    the asserts of every test module and compiles it, the same ones at the same moment: about 20
+    CPU-s a worker, the same work twice. The first worker's collection goes through the modules
+    in order; worker k of n first imports the modules of its k-th share backwards, from the end
     of the share, until it meets one whose bytecode is written (by a worker before it): each
-    module is then compiled about once. A module is imported here as its collection would
-    (the same name, with pytest's assertion rewriting); one that fails to import is left to
-    the collection, which reports it."""
+    module is then compiled about once. A module is imported here as its collection would (the
+    same name, with pytest's assertion rewriting); one that fails to import is left to the
+    collection, which reports it."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "")
     count = os.environ.get("PYTEST_XDIST_WORKER_COUNT", "")
     if (sys.dont_write_bytecode or not worker.startswith("gw") or not worker[2:].isdigit()

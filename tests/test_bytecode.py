@@ -8,7 +8,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-from towtank.testing.bytecode import NO_BYTECODE, PREFIX, bytecode_env
+from towtank.testing.bytecode import (
+    NO_BYTECODE,
+    PREFIX,
+    bytecode_env,
+    pycache_folders,
+    remove_new_pycache,
+)
 
 
 def test_the_environment_is_changed_only_where_writing_is_off(tmp_path):
@@ -49,3 +55,21 @@ def test_a_process_and_its_children_write_bytecode_beside_the_sources(tmp_path):
     subprocess.run([sys.executable, "-c", _CHILD, str(src)], env=env, check=True, timeout=120)
     written = sorted(p.name.split(".")[0] for p in (src / "__pycache__").glob("probe_*.pyc"))
     assert written == ["probe_grandchild", "probe_module"]
+
+
+def test_only_the_bytecode_folders_a_run_made_are_removed(tmp_path):
+    """A __pycache__ that was there before the run stays; those the run made go, the sources
+    beside them stay."""
+    src = tmp_path / "src"
+    (src / "old" / "__pycache__").mkdir(parents=True)
+    (src / "old" / "__pycache__" / "a.cpython-311.pyc").write_bytes(b"old")
+    before = pycache_folders([src])
+    assert before == {src / "old" / "__pycache__"}
+    for folder in (src, src / "new"):
+        (folder / "__pycache__").mkdir(parents=True)
+        (folder / "__pycache__" / "m.cpython-311.pyc").write_bytes(b"new")
+        (folder / "m.py").write_text("VALUE = 1\n")
+    remove_new_pycache([src], before)
+    assert pycache_folders([src]) == before
+    assert (src / "old" / "__pycache__" / "a.cpython-311.pyc").read_bytes() == b"old"
+    assert (src / "m.py").exists() and (src / "new" / "m.py").exists()

@@ -11,22 +11,25 @@ package never pays.
 Two remedies. The test run switches writing on again as Python's default has it
 (:func:`write_bytecode_again`): beside each source, in ``__pycache__`` (which git ignores),
 where the installed libraries keep the bytecode pip compiled for them, so theirs is read, not
-made again. The benchmark, which copies nothing into the checkout, keeps its processes'
-bytecode under a folder of its own (:func:`bytecode_env`, ``PYTHONPYCACHEPREFIX``); there
-Python looks for every module's bytecode under that folder only, the libraries' too, and
-compiles each library module once more per folder: a pytest-xdist run on two cores started
-and collected its 2,542 tests in 47–49 CPU-s (30–31 s) that way, and in 28–30 CPU-s
-(17–21 s) with the bytecode beside the sources (2026-11-29, a fresh checkout each time).
+made again; when it ends it removes the folders it made (:func:`remove_new_pycache`), so that
+the environment's wish holds after the run. The benchmark, which copies nothing into the
+checkout, keeps its processes' bytecode under a folder of its own (:func:`bytecode_env`,
+``PYTHONPYCACHEPREFIX``); there Python looks for every module's bytecode under that folder
+only, the libraries' too, and compiles each library module once more per folder: a
+pytest-xdist run on two cores started and collected its 2,542 tests in 47–49 CPU-s (30–31 s)
+that way, and in 28–30 CPU-s (17–21 s) with the bytecode beside the sources (2026-11-29, a
+fresh checkout each time).
 """
 
 from __future__ import annotations
 
 import os
+import shutil
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-__all__ = ["bytecode_env", "write_bytecode_again"]
+__all__ = ["bytecode_env", "pycache_folders", "remove_new_pycache", "write_bytecode_again"]
 
 #: The variable that switches bytecode writing off.
 NO_BYTECODE = "PYTHONDONTWRITEBYTECODE"
@@ -54,3 +57,17 @@ def write_bytecode_again() -> bool:
     os.environ.pop(NO_BYTECODE)
     sys.dont_write_bytecode = False
     return True
+
+
+def pycache_folders(roots: Iterable[Path]) -> set[Path]:
+    """The ``__pycache__`` folders under each of ``roots`` (their own included)."""
+    return {Path(top) / "__pycache__" for root in roots
+            for top, dirs, _ in os.walk(root) if "__pycache__" in dirs}
+
+
+def remove_new_pycache(roots: Iterable[Path], before: set[Path]) -> None:
+    """Remove the ``__pycache__`` folders under ``roots`` that are not in ``before`` (those a
+    run made after :func:`write_bytecode_again`); the others are left as they are."""
+    roots = tuple(roots)
+    for folder in sorted(pycache_folders(roots) - before):
+        shutil.rmtree(folder, ignore_errors=True)
